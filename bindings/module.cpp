@@ -1,0 +1,236 @@
+// boxmarch._core: NumPy arrays in and out of the native core, without copies. This file only
+// checks arrays and moves them; every algorithm lives in cpp/.
+#include "boxmarch/boxmarch.h"
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <sstream>
+#include <string>
+
+namespace py = pybind11;
+using namespace boxmarch;
+
+namespace {
+
+template <class T>
+const char* dtype_name();
+template <> const char* dtype_name<float>() { return "float32"; }
+template <> const char* dtype_name<double>() { return "float64"; }
+template <> const char* dtype_name<int32_t>() { return "int32"; }
+template <> const char* dtype_name<uint32_t>() { return "uint32"; }
+template <> const char* dtype_name<uint8_t>() { return "uint8"; }
+
+std::string shape_of(const py::array& a) {
+    std::ostringstream s;
+    s << "(";
+    for (py::ssize_t i = 0; i < a.ndim(); ++i) s << (i ? ", " : "") << a.shape(i);
+    s << (a.ndim() == 1 ? ",)" : ")");
+    return s.str();
+}
+
+// The array as a C-contiguous T array of shape (rows, cols) (cols 0: one dimension), or a
+// ValueError saying what was expected and what came. rows < 0 accepts any row count.
+template <class T>
+py::array_t<T> checked(const py::object& obj, const char* name, py::ssize_t rows, py::ssize_t cols, bool writable = false) {
+    if (!py::isinstance<py::array>(obj))
+        throw py::value_error(std::string(name) + " must be a NumPy array");
+    py::array a = py::reinterpret_borrow<py::array>(obj);
+    const bool dtype_ok = a.dtype().is(py::dtype::of<T>()) || a.dtype().equal(py::dtype::of<T>());
+    const bool shape_ok = cols ? (a.ndim() == 2 && a.shape(1) == cols) : a.ndim() == 1;
+    const bool rows_ok = shape_ok && (rows < 0 || a.shape(0) == rows);
+    if (!dtype_ok || !rows_ok || !(a.flags() & py::array::c_style) || (writable && !a.writeable())) {
+        std::ostringstream s;
+        s << name << " must be a C-contiguous" << (writable ? " writable " : " ") << dtype_name<T>()
+          << " array of shape (" << (rows < 0 ? std::string("N") : std::to_string(rows));
+        if (cols) s << ", " << cols;
+        s << (cols ? ")" : ",)") << "; got " << py::str(a.dtype()).cast<std::string>() << " " << shape_of(a);
+        if (!(a.flags() & py::array::c_style)) s << " (not C-contiguous)";
+        throw py::value_error(s.str());
+    }
+    return py::reinterpret_borrow<py::array_t<T>>(a);
+}
+
+// Arrays of one mesh, kept alive while the view points into them.
+struct MeshArrays {
+    py::array_t<float> positions;
+    py::array_t<int32_t> edges, face_starts, face_sizes, corner_verts;
+    MeshView view;
+
+    MeshArrays(const py::object& p, const py::object& e, const py::object& fs, const py::object& fz, const py::object& cv)
+        : positions(checked<float>(p, "positions", -1, 3)),
+          edges(checked<int32_t>(e, "edges", -1, 2)),
+          face_starts(checked<int32_t>(fs, "face_starts", -1, 0)),
+          face_sizes(checked<int32_t>(fz, "face_sizes", face_starts.shape(0), 0)),
+          corner_verts(checked<int32_t>(cv, "corner_verts", -1, 0)) {
+        view.positions = positions.data();
+        view.vertex_count = size_t(positions.shape(0));
+        view.edges = edges.data();
+        view.edge_count = size_t(edges.shape(0));
+        view.face_starts = face_starts.data();
+        view.face_sizes = face_sizes.data();
+        view.face_count = size_t(face_starts.shape(0));
+        view.corner_verts = corner_verts.data();
+        view.corner_count = size_t(corner_verts.shape(0));
+        py::gil_scoped_release release;
+        validate_mesh(view);
+    }
+};
+
+template <class T>
+py::array_t<T> empty(py::ssize_t rows, py::ssize_t cols = 0) {
+    return cols ? py::array_t<T>({rows, cols}) : py::array_t<T>(rows);
+}
+
+py::dict bake_py(const py::object& positions, const py::object& edges, const py::object& face_starts,
+                 const py::object& face_sizes, const py::object& corner_verts, const py::object& mask,
+                 const py::object& previous_fingerprints, const py::object& offsets_out, double angle_epsilon,
+                 const std::string& origin, bool sort_axes_by_extent, int axis_turn, const std::string& encoding,
+                 bool use_cache, int threads) {
+    MeshArrays mesh(positions, edges, face_starts, face_sizes, corner_verts);
+    const py::ssize_t n = py::ssize_t(mesh.view.vertex_count);
+    BakeOptions options;
+    options.angle_epsilon = angle_epsilon;
+    if (origin == "BOUNDS") options.origin = OriginMode::Bounds;
+    else if (origin == "MEAN") options.origin = OriginMode::Mean;
+    else throw py::value_error("origin must be 'BOUNDS' or 'MEAN', got '" + origin + "'");
+    if (encoding == "FLOAT_COLOR") options.encoding = ColorEncoding::Float;
+    else if (encoding == "BYTE_COLOR") options.encoding = ColorEncoding::Byte;
+    else throw py::value_error("encoding must be 'FLOAT_COLOR' or 'BYTE_COLOR', got '" + encoding + "'");
+    options.sort_axes_by_extent = sort_axes_by_extent;
+    options.axis_turn = axis_turn;
+    options.use_cache = use_cache;
+    options.threads = threads;
+    const bool bytes = options.encoding == ColorEncoding::Byte;
+
+    py::array_t<uint8_t> mask_arr;
+    py::array_t<uint32_t> previous;
+    if (!mask.is_none()) mask_arr = checked<uint8_t>(mask, "mask", n, 0);
+    if (!previous_fingerprints.is_none()) previous = checked<uint32_t>(previous_fingerprints, "previous_fingerprints", n, 0);
+    py::array offsets;
+    if (offsets_out.is_none()) offsets = bytes ? py::array(empty<uint8_t>(n, 4)) : py::array(empty<float>(n, 4));
+    else offsets = bytes ? py::array(checked<uint8_t>(offsets_out, "offsets", n, 4, true))
+                         : py::array(checked<float>(offsets_out, "offsets", n, 4, true));
+
+    py::array_t<int32_t> submesh_of_vertex = empty<int32_t>(n);
+    py::array_t<uint32_t> fingerprints = empty<uint32_t>(n);
+    size_t count;
+    {
+        py::gil_scoped_release release;
+        count = find_submeshes(submesh_of_vertex.mutable_data(), mesh.view);
+    }
+    const py::ssize_t m = py::ssize_t(count);
+    py::array_t<float> quaternions = empty<float>(m, 4), scales = empty<float>(m);
+    py::array_t<double> origins = empty<double>(m, 3), half_extents = empty<double>(m, 3);
+    py::array_t<uint8_t> sources = empty<uint8_t>(m), statuses = empty<uint8_t>(m);
+    BakeSubmeshes out;
+    out.quaternions = quaternions.mutable_data();
+    out.origins = origins.mutable_data();
+    out.half_extents = half_extents.mutable_data();
+    out.scales = scales.mutable_data();
+    out.sources = sources.mutable_data();
+    out.statuses = statuses.mutable_data();
+    BakeReport report;
+    {
+        float* of = bytes ? nullptr : static_cast<float*>(offsets.mutable_data());
+        uint8_t* ob = bytes ? static_cast<uint8_t*>(offsets.mutable_data()) : nullptr;
+        const uint8_t* mk = mask.is_none() ? nullptr : mask_arr.data();
+        const uint32_t* pv = previous_fingerprints.is_none() ? nullptr : previous.data();
+        py::gil_scoped_release release;
+        report = bake(mesh.view, submesh_of_vertex.data(), count, mk, pv, options, fingerprints.mutable_data(), of, ob, out);
+    }
+    py::dict r;
+    r["submesh_of_vertex"] = submesh_of_vertex;
+    r["fingerprints"] = fingerprints;
+    r["offsets"] = offsets;
+    r["quaternions"] = quaternions;
+    r["origins"] = origins;
+    r["half_extents"] = half_extents;
+    r["scales"] = scales;
+    r["sources"] = sources;
+    r["statuses"] = statuses;
+    r["submesh_count"] = report.submesh_count;
+    r["baked"] = report.baked;
+    r["cache_hits"] = report.cache_hits;
+    r["unchanged"] = report.unchanged;
+    r["not_selected"] = report.not_selected;
+    r["degenerate"] = report.degenerate;
+    r["max_error"] = report.max_error;
+    r["max_relative_error"] = report.max_relative_error;
+    return r;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+    m.doc() = "boxmarch native core: submeshes, frames, offset encoding (see boxmarch.core for the documented API)";
+
+    m.def("validate_mesh", [](const py::object& p, const py::object& e, const py::object& fs, const py::object& fz,
+                              const py::object& cv) { MeshArrays mesh(p, e, fs, fz, cv); },
+          py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"), py::arg("corner_verts"),
+          "Raise ValueError naming the first malformed element of the mesh arrays.");
+
+    m.def("find_submeshes", [](const py::object& p, const py::object& e, const py::object& fs, const py::object& fz,
+                               const py::object& cv) {
+              MeshArrays mesh(p, e, fs, fz, cv);
+              py::array_t<int32_t> ids = empty<int32_t>(py::ssize_t(mesh.view.vertex_count));
+              size_t count;
+              {
+                  py::gil_scoped_release release;
+                  count = find_submeshes(ids.mutable_data(), mesh.view);
+              }
+              return py::make_tuple(ids, count);
+          },
+          py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"), py::arg("corner_verts"),
+          "Connected components: (submesh_of_vertex int32[N], count), numbered by lowest vertex.");
+
+    m.def("bake", &bake_py, py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"),
+          py::arg("corner_verts"), py::kw_only(), py::arg("mask") = py::none(),
+          py::arg("previous_fingerprints") = py::none(), py::arg("offsets") = py::none(),
+          py::arg("angle_epsilon") = 0.1, py::arg("origin") = "BOUNDS", py::arg("sort_axes_by_extent") = false,
+          py::arg("axis_turn") = 0, py::arg("encoding") = "FLOAT_COLOR", py::arg("use_cache") = true,
+          py::arg("threads") = 0, "Bake every submesh; see boxmarch.core.bake.");
+
+    m.def("expand_corner_quaternions",
+          [](const py::object& corner_uv, int half, const py::object& corner_verts, const py::object& submesh_of_vertex,
+             const py::object& quaternions, const py::object& write_submesh) {
+              auto cv = checked<int32_t>(corner_verts, "corner_verts", -1, 0);
+              auto uv = checked<float>(corner_uv, "corner_uv", cv.shape(0), 2, true);
+              auto sv = checked<int32_t>(submesh_of_vertex, "submesh_of_vertex", -1, 0);
+              auto q = checked<float>(quaternions, "quaternions", -1, 4);
+              py::array_t<uint8_t> w;
+              if (!write_submesh.is_none()) w = checked<uint8_t>(write_submesh, "write_submesh", q.shape(0), 0);
+              const uint8_t* wp = write_submesh.is_none() ? nullptr : w.data();
+              float* out = uv.mutable_data();
+              py::gil_scoped_release release;
+              expand_corner_quaternions(out, half, cv.data(), size_t(cv.shape(0)), sv.data(), size_t(sv.shape(0)),
+                                        q.data(), size_t(q.shape(0)), wp);
+          },
+          py::arg("corner_uv"), py::arg("half"), py::arg("corner_verts"), py::arg("submesh_of_vertex"),
+          py::arg("quaternions"), py::arg("write_submesh") = py::none(),
+          "Fill corner_uv (float32[C, 2]) in place with each corner's (q.x, q.y) (half=0) or (q.z, q.w) (half=1).");
+
+    m.def("axis_turn_matrices", []() {
+        py::array_t<double> all({24, 3, 3});
+        double* d = all.mutable_data();
+        for (int i = 0; i < 24; ++i) {
+            double col_major[9];
+            axis_turn_matrix(col_major, i);
+            for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 3; ++c) d[i * 9 + r * 3 + c] = col_major[c * 3 + r];
+        }
+        return all;
+    }, "The 24 axis-aligned turns as row-major 3x3 matrices; column i is the new local axis i in the derived frame.");
+
+    py::enum_<FrameSource>(m, "FrameSource")
+        .value("FACES", FrameSource::Faces)
+        .value("FACE_EDGE", FrameSource::FaceEdge)
+        .value("EDGES", FrameSource::Edges)
+        .value("ONE_AXIS", FrameSource::OneAxis)
+        .value("IDENTITY", FrameSource::Identity);
+    py::enum_<SubmeshStatus>(m, "SubmeshStatus")
+        .value("BAKED", SubmeshStatus::Baked)
+        .value("UNCHANGED", SubmeshStatus::Unchanged)
+        .value("NOT_SELECTED", SubmeshStatus::NotSelected);
+}

@@ -1,0 +1,140 @@
+// boxmarch: bake box-local frames into mesh vertex data for raymarching inside rasterized boxes.
+// Copyright (C) 2026 the boxmarch developers. SPDX-License-Identifier: GPL-3.0-or-later
+//
+// The one public header of the native core. Every function works on flat arrays that the caller
+// owns; counts are element counts, not bytes. Functions throw std::invalid_argument with a
+// readable message when their input is malformed (out-of-range indices, non-finite positions,
+// mismatched counts) and write nothing in that case.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace boxmarch {
+
+// A mesh as Blender stores it: positions per vertex, edges as vertex pairs, faces as runs of
+// corners (face f owns corners face_starts[f] .. face_starts[f] + face_sizes[f] - 1), each corner
+// naming its vertex.
+struct MeshView {
+    const float* positions = nullptr;    // vertex_count * 3
+    size_t vertex_count = 0;
+    const int32_t* edges = nullptr;      // edge_count * 2
+    size_t edge_count = 0;
+    const int32_t* face_starts = nullptr;  // face_count
+    const int32_t* face_sizes = nullptr;   // face_count
+    size_t face_count = 0;
+    const int32_t* corner_verts = nullptr;  // corner_count
+    size_t corner_count = 0;
+};
+
+// Reads the whole mesh. Throws std::invalid_argument naming the first problem: an index out of
+// range, a face with fewer than 3 corners or running past corner_count, a NaN or infinite
+// coordinate. Returns normally when the mesh is safe for every other function here.
+void validate_mesh(const MeshView& mesh);
+
+// ---------------------------------------------------------------------------------------------
+// submesh.cpp: connected components
+
+// Reads edges and face corners; writes submesh_of_vertex[vertex_count] with ids 0..n-1 numbered
+// in order of each submesh's lowest vertex index (so the result does not depend on edge order).
+// Returns n, the number of submeshes. Expects a validated mesh.
+size_t find_submeshes(int32_t* submesh_of_vertex, const MeshView& mesh);
+
+// Counting sort of items by their submesh. Reads submesh_of_item[item_count] (values in
+// 0..submesh_count-1); writes offsets[submesh_count + 1] and items[item_count] so the items of
+// submesh s are items[offsets[s] .. offsets[s+1]-1], ascending.
+void group_by_submesh(uint32_t* offsets, uint32_t* items, const int32_t* submesh_of_item,
+                      size_t item_count, size_t submesh_count);
+
+// ---------------------------------------------------------------------------------------------
+// frame.cpp: the 24 axis-aligned turns
+
+// Fixed list of the 24 proper signed permutation matrices (det = +1), index 0 the identity.
+// Writes the 3x3 matrix of turn `index` column-major into matrix[9]: column i is the new local
+// axis i expressed in the derived frame. Returns false for an index outside 0..23.
+bool axis_turn_matrix(double* matrix, int index);
+
+// ---------------------------------------------------------------------------------------------
+// bake.cpp: the whole bake
+
+enum class OriginMode : int { Bounds = 0, Mean = 1 };
+enum class ColorEncoding : int { Float = 0, Byte = 1 };
+
+// How the frame of a submesh was derived. Anything but Faces counts as degenerate.
+enum class FrameSource : uint8_t {
+    Faces = 0,       // two face normals (the normal case)
+    FaceEdge = 1,    // one face normal and the longest edge not parallel to it (flat submesh)
+    Edges = 2,       // the two longest non-parallel edges (no face with area)
+    OneAxis = 3,     // one face normal or edge, and the world axis least aligned with it
+    Identity = 4,    // no direction at all (single vertex, coincident vertices)
+};
+
+enum class SubmeshStatus : uint8_t {
+    Baked = 0,
+    Unchanged = 1,   // fingerprint equals the previous bake's: outputs left as they were
+    NotSelected = 2, // bake_mask excluded it: outputs left as they were
+};
+
+struct BakeOptions {
+    double angle_epsilon = 0.1;      // radians: axis 2 needs |dot(n, axis1)| < cos(angle_epsilon)
+    OriginMode origin = OriginMode::Bounds;
+    bool sort_axes_by_extent = false; // local x longest, z shortest, before the turn
+    int axis_turn = 0;               // 0..23, see axis_turn_matrix
+    ColorEncoding encoding = ColorEncoding::Float;
+    bool use_cache = true;           // reuse frame decisions between similar copies
+    int threads = 0;                 // 0: hardware concurrency
+};
+
+struct BakeReport {
+    size_t submesh_count = 0;
+    size_t baked = 0;
+    size_t cache_hits = 0;
+    size_t unchanged = 0;
+    size_t not_selected = 0;
+    size_t degenerate = 0;
+    // Worst decode error over baked submeshes, decoding the stored values in double with
+    // f = (rgb * 2 - 1) / a: absolute (object units) and relative to the submesh's largest
+    // local half-extent (submeshes with zero extent count as absolute).
+    double max_error = 0.0;
+    double max_relative_error = 0.0;
+};
+
+// Per-submesh results, arrays of length submesh_count (caller sizes them after find_submeshes,
+// or passes vertex_count, which is always enough).
+struct BakeSubmeshes {
+    float* quaternions = nullptr;    // x, y, z, w per submesh; unit, w >= 0
+    double* origins = nullptr;       // object-space origin, 3 per submesh (may be null)
+    double* half_extents = nullptr;  // local half-extents, 3 per submesh (may be null)
+    float* scales = nullptr;         // alpha s per submesh (may be null)
+    uint8_t* sources = nullptr;      // FrameSource per submesh (may be null)
+    uint8_t* statuses = nullptr;     // SubmeshStatus per submesh (may be null)
+};
+
+// Bakes every submesh of a validated mesh.
+// Reads: mesh; submesh_of_vertex from find_submeshes with its count; bake_mask[vertex_count]
+// (may be null: bake everything; else a submesh is baked when any of its vertices is nonzero);
+// previous_fingerprints[vertex_count] (may be null: no incremental skip).
+// Writes: fingerprints[vertex_count] (every vertex, baked or not); for baked submeshes only, the
+// colour of each vertex into offset_float[vertex_count * 4] (Float encoding) or
+// offset_byte[vertex_count * 4] (Byte encoding; the other pointer may be null); and the arrays
+// of `out` (every submesh's entry is written; quaternions of unbaked submeshes are computed too,
+// so callers can rewrite them). Returns the report.
+BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t submesh_count,
+                const uint8_t* bake_mask, const uint32_t* previous_fingerprints,
+                const BakeOptions& options, uint32_t* fingerprints, float* offset_float,
+                uint8_t* offset_byte, const BakeSubmeshes& out);
+
+// Writes, for every corner whose submesh has write_submesh[s] != 0 (null: all corners), the pair
+// (q.x, q.y) when half == 0 or (q.z, q.w) when half == 1 of its submesh's quaternion into
+// corner_uv[corner_count * 2]; other corners are left untouched. Reads corner_verts (values in
+// 0..vertex_count-1), submesh_of_vertex[vertex_count] (values in 0..submesh_count-1) and
+// quaternions[submesh_count * 4]. Throws std::invalid_argument on an index out of range.
+void expand_corner_quaternions(float* corner_uv, int half, const int32_t* corner_verts,
+                               size_t corner_count, const int32_t* submesh_of_vertex,
+                               size_t vertex_count, const float* quaternions,
+                               size_t submesh_count, const uint8_t* write_submesh);
+
+// Fingerprint seed of the options that change the bake's output. Equal options give equal seeds.
+uint32_t options_seed(const BakeOptions& options);
+
+}  // namespace boxmarch

@@ -1,0 +1,243 @@
+// The bake: per submesh, frame (fresh or from the copy cache), optional axis sort and turn,
+// origin, offsets, colour encoding, quaternion and the decode check. Submeshes are independent,
+// so they are split across threads in fixed contiguous ranges (the output never depends on the
+// thread count; only which copies hit the per-thread caches does).
+#include "internal.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace boxmarch {
+
+namespace {
+
+// Relative tolerance of the copy cache: a copy may deviate from an exact similar image of the
+// stored submesh by this fraction of its rms radius (room for float32 rounding of far copies).
+constexpr double kCacheTolerance = 1e-4;
+
+struct Grouped {
+    std::vector<uint32_t> vertex_offsets, vertices, face_offsets, faces, edge_offsets, edges;
+};
+
+Grouped group(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t submesh_count) {
+    Grouped g;
+    g.vertex_offsets.resize(submesh_count + 1);
+    g.vertices.resize(mesh.vertex_count);
+    group_by_submesh(g.vertex_offsets.data(), g.vertices.data(), submesh_of_vertex, mesh.vertex_count, submesh_count);
+    std::vector<int32_t> owner(std::max(mesh.face_count, mesh.edge_count));
+    for (size_t f = 0; f < mesh.face_count; ++f) owner[f] = submesh_of_vertex[mesh.corner_verts[mesh.face_starts[f]]];
+    g.face_offsets.resize(submesh_count + 1);
+    g.faces.resize(mesh.face_count);
+    group_by_submesh(g.face_offsets.data(), g.faces.data(), owner.data(), mesh.face_count, submesh_count);
+    for (size_t e = 0; e < mesh.edge_count; ++e) owner[e] = submesh_of_vertex[mesh.edges[2 * e]];
+    g.edge_offsets.resize(submesh_count + 1);
+    g.edges.resize(mesh.edge_count);
+    group_by_submesh(g.edge_offsets.data(), g.edges.data(), owner.data(), mesh.edge_count, submesh_count);
+    return g;
+}
+
+// Local coordinates of every vertex in `frame`; writes their bounds.
+void local_bounds(const SubmeshView& s, const glm::dmat3& frame, std::vector<glm::dvec3>& local,
+                  glm::dvec3& lo, glm::dvec3& hi) {
+    const glm::dmat3 to_local = glm::transpose(frame);
+    lo = glm::dvec3(INFINITY);
+    hi = glm::dvec3(-INFINITY);
+    for (uint32_t i = 0; i < s.vertex_count; ++i) {
+        local[i] = to_local * s.position(s.vertices[i]);
+        lo = glm::min(lo, local[i]);
+        hi = glm::max(hi, local[i]);
+    }
+}
+
+// Reorders the axes so extents fall from x to z (equal extents within the tie band keep their
+// order), keeping the frame right-handed.
+glm::dmat3 sort_by_extent(const glm::dmat3& frame, const glm::dvec3& extent) {
+    int order[3] = {0, 1, 2};
+    std::stable_sort(order, order + 3, [&](int a, int b) { return extent[a] > extent[b] * (1.0 + kTieBand); });
+    const glm::dvec3 x = frame[order[0]], y = frame[order[1]];
+    return glm::dmat3(x, y, glm::cross(x, y));
+}
+
+struct Accumulated {
+    size_t baked = 0, cache_hits = 0, unchanged = 0, not_selected = 0, degenerate = 0;
+    double max_error = 0.0, max_relative_error = 0.0;
+};
+
+}  // namespace
+
+uint32_t options_seed(const BakeOptions& o) {
+    uint64_t h = 0x243F6A8885A308D3ull;
+    auto add = [&](uint64_t x) { h = (h ^ x) * 0x100000001B3ull; h ^= h >> 29; };
+    uint64_t eps_bits;
+    static_assert(sizeof eps_bits == sizeof o.angle_epsilon, "double is 64-bit");
+    std::memcpy(&eps_bits, &o.angle_epsilon, sizeof eps_bits);
+    add(eps_bits);
+    add(uint64_t(o.origin));
+    add(uint64_t(o.sort_axes_by_extent));
+    add(uint64_t(o.axis_turn));
+    add(uint64_t(o.encoding));
+    add(3);  // format version: bump when the bake's output changes for the same options
+    return uint32_t(h ^ (h >> 32));
+}
+
+BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t submesh_count,
+                const uint8_t* bake_mask, const uint32_t* previous_fingerprints,
+                const BakeOptions& options, uint32_t* fingerprints, float* offset_float,
+                uint8_t* offset_byte, const BakeSubmeshes& out) {
+    if (!(options.angle_epsilon > 0.0 && options.angle_epsilon <= M_PI / 2))
+        throw std::invalid_argument("angle_epsilon must be in (0, pi/2] radians");
+    double turn[9];
+    if (!axis_turn_matrix(turn, options.axis_turn)) throw std::invalid_argument("axis_turn must be in 0..23");
+    const bool bytes = options.encoding == ColorEncoding::Byte;
+    if (bytes ? !offset_byte : !offset_float) throw std::invalid_argument("no output array for the chosen colour encoding");
+    if (!out.quaternions || !fingerprints) throw std::invalid_argument("quaternion and fingerprint outputs are required");
+    for (size_t v = 0; v < mesh.vertex_count; ++v)
+        if (submesh_of_vertex[v] < 0 || size_t(submesh_of_vertex[v]) >= submesh_count)
+            throw std::invalid_argument("submesh_of_vertex does not match submesh_count");
+
+    const Grouped g = group(mesh, submesh_of_vertex, submesh_count);
+    const glm::dmat3 turn_matrix(turn[0], turn[1], turn[2], turn[3], turn[4], turn[5], turn[6], turn[7], turn[8]);
+    const double cos_epsilon = std::cos(options.angle_epsilon);
+    const uint32_t seed = options_seed(options);
+
+    auto run = [&](size_t first, size_t last, Accumulated& acc) {
+        CopyCache cache(kCacheTolerance);
+        std::vector<glm::dvec3> local, offsets;
+        for (size_t sm = first; sm < last; ++sm) {
+            SubmeshView s{&mesh,
+                          g.vertices.data() + g.vertex_offsets[sm], g.vertex_offsets[sm + 1] - g.vertex_offsets[sm],
+                          g.faces.data() + g.face_offsets[sm], g.face_offsets[sm + 1] - g.face_offsets[sm],
+                          g.edges.data() + g.edge_offsets[sm], g.edge_offsets[sm + 1] - g.edge_offsets[sm],
+                          glm::dvec3(0.0)};
+            const float* p0 = mesh.positions + size_t(s.vertices[0]) * 3;
+            s.base = glm::dvec3(p0[0], p0[1], p0[2]);
+
+            const uint32_t fp = fingerprint_submesh(s, seed);
+            bool selected = !bake_mask, unchanged = previous_fingerprints != nullptr;
+            for (uint32_t i = 0; i < s.vertex_count; ++i) {
+                const uint32_t v = s.vertices[i];
+                fingerprints[v] = fp;
+                selected = selected || bake_mask[v];
+                unchanged = unchanged && previous_fingerprints[v] == fp;
+            }
+            float* q_out = out.quaternions + sm * 4;
+            const SubmeshStatus status = !selected ? SubmeshStatus::NotSelected
+                                         : unchanged ? SubmeshStatus::Unchanged
+                                                     : SubmeshStatus::Baked;
+            if (out.statuses) out.statuses[sm] = uint8_t(status);
+            if (status != SubmeshStatus::Baked) {
+                ++(status == SubmeshStatus::Unchanged ? acc.unchanged : acc.not_selected);
+                std::fill(q_out, q_out + 4, 0.0f);
+                if (out.origins) std::fill(out.origins + sm * 3, out.origins + sm * 3 + 3, 0.0);
+                if (out.half_extents) std::fill(out.half_extents + sm * 3, out.half_extents + sm * 3 + 3, 0.0);
+                if (out.scales) out.scales[sm] = 0.0f;
+                if (out.sources) out.sources[sm] = uint8_t(FrameSource::Identity);
+                continue;
+            }
+            ++acc.baked;
+
+            FrameChoice choice;
+            if (options.use_cache && cache.lookup(s, choice)) {
+                ++acc.cache_hits;
+            } else {
+                choice = choose_frame(s, cos_epsilon, options.use_cache ? cache.displacement(s) : 0.0);
+                if (options.use_cache) cache.insert(s, choice);
+            }
+            const FrameSource source = frame_source(choice);
+            if (source != FrameSource::Faces) ++acc.degenerate;
+            if (out.sources) out.sources[sm] = uint8_t(source);
+
+            glm::dmat3 frame = frame_from_choice(choice, s);
+            local.resize(s.vertex_count);
+            offsets.resize(s.vertex_count);
+            glm::dvec3 lo, hi;
+            if (options.sort_axes_by_extent) {
+                local_bounds(s, frame, local, lo, hi);
+                frame = sort_by_extent(frame, hi - lo);
+            }
+            frame = frame * turn_matrix;
+            local_bounds(s, frame, local, lo, hi);
+            const glm::dvec3 half = 0.5 * (hi - lo);
+            glm::dvec3 origin_local;  // origin relative to base, in local coordinates
+            if (options.origin == OriginMode::Bounds) {
+                origin_local = 0.5 * (lo + hi);
+            } else {
+                origin_local = glm::dvec3(0.0);
+                for (uint32_t i = 0; i < s.vertex_count; ++i) origin_local += local[i];
+                origin_local /= double(s.vertex_count);
+            }
+            for (uint32_t i = 0; i < s.vertex_count; ++i) offsets[i] = origin_local - local[i];
+            const float scale = bytes ? encode_byte(offsets.data(), s.vertices, s.vertex_count, offset_byte)
+                                      : encode_float(offsets.data(), s.vertices, s.vertex_count, offset_float);
+
+            const glm::dvec4 q = quaternion_from_frame(frame);
+            for (int k = 0; k < 4; ++k) q_out[k] = float(q[k]);
+            const glm::dvec3 origin = frame * origin_local;  // relative to base, object axes
+            if (out.origins)
+                for (int k = 0; k < 3; ++k) out.origins[sm * 3 + k] = s.base[k] + origin[k];
+            if (out.half_extents)
+                for (int k = 0; k < 3; ++k) out.half_extents[sm * 3 + k] = half[k];
+            if (out.scales) out.scales[sm] = scale;
+
+            // Decode what was stored, as a shader would, and measure the miss.
+            double worst = 0.0;
+            for (uint32_t i = 0; i < s.vertex_count; ++i) {
+                const uint32_t v = s.vertices[i];
+                const glm::dvec3 f = bytes ? decode_byte(offset_byte + size_t(v) * 4) : decode_float(offset_float + size_t(v) * 4);
+                worst = std::max(worst, glm::length(s.position(v) + rotate_vector(f, q_out) - origin));
+            }
+            const double extent = std::max({half.x, half.y, half.z});
+            acc.max_error = std::max(acc.max_error, worst);
+            acc.max_relative_error = std::max(acc.max_relative_error, extent > 0.0 ? worst / extent : worst);
+        }
+    };
+
+    size_t threads = options.threads > 0 ? size_t(options.threads) : std::max(1u, std::thread::hardware_concurrency());
+    threads = std::min(threads, std::max<size_t>(1, submesh_count / 1024));
+    std::vector<Accumulated> parts(threads);
+    std::vector<std::thread> pool;
+    for (size_t t = 1; t < threads; ++t)
+        pool.emplace_back(run, submesh_count * t / threads, submesh_count * (t + 1) / threads, std::ref(parts[t]));
+    run(0, submesh_count / threads, parts[0]);
+    for (std::thread& th : pool) th.join();
+
+    BakeReport report;
+    report.submesh_count = submesh_count;
+    for (const Accumulated& a : parts) {
+        report.baked += a.baked;
+        report.cache_hits += a.cache_hits;
+        report.unchanged += a.unchanged;
+        report.not_selected += a.not_selected;
+        report.degenerate += a.degenerate;
+        report.max_error = std::max(report.max_error, a.max_error);
+        report.max_relative_error = std::max(report.max_relative_error, a.max_relative_error);
+    }
+    return report;
+}
+
+void expand_corner_quaternions(float* corner_uv, int half, const int32_t* corner_verts, size_t corner_count,
+                               const int32_t* submesh_of_vertex, size_t vertex_count, const float* quaternions,
+                               size_t submesh_count, const uint8_t* write_submesh) {
+    if (half != 0 && half != 1) throw std::invalid_argument("half must be 0 (x, y) or 1 (z, w)");
+    for (size_t c = 0; c < corner_count; ++c)
+        if (corner_verts[c] < 0 || size_t(corner_verts[c]) >= vertex_count)
+            throw std::invalid_argument("corner " + std::to_string(c) + " names a vertex out of range");
+    for (size_t v = 0; v < vertex_count; ++v)
+        if (submesh_of_vertex[v] < 0 || size_t(submesh_of_vertex[v]) >= submesh_count)
+            throw std::invalid_argument("submesh_of_vertex does not match submesh_count");
+    const int k = half ? 2 : 0;
+    for (size_t c = 0; c < corner_count; ++c) {
+        const int32_t sm = submesh_of_vertex[corner_verts[c]];
+        if (write_submesh && !write_submesh[sm]) continue;
+        corner_uv[2 * c] = quaternions[sm * 4 + k];
+        corner_uv[2 * c + 1] = quaternions[sm * 4 + k + 1];
+    }
+}
+
+}  // namespace boxmarch

@@ -1,0 +1,199 @@
+// Submesh identity: the copy cache (similar copies share one frame decision) and the exact
+// fingerprints behind incremental re-bakes.
+#include "internal.h"
+
+#include <cmath>
+#include <cstring>
+#include <unordered_map>
+#include <vector>
+
+namespace boxmarch {
+
+namespace {
+
+uint64_t mix(uint64_t h, uint64_t x) {
+    h ^= x * 0x9E3779B97F4A7C15ull;
+    h = (h << 31) | (h >> 33);
+    return h * 0xBF58476D1CE4E5B9ull;
+}
+
+// Walks the submesh's topology with vertex indices taken relative to its lowest vertex, so a
+// copy made by duplicating geometry (same internal order) yields the same sequence.
+template <class Visit>
+void visit_topology(const SubmeshView& s, Visit&& visit) {
+    const MeshView& m = *s.mesh;
+    const int64_t first = s.vertices[0];
+    for (uint32_t i = 0; i < s.vertex_count; ++i) visit(int64_t(s.vertices[i]) - first);
+    for (uint32_t i = 0; i < s.face_count; ++i) {
+        const int32_t f = int32_t(s.faces[i]);
+        visit(-int64_t(m.face_sizes[f]));  // negative: cannot collide with a vertex offset
+        for (int32_t c = 0; c < m.face_sizes[f]; ++c) visit(m.corner_verts[m.face_starts[f] + c] - first);
+    }
+    for (uint32_t i = 0; i < s.edge_count; ++i) {
+        visit(m.edges[s.edges[i] * 2] - first);
+        visit(m.edges[s.edges[i] * 2 + 1] - first);
+    }
+}
+
+// Centroid and root-mean-square distance from it.
+void spread(const SubmeshView& s, glm::dvec3& centre, double& rms) {
+    centre = glm::dvec3(0.0);
+    for (uint32_t i = 0; i < s.vertex_count; ++i) centre += s.position(s.vertices[i]);
+    centre /= double(s.vertex_count);
+    double sum = 0.0;
+    for (uint32_t i = 0; i < s.vertex_count; ++i) {
+        const glm::dvec3 d = s.position(s.vertices[i]) - centre;
+        sum += glm::dot(d, d);
+    }
+    rms = std::sqrt(sum / double(s.vertex_count));
+}
+
+// Rotation anchored on two vertices: x towards vertex i0, y towards i1 (made orthogonal).
+bool anchor_frame(const SubmeshView& s, const glm::dvec3& centre, uint32_t i0, uint32_t i1, glm::dmat3& frame) {
+    const glm::dvec3 a = s.position(s.vertices[i0]) - centre, b = s.position(s.vertices[i1]) - centre;
+    const double la = glm::length(a);
+    if (!(la > 0.0)) return false;
+    const glm::dvec3 x = a / la;
+    glm::dvec3 y = b - glm::dot(b, x) * x;
+    const double ly = glm::length(y);
+    if (!(ly > 0.0)) return false;
+    y /= ly;
+    frame = glm::dmat3(x, y, glm::cross(x, y));
+    return true;
+}
+
+constexpr size_t kMaxStoredVertices = size_t(1) << 20;  // bounds the cache's memory (~40 MB)
+constexpr size_t kMaxPerBucket = 4;                       // bounds the work of one lookup
+
+}  // namespace
+
+struct CopyCache::Impl {
+    struct Prototype {
+        uint32_t vertex_count, face_count, edge_count;
+        size_t topology_at, topology_size, positions_at;
+        double rms;
+        uint32_t anchor0, anchor1;
+        glm::dmat3 anchors;
+        FrameChoice choice;
+    };
+    double tolerance;
+    std::vector<Prototype> prototypes;
+    std::vector<int64_t> topology;
+    std::vector<double> positions;
+    std::unordered_map<uint64_t, std::vector<uint32_t>> buckets;
+
+    // Counts plus two similarity-invariant distance ratios, coarsely quantised: copies land in
+    // one bucket (a quantisation border only costs a miss, never a wrong match).
+    uint64_t key(const SubmeshView& s, double rms) const {
+        uint64_t h = mix(mix(mix(0, s.vertex_count), s.face_count), s.edge_count);
+        const glm::dvec3 p0 = s.position(s.vertices[0]);
+        for (uint32_t i : {1u, s.vertex_count - 1}) {
+            const double ratio = rms > 0.0 ? glm::length(s.position(s.vertices[i]) - p0) / rms : 0.0;
+            h = mix(h, uint64_t(std::llround(ratio * 64.0)));
+        }
+        return h;
+    }
+};
+
+CopyCache::CopyCache(double tolerance) : impl_(new Impl) { impl_->tolerance = tolerance; }
+CopyCache::~CopyCache() { delete impl_; }
+
+double CopyCache::displacement(const SubmeshView& s) const {
+    glm::dvec3 centre;
+    double rms;
+    spread(s, centre, rms);
+    return impl_->tolerance * rms;
+}
+
+bool CopyCache::lookup(const SubmeshView& s, FrameChoice& choice) {
+    if (s.vertex_count < 3) return false;
+    glm::dvec3 centre;
+    double rms;
+    spread(s, centre, rms);
+    if (!(rms > 0.0)) return false;
+    const auto bucket = impl_->buckets.find(impl_->key(s, rms));
+    if (bucket == impl_->buckets.end()) return false;
+    for (uint32_t id : bucket->second) {
+        const Impl::Prototype& p = impl_->prototypes[id];
+        if (p.vertex_count != s.vertex_count || p.face_count != s.face_count || p.edge_count != s.edge_count)
+            continue;
+        size_t at = p.topology_at;
+        bool same = true;
+        visit_topology(s, [&](int64_t x) {
+            same = same && at < p.topology_at + p.topology_size && impl_->topology[at] == x;
+            ++at;
+        });
+        if (!same || at != p.topology_at + p.topology_size) continue;
+        glm::dmat3 anchors;
+        if (!anchor_frame(s, centre, p.anchor0, p.anchor1, anchors)) continue;
+        const glm::dmat3 rotation = anchors * glm::transpose(p.anchors);
+        const double scale = rms / p.rms, limit = impl_->tolerance * rms;
+        const double* stored = impl_->positions.data() + p.positions_at;
+        bool fits = true;
+        for (uint32_t i = 0; i < s.vertex_count && fits; ++i) {
+            const glm::dvec3 q(stored[i * 3], stored[i * 3 + 1], stored[i * 3 + 2]);
+            const glm::dvec3 mapped = scale * (rotation * q);
+            fits = glm::length(s.position(s.vertices[i]) - centre - mapped) <= limit;
+        }
+        if (!fits) continue;
+        choice = p.choice;
+        return true;
+    }
+    return false;
+}
+
+void CopyCache::insert(const SubmeshView& s, const FrameChoice& choice) {
+    if (!choice.stable || s.vertex_count < 3) return;
+    if (impl_->positions.size() / 3 + s.vertex_count > kMaxStoredVertices) return;
+    glm::dvec3 centre;
+    double rms;
+    spread(s, centre, rms);
+    if (!(rms > 0.0)) return;
+    std::vector<uint32_t>& bucket = impl_->buckets[impl_->key(s, rms)];
+    if (bucket.size() >= kMaxPerBucket) return;
+
+    // Anchors: the first vertex well away from the centre, then the vertex farthest off that line.
+    uint32_t a0 = s.vertex_count;
+    for (uint32_t i = 0; i < s.vertex_count && a0 == s.vertex_count; ++i)
+        if (glm::length(s.position(s.vertices[i]) - centre) >= 0.5 * rms) a0 = i;
+    if (a0 == s.vertex_count) return;
+    const glm::dvec3 x = glm::normalize(s.position(s.vertices[a0]) - centre);
+    uint32_t a1 = 0;
+    double best = 0.0;
+    for (uint32_t i = 0; i < s.vertex_count; ++i) {
+        const double off = glm::length(glm::cross(x, s.position(s.vertices[i]) - centre));
+        if (off > best) { best = off; a1 = i; }
+    }
+    Impl::Prototype p;
+    if (best < 0.1 * rms || !anchor_frame(s, centre, a0, a1, p.anchors)) return;  // too thin to anchor
+    p.vertex_count = s.vertex_count;
+    p.face_count = s.face_count;
+    p.edge_count = s.edge_count;
+    p.rms = rms;
+    p.anchor0 = a0;
+    p.anchor1 = a1;
+    p.choice = choice;
+    p.topology_at = impl_->topology.size();
+    visit_topology(s, [&](int64_t v) { impl_->topology.push_back(v); });
+    p.topology_size = impl_->topology.size() - p.topology_at;
+    p.positions_at = impl_->positions.size();
+    for (uint32_t i = 0; i < s.vertex_count; ++i) {
+        const glm::dvec3 q = s.position(s.vertices[i]) - centre;
+        impl_->positions.insert(impl_->positions.end(), {q.x, q.y, q.z});
+    }
+    bucket.push_back(uint32_t(impl_->prototypes.size()));
+    impl_->prototypes.push_back(p);
+}
+
+uint32_t fingerprint_submesh(const SubmeshView& s, uint32_t seed) {
+    uint64_t h = mix(seed, s.vertex_count);
+    for (uint32_t i = 0; i < s.vertex_count; ++i) {
+        uint32_t bits[3];
+        std::memcpy(bits, s.mesh->positions + size_t(s.vertices[i]) * 3, sizeof bits);
+        h = mix(mix(mix(h, bits[0]), bits[1]), bits[2]);
+    }
+    visit_topology(s, [&](int64_t x) { h = mix(h, uint64_t(x)); });
+    return uint32_t(h ^ (h >> 32));
+}
+
+}  // namespace boxmarch

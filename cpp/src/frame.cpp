@@ -1,0 +1,220 @@
+// Frame derivation: which faces (or edges) orient a submesh, the frame they span, its quaternion,
+// and the 24 axis-aligned turns an artist can apply on top.
+#include "internal.h"
+
+#include <glm/gtc/quaternion.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace boxmarch {
+
+namespace {
+
+// A candidate direction (face or edge) with the size that ranks it and how far a copy's
+// vertex displacement could move that size and the direction itself.
+struct Candidate {
+    glm::dvec3 direction;
+    double size;          // face area or edge length
+    double size_slack;    // how much the size may move on a copy within the displacement
+    double angle_slack;   // radians the direction may turn on that copy
+};
+
+// Newell's normal of face f: robust for non-planar and concave polygons. Writes its unit normal,
+// area and perimeter; the normal is zero when the area is.
+void face_measure(const SubmeshView& s, uint32_t f, glm::dvec3& normal, double& area, double& perimeter) {
+    const MeshView& m = *s.mesh;
+    const int32_t* corners = m.corner_verts + m.face_starts[f];
+    const int32_t n = m.face_sizes[f];
+    const glm::dvec3 first = s.position(uint32_t(corners[0]));
+    glm::dvec3 sum(0.0);
+    perimeter = 0.0;
+    glm::dvec3 prev = glm::dvec3(0.0);
+    for (int32_t c = 1; c <= n; ++c) {
+        const glm::dvec3 cur = s.position(uint32_t(corners[c % n])) - first;
+        sum += glm::cross(prev, cur);
+        perimeter += glm::length(cur - prev);
+        prev = cur;
+    }
+    const double len = glm::length(sum);
+    area = 0.5 * len;
+    normal = len > 0.0 ? sum / len : glm::dvec3(0.0);
+}
+
+void edge_measure(const SubmeshView& s, uint32_t e, glm::dvec3& direction, double& length) {
+    const int32_t* ends = s.mesh->edges + size_t(e) * 2;
+    const glm::dvec3 d = s.position(uint32_t(ends[1])) - s.position(uint32_t(ends[0]));
+    length = glm::length(d);
+    direction = length > 0.0 ? d / length : glm::dvec3(0.0);
+}
+
+// Among eligible candidates, the lowest index whose size is within the tie band of the largest.
+// Returns -1 when none is eligible. Clears `stable` when a copy's displacement could change which
+// candidates are eligible (eligibility_margin[i] <= 0) or which fall inside the band.
+int64_t pick_largest(const std::vector<Candidate>& c, const std::vector<char>& eligible,
+                     const std::vector<double>& eligibility_margin, bool& stable) {
+    double best = 0.0, best_slack = 0.0;
+    for (size_t i = 0; i < c.size(); ++i) {
+        if (eligibility_margin[i] <= 0.0) stable = false;
+        if (eligible[i] && c[i].size > best) {
+            best = c[i].size;
+            best_slack = c[i].size_slack;
+        }
+    }
+    if (best <= 0.0) return -1;
+    const double cut = (1.0 - kTieBand) * best;
+    int64_t pick = -1;
+    for (size_t i = 0; i < c.size(); ++i) {
+        if (!eligible[i]) continue;
+        if (std::abs(c[i].size - cut) <= c[i].size_slack + best_slack) stable = false;
+        if (pick < 0 && c[i].size >= cut) pick = int64_t(i);
+    }
+    return pick;
+}
+
+// Candidates for the second axis: eligible when more than angle_epsilon off the first axis.
+int64_t pick_second(const std::vector<Candidate>& c, const std::vector<char>& usable,
+                    const Candidate& first, double cos_epsilon, bool& stable) {
+    std::vector<char> eligible(c.size());
+    std::vector<double> margin(c.size());
+    for (size_t i = 0; i < c.size(); ++i) {
+        const double dot = std::abs(glm::dot(c[i].direction, first.direction));
+        eligible[i] = usable[i] && dot < cos_epsilon;
+        margin[i] = usable[i] ? std::abs(dot - cos_epsilon) - (c[i].angle_slack + first.angle_slack) : 1.0;
+    }
+    return pick_largest(c, eligible, margin, stable);
+}
+
+glm::dvec3 orthogonal_part(const glm::dvec3& d, const glm::dvec3& axis) {
+    return d - glm::dot(d, axis) * axis;
+}
+
+// The world axis least aligned with `axis` (lowest index on a tie), made orthogonal to it.
+glm::dvec3 world_second_axis(const glm::dvec3& axis) {
+    int best = 0;
+    for (int k = 1; k < 3; ++k)
+        if (std::abs(axis[k]) < std::abs(axis[best])) best = k;
+    glm::dvec3 w(0.0);
+    w[best] = 1.0;
+    return glm::normalize(orthogonal_part(w, axis));
+}
+
+}  // namespace
+
+FrameSource frame_source(const FrameChoice& choice) {
+    if (choice.first_kind == DirectionKind::None) return FrameSource::Identity;
+    if (choice.second_kind == DirectionKind::World) return FrameSource::OneAxis;
+    if (choice.first_kind == DirectionKind::Edge) return FrameSource::Edges;
+    return choice.second_kind == DirectionKind::Face ? FrameSource::Faces : FrameSource::FaceEdge;
+}
+
+FrameChoice choose_frame(const SubmeshView& s, double cos_epsilon, double displacement) {
+    // Sizes below these are noise relative to the submesh: zero-area faces, zero-length edges.
+    double reach = 0.0;
+    for (uint32_t i = 0; i < s.vertex_count; ++i) reach = std::max(reach, glm::length(s.position(s.vertices[i])));
+    const double min_length = 1e-9 * reach, min_area = min_length * min_length;
+    const double d2 = 2.0 * displacement;
+
+    FrameChoice choice;
+    choice.stable = true;
+
+    std::vector<Candidate> faces(s.face_count);
+    std::vector<char> face_usable(s.face_count);
+    std::vector<double> always(s.face_count, 1.0);
+    for (uint32_t i = 0; i < s.face_count; ++i) {
+        double area, perimeter;
+        face_measure(s, s.faces[i], faces[i].direction, area, perimeter);
+        faces[i].size = area;
+        faces[i].size_slack = d2 * perimeter;
+        faces[i].angle_slack = area > 0.0 ? d2 * perimeter / area : 1.0;
+        face_usable[i] = area > min_area;
+    }
+    std::vector<Candidate> edges(s.edge_count);
+    std::vector<char> edge_usable(s.edge_count);
+    for (uint32_t i = 0; i < s.edge_count; ++i) {
+        double length;
+        edge_measure(s, s.edges[i], edges[i].direction, length);
+        edges[i].size = length;
+        edges[i].size_slack = d2;
+        edges[i].angle_slack = length > 0.0 ? d2 / length : 1.0;
+        edge_usable[i] = length > min_length;
+    }
+
+    const int64_t a = pick_largest(faces, face_usable, always, choice.stable);
+    if (a >= 0) {
+        choice.first_kind = DirectionKind::Face;
+        choice.first = uint32_t(a);
+        const int64_t b = pick_second(faces, face_usable, faces[a], cos_epsilon, choice.stable);
+        if (b >= 0) {
+            choice.second_kind = DirectionKind::Face;
+            choice.second = uint32_t(b);
+            return choice;
+        }
+        const int64_t e = pick_second(edges, edge_usable, faces[a], cos_epsilon, choice.stable);
+        choice.second_kind = e >= 0 ? DirectionKind::Edge : DirectionKind::World;
+        choice.second = e >= 0 ? uint32_t(e) : 0;
+        return choice;
+    }
+    std::vector<double> edge_always(s.edge_count, 1.0);
+    const int64_t e = pick_largest(edges, edge_usable, edge_always, choice.stable);
+    if (e < 0) return choice;  // Identity: nothing has a direction
+    choice.first_kind = DirectionKind::Edge;
+    choice.first = uint32_t(e);
+    const int64_t f = pick_second(edges, edge_usable, edges[e], cos_epsilon, choice.stable);
+    choice.second_kind = f >= 0 ? DirectionKind::Edge : DirectionKind::World;
+    choice.second = f >= 0 ? uint32_t(f) : 0;
+    return choice;
+}
+
+glm::dmat3 frame_from_choice(const FrameChoice& choice, const SubmeshView& s) {
+    auto direction = [&](DirectionKind kind, uint32_t index) {
+        glm::dvec3 d;
+        double size, perimeter;
+        if (kind == DirectionKind::Face) face_measure(s, s.faces[index], d, size, perimeter);
+        else edge_measure(s, s.edges[index], d, size);
+        return d;
+    };
+    if (choice.first_kind == DirectionKind::None) return glm::dmat3(1.0);
+    const glm::dvec3 x = direction(choice.first_kind, choice.first);
+    glm::dvec3 y;
+    if (choice.second_kind == DirectionKind::World) {
+        y = world_second_axis(x);
+    } else {
+        y = orthogonal_part(direction(choice.second_kind, choice.second), x);
+        const double len = glm::length(y);
+        y = len > 0.0 ? y / len : world_second_axis(x);
+    }
+    return glm::dmat3(x, y, glm::cross(x, y));
+}
+
+glm::dvec4 quaternion_from_frame(const glm::dmat3& frame) {
+    const glm::dquat q = glm::normalize(glm::quat_cast(frame));
+    glm::dvec4 v(q.x, q.y, q.z, q.w);
+    // q and -q are the same rotation; pick the one with w > 0, or at w == 0 the one whose first
+    // nonzero vector component is positive.
+    double lead = v.w;
+    for (int k = 0; k < 3 && lead == 0.0; ++k) lead = v[k];
+    return lead < 0.0 ? -v : v;
+}
+
+bool axis_turn_matrix(double* matrix, int index) {
+    static const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+    static const int parity[6] = {1, -1, -1, 1, 1, -1};
+    if (index < 0 || index >= 24) return false;
+    int found = 0;
+    for (int p = 0; p < 6; ++p)
+        for (int signs = 0; signs < 8; ++signs) {
+            const int sx = (signs & 4) ? -1 : 1, sy = (signs & 2) ? -1 : 1, sz = (signs & 1) ? -1 : 1;
+            if (parity[p] * sx * sy * sz != 1) continue;
+            if (found++ != index) continue;
+            const int sign[3] = {sx, sy, sz};
+            for (int k = 0; k < 9; ++k) matrix[k] = 0.0;
+            for (int col = 0; col < 3; ++col) matrix[col * 3 + perms[p][col]] = sign[col];
+            return true;
+        }
+    return false;
+}
+
+}  // namespace boxmarch

@@ -1,0 +1,108 @@
+// Shared pieces of the bake that are not part of the public contract.
+#pragma once
+
+#include "boxmarch/boxmarch.h"
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+
+namespace boxmarch {
+
+// One submesh seen through the whole mesh: its vertices (ascending), faces and edges as lists of
+// indices into the mesh's arrays. base is the position of its lowest vertex in double: every
+// computation works relative to it so far-away submeshes keep their precision.
+struct SubmeshView {
+    const MeshView* mesh;
+    const uint32_t* vertices;
+    uint32_t vertex_count;
+    const uint32_t* faces;
+    uint32_t face_count;
+    const uint32_t* edges;
+    uint32_t edge_count;
+    glm::dvec3 base;
+
+    glm::dvec3 position(uint32_t v) const {
+        const float* p = mesh->positions + size_t(v) * 3;
+        return glm::dvec3(p[0], p[1], p[2]) - base;
+    }
+};
+
+// Relative band inside which two face areas (or edge lengths, or extents) count as equal; the
+// lowest index wins such a tie, so float noise cannot pick between opposite faces of a box.
+constexpr double kTieBand = 1e-3;
+
+// Which geometry a frame's two directions come from. Indices are positions in the submesh's face
+// or edge list, so a decision made on one copy names the same elements on another.
+enum class DirectionKind : uint8_t { None, Face, Edge, World };
+
+struct FrameChoice {
+    DirectionKind first_kind = DirectionKind::None;
+    DirectionKind second_kind = DirectionKind::None;
+    uint32_t first = 0;
+    uint32_t second = 0;
+    // True when every comparison behind the choice clears its threshold by more than the effect
+    // of moving each vertex by `displacement`: a copy that close makes the same choice.
+    bool stable = false;
+};
+
+FrameSource frame_source(const FrameChoice& choice);
+
+// Reads the submesh's faces and edges; returns the choice the bake's rules make (largest face,
+// next face at least angle_epsilon off its plane, fallbacks for flat and face-less submeshes).
+// stable is judged for vertex displacements up to `displacement` (object units).
+FrameChoice choose_frame(const SubmeshView& s, double cos_epsilon, double displacement);
+
+// Builds the orthonormal right-handed frame (columns = local axes in object space) that a choice
+// names, from the submesh's own geometry. The same arithmetic serves fresh and cached choices.
+glm::dmat3 frame_from_choice(const FrameChoice& choice, const SubmeshView& s);
+
+// Unit quaternion (x, y, z, w) of a rotation matrix with w >= 0 (and, at w == 0, the first
+// nonzero of x, y, z positive), so the same frame always gives the same four numbers.
+glm::dvec4 quaternion_from_frame(const glm::dmat3& frame);
+
+// Similarity-copy cache of frame choices (fingerprint.cpp). Not thread-safe: one per thread.
+class CopyCache {
+public:
+    explicit CopyCache(double tolerance);
+    ~CopyCache();
+    CopyCache(const CopyCache&) = delete;
+    CopyCache& operator=(const CopyCache&) = delete;
+    // Returns true and sets choice when a stored submesh maps onto s by a rotation, uniform scale
+    // and translation within tolerance * (s's rms radius) at every vertex, with identical
+    // topology. Mirrored copies never match (the map is a proper rotation).
+    bool lookup(const SubmeshView& s, FrameChoice& choice);
+    // Stores s and its (stable) choice for later copies; silently ignores it past the size cap.
+    void insert(const SubmeshView& s, const FrameChoice& choice);
+    // Largest vertex displacement a matching copy can have, for choose_frame's stability test.
+    double displacement(const SubmeshView& s) const;
+
+private:
+    struct Impl;
+    Impl* impl_;
+};
+
+// encode.cpp: the colour encoding of local offsets f (vector from vertex to origin, box-local).
+// Decoding is the seed's GetFragToOrigin: f = (rgb * 2 - 1) / a, with one alpha per submesh.
+
+// Writes rgba[v * 4 ..] for each listed vertex v from offsets[i] (i-th listed vertex): rgb =
+// 0.5 + 0.5 * s * f, a = s, s = 1 / largest |component| (1 when every offset is zero).
+// Returns s.
+float encode_float(const glm::dvec3* offsets, const uint32_t* vertices, uint32_t count, float* rgba);
+
+// Byte colour (raw bytes, as Unity's Color32 and Blender's color_srgb hold them): among the 32
+// largest alphas A/255 that keep a*f inside the representable range, the one whose rounded bytes
+// decode with the least worst-case error. Writes rgba bytes; returns the chosen alpha A/255.
+float encode_byte(const glm::dvec3* offsets, const uint32_t* vertices, uint32_t count, uint8_t* rgba);
+
+// The decode formula, in double, from stored values.
+glm::dvec3 decode_float(const float* rgba);
+glm::dvec3 decode_byte(const uint8_t* rgba);
+
+// The shader's rotate_vector: v + 2 cross(q.xyz, cross(q.xyz, v) + q.w v), used as stored.
+glm::dvec3 rotate_vector(const glm::dvec3& v, const float* q);
+
+// 32-bit fingerprint of a submesh's exact positions and topology, mixed with seed.
+uint32_t fingerprint_submesh(const SubmeshView& s, uint32_t seed);
+
+}  // namespace boxmarch

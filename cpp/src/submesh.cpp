@@ -1,0 +1,59 @@
+// Connected components of a mesh through its edges and face corners (union-find).
+#include "boxmarch/boxmarch.h"
+
+#include <vector>
+
+namespace boxmarch {
+
+namespace {
+
+// Root of v, halving the path on the way so later finds stay short.
+int32_t find_root(std::vector<int32_t>& parent, int32_t v) {
+    while (parent[v] != v) {
+        parent[v] = parent[parent[v]];
+        v = parent[v];
+    }
+    return v;
+}
+
+// Joins the sets of a and b; the smaller root wins, which keeps the forest shallow enough and
+// makes the outcome independent of the order joins arrive in.
+void unite(std::vector<int32_t>& parent, int32_t a, int32_t b) {
+    a = find_root(parent, a);
+    b = find_root(parent, b);
+    if (a < b) parent[b] = a;
+    else if (b < a) parent[a] = b;
+}
+
+}  // namespace
+
+size_t find_submeshes(int32_t* submesh_of_vertex, const MeshView& mesh) {
+    const size_t n = mesh.vertex_count;
+    std::vector<int32_t> parent(n);
+    for (size_t v = 0; v < n; ++v) parent[v] = int32_t(v);
+    for (size_t e = 0; e < mesh.edge_count; ++e) unite(parent, mesh.edges[2 * e], mesh.edges[2 * e + 1]);
+    // Faces normally come with their edges; joining corners too keeps edge-less face data right.
+    for (size_t f = 0; f < mesh.face_count; ++f) {
+        const int32_t* corners = mesh.corner_verts + mesh.face_starts[f];
+        for (int32_t c = 1; c < mesh.face_sizes[f]; ++c) unite(parent, corners[0], corners[c]);
+    }
+    // Roots are the lowest vertex of their set, so numbering roots in vertex order numbers
+    // submeshes by their lowest vertex.
+    size_t count = 0;
+    for (size_t v = 0; v < n; ++v) {
+        const int32_t root = find_root(parent, int32_t(v));
+        submesh_of_vertex[v] = (root == int32_t(v)) ? int32_t(count++) : submesh_of_vertex[root];
+    }
+    return count;
+}
+
+void group_by_submesh(uint32_t* offsets, uint32_t* items, const int32_t* submesh_of_item,
+                      size_t item_count, size_t submesh_count) {
+    for (size_t s = 0; s <= submesh_count; ++s) offsets[s] = 0;
+    for (size_t i = 0; i < item_count; ++i) ++offsets[submesh_of_item[i] + 1];
+    for (size_t s = 0; s < submesh_count; ++s) offsets[s + 1] += offsets[s];
+    std::vector<uint32_t> cursor(offsets, offsets + submesh_count);
+    for (size_t i = 0; i < item_count; ++i) items[cursor[submesh_of_item[i]]++] = uint32_t(i);
+}
+
+}  // namespace boxmarch
