@@ -109,6 +109,7 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
     auto run = [&](size_t first, size_t last, Accumulated& acc) {
         CopyCache cache(kCacheTolerance);
         std::vector<glm::dvec3> local, offsets;
+        FrameScratch scratch;
         for (size_t sm = first; sm < last; ++sm) {
             SubmeshView s{&mesh,
                           g.vertices.data() + g.vertex_offsets[sm], g.vertex_offsets[sm + 1] - g.vertex_offsets[sm],
@@ -146,7 +147,7 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
             if (options.use_cache && cache.lookup(s, choice)) {
                 ++acc.cache_hits;
             } else {
-                choice = choose_frame(s, cos_epsilon, options.use_cache ? cache.displacement(s) : 0.0);
+                choice = choose_frame(s, cos_epsilon, options.use_cache ? cache.displacement(s) : 0.0, scratch);
                 if (options.use_cache) cache.insert(s, choice);
             }
             const FrameSource source = frame_source(choice);

@@ -15,12 +15,6 @@ namespace {
 
 // A candidate direction (face or edge) with the size that ranks it and how far a copy's
 // vertex displacement could move that size and the direction itself.
-struct Candidate {
-    glm::dvec3 direction;
-    double size;          // face area or edge length
-    double size_slack;    // how much the size may move on a copy within the displacement
-    double angle_slack;   // radians the direction may turn on that copy
-};
 
 // Newell's normal of face f: robust for non-planar and concave polygons. Writes its unit normal,
 // area and perimeter; the normal is zero when the area is.
@@ -52,39 +46,69 @@ void edge_measure(const SubmeshView& s, uint32_t e, glm::dvec3& direction, doubl
 
 // Among eligible candidates, the lowest index whose size is within the tie band of the largest.
 // Returns -1 when none is eligible. Clears `stable` when a copy's displacement could change which
-// candidates are eligible (eligibility_margin[i] <= 0) or which fall inside the band.
-int64_t pick_largest(const std::vector<Candidate>& c, const std::vector<char>& eligible,
-                     const std::vector<double>& eligibility_margin, bool& stable) {
+// candidates are eligible (margin <= 0) or which fall inside the band.
+int64_t pick_largest(const std::vector<Candidate>& c, bool& stable) {
     double best = 0.0, best_slack = 0.0;
-    for (size_t i = 0; i < c.size(); ++i) {
-        if (eligibility_margin[i] <= 0.0) stable = false;
-        if (eligible[i] && c[i].size > best) {
-            best = c[i].size;
-            best_slack = c[i].size_slack;
+    for (const Candidate& x : c) {
+        if (x.margin <= 0.0) stable = false;
+        if (x.eligible && x.size > best) {
+            best = x.size;
+            best_slack = x.size_slack;
         }
     }
     if (best <= 0.0) return -1;
     const double cut = (1.0 - kTieBand) * best;
     int64_t pick = -1;
     for (size_t i = 0; i < c.size(); ++i) {
-        if (!eligible[i]) continue;
+        if (!c[i].eligible) continue;
         if (std::abs(c[i].size - cut) <= c[i].size_slack + best_slack) stable = false;
         if (pick < 0 && c[i].size >= cut) pick = int64_t(i);
     }
     return pick;
 }
 
-// Candidates for the second axis: eligible when more than angle_epsilon off the first axis.
-int64_t pick_second(const std::vector<Candidate>& c, const std::vector<char>& usable,
-                    const Candidate& first, double cos_epsilon, bool& stable) {
-    std::vector<char> eligible(c.size());
-    std::vector<double> margin(c.size());
-    for (size_t i = 0; i < c.size(); ++i) {
-        const double dot = std::abs(glm::dot(c[i].direction, first.direction));
-        eligible[i] = usable[i] && dot < cos_epsilon;
-        margin[i] = usable[i] ? std::abs(dot - cos_epsilon) - (c[i].angle_slack + first.angle_slack) : 1.0;
+// Marks candidates for the second axis: usable ones more than angle_epsilon off the first axis.
+void mark_second(std::vector<Candidate>& c, const Candidate& first, double cos_epsilon) {
+    for (Candidate& x : c) {
+        const double dot = std::abs(glm::dot(x.direction, first.direction));
+        x.eligible = x.usable && dot < cos_epsilon;
+        x.margin = x.usable ? std::abs(dot - cos_epsilon) - (x.angle_slack + first.angle_slack) : 1.0;
     }
-    return pick_largest(c, eligible, margin, stable);
+}
+
+// Usable (non-degenerate) candidates are eligible, with nothing near a threshold.
+void mark_usable(std::vector<Candidate>& c) {
+    for (Candidate& x : c) {
+        x.eligible = x.usable;
+        x.margin = 1.0;
+    }
+}
+
+void measure_faces(const SubmeshView& s, double d2, std::vector<Candidate>& faces) {
+    faces.resize(s.face_count);
+    double longest = 0.0;
+    for (uint32_t i = 0; i < s.face_count; ++i) {
+        double perimeter;
+        face_measure(s, s.faces[i], faces[i].direction, faces[i].size, perimeter);
+        faces[i].size_slack = d2 * perimeter;
+        faces[i].angle_slack = faces[i].size > 0.0 ? d2 * perimeter / faces[i].size : 1.0;
+        longest = std::max(longest, perimeter);
+    }
+    // Areas this small next to the largest face's scale are rounding noise: zero-area faces.
+    const double min_area = 1e-18 * longest * longest;
+    for (Candidate& f : faces) f.usable = f.size > min_area;
+}
+
+void measure_edges(const SubmeshView& s, double d2, std::vector<Candidate>& edges) {
+    edges.resize(s.edge_count);
+    double longest = 0.0;
+    for (uint32_t i = 0; i < s.edge_count; ++i) {
+        edge_measure(s, s.edges[i], edges[i].direction, edges[i].size);
+        edges[i].size_slack = d2;
+        edges[i].angle_slack = edges[i].size > 0.0 ? d2 / edges[i].size : 1.0;
+        longest = std::max(longest, edges[i].size);
+    }
+    for (Candidate& e : edges) e.usable = e.size > 1e-9 * longest;
 }
 
 glm::dvec3 orthogonal_part(const glm::dvec3& d, const glm::dvec3& axis) {
@@ -110,59 +134,42 @@ FrameSource frame_source(const FrameChoice& choice) {
     return choice.second_kind == DirectionKind::Face ? FrameSource::Faces : FrameSource::FaceEdge;
 }
 
-FrameChoice choose_frame(const SubmeshView& s, double cos_epsilon, double displacement) {
-    // Sizes below these are noise relative to the submesh: zero-area faces, zero-length edges.
-    double reach = 0.0;
-    for (uint32_t i = 0; i < s.vertex_count; ++i) reach = std::max(reach, glm::length(s.position(s.vertices[i])));
-    const double min_length = 1e-9 * reach, min_area = min_length * min_length;
+FrameChoice choose_frame(const SubmeshView& s, double cos_epsilon, double displacement, FrameScratch& scratch) {
+    std::vector<Candidate>& faces = scratch.faces;
+    std::vector<Candidate>& edges = scratch.edges;
     const double d2 = 2.0 * displacement;
-
     FrameChoice choice;
     choice.stable = true;
 
-    std::vector<Candidate> faces(s.face_count);
-    std::vector<char> face_usable(s.face_count);
-    std::vector<double> always(s.face_count, 1.0);
-    for (uint32_t i = 0; i < s.face_count; ++i) {
-        double area, perimeter;
-        face_measure(s, s.faces[i], faces[i].direction, area, perimeter);
-        faces[i].size = area;
-        faces[i].size_slack = d2 * perimeter;
-        faces[i].angle_slack = area > 0.0 ? d2 * perimeter / area : 1.0;
-        face_usable[i] = area > min_area;
-    }
-    std::vector<Candidate> edges(s.edge_count);
-    std::vector<char> edge_usable(s.edge_count);
-    for (uint32_t i = 0; i < s.edge_count; ++i) {
-        double length;
-        edge_measure(s, s.edges[i], edges[i].direction, length);
-        edges[i].size = length;
-        edges[i].size_slack = d2;
-        edges[i].angle_slack = length > 0.0 ? d2 / length : 1.0;
-        edge_usable[i] = length > min_length;
-    }
-
-    const int64_t a = pick_largest(faces, face_usable, always, choice.stable);
+    measure_faces(s, d2, faces);
+    mark_usable(faces);
+    const int64_t a = pick_largest(faces, choice.stable);
     if (a >= 0) {
         choice.first_kind = DirectionKind::Face;
         choice.first = uint32_t(a);
-        const int64_t b = pick_second(faces, face_usable, faces[a], cos_epsilon, choice.stable);
+        const Candidate first = faces[a];
+        mark_second(faces, first, cos_epsilon);
+        const int64_t b = pick_largest(faces, choice.stable);
         if (b >= 0) {
             choice.second_kind = DirectionKind::Face;
             choice.second = uint32_t(b);
             return choice;
         }
-        const int64_t e = pick_second(edges, edge_usable, faces[a], cos_epsilon, choice.stable);
+        measure_edges(s, d2, edges);
+        mark_second(edges, first, cos_epsilon);
+        const int64_t e = pick_largest(edges, choice.stable);
         choice.second_kind = e >= 0 ? DirectionKind::Edge : DirectionKind::World;
         choice.second = e >= 0 ? uint32_t(e) : 0;
         return choice;
     }
-    std::vector<double> edge_always(s.edge_count, 1.0);
-    const int64_t e = pick_largest(edges, edge_usable, edge_always, choice.stable);
+    measure_edges(s, d2, edges);
+    mark_usable(edges);
+    const int64_t e = pick_largest(edges, choice.stable);
     if (e < 0) return choice;  // Identity: nothing has a direction
     choice.first_kind = DirectionKind::Edge;
     choice.first = uint32_t(e);
-    const int64_t f = pick_second(edges, edge_usable, edges[e], cos_epsilon, choice.stable);
+    mark_second(edges, edges[e], cos_epsilon);
+    const int64_t f = pick_largest(edges, choice.stable);
     choice.second_kind = f >= 0 ? DirectionKind::Edge : DirectionKind::World;
     choice.second = f >= 0 ? uint32_t(f) : 0;
     return choice;

@@ -6,6 +6,7 @@
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <vector>
 
 namespace boxmarch {
 
@@ -48,10 +49,27 @@ struct FrameChoice {
 
 FrameSource frame_source(const FrameChoice& choice);
 
-// Reads the submesh's faces and edges; returns the choice the bake's rules make (largest face,
+// A candidate direction (face normal or edge) with the size that ranks it and how far a copy's
+// vertex displacement could move that size and the direction itself.
+struct Candidate {
+    glm::dvec3 direction;
+    double size;          // face area or edge length
+    double size_slack;    // how much the size may move on a copy within the displacement
+    double angle_slack;   // radians the direction may turn on that copy
+    bool usable;          // not degenerate (zero area or length)
+    bool eligible;        // passes the current selection's test
+    double margin;        // how clearly it passes or fails that test (<= 0: a copy may differ)
+};
+
+// Buffers choose_frame reuses from one submesh to the next.
+struct FrameScratch {
+    std::vector<Candidate> faces, edges;
+};
+
+// Reads the submesh's faces (and edges when faces cannot orient it); returns the choice the bake's rules make (largest face,
 // next face at least angle_epsilon off its plane, fallbacks for flat and face-less submeshes).
 // stable is judged for vertex displacements up to `displacement` (object units).
-FrameChoice choose_frame(const SubmeshView& s, double cos_epsilon, double displacement);
+FrameChoice choose_frame(const SubmeshView& s, double cos_epsilon, double displacement, FrameScratch& scratch);
 
 // Builds the orthonormal right-handed frame (columns = local axes in object space) that a choice
 // names, from the submesh's own geometry. The same arithmetic serves fresh and cached choices.
