@@ -8,6 +8,8 @@
 
 #include <sstream>
 #include <string>
+#include <vector>
+#include <algorithm>
 
 namespace py = pybind11;
 using namespace boxmarch;
@@ -184,6 +186,25 @@ PYBIND11_MODULE(_core, m) {
           },
           py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"), py::arg("corner_verts"),
           "Connected components: (submesh_of_vertex int32[N], count), numbered by lowest vertex.");
+
+    m.def("face_starts_from_corner_edges",
+          [](const py::object& corner_verts, const py::object& corner_edges, const py::object& edges, size_t vertex_count) {
+              auto cv = checked<int32_t>(corner_verts, "corner_verts", -1, 0);
+              auto ce = checked<int32_t>(corner_edges, "corner_edges", cv.shape(0), 0);
+              auto e = checked<int32_t>(edges, "edges", -1, 2);
+              std::vector<int32_t> starts(size_t(cv.shape(0)) / 3 + 1);
+              size_t count;
+              {
+                  py::gil_scoped_release release;
+                  count = face_starts_from_corner_edges(starts.data(), cv.data(), ce.data(), size_t(cv.shape(0)),
+                                                        e.data(), size_t(e.shape(0)), vertex_count);
+              }
+              py::array_t<int32_t> result(py::ssize_t(std::min(count, starts.size())));
+              std::copy(starts.begin(), starts.begin() + result.shape(0), result.mutable_data());
+              return py::make_tuple(result, count);
+          },
+          py::arg("corner_verts"), py::arg("corner_edges"), py::arg("edges"), py::arg("vertex_count"),
+          "(face_starts int32, count): face boundaries recovered from corner edges; compare count with the real face count.");
 
     m.def("bake", &bake_py, py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"),
           py::arg("corner_verts"), py::kw_only(), py::arg("mask") = py::none(),

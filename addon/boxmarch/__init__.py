@@ -1,0 +1,42 @@
+# boxmarch: bake box-local frames into meshes for raymarching inside rasterized boxes.
+# Copyright (C) 2026 the boxmarch developers. SPDX-License-Identifier: GPL-3.0-or-later
+"""boxmarch: a Blender add-on and a Blender-free NumPy API (``boxmarch.core``).
+
+Importing the package does not import ``bpy``; ``register()`` does, when Blender loads the add-on.
+"""
+
+bl_info = {
+    "name": "Boxmarch",
+    "author": "boxmarch developers",
+    "version": (0, 1, 0),
+    "blender": (3, 4, 0),
+    "location": "View3D > Sidebar > Boxmarch; Object and Edit Mesh menus",
+    "description": "Bake per-submesh origins and frames for raymarching inside rasterized boxes",
+    "category": "Mesh",
+}
+
+_registered = []
+
+
+def register():
+    import bpy
+
+    from . import operators, ui
+
+    operators.register_enums()
+    for cls in operators.classes + ui.classes:
+        bpy.utils.register_class(cls)
+        _registered.append(cls)
+    for menu_name, draw in operators.menus:
+        getattr(bpy.types, menu_name).append(draw)
+
+
+def unregister():
+    import bpy
+
+    from . import operators
+
+    for menu_name, draw in operators.menus:
+        getattr(bpy.types, menu_name).remove(draw)
+    while _registered:
+        bpy.utils.unregister_class(_registered.pop())

@@ -93,6 +93,18 @@ def find_submeshes(positions, edges, face_starts, face_sizes, corner_verts):
     return _core.find_submeshes(positions, edges, face_starts, face_sizes, corner_verts)
 
 
+def face_offsets_from_corner_edges(corner_verts, corner_edges, edges, vertex_count, face_count):
+    """(face_starts, face_sizes) recovered from corner data, or None when they do not give exactly
+    ``face_count`` faces of 3 or more corners (then read the face arrays themselves)."""
+    starts, count = _core.face_starts_from_corner_edges(corner_verts, corner_edges, edges, int(vertex_count))
+    if count != face_count:
+        return None
+    sizes = np.diff(starts, append=np.int32(len(corner_verts))).astype(np.int32)
+    if len(sizes) and sizes.min() < 3:
+        return None
+    return starts, sizes
+
+
 def validate_mesh(positions, edges, face_starts, face_sizes, corner_verts) -> None:
     """Raise ValueError naming the first malformed element (index out of range, NaN, ...)."""
     _core.validate_mesh(positions, edges, face_starts, face_sizes, corner_verts)

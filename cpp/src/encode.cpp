@@ -25,21 +25,6 @@ uint8_t byte_of(double unit) {  // unit in [0, 1] (clamped), rounded to the near
 
 }  // namespace
 
-glm::dvec3 decode_float(const float* rgba) {
-    const double a = rgba[3];
-    return (glm::dvec3(rgba[0], rgba[1], rgba[2]) * 2.0 - 1.0) / a;
-}
-
-glm::dvec3 decode_byte(const uint8_t* rgba) {
-    const double a = rgba[3] / 255.0;
-    return (glm::dvec3(rgba[0], rgba[1], rgba[2]) / 255.0 * 2.0 - 1.0) / a;
-}
-
-glm::dvec3 rotate_vector(const glm::dvec3& v, const float* q) {
-    const glm::dvec3 u(q[0], q[1], q[2]);
-    return v + 2.0 * glm::cross(u, glm::cross(u, v) + double(q[3]) * v);
-}
-
 float encode_float(const glm::dvec3* offsets, const uint32_t* vertices, uint32_t count, float* rgba) {
     const double largest = largest_component(offsets, count);
     const double scale = largest > kSmallestScaledOffset ? 1.0 / largest : 1.0;

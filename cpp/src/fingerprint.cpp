@@ -190,7 +190,7 @@ uint32_t fingerprint_submesh(const SubmeshView& s, uint32_t seed) {
     for (uint32_t i = 0; i < s.vertex_count; ++i) {
         uint32_t bits[3];
         std::memcpy(bits, s.mesh->positions + size_t(s.vertices[i]) * 3, sizeof bits);
-        h = mix(mix(mix(h, bits[0]), bits[1]), bits[2]);
+        h = mix(mix(h, (uint64_t(bits[0]) << 32) | bits[1]), bits[2]);
     }
     visit_topology(s, [&](int64_t x) { h = mix(h, uint64_t(x)); });
     return uint32_t(h ^ (h >> 32));

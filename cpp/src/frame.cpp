@@ -16,22 +16,22 @@ namespace {
 // A candidate direction (face or edge) with the size that ranks it and how far a copy's
 // vertex displacement could move that size and the direction itself.
 
-// Newell's normal of face f: robust for non-planar and concave polygons. Writes its unit normal,
-// area and perimeter; the normal is zero when the area is.
-void face_measure(const SubmeshView& s, uint32_t f, glm::dvec3& normal, double& area, double& perimeter) {
+// Newell's normal of face f: robust for non-planar and concave polygons. Writes its unit normal
+// and area (the normal is zero when the area is) and, when asked, its perimeter.
+void face_measure(const SubmeshView& s, uint32_t f, glm::dvec3& normal, double& area, double* perimeter) {
     const MeshView& m = *s.mesh;
     const int32_t* corners = m.corner_verts + m.face_starts[f];
     const int32_t n = m.face_sizes[f];
     const glm::dvec3 first = s.position(uint32_t(corners[0]));
-    glm::dvec3 sum(0.0);
-    perimeter = 0.0;
-    glm::dvec3 prev = glm::dvec3(0.0);
+    glm::dvec3 sum(0.0), prev(0.0);
+    double length = 0.0;
     for (int32_t c = 1; c <= n; ++c) {
-        const glm::dvec3 cur = s.position(uint32_t(corners[c % n])) - first;
+        const glm::dvec3 cur = c < n ? s.position(uint32_t(corners[c])) - first : glm::dvec3(0.0);
         sum += glm::cross(prev, cur);
-        perimeter += glm::length(cur - prev);
+        if (perimeter) length += glm::length(cur - prev);
         prev = cur;
     }
+    if (perimeter) *perimeter = length;
     const double len = glm::length(sum);
     area = 0.5 * len;
     normal = len > 0.0 ? sum / len : glm::dvec3(0.0);
@@ -86,10 +86,13 @@ void mark_usable(std::vector<Candidate>& c) {
 
 void measure_faces(const SubmeshView& s, double d2, std::vector<Candidate>& faces) {
     faces.resize(s.face_count);
+    // Perimeters bound how far a copy's displacement moves areas and normals; without a
+    // displacement (no cache) they are not needed, and the area scale stands in for them.
     double longest = 0.0;
     for (uint32_t i = 0; i < s.face_count; ++i) {
-        double perimeter;
-        face_measure(s, s.faces[i], faces[i].direction, faces[i].size, perimeter);
+        double perimeter = 0.0;
+        face_measure(s, s.faces[i], faces[i].direction, faces[i].size, d2 > 0.0 ? &perimeter : nullptr);
+        if (d2 <= 0.0) perimeter = std::sqrt(faces[i].size);
         faces[i].size_slack = d2 * perimeter;
         faces[i].angle_slack = faces[i].size > 0.0 ? d2 * perimeter / faces[i].size : 1.0;
         longest = std::max(longest, perimeter);
@@ -178,8 +181,8 @@ FrameChoice choose_frame(const SubmeshView& s, double cos_epsilon, double displa
 glm::dmat3 frame_from_choice(const FrameChoice& choice, const SubmeshView& s) {
     auto direction = [&](DirectionKind kind, uint32_t index) {
         glm::dvec3 d;
-        double size, perimeter;
-        if (kind == DirectionKind::Face) face_measure(s, s.faces[index], d, size, perimeter);
+        double size;
+        if (kind == DirectionKind::Face) face_measure(s, s.faces[index], d, size, nullptr);
         else edge_measure(s, s.edges[index], d, size);
         return d;
     };

@@ -114,11 +114,18 @@ float encode_float(const glm::dvec3* offsets, const uint32_t* vertices, uint32_t
 float encode_byte(const glm::dvec3* offsets, const uint32_t* vertices, uint32_t count, uint8_t* rgba);
 
 // The decode formula, in double, from stored values.
-glm::dvec3 decode_float(const float* rgba);
-glm::dvec3 decode_byte(const uint8_t* rgba);
+inline glm::dvec3 decode_float(const float* rgba) {
+    return (glm::dvec3(rgba[0], rgba[1], rgba[2]) * 2.0 - 1.0) / double(rgba[3]);
+}
+inline glm::dvec3 decode_byte(const uint8_t* rgba) {
+    return (glm::dvec3(rgba[0], rgba[1], rgba[2]) / 255.0 * 2.0 - 1.0) / (rgba[3] / 255.0);
+}
 
-// The shader's rotate_vector: v + 2 cross(q.xyz, cross(q.xyz, v) + q.w v), used as stored.
-glm::dvec3 rotate_vector(const glm::dvec3& v, const float* q);
+// The shader's rotate_vector: v + 2 cross(q.xyz, cross(q.xyz, v) + q.w v), with q as stored.
+inline glm::dvec3 rotate_vector(const glm::dvec3& v, const float* q) {
+    const glm::dvec3 u(q[0], q[1], q[2]);
+    return v + 2.0 * glm::cross(u, glm::cross(u, v) + double(q[3]) * v);
+}
 
 // 32-bit fingerprint of a submesh's exact positions and topology, mixed with seed.
 uint32_t fingerprint_submesh(const SubmeshView& s, uint32_t seed);

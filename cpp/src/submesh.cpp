@@ -1,6 +1,8 @@
 // Connected components of a mesh through its edges and face corners (union-find).
 #include "boxmarch/boxmarch.h"
 
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace boxmarch {
@@ -47,11 +49,44 @@ size_t find_submeshes(int32_t* submesh_of_vertex, const MeshView& mesh) {
     return count;
 }
 
+size_t face_starts_from_corner_edges(int32_t* face_starts, const int32_t* corner_verts,
+                                     const int32_t* corner_edges, size_t corner_count,
+                                     const int32_t* edges, size_t edge_count, size_t vertex_count) {
+    for (size_t c = 0; c < corner_count; ++c) {
+        if (corner_edges[c] < 0 || size_t(corner_edges[c]) >= edge_count)
+            throw std::invalid_argument("corner " + std::to_string(c) + " names an edge out of range");
+        if (corner_verts[c] < 0 || size_t(corner_verts[c]) >= vertex_count)
+            throw std::invalid_argument("corner " + std::to_string(c) + " names a vertex out of range");
+    }
+    const size_t capacity = corner_count / 3 + 1;
+    size_t count = 0, start = 0;
+    if (corner_count) face_starts[count++] = 0;
+    for (size_t c = 0; c + 1 < corner_count; ++c) {
+        const int32_t a = edges[2 * size_t(corner_edges[c])], b = edges[2 * size_t(corner_edges[c]) + 1];
+        const int32_t here = corner_verts[c], next = corner_verts[c + 1];
+        const bool joined = (a == here && b == next) || (a == next && b == here);
+        if (!joined || next == corner_verts[start]) {
+            if (count == capacity) return count + 1;  // more faces than corners allow: not a valid mesh
+            start = c + 1;
+            face_starts[count++] = int32_t(start);
+        }
+    }
+    return count;
+}
+
 void group_by_submesh(uint32_t* offsets, uint32_t* items, const int32_t* submesh_of_item,
                       size_t item_count, size_t submesh_count) {
     for (size_t s = 0; s <= submesh_count; ++s) offsets[s] = 0;
-    for (size_t i = 0; i < item_count; ++i) ++offsets[submesh_of_item[i] + 1];
+    bool sorted = true;
+    for (size_t i = 0; i < item_count; ++i) {
+        ++offsets[submesh_of_item[i] + 1];
+        sorted = sorted && (i == 0 || submesh_of_item[i - 1] <= submesh_of_item[i]);
+    }
     for (size_t s = 0; s < submesh_count; ++s) offsets[s + 1] += offsets[s];
+    if (sorted) {  // the common case (submeshes stored one after another): no scatter needed
+        for (size_t i = 0; i < item_count; ++i) items[i] = uint32_t(i);
+        return;
+    }
     std::vector<uint32_t> cursor(offsets, offsets + submesh_count);
     for (size_t i = 0; i < item_count; ++i) items[cursor[submesh_of_item[i]]++] = uint32_t(i);
 }

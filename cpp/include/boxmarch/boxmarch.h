@@ -40,6 +40,18 @@ void validate_mesh(const MeshView& mesh);
 // Returns n, the number of submeshes. Expects a validated mesh.
 size_t find_submeshes(int32_t* submesh_of_vertex, const MeshView& mesh);
 
+// Recovers face boundaries from corner data alone (Blender 4+ stores no face sizes in attributes,
+// and reading them per face is slow). Reads corner_verts[corner_count], corner_edges (the edge
+// from each corner to the next corner of its face) and edges[edge_count * 2]. A corner starts a
+// new face when its predecessor's edge does not join the two, or when it repeats the current
+// face's first vertex (a valid face never repeats a vertex). Writes the start of every face found
+// into face_starts (room for corner_count / 3 + 1 entries) and returns how many it wrote; exact
+// for valid meshes, so callers compare the count with the real face count. Throws
+// std::invalid_argument on an edge or vertex index out of range.
+size_t face_starts_from_corner_edges(int32_t* face_starts, const int32_t* corner_verts,
+                                     const int32_t* corner_edges, size_t corner_count,
+                                     const int32_t* edges, size_t edge_count, size_t vertex_count);
+
 // Counting sort of items by their submesh. Reads submesh_of_item[item_count] (values in
 // 0..submesh_count-1); writes offsets[submesh_count + 1] and items[item_count] so the items of
 // submesh s are items[offsets[s] .. offsets[s+1]-1], ascending.

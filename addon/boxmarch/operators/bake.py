@@ -1,0 +1,130 @@
+"""boxmarch.bake: bake box frames of the selected meshes (Object Mode) or of the submeshes touched
+by the selection (Edit Mode)."""
+from __future__ import annotations
+
+import time
+
+import bpy
+from bpy.props import BoolProperty, EnumProperty, FloatProperty
+
+from .. import core, mesh_io
+
+
+def _axis_turn_items(_self, _context):
+    return _AXIS_TURN_ITEMS
+
+
+_AXIS_TURN_ITEMS = []
+
+
+def _build_axis_turn_items():
+    # Built once at registration: Blender keeps enum item strings only while Python holds them.
+    _AXIS_TURN_ITEMS[:] = [(str(i), core.axis_turn_label(i),
+                            "Local axes of the baked frame in terms of the derived one", i)
+                           for i in range(24)]
+
+
+class BOXMARCH_OT_bake(bpy.types.Operator):
+    """Bake each submesh's origin and orientation into vertex colour and two UV maps"""
+
+    bl_idname = "boxmarch.bake"
+    bl_label = "Bake Box Frames"
+    bl_options = {"REGISTER", "UNDO"}
+
+    angle_epsilon: FloatProperty(
+        name="Angle Epsilon", subtype="ANGLE", default=0.1, min=1e-6, max=1.5707963,
+        description="The second axis comes from the largest face at least this far from the first axis's plane")
+    origin: EnumProperty(
+        name="Origin", default="BOUNDS",
+        items=[("BOUNDS", "Bounds Centre", "Centre of the submesh's bounding box in its own frame"),
+               ("MEAN", "Vertex Mean", "Average of the submesh's vertex positions")])
+    encoding: EnumProperty(
+        name="Colour", default="FLOAT_COLOR",
+        items=[("FLOAT_COLOR", "Float", "32-bit float colour: exact decode"),
+               ("BYTE_COLOR", "8-bit", "Byte colour: smaller, decode limited by quantisation")])
+    domain: EnumProperty(
+        name="Domain", default="POINT",
+        items=[("POINT", "Vertex", "One colour per vertex"), ("CORNER", "Face Corner", "One colour per face corner")])
+    axis_turn: EnumProperty(name="Axis Turn", items=_axis_turn_items,
+                            description="Turn the derived frame by an axis-aligned rotation (offsets follow)")
+    sort_axes_by_extent: BoolProperty(
+        name="Sort Axes by Extent", default=False,
+        description="Local X along the longest side, Z along the shortest, before the turn")
+    use_cache: BoolProperty(name="Copy Cache", default=True,
+                            description="Derive the frame once for translated, rotated or scaled copies")
+    incremental: BoolProperty(name="Skip Unchanged", default=True,
+                              description="Leave submeshes whose geometry has not changed since the last bake")
+
+    @classmethod
+    def poll(cls, context):
+        return context.mode in {"OBJECT", "EDIT_MESH"}
+
+    def draw(self, _context):
+        layout = self.layout
+        layout.use_property_split = True
+        for name in ("origin", "angle_epsilon", "encoding", "domain", "axis_turn",
+                     "sort_axes_by_extent", "use_cache", "incremental"):
+            layout.prop(self, name)
+
+    def execute(self, context):
+        edit = context.mode == "EDIT_MESH"
+        if edit:
+            objects = [ob for ob in context.objects_in_mode_unique_data if ob.type == "MESH"]
+        else:
+            objects = [ob for ob in context.selected_objects if ob.type == "MESH"]
+        meshes = list({ob.data.name_full: ob.data for ob in objects}.values())
+        if not meshes:
+            self.report({"ERROR"}, "Select at least one mesh object to bake")
+            return {"CANCELLED"}
+        settings = mesh_io.BakeSettings(
+            angle_epsilon=self.angle_epsilon, origin=self.origin, encoding=self.encoding,
+            domain=self.domain, axis_turn=int(self.axis_turn), sort_axes_by_extent=self.sort_axes_by_extent,
+            use_cache=self.use_cache, incremental=self.incremental)
+        start = time.perf_counter()
+        wm = context.window_manager
+        wm.progress_begin(0, 2 * len(meshes))
+        if edit:
+            bpy.ops.object.mode_set(mode="OBJECT")
+        try:
+            # Compute everything before writing anything: one bad mesh leaves all of them untouched.
+            prepared = []
+            for i, mesh in enumerate(meshes):
+                prepared.append(mesh_io.prepare_bake(mesh, settings, selected_only=edit))
+                wm.progress_update(i + 1)
+            reports = []
+            for i, bake in enumerate(prepared):
+                reports.append(bake.write())
+                wm.progress_update(len(meshes) + i + 1)
+        except mesh_io.BakeInputError as error:
+            self.report({"ERROR"}, f"Nothing baked: {error}")
+            return {"CANCELLED"}
+        finally:
+            if edit:
+                bpy.ops.object.mode_set(mode="EDIT")
+            wm.progress_end()
+        self.report({"INFO"}, summary(reports, time.perf_counter() - start))
+        return {"FINISHED"}
+
+
+def summary(reports, seconds) -> str:
+    total = {key: sum(r[key] for r in reports)
+             for key in ("submeshes", "baked", "cache_hits", "unchanged", "not_selected", "degenerate")}
+    worst = max(r["max_relative_error"] for r in reports)
+    channels = sorted({r["uv_channels"] for r in reports if "uv_channels" in r})
+    text = (f"Baked {total['baked']} of {total['submeshes']} submeshes in {len(reports)} mesh(es), "
+            f"{seconds:.3f} s: {total['cache_hits']} cache hits, {total['unchanged']} unchanged skipped, "
+            f"{total['degenerate']} degenerate, worst decode error {worst:.2g} of half-extent")
+    if total["not_selected"]:
+        text += f", {total['not_selected']} not selected"
+    if channels:
+        text += "; quaternion in UV channels " + ", ".join(f"{a} and {b}" for a, b in channels)
+    return text
+
+
+def menu_object(self, _context):
+    self.layout.separator()
+    self.layout.operator(BOXMARCH_OT_bake.bl_idname, icon="MOD_WIREFRAME")
+
+
+classes = (BOXMARCH_OT_bake,)
+menus = (("VIEW3D_MT_object", menu_object), ("VIEW3D_MT_edit_mesh", menu_object))
