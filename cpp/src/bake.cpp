@@ -123,9 +123,14 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
             bool selected = !bake_mask, unchanged = previous_fingerprints != nullptr;
             for (uint32_t i = 0; i < s.vertex_count; ++i) {
                 const uint32_t v = s.vertices[i];
-                fingerprints[v] = fp;
                 selected = selected || bake_mask[v];
                 unchanged = unchanged && previous_fingerprints[v] == fp;
+            }
+            // A submesh left out keeps its old fingerprint (0: never baked), so a later bake
+            // cannot mistake it for one already baked.
+            for (uint32_t i = 0; i < s.vertex_count; ++i) {
+                const uint32_t v = s.vertices[i];
+                fingerprints[v] = selected ? fp : previous_fingerprints ? previous_fingerprints[v] : 0;
             }
             float* q_out = out.quaternions + sm * 4;
             const SubmeshStatus status = !selected ? SubmeshStatus::NotSelected

@@ -193,7 +193,8 @@ uint32_t fingerprint_submesh(const SubmeshView& s, uint32_t seed) {
         h = mix(mix(h, (uint64_t(bits[0]) << 32) | bits[1]), bits[2]);
     }
     visit_topology(s, [&](int64_t x) { h = mix(h, uint64_t(x)); });
-    return uint32_t(h ^ (h >> 32));
+    const uint32_t folded = uint32_t(h ^ (h >> 32));
+    return folded ? folded : 1;  // 0 is reserved for "never baked"
 }
 
 }  // namespace boxmarch

@@ -126,7 +126,8 @@ struct BakeSubmeshes {
 // Reads: mesh; submesh_of_vertex from find_submeshes with its count; bake_mask[vertex_count]
 // (may be null: bake everything; else a submesh is baked when any of its vertices is nonzero);
 // previous_fingerprints[vertex_count] (may be null: no incremental skip).
-// Writes: fingerprints[vertex_count] (every vertex, baked or not); for baked submeshes only, the
+// Writes: fingerprints[vertex_count] (never 0 for a selected submesh; a submesh excluded by
+// bake_mask keeps its previous fingerprint, or 0 without one); for baked submeshes only, the
 // colour of each vertex into offset_float[vertex_count * 4] (Float encoding) or
 // offset_byte[vertex_count * 4] (Byte encoding; the other pointer may be null); and the arrays
 // of `out` (every submesh's entry is written; quaternions of unbaked submeshes are computed too,
