@@ -259,10 +259,11 @@ def test_random_boxes_frames_are_orthonormal_right_handed_and_follow_the_box_axe
 
 
 @pytest.mark.parametrize("sizes, first, second", [
-    ((1.0, 1.0, 1.0), 0, 1),          # cube: everything ties, lowest face index wins
-    ((1.0004, 1.0, 2.0), 0, 2),       # -y face is 0.04% larger than -x: inside the band, -x wins
-    ((1.01, 1.0, 2.0), 1, 2),         # 1% larger: outside the band, -y wins
-    ((3.0, 2.0, 2.0004), 2, 1),       # second axis tie: -y (index 2) beats the larger -z (4)
+    ((1.0, 1.0, 1.0), 0, 1),      # cube: everything ties, lowest face index wins
+    ((1.0004, 1.0, 2.0), 0, 1),   # -y face 0.04% larger than -x: inside the band, -x wins
+    ((1.01, 1.0, 2.0), 1, 0),     # 1% larger: outside the band, -y wins
+    ((1.0, 2.0008, 2.0), 0, 1),   # second-axis tie: -y (face 2) beats the 0.04% larger -z (face 4)
+    ((1.0, 2.02, 2.0), 0, 2),     # 1% larger: -z wins
 ])
 def test_largest_face_ties_go_to_the_lowest_face_index(sizes, first, second):
     rotation = scenes.random_rotations(1, np.random.default_rng(3))[0]
@@ -317,7 +318,8 @@ def test_vertex_decode_returns_the_bounds_centre_for_small_large_and_far_boxes()
     half = 0.5 * sizes.max(1)
     for s in range(r.submesh_count):
         v = vertices_of(r, s)
-        truth = bounds_centre(p64[v], quat_matrix(r.quaternions[s]))
+        frame = quat_matrix(r.quaternions[s])
+        truth = bounds_centre(p64[v], frame)
         err = np.linalg.norm(decoded[v] - truth, axis=1).max()
         assert err <= 1e-5 * half[s], (s, err, half[s])
         # The bounds centre of the float32-stored box is the generator's centre up to the
@@ -325,8 +327,12 @@ def test_vertex_decode_returns_the_bounds_centre_for_small_large_and_far_boxes()
         rounding = 4.0 * np.abs(p64[v]).max() * U32
         assert np.linalg.norm(truth - centres[s]) <= rounding + 1e-5 * half[s]
         assert np.linalg.norm(r.origins[s] - truth) <= 1e-5 * half[s]
-    # One alpha per submesh: 1 / largest offset component = 1 / largest half-extent.
-    np.testing.assert_allclose(r.scales, 1.0 / half, rtol=1e-5)
+        # One alpha per submesh: 1 / largest local offset component (= largest half-extent of
+        # the stored vertices; far small boxes are visibly distorted by float32 storage).
+        own_half = half_extents_in(p64[v], frame)
+        np.testing.assert_allclose(r.half_extents[s], own_half, rtol=0, atol=1e-6 * own_half.max())
+        assert r.scales[s] == pytest.approx(1.0 / np.abs((truth - p64[v]) @ frame).max(), rel=1e-6)
+        assert np.abs(own_half.max() - half[s]) <= rounding
     np.testing.assert_array_equal(r.offsets[:, 3], r.scales[r.submesh_of_vertex])
     assert np.all(np.abs(r.offsets[:, :3] - 0.5) <= 0.5 + 1e-6)
 
@@ -368,14 +374,17 @@ def test_mean_origin_decodes_to_the_mean_of_the_stored_vertices():
 
 
 def test_reported_float_error_matches_an_independent_decode():
+    # Float decode errors are ~1e-7 of the box while the coordinates are up to 1000: the
+    # absolute-coordinate arithmetic here cancels ~1e-13, so agreement is only to ~1e-4 here
+    # (the 1e-9 agreement is checked with bytes, whose errors are large).
     arrays, *_ = far_boxes(24, 50)
     r = core.bake(*arrays)
     decoded = decoded_origins(r, arrays[0])
     err = np.linalg.norm(decoded - r.origins[r.submesh_of_vertex], axis=1)
     rel = err / r.half_extents.max(1)[r.submesh_of_vertex]
-    assert r.max_error == pytest.approx(err.max(), rel=1e-9, abs=1e-300)
-    assert r.max_relative_error == pytest.approx(rel.max(), rel=1e-9, abs=1e-300)
-    assert r.max_relative_error < 1e-6
+    assert r.max_error == pytest.approx(err.max(), rel=1e-4)
+    assert r.max_relative_error == pytest.approx(rel.max(), rel=1e-4)
+    assert 0 < r.max_relative_error < 1e-6
 
 
 # -------------------------------------------------------------------------------------------------
@@ -592,12 +601,17 @@ def test_degenerate_submeshes_get_valid_frames_and_exact_decode(encoding):
         v = vertices_of(r, s)
         truth = bounds_centre(p64[v], quat_matrix(r.quaternions[s]))
         h = half_extents_in(p64[v], quat_matrix(r.quaternions[s])).max()
-        tol = (1e-5 if encoding == "FLOAT_COLOR" else 1.8 / 255) * h + 1e-12
+        if encoding == "FLOAT_COLOR":
+            tol = 1e-5 * h + 1e-12
+        else:  # bytes cannot hold 0.5 exactly: up to 1 / (255 a) per component
+            tol = np.sqrt(3) * (1 + 1e-6) / (255.0 * r.scales[s]) + 1e-5 * h
         assert np.linalg.norm(decoded[v] - truth, axis=1).max() <= tol, pieces[s][0] if s < len(pieces) else "box"
-    # Zero-extent submeshes encode the zero offset exactly: grey with alpha 1, frame = identity.
+    # Zero-extent submeshes: identity frame, zero offset (grey, alpha 1); exact as floats.
     for s in (0, 5):
-        np.testing.assert_array_equal(decoded[vertices_of(r, s)], p64[vertices_of(r, s)])
         np.testing.assert_array_equal(r.quaternions[s], [0, 0, 0, 1])
+        assert r.scales[s] == 1.0
+        if encoding == "FLOAT_COLOR":
+            np.testing.assert_array_equal(decoded[vertices_of(r, s)], p64[vertices_of(r, s)])
     # Frames that have a face normal or an edge use it as local x.
     tri = p64[vertices_of(r, 2)]
     normal = np.cross(tri[1] - tri[0], tri[2] - tri[0])
@@ -648,7 +662,10 @@ def test_sort_axes_by_extent_orders_half_extents_before_the_turn(turn):
     np.testing.assert_allclose(quat_matrix(r.quaternions), sorted_frames @ m, atol=2e-6)
     unturned = r.half_extents[:, np.argsort(np.abs(m).argmax(0))]
     assert np.all(np.diff(unturned, axis=1) < 0)
-    np.testing.assert_allclose(unturned, -np.sort(-0.5 * sizes, axis=1), rtol=1e-5)
+    p64 = arrays[0].astype(np.float64)
+    for s in range(r.submesh_count):  # half-extents of the stored vertices in the stored frame
+        own = half_extents_in(p64[vertices_of(r, s)], quat_matrix(r.quaternions[s]))
+        np.testing.assert_allclose(r.half_extents[s], own, rtol=0, atol=1e-6 * own.max())
     decoded = decoded_origins(r, arrays[0])
     err = np.linalg.norm(decoded - r.origins[r.submesh_of_vertex], axis=1)
     assert np.all(err <= 1e-5 * 0.5 * sizes.max(1)[r.submesh_of_vertex])
@@ -673,7 +690,7 @@ def test_byte_colors_decode_within_quantisation_error():
     assert_frames_valid(r)
     alpha = r.offsets[:, 3].astype(np.float64) / 255.0
     assert np.all((alpha > 0) & (alpha <= 1))
-    np.testing.assert_array_equal(alpha, r.scales[r.submesh_of_vertex].astype(np.float64))
+    np.testing.assert_array_equal(alpha.astype(np.float32), r.scales[r.submesh_of_vertex])
     p64 = arrays[0].astype(np.float64)
     decoded_f = decode_rgba(r.offsets)
     for s in range(r.submesh_count):
@@ -775,6 +792,24 @@ def test_mask_bakes_only_submeshes_with_a_selected_vertex():
     np.testing.assert_array_equal(r.quaternions[[3, 9]], full.quaternions[[3, 9]])
 
 
+@pytest.mark.xfail(strict=True, reason=(
+    "library bug: when no `offsets` array is passed, bindings/module.cpp allocates the output "
+    "with an uninitialised py::array_t (empty<>()) and bake() writes only baked submeshes, so "
+    "the rows of not-selected / unchanged submeshes return stale memory instead of zeros"))
+def test_unbaked_rows_of_a_fresh_offsets_array_are_zero():
+    arrays = small_scene(n=2)
+    mask = np.zeros(16, np.uint8)
+    mask[0] = 1
+    first = core.bake(*arrays)
+    for options in (dict(mask=mask), dict(previous_fingerprints=first.fingerprints)):
+        poison = np.full((16, 4), np.nan, np.float32)  # freed memory numpy may hand out again
+        del poison
+        r = core.bake(*arrays, **options)
+        unbaked = r.statuses[r.submesh_of_vertex] != core.STATUS_BAKED
+        assert unbaked.any()
+        assert np.all(r.offsets[unbaked] == 0), options
+
+
 def test_corner_quaternion_uv_writes_only_corners_of_written_submeshes():
     arrays = small_scene()
     first = core.bake(*arrays)
@@ -793,16 +828,16 @@ def test_corner_quaternion_uv_writes_only_corners_of_written_submeshes():
 
 
 def test_find_submeshes_numbers_components_by_lowest_vertex():
-    # Two triangles and an isolated vertex, vertices interleaved.
-    positions = np.zeros((7, 3), np.float32)
-    positions[:, 0] = np.arange(7)
+    # A triangle, a triangle joined to an edge, and an isolated vertex, vertices interleaved.
+    positions = np.zeros((8, 3), np.float32)
+    positions[:, 0] = np.arange(8)
     edges = np.array([[5, 1]], np.int32)
     face_starts = np.array([0, 3], np.int32)
     face_sizes = np.array([3, 3], np.int32)
     corner_verts = np.array([6, 2, 4, 3, 5, 0], np.int32)
     ids, count = core.find_submeshes(positions, edges, face_starts, face_sizes, corner_verts)
     assert count == 3
-    np.testing.assert_array_equal(ids, [0, 0, 1, 0, 1, 0, 1])
+    np.testing.assert_array_equal(ids, [0, 0, 1, 0, 1, 0, 1, 2])
 
 
 def test_empty_mesh():

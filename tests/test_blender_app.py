@@ -1,0 +1,72 @@
+"""The add-on inside Debian's Blender program (3.4): a background bake, and undo in a real window
+under Xvfb (the bpy module has no window, so undo needs the program)."""
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import boxmarch
+
+SCRIPTS = Path(__file__).parent / "blender_scripts"
+
+
+@pytest.fixture(scope="module")
+def package_parent(tmp_path_factory):
+    """A folder holding only the installed boxmarch package: Blender's own Python must not see
+    the rest of this Python's site-packages."""
+    parent = tmp_path_factory.mktemp("blender_path")
+    (parent / "boxmarch").symlink_to(Path(boxmarch.__file__).parent, target_is_directory=True)
+    return parent
+
+
+def blender_env(tmp_path):
+    env = dict(os.environ)
+    for var in ("HOME", "TMPDIR", "XDG_CACHE_HOME", "XDG_CONFIG_HOME"):
+        env[var] = str(tmp_path)
+    env.pop("PYTHONPATH", None)
+    # Debian's Blender finds its Python home through the first python3 on PATH: it must be the
+    # system one, not the (pyenv or venv) Python running these tests.
+    env["PATH"] = "/usr/bin:/bin:" + env.get("PATH", "")
+    return env
+
+
+def run_blender(args, tmp_path, timeout=240):
+    blender = shutil.which("blender")
+    assert blender, "Debian's blender is missing: run scripts/setup.sh"
+    proc = subprocess.run([blender, *args], env=blender_env(tmp_path), capture_output=True, text=True,
+                          timeout=timeout)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    return proc
+
+
+@pytest.mark.parametrize("encoding, tolerance", [("FLOAT_COLOR", 1e-5), ("BYTE_COLOR", 0.05)])
+def test_background_bake_in_blender_program(package_parent, tmp_path, encoding, tolerance):
+    out = tmp_path / "result.json"
+    run_blender(["--background", "--factory-startup", "--python-exit-code", "1",
+                 "--python", str(SCRIPTS / "bake_check.py"), "--", str(package_parent), str(out), encoding],
+                tmp_path)
+    result = json.loads(out.read_text())
+    assert result["result"] == ["FINISHED"]
+    assert result["uv_layers"] == ["UVMap", "BoxQuatXY", "BoxQuatZW"]
+    assert result["max_relative_error"] <= tolerance
+    if encoding == "BYTE_COLOR":
+        assert result["alpha_max"] <= 1.0
+
+
+def test_undo_in_a_window(package_parent, tmp_path):
+    if shutil.which("xvfb-run") is None:
+        pytest.fail("xvfb-run is missing: run scripts/setup.sh")
+    out = tmp_path / "undo.json"
+    run_blender_cmd = ["-a", "-s", "-screen 0 1024x768x24", shutil.which("blender"), "--factory-startup",
+                       "--python", str(SCRIPTS / "undo_check.py"), "--", str(package_parent), str(out)]
+    proc = subprocess.run(["xvfb-run", *run_blender_cmd], env=blender_env(tmp_path), capture_output=True,
+                          text=True, timeout=240)
+    assert out.exists(), proc.stdout[-3000:] + proc.stderr[-3000:]
+    result = json.loads(out.read_text())
+    assert result["error"] is None, result["error"]
+    assert result["object_mode"] == {"after_bake": True, "after_undo": False}
+    assert result["edit_mode"] == {"after_bake": True, "after_undo": False}
