@@ -5,6 +5,7 @@
 #include "internal.h"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstring>
 #include <numeric>
@@ -19,7 +20,7 @@ namespace {
 
 // Relative tolerance of the copy cache: a copy may deviate from an exact similar image of the
 // stored submesh by this fraction of its rms radius (room for float32 rounding of far copies).
-constexpr double kCacheTolerance = 1e-4;
+constexpr double kCacheTolerance = 1e-5;
 
 struct Grouped {
     std::vector<uint32_t> vertex_offsets, vertices, face_offsets, faces, edge_offsets, edges;
@@ -55,11 +56,15 @@ void local_bounds(const SubmeshView& s, const glm::dmat3& frame, std::vector<glm
     }
 }
 
-// Reorders the axes so extents fall from x to z (equal extents within the tie band keep their
-// order), keeping the frame right-handed.
+// Reorders the axes so extents fall from x to z, keeping the frame right-handed. Extents are
+// compared on a logarithmic grid of tie-band steps, a transitive tie: extents in one step keep
+// their axis order, so float noise cannot swap the axes of a cube.
 glm::dmat3 sort_by_extent(const glm::dmat3& frame, const glm::dvec3& extent) {
+    int64_t step[3];
+    for (int k = 0; k < 3; ++k)
+        step[k] = extent[k] > 0.0 ? std::llround(std::log(extent[k]) / std::log1p(kTieBand)) : INT64_MIN;
     int order[3] = {0, 1, 2};
-    std::stable_sort(order, order + 3, [&](int a, int b) { return extent[a] > extent[b] * (1.0 + kTieBand); });
+    std::stable_sort(order, order + 3, [&](int a, int b) { return step[a] > step[b]; });
     const glm::dvec3 x = frame[order[0]], y = frame[order[1]];
     return glm::dmat3(x, y, glm::cross(x, y));
 }
@@ -106,18 +111,34 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
     const double cos_epsilon = std::cos(options.angle_epsilon);
     const uint32_t seed = options_seed(options);
 
-    auto run = [&](size_t first, size_t last, Accumulated& acc) {
+    auto view = [&](size_t sm) {
+        SubmeshView s{&mesh,
+                      g.vertices.data() + g.vertex_offsets[sm], g.vertex_offsets[sm + 1] - g.vertex_offsets[sm],
+                      g.faces.data() + g.face_offsets[sm], g.face_offsets[sm + 1] - g.face_offsets[sm],
+                      g.edges.data() + g.edge_offsets[sm], g.edge_offsets[sm + 1] - g.edge_offsets[sm],
+                      glm::dvec3(0.0)};
+        const float* p0 = mesh.positions + size_t(s.vertices[0]) * 3;
+        s.base = glm::dvec3(p0[0], p0[1], p0[2]);
+        return s;
+    };
+    size_t threads = options.threads > 0 ? size_t(options.threads) : std::max(1u, std::thread::hardware_concurrency());
+    threads = std::min<size_t>({threads, 255, std::max<size_t>(1, submesh_count / 1024)});
+    // With the cache on, thread t takes the submeshes whose cache key falls to it, so every copy
+    // meets its prototype in the same thread's cache; otherwise contiguous ranges.
+    std::vector<uint8_t> shard;
+    if (options.use_cache && threads > 1) {
+        shard.resize(submesh_count);
+        for (size_t sm = 0; sm < submesh_count; ++sm) shard[sm] = uint8_t(CopyCache::key(view(sm)) % threads);
+    }
+    auto run = [&](size_t thread, Accumulated& acc) {
         CopyCache cache(kCacheTolerance);
         std::vector<glm::dvec3> local, offsets;
         FrameScratch scratch;
+        const size_t first = shard.empty() ? submesh_count * thread / threads : 0;
+        const size_t last = shard.empty() ? submesh_count * (thread + 1) / threads : submesh_count;
         for (size_t sm = first; sm < last; ++sm) {
-            SubmeshView s{&mesh,
-                          g.vertices.data() + g.vertex_offsets[sm], g.vertex_offsets[sm + 1] - g.vertex_offsets[sm],
-                          g.faces.data() + g.face_offsets[sm], g.face_offsets[sm + 1] - g.face_offsets[sm],
-                          g.edges.data() + g.edge_offsets[sm], g.edge_offsets[sm + 1] - g.edge_offsets[sm],
-                          glm::dvec3(0.0)};
-            const float* p0 = mesh.positions + size_t(s.vertices[0]) * 3;
-            s.base = glm::dvec3(p0[0], p0[1], p0[2]);
+            if (!shard.empty() && shard[sm] != thread) continue;
+            const SubmeshView s = view(sm);
 
             const uint32_t fp = fingerprint_submesh(s, seed);
             bool selected = !bake_mask, unchanged = previous_fingerprints != nullptr;
@@ -204,13 +225,10 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
         }
     };
 
-    size_t threads = options.threads > 0 ? size_t(options.threads) : std::max(1u, std::thread::hardware_concurrency());
-    threads = std::min(threads, std::max<size_t>(1, submesh_count / 1024));
     std::vector<Accumulated> parts(threads);
     std::vector<std::thread> pool;
-    for (size_t t = 1; t < threads; ++t)
-        pool.emplace_back(run, submesh_count * t / threads, submesh_count * (t + 1) / threads, std::ref(parts[t]));
-    run(0, submesh_count / threads, parts[0]);
+    for (size_t t = 1; t < threads; ++t) pool.emplace_back(run, t, std::ref(parts[t]));
+    run(0, parts[0]);
     for (std::thread& th : pool) th.join();
 
     BakeReport report;

@@ -2,6 +2,7 @@
 // fingerprints behind incremental re-bakes.
 #include "internal.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <unordered_map>
@@ -82,18 +83,29 @@ struct CopyCache::Impl {
     std::vector<double> positions;
     std::unordered_map<uint64_t, std::vector<uint32_t>> buckets;
 
-    // Counts plus two similarity-invariant distance ratios, coarsely quantised: copies land in
-    // one bucket (a quantisation border only costs a miss, never a wrong match).
-    uint64_t key(const SubmeshView& s, double rms) const {
-        uint64_t h = mix(mix(mix(0, s.vertex_count), s.face_count), s.edge_count);
-        const glm::dvec3 p0 = s.position(s.vertices[0]);
-        for (uint32_t i : {1u, s.vertex_count - 1}) {
-            const double ratio = rms > 0.0 ? glm::length(s.position(s.vertices[i]) - p0) / rms : 0.0;
-            h = mix(h, uint64_t(std::llround(ratio * 64.0)));
-        }
-        return h;
-    }
 };
+
+// Counts plus similarity-invariant distance ratios, coarsely quantised: copies land in one
+// bucket (a quantisation border only costs a miss, never a wrong match).
+static uint64_t bucket_key(const SubmeshView& s, double rms) {
+    uint64_t h = mix(mix(mix(0, s.vertex_count), s.face_count), s.edge_count);
+    if (s.vertex_count < 2 || !(rms > 0.0)) return h;
+    const glm::dvec3 p0 = s.position(s.vertices[0]);
+    // The first few vertices: for a box these span its edges, so boxes of different proportions
+    // spread over many buckets.
+    for (uint32_t i = 1; i < std::min(s.vertex_count, 5u); ++i) {
+        const double ratio = glm::length(s.position(s.vertices[i]) - p0) / rms;
+        h = mix(h, uint64_t(std::llround(ratio * 64.0)));
+    }
+    return h;
+}
+
+uint64_t CopyCache::key(const SubmeshView& s) {
+    glm::dvec3 centre;
+    double rms;
+    spread(s, centre, rms);
+    return bucket_key(s, rms);
+}
 
 CopyCache::CopyCache(double tolerance) : impl_(new Impl) { impl_->tolerance = tolerance; }
 CopyCache::~CopyCache() { delete impl_; }
@@ -111,7 +123,7 @@ bool CopyCache::lookup(const SubmeshView& s, FrameChoice& choice) {
     double rms;
     spread(s, centre, rms);
     if (!(rms > 0.0)) return false;
-    const auto bucket = impl_->buckets.find(impl_->key(s, rms));
+    const auto bucket = impl_->buckets.find(bucket_key(s, rms));
     if (bucket == impl_->buckets.end()) return false;
     for (uint32_t id : bucket->second) {
         const Impl::Prototype& p = impl_->prototypes[id];
@@ -149,7 +161,7 @@ void CopyCache::insert(const SubmeshView& s, const FrameChoice& choice) {
     double rms;
     spread(s, centre, rms);
     if (!(rms > 0.0)) return;
-    std::vector<uint32_t>& bucket = impl_->buckets[impl_->key(s, rms)];
+    std::vector<uint32_t>& bucket = impl_->buckets[bucket_key(s, rms)];
     if (bucket.size() >= kMaxPerBucket) return;
 
     // Anchors: the first vertex well away from the centre, then the vertex farthest off that line.
@@ -165,7 +177,9 @@ void CopyCache::insert(const SubmeshView& s, const FrameChoice& choice) {
         if (off > best) { best = off; a1 = i; }
     }
     Impl::Prototype p;
-    if (best < 0.1 * rms || !anchor_frame(s, centre, a0, a1, p.anchors)) return;  // too thin to anchor
+    // Thin anchors turn noise into rotation error; the fit test still rejects any bad map, so a
+    // modest bound only trades misses against reach.
+    if (best < 0.01 * rms || !anchor_frame(s, centre, a0, a1, p.anchors)) return;
     p.vertex_count = s.vertex_count;
     p.face_count = s.face_count;
     p.edge_count = s.edge_count;

@@ -61,7 +61,8 @@ int64_t pick_largest(const std::vector<Candidate>& c, bool& stable) {
     int64_t pick = -1;
     for (size_t i = 0; i < c.size(); ++i) {
         if (!c[i].eligible) continue;
-        if (std::abs(c[i].size - cut) <= c[i].size_slack + best_slack) stable = false;
+        // The largest itself is inside the band by definition; only the others can cross the cut.
+        if (c[i].size != best && std::abs(c[i].size - cut) <= c[i].size_slack + best_slack) stable = false;
         if (pick < 0 && c[i].size >= cut) pick = int64_t(i);
     }
     return pick;

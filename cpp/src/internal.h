@@ -92,6 +92,9 @@ public:
     bool lookup(const SubmeshView& s, FrameChoice& choice);
     // Stores s and its (stable) choice for later copies; silently ignores it past the size cap.
     void insert(const SubmeshView& s, const FrameChoice& choice);
+    // Bucket key of s: equal for every copy that could match (counts and similarity-invariant
+    // distance ratios, coarsely quantised). Lets callers send copies to the same cache.
+    static uint64_t key(const SubmeshView& s);
     // Largest vertex displacement a matching copy can have, for choose_frame's stability test.
     double displacement(const SubmeshView& s) const;
 

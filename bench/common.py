@@ -1,0 +1,87 @@
+"""Helpers shared by the benchmarks: scenes in Blender, timing, peak memory."""
+import time
+
+import numpy as np
+
+from boxmarch import scenes
+
+
+def boxes_object(bpy, count, seed=0, name="boxes"):
+    """One mesh object of ``count`` random boxes (8 vertices, 6 quads, 12 edges each), selected
+    and active. Returns (object, centres, sizes)."""
+    (positions, edges, face_starts, face_sizes, corner_verts), centres, sizes, _ = scenes.random_boxes(count, seed=seed)
+    mesh = bpy.data.meshes.new(name)
+    mesh.vertices.add(len(positions))
+    mesh.vertices.foreach_set("co", positions.reshape(-1))
+    mesh.loops.add(len(corner_verts))
+    mesh.loops.foreach_set("vertex_index", corner_verts)
+    mesh.polygons.add(len(face_starts))
+    mesh.polygons.foreach_set("loop_start", face_starts)
+    if bpy.app.version < (4, 0, 0):
+        mesh.polygons.foreach_set("loop_total", face_sizes)
+    mesh.update(calc_edges=True)  # Blender derives edges and each corner's edge, as in any real mesh
+    ob = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(ob)
+    for other in bpy.context.scene.objects:
+        other.select_set(other == ob)
+    bpy.context.view_layer.objects.active = ob
+    return ob, centres, sizes
+
+
+def best_of(repeats, fn):
+    """Smallest wall time of ``repeats`` calls, in seconds."""
+    best = float("inf")
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def reset_peak_rss():
+    """Start a new peak-RSS measurement (Linux: writing 5 to clear_refs resets VmHWM)."""
+    with open("/proc/self/clear_refs", "w") as f:
+        f.write("5")
+
+
+def rss_bytes(field="VmRSS"):
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith(field + ":"):
+                return int(line.split()[1]) * 1024
+    raise RuntimeError(f"{field} not in /proc/self/status")
+
+
+def table(headers, rows):
+    widths = [max(len(str(h)), *(len(str(r[i])) for r in rows)) for i, h in enumerate(headers)]
+    line = lambda cells: "| " + " | ".join(str(c).rjust(w) for c, w in zip(cells, widths)) + " |"
+    return "\n".join([line(headers), "|" + "|".join("-" * (w + 2) for w in widths) + "|", *map(line, rows)])
+
+
+def decode_error(mesh, origins, half_extents, raw_bytes):
+    """Worst |decoded origin - origin| / largest half-extent over every vertex, decoding what
+    Blender stores with the documented formula in float64. ``origins`` and ``half_extents`` (per
+    box) are the bake's own, defined from the float32 vertices Blender stores."""
+    corner_verts = np.empty(len(mesh.loops), np.int32)
+    mesh.attributes[".corner_vert"].data.foreach_get("value", corner_verts)
+    colour = np.empty(len(mesh.vertices) * 4, np.float32)
+    mesh.color_attributes["BoxOffset"].data.foreach_get("color_srgb" if raw_bytes else "color", colour)
+    colour = colour.reshape(-1, 4).astype(np.float64)
+    if raw_bytes:
+        colour = np.rint(colour * 255) / 255
+    q = np.empty((len(mesh.loops), 4), np.float32)
+    for half, name in enumerate(("BoxQuatXY", "BoxQuatZW")):
+        uv = np.empty(len(mesh.loops) * 2, np.float32)
+        mesh.uv_layers[name].uv.foreach_get("vector", uv)
+        q[:, 2 * half:2 * half + 2] = uv.reshape(-1, 2)
+    positions = np.empty(len(mesh.vertices) * 3, np.float32)
+    mesh.vertices.foreach_get("co", positions)
+    # per vertex: every corner of a vertex holds the same quaternion
+    first_corner = np.empty(len(mesh.vertices), np.int64)
+    first_corner[corner_verts[::-1]] = np.arange(len(corner_verts))[::-1]
+    q = q[first_corner].astype(np.float64)
+    f = (colour[:, :3] * 2 - 1) / colour[:, 3:4]
+    u, w = q[:, :3], q[:, 3:4]
+    decoded = positions.reshape(-1, 3) + f + 2 * np.cross(u, np.cross(u, f) + w * f)
+    error = np.linalg.norm(decoded - np.repeat(origins, 8, axis=0), axis=1)
+    return float((error / np.repeat(half_extents.max(axis=1), 8)).max())

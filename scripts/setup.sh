@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Installs everything boxmarch needs on a fresh Debian 12 machine with Python 3.11 and builds the
+# package into that Python. Safe to run again: it only installs what is missing.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+PYTHON="${PYTHON:-python3}"
+
+APT_PACKAGES=(blender python3-numpy libglm-dev libnanoflann-dev glslang-tools xvfb xauth
+              libxi6 libxxf86vm1 libxfixes3 libxrender1 libgl1 libxkbcommon0 libsm6)
+missing=()
+for pkg in "${APT_PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "[setup] apt-get install ${missing[*]}" >&2
+  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+echo "[setup] pip install (bpy, build and test tools)" >&2
+"$PYTHON" -m pip install -q --disable-pip-version-check bpy "scikit-build-core>=0.10" "pybind11>=2.12" pytest hypothesis
+echo "[setup] building boxmarch" >&2
+"$PYTHON" -m pip install -q --disable-pip-version-check --no-build-isolation .
