@@ -648,6 +648,23 @@ def test_degenerate_submeshes_get_valid_frames_and_exact_decode(encoding):
 # Axis turns and sorting
 
 
+def test_quaternion_sign_rule_for_half_turns():
+    # Axis-aligned box: many turned frames are half-turns (w = 0); then the first nonzero of
+    # x, y, z is positive (docs/FORMAT.md), so one frame always gives the same four numbers.
+    arrays = scenes.box_arrays([[0.0, 0.0, 0.0]], [1.0, 2.0, 3.0], np.eye(3))
+    turns = core.axis_turn_matrices()
+    half_turns = 0
+    for t in range(24):
+        q = core.bake(*arrays, axis_turn=t).quaternions[0].astype(np.float64)
+        assert q[3] >= 0
+        if abs(q[3]) < 1e-7:
+            half_turns += 1
+            assert q[:3][np.abs(q[:3]) > 1e-7][0] > 0, (t, q)
+        # Base frame of this box is diag(-1, -1, 1) (faces -x, -y); the turn goes on top.
+        np.testing.assert_allclose(quat_matrix(q), np.diag([-1.0, -1.0, 1.0]) @ turns[t], atol=1e-7)
+    assert half_turns >= 4
+
+
 def test_every_axis_turn_turns_the_frame_and_keeps_decode_exact():
     arrays, centres, sizes, rotations = far_boxes(41, 30)
     positions = arrays[0].astype(np.float64)
@@ -830,6 +847,17 @@ def test_mask_bakes_only_submeshes_with_a_selected_vertex():
     full = core.bake(*arrays)
     np.testing.assert_array_equal(sentinel[chosen], full.offsets[chosen])
     np.testing.assert_array_equal(r.quaternions[[3, 9]], full.quaternions[[3, 9]])
+    # Fingerprints (boxmarch.h): a selected submesh gets its own (never 0); one left out keeps
+    # the previous fingerprint, or 0 when there is none, so it is never taken as baked.
+    np.testing.assert_array_equal(r.fingerprints[chosen], full.fingerprints[chosen])
+    assert np.all(r.fingerprints[chosen] != 0) and np.all(r.fingerprints[~chosen] == 0)
+    previous = np.arange(1, n_vertices + 1, dtype=np.uint32)
+    again = core.bake(*arrays, mask=mask, previous_fingerprints=previous)
+    np.testing.assert_array_equal(again.fingerprints[~chosen], previous[~chosen])
+    np.testing.assert_array_equal(again.fingerprints[chosen], full.fingerprints[chosen])
+    # The next full incremental bake re-bakes exactly the submeshes the masked bake skipped.
+    after = core.bake(*arrays, previous_fingerprints=r.fingerprints)
+    np.testing.assert_array_equal(after.statuses == core.STATUS_BAKED, expected != core.STATUS_BAKED)
 
 
 def test_unbaked_rows_of_a_fresh_offsets_array_are_zero():
