@@ -3,23 +3,14 @@ import time
 
 import numpy as np
 
-from boxmarch import scenes
+from boxmarch import mesh_io, scenes
 
 
 def boxes_object(bpy, count, seed=0, name="boxes"):
     """One mesh object of ``count`` random boxes (8 vertices, 6 quads, 12 edges each), selected
     and active. Returns (object, centres, sizes)."""
-    (positions, edges, face_starts, face_sizes, corner_verts), centres, sizes, _ = scenes.random_boxes(count, seed=seed)
-    mesh = bpy.data.meshes.new(name)
-    mesh.vertices.add(len(positions))
-    mesh.vertices.foreach_set("co", positions.reshape(-1))
-    mesh.loops.add(len(corner_verts))
-    mesh.loops.foreach_set("vertex_index", corner_verts)
-    mesh.polygons.add(len(face_starts))
-    mesh.polygons.foreach_set("loop_start", face_starts)
-    if bpy.app.version < (4, 0, 0):
-        mesh.polygons.foreach_set("loop_total", face_sizes)
-    mesh.update(calc_edges=True)  # Blender derives edges and each corner's edge, as in any real mesh
+    (positions, _edges, face_starts, face_sizes, corner_verts), centres, sizes, _ = scenes.random_boxes(count, seed=seed)
+    mesh = mesh_io.new_mesh(name, positions, face_starts, face_sizes, corner_verts)
     ob = bpy.data.objects.new(name, mesh)
     bpy.context.scene.collection.objects.link(ob)
     for other in bpy.context.scene.objects:

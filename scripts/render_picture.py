@@ -21,15 +21,7 @@ count = 3000
 centres = rng.uniform(-12, 12, (count, 3)) * [1.6, 1.0, 0.5]
 positions, _, face_starts, face_sizes, corner_verts = scenes.box_arrays(
     centres, rng.uniform(0.2, 1.6, (count, 3)), scenes.random_rotations(count, rng))
-mesh = bpy.data.meshes.new("BoxWorld")
-mesh.vertices.add(len(positions))
-mesh.vertices.foreach_set("co", positions.reshape(-1))
-mesh.loops.add(len(corner_verts))
-mesh.loops.foreach_set("vertex_index", corner_verts)
-mesh.polygons.add(len(face_starts))
-mesh.polygons.foreach_set("loop_start", face_starts)
-mesh.polygons.foreach_set("loop_total", face_sizes)
-mesh.update(calc_edges=True)
+mesh = mesh_io.new_mesh("BoxWorld", positions, face_starts, face_sizes, corner_verts)
 ob = bpy.data.objects.new("BoxWorld", mesh)
 bpy.context.scene.collection.objects.link(ob)
 mesh_io.prepare_bake(mesh, mesh_io.BakeSettings()).write()

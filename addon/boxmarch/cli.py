@@ -49,16 +49,7 @@ def demo(args) -> int:
     rotations[-copies:] = rotations[:copies]
     centres = rng.uniform(-100, 100, (args.count, 3))
     positions, _edges, face_starts, face_sizes, corner_verts = scenes.box_arrays(centres, sizes, rotations)
-    mesh = bpy.data.meshes.new("BoxWorld")
-    mesh.vertices.add(len(positions))
-    mesh.vertices.foreach_set("co", positions.reshape(-1))
-    mesh.loops.add(len(corner_verts))
-    mesh.loops.foreach_set("vertex_index", corner_verts)
-    mesh.polygons.add(len(face_starts))
-    mesh.polygons.foreach_set("loop_start", face_starts)
-    if bpy.app.version < (4, 0, 0):
-        mesh.polygons.foreach_set("loop_total", face_sizes)
-    mesh.update(calc_edges=True)
+    mesh = mesh_io.new_mesh("BoxWorld", positions, face_starts, face_sizes, corner_verts)
     ob = bpy.data.objects.new("BoxWorld", mesh)
     bpy.context.scene.collection.objects.link(ob)
     ob.select_set(True)

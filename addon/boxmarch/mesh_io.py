@@ -29,6 +29,22 @@ class BakeInputError(ValueError):
     """The mesh cannot be baked as it is; the message says why. Nothing was written."""
 
 
+def new_mesh(name, positions, face_starts, face_sizes, corner_verts):
+    """A new mesh datablock holding these faces; Blender derives the edges (and each corner's
+    edge), as in any mesh made in the editor."""
+    mesh = bpy.data.meshes.new(name)
+    mesh.vertices.add(len(positions))
+    mesh.vertices.foreach_set("co", np.asarray(positions, np.float32).reshape(-1))
+    mesh.loops.add(len(corner_verts))
+    mesh.loops.foreach_set("vertex_index", np.asarray(corner_verts, np.int32))
+    mesh.polygons.add(len(face_starts))
+    mesh.polygons.foreach_set("loop_start", np.asarray(face_starts, np.int32))
+    if bpy.app.version < (4, 0, 0):  # 4.0 derives sizes from the starts
+        mesh.polygons.foreach_set("loop_total", np.asarray(face_sizes, np.int32))
+    mesh.update(calc_edges=True)
+    return mesh
+
+
 def _fast_attribute(mesh, name):
     """Blender 4+ keeps topology in internal attributes with contiguous storage (much faster to
     read than the per-element RNA of mesh.loops or mesh.edges); 3.x has none of them."""

@@ -10,20 +10,12 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 import boxmarch  # noqa: E402
-from boxmarch import scenes  # noqa: E402
+from boxmarch import mesh_io, scenes  # noqa: E402
 
 boxmarch.register()
 bpy.ops.wm.read_homefile(use_empty=True)
 (positions, edges, face_starts, face_sizes, corner_verts), centres, sizes, _ = scenes.random_boxes(200, seed=7, spread=50)
-mesh = bpy.data.meshes.new("boxes")
-mesh.vertices.add(len(positions))
-mesh.vertices.foreach_set("co", positions.reshape(-1))
-mesh.loops.add(len(corner_verts))
-mesh.loops.foreach_set("vertex_index", corner_verts)
-mesh.polygons.add(len(face_starts))
-mesh.polygons.foreach_set("loop_start", face_starts)
-mesh.polygons.foreach_set("loop_total", face_sizes)
-mesh.update(calc_edges=True)
+mesh = mesh_io.new_mesh("boxes", positions, face_starts, face_sizes, corner_verts)
 ob = bpy.data.objects.new("boxes", mesh)
 bpy.context.scene.collection.objects.link(ob)
 ob.select_set(True)
