@@ -1,0 +1,172 @@
+"""Reading and rewriting glTF binary (.glb) files: the container, accessors, and the one patch
+the GLTF preset needs (a float COLOR_0). Blender-free.
+
+Blender's glTF exporter writes colours as normalised unsigned shorts clipped to [0, 1]: the
+offset alpha (up to 1 / smallest half-extent) would be clipped and 16-bit steps alone cost up to
+1.5e-5 of the half-extent. So the preset exports each vertex's *index* as the colour (exact in
+two 16-bit channels) and this module replaces that COLOR_0 with float32 offsets looked up by
+index, which glTF allows (COLOR_n may be FLOAT).
+"""
+from __future__ import annotations
+
+import json
+import struct
+
+import numpy as np
+
+GLB_MAGIC, CHUNK_JSON, CHUNK_BIN = 0x46546C67, 0x4E4F534A, 0x004E4942
+COMPONENT_DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16,
+                    5125: np.uint32, 5126: np.float32}
+TYPE_SIZES = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
+FLOAT, ARRAY_BUFFER = 5126, 34962
+INDEX_COLOUR_SCALE = 65535.0
+
+
+def read(path):
+    """(gltf dict, bin bytes) of a .glb file; ValueError if it is not one."""
+    with open(path, "rb") as f:
+        data = f.read()
+    if len(data) < 20 or struct.unpack_from("<I", data, 0)[0] != GLB_MAGIC:
+        raise ValueError(f"{path} is not a glTF binary file")
+    gltf, binary, offset = None, b"", 12
+    while offset + 8 <= len(data):
+        length, kind = struct.unpack_from("<II", data, offset)
+        chunk = data[offset + 8:offset + 8 + length]
+        if kind == CHUNK_JSON:
+            gltf = json.loads(chunk)
+        elif kind == CHUNK_BIN:
+            binary = chunk
+        offset += 8 + length
+    if gltf is None:
+        raise ValueError(f"{path} has no JSON chunk")
+    return gltf, binary
+
+
+def write(path, gltf, binary) -> None:
+    """Write a .glb: JSON chunk padded with spaces, BIN chunk padded with zeros (4-byte aligned)."""
+    text = json.dumps(gltf, separators=(",", ":")).encode()
+    text += b" " * (-len(text) % 4)
+    binary = bytes(binary) + b"\0" * (-len(binary) % 4)
+    total = 12 + 8 + len(text) + (8 + len(binary) if binary else 0)
+    with open(path, "wb") as f:
+        f.write(struct.pack("<III", GLB_MAGIC, 2, total))
+        f.write(struct.pack("<II", len(text), CHUNK_JSON) + text)
+        if binary:
+            f.write(struct.pack("<II", len(binary), CHUNK_BIN) + binary)
+
+
+def accessor_array(gltf, binary, index) -> np.ndarray:
+    """(count, components) array of accessor ``index`` (tightly packed or strided; no sparse)."""
+    acc = gltf["accessors"][index]
+    view = gltf["bufferViews"][acc["bufferView"]]
+    dtype = np.dtype(COMPONENT_DTYPES[acc["componentType"]])
+    width = TYPE_SIZES[acc["type"]]
+    start = view.get("byteOffset", 0) + acc.get("byteOffset", 0)
+    stride = view.get("byteStride", dtype.itemsize * width)
+    raw = np.frombuffer(binary, np.uint8, stride * (acc["count"] - 1) + dtype.itemsize * width, start)
+    rows = np.lib.stride_tricks.as_strided(raw, (acc["count"], dtype.itemsize * width), (stride, 1))
+    return np.ascontiguousarray(rows).view(dtype).reshape(acc["count"], width)
+
+
+def index_colours(count: int) -> np.ndarray:
+    """(count, 4) float32 colours encoding vertex indices: R, G = low and high 16 bits / 65535.
+    The exporter's rounding (c * 65535 + 0.5, truncated) gives the bits back exactly."""
+    i = np.arange(count, dtype=np.int64)
+    out = np.zeros((count, 4), np.float32)
+    out[:, 0] = (i & 0xFFFF) / INDEX_COLOUR_SCALE
+    out[:, 1] = (i >> 16) / INDEX_COLOUR_SCALE
+    out[:, 3] = 1.0
+    return out
+
+
+def replace_index_colours(gltf, binary, colours_by_mesh: dict):
+    """Swap every COLOR_0 written from :func:`index_colours` in the meshes named in
+    ``colours_by_mesh`` (mesh name -> float32 (vertices, 4)) for a float32 VEC4 accessor of the
+    colours of those vertices. Returns (gltf, binary) with unused buffer views dropped.
+    Raises ValueError when a named mesh is missing or an index is out of range."""
+    binary = bytearray(binary)
+    found = set()
+    for mesh in gltf.get("meshes", []):
+        colours = colours_by_mesh.get(mesh.get("name"))
+        if colours is None:
+            continue
+        for primitive in mesh["primitives"]:
+            attrs = primitive["attributes"]
+            if "COLOR_0" not in attrs:
+                raise ValueError(f"mesh '{mesh['name']}' was exported without COLOR_0")
+            code = accessor_array(gltf, bytes(binary), attrs["COLOR_0"]).astype(np.int64)
+            index = code[:, 0] + (code[:, 1] << 16)
+            if index.size and index.max() >= len(colours):
+                raise ValueError(f"mesh '{mesh['name']}': COLOR_0 holds vertex {index.max()}, "
+                                 f"the mesh has {len(colours)}")
+            values = np.ascontiguousarray(colours[index], np.float32)
+            binary += b"\0" * (-len(binary) % 4)
+            gltf["bufferViews"].append({"buffer": 0, "byteOffset": len(binary),
+                                        "byteLength": values.nbytes, "target": ARRAY_BUFFER})
+            binary += values.tobytes()
+            gltf["accessors"].append({"bufferView": len(gltf["bufferViews"]) - 1, "componentType": FLOAT,
+                                      "count": len(values), "type": "VEC4"})
+            attrs["COLOR_0"] = len(gltf["accessors"]) - 1
+        found.add(mesh.get("name"))
+    missing = set(colours_by_mesh) - found
+    if missing:
+        raise ValueError(f"the exporter wrote no mesh named {sorted(missing)}")
+    return _drop_unused(gltf, bytes(binary))
+
+
+def _drop_unused(gltf, binary):
+    """Remove accessors and buffer views nothing refers to, packing the buffer again."""
+    used_accessors = set()
+    for mesh in gltf.get("meshes", []):
+        for primitive in mesh["primitives"]:
+            used_accessors.update(primitive["attributes"].values())
+            if "indices" in primitive:
+                used_accessors.add(primitive["indices"])
+            for target in primitive.get("targets", []):
+                used_accessors.update(target.values())
+    for skin in gltf.get("skins", []):
+        if "inverseBindMatrices" in skin:
+            used_accessors.add(skin["inverseBindMatrices"])
+    for animation in gltf.get("animations", []):
+        for sampler in animation.get("samplers", []):
+            used_accessors.update((sampler["input"], sampler["output"]))
+    accessor_map = {old: new for new, old in enumerate(sorted(used_accessors))}
+    accessors = [gltf["accessors"][old] for old in sorted(used_accessors)]
+    used_views = {a["bufferView"] for a in accessors if "bufferView" in a}
+    used_views |= {image["bufferView"] for image in gltf.get("images", []) if "bufferView" in image}
+    view_map, views, packed = {}, [], bytearray()
+    for old in sorted(used_views):
+        view = dict(gltf["bufferViews"][old])
+        start = view.get("byteOffset", 0)
+        packed += b"\0" * (-len(packed) % 4)
+        chunk = binary[start:start + view["byteLength"]]
+        view["byteOffset"] = len(packed)
+        packed += chunk
+        view_map[old] = len(views)
+        views.append(view)
+    for a in accessors:
+        if "bufferView" in a:
+            a["bufferView"] = view_map[a["bufferView"]]
+    for image in gltf.get("images", []):
+        if "bufferView" in image:
+            image["bufferView"] = view_map[image["bufferView"]]
+    for mesh in gltf.get("meshes", []):
+        for primitive in mesh["primitives"]:
+            primitive["attributes"] = {k: accessor_map[v] for k, v in primitive["attributes"].items()}
+            if "indices" in primitive:
+                primitive["indices"] = accessor_map[primitive["indices"]]
+            if "targets" in primitive:
+                primitive["targets"] = [{k: accessor_map[v] for k, v in t.items()} for t in primitive["targets"]]
+    for skin in gltf.get("skins", []):
+        if "inverseBindMatrices" in skin:
+            skin["inverseBindMatrices"] = accessor_map[skin["inverseBindMatrices"]]
+    for animation in gltf.get("animations", []):
+        for sampler in animation.get("samplers", []):
+            sampler["input"] = accessor_map[sampler["input"]]
+            sampler["output"] = accessor_map[sampler["output"]]
+    gltf["accessors"] = accessors
+    gltf["bufferViews"] = views
+    packed += b"\0" * (-len(packed) % 4)
+    if gltf.get("buffers"):
+        gltf["buffers"][0]["byteLength"] = len(packed)
+    return gltf, bytes(packed)

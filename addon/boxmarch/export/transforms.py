@@ -1,0 +1,115 @@
+"""Format-facing transforms of the baked data: what each engine preset writes so the file holds
+the final numbers for the documented decode (docs/FORMAT.md) in the target's object frame.
+
+Blender-free (NumPy only), like the format half of glTF-Blender-IO; ``export/scene.py`` is the
+Blender-facing half. docs/EXPORT.md derives every transform here.
+
+A preset is described by two signed permutation matrices and a few flags:
+
+* ``axes`` A: target object coordinates of a Blender object-space point, p' = A p, as the
+  exporter (and the engine's importer, for Unity) converts positions;
+* ``local_mirror`` M (diagonal, +-1): when det A = -1 no rotation maps Blender's frame to the
+  target's, so each box's local frame is mirrored as the target mirrors object frames.
+
+Decode invariant: origin' = p' + R(q') f' must equal A (p + R(q) f) for every vertex. With
+R(q') = A R(q) M and f' = M f it does, because M M = I.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..scenes import quaternion_matrices
+
+# Blender's Z-up right-handed object space to the Y-up right-handed space of glTF and of FBX
+# written with axis_forward='-Z', axis_up='Y': (x, y, z) -> (x, z, -y).
+Z_UP_TO_Y_UP = np.array([[1, 0, 0], [0, 0, 1], [0, -1, 0]], np.float64)
+# Unity's FBX importer turns the right-handed file into its left-handed frame by negating x.
+NEGATE_X = np.diag([-1.0, 1.0, 1.0])
+
+
+@dataclass(frozen=True)
+class Preset:
+    name: str
+    label: str
+    extension: str
+    axes: np.ndarray          # A (3, 3)
+    local_mirror: np.ndarray  # diagonal of M (3,)
+    flip_v_on_export: bool    # the exporter writes v -> 1 - v on every UV map
+    description: str
+
+
+PRESETS = {
+    "UNITY": Preset(
+        "UNITY", "Unity (FBX)", ".fbx", NEGATE_X @ Z_UP_TO_Y_UP, np.array([-1.0, 1.0, 1.0]), False,
+        "FBX for Unity's importer: left-handed Y-up object frame, colour and UVs as Unity reads them"),
+    "GLTF": Preset(
+        "GLTF", "glTF Binary", ".glb", Z_UP_TO_Y_UP, np.ones(3), True,
+        "glTF binary: right-handed Y-up, TEXCOORD_1/2 = quaternion and float COLOR_0 = offset as stored"),
+    "BLENDER": Preset(
+        "BLENDER", "Blender (raw)", ".blend", np.eye(3), np.ones(3), False,
+        "The selected objects in a .blend, baked data in Blender's own object space"),
+}
+
+
+def matrix_quaternions(m) -> np.ndarray:
+    """(n, 4) unit quaternions (x, y, z, w) of rotation matrices, float64, in the baked sign
+    convention: w >= 0, and at w = 0 the first nonzero of x, y, z positive. Each row is computed
+    from the largest of w, x, y, z (Shepperd's method), so no branch divides by a small number."""
+    m = np.asarray(m, np.float64).reshape(-1, 3, 3)
+    t = np.stack([m[:, 0, 0] - m[:, 1, 1] - m[:, 2, 2], -m[:, 0, 0] + m[:, 1, 1] - m[:, 2, 2],
+                  -m[:, 0, 0] - m[:, 1, 1] + m[:, 2, 2], m[:, 0, 0] + m[:, 1, 1] + m[:, 2, 2]], 1)
+    pick = np.argmax(t, axis=1)
+    q = np.empty((len(m), 4))
+    s = np.sqrt(np.maximum(1.0 + t[np.arange(len(m)), pick], 0.0)) * 2.0  # 4 * |largest component|
+    a, b, c = (m[:, 2, 1] - m[:, 1, 2]), (m[:, 0, 2] - m[:, 2, 0]), (m[:, 1, 0] - m[:, 0, 1])
+    d, e, f = (m[:, 0, 1] + m[:, 1, 0]), (m[:, 0, 2] + m[:, 2, 0]), (m[:, 1, 2] + m[:, 2, 1])
+    rows = {0: (0.25 * s, d / s, e / s, a / s), 1: (d / s, 0.25 * s, f / s, b / s),
+            2: (e / s, f / s, 0.25 * s, c / s), 3: (a / s, b / s, c / s, 0.25 * s)}
+    for k, (qx, qy, qz, qw) in rows.items():
+        sel = pick == k
+        q[sel] = np.stack([qx[sel], qy[sel], qz[sel], qw[sel]], 1)
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    return canonical_sign(q)
+
+
+def canonical_sign(q) -> np.ndarray:
+    """q or -q, whichever has w > 0 (at w = 0: the first nonzero of x, y, z positive)."""
+    q = np.array(q, np.float64).reshape(-1, 4)
+    lead = np.where(q[:, 3] != 0, q[:, 3],
+                    np.where(q[:, 0] != 0, q[:, 0], np.where(q[:, 1] != 0, q[:, 1], q[:, 2])))
+    q[lead < 0] *= -1.0
+    return q
+
+
+def target_quaternions(q, preset: Preset) -> np.ndarray:
+    """(n, 4) float64: q' with R(q') = A R(q) M, the box frame in the target's object frame."""
+    m = preset.axes @ quaternion_matrices(q) * preset.local_mirror[None, None, :]
+    return matrix_quaternions(m)
+
+
+def target_offsets(rgba, preset: Preset, length_scale: float = 1.0) -> np.ndarray:
+    """(n, 4) float32 offsets for the target: f' = M f, so a mirrored channel c becomes 1 - c
+    (the encoding 0.5 + 0.5 s f is symmetric about 0.5); positions the importer scales by
+    ``length_scale`` scale f too, which the alpha s absorbs: s' = s / length_scale.
+    ``rgba`` is float (values as the shader reads them: bytes already divided by 255)."""
+    out = np.array(rgba, np.float64).reshape(-1, 4)
+    mirrored = preset.local_mirror < 0
+    out[:, :3][:, mirrored] = 1.0 - out[:, :3][:, mirrored]
+    out[:, 3] /= length_scale
+    return out.astype(np.float32)
+
+
+def uv_for_exporter(uv, preset: Preset) -> np.ndarray:
+    """(n, 2) float32 UVs to hand the exporter so that it writes ``uv``: the glTF exporter writes
+    1 - v, so it gets 1 - v (round-off: at most half an ulp of values up to 2, 1.2e-7)."""
+    out = np.array(uv, np.float32).reshape(-1, 2)
+    if preset.flip_v_on_export:
+        out[:, 1] = np.float32(1.0) - out[:, 1]
+    return out
+
+
+def target_positions(positions, preset: Preset, length_scale: float = 1.0) -> np.ndarray:
+    """(n, 3) float64: where the target's object frame puts Blender object-space points."""
+    return np.asarray(positions, np.float64) @ preset.axes.T * length_scale

@@ -1,0 +1,57 @@
+"""A small glTF binary reader for the tests, written from the glTF 2.0 specification and kept
+apart from boxmarch's own export code (and from Blender's importer), so a round trip through it
+checks the file, not the code that wrote it.
+
+read_glb(path) -> list of meshes: {"name", "primitives": [{attribute name: float64 array}]},
+with normalised integer attributes divided by their maximum as the spec says (section 3.11)."""
+import json
+import struct
+
+import numpy as np
+
+_COMPONENTS = {5120: ("b", 127.0), 5121: ("B", 255.0), 5122: ("h", 32767.0), 5123: ("H", 65535.0),
+               5125: ("I", None), 5126: ("f", None)}
+_WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}
+
+
+def _chunks(data):
+    magic, version, length = struct.unpack_from("<4sII", data, 0)
+    assert magic == b"glTF" and version == 2 and length == len(data), "not a glTF 2.0 binary"
+    offset, chunks = 12, {}
+    while offset < length:
+        size, kind = struct.unpack_from("<I4s", data, offset)
+        chunks[kind] = data[offset + 8:offset + 8 + size]
+        offset += 8 + size
+    return json.loads(chunks[b"JSON"]), chunks.get(b"BIN\0", b"")
+
+
+def _accessor(doc, binary, index):
+    acc = doc["accessors"][index]
+    view = doc["bufferViews"][acc["bufferView"]]
+    code, norm = _COMPONENTS[acc["componentType"]]
+    width = _WIDTH[acc["type"]]
+    item = struct.calcsize("<" + code)
+    stride = view.get("byteStride") or item * width
+    base = view.get("byteOffset", 0) + acc.get("byteOffset", 0)
+    rows = [struct.unpack_from(f"<{width}{code}", binary, base + i * stride) for i in range(acc["count"])]
+    values = np.array(rows, np.float64).reshape(acc["count"], width)
+    if acc.get("normalized"):
+        values = values / norm
+    return values, acc
+
+
+def read_glb(path):
+    with open(path, "rb") as f:
+        doc, binary = _chunks(f.read())
+    meshes = []
+    for mesh in doc.get("meshes", []):
+        primitives = []
+        for primitive in mesh["primitives"]:
+            attrs = {name: _accessor(doc, binary, i)[0] for name, i in primitive["attributes"].items()}
+            attrs["_component_types"] = {name: doc["accessors"][i]["componentType"]
+                                         for name, i in primitive["attributes"].items()}
+            if "indices" in primitive:
+                attrs["indices"] = _accessor(doc, binary, primitive["indices"])[0].astype(np.int64).reshape(-1)
+            primitives.append(attrs)
+        meshes.append({"name": mesh.get("name"), "primitives": primitives})
+    return meshes
