@@ -1,9 +1,10 @@
 """Reading and rewriting glTF binary (.glb) files: the container, accessors, and the one patch
 the GLTF preset needs (a float COLOR_0). Blender-free.
 
-Blender's glTF exporter writes colours as normalised unsigned shorts clipped to [0, 1]: the
-offset alpha (up to 1 / smallest half-extent) would be clipped and 16-bit steps alone cost up to
-1.5e-5 of the half-extent. So the preset exports each vertex's *index* as the colour (exact in
+Blender's glTF exporter (4.x and 5.0) writes colours as normalised unsigned shorts clipped to
+[0, 1]: the offset alpha (up to 1 / smallest half-extent) would be clipped, and 16-bit steps alone
+cost up to 1.5e-5 of the half-extent. (3.4 writes floats, but its CORNER-domain colours land on
+the wrong vertices.) So the preset exports each vertex's *index* as the colour (exact in
 two 16-bit channels) and this module replaces that COLOR_0 with float32 offsets looked up by
 index, which glTF allows (COLOR_n may be FLOAT).
 """
@@ -94,7 +95,10 @@ def replace_index_colours(gltf, binary, colours_by_mesh: dict):
             attrs = primitive["attributes"]
             if "COLOR_0" not in attrs:
                 raise ValueError(f"mesh '{mesh['name']}' was exported without COLOR_0")
-            code = accessor_array(gltf, bytes(binary), attrs["COLOR_0"]).astype(np.int64)
+            code = accessor_array(gltf, bytes(binary), attrs["COLOR_0"])
+            if code.dtype.kind == "f":  # 3.4 writes float colours, later versions unsigned shorts
+                code = np.rint(code.astype(np.float64) * INDEX_COLOUR_SCALE)
+            code = code.astype(np.int64)
             index = code[:, 0] + (code[:, 1] << 16)
             if index.size and index.max() >= len(colours):
                 raise ValueError(f"mesh '{mesh['name']}': COLOR_0 holds vertex {index.max()}, "

@@ -1,8 +1,8 @@
 """Blender operators: thin shells over boxmarch.mesh_io and boxmarch.core."""
-from . import bake
+from . import bake, export
 
-classes = bake.classes
-menus = bake.menus
+classes = bake.classes + export.classes
+menus = bake.menus + export.menus
 
 
 def register_enums():

@@ -1,0 +1,67 @@
+"""boxmarch.export: write the selected baked meshes for an engine (File > Export), with the
+baked offsets and quaternions re-expressed in the engine's object frame (docs/EXPORT.md)."""
+from __future__ import annotations
+
+import os
+
+import bpy
+from bpy.props import EnumProperty, StringProperty
+from bpy_extras.io_utils import ExportHelper
+
+from ..export import scene, transforms
+
+
+class BOXMARCH_OT_export(bpy.types.Operator, ExportHelper):
+    """Export the selected baked meshes with the box frames converted for an engine"""
+
+    bl_idname = "boxmarch.export"
+    bl_label = "Export Box Frames"
+    bl_options = {"REGISTER", "PRESET"}
+
+    filename_ext = ""  # set per preset in check()
+    filter_glob: StringProperty(default="*.fbx;*.glb;*.blend", options={"HIDDEN"})
+    preset: EnumProperty(
+        name="Engine", default="UNITY",
+        items=[(p.name, p.label, p.description) for p in transforms.PRESETS.values()])
+
+    @classmethod
+    def poll(cls, context):
+        return context.mode == "OBJECT"
+
+    def check(self, _context):
+        wanted = transforms.PRESETS[self.preset].extension
+        root, ext = os.path.splitext(self.filepath)
+        if ext.lower() != wanted:
+            self.filepath = (root if ext.lower() in {".fbx", ".glb", ".blend"} else self.filepath) + wanted
+            return True
+        return False
+
+    def execute(self, context):
+        self.check(context)
+        objects = [ob for ob in context.selected_objects if ob.type == "MESH"]
+        wm = context.window_manager
+        wm.progress_begin(0, 1)
+        try:
+            report = scene.export_objects(context, objects, self.preset, self.filepath)
+        except scene.ExportInputError as error:
+            self.report({"ERROR"}, f"Nothing exported: {error}")
+            return {"CANCELLED"}
+        finally:
+            wm.progress_end()
+        for warning in report["warnings"]:
+            self.report({"WARNING"}, warning)
+        channels = sorted({tuple(m.get("uv_channels", ())) for m in report["meshes"]} - {()})
+        text = (f"Exported {len(report['objects'])} object(s) for {transforms.PRESETS[self.preset].label} "
+                f"to {report['path']} in {report['seconds']:.2f} s")
+        if channels:
+            text += "; quaternion in UV channels " + ", ".join(f"{a} and {b}" for a, b in channels)
+        self.report({"INFO"}, text)
+        return {"FINISHED"}
+
+
+def menu_export(self, _context):
+    self.layout.operator(BOXMARCH_OT_export.bl_idname, text="Boxmarch Box Frames (.fbx/.glb/.blend)")
+
+
+classes = (BOXMARCH_OT_export,)
+menus = (("TOPBAR_MT_file_export", menu_export),)
