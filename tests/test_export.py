@@ -1,0 +1,257 @@
+"""Engine export presets, proved by round trip (docs/EXPORT.md).
+
+glTF: the .glb is read back with tests/gltf_reader.py (written from the spec, not Blender's
+importer) and every vertex is decoded with the shader's formula in glTF's own frame.
+FBX (Unity): the file's raw numbers are read with Blender's FBX parser (no axis conversion), put
+in Unity's frame by negating x as Unity's importer does, and decoded; Blender's FBX importer must
+give back exactly the numbers in the file. Expected values come from the box geometry and from
+the closed forms derived in docs/EXPORT.md, never from the export code itself.
+"""
+import math
+import os
+
+import numpy as np
+import pytest
+
+from boxmarch import scenes
+from boxmarch.export import glb, transforms
+from conftest import mesh_object
+from gltf_reader import read_glb
+
+HALF = math.sqrt(0.5)
+# Blender object space -> glTF (x, z, -y); -> Unity (-x, z, -y).
+TO_GLTF = np.array([[1, 0, 0], [0, 0, 1], [0, -1, 0]], float)
+TO_UNITY = np.array([[-1, 0, 0], [0, 0, 1], [0, -1, 0]], float)
+
+
+def shader_origin(position, rgba, q):
+    """docs/FORMAT.md: objPos + rotate_vector((rgb * 2 - 1) / a, q), in float64."""
+    f = (rgba[:, :3] * 2.0 - 1.0) / rgba[:, 3:4]
+    u, w = q[:, :3], q[:, 3:4]
+    return position + f + 2.0 * np.cross(u, np.cross(u, f) + w * f)
+
+
+def baked_boxes(bpy, count=120, seed=5, encoding="FLOAT_COLOR", domain="POINT"):
+    # Small spread, sizable boxes: float32 positions then sit within 2e-6 of the half-extent of
+    # the exact box corners, so the exact centres are a fair reference at 1e-5.
+    arrays, centres, sizes, _ = scenes.random_boxes(count, seed=seed, spread=10.0, size_range=(0.5, 3.0))
+    ob = mesh_object(bpy, "Boxes", *arrays)
+    assert bpy.ops.boxmarch.bake(encoding=encoding, domain=domain) == {"FINISHED"}
+    return ob, arrays[0], centres, sizes
+
+
+def vertex_of(target_positions, blender_positions, axes):
+    """Index of the Blender vertex behind each exported vertex: positions map exactly (a signed
+    permutation of float32 values)."""
+    lookup = {tuple(row): i for i, row in enumerate((blender_positions.astype(np.float64) @ axes.T)
+                                                    .astype(np.float32).tolist())}
+    return np.array([lookup[tuple(row)] for row in target_positions.astype(np.float32).tolist()])
+
+
+def export(bpy, preset, path):
+    assert bpy.ops.boxmarch.export(filepath=str(path), preset=preset) == {"FINISHED"}
+    assert path.exists()
+
+
+@pytest.mark.parametrize("encoding, domain, tolerance", [
+    ("FLOAT_COLOR", "POINT", 1e-5), ("FLOAT_COLOR", "CORNER", 1e-5),
+    ("BYTE_COLOR", "POINT", 0.05)])  # 8-bit: the bake's own quantisation bound (docs/FORMAT.md)
+def test_gltf_round_trip_lands_on_box_centres_in_gltf_frame(blender, tmp_path, encoding, domain, tolerance):
+    ob, positions, centres, sizes = baked_boxes(blender, encoding=encoding, domain=domain)
+    export(blender, "GLTF", tmp_path / "boxes.glb")
+    meshes = read_glb(tmp_path / "boxes.glb")
+    assert [m["name"] for m in meshes] == ["Boxes"]
+    seen = np.zeros(len(positions), bool)
+    for primitive in meshes[0]["primitives"]:
+        assert primitive["_component_types"]["COLOR_0"] == 5126  # FLOAT: no 16-bit steps, no clipping
+        vertex = vertex_of(primitive["POSITION"], positions, TO_GLTF)
+        seen[vertex] = True
+        q = np.concatenate([primitive["TEXCOORD_1"], primitive["TEXCOORD_2"]], axis=1)
+        assert np.abs(np.linalg.norm(q, axis=1) - 1).max() < 1e-6
+        origin = shader_origin(primitive["POSITION"], primitive["COLOR_0"], q)
+        box = vertex // 8
+        error = np.linalg.norm(origin - centres[box] @ TO_GLTF.T, axis=1) / (sizes[box].max(axis=1) / 2)
+        assert error.max() <= tolerance, error.max()
+    assert seen.all()
+
+
+def test_gltf_keeps_texture_uvs_in_gltf_convention(blender, tmp_path):
+    """Only the quaternion maps are compensated: the artist's UVMap is flipped as glTF wants."""
+    ob, positions, _, _ = baked_boxes(blender, count=10)
+    uv = ob.data.uv_layers["UVMap"]
+    values = np.random.default_rng(0).uniform(0, 1, len(ob.data.loops) * 2).astype(np.float32)
+    uv.data.foreach_set("uv", values)
+    corner_verts = np.empty(len(ob.data.loops), np.int32)
+    ob.data.loops.foreach_get("vertex_index", corner_verts)
+    per_vertex = np.empty((len(positions), 2), np.float32)
+    per_vertex[corner_verts] = values.reshape(-1, 2)
+    # one UV per vertex so the exporter cannot split and reorder corners differently
+    uv.data.foreach_set("uv", per_vertex[corner_verts].reshape(-1))
+    export(blender, "GLTF", tmp_path / "uv.glb")
+    primitive = read_glb(tmp_path / "uv.glb")[0]["primitives"][0]
+    vertex = vertex_of(primitive["POSITION"], positions, TO_GLTF)
+    expected = per_vertex[vertex].astype(np.float64)
+    expected[:, 1] = 1.0 - expected[:, 1]
+    assert np.abs(primitive["TEXCOORD_0"] - expected).max() < 1e-6
+
+
+def fbx_raw_geometry(path):
+    """Raw numbers of the first Geometry of an FBX file, per polygon corner (no conversion)."""
+    from io_scene_fbx import parse_fbx
+
+    root, _version = parse_fbx.parse(str(path))
+    child = lambda elem, name: next(c for c in elem.elems if c.id == name)
+    geometry = child(child(root, b"Objects"), b"Geometry")
+    corner_vertex = np.array(child(geometry, b"PolygonVertexIndex").props[0])
+    corner_vertex = np.where(corner_vertex < 0, ~corner_vertex, corner_vertex)
+    out = {"vertex": corner_vertex,
+           "position": np.array(child(geometry, b"Vertices").props[0]).reshape(-1, 3)[corner_vertex]}
+    for layer in geometry.elems:
+        if layer.id in (b"LayerElementUV", b"LayerElementColor"):
+            name = child(layer, b"Name").props[0].decode()
+            assert child(layer, b"MappingInformationType").props[0] == b"ByPolygonVertex"
+            data, index, width = ((b"UV", b"UVIndex", 2) if layer.id == b"LayerElementUV"
+                                  else (b"Colors", b"ColorIndex", 4))
+            values = np.array(child(layer, data).props[0]).reshape(-1, width)
+            out.setdefault("uv_maps" if width == 2 else "colours", []).append(name)
+            out[name] = values[np.array(child(layer, index).props[0])]
+    settings = child(child(root, b"GlobalSettings"), b"Properties70")
+    out["settings"] = {p.props[0].decode(): p.props[-1] for p in settings.elems}
+    return out
+
+
+def unity_closed_form(q, rgba):
+    """docs/EXPORT.md: Unity's quaternion sqrt(1/2) (x - w, -y - z, y - z, w + x) with w >= 0,
+    and the offset's first channel mirrored (1 - r)."""
+    x, y, z, w = q.T
+    qu = HALF * np.stack([x - w, -y - z, y - z, w + x], 1)
+    lead = np.where(qu[:, 3] != 0, qu[:, 3], np.where(qu[:, 0] != 0, qu[:, 0], np.where(qu[:, 1] != 0, qu[:, 1], qu[:, 2])))
+    qu[lead < 0] *= -1
+    out = rgba.copy()
+    out[:, 0] = 1.0 - out[:, 0]
+    return qu, out
+
+
+@pytest.mark.parametrize("encoding, tolerance", [("FLOAT_COLOR", 1e-5), ("BYTE_COLOR", 0.05)])
+def test_unity_fbx_decodes_in_unity_frame_and_reimports_exactly(blender, tmp_path, encoding, tolerance):
+    bpy = blender
+    ob, positions, centres, sizes = baked_boxes(bpy, encoding=encoding)
+    mesh = ob.data
+    corner_verts = np.empty(len(mesh.loops), np.int32)
+    mesh.loops.foreach_get("vertex_index", corner_verts)
+    stored = np.empty(len(mesh.vertices) * 4, np.float32)
+    mesh.color_attributes["BoxOffset"].data.foreach_get("color_srgb" if encoding == "BYTE_COLOR" else "color", stored)
+    stored = stored.reshape(-1, 4)[corner_verts].astype(np.float64)
+    if encoding == "BYTE_COLOR":
+        stored = np.rint(stored * 255) / 255
+    q = np.concatenate([np.array([d.uv[:] for d in mesh.uv_layers[name].data]) for name in ("BoxQuatXY", "BoxQuatZW")], 1)
+
+    export(bpy, "UNITY", tmp_path / "boxes.fbx")
+    raw = fbx_raw_geometry(tmp_path / "boxes.fbx")
+    assert raw["uv_maps"] == ["UVMap", "BoxQuatXY", "BoxQuatZW"]  # Unity's UV channels 0, 1, 2
+    assert raw["colours"] == ["BoxOffset"]  # Unity reads one colour layer: it must be ours
+    assert raw["settings"]["UnitScaleFactor"] == 100.0  # metres: Unity's file scale is 1
+    assert np.array_equal(raw["vertex"], corner_verts)
+    # The file holds Blender's positions turned to Y-up, exactly (no scale).
+    assert np.array_equal(raw["position"], positions.astype(np.float64)[corner_verts] @ TO_GLTF.T)
+    expected_q, expected_rgba = unity_closed_form(q, stored)
+    file_q = np.concatenate([raw["BoxQuatXY"], raw["BoxQuatZW"]], 1)
+    assert np.abs(file_q - expected_q).max() < 2e-7
+    assert np.abs(raw["BoxOffset"] - expected_rgba).max() < 2e-7
+    if encoding == "BYTE_COLOR":  # bytes stay bytes: Unity's Color32 gets them back exactly
+        file_bytes = raw["BoxOffset"] * 255
+        assert np.abs(file_bytes - np.rint(file_bytes)).max() < 1e-4
+        assert np.array_equal(np.rint(file_bytes), np.rint(expected_rgba * 255))
+    # Unity's importer negates x; decode there with the shader's formula.
+    origin = shader_origin(raw["position"] * [-1, 1, 1], raw["BoxOffset"], file_q)
+    box = corner_verts // 8
+    error = np.linalg.norm(origin - centres[box] @ TO_UNITY.T, axis=1) / (sizes[box].max(axis=1) / 2)
+    assert error.max() <= tolerance, error.max()
+
+    # Blender's importer converts positions back, but colours and UVs must come back untouched.
+    bpy.ops.import_scene.fbx(filepath=str(tmp_path / "boxes.fbx"), colors_type="LINEAR")
+    imported = next(o for o in bpy.context.selected_objects if o.type == "MESH").data
+    assert len(imported.loops) == len(corner_verts)
+    for name in ("BoxQuatXY", "BoxQuatZW"):
+        uv = np.empty(len(imported.loops) * 2, np.float32)
+        imported.uv_layers[name].data.foreach_get("uv", uv)
+        assert np.array_equal(uv.reshape(-1, 2), raw[name].astype(np.float32))
+        assert np.array_equal(raw[name].astype(np.float32).astype(np.float64), raw[name])  # float32 in the file
+    colour = imported.color_attributes["BoxOffset"]
+    values = np.empty(len(colour.data) * 4, np.float32)
+    colour.data.foreach_get("color", values)
+    values = values.reshape(-1, 4)
+    if colour.domain == "POINT":
+        imported_corner_verts = np.empty(len(imported.loops), np.int32)
+        imported.loops.foreach_get("vertex_index", imported_corner_verts)
+        values = values[imported_corner_verts]
+    assert np.array_equal(values, raw["BoxOffset"].astype(np.float32))
+
+
+def test_blender_preset_writes_the_baked_data_untouched(blender, tmp_path):
+    bpy = blender
+    ob, _, _, _ = baked_boxes(bpy, count=20)
+    before = np.empty(len(ob.data.vertices) * 4, np.float32)
+    ob.data.color_attributes["BoxOffset"].data.foreach_get("color", before)
+    export(bpy, "BLENDER", tmp_path / "raw.blend")
+    with bpy.data.libraries.load(str(tmp_path / "raw.blend")) as (src, dst):
+        assert src.objects == ["Boxes"]
+        dst.meshes = src.meshes
+    loaded = dst.meshes[0]
+    after = np.empty(len(loaded.vertices) * 4, np.float32)
+    loaded.color_attributes["BoxOffset"].data.foreach_get("color", after)
+    assert np.array_equal(before, after)
+
+
+def test_export_leaves_the_scene_as_it_was(blender, tmp_path):
+    bpy = blender
+    ob, _, _, _ = baked_boxes(bpy, count=20)
+    other = mesh_object(bpy, "Other", *scenes.random_boxes(2, seed=1)[0], select=False)
+    ob.select_set(True)
+    mesh_names = sorted(m.name for m in bpy.data.meshes)
+    uv_before = np.array([d.uv[:] for d in ob.data.uv_layers["BoxQuatZW"].data])
+    for preset, name in (("GLTF", "a.glb"), ("UNITY", "a.fbx")):
+        export(bpy, preset, tmp_path / name)
+    assert sorted(m.name for m in bpy.data.meshes) == mesh_names
+    assert ob.data.name == "Boxes" and other.data.name == "Other"
+    assert np.array_equal(np.array([d.uv[:] for d in ob.data.uv_layers["BoxQuatZW"].data]), uv_before)
+    assert ob.select_get() and not other.select_get()
+    assert sorted(os.listdir(tmp_path)) == ["a.fbx", "a.glb"]  # no partial files left
+
+
+def test_export_refuses_unbaked_mesh_and_writes_nothing(blender, tmp_path):
+    bpy = blender
+    mesh_object(bpy, "Raw", *scenes.random_boxes(3, seed=2)[0])
+    with pytest.raises(RuntimeError, match="not baked"):
+        bpy.ops.boxmarch.export(filepath=str(tmp_path / "x.glb"), preset="GLTF")
+    assert os.listdir(tmp_path) == []
+
+
+def test_export_operator_is_in_file_export_menu(blender):
+    from boxmarch.operators import export as export_ops
+
+    draw_funcs = blender.types.TOPBAR_MT_file_export._dyn_ui_initialize()
+    assert export_ops.menu_export in draw_funcs
+
+
+def test_exporter_index_colours_come_back_exactly():
+    """The vertex index the glTF preset hands the exporter as a colour survives the exporter's
+    16-bit rounding (c * 65535 + 0.5, truncated) for every index up to 2^32 - 1."""
+    count = 70000
+    colours = glb.index_colours(count)
+    rounded = (colours * np.float32(65535) + np.float32(0.5)).astype(np.uint16).astype(np.int64)
+    assert np.array_equal(rounded[:, 0] + (rounded[:, 1] << 16), np.arange(count))
+
+
+def test_target_quaternions_match_closed_forms():
+    rng = np.random.default_rng(4)
+    q = rng.normal(size=(500, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    q[q[:, 3] < 0] *= -1
+    x, y, z, w = q.T
+    gltf = HALF * np.stack([x - w, y + z, z - y, w + x], 1)
+    gltf[gltf[:, 3] < 0] *= -1
+    assert np.abs(transforms.target_quaternions(q, transforms.PRESETS["GLTF"]) - gltf).max() < 1e-12
+    unity, _ = unity_closed_form(q, np.zeros((500, 4)))
+    assert np.abs(transforms.target_quaternions(q, transforms.PRESETS["UNITY"]) - unity).max() < 1e-12
+    assert np.abs(transforms.target_quaternions(q, transforms.PRESETS["BLENDER"]) - q).max() < 1e-12
