@@ -1,0 +1,184 @@
+"""The command line in both forms: `python -m boxmarch` (a Python with bpy) and Debian's Blender
+3.4 program (`blender --background FILE --python-expr "import boxmarch.cli; boxmarch.cli.main()"
+-- ...`). Exit codes, reports, outputs that appear only complete, and decodes of what it wrote."""
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import boxmarch
+from boxmarch import scenes
+from gltf_reader import read_glb
+from test_blender_app import SCRIPTS, blender_env, package_parent  # noqa: F401 (fixture)
+
+TO_GLTF = np.array([[1, 0, 0], [0, 0, 1], [0, -1, 0]], float)
+COUNT, SEED = 60, 11
+
+
+def boxes_reference():
+    """Centres and half-extents of the boxes make_boxes.py writes (same seed, same generator)."""
+    (positions, *_), centres, sizes, _ = scenes.random_boxes(COUNT, seed=SEED, spread=10.0, size_range=(0.5, 3.0))
+    return positions, centres, sizes.max(axis=1) / 2
+
+
+def run_module(args, cwd, timeout=240):
+    env = dict(os.environ, PYTHONPATH=str(Path(boxmarch.__file__).parent.parent))
+    home = Path(cwd).parent / f"{Path(cwd).name}-home"  # Blender's caches, outside the checked folder
+    home.mkdir(exist_ok=True)
+    for var in ("HOME", "TMPDIR", "XDG_CACHE_HOME"):
+        env[var] = str(home)
+    return subprocess.run([sys.executable, "-m", "boxmarch", *args], cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=timeout)
+
+
+def run_blender_cli(blend, args, package_parent, cwd, timeout=240):
+    home = Path(cwd).parent / f"{Path(cwd).name}-home"
+    home.mkdir(exist_ok=True)
+    env = blender_env(home)
+    env["PYTHONPATH"] = str(package_parent)  # Debian's Blender honours it
+    command = [shutil.which("blender"), "--background", "--factory-startup"]
+    if blend:
+        command.append(str(blend))
+    command += ["--python-expr", "import boxmarch.cli; boxmarch.cli.main()", "--", *args]
+    return subprocess.run(command, cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.fixture(scope="module")
+def boxes_blend_34(package_parent, tmp_path_factory):
+    """An unbaked boxes file saved by Blender 3.4 (5.0's files do not open in 3.4; 3.4's open in both)."""
+    folder = tmp_path_factory.mktemp("input")
+    path = folder / "boxes.blend"
+    proc = subprocess.run([shutil.which("blender"), "--background", "--factory-startup", "--python-exit-code", "1",
+                           "--python", str(SCRIPTS / "make_boxes.py"), "--", str(package_parent), str(path),
+                           str(COUNT), str(SEED)], env=blender_env(folder), capture_output=True, text=True, timeout=240)
+    assert proc.returncode == 0 and path.exists(), proc.stdout[-2000:] + proc.stderr[-2000:]
+    return path
+
+
+def digest(path):
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def assert_glb_decodes_to_centres(path, tolerance=1e-5):
+    positions, centres, half = boxes_reference()
+    lookup = {tuple(r): i for i, r in enumerate((positions.astype(np.float64) @ TO_GLTF.T).astype(np.float32).tolist())}
+    worst = 0.0
+    for primitive in read_glb(path)[0]["primitives"]:
+        box = np.array([lookup[tuple(r)] for r in primitive["POSITION"].astype(np.float32).tolist()]) // 8
+        c = primitive["COLOR_0"]
+        q = np.concatenate([primitive["TEXCOORD_1"], primitive["TEXCOORD_2"]], axis=1)
+        f = (c[:, :3] * 2 - 1) / c[:, 3:4]
+        u, w = q[:, :3], q[:, 3:4]
+        origin = primitive["POSITION"] + f + 2 * np.cross(u, np.cross(u, f) + w * f)
+        worst = max(worst, float((np.linalg.norm(origin - centres[box] @ TO_GLTF.T, axis=1) / half[box]).max()))
+    assert worst <= tolerance, worst
+    return worst
+
+
+# --- python -m boxmarch -------------------------------------------------------------------------
+
+
+def test_module_demo_prints_table_and_writes_checked_files(tmp_path):
+    proc = run_module(["demo", "--count", "300", "--out", "out", "--json", "demo.json"], tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "| step" in proc.stdout and "bake FLOAT_COLOR" in proc.stdout and "export demo.glb" in proc.stdout
+    assert "[boxmarch]" in proc.stderr  # progress goes to stderr
+    report = json.loads((tmp_path / "demo.json").read_text())
+    assert report["ok"] and report["count"] == 300
+    meshes = read_glb(tmp_path / "out" / "demo.glb")
+    assert len(np.unique(meshes[0]["primitives"][0]["POSITION"], axis=0)) == 300 * 8  # every box corner
+    assert (tmp_path / "out" / "demo.blend").exists()
+    assert sorted(os.listdir(tmp_path / "out")) == ["demo.blend", "demo.glb"]
+
+
+def test_module_bake_export_pipeline_on_a_file(boxes_blend_34, tmp_path):
+    source = tmp_path / "in.blend"
+    shutil.copy(boxes_blend_34, source)
+    before = digest(source)
+    proc = run_module(["pipeline", str(source), "--objects", "Boxes", "--steps", "bake,export", "--preset", "GLTF",
+                       "--to", "boxes.glb", "--out", "baked.blend", "--json", "report.json"], tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    report = json.loads((tmp_path / "report.json").read_text())
+    bake, export = report["steps"]
+    assert (bake["step"], bake["baked"], bake["submeshes"]) == ("bake", COUNT, COUNT)
+    assert bake["max_relative_error"] < 1e-5
+    assert export["preset"] == "GLTF" and export["meshes"][0]["uv_channels"] == [1, 2]
+    assert digest(source) == before  # the input is never written
+    assert_glb_decodes_to_centres(tmp_path / "boxes.glb")
+    # The written .blend holds the bake: export from it alone gives the same file content.
+    proc = run_module(["export", "baked.blend", "--preset", "UNITY", "--to", "boxes.fbx"], tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert (tmp_path / "boxes.fbx").stat().st_size > 0
+
+
+@pytest.mark.parametrize("args, reason", [
+    (["bake", "missing.blend"], "no such file"),
+    (["bake", "notes.txt"], "not a .blend file"),
+    (["bake", "in.blend", "--objects", "Nope"], "no object named 'Nope'"),
+    (["bake", "in.blend", "--objects", "Camera"], "is a camera, not a mesh"),
+    (["bake", "in.blend", "--encoding", "HALF"], "invalid choice"),
+    (["bake", "in.blend", "--out", "nowhere/x.blend"], "does not exist"),
+    (["bake", "in.blend", "--out", "x.txt"], "must name a .blend"),
+    (["export", "in.blend", "--preset", "GLTF"], "--to"),
+    (["export", "in.blend", "--preset", "GLTF", "--to", "x.glb"], "not baked"),
+    (["pipeline", "in.blend", "--steps", "bake,polish"], "--steps"),
+    (["demo", "--count", "0"], "at least 1"),
+    (["frobnicate"], "invalid choice"),
+])
+def test_module_bad_input_exits_2_with_one_line_and_writes_nothing(boxes_blend_34, tmp_path, args, reason):
+    shutil.copy(boxes_blend_34, tmp_path / "in.blend")
+    (tmp_path / "notes.txt").write_text("not a blend file")
+    files_before = sorted(os.listdir(tmp_path))
+    proc = run_module(args, tmp_path)
+    assert proc.returncode == 2, proc.stdout[-2000:] + proc.stderr[-2000:]
+    last = proc.stderr.strip().splitlines()[-1]
+    assert last.startswith("boxmarch: error:") and reason in last, proc.stderr
+    assert sorted(os.listdir(tmp_path)) == files_before
+
+
+def test_module_failure_report_is_json_when_asked(boxes_blend_34, tmp_path):
+    shutil.copy(boxes_blend_34, tmp_path / "in.blend")
+    proc = run_module(["bake", "in.blend", "--objects", "Camera", "--out", "o.blend", "--json", "r.json"], tmp_path)
+    assert proc.returncode == 2
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["ok"] is False and report["exit_code"] == 2 and "camera" in report["error"]
+    assert not (tmp_path / "o.blend").exists()
+
+
+# --- blender --background FILE --python-expr ... -- ---------------------------------------------
+
+
+def test_blender_34_form_bake_export_and_exit_codes(boxes_blend_34, package_parent, tmp_path):  # noqa: F811
+    proc = run_blender_cli(boxes_blend_34, ["bake", "--out", str(tmp_path / "baked.blend"),
+                                            "--json", str(tmp_path / "bake.json")], package_parent, tmp_path)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    report = json.loads((tmp_path / "bake.json").read_text())
+    assert report["blender"].startswith("3.4") and report["objects"] == ["Boxes"]
+    assert report["steps"][0]["baked"] == COUNT
+    proc = run_blender_cli(tmp_path / "baked.blend", ["export", "--preset", "GLTF", "--to", str(tmp_path / "b.glb")],
+                           package_parent, tmp_path)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    assert_glb_decodes_to_centres(tmp_path / "b.glb")
+    proc = run_blender_cli(boxes_blend_34, ["bake", "--objects", "Camera", "--out", str(tmp_path / "no.blend")],
+                           package_parent, tmp_path)
+    assert proc.returncode == 2 and "is a camera, not a mesh" in proc.stderr
+    assert not (tmp_path / "no.blend").exists()
+    proc = run_blender_cli(boxes_blend_34, ["bake", "--angle-epsilon", "wide"], package_parent, tmp_path)
+    assert proc.returncode == 2 and "invalid float value" in proc.stderr
+    # A file handed to boxmarch rather than to Blender is checked (Blender itself exits 0 on an
+    # unreadable file without running the script).
+    proc = run_blender_cli(None, ["bake", str(tmp_path / "missing.blend")], package_parent, tmp_path)
+    assert proc.returncode == 2 and "no such file" in proc.stderr
+
+
+def test_blender_34_form_demo(package_parent, tmp_path):  # noqa: F811
+    proc = run_blender_cli(None, ["demo", "--count", "300", "--out", str(tmp_path)], package_parent, tmp_path)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    assert "Blender 3.4" in proc.stdout and "export demo.glb" in proc.stdout
+    assert (tmp_path / "demo.blend").exists() and (tmp_path / "demo.glb").exists()
