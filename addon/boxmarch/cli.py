@@ -87,9 +87,9 @@ def _write_json(path: str, report: dict) -> None:
 
 def _ensure_registered(bpy) -> None:
     if not hasattr(bpy.types, "BOXMARCH_OT_bake"):
-        import boxmarch
+        from . import register  # relative: installed as an extension the package is bl_ext.*.boxmarch
 
-        boxmarch.register()
+        register()
 
 
 def _open(bpy, args) -> None:

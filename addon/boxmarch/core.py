@@ -19,7 +19,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import _core
+try:
+    from . import _core
+except ImportError:  # installed as a Blender 4.2+ extension: the module comes from its platform wheel
+    from boxmarch_native import _core
 
 ORIGIN_MODES = ("BOUNDS", "MEAN")
 ENCODINGS = ("FLOAT_COLOR", "BYTE_COLOR")

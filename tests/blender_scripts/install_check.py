@@ -1,0 +1,54 @@
+"""Run inside a Blender program with a fresh user config: install the add-on from a zip, enable it,
+bake boxes through the installed copy and write what happened.
+Usage: blender -b --factory-startup --python install_check.py -- ZIP OUT_JSON"""
+import json
+import os
+import sys
+import traceback
+
+argv = sys.argv[sys.argv.index("--") + 1:]
+zip_path, out_path = argv[0], argv[1]
+result = {"error": None}
+try:
+    import bpy  # first: with the bpy module, addon_utils is importable only after it
+    import addon_utils
+    import numpy as np
+
+    if bpy.app.version >= (4, 2, 0):
+        bpy.ops.extensions.package_install_files(filepath=zip_path, repo="user_default", enable_on_install=True)
+        module_name = "bl_ext.user_default.boxmarch"
+    else:
+        bpy.ops.preferences.addon_install(filepath=zip_path)
+        bpy.ops.preferences.addon_enable(module="boxmarch")
+        module_name = "boxmarch"
+    module = sys.modules[module_name]
+    result["module_file"] = module.__file__
+    result["enabled"] = addon_utils.check(module_name)[1]
+    core = sys.modules[module_name + ".core"]
+    result["core_file"] = core._core.__file__
+    scenes = sys.modules.get(module_name + ".scenes") or __import__(module_name + ".scenes", fromlist=["x"])
+    mesh_io = sys.modules.get(module_name + ".mesh_io") or __import__(module_name + ".mesh_io", fromlist=["x"])
+    bpy.ops.wm.read_homefile(use_empty=True)
+    (positions, _, face_starts, face_sizes, corner_verts), centres, sizes, _ = scenes.random_boxes(
+        40, seed=2, spread=10.0, size_range=(0.5, 3.0))
+    ob = bpy.data.objects.new("Boxes", mesh_io.new_mesh("Boxes", positions, face_starts, face_sizes, corner_verts))
+    bpy.context.scene.collection.objects.link(ob)
+    ob.select_set(True)
+    bpy.context.view_layer.objects.active = ob
+    result["bake"] = sorted(bpy.ops.boxmarch.bake())
+    mesh = ob.data
+    colour = np.empty(len(mesh.vertices) * 4, np.float32)
+    mesh.color_attributes["BoxOffset"].data.foreach_get("color", colour)
+    colour = colour.reshape(-1, 4)[corner_verts].astype(np.float64)
+    q = np.concatenate([np.array([d.uv[:] for d in mesh.uv_layers[n].data]) for n in ("BoxQuatXY", "BoxQuatZW")], 1)
+    f = (colour[:, :3] * 2 - 1) / colour[:, 3:4]
+    u, w = q[:, :3], q[:, 3:4]
+    origin = positions[corner_verts] + f + 2 * np.cross(u, np.cross(u, f) + w * f)
+    box = corner_verts // 8
+    result["max_relative_error"] = float((np.linalg.norm(origin - centres[box], axis=1) / (sizes[box].max(1) / 2)).max())
+    result["user_scripts"] = bpy.utils.user_resource("SCRIPTS")
+    result["version"] = list(bpy.app.version)
+except Exception:
+    result["error"] = traceback.format_exc()
+with open(out_path, "w") as f:
+    json.dump(result, f)
