@@ -2,7 +2,8 @@
 
 glTF: the .glb is read back with tests/gltf_reader.py (written from the spec, not Blender's
 importer) and every vertex is decoded with the shader's formula in glTF's own frame.
-FBX (Unity): the file's raw numbers are read with Blender's FBX parser (no axis conversion), put
+FBX (Unity): the file's raw numbers are read with Blender's FBX parser (tests/fbx_reader.py: no
+axis conversion), put
 in Unity's frame by negating x as Unity's importer does, and decoded; Blender's FBX importer must
 give back exactly the numbers in the file. Expected values come from the box geometry and from
 the closed forms derived in docs/EXPORT.md, never from the export code itself.
@@ -16,6 +17,7 @@ import pytest
 from boxmarch import scenes
 from boxmarch.export import glb, transforms
 from conftest import mesh_object
+from fbx_reader import read_fbx_geometry
 from gltf_reader import read_glb
 
 HALF = math.sqrt(0.5)
@@ -95,31 +97,6 @@ def test_gltf_keeps_texture_uvs_in_gltf_convention(blender, tmp_path):
     assert np.abs(primitive["TEXCOORD_0"] - expected).max() < 1e-6
 
 
-def fbx_raw_geometry(path):
-    """Raw numbers of the first Geometry of an FBX file, per polygon corner (no conversion)."""
-    from io_scene_fbx import parse_fbx
-
-    root, _version = parse_fbx.parse(str(path))
-    child = lambda elem, name: next(c for c in elem.elems if c.id == name)
-    geometry = child(child(root, b"Objects"), b"Geometry")
-    corner_vertex = np.array(child(geometry, b"PolygonVertexIndex").props[0])
-    corner_vertex = np.where(corner_vertex < 0, ~corner_vertex, corner_vertex)
-    out = {"vertex": corner_vertex,
-           "position": np.array(child(geometry, b"Vertices").props[0]).reshape(-1, 3)[corner_vertex]}
-    for layer in geometry.elems:
-        if layer.id in (b"LayerElementUV", b"LayerElementColor"):
-            name = child(layer, b"Name").props[0].decode()
-            assert child(layer, b"MappingInformationType").props[0] == b"ByPolygonVertex"
-            data, index, width = ((b"UV", b"UVIndex", 2) if layer.id == b"LayerElementUV"
-                                  else (b"Colors", b"ColorIndex", 4))
-            values = np.array(child(layer, data).props[0]).reshape(-1, width)
-            out.setdefault("uv_maps" if width == 2 else "colours", []).append(name)
-            out[name] = values[np.array(child(layer, index).props[0])]
-    settings = child(child(root, b"GlobalSettings"), b"Properties70")
-    out["settings"] = {p.props[0].decode(): p.props[-1] for p in settings.elems}
-    return out
-
-
 def unity_closed_form(q, rgba):
     """docs/EXPORT.md: Unity's quaternion sqrt(1/2) (x - w, -y - z, y - z, w + x) with w >= 0,
     and the offset's first channel mirrored (1 - r)."""
@@ -147,7 +124,7 @@ def test_unity_fbx_decodes_in_unity_frame_and_reimports_exactly(blender, tmp_pat
     q = np.concatenate([np.array([d.uv[:] for d in mesh.uv_layers[name].data]) for name in ("BoxQuatXY", "BoxQuatZW")], 1)
 
     export(bpy, "UNITY", tmp_path / "boxes.fbx")
-    raw = fbx_raw_geometry(tmp_path / "boxes.fbx")
+    raw = read_fbx_geometry(tmp_path / "boxes.fbx")
     assert raw["uv_maps"] == ["UVMap", "BoxQuatXY", "BoxQuatZW"]  # Unity's UV channels 0, 1, 2
     assert raw["colours"] == ["BoxOffset"]  # Unity reads one colour layer: it must be ours
     assert raw["settings"]["UnitScaleFactor"] == 100.0  # metres: Unity's file scale is 1
@@ -255,3 +232,19 @@ def test_target_quaternions_match_closed_forms():
     unity, _ = unity_closed_form(q, np.zeros((500, 4)))
     assert np.abs(transforms.target_quaternions(q, transforms.PRESETS["UNITY"]) - unity).max() < 1e-12
     assert np.abs(transforms.target_quaternions(q, transforms.PRESETS["BLENDER"]) - q).max() < 1e-12
+
+
+def test_preset_rotation_is_a_quarter_turn_about_x():
+    """Z-up to Y-up, (x, y, z) -> (x, z, -y), is -90 degrees about x: q = (-sqrt(1/2), 0, 0, sqrt(1/2))."""
+    q = transforms.matrix_quaternions(transforms.Z_UP_TO_Y_UP)[0]
+    assert np.abs(q - [-HALF, 0, 0, HALF]).max() < 1e-15
+
+
+def test_unity_export_warns_about_float_offsets(blender, tmp_path):
+    from boxmarch.export import scene
+
+    ob, _, _, _ = baked_boxes(blender, count=5)
+    report = scene.export_objects(blender.context, [ob], "UNITY", str(tmp_path / "w.fbx"))
+    assert len(report["warnings"]) == 1 and "Color32" in report["warnings"][0]
+    assert blender.ops.boxmarch.bake(encoding="BYTE_COLOR") == {"FINISHED"}
+    assert scene.export_objects(blender.context, [ob], "UNITY", str(tmp_path / "w.fbx"))["warnings"] == []

@@ -58,13 +58,19 @@ def _target_copy(mesh, preset, index_colour: bool):
     q = np.concatenate([quat_xy, quat_zw], axis=1)
     target_q = transforms.target_quaternions(q, preset).astype(np.float32)
     target_rgba = transforms.target_offsets(offsets, preset)
-    # The decode in the target frame must land where the target frame puts Blender's decode.
-    positions = mesh_io.read_positions(mesh).astype(np.float64)[corner_verts]
-    blender_origin = positions + core.rotate_vector(core.decode_offsets(offsets[corner_verts]), q)
+    # Self-check, per vertex (the baked quaternion is the same on every corner of a vertex): the
+    # decode in the target frame must land where the target frame puts Blender's decode.
+    positions = mesh_io.read_positions(mesh).astype(np.float64)
+    vertex_q = np.zeros((len(positions), 4), np.float32)
+    vertex_q[corner_verts] = q
+    vertex_target_q = np.zeros((len(positions), 4), np.float32)
+    vertex_target_q[corner_verts] = target_q
+    f = core.decode_offsets(offsets)
+    blender_origin = positions + core.rotate_vector(f, vertex_q)
     target_origin = (transforms.target_positions(positions, preset)
-                     + core.rotate_vector(core.decode_offsets(target_rgba[corner_verts]), target_q))
-    reach = np.abs(core.decode_offsets(offsets)).max() if len(offsets) else 1.0
-    error = float(np.abs(target_origin - transforms.target_positions(blender_origin, preset)).max() / max(reach, 1e-30))
+                     + core.rotate_vector(core.decode_offsets(target_rgba), vertex_target_q))
+    reach = max(float(np.abs(f).max()) if len(f) else 0.0, 1e-30)
+    error = float(np.abs(target_origin - transforms.target_positions(blender_origin, preset)).max() / reach)
 
     copy = mesh.copy()
     for name in [a.name for a in copy.color_attributes]:
@@ -78,6 +84,8 @@ def _target_copy(mesh, preset, index_colour: bool):
     names = [uv.name for uv in copy.uv_layers]
     stats = {"mesh": mesh.name, "vertices": len(mesh.vertices), "corners": len(corner_verts),
              "uv_channels": [names.index(mesh_io.QUAT_XY_UV), names.index(mesh_io.QUAT_ZW_UV)],
+             "colour": mesh.color_attributes[mesh_io.OFFSET_ATTRIBUTE].data_type,
+             "max_alpha": float(target_rgba[:, 3].max()) if len(target_rgba) else 0.0,
              "transform_error": error}
     return copy, target_rgba, stats
 
@@ -131,6 +139,14 @@ def export_objects(context, objects, preset_name: str, filepath: str) -> dict:
             bpy.data.libraries.write(temp, set(objects), fake_user=True, compress=False)
         else:
             stats = _export_with_copies(context, objects, meshes, preset, temp)
+            if preset.name == "UNITY":
+                floats = [m for m in stats if m["colour"] == "FLOAT_COLOR"]
+                if floats:
+                    warnings.append(
+                        f"{', '.join(m['mesh'] for m in floats)}: float offsets (alpha up to "
+                        f"{max(m['max_alpha'] for m in floats):.3g}); Unity usually stores vertex colours as "
+                        "8-bit Color32, which clips alpha above 1 and rounds the rest: bake with 8-bit colour "
+                        "for Unity (docs/EXPORT.md)")
         os.replace(temp, filepath)
     finally:
         if os.path.exists(temp):

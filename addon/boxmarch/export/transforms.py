@@ -4,15 +4,17 @@ the final numbers for the documented decode (docs/FORMAT.md) in the target's obj
 Blender-free (NumPy only), like the format half of glTF-Blender-IO; ``export/scene.py`` is the
 Blender-facing half. docs/EXPORT.md derives every transform here.
 
-A preset is described by two signed permutation matrices and a few flags:
+A preset is described by a rotation and a mirror, as signed permutation matrices:
 
-* ``axes`` A: target object coordinates of a Blender object-space point, p' = A p, as the
-  exporter (and the engine's importer, for Unity) converts positions;
-* ``local_mirror`` M (diagonal, +-1): when det A = -1 no rotation maps Blender's frame to the
-  target's, so each box's local frame is mirrored as the target mirrors object frames.
+* ``rotation`` A0 (det +1) and ``mirror`` N (diagonal, +-1): target object coordinates of a
+  Blender object-space point are p' = A p with A = N A0, as the exporter (and, for Unity, the
+  engine's importer) converts positions;
+* when N is a reflection no rotation maps Blender's frame to the target's, so each box's local
+  frame is mirrored the way the target mirrors every object frame: local coordinates f' = N f.
 
 Decode invariant: origin' = p' + R(q') f' must equal A (p + R(q) f) for every vertex. With
-R(q') = A R(q) M and f' = M f it does, because M M = I.
+R(q') = N A0 R(q) N and f' = N f it does, because N N = I; and N Q N is a rotation for any
+rotation Q, whose quaternion is Q's with the vector part v replaced by det(N) N v.
 """
 from __future__ import annotations
 
@@ -20,13 +22,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scenes import quaternion_matrices
 
 # Blender's Z-up right-handed object space to the Y-up right-handed space of glTF and of FBX
 # written with axis_forward='-Z', axis_up='Y': (x, y, z) -> (x, z, -y).
 Z_UP_TO_Y_UP = np.array([[1, 0, 0], [0, 0, 1], [0, -1, 0]], np.float64)
-# Unity's FBX importer turns the right-handed file into its left-handed frame by negating x.
-NEGATE_X = np.diag([-1.0, 1.0, 1.0])
+# Unity's FBX importer turns the right-handed file into its left-handed frame by negating x:
+# the UNITY preset's mirror is diag(-1, 1, 1).
 
 
 @dataclass(frozen=True)
@@ -34,15 +35,20 @@ class Preset:
     name: str
     label: str
     extension: str
-    axes: np.ndarray          # A (3, 3)
-    local_mirror: np.ndarray  # diagonal of M (3,)
-    flip_v_on_export: bool    # the exporter writes v -> 1 - v on every UV map
+    rotation: np.ndarray   # A0 (3, 3), det +1
+    mirror: np.ndarray     # diagonal of N (3,), +-1, at most one -1
+    flip_v_on_export: bool  # the exporter writes v -> 1 - v on every UV map
     description: str
+
+    @property
+    def axes(self) -> np.ndarray:
+        """A = N A0: p' = A p."""
+        return self.mirror[:, None] * self.rotation
 
 
 PRESETS = {
     "UNITY": Preset(
-        "UNITY", "Unity (FBX)", ".fbx", NEGATE_X @ Z_UP_TO_Y_UP, np.array([-1.0, 1.0, 1.0]), False,
+        "UNITY", "Unity (FBX)", ".fbx", Z_UP_TO_Y_UP, np.array([-1.0, 1.0, 1.0]), False,
         "FBX for Unity's importer: left-handed Y-up object frame, colour and UVs as Unity reads them"),
     "GLTF": Preset(
         "GLTF", "glTF Binary", ".glb", Z_UP_TO_Y_UP, np.ones(3), True,
@@ -83,19 +89,30 @@ def canonical_sign(q) -> np.ndarray:
     return q
 
 
+def multiply(a, b) -> np.ndarray:
+    """Hamilton products a b of quaternions (x, y, z, w), broadcast, float64."""
+    a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
+    av, aw, bv, bw = a[..., :3], a[..., 3:], b[..., :3], b[..., 3:]
+    return np.concatenate([aw * bv + bw * av + np.cross(av, bv),
+                           aw * bw - np.sum(av * bv, axis=-1, keepdims=True)], axis=-1)
+
+
 def target_quaternions(q, preset: Preset) -> np.ndarray:
-    """(n, 4) float64: q' with R(q') = A R(q) M, the box frame in the target's object frame."""
-    m = preset.axes @ quaternion_matrices(q) * preset.local_mirror[None, None, :]
-    return matrix_quaternions(m)
+    """(n, 4) float64: q' with R(q') = N A0 R(q) N, the box frame in the target's object frame,
+    in the baked sign convention."""
+    turned = multiply(matrix_quaternions(preset.rotation)[0], np.asarray(q, np.float64).reshape(-1, 4))
+    if (preset.mirror < 0).any():  # N Q N: vector part v -> det(N) N v = -N v
+        turned[:, :3] *= -preset.mirror
+    return canonical_sign(turned)
 
 
 def target_offsets(rgba, preset: Preset, length_scale: float = 1.0) -> np.ndarray:
-    """(n, 4) float32 offsets for the target: f' = M f, so a mirrored channel c becomes 1 - c
+    """(n, 4) float32 offsets for the target: f' = N f, so a mirrored channel c becomes 1 - c
     (the encoding 0.5 + 0.5 s f is symmetric about 0.5); positions the importer scales by
     ``length_scale`` scale f too, which the alpha s absorbs: s' = s / length_scale.
     ``rgba`` is float (values as the shader reads them: bytes already divided by 255)."""
     out = np.array(rgba, np.float64).reshape(-1, 4)
-    mirrored = preset.local_mirror < 0
+    mirrored = preset.mirror < 0
     out[:, :3][:, mirrored] = 1.0 - out[:, :3][:, mirrored]
     out[:, 3] /= length_scale
     return out.astype(np.float32)
