@@ -248,3 +248,14 @@ def test_unity_export_warns_about_float_offsets(blender, tmp_path):
     assert len(report["warnings"]) == 1 and "Color32" in report["warnings"][0]
     assert blender.ops.boxmarch.bake(encoding="BYTE_COLOR") == {"FINISHED"}
     assert scene.export_objects(blender.context, [ob], "UNITY", str(tmp_path / "w.fbx"))["warnings"] == []
+
+
+def test_quick_export_repeats_the_last_preset_and_file(blender, tmp_path):
+    bpy = blender
+    baked_boxes(bpy, count=5)
+    with pytest.raises(RuntimeError, match="Nothing exported yet"):
+        bpy.ops.boxmarch.quick_export()
+    export(bpy, "GLTF", tmp_path / "q.glb")
+    (tmp_path / "q.glb").unlink()
+    assert bpy.ops.boxmarch.quick_export() == {"FINISHED"}
+    assert read_glb(tmp_path / "q.glb")[0]["name"] == "Boxes"

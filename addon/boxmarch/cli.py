@@ -350,14 +350,20 @@ def demo(args) -> int:
     worst = 0.0
     preset = transforms.PRESETS["GLTF"]
     target_centres = transforms.target_positions(baked_origins, preset)
-    lookup = {row: i for i, row in enumerate(map(tuple, transforms.target_positions(positions, preset)
-                                                 .astype(np.float32).tolist()))}
+    ours = transforms.target_positions(positions, preset).astype(np.float32)  # exact: a signed permutation
     half = sizes.max(axis=1) / 2
     for primitive in gltf["meshes"][0]["primitives"]:
         a = {k: glb.accessor_array(gltf, binary, i).astype(np.float64) for k, i in primitive["attributes"].items()}
         q = np.concatenate([a["TEXCOORD_1"], a["TEXCOORD_2"]], axis=1)
         origin = a["POSITION"] + core.rotate_vector(core.decode_offsets(a["COLOR_0"]), q)
-        box = np.array([lookup[row] for row in map(tuple, a["POSITION"].astype(np.float32).tolist())]) // 8
+        # The box of each file vertex: the Blender vertex at exactly that position (sort-based match).
+        _, group = np.unique(np.concatenate([ours, a["POSITION"].astype(np.float32)]), axis=0, return_inverse=True)
+        group = group.reshape(-1)
+        vertex_of_group = np.full(group.max() + 1, -1)
+        vertex_of_group[group[:len(ours)]] = np.arange(len(ours))
+        box = vertex_of_group[group[len(ours):]] // 8
+        if (box < 0).any():
+            raise RuntimeError("demo.glb holds a vertex the scene does not have")
         worst = max(worst, float((np.linalg.norm(origin - target_centres[box], axis=1) / half[box]).max()))
     rows.append(["export demo.glb", f"{seconds:.3f} s", f"{os.path.getsize(glb_path) / 1e6:.1f} MB",
                  f"read back: worst decode error {worst:.2e} of half-extent in glTF's frame"])

@@ -38,30 +38,67 @@ class BOXMARCH_OT_export(bpy.types.Operator, ExportHelper):
 
     def execute(self, context):
         self.check(context)
-        objects = [ob for ob in context.selected_objects if ob.type == "MESH"]
-        wm = context.window_manager
-        wm.progress_begin(0, 1)
-        try:
-            report = scene.export_objects(context, objects, self.preset, self.filepath)
-        except scene.ExportInputError as error:
-            self.report({"ERROR"}, f"Nothing exported: {error}")
+        if not run_export(self, context, self.preset, self.filepath):
             return {"CANCELLED"}
-        finally:
-            wm.progress_end()
-        for warning in report["warnings"]:
-            self.report({"WARNING"}, warning)
-        channels = sorted({tuple(m.get("uv_channels", ())) for m in report["meshes"]} - {()})
-        text = (f"Exported {len(report['objects'])} object(s) for {transforms.PRESETS[self.preset].label} "
-                f"to {report['path']} in {report['seconds']:.2f} s")
-        if channels:
-            text += "; quaternion in UV channels " + ", ".join(f"{a} and {b}" for a, b in channels)
-        self.report({"INFO"}, text)
+        # Remembered on the scene (saved with the .blend) for Quick Export.
+        context.scene[LAST_EXPORT] = {"preset": self.preset, "filepath": self.filepath}
         return {"FINISHED"}
+
+
+LAST_EXPORT = "boxmarch_last_export"
+
+
+def run_export(operator, context, preset, filepath) -> bool:
+    """Export the selected meshes and report in the status bar; False when nothing was written."""
+    objects = [ob for ob in context.selected_objects if ob.type == "MESH"]
+    wm = context.window_manager
+    wm.progress_begin(0, 1)
+    try:
+        report = scene.export_objects(context, objects, preset, filepath)
+    except scene.ExportInputError as error:
+        operator.report({"ERROR"}, f"Nothing exported: {error}")
+        return False
+    finally:
+        wm.progress_end()
+    for warning in report["warnings"]:
+        operator.report({"WARNING"}, warning)
+    channels = sorted({tuple(m.get("uv_channels", ())) for m in report["meshes"]} - {()})
+    text = (f"Exported {len(report['objects'])} object(s) for {transforms.PRESETS[preset].label} "
+            f"to {report['path']} in {report['seconds']:.2f} s")
+    if channels:
+        text += "; quaternion in UV channels " + ", ".join(f"{a} and {b}" for a, b in channels)
+    operator.report({"INFO"}, text)
+    return True
+
+
+class BOXMARCH_OT_quick_export(bpy.types.Operator):
+    """Export the selected baked meshes again with the last engine preset and file (no dialog)"""
+
+    bl_idname = "boxmarch.quick_export"
+    bl_label = "Quick Export Box Frames"
+    bl_options = {"REGISTER"}
+
+    @classmethod
+    def poll(cls, context):
+        return context.mode == "OBJECT"
+
+    def invoke(self, context, _event):
+        if LAST_EXPORT not in context.scene:  # first time: ask where, like the full exporter
+            return bpy.ops.boxmarch.export("INVOKE_DEFAULT")
+        return self.execute(context)
+
+    def execute(self, context):
+        last = context.scene.get(LAST_EXPORT)
+        if last is None or last.get("preset") not in transforms.PRESETS:
+            self.report({"ERROR"}, "Nothing exported yet in this scene: use File > Export > Boxmarch Box Frames first")
+            return {"CANCELLED"}
+        return {"FINISHED"} if run_export(self, context, last["preset"], last["filepath"]) else {"CANCELLED"}
 
 
 def menu_export(self, _context):
     self.layout.operator(BOXMARCH_OT_export.bl_idname, text="Boxmarch Box Frames (.fbx/.glb/.blend)")
+    self.layout.operator(BOXMARCH_OT_quick_export.bl_idname, text="Boxmarch Quick Export (last preset and file)")
 
 
-classes = (BOXMARCH_OT_export,)
+classes = (BOXMARCH_OT_export, BOXMARCH_OT_quick_export)
 menus = (("TOPBAR_MT_file_export", menu_export),)
