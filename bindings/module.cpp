@@ -386,7 +386,7 @@ PYBIND11_MODULE(_core, m) {
               auto p = checked<float>(positions, "positions", -1, 3);
               auto ids = checked_submeshes(submesh_of_vertex, p.shape(0), submesh_count);
               auto ch = checked<uint8_t>(chosen, "chosen", py::ssize_t(submesh_count), 0);
-              py::array_t<int32_t> out = empty<int32_t>(py::ssize_t(submesh_count));
+              py::array_t<int32_t> out = empty<int32_t>(p.shape(0));
               size_t passes;
               {
                   int32_t* o = out.mutable_data();
@@ -398,7 +398,7 @@ PYBIND11_MODULE(_core, m) {
           },
           py::arg("positions"), py::arg("submesh_of_vertex"), py::arg("submesh_count"), py::arg("chosen"),
           py::arg("distance"), py::arg("threads") = 0,
-          "(pass_of_submesh int32, -1 where not chosen; number of passes).");
+          "(pass_of_vertex int32, -1 where nothing merges; number of passes).");
 
     m.def("pack_uv_by_height", &pack_uv_py, py::arg("corner_uv"), py::arg("positions"), py::arg("edges"),
           py::arg("face_starts"), py::arg("face_sizes"), py::arg("corner_verts"), py::kw_only(),

@@ -1,8 +1,8 @@
 """Blender operators: thin shells over boxmarch.mesh_io and boxmarch.core."""
-from . import bake
+from . import bake, instance_on_curve, tools
 
-classes = bake.classes
-menus = bake.menus
+classes = bake.classes + tools.classes + instance_on_curve.classes
+menus = bake.menus + tools.menus + instance_on_curve.menus
 
 
 def register_enums():

@@ -212,13 +212,16 @@ size_t find_duplicate_submeshes(int32_t* duplicate_of, const float* positions,
 // ---------------------------------------------------------------------------------------------
 // merge.cpp: merge by distance inside each submesh
 
-// Splits the chosen submeshes (chosen[s] != 0) into passes so that no two submeshes of one pass
-// hold vertices within `distance` of each other (a margin of 1e-6 relative is added, so a
-// merge that compares with < or <= cannot join them); a merge by distance over all vertices of
-// one pass then never merges across submeshes. Greedy colouring in submesh id order. Writes
-// pass_of_submesh[submesh_count] (-1 for submeshes not chosen); returns the number of passes.
+// Plans a merge by distance inside each chosen submesh (chosen[s] != 0) for a merge that works
+// on a vertex selection (Blender's own Merge by Distance): only vertices with a partner of their
+// own submesh within `distance` can merge, so only they need selecting; and submeshes whose such
+// vertices come within `distance` of each other go to different passes, so a pass never merges
+// across submeshes. A relative margin of 1e-6 on the distance makes the plan safe for a merge
+// comparing with < or <=. Greedy colouring in submesh id order. Reads positions,
+// submesh_of_vertex (from find_submeshes); writes pass_of_vertex[vertex_count] (-1: nothing to
+// merge at this vertex). Returns the number of passes (0: nothing to merge).
 // Throws std::invalid_argument on a negative, NaN or infinite distance or a non-finite position.
-size_t merge_passes(int32_t* pass_of_submesh, const float* positions,
+size_t merge_passes(int32_t* pass_of_vertex, const float* positions,
                     const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count,
                     const uint8_t* chosen, double distance, int threads);
 
