@@ -101,8 +101,11 @@ class BOXMARCH_OT_add_instance_on_curve(bpy.types.Operator):
             self.report({"ERROR"}, "The curve cannot be placed along itself")
             return {"CANCELLED"}
         group = ensure_node_group()
-        modifier = curve.modifiers.new(GROUP_NAME, "NODES")
-        modifier.node_group = group
+        # Running it again on the same curve updates its modifier instead of stacking another.
+        modifier = next((m for m in curve.modifiers if m.type == "NODES" and m.node_group == group), None)
+        if modifier is None:
+            modifier = curve.modifiers.new(GROUP_NAME, "NODES")
+            modifier.node_group = group
         ids = _input_identifiers(group)
         modifier[ids["Instance"]] = instance
         modifier[ids["Spacing"]] = float(self.spacing)

@@ -79,7 +79,7 @@ class BOXMARCH_OT_select_linked_across(_SubmeshTool, bpy.types.Operator):
     bl_idname = "boxmarch.select_linked_across"
     bl_label = "Select Linked Across Submeshes"
 
-    epsilon: FloatProperty(name="Epsilon", default=1e-4, min=0.0, soft_max=1.0, precision=6, subtype="DISTANCE",
+    epsilon: FloatProperty(name="Epsilon", default=1e-4, soft_min=0.0, soft_max=1.0, precision=6, subtype="DISTANCE",
                            description="Vertices of different submeshes this close (true distance) link them")
 
     def run(self, context, objects, arrays, edit, wm):
@@ -100,7 +100,7 @@ class BOXMARCH_OT_dedup_submeshes(_SubmeshTool, bpy.types.Operator):
     bl_idname = "boxmarch.dedup_submeshes"
     bl_label = "Delete Duplicate Submeshes"
 
-    tolerance: FloatProperty(name="Tolerance", default=1e-4, min=0.0, soft_max=1.0, precision=6, subtype="DISTANCE",
+    tolerance: FloatProperty(name="Tolerance", default=1e-4, soft_min=0.0, soft_max=1.0, precision=6, subtype="DISTANCE",
                              description="Every vertex must lie this close to a distinct vertex of the kept copy")
 
     def run(self, context, objects, arrays, edit, wm):
@@ -124,7 +124,7 @@ class BOXMARCH_OT_merge_by_distance_submeshes(_SubmeshTool, bpy.types.Operator):
     bl_idname = "boxmarch.merge_by_distance_submeshes"
     bl_label = "Merge by Distance per Submesh"
 
-    distance: FloatProperty(name="Merge Distance", default=1e-3, min=0.0, soft_max=1.0, precision=6,
+    distance: FloatProperty(name="Merge Distance", default=1e-3, soft_min=0.0, soft_max=1.0, precision=6,
                             subtype="DISTANCE", description="Vertices of one submesh this close merge")
 
     def run(self, context, objects, arrays, edit, wm):
