@@ -111,6 +111,11 @@ def hidden_vertices(mesh) -> np.ndarray:
 def _write_flags(mesh, attribute, domain, collection, values):
     if bpy.app.version >= (4, 0, 0):
         attr = mesh.attributes.get(attribute)
+        if attr is not None and (attr.data_type != "BOOLEAN" or attr.domain != domain):
+            # Seen in 5.0.1: update(calc_edges=True) on a mesh built from arrays can leave an
+            # INT32_2D '.select_edge'; RNA access to edge selection then crashes. Replace it.
+            mesh.attributes.remove(attr)
+            attr = None
         if attr is None:
             attr = mesh.attributes.new(attribute, "BOOLEAN", domain)
         attr.data.foreach_set("value", values)
