@@ -152,3 +152,77 @@ def decode_offsets(rgba) -> np.ndarray:
     rgba = np.asarray(rgba)
     c = rgba.astype(np.float64) / 255.0 if rgba.dtype == np.uint8 else rgba.astype(np.float64)
     return (c[..., :3] * 2.0 - 1.0) / c[..., 3:4]
+
+
+# ---------------------------------------------------------------------------------------------
+# Submesh tools (docs/TOOLS.md). Submesh ids come from find_submeshes; masks are any array of
+# booleans or 0/1 values, one per vertex (or per submesh / face where named so).
+
+def _mask(values, name, length) -> np.ndarray:
+    mask = np.ascontiguousarray(np.asarray(values) != 0, dtype=np.uint8)
+    if mask.shape != (length,):
+        raise ValueError(f"{name} must have shape ({length},), got {np.shape(values)}")
+    return mask
+
+
+def find_close_pairs(positions, radius, groups=None, method="HASH", threads=0) -> np.ndarray:
+    """uint32 (P, 2): every pair i < j of points with Euclidean distance <= ``radius``, sorted.
+    ``groups`` (int32 per point, optional): only pairs from different groups; negative groups
+    leave the point out. ``method``: 'HASH' (hash grid, threaded) or 'KDTREE' (nanoflann radius
+    searches, the reference)."""
+    return _core.find_close_pairs(positions, float(radius), groups=groups, method=method, threads=int(threads))
+
+
+def select_linked_submeshes(selected, submesh_of_vertex, submesh_count):
+    """(uint8 mask per vertex, submeshes selected): every submesh with a selected vertex, whole."""
+    ids = np.asarray(submesh_of_vertex)
+    return _core.select_linked_submeshes(_mask(selected, "selected", len(ids)), ids, int(submesh_count))
+
+
+def select_linked_across(positions, selected, submesh_of_vertex, submesh_count, epsilon=1e-4, threads=0):
+    """(uint8 mask per vertex, submeshes selected): flood fill from the selection through edges
+    and through vertices of other submeshes within ``epsilon`` (true distance, inclusive)."""
+    ids = np.asarray(submesh_of_vertex)
+    return _core.select_linked_across(positions, _mask(selected, "selected", len(ids)), ids,
+                                      int(submesh_count), float(epsilon), int(threads))
+
+
+def find_duplicate_submeshes(positions, submesh_of_vertex, submesh_count, candidates=None,
+                             tolerance=1e-4, threads=0):
+    """(duplicate_of int32 per submesh, count). A candidate submesh (``candidates``: mask per
+    submesh, None: all) duplicates an earlier kept candidate when both have the same vertex
+    count and its vertices pair one-to-one with that one's within ``tolerance``; duplicate_of
+    names the kept submesh, -1 where the submesh is kept or not a candidate."""
+    if candidates is not None:
+        candidates = _mask(candidates, "candidates", int(submesh_count))
+    return _core.find_duplicate_submeshes(positions, submesh_of_vertex, int(submesh_count), candidates,
+                                          float(tolerance), int(threads))
+
+
+def merge_passes(positions, submesh_of_vertex, submesh_count, chosen=None, distance=1e-3, threads=0):
+    """(pass_of_vertex int32, passes): a plan for merging by distance inside each chosen
+    submesh (mask per submesh, None: all) with a selection-based merge: pass k selects the
+    vertices marked k and merges them; -1 marks vertices with no partner in their submesh."""
+    count = int(submesh_count)
+    chosen = np.ones(count, np.uint8) if chosen is None else _mask(chosen, "chosen", count)
+    return _core.merge_passes(positions, submesh_of_vertex, count, chosen, float(distance), int(threads))
+
+
+def pack_uv_by_height(corner_uv, positions, edges, face_starts, face_sizes, corner_verts, *,
+                      vertex_height, submesh_of_vertex, submesh_count, face_mask=None,
+                      padding=0.002, max_per_row=0, lock_overlapping=False) -> dict:
+    """Pack the UV islands of the masked faces (None: all) into the unit square in rows, sorted
+    by the height of their submesh (``vertex_height`` per vertex, e.g. world Z; highest on top),
+    at one uniform scale with ``padding`` around every island; ``max_per_row`` 0 means no limit.
+    ``corner_uv`` (float32 (C, 2)) is written in place for the masked faces only. Returns
+    {'islands', 'groups', 'rows', 'scale'}. Raises ValueError (nothing written) on bad input."""
+    if face_mask is not None:
+        face_mask = _mask(face_mask, "face_mask", len(face_starts))
+    if int(max_per_row) < 0:
+        raise ValueError(f"max_per_row must be >= 0, got {max_per_row}")
+    return _core.pack_uv_by_height(corner_uv, positions, edges, face_starts, face_sizes, corner_verts,
+                                   face_mask=face_mask,
+                                   vertex_height=np.ascontiguousarray(vertex_height, np.float32),
+                                   submesh_of_vertex=submesh_of_vertex, submesh_count=int(submesh_count),
+                                   padding=float(padding), max_per_row=int(max_per_row),
+                                   lock_overlapping=bool(lock_overlapping))

@@ -2,7 +2,9 @@
 import bpy
 
 from . import mesh_io
+from .operators import tools
 from .operators.bake import BOXMARCH_OT_bake
+from .operators.instance_on_curve import BOXMARCH_OT_add_instance_on_curve
 
 
 class BOXMARCH_PT_bake(bpy.types.Panel):
@@ -31,4 +33,18 @@ class BOXMARCH_PT_bake(bpy.types.Panel):
             col.label(text=f"{name}: UV channel {names.index(name)}" if name in names else f"{name}: missing")
 
 
-classes = (BOXMARCH_PT_bake,)
+class BOXMARCH_PT_submesh_tools(bpy.types.Panel):
+    bl_label = "Submesh Tools"
+    bl_idname = "BOXMARCH_PT_submesh_tools"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Boxmarch"
+
+    def draw(self, context):
+        col = self.layout.column(align=True)
+        for cls in tools.classes:
+            col.operator(cls.bl_idname)
+        self.layout.operator(BOXMARCH_OT_add_instance_on_curve.bl_idname, icon="CURVE_DATA")
+
+
+classes = (BOXMARCH_PT_bake, BOXMARCH_PT_submesh_tools)
