@@ -61,6 +61,19 @@ def boxes_blend_34(package_parent, tmp_path_factory):
     return path
 
 
+@pytest.fixture(scope="module")
+def messy_blend_34(package_parent, tmp_path_factory):
+    """Like boxes_blend_34, plus the object "Messy" (duplicates and a split corner)."""
+    folder = tmp_path_factory.mktemp("messy")
+    path = folder / "messy.blend"
+    proc = subprocess.run([shutil.which("blender"), "--background", "--factory-startup", "--python-exit-code", "1",
+                           "--python", str(SCRIPTS / "make_boxes.py"), "--", str(package_parent), str(path),
+                           str(COUNT), str(SEED), "MESSY"], env=blender_env(folder), capture_output=True, text=True,
+                          timeout=240)
+    assert proc.returncode == 0 and path.exists(), proc.stdout[-2000:] + proc.stderr[-2000:]
+    return path
+
+
 def digest(path):
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
@@ -115,6 +128,24 @@ def test_module_bake_export_pipeline_on_a_file(boxes_blend_34, tmp_path):
     proc = run_module(["export", "baked.blend", "--preset", "UNITY", "--to", "boxes.fbx"], tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert (tmp_path / "boxes.fbx").stat().st_size > 0
+
+
+def test_module_cleanup_pipeline_dedups_merges_bakes_and_packs(messy_blend_34, tmp_path, blender):
+    proc = run_module(["pipeline", str(messy_blend_34), "--objects", "Messy", "--steps", "dedup,merge,bake,pack-uv",
+                       "--tolerance", "1e-4", "--distance", "1e-3", "--padding", "0.01",
+                       "--out", "clean.blend", "--json", "report.json"], tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    steps = {s["step"]: s for s in json.loads((tmp_path / "report.json").read_text())["steps"]}
+    # 13 boxes of 8 vertices + 1 split corner; dedup drops the 3 duplicates, merge the split corner.
+    assert (steps["dedup"]["before"]["vertices"], steps["dedup"]["after"]["vertices"]) == (105, 81)
+    assert (steps["merge"]["before"]["vertices"], steps["merge"]["after"]["vertices"]) == (81, 80)
+    assert steps["bake"]["submeshes"] == 10 and steps["bake"]["max_relative_error"] < 1e-5
+    with blender.data.libraries.load(str(tmp_path / "clean.blend")) as (src, dst):
+        dst.meshes = ["Messy"]
+    mesh = dst.meshes[0]
+    uv = np.empty(len(mesh.loops) * 2, np.float32)
+    mesh.uv_layers["UVMap"].data.foreach_get("uv", uv)
+    assert len(mesh.vertices) == 80 and uv.min() >= 0.0 and uv.max() <= 1.0 and np.ptp(uv) > 0.5
 
 
 @pytest.mark.parametrize("args, reason", [
@@ -182,3 +213,13 @@ def test_blender_34_form_demo(package_parent, tmp_path):  # noqa: F811
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     assert "Blender 3.4" in proc.stdout and "export demo.glb" in proc.stdout
     assert (tmp_path / "demo.blend").exists() and (tmp_path / "demo.glb").exists()
+
+
+def test_blender_34_form_cleanup_commands(messy_blend_34, package_parent, tmp_path):  # noqa: F811
+    for command, option, before, after in (("dedup", ["--tolerance", "1e-4"], 105, 81),
+                                           ("merge", ["--distance", "1e-3"], 105, 104)):
+        proc = run_blender_cli(messy_blend_34, [command, "--objects", "Messy", *option, "--json",
+                                                str(tmp_path / f"{command}.json")], package_parent, tmp_path)
+        assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+        step = json.loads((tmp_path / f"{command}.json").read_text())["steps"][0]
+        assert (step["before"]["vertices"], step["after"]["vertices"]) == (before, after)
