@@ -61,6 +61,10 @@ March march(SdfPreset kind, vec3 ro, vec3 rd, vec3 h, float t_end, const MarchOp
     return {false, t, o.max_steps};
 }
 
+// raymarch.glsl: bm_normal_tap. Taps closer than a thousandth of the box lose the gradient in
+// float rounding, so small epsilons do not shrink them further.
+float normal_tap(float epsilon, vec3 h) { return std::max(epsilon, 1e-3f * sdf::max3(h)); }
+
 // raymarch.glsl: bm_normal (four tetrahedral taps).
 vec3 normal_at(SdfPreset kind, vec3 p, vec3 h, float e) {
     const vec3 a(1.0f, -1.0f, -1.0f), b(-1.0f, -1.0f, 1.0f), c(-1.0f, 1.0f, -1.0f), d(1.0f, 1.0f, 1.0f);
@@ -118,7 +122,7 @@ void raymarch(const float* origins, const float* directions, const float* half_e
             if (hit) hit[i] = m.hit ? 1 : 0;
             if (positions) for (int k = 0; k < 3; ++k) positions[3 * i + k] = p[k];
             if (normals) {
-                vec3 n = m.hit ? normal_at(o.sdf, p, h, o.epsilon) : vec3(0.0f);
+                vec3 n = m.hit ? normal_at(o.sdf, p, h, normal_tap(o.epsilon, h)) : vec3(0.0f);
                 for (int k = 0; k < 3; ++k) normals[3 * i + k] = n[k];
             }
             if (steps) steps[i] = m.steps;
@@ -186,7 +190,7 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                     vec4 clip = to_clip * vec4(object_hit, 1.0f);
                     float depth = clip.z / clip.w * 0.5f + 0.5f;
                     if (!(depth >= 0.0f && depth < images.depth[pix])) continue;
-                    vec3 n_object = q * normal_at(o.sdf, local_hit, h, o.epsilon);
+                    vec3 n_object = q * normal_at(o.sdf, local_hit, h, normal_tap(o.epsilon, h));
                     vec3 color = shade(glm::normalize(normal_matrix * n_object), base);
                     images.depth[pix] = depth;
                     for (int k = 0; k < 3; ++k) images.rgba[4 * pix + k] = color[k];

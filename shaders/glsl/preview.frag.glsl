@@ -60,7 +60,7 @@ void main()
   vec4 clip = preview.object_to_clip * vec4(obj_hit, 1.0);
   gl_FragDepth = clip.z / clip.w * 0.5 + 0.5;
 
-  vec3 n_object = rotate_vector(bm_normal(local_hit, preview.march.x), q);
+  vec3 n_object = rotate_vector(bm_normal(local_hit, bm_normal_tap(preview.march.x, box_half)), q);
   if (preview.mode.x == 1) {
     frag_color = vec4(n_object * 0.5 + 0.5, 1.0);
   }

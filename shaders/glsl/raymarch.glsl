@@ -37,6 +37,13 @@ bool bm_march(vec3 ro, vec3 rd, float t_end, int max_steps, float epsilon, float
   return false;
 }
 
+// Tap distance of bm_normal: taps closer than a thousandth of the box lose the gradient in float
+// rounding, so small epsilons do not shrink them further.
+float bm_normal_tap(float epsilon, vec3 h)
+{
+  return max(epsilon, 1e-3 * max3(h));
+}
+
 // Unit SDF gradient from four tetrahedral taps at distance e.
 vec3 bm_normal(vec3 p, float e)
 {

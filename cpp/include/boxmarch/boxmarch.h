@@ -187,7 +187,7 @@ float sdf_distance(SdfPreset sdf, const float* p, const float* h);
 // leaves the box or travels options.max_distance; a ray that misses the box takes 0 steps.
 // Writes hit[ray_count] (1 = distance fell below epsilon), positions[ray_count * 3] (last
 // sample point, box-local), normals[ray_count * 3] (unit SDF gradient by 4 tetrahedral taps at
-// distance epsilon; zero on a miss) and steps[ray_count] (SDF evaluations of the march).
+// distance max(epsilon, max(h) / 1000); zero on a miss) and steps[ray_count] (SDF evaluations of the march).
 // Any output pointer may be null. Throws std::invalid_argument on max_steps < 0,
 // epsilon <= 0, relaxation outside (0, 2] or max_distance <= 0.
 void raymarch(const float* origins, const float* directions, const float* half_extents,
