@@ -7,7 +7,6 @@ import gpu
 import numpy as np
 from gpu_extras.batch import batch_for_shader
 
-from .. import core
 from . import mesh_data, shader as preview_shader, sources
 
 RAW_VECTOR_COLOR = (0.35, 0.75, 1.0, 1.0)      # light blue, as in the seed's Unity script
@@ -46,13 +45,7 @@ def _mesh_batches(ob):
             "half_extents": baked.half_extents}, indices=baked.triangles)
         lines = uniform_shader()
         outline = batch_for_shader(lines, "LINES", {"pos": baked.positions}, indices=baked.edges)
-        f = core.decode_offsets(baked.offsets)
-        tips_raw = (baked.positions + f).astype(np.float32)
-        tips_rotated = (baked.positions + core.rotate_vector(f, baked.quaternions)).astype(np.float32)
-        vectors = []
-        for tips in (tips_raw, tips_rotated):
-            pairs = np.stack([baked.positions, tips], axis=1).reshape(-1, 3)
-            vectors.append(batch_for_shader(lines, "LINES", {"pos": pairs}))
+        vectors = [batch_for_shader(lines, "LINES", {"pos": pairs}) for pairs in mesh_data.vector_lines(baked)]
         _batches[key] = (march, outline, *vectors)
     return _batches[key]
 

@@ -58,3 +58,14 @@ def read_triangles(mesh):
     triangles = np.empty(len(mesh.loop_triangles) * 3, np.int32)
     mesh.loop_triangles.foreach_get("vertices", triangles)
     return mesh_io.read_positions(mesh), triangles.reshape(-1, 3)
+
+
+def vector_lines(baked: BakedMesh):
+    """The decoded-vector overlay (the seed's "Decode vertex vectors" script) as line pairs,
+    float32 (2N, 3) each: from every vertex along the raw decoded f, and along f rotated by q,
+    which ends at the vertex's submesh origin."""
+    f = core.decode_offsets(baked.offsets)
+    raw = baked.positions + f
+    rotated = baked.positions + core.rotate_vector(f, baked.quaternions)
+    return tuple(np.stack([baked.positions, tips.astype(np.float32)], axis=1).reshape(-1, 3)
+                 for tips in (raw, rotated))
