@@ -1,17 +1,19 @@
-"""The viewport preview rendered by Blender's GPU module (Debian's Blender 3.4 in the background,
-Mesa llvmpipe here) against the CPU reference raymarcher, which renders the scene from the boxes'
+"""The viewport preview rendered by Blender's GPU module (Debian's Blender 3.4 program and the
+bpy 5.0 module, both in the background on Mesa llvmpipe here) against the CPU reference raymarcher, which renders the scene from the boxes'
 known centres, sizes and rotations (not from the baked data the GPU decodes).
 
 Tolerances: coverage masks agree on >= 99% of pixels; where both hit, the 99.9th percentile of
 |window depth difference| <= 2e-6, the 99th percentile of the normal angle <= 2 degrees and of
 the largest colour channel difference <= 0.02 (measured: docs/PREVIEW.md)."""
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from boxmarch import core
-from test_blender_app import package_parent, run_blender  # noqa: F401  (fixture)
+from test_blender_app import blender_env, package_parent, run_blender  # noqa: F401  (fixture)
 
 SCRIPT = Path(__file__).parent / "blender_scripts" / "preview_check.py"
 OUTLINE_COLOR = (0.05, 0.05, 0.05)  # preview/draw.py OUTLINE_COLOR (that module needs bpy)
@@ -31,12 +33,17 @@ def quaternions_of(rotations):
     return np.stack([x, y, z, w], 1)
 
 
-@pytest.fixture(scope="module")
-def rendered(package_parent, tmp_path_factory):  # noqa: F811
+@pytest.fixture(scope="module", params=["blender-3.4-program", "bpy-5.0-module"])
+def rendered(request, package_parent, tmp_path_factory):  # noqa: F811
     tmp = tmp_path_factory.mktemp("preview")
     out = tmp / "preview.npz"
-    run_blender(["--background", "--factory-startup", "--python-exit-code", "1", "--python", str(SCRIPT), "--",
-                 str(package_parent), str(out)], tmp, timeout=600)
+    if request.param == "blender-3.4-program":
+        run_blender(["--background", "--factory-startup", "--python-exit-code", "1", "--python", str(SCRIPT), "--",
+                     str(package_parent), str(out)], tmp, timeout=600)
+    else:
+        proc = subprocess.run([sys.executable, str(SCRIPT), "--", str(package_parent), str(out)],
+                              env=blender_env(tmp), capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     return dict(np.load(out))
 
 

@@ -68,8 +68,9 @@ def _compile_capturing_log(info):
     return shader, error, text
 
 
-# Blender reformats the driver's log as "   12 | <source line>" ... "   | Error: <message>";
-# raw driver logs say "0:12(5): error: <message>".
+# Blender 4+ reformats the driver's log with the line in the message ("| :12:5: Error: <message>");
+# 3.4 as "   12 | <source line>" ... "   | Error: <message>"; raw logs say "0:12(5): error: <message>".
+_LOCATED_ERROR = re.compile(r"\|\s*:(\d+):\d+:\s*error:?\s*(.*)", re.I)
 _SOURCE_LINE = re.compile(r"^\s*(\d+)\s*\|")
 _BLENDER_ERROR = re.compile(r"\|\s*error:?\s*(.*)", re.I)
 _DRIVER_ERROR = re.compile(r"\b\d+:(\d+)\(\d+\):\s*error:?\s*(.*)", re.I)
@@ -83,6 +84,10 @@ def _located(line: int, message: str):
 
 def describe_compile_error(log: str):
     """(message, user line or None) from a compiler log of a shader holding user text."""
+    for raw in log.splitlines():
+        match = _LOCATED_ERROR.search(raw)
+        if match:
+            return _located(int(match.group(1)), match.group(2).strip())
     last_line = None
     for raw in log.splitlines():
         numbered = _SOURCE_LINE.match(raw)
