@@ -5,7 +5,7 @@
 // of the object-to-view rotation part); eye (object-space camera position with w = 1, or for
 // orthographic views the object-space view direction with w = 0); march (epsilon, relaxation,
 // max_distance, max_steps); base_color; mode.x (0 shaded, 1 object-space normal as colour,
-// 2 steps of every fragment in red, for additive blending).
+// 2 steps of every fragment in red with alpha 1, for Blender's ADDITIVE blend: src * alpha + dst).
 // Mirrored by cpp/src/raymarch.cpp (render_boxes).
 
 // Lambert from a light fixed in view space plus a sky/ground hemisphere, like the viewport's
@@ -35,7 +35,7 @@ void main()
   if (span.x + span.y < 0.0) {
     if (preview.eye.w < 0.5 || eye_distance > -span.x) {
       if (preview.mode.x == 2) {
-        frag_color = vec4(0.0);
+        frag_color = vec4(0.0, 0.0, 0.0, 1.0);
         return;
       }
       discard;
@@ -49,7 +49,7 @@ void main()
   int steps;
   bool hit = bm_march(ro, rd, min(t_end, preview.march.z), max_steps, preview.march.x, preview.march.y, t, steps);
   if (preview.mode.x == 2) {
-    frag_color = vec4(float(steps), 0.0, 0.0, 0.0);
+    frag_color = vec4(float(steps), 0.0, 0.0, 1.0);
     return;
   }
   if (!hit) {

@@ -119,14 +119,24 @@ def ensure_gpu_context():
         return
     except SystemError:
         pass
-    render = bpy.context.scene.render
+    scene = bpy.context.scene
+    render = scene.render
     saved = render.engine, render.resolution_x, render.resolution_y, render.resolution_percentage
     render.engine, render.resolution_x, render.resolution_y, render.resolution_percentage = \
         "BLENDER_WORKBENCH", 8, 8, 100
+    camera = None
+    if scene.camera is None:  # a render needs one: a temporary camera, removed again below
+        camera = bpy.data.objects.new("boxmarch_gpu_init", bpy.data.cameras.new("boxmarch_gpu_init"))
+        scene.collection.objects.link(camera)
+        scene.camera = camera
     try:
         bpy.ops.render.render()
     finally:
         render.engine, render.resolution_x, render.resolution_y, render.resolution_percentage = saved
+        if camera is not None:
+            camera_data = camera.data
+            bpy.data.objects.remove(camera)
+            bpy.data.cameras.remove(camera_data)
 
 
 def _read(buffer, shape):
