@@ -97,17 +97,25 @@ def assert_glb_decodes_to_centres(path, tolerance=1e-5):
 # --- python -m boxmarch -------------------------------------------------------------------------
 
 
-def test_module_demo_prints_table_and_writes_checked_files(tmp_path):
-    proc = run_module(["demo", "--count", "300", "--out", "out", "--json", "demo.json"], tmp_path)
+@pytest.mark.parametrize("renderer", ["AUTO", "CPU"])
+def test_module_demo_prints_table_and_writes_checked_files(tmp_path, renderer):
+    proc = run_module(["demo", "--count", "300", "--out", "out", "--json", "demo.json", "--preview", renderer], tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
-    assert "| step" in proc.stdout and "bake FLOAT_COLOR" in proc.stdout and "export demo.glb" in proc.stdout
+    for step in ("build scene", "dedup", "merge", "bake BYTE_COLOR", "bake FLOAT_COLOR", "re-bake (incremental)",
+                 "pack-uv", "export demo.glb", "preview demo.png", "total"):
+        assert f"| {step} " in proc.stdout, step
     assert "[boxmarch]" in proc.stderr  # progress goes to stderr
+    # 300 boxes + 6 split-corner vertices: 6 planted duplicates (48 vertices) and the 6 splits go away
+    assert "2,406 -> 2,358 vertices" in proc.stdout and "2,358 -> 2,352 vertices" in proc.stdout
     report = json.loads((tmp_path / "demo.json").read_text())
-    assert report["ok"] and report["count"] == 300
+    assert report["ok"] and report["count"] == 300 and report["glb_max_relative_error"] < 1e-5
+    if renderer == "CPU":
+        assert report["preview"] == "CPU reference raymarcher"
     meshes = read_glb(tmp_path / "out" / "demo.glb")
-    assert len(np.unique(meshes[0]["primitives"][0]["POSITION"], axis=0)) == 300 * 8  # every box corner
-    assert (tmp_path / "out" / "demo.blend").exists()
-    assert sorted(os.listdir(tmp_path / "out")) == ["demo.blend", "demo.glb"]
+    assert [m["name"] for m in meshes] == ["BoxWorld", "Chains"]
+    assert sorted(os.listdir(tmp_path / "out")) == ["demo.blend", "demo.glb", "demo.png"]
+    png = (tmp_path / "out" / "demo.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and int.from_bytes(png[16:20], "big") == 640
 
 
 def test_module_bake_export_pipeline_on_a_file(boxes_blend_34, tmp_path):
@@ -159,7 +167,7 @@ def test_module_cleanup_pipeline_dedups_merges_bakes_and_packs(messy_blend_34, t
     (["export", "in.blend", "--preset", "GLTF"], "--to"),
     (["export", "in.blend", "--preset", "GLTF", "--to", "x.glb"], "not baked"),
     (["pipeline", "in.blend", "--steps", "bake,polish"], "--steps"),
-    (["demo", "--count", "0"], "at least 1"),
+    (["demo", "--count", "0"], "at least 100"),
     (["frobnicate"], "invalid choice"),
 ])
 def test_module_bad_input_exits_2_with_one_line_and_writes_nothing(boxes_blend_34, tmp_path, args, reason):
@@ -209,10 +217,14 @@ def test_blender_34_form_bake_export_and_exit_codes(boxes_blend_34, package_pare
 
 
 def test_blender_34_form_demo(package_parent, tmp_path):  # noqa: F811
-    proc = run_blender_cli(None, ["demo", "--count", "300", "--out", str(tmp_path)], package_parent, tmp_path)
+    proc = run_blender_cli(None, ["demo", "--count", "300", "--out", str(tmp_path), "--json", str(tmp_path / "r.json")],
+                           package_parent, tmp_path)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    assert "Blender 3.4" in proc.stdout and "export demo.glb" in proc.stdout
-    assert (tmp_path / "demo.blend").exists() and (tmp_path / "demo.glb").exists()
+    assert "Blender 3.4" in proc.stdout and "| export demo.glb" in proc.stdout and "| pack-uv" in proc.stdout
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["glb_max_relative_error"] < 1e-5
+    for name in ("demo.blend", "demo.glb", "demo.png"):
+        assert (tmp_path / name).exists()
 
 
 def test_blender_34_form_cleanup_commands(messy_blend_34, package_parent, tmp_path):  # noqa: F811

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 import time
@@ -283,90 +284,274 @@ def cmd_pipeline(args):
 # ---------------------------------------------------------------------------------------------
 # demo
 
+DEMO_IMAGE_SIZE = (640, 360)
+
+
+def _demo_world(bpy, np, args):
+    """The box world of the README: ``args.count`` boxes of varied sizes and rotations, 5% of them
+    translated copies (the copy cache's case), 2% exact duplicates of others (for dedup) and 2%
+    with one corner split into two vertices 1e-5 apart (for merge), plus chains of links laid
+    along three curves with the instance-on-curve group. Returns (world object, chain object or
+    None, expected duplicates, expected split corners)."""
+    from . import mesh_io, scenes
+
+    rng = np.random.default_rng(args.seed)
+    duplicates = args.count // 50
+    splits = args.count // 50
+    unique = args.count - duplicates
+    copies = unique // 20
+    sizes = rng.uniform(0.05, 2.0, (unique, 3))
+    rotations = scenes.random_rotations(unique, rng)
+    sizes[-copies:] = sizes[:copies]
+    rotations[-copies:] = rotations[:copies]
+    centres = rng.uniform(-100, 100, (unique, 3))
+    # Disjoint sets: a box that got both a duplicate and a split corner would leave two nearly
+    # equal boxes that neither dedup nor merge removes.
+    chosen = rng.permutation(unique)
+    twins, split = chosen[:duplicates], chosen[duplicates:duplicates + splits]
+    centres = np.concatenate([centres, centres[twins]])
+    sizes = np.concatenate([sizes, sizes[twins]])
+    rotations = np.concatenate([rotations, rotations[twins]])
+    positions, _edges, face_starts, face_sizes, corner_verts = scenes.box_arrays(centres, sizes, rotations)
+    # Split corner 0 of some boxes: their first face (-x) uses a new vertex 1e-5 away.
+    extra = positions[8 * split] + np.float32(1e-5)
+    corner_verts[24 * split] = len(positions) + np.arange(splits, dtype=np.int32)
+    positions = np.concatenate([positions, extra])
+    world = bpy.data.objects.new("BoxWorld", mesh_io.new_mesh("BoxWorld", positions, face_starts, face_sizes,
+                                                               corner_verts))
+    bpy.context.scene.collection.objects.link(world)
+
+    chains = None
+    if hasattr(bpy.types, "BOXMARCH_OT_add_instance_on_curve"):
+        (link_positions, _e, link_starts, link_sizes, link_corners) = scenes.box_arrays(
+            np.zeros((1, 3)), np.array([[0.3, 0.6, 0.1]]), np.eye(3)[None])
+        link = bpy.data.objects.new("Link", mesh_io.new_mesh("Link", link_positions, link_starts, link_sizes,
+                                                             link_corners))
+        bpy.context.scene.collection.objects.link(link)
+        converted = []
+        for i in range(3):  # helices around the origin, where the camera looks
+            t = np.linspace(0.0, 4.0 * np.pi, 64)
+            curve_data = bpy.data.curves.new(f"Chain{i}", "CURVE")
+            curve_data.dimensions = "3D"
+            spline = curve_data.splines.new("POLY")
+            spline.points.add(len(t) - 1)
+            radius = 3.0 + 2.0 * i
+            points = np.stack([radius * np.cos(t + i), radius * np.sin(t + i), 1.5 * t - 9.0, np.ones_like(t)], 1)
+            spline.points.foreach_set("co", points.astype(np.float32).reshape(-1))
+            curve = bpy.data.objects.new(f"Chain{i}", curve_data)
+            bpy.context.scene.collection.objects.link(curve)
+            for ob in bpy.context.scene.objects:
+                ob.select_set(ob == curve)
+            bpy.context.view_layer.objects.active = curve
+            bpy.ops.boxmarch.add_instance_on_curve(instance=link.name, spacing=0.7, convert_to_mesh=True)
+            converted.append(bpy.data.objects[f"Chain{i}"])
+        bpy.data.objects.remove(link)
+        for ob in bpy.context.scene.objects:
+            ob.select_set(ob in converted)
+        bpy.context.view_layer.objects.active = converted[0]
+        bpy.ops.object.join()
+        chains = bpy.context.view_layer.objects.active
+        chains.name = chains.data.name = "Chains"
+    return world, chains, duplicates, splits
+
+
+def _select(bpy, objects):
+    for ob in bpy.context.scene.objects:
+        ob.select_set(ob in objects)
+    bpy.context.view_layer.objects.active = objects[0]
+
+
+def _bake_all(mesh_io, meshes, encoding, incremental):
+    """Bake every mesh (as the bake command does); (seconds, prepared bakes, reports)."""
+    settings = mesh_io.BakeSettings(encoding=encoding, incremental=incremental)
+    t = time.perf_counter()
+    prepared = [mesh_io.prepare_bake(mesh, settings) for mesh in meshes]
+    reports = [p.write() for p in prepared]
+    return time.perf_counter() - t, prepared, reports
+
+
+def _glb_decode_error(np, path, objects, prepared):
+    """Read ``path`` back (boxmarch.export.glb) and decode every vertex in glTF's frame with the
+    shader's formula; worst distance to the baked centre of its submesh put in glTF's frame, over
+    that submesh's largest half-extent."""
+    from . import core, mesh_io
+    from .export import glb, transforms
+
+    preset = transforms.PRESETS["GLTF"]
+    gltf, binary = glb.read(path)
+    by_name = {ob.data.name: (ob.data, bake.result) for ob, bake in zip(objects, prepared)}
+    worst = 0.0
+    for mesh_entry in gltf["meshes"]:
+        mesh, result = by_name[mesh_entry["name"]]
+        ours = transforms.target_positions(mesh_io.read_positions(mesh), preset).astype(np.float32)
+        centres = transforms.target_positions(result.origins, preset)
+        half = result.half_extents.max(axis=1)
+        for primitive in mesh_entry["primitives"]:
+            a = {k: glb.accessor_array(gltf, binary, i).astype(np.float64) for k, i in primitive["attributes"].items()}
+            q = np.concatenate([a["TEXCOORD_1"], a["TEXCOORD_2"]], axis=1)
+            origin = a["POSITION"] + core.rotate_vector(core.decode_offsets(a["COLOR_0"]), q)
+            # The submesh of each file vertex: the Blender vertex at exactly that position, found
+            # by sorting (positions are a signed permutation of float32 values, so exact).
+            _, group = np.unique(np.concatenate([ours, a["POSITION"].astype(np.float32)]), axis=0, return_inverse=True)
+            group = group.reshape(-1)
+            vertex_of_group = np.full(group.max() + 1, -1)
+            vertex_of_group[group[:len(ours)]] = np.arange(len(ours))
+            vertex = vertex_of_group[group[len(ours):]]
+            if (vertex < 0).any():
+                raise RuntimeError(f"{path} holds a vertex mesh '{mesh.name}' does not have")
+            submesh = result.submesh_of_vertex[vertex]
+            worst = max(worst, float((np.linalg.norm(origin - centres[submesh], axis=1) / half[submesh]).max()))
+    return worst
+
+
+def _demo_camera(bpy):
+    data = bpy.data.cameras.new("DemoCamera")
+    data.lens = 30.0
+    camera = bpy.data.objects.new("DemoCamera", data)
+    bpy.context.scene.collection.objects.link(camera)
+    camera.location = (0.0, -24.0, 3.0)
+    camera.rotation_euler = (math.radians(85.0), 0.0, 0.0)  # looks at the chains around the origin
+    bpy.context.scene.camera = camera
+    return camera
+
+
+def _preview_picture(bpy, np, objects, sdfs, path, renderer="AUTO"):
+    """Render the preview picture: the GPU raymarch preview when a GPU context can be made (or
+    ``renderer`` is 'GPU'), else the CPU reference raymarcher (same decode, same SDFs). Returns
+    the method used."""
+    from . import core, mesh_io, preview
+
+    scene = bpy.context.scene
+    camera = _demo_camera(bpy)
+    width, height = DEMO_IMAGE_SIZE
+    for ob, sdf in zip(objects, sdfs):
+        ob.boxmarch.sdf = sdf
+        ob.boxmarch.preview = True
+    rgba = None
+    if renderer != "CPU":
+        try:
+            rgba, _depth = preview.render(scene, camera, width, height)
+            method = "GPU raymarch preview"
+        except (SystemError, RuntimeError) as error:  # no GPU context here
+            if renderer == "GPU":
+                raise
+            _progress(f"preview: no GPU ({str(error).splitlines()[0]}), using the CPU reference raymarcher")
+    if rgba is None:
+        view, projection = preview.camera_matrices(scene, camera, width, height)
+        depth = np.ones((height, width), np.float32)
+        rgba = np.zeros((height, width, 4), np.float32)
+        for ob, sdf in zip(objects, sdfs):
+            mesh = ob.data
+            positions = mesh_io.read_positions(mesh)
+            _edges, _starts, _sizes, corner_verts = mesh_io.read_topology(mesh)
+            colour = np.empty(len(mesh.vertices) * 4, np.float32)
+            mesh.color_attributes[mesh_io.OFFSET_ATTRIBUTE].data.foreach_get("color", colour)
+            q = np.concatenate([mesh_io._read_uv(mesh, mesh_io.QUAT_XY_UV, len(corner_verts)),
+                                mesh_io._read_uv(mesh, mesh_io.QUAT_ZW_UV, len(corner_verts))], axis=1)
+            submesh_of_vertex, _count = core.find_submeshes(positions, *mesh_io.read_topology(mesh))
+            world = np.array(ob.matrix_world, np.float64)
+            core.render_baked_mesh(positions, colour.reshape(-1, 4), corner_verts, q, submesh_of_vertex,
+                                   projection @ view @ world, view @ world, width, height, sdf=sdf,
+                                   depth=depth, rgba=rgba)
+        method = "CPU reference raymarcher"
+    image = bpy.data.images.new("boxmarch_demo", width, height, alpha=True)
+    try:
+        # Over a dark background (the render's background is transparent), rows bottom-up as Blender stores them.
+        alpha = np.clip(rgba[::-1, :, 3:4], 0.0, 1.0)
+        picture = np.empty((height, width, 4), np.float32)
+        picture[..., :3] = np.clip(rgba[::-1, :, :3], 0.0, 1.0) * alpha + np.float32(0.08) * (1.0 - alpha)
+        picture[..., 3] = 1.0
+        image.pixels.foreach_set(picture.reshape(-1))
+        image.file_format = "PNG"
+
+        def save(temp):
+            image.filepath_raw = temp
+            image.save()
+        _write_atomically(path, save)
+    finally:
+        bpy.data.images.remove(image)
+    return method
+
 
 def demo(args) -> int:
-    """Build a world of boxes (varied sizes and rotations, some exact translated copies), bake it
-    headless through the add-on's operator in float and 8-bit colour, decode the stored data and
-    print timings and decode errors; write the baked scene to OUT/demo.blend and the glTF preset's
-    export to OUT/demo.glb, read back and decoded in glTF's frame."""
+    """The README's main job, headless: build the box world (duplicates, split corners, chains
+    along curves), run dedup, merge, bake (8-bit and float, then an incremental re-bake) and
+    pack-uv, export demo.glb with the GLTF preset and decode it back in glTF's frame, render
+    demo.png, save demo.blend, and print a table of timings and decode errors."""
     import bpy
     import numpy as np
 
-    from . import core, mesh_io, scenes
-    from .export import glb, scene as export_scene, transforms
+    from . import mesh_io
+    from .export import scene as export_scene
 
-    if args.count < 1:
-        raise InputError("--count must be at least 1")
+    if args.count < 100:
+        raise InputError("--count must be at least 100")
     os.makedirs(args.out, exist_ok=True)
     rows = []
     start = time.perf_counter()
-    _progress(f"building {args.count:,} boxes")
+    _progress(f"building {args.count:,} boxes and the chains")
     bpy.ops.wm.read_factory_settings(use_empty=True)
     _ensure_registered(bpy)
-    rng = np.random.default_rng(args.seed)
-    copies = args.count // 20  # 5% exact translated copies of the first boxes: the copy cache's case
-    sizes = rng.uniform(0.05, 2.0, (args.count, 3))
-    rotations = scenes.random_rotations(args.count, rng)
-    sizes[-copies:] = sizes[:copies]
-    rotations[-copies:] = rotations[:copies]
-    centres = rng.uniform(-100, 100, (args.count, 3))
-    positions, _edges, face_starts, face_sizes, corner_verts = scenes.box_arrays(centres, sizes, rotations)
-    mesh = mesh_io.new_mesh("BoxWorld", positions, face_starts, face_sizes, corner_verts)
-    ob = bpy.data.objects.new("BoxWorld", mesh)
-    bpy.context.scene.collection.objects.link(ob)
-    ob.select_set(True)
-    bpy.context.view_layer.objects.active = ob
-    rows.append(["build scene", f"{time.perf_counter() - start:.3f} s", f"{len(mesh.vertices):,} vertices", ""])
+    world, chains, duplicates, splits = _demo_world(bpy, np, args)
+    objects = [ob for ob in (world, chains) if ob is not None]
+    meshes = [ob.data for ob in objects]
+    links = len(chains.data.vertices) // 8 if chains else 0
+    rows.append(["build scene", f"{time.perf_counter() - start:.3f} s",
+                 f"{len(world.data.vertices):,} vertices; {links} chain links on 3 curves", ""])
+
+    for command, option, expected in (("dedup", {"tolerance": 1e-4}, f"{duplicates} exact duplicates planted"),
+                                      ("merge", {"distance": 1e-3}, f"{splits} split corners planted")):
+        op_id = CLEANUP_OPERATORS[command][0]
+        if not hasattr(bpy.types, "BOXMARCH_OT_" + op_id):
+            rows.append([command, "-", f"skipped: boxmarch.{op_id} is not in this build", ""])
+            continue
+        _progress(command)
+        _select(bpy, [world])
+        before = len(world.data.vertices)
+        t = time.perf_counter()
+        getattr(bpy.ops.boxmarch, op_id)(**option)
+        rows.append([command, f"{time.perf_counter() - t:.3f} s",
+                     f"{before:,} -> {len(world.data.vertices):,} vertices", expected])
 
     for encoding in ("BYTE_COLOR", "FLOAT_COLOR"):
         _progress(f"baking ({encoding})")
-        settings = mesh_io.BakeSettings(encoding=encoding, incremental=False)
-        t = time.perf_counter()
-        prepared = mesh_io.prepare_bake(mesh, settings)
-        report = prepared.write()
-        seconds = time.perf_counter() - t
-        r = prepared.result
-        baked_origins = r.origins  # float64 centre of each stored (float32) box, in Blender's frame
+        seconds, prepared, reports = _bake_all(mesh_io, meshes, encoding, incremental=False)
+        rs = [p.result for p in prepared]
         rows.append([f"bake {encoding}", f"{seconds:.3f} s",
-                     f"{r.baked:,} submeshes, {r.cache_hits:,} cache hits, {r.degenerate} degenerate",
-                     f"worst decode error {r.max_relative_error:.2e} of half-extent "
-                     f"(UV channels {report['uv_channels'][0]}, {report['uv_channels'][1]})"])
+                     f"{sum(r.baked for r in rs):,} submeshes, {sum(r.cache_hits for r in rs):,} cache hits, "
+                     f"{sum(r.degenerate for r in rs)} degenerate",
+                     f"worst decode error {max(r.max_relative_error for r in rs):.2e} of half-extent "
+                     f"(UV channels {reports[0]['uv_channels'][0]}, {reports[0]['uv_channels'][1]})"])
+    float_bakes = prepared
     _progress("re-baking unchanged geometry")
-    t = time.perf_counter()
-    prepared = mesh_io.prepare_bake(mesh, mesh_io.BakeSettings(encoding="FLOAT_COLOR"))
-    prepared.write()
-    rows.append(["re-bake (incremental)", f"{time.perf_counter() - t:.3f} s",
-                 f"{prepared.result.unchanged:,} unchanged submeshes skipped", ""])
+    seconds, prepared, _ = _bake_all(mesh_io, meshes, "FLOAT_COLOR", incremental=True)
+    rows.append(["re-bake (incremental)", f"{seconds:.3f} s",
+                 f"{sum(p.result.unchanged for p in prepared):,} unchanged submeshes skipped", ""])
+
+    if hasattr(bpy.types, "BOXMARCH_OT_pack_uv_by_z"):
+        _progress("packing UVs by height")
+        _select(bpy, objects)
+        t = time.perf_counter()
+        bpy.ops.boxmarch.pack_uv_by_z(uv_map="UVMap")
+        rows.append(["pack-uv", f"{time.perf_counter() - t:.3f} s", "UVMap islands in rows by Z", ""])
+    else:
+        rows.append(["pack-uv", "-", "skipped: boxmarch.pack_uv_by_z is not in this build", ""])
 
     _progress("exporting demo.glb (GLTF preset)")
     glb_path = os.path.abspath(os.path.join(args.out, "demo.glb"))
     t = time.perf_counter()
-    export_scene.export_objects(bpy.context, [ob], "GLTF", glb_path)
+    export_scene.export_objects(bpy.context, objects, "GLTF", glb_path)
     seconds = time.perf_counter() - t
-    # Read the file back, decode every vertex in glTF's frame (the shader's formula) and compare
-    # with the baked centres put in glTF's frame (the exact centres differ from those of the
-    # float32-rounded boxes by up to half a float32 step of the coordinates).
-    gltf, binary = glb.read(glb_path)
-    worst = 0.0
-    preset = transforms.PRESETS["GLTF"]
-    target_centres = transforms.target_positions(baked_origins, preset)
-    ours = transforms.target_positions(positions, preset).astype(np.float32)  # exact: a signed permutation
-    half = sizes.max(axis=1) / 2
-    for primitive in gltf["meshes"][0]["primitives"]:
-        a = {k: glb.accessor_array(gltf, binary, i).astype(np.float64) for k, i in primitive["attributes"].items()}
-        q = np.concatenate([a["TEXCOORD_1"], a["TEXCOORD_2"]], axis=1)
-        origin = a["POSITION"] + core.rotate_vector(core.decode_offsets(a["COLOR_0"]), q)
-        # The box of each file vertex: the Blender vertex at exactly that position (sort-based match).
-        _, group = np.unique(np.concatenate([ours, a["POSITION"].astype(np.float32)]), axis=0, return_inverse=True)
-        group = group.reshape(-1)
-        vertex_of_group = np.full(group.max() + 1, -1)
-        vertex_of_group[group[:len(ours)]] = np.arange(len(ours))
-        box = vertex_of_group[group[len(ours):]] // 8
-        if (box < 0).any():
-            raise RuntimeError("demo.glb holds a vertex the scene does not have")
-        worst = max(worst, float((np.linalg.norm(origin - target_centres[box], axis=1) / half[box]).max()))
+    worst = _glb_decode_error(np, glb_path, objects, float_bakes)
     rows.append(["export demo.glb", f"{seconds:.3f} s", f"{os.path.getsize(glb_path) / 1e6:.1f} MB",
                  f"read back: worst decode error {worst:.2e} of half-extent in glTF's frame"])
+
+    png_path = os.path.abspath(os.path.join(args.out, "demo.png"))
+    _progress("rendering demo.png")
+    t = time.perf_counter()
+    method = _preview_picture(bpy, np, objects, ["ROUNDED_BOX", "LINK"][:len(objects)], png_path, args.preview)
+    rows.append(["preview demo.png", f"{time.perf_counter() - t:.3f} s",
+                 f"{DEMO_IMAGE_SIZE[0]} x {DEMO_IMAGE_SIZE[1]}, {method}", ""])
 
     path = os.path.abspath(os.path.join(args.out, "demo.blend"))
     _save_blend(bpy, path)
@@ -375,8 +560,8 @@ def demo(args) -> int:
     print(_table(["step", "time", "what", "accuracy"], rows))
     if args.json:
         _write_json(args.json, {"ok": True, "command": "demo", "count": args.count, "blend": path,
-                                "glb": glb_path, "glb_max_relative_error": worst,
-                                "rows": rows, "blender": bpy.app.version_string})
+                                "glb": glb_path, "png": png_path, "preview": method,
+                                "glb_max_relative_error": worst, "rows": rows, "blender": bpy.app.version_string})
     return 0
 
 
@@ -456,6 +641,8 @@ def build_parser():
     p.add_argument("--count", type=int, default=16000, help="number of boxes (default 16000)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--out", default="demo_out", help="folder for demo.blend and demo.glb (default ./demo_out)")
+    p.add_argument("--preview", choices=("AUTO", "GPU", "CPU"), default="AUTO",
+                   help="renderer of demo.png (AUTO: the GPU preview if a GPU context can be made)")
     p.add_argument("--json", metavar="REPORT.json")
     p.set_defaults(run=demo)
     return parser
