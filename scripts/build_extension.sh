@@ -29,7 +29,12 @@ ext_suffix = sysconfig.get_config_var("EXT_SUFFIX")
 if ext_suffix != ".cpython-311-x86_64-linux-gnu.so":
     sys.exit(f"build_extension: Blender 3.4 (Debian) to 5.0 run CPython 3.11 on x86-64; this Python builds {ext_suffix}")
 native = package / f"_core{ext_suffix}"
-sources = [p for p in sorted(package.rglob("*")) if p.is_file() and "__pycache__" not in p.parts and p.suffix != ".so"]
+# (file, path inside the package): the package, and the shaders the preview compiles at run time
+# (installed into the package as the wheel does, see CMakeLists.txt).
+sources = [(p, p.relative_to(package)) for p in sorted(package.rglob("*"))
+           if p.is_file() and "__pycache__" not in p.parts and p.suffix != ".so"]
+sources += [(p, pathlib.Path("shaders") / p.relative_to("shaders")) for p in sorted(pathlib.Path("shaders").rglob("*"))
+            if p.is_file()]
 
 # Platform wheel: boxmarch_native/_core*.so (a wheel is a zip with a dist-info and hashed RECORD).
 wheel_name = f"boxmarch_native-{version}-cp311-cp311-linux_x86_64.whl"
@@ -52,8 +57,8 @@ with zipfile.ZipFile(stage / "boxmarch" / "wheels" / wheel_name, "w", zipfile.ZI
     record.append(f"{dist_info}/RECORD,,")
     whl.writestr(f"{dist_info}/RECORD", "\n".join(record) + "\n")
 assert manifest["wheels"] == [f"./wheels/{wheel_name}"], "blender_manifest.toml names another wheel"
-for src in sources:
-    dst = stage / "boxmarch" / src.relative_to(package)
+for src, inside in sources:
+    dst = stage / "boxmarch" / inside
     dst.parent.mkdir(parents=True, exist_ok=True)
     shutil.copy2(src, dst)
 
@@ -61,9 +66,9 @@ for src in sources:
 # would otherwise take it for an extension without its wheel).
 legacy = out / f"boxmarch-{version}-legacy-linux-x64.zip"
 with zipfile.ZipFile(legacy, "w", zipfile.ZIP_DEFLATED) as z:
-    for src in sources:
+    for src, inside in sources:
         if src.name != "blender_manifest.toml":
-            z.write(src, f"boxmarch/{src.relative_to(package)}")
+            z.write(src, f"boxmarch/{inside}")
     z.write(native, f"boxmarch/{native.name}")
 print(f"[build_extension] {legacy}", file=sys.stderr)
 PY

@@ -30,8 +30,10 @@ def test_zips_hold_what_each_blender_needs(packages):
     legacy = zipfile.ZipFile(packages["legacy"]).namelist()
     assert "boxmarch/__init__.py" in legacy and "boxmarch/_core.cpython-311-x86_64-linux-gnu.so" in legacy
     assert "boxmarch/blender_manifest.toml" not in legacy
+    assert "boxmarch/shaders/glsl/preview.frag.glsl" in legacy
     extension = zipfile.ZipFile(packages["extension"]).namelist()
     assert "blender_manifest.toml" in extension and "__init__.py" in extension
+    assert "shaders/glsl/preview.frag.glsl" in extension
     assert not [n for n in extension if n.endswith(".so")]  # the native module travels in the wheel
     wheel = next(n for n in extension if n.endswith(".whl"))
     with zipfile.ZipFile(packages["extension"]).open(wheel) as f:
@@ -44,6 +46,7 @@ def check(result, root):
     assert result["enabled"] and result["bake"] == ["FINISHED"]
     assert result["module_file"].startswith(str(root)) and result["core_file"].startswith(str(root))
     assert result["max_relative_error"] < 1e-5
+    assert result["shader_dir"].startswith(str(root)) and result["preview_covered"] > 0.01
 
 
 def test_legacy_zip_installs_into_clean_blender_34_and_bakes(packages, tmp_path):
@@ -57,6 +60,7 @@ def test_legacy_zip_installs_into_clean_blender_34_and_bakes(packages, tmp_path)
                           env=env, capture_output=True, text=True, timeout=300)
     assert out.exists(), proc.stdout[-3000:] + proc.stderr[-3000:]
     result = json.loads(out.read_text())
+    assert result["error"] is None, result["error"]
     assert result["version"][:2] == [3, 4]
     check(result, tmp_path / "scripts")
 
@@ -73,5 +77,6 @@ def test_extension_installs_into_clean_blender_5_and_bakes(packages, tmp_path):
                           env=env, capture_output=True, text=True, timeout=300)
     assert out.exists(), proc.stdout[-3000:] + proc.stderr[-3000:]
     result = json.loads(out.read_text())
+    assert result["error"] is None, result["error"]
     assert result["version"][:2] >= [4, 2]
     check(result, tmp_path / "resources")

@@ -1,8 +1,8 @@
 """Run inside a Blender program with a fresh user config: install the add-on from a zip, enable it,
 bake boxes through the installed copy and write what happened.
 Usage: blender -b --factory-startup --python install_check.py -- ZIP OUT_JSON"""
+import importlib
 import json
-import os
 import sys
 import traceback
 
@@ -26,8 +26,8 @@ try:
     result["enabled"] = addon_utils.check(module_name)[1]
     core = sys.modules[module_name + ".core"]
     result["core_file"] = core._core.__file__
-    scenes = sys.modules.get(module_name + ".scenes") or __import__(module_name + ".scenes", fromlist=["x"])
-    mesh_io = sys.modules.get(module_name + ".mesh_io") or __import__(module_name + ".mesh_io", fromlist=["x"])
+    scenes = importlib.import_module(module_name + ".scenes")
+    mesh_io = importlib.import_module(module_name + ".mesh_io")
     bpy.ops.wm.read_homefile(use_empty=True)
     (positions, _, face_starts, face_sizes, corner_verts), centres, sizes, _ = scenes.random_boxes(
         40, seed=2, spread=10.0, size_range=(0.5, 3.0))
@@ -47,6 +47,17 @@ try:
     box = corner_verts // 8
     result["max_relative_error"] = float((np.linalg.norm(origin - centres[box], axis=1) / (sizes[box].max(1) / 2)).max())
     result["user_scripts"] = bpy.utils.user_resource("SCRIPTS")
+    # The raymarch preview of the installed copy: its shaders must have travelled in the zip.
+    preview = importlib.import_module(module_name + ".preview")
+    sources = importlib.import_module(module_name + ".preview.sources")
+    result["shader_dir"] = str(sources.shader_dir())
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    bpy.context.scene.collection.objects.link(camera)
+    camera.location = (0.0, -40.0, 0.0)
+    camera.rotation_euler = (1.5707963, 0.0, 0.0)
+    ob.boxmarch.preview = True
+    rgba, _depth = preview.render(bpy.context.scene, camera, 64, 48)
+    result["preview_covered"] = float((rgba[..., 3] > 0).mean())
     result["version"] = list(bpy.app.version)
 except Exception:
     result["error"] = traceback.format_exc()
