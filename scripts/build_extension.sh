@@ -3,7 +3,8 @@
 #   dist/boxmarch-0.1.0.zip                   Blender 4.2+ extension (blender_manifest.toml; the
 #                                             native module as a platform wheel for Python 3.11)
 #   dist/boxmarch-0.1.0-legacy-linux-x64.zip  legacy add-on zip for Blender 3.x (bl_info, _core inside)
-# The native module is compiled from this checkout (scripts/dev_build.sh). The extension is built
+# The native module is compiled from this checkout in its own build folder (build/extension: a
+# running Python that loaded addon/boxmarch/_core*.so is never touched). The extension is built
 # and validated with Blender's own extension tool: `blender --command extension build` when the
 # blender on PATH is 4.2 or newer, else the same tool (bl_pkg/cli/blender_ext.py) shipped with the
 # bpy module of this Python.
@@ -11,24 +12,28 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 PYTHON="${PYTHON:-python3}"
 OUT="${1:-dist}"
-bash scripts/dev_build.sh
+cmake -S . -B build/extension -DCMAKE_BUILD_TYPE=Release -DBOXMARCH_BUILD_PYTHON=ON \
+  -DPython_EXECUTABLE="$(command -v "$PYTHON")" \
+  -Dpybind11_DIR="$("$PYTHON" -c 'import pybind11; print(pybind11.get_cmake_dir())')" >/dev/null
+cmake --build build/extension -j2 >/dev/null
+NATIVE="$(ls build/extension/_core*.so)"
 mkdir -p "$OUT"
 OUT="$(cd "$OUT" && pwd)"
 STAGE="$(mktemp -d)"
 trap 'rm -rf "$STAGE"' EXIT
 
-"$PYTHON" - "$STAGE" "$OUT" <<'PY'
+"$PYTHON" - "$STAGE" "$OUT" "$NATIVE" <<'PY'
 """Stage the extension (package + wheel) and write the legacy zip."""
 import base64, hashlib, pathlib, shutil, sys, sysconfig, tomllib, zipfile
 
-stage, out = map(pathlib.Path, sys.argv[1:])
+stage, out, native = map(pathlib.Path, sys.argv[1:])
 package = pathlib.Path("addon/boxmarch")
 manifest = tomllib.loads((package / "blender_manifest.toml").read_text())
 version = manifest["version"]
 ext_suffix = sysconfig.get_config_var("EXT_SUFFIX")
 if ext_suffix != ".cpython-311-x86_64-linux-gnu.so":
     sys.exit(f"build_extension: Blender 3.4 (Debian) to 5.0 run CPython 3.11 on x86-64; this Python builds {ext_suffix}")
-native = package / f"_core{ext_suffix}"
+assert native.name == f"_core{ext_suffix}", native
 # (file, path inside the package): the package, and the shaders the preview compiles at run time
 # (installed into the package as the wheel does, see CMakeLists.txt).
 sources = [(p, p.relative_to(package)) for p in sorted(package.rglob("*"))
