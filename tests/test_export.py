@@ -259,3 +259,30 @@ def test_quick_export_repeats_the_last_preset_and_file(blender, tmp_path):
     (tmp_path / "q.glb").unlink()
     assert bpy.ops.boxmarch.quick_export() == {"FINISHED"}
     assert read_glb(tmp_path / "q.glb")[0]["name"] == "Boxes"
+
+
+def test_object_transforms_and_shared_meshes_keep_mesh_space_exact(blender, tmp_path):
+    """The decode works in object (mesh) space: turned, scaled and instanced objects must reach
+    the file with the mesh data in the target's object frame, the transform on the node."""
+    bpy = blender
+    ob, positions, centres, sizes = baked_boxes(bpy, count=30)
+    ob.rotation_euler = (0.3, -1.1, 2.0)
+    ob.scale = (2.0, 0.5, 1.5)
+    ob.location = (5.0, -3.0, 7.0)
+    twin = bpy.data.objects.new("Twin", ob.data)  # a second object sharing the mesh
+    bpy.context.scene.collection.objects.link(twin)
+    twin.select_set(True)
+    export(bpy, "GLTF", tmp_path / "t.glb")
+    meshes = read_glb(tmp_path / "t.glb")
+    assert [m["name"] for m in meshes] == ["Boxes"]  # one mesh, two nodes
+    primitive = meshes[0]["primitives"][0]
+    vertex = vertex_of(primitive["POSITION"], positions, TO_GLTF)  # raises KeyError if transformed
+    q = np.concatenate([primitive["TEXCOORD_1"], primitive["TEXCOORD_2"]], axis=1)
+    origin = shader_origin(primitive["POSITION"], primitive["COLOR_0"], q)
+    box = vertex // 8
+    assert (np.linalg.norm(origin - centres[box] @ TO_GLTF.T, axis=1) / (sizes[box].max(axis=1) / 2)).max() < 1e-5
+    export(bpy, "UNITY", tmp_path / "t.fbx")
+    raw = read_fbx_geometry(tmp_path / "t.fbx")
+    corner_verts = np.empty(len(ob.data.loops), np.int32)
+    ob.data.loops.foreach_get("vertex_index", corner_verts)
+    assert np.array_equal(raw["position"], positions.astype(np.float64)[corner_verts] @ TO_GLTF.T)
