@@ -3,6 +3,7 @@ import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
 from . import core
+from .export import transforms
 
 _SDF_DESCRIPTIONS = {
     "BOX": "The submesh's own box (matches the rasterised mesh)",
@@ -42,6 +43,12 @@ class BoxmarchObjectSettings(bpy.types.PropertyGroup):
                                 description="Longest march inside a box (box-local units)")
     show_outline: BoolProperty(name="Box Outline", default=False, update=_redraw,
                                description="Draw the mesh edges over the preview")
+    engine: EnumProperty(
+        name="Engine View", default="BLENDER", update=_redraw,
+        items=[(p.name, p.label, f"The SDF in the local frame {p.label} gives each box (export preset {p.name})")
+               for p in transforms.PRESETS.values()],
+        description="See the SDF as an export preset's engine evaluates it: Unity mirrors every local frame's x, "
+                    "so a shape that is not symmetric in local x appears mirrored there (docs/EXPORT.md)")
     show_vectors: BoolProperty(name="Decoded Vectors", default=False, update=_redraw,
                                description="Lines from every vertex along the raw offset (blue) and the rotated "
                                            "offset (orange): the orange ones meet at each submesh's origin")

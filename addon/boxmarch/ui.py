@@ -70,6 +70,7 @@ class BOXMARCH_PT_preview(bpy.types.Panel):
         layout.use_property_split = True
         layout.active = settings.preview
         layout.prop(settings, "sdf")
+        layout.prop(settings, "engine")
         if settings.sdf == "USER":
             layout.prop_search(settings, "user_text", bpy.data, "texts")
         col = layout.column(align=True)

@@ -7,6 +7,7 @@ import gpu
 import numpy as np
 from gpu_extras.batch import batch_for_shader
 
+from ..export import transforms
 from . import mesh_data, shader as preview_shader, sources
 
 RAW_VECTOR_COLOR = (0.35, 0.75, 1.0, 1.0)      # light blue, as in the seed's Unity script
@@ -77,15 +78,16 @@ def uniform_block_data(object_to_clip, object_to_view, perspective, settings, ou
 def _marching_shader(ob):
     """The object's preview shader, or None (and an error noted) when its user SDF fails."""
     settings = ob.boxmarch
+    mirror = transforms.PRESETS[settings.engine].mirror  # what the engine's local frame does
     if settings.sdf != "USER":
         errors.pop(ob.name, None)
-        return preview_shader.preview_shader(settings.sdf)
+        return preview_shader.preview_shader(settings.sdf, None, mirror)
     text = bpy.data.texts.get(settings.user_text)
     if text is None:
         errors[ob.name] = f"no text block named '{settings.user_text}'" if settings.user_text else "choose a text block"
         return None
     try:
-        shader = preview_shader.preview_shader("USER", text.as_string())
+        shader = preview_shader.preview_shader("USER", text.as_string(), mirror)
     except preview_shader.UserSdfError as exc:
         errors[ob.name] = f"{text.name}: {exc}"
         return None

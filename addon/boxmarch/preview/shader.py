@@ -104,13 +104,14 @@ def describe_compile_error(log: str):
     return (errors[0] if errors else "the shader did not compile (see the system console)"), None
 
 
-def preview_shader(sdf: str = "BOX", user_text: str | None = None):
-    """The compiled preview shader for a preset, or for user text defining ``float map(vec3 p)``.
-    Raises UserSdfError with the line for user text that does not compile."""
-    key = (sdf, user_text)
+def preview_shader(sdf: str = "BOX", user_text: str | None = None, local_mirror=(1.0, 1.0, 1.0)):
+    """The compiled preview shader for a preset, or for user text defining ``float map(vec3 p)``,
+    as an engine with ``local_mirror`` sees it. Raises UserSdfError with the line for user text
+    that does not compile."""
+    key = (sdf, user_text, tuple(float(v) for v in local_mirror))
     if key in _cache:
         return _cache[key]
-    info, iface = _create_info(sources.fragment_source(sdf, user_text))
+    info, iface = _create_info(sources.fragment_source(sdf, user_text, local_mirror))
     shader, error, log = _compile_capturing_log(info)
     del iface  # the create-info refers to it until compiled
     if shader is None:

@@ -58,12 +58,24 @@ def user_map_source(text: str) -> str:
     return f"#line 1\n{text}\n#line {USER_END_LINE}\n"
 
 
-def fragment_source(sdf: str = "BOX", user_text: str | None = None) -> str:
+def engine_map_source(body: str, local_mirror) -> str:
+    """``body``'s map() as an engine whose object frame is mirrored evaluates it (export preset
+    UNITY, docs/EXPORT.md): the box-local point mirrored (Unity: x negated) before the SDF;
+    normals follow through the gradient of the wrapped map()."""
+    mirror = ", ".join(f"{float(v):.1f}" for v in local_mirror)
+    return (f"#define map bm_engine_map\n{body}\n#undef map\n"
+            f"float map(vec3 p)\n{{\n  return bm_engine_map(p * vec3({mirror}));\n}}\n")
+
+
+def fragment_source(sdf: str = "BOX", user_text: str | None = None, local_mirror=(1.0, 1.0, 1.0)) -> str:
     """The fragment stage as Blender compiles it (after its own declarations): the library, the
-    preset's map() or the user's text, and the preview's main()."""
+    preset's map() or the user's text (seen through an engine's local mirror, if any), and the
+    preview's main()."""
     if user_text is None and sdf not in PRESET_MAPS:
         raise ValueError(f"sdf must be one of {tuple(PRESET_MAPS)}, got {sdf!r}")
     body = user_map_source(user_text) if user_text is not None else PRESET_MAPS[sdf]
+    if any(float(v) < 0 for v in local_mirror):
+        body = engine_map_source(body, local_mirror)
     return "\n".join([read_glsl("decode.glsl"), read_glsl("sdf.glsl"), read_glsl("raymarch.glsl"), body,
                       read_glsl("preview.frag.glsl")])
 
