@@ -14,6 +14,7 @@ import pytest
 
 import boxmarch
 from boxmarch import scenes
+from fbx_reader import read_fbx_geometry
 from gltf_reader import read_glb
 from test_blender_app import SCRIPTS, blender_env, package_parent  # noqa: F401 (fixture)
 
@@ -193,7 +194,7 @@ def test_module_failure_report_is_json_when_asked(boxes_blend_34, tmp_path):
 # --- blender --background FILE --python-expr ... -- ---------------------------------------------
 
 
-def test_blender_34_form_bake_export_and_exit_codes(boxes_blend_34, package_parent, tmp_path):  # noqa: F811
+def test_blender_34_form_bake_export_and_exit_codes(boxes_blend_34, package_parent, tmp_path, blender):  # noqa: F811
     proc = run_blender_cli(boxes_blend_34, ["bake", "--out", str(tmp_path / "baked.blend"),
                                             "--json", str(tmp_path / "bake.json")], package_parent, tmp_path)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
@@ -204,6 +205,19 @@ def test_blender_34_form_bake_export_and_exit_codes(boxes_blend_34, package_pare
                            package_parent, tmp_path)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     assert_glb_decodes_to_centres(tmp_path / "b.glb")
+    # 3.4's FBX exporter: the raw file decodes in Unity's frame (x negated) onto the centres.
+    proc = run_blender_cli(tmp_path / "baked.blend", ["export", "--preset", "UNITY", "--to", str(tmp_path / "b.fbx")],
+                           package_parent, tmp_path)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    raw = read_fbx_geometry(tmp_path / "b.fbx")
+    _positions, centres, half = boxes_reference()
+    c, q = raw["BoxOffset"], np.concatenate([raw["BoxQuatXY"], raw["BoxQuatZW"]], axis=1)
+    f = (c[:, :3] * 2 - 1) / c[:, 3:4]
+    u, w = q[:, :3], q[:, 3:4]
+    origin = raw["position"] * [-1, 1, 1] + f + 2 * np.cross(u, np.cross(u, f) + w * f)
+    box = raw["vertex"] // 8
+    to_unity = TO_GLTF * np.array([-1.0, 1.0, 1.0])[:, None]
+    assert (np.linalg.norm(origin - centres[box] @ to_unity.T, axis=1) / half[box]).max() < 1e-5
     proc = run_blender_cli(boxes_blend_34, ["bake", "--objects", "Camera", "--out", str(tmp_path / "no.blend")],
                            package_parent, tmp_path)
     assert proc.returncode == 2 and "is a camera, not a mesh" in proc.stderr
@@ -235,3 +249,15 @@ def test_blender_34_form_cleanup_commands(messy_blend_34, package_parent, tmp_pa
         assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
         step = json.loads((tmp_path / f"{command}.json").read_text())["steps"][0]
         assert (step["before"]["vertices"], step["after"]["vertices"]) == (before, after)
+
+
+def test_internal_error_exits_1_with_one_line(monkeypatch, capsys):
+    from boxmarch import cli
+
+    def broken(_args):
+        raise KeyError("something the code did not expect")
+
+    monkeypatch.setattr(cli, "cmd_bake", broken)
+    assert cli.run(["bake"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("boxmarch: internal error: KeyError")
