@@ -101,7 +101,7 @@ def _open(bpy, args) -> None:
             raise InputError(f"no such file: {args.blend}")
         with open(path, "rb") as f:
             head = f.read(7)
-        if head not in (b"BLENDER",) and not head.startswith((b"\x1f\x8b", b"\x28\xb5\x2f\xfd")):
+        if head != b"BLENDER" and not head.startswith((b"\x1f\x8b", b"\x28\xb5\x2f\xfd")):  # plain, gzip, zstd
             raise InputError(f"{args.blend} is not a .blend file")
         _progress(f"opening {path}")
         try:
@@ -115,7 +115,8 @@ def _open(bpy, args) -> None:
 
 def _objects(bpy, args):
     """The objects named with --objects (each must exist and be a mesh), else every mesh object
-    of the scene; selects exactly them and makes the first active."""
+    of the scene; selects exactly them (operators skip hidden objects: hidden ones are shown,
+    and hidden again by _run_steps) and makes the first active."""
     scene_objects = bpy.context.view_layer.objects
     if args.objects:
         objects = []
@@ -235,6 +236,7 @@ def _run_steps(args, steps) -> int:
 
     start = time.perf_counter()
     _open(bpy, args)
+    hidden = [ob.name for ob in bpy.context.view_layer.objects if ob.hide_get()]
     objects = _objects(bpy, args)
     names = [ob.name for ob in objects]
     reports = []
@@ -246,6 +248,8 @@ def _run_steps(args, steps) -> int:
             reports.append(step_export(bpy, objects, args))
         else:
             reports.append(step_cleanup(bpy, objects, args, step))
+    for name in hidden:
+        bpy.data.objects[name].hide_set(True)
     out = _save_blend(bpy, args.out) if args.out else None
     total = time.perf_counter() - start
     rows = [[r["step"], f"{r['seconds']:.3f} s", r["summary"]] for r in reports]
