@@ -170,7 +170,7 @@ def step_bake(bpy, objects, args) -> dict:
     seconds = time.perf_counter() - start
     totals = {key: sum(r[key] for r in reports)
               for key in ("submeshes", "baked", "cache_hits", "unchanged", "degenerate")}
-    return {"step": "bake", "seconds": seconds, **totals,
+    return {"step": "bake", "seconds": seconds, **totals, "skipped": totals["unchanged"],
             "max_relative_error": max(r["max_relative_error"] for r in reports),
             "meshes": [{k: (list(v) if isinstance(v, tuple) else v) for k, v in r.items()} for r in reports],
             "summary": (f"{totals['baked']:,} of {totals['submeshes']:,} submeshes baked, "
