@@ -362,3 +362,42 @@ def test_instance_on_curve_refuses_bad_input(blender):
     blender.ops.curve.primitive_nurbs_path_add()
     with pytest.raises(RuntimeError, match="No object named"):
         blender.ops.boxmarch.add_instance_on_curve(instance="Missing")
+
+
+def test_tools_and_undo_in_blender_34_window(tmp_path):
+    """Debian's Blender 3.4 with a window under Xvfb (the bpy module has no window, so undo needs
+    the program): every tool runs there, changes the mesh, and one undo restores it."""
+    import json
+    import shutil
+    import subprocess
+    from pathlib import Path
+
+    from test_blender_app import SCRIPTS, blender_env
+
+    import boxmarch
+
+    if shutil.which("xvfb-run") is None or shutil.which("blender") is None:
+        pytest.fail("xvfb-run or Debian's blender is missing: run scripts/setup.sh")
+    parent = tmp_path / "path"
+    parent.mkdir()
+    (parent / "boxmarch").symlink_to(Path(boxmarch.__file__).parent, target_is_directory=True)
+    out = tmp_path / "tools.json"
+    proc = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 1024x768x24", shutil.which("blender"),
+                           "--factory-startup", "--python", str(SCRIPTS / "tools_undo_check.py"), "--",
+                           str(parent), str(out)], env=blender_env(tmp_path), capture_output=True, text=True,
+                          timeout=300)
+    assert out.exists(), proc.stdout[-3000:] + proc.stderr[-3000:]
+    result = json.loads(out.read_text())
+    assert result["error"] is None, result["error"]
+    tools = result["tools"]
+    for name, state in tools.items():
+        assert state["result"] == ["FINISHED"] and state["undo_option"], name
+        assert state["undone"] == state["before"] != state["after"], name
+    assert tools["select_linked_submeshes"]["after"]["selected"] == 8  # box 0
+    assert tools["select_linked_across"]["after"]["selected"] == 16    # box 0 and its copy 1e-6 away
+    assert tools["dedup_submeshes"]["after"]["vertices"] == tools["dedup_submeshes"]["before"]["vertices"] - 8
+    assert tools["merge_by_distance_submeshes"]["after"]["vertices"] == 40
+    assert tools["pack_uv_by_z"]["after"]["uv_sum"] != tools["pack_uv_by_z"]["before"]["uv_sum"]
+    curve = result["instance_on_curve"]
+    assert curve["result"] == ["FINISHED"] and curve["evaluated_vertices"] == 72
+    assert (curve["modifiers"], curve["modifiers_undone"]) == (1, 0)
