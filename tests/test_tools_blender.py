@@ -223,7 +223,7 @@ def test_merge_per_submesh_equals_blenders_merge_of_each_submesh(blender):
     mesh.polygons.foreach_get("material_index", after_material)
     assert np.array_equal(np.sort(after_material), np.sort(material))
     # the tool's helper attributes are gone and the selection is back
-    assert "boxmarch_merge_pass" not in mesh.attributes and "boxmarch_saved_selection" not in mesh.attributes
+    assert not [a.name for a in mesh.attributes if a.name.startswith("boxmarch")]
     assert flags(mesh, "vertices").all()
 
 
@@ -236,6 +236,23 @@ def test_merge_only_touches_selected_submeshes(blender):
     blender.ops.object.mode_set(mode="OBJECT")
     assert len(ob.data.vertices) == 32
     assert np.flatnonzero(flags(ob.data, "vertices")).tolist() == [12]
+
+
+def test_dedup_and_merge_in_object_mode_work_on_whole_meshes(blender):
+    """Object Mode (scripts, the command line): whole meshes of the selected objects."""
+    dups = mesh_object(blender, "dups", *duplicated_boxes(4, 1e-6))
+    split = faces_object(blender, "split", *split_boxes(np.arange(3)[:, None] * np.array([1.0, 0, 0]), 1e-4))
+    for ob in (dups, split):
+        ob.select_set(True)
+        set_vertex_selection(blender, ob, [0])
+    assert blender.context.mode == "OBJECT"
+    assert blender.ops.boxmarch.dedup_submeshes() == {"FINISHED"}
+    assert blender.ops.boxmarch.merge_by_distance_submeshes(distance=1e-3) == {"FINISHED"}
+    assert blender.context.mode == "OBJECT"
+    assert (len(dups.data.vertices), len(split.data.vertices)) == (32, 24)
+    assert blender.context.view_layer.objects.active == split
+    assert sorted(ob.name for ob in blender.context.selected_objects) == ["dups", "split"]
+    assert flags(dups.data, "vertices").sum() == 1 and flags(split.data, "vertices").sum() == 1
 
 
 def uv_islands_mesh(bpy, count=30, seed=0):

@@ -37,10 +37,12 @@ class _SubmeshTool:
                     # Read and check every mesh before changing any.
                     arrays = [mesh_edit.read_mesh(ob.data, self.need_faces) for ob in objects]
                     wm.progress_update(20)
-                    message = self.run(context, objects, arrays, edit, wm)
+                    outcome = self.run(context, objects, arrays, edit, wm)
                 except (mesh_edit.ToolInputError, ValueError) as error:
                     self.report({"ERROR"}, f"Nothing changed: {error}")
                     return {"CANCELLED"}
+            # Geometry edits that finish inside Edit Mode run once the objects are back there.
+            message = outcome() if callable(outcome) else outcome
         finally:
             wm.progress_end()
         self.report({"INFO"}, f"{message} ({time.perf_counter() - start:.2f} s)")
@@ -108,14 +110,14 @@ class BOXMARCH_OT_dedup_submeshes(_SubmeshTool, bpy.types.Operator):
         for ob, a in zip(objects, arrays):
             duplicate_of, count = core.find_duplicate_submeshes(
                 a.positions, a.submesh_of_vertex, a.submesh_count, self.chosen_submeshes(ob, a, edit), self.tolerance)
-            if count:
-                delete = (duplicate_of >= 0)[a.submesh_of_vertex]
-                plans.append((ob, a, delete, mesh_edit.read_vertex_selection(ob.data)))
-                total += count
+            plans.append((ob, a, (duplicate_of >= 0)[a.submesh_of_vertex], mesh_edit.read_vertex_selection(ob.data)))
+            total += count
         wm.progress_update(50)
-        if plans:
-            mesh_edit.delete_submeshes(context, plans)
-        return f"Deleted {total} duplicate submesh(es) in {len(objects)} mesh(es), tolerance {self.tolerance:g}"
+        message = f"Deleted {total} duplicate submesh(es) in {len(objects)} mesh(es), tolerance {self.tolerance:g}"
+        if not total:
+            return message
+        action = mesh_edit.delete_vertices(context, plans, edit)
+        return message if action is None else lambda: (action(), message)[1]
 
 
 class BOXMARCH_OT_merge_by_distance_submeshes(_SubmeshTool, bpy.types.Operator):
@@ -128,18 +130,24 @@ class BOXMARCH_OT_merge_by_distance_submeshes(_SubmeshTool, bpy.types.Operator):
                             subtype="DISTANCE", description="Vertices of one submesh this close merge")
 
     def run(self, context, objects, arrays, edit, wm):
-        plans = []
+        plans, passes = [], 0
         for ob, a in zip(objects, arrays):
-            pass_of_vertex, passes = core.merge_passes(a.positions, a.submesh_of_vertex, a.submesh_count,
-                                                       self.chosen_submeshes(ob, a, edit), self.distance)
-            if passes:
-                plans.append((ob, a, pass_of_vertex, mesh_edit.read_vertex_selection(ob.data)))
-        if not plans:
+            pass_of_vertex, count = core.merge_passes(a.positions, a.submesh_of_vertex, a.submesh_count,
+                                                      self.chosen_submeshes(ob, a, edit), self.distance)
+            plans.append((ob, a, pass_of_vertex, mesh_edit.read_vertex_selection(ob.data)))
+            passes = max(passes, count)
+        if not passes:
             return "Removed 0 vertices: no submesh has vertices that close"
-        passes = max(int(p.max()) + 1 for _ob, _a, p, _s in plans)
-        removed = mesh_edit.merge_by_distance(context, plans, self.distance,
-                                              lambda k: wm.progress_update(20 + 80 * k // passes))
-        return f"Removed {removed} vertices in {len(plans)} mesh(es) ({passes} pass(es)), distance {self.distance:g}"
+        before = sum(len(a.positions) for a in arrays)
+        action = mesh_edit.merge_by_distance(context, plans, self.distance, edit,
+                                             lambda k, n: wm.progress_update(20 + 80 * k // n))
+
+        def finish():
+            if action is not None:
+                action()
+            removed = before - mesh_edit.vertex_total(objects)
+            return f"Removed {removed} vertices in {len(objects)} mesh(es) ({passes} pass(es)), distance {self.distance:g}"
+        return finish
 
 
 class BOXMARCH_OT_pack_uv_by_z(_SubmeshTool, bpy.types.Operator):
