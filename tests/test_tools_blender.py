@@ -227,6 +227,36 @@ def test_merge_per_submesh_equals_blenders_merge_of_each_submesh(blender):
     assert flags(mesh, "vertices").all()
 
 
+@pytest.mark.parametrize("case", ["vertex_group", "face_split"])
+def test_merge_falls_back_to_blenders_merge_and_still_matches(blender, case):
+    """Where a rebuild could lose data (vertex groups) or Blender's weld does more than drop
+    corners (a quad whose opposite corners merge is split), the tool runs Blender's own merge on
+    a planned selection, pass by pass: counts still equal Blender's merge of each submesh."""
+    centres = np.arange(4)[:, None] * np.array([1.0, 0, 0])
+    distance = 1e-3
+    positions, starts, sizes, corners = split_boxes(centres, distance / 10)
+    if case == "face_split":
+        # box 0's -x face [0, 1, 3, 2]: corner 3 moved onto corner 0 (opposite corners)
+        positions = positions.copy()
+        positions[3] = positions[0] + 1e-5
+    arrays = (positions, starts, sizes, corners)
+    expected = blender_merge_per_submesh(blender, arrays, distance, 4)
+    ob = faces_object(blender, "split", *arrays)
+    if case == "vertex_group":
+        group = ob.vertex_groups.new(name="weights")
+        group.add(list(range(0, len(positions), 2)), 0.5, "REPLACE")
+    edit(blender, ob)
+    blender.ops.mesh.select_all(action="SELECT")
+    assert blender.ops.boxmarch.merge_by_distance_submeshes(distance=distance) == {"FINISHED"}
+    blender.ops.object.mode_set(mode="OBJECT")
+    mesh = ob.data
+    assert [len(mesh.vertices), len(mesh.edges), len(mesh.polygons)] == expected.tolist()
+    assert not [a.name for a in mesh.attributes if a.name.startswith("boxmarch")]
+    assert flags(mesh, "vertices").all()
+    if case == "vertex_group":
+        assert sum(1 for v in mesh.vertices if v.groups) > 0
+
+
 def test_merge_only_touches_selected_submeshes(blender):
     arrays = split_boxes(np.arange(3)[:, None] * np.array([3.0, 0, 0]), 1e-4)
     ob = faces_object(blender, "split", *arrays)

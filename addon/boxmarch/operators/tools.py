@@ -130,23 +130,46 @@ class BOXMARCH_OT_merge_by_distance_submeshes(_SubmeshTool, bpy.types.Operator):
                             subtype="DISTANCE", description="Vertices of one submesh this close merge")
 
     def run(self, context, objects, arrays, edit, wm):
+        # The merge computed here and written as a rebuilt mesh (fast, Blender 4.1+), or
+        # Blender's own Merge by Distance on a planned selection where a rebuild could lose
+        # data or Blender's weld would do more (split or dedupe faces).
+        chosen = [self.chosen_submeshes(ob, a, edit) for ob, a in zip(objects, arrays)]
+        welds = []
+        for ob, a, c in zip(objects, arrays, chosen):
+            target, merged_positions, count = core.merge_targets(a.positions, a.submesh_of_vertex, a.submesh_count,
+                                                                 c, self.distance)
+            weld = core.weld(*a.topology, target) if count and mesh_edit.can_rebuild(ob.data) else None
+            if count and (weld is None or weld["needs_blender"]):
+                welds = None
+                break
+            welds.append((ob, merged_positions, weld, count))
+        wm.progress_update(50)
+        if welds is not None:
+            removed = 0
+            for ob, merged_positions, weld, count in welds:
+                if count:
+                    mesh_edit.rebuild_welded(ob.data, merged_positions, weld)
+                    removed += count
+            return f"Removed {removed} vertices in {len(objects)} mesh(es), distance {self.distance:g}"
+
         plans, passes = [], 0
-        for ob, a in zip(objects, arrays):
-            pass_of_vertex, count = core.merge_passes(a.positions, a.submesh_of_vertex, a.submesh_count,
-                                                      self.chosen_submeshes(ob, a, edit), self.distance)
+        for ob, a, c in zip(objects, arrays, chosen):
+            pass_of_vertex, count = core.merge_passes(a.positions, a.submesh_of_vertex, a.submesh_count, c,
+                                                      self.distance)
             plans.append((ob, a, pass_of_vertex, mesh_edit.read_vertex_selection(ob.data)))
             passes = max(passes, count)
         if not passes:
             return "Removed 0 vertices: no submesh has vertices that close"
         before = sum(len(a.positions) for a in arrays)
         action = mesh_edit.merge_by_distance(context, plans, self.distance, edit,
-                                             lambda k, n: wm.progress_update(20 + 80 * k // n))
+                                             lambda k, n: wm.progress_update(50 + 50 * k // n))
 
         def finish():
             if action is not None:
                 action()
             removed = before - mesh_edit.vertex_total(objects)
-            return f"Removed {removed} vertices in {len(objects)} mesh(es) ({passes} pass(es)), distance {self.distance:g}"
+            return (f"Removed {removed} vertices in {len(objects)} mesh(es) with Blender's merge "
+                    f"({passes} pass(es)), distance {self.distance:g}")
         return finish
 
 
