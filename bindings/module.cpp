@@ -425,6 +425,62 @@ PYBIND11_MODULE(_core, m) {
           py::arg("distance"), py::arg("threads") = 0,
           "(pass_of_vertex int32, -1 where nothing merges; number of passes).");
 
+    m.def("merge_targets",
+          [](const py::object& positions, const py::object& submesh_of_vertex, size_t submesh_count,
+             const py::object& chosen, double distance, int threads) {
+              auto p = checked<float>(positions, "positions", -1, 3);
+              auto ids = checked_submeshes(submesh_of_vertex, p.shape(0), submesh_count);
+              auto ch = checked<uint8_t>(chosen, "chosen", py::ssize_t(submesh_count), 0);
+              py::array_t<int32_t> target = empty<int32_t>(p.shape(0));
+              py::array_t<float> merged = empty<float>(p.shape(0), 3);
+              size_t count;
+              {
+                  int32_t* t = target.mutable_data();
+                  float* m = merged.mutable_data();
+                  py::gil_scoped_release release;
+                  count = merge_targets(t, m, p.data(), ids.data(), size_t(p.shape(0)), submesh_count, ch.data(),
+                                        distance, threads);
+              }
+              return py::make_tuple(target, merged, count);
+          },
+          py::arg("positions"), py::arg("submesh_of_vertex"), py::arg("submesh_count"), py::arg("chosen"),
+          py::arg("distance"), py::arg("threads") = 0,
+          "(target int32 per vertex, merged positions float32 (N, 3), vertices merged away).");
+
+    m.def("weld_topology",
+          [](const py::object& positions, const py::object& edges, const py::object& face_starts,
+             const py::object& face_sizes, const py::object& corner_verts, const py::object& target) {
+              MeshArrays mesh(positions, edges, face_starts, face_sizes, corner_verts);
+              auto t = checked<int32_t>(target, "target", py::ssize_t(mesh.view.vertex_count), 0);
+              const py::ssize_t nv = py::ssize_t(mesh.view.vertex_count), ne = py::ssize_t(mesh.view.edge_count),
+                                nf = py::ssize_t(mesh.view.face_count), nc = py::ssize_t(mesh.view.corner_count);
+              auto vs = empty<int32_t>(nv), es = empty<int32_t>(ne), fs = empty<int32_t>(nf), fst = empty<int32_t>(nf),
+                   cs = empty<int32_t>(nc), cv = empty<int32_t>(nc), ce = empty<int32_t>(nc);
+              auto e2 = empty<int32_t>(ne, 2);
+              WeldOutput out{vs.mutable_data(), es.mutable_data(), e2.mutable_data(), fs.mutable_data(),
+                             fst.mutable_data(), cs.mutable_data(), cv.mutable_data(), ce.mutable_data()};
+              WeldCounts counts;
+              {
+                  py::gil_scoped_release release;
+                  counts = weld_topology(mesh.view, t.data(), out);
+              }
+              using py::slice;
+              py::dict r;
+              r["vertex_source"] = vs[slice(0, counts.vertices, 1)];
+              r["edge_source"] = es[slice(0, counts.edges, 1)];
+              r["edges"] = e2[slice(0, counts.edges, 1)];
+              r["face_source"] = fs[slice(0, counts.faces, 1)];
+              r["face_starts"] = fst[slice(0, counts.faces, 1)];
+              r["corner_source"] = cs[slice(0, counts.corners, 1)];
+              r["corner_verts"] = cv[slice(0, counts.corners, 1)];
+              r["corner_edges"] = ce[slice(0, counts.corners, 1)];
+              r["needs_blender"] = counts.needs_blender;
+              return r;
+          },
+          py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"),
+          py::arg("corner_verts"), py::arg("target"),
+          "The mesh after merging each vertex into target[v], as Blender's weld leaves it (see boxmarch.core.weld).");
+
     m.def("pack_uv_by_height", &pack_uv_py, py::arg("corner_uv"), py::arg("positions"), py::arg("edges"),
           py::arg("face_starts"), py::arg("face_sizes"), py::arg("corner_verts"), py::kw_only(),
           py::arg("face_mask"), py::arg("vertex_height"), py::arg("submesh_of_vertex"), py::arg("submesh_count"),

@@ -223,8 +223,38 @@ def test_merge_per_submesh_equals_blenders_merge_of_each_submesh(blender):
     mesh.polygons.foreach_get("material_index", after_material)
     assert np.array_equal(np.sort(after_material), np.sort(material))
     # the tool's helper attributes are gone and the selection is back
-    assert "boxmarch_merge_pass" not in mesh.attributes and "boxmarch_saved_selection" not in mesh.attributes
+    assert not [a.name for a in mesh.attributes if a.name.startswith("boxmarch")]
     assert flags(mesh, "vertices").all()
+
+
+@pytest.mark.parametrize("case", ["vertex_group", "face_split"])
+def test_merge_falls_back_to_blenders_merge_and_still_matches(blender, case):
+    """Where a rebuild could lose data (vertex groups) or Blender's weld does more than drop
+    corners (a quad whose opposite corners merge is split), the tool runs Blender's own merge on
+    a planned selection, pass by pass: counts still equal Blender's merge of each submesh."""
+    centres = np.arange(4)[:, None] * np.array([1.0, 0, 0])
+    distance = 1e-3
+    positions, starts, sizes, corners = split_boxes(centres, distance / 10)
+    if case == "face_split":
+        # box 0's -x face [0, 1, 3, 2]: corner 3 moved onto corner 0 (opposite corners)
+        positions = positions.copy()
+        positions[3] = positions[0] + 1e-5
+    arrays = (positions, starts, sizes, corners)
+    expected = blender_merge_per_submesh(blender, arrays, distance, 4)
+    ob = faces_object(blender, "split", *arrays)
+    if case == "vertex_group":
+        group = ob.vertex_groups.new(name="weights")
+        group.add(list(range(0, len(positions), 2)), 0.5, "REPLACE")
+    edit(blender, ob)
+    blender.ops.mesh.select_all(action="SELECT")
+    assert blender.ops.boxmarch.merge_by_distance_submeshes(distance=distance) == {"FINISHED"}
+    blender.ops.object.mode_set(mode="OBJECT")
+    mesh = ob.data
+    assert [len(mesh.vertices), len(mesh.edges), len(mesh.polygons)] == expected.tolist()
+    assert not [a.name for a in mesh.attributes if a.name.startswith("boxmarch")]
+    assert flags(mesh, "vertices").all()
+    if case == "vertex_group":
+        assert sum(1 for v in mesh.vertices if v.groups) > 0
 
 
 def test_merge_only_touches_selected_submeshes(blender):
@@ -236,6 +266,23 @@ def test_merge_only_touches_selected_submeshes(blender):
     blender.ops.object.mode_set(mode="OBJECT")
     assert len(ob.data.vertices) == 32
     assert np.flatnonzero(flags(ob.data, "vertices")).tolist() == [12]
+
+
+def test_dedup_and_merge_in_object_mode_work_on_whole_meshes(blender):
+    """Object Mode (scripts, the command line): whole meshes of the selected objects."""
+    dups = mesh_object(blender, "dups", *duplicated_boxes(4, 1e-6))
+    split = faces_object(blender, "split", *split_boxes(np.arange(3)[:, None] * np.array([1.0, 0, 0]), 1e-4))
+    for ob in (dups, split):
+        ob.select_set(True)
+        set_vertex_selection(blender, ob, [0])
+    assert blender.context.mode == "OBJECT"
+    assert blender.ops.boxmarch.dedup_submeshes() == {"FINISHED"}
+    assert blender.ops.boxmarch.merge_by_distance_submeshes(distance=1e-3) == {"FINISHED"}
+    assert blender.context.mode == "OBJECT"
+    assert (len(dups.data.vertices), len(split.data.vertices)) == (32, 24)
+    assert blender.context.view_layer.objects.active == split
+    assert sorted(ob.name for ob in blender.context.selected_objects) == ["dups", "split"]
+    assert flags(dups.data, "vertices").sum() == 1 and flags(split.data, "vertices").sum() == 1
 
 
 def uv_islands_mesh(bpy, count=30, seed=0):
@@ -362,3 +409,42 @@ def test_instance_on_curve_refuses_bad_input(blender):
     blender.ops.curve.primitive_nurbs_path_add()
     with pytest.raises(RuntimeError, match="No object named"):
         blender.ops.boxmarch.add_instance_on_curve(instance="Missing")
+
+
+def test_tools_and_undo_in_blender_34_window(tmp_path):
+    """Debian's Blender 3.4 with a window under Xvfb (the bpy module has no window, so undo needs
+    the program): every tool runs there, changes the mesh, and one undo restores it."""
+    import json
+    import shutil
+    import subprocess
+    from pathlib import Path
+
+    from test_blender_app import SCRIPTS, blender_env
+
+    import boxmarch
+
+    if shutil.which("xvfb-run") is None or shutil.which("blender") is None:
+        pytest.fail("xvfb-run or Debian's blender is missing: run scripts/setup.sh")
+    parent = tmp_path / "path"
+    parent.mkdir()
+    (parent / "boxmarch").symlink_to(Path(boxmarch.__file__).parent, target_is_directory=True)
+    out = tmp_path / "tools.json"
+    proc = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 1024x768x24", shutil.which("blender"),
+                           "--factory-startup", "--python", str(SCRIPTS / "tools_undo_check.py"), "--",
+                           str(parent), str(out)], env=blender_env(tmp_path), capture_output=True, text=True,
+                          timeout=300)
+    assert out.exists(), proc.stdout[-3000:] + proc.stderr[-3000:]
+    result = json.loads(out.read_text())
+    assert result["error"] is None, result["error"]
+    tools = result["tools"]
+    for name, state in tools.items():
+        assert state["result"] == ["FINISHED"] and state["undo_option"], name
+        assert state["undone"] == state["before"] != state["after"], name
+    assert tools["select_linked_submeshes"]["after"]["selected"] == 8  # box 0
+    assert tools["select_linked_across"]["after"]["selected"] == 16    # box 0 and its copy 1e-6 away
+    assert tools["dedup_submeshes"]["after"]["vertices"] == tools["dedup_submeshes"]["before"]["vertices"] - 8
+    assert tools["merge_by_distance_submeshes"]["after"]["vertices"] == 40
+    assert tools["pack_uv_by_z"]["after"]["uv_sum"] != tools["pack_uv_by_z"]["before"]["uv_sum"]
+    curve = result["instance_on_curve"]
+    assert curve["result"] == ["FINISHED"] and curve["evaluated_vertices"] == 72
+    assert (curve["modifiers"], curve["modifiers_undone"]) == (1, 0)

@@ -307,3 +307,37 @@ def test_pack_uv_bad_input_writes_nothing():
     mask[:6] = True
     core.pack_uv_by_height(partial, *arrays, face_mask=mask, **kwargs)
     assert np.array_equal(partial[24:], uv[24:])  # unselected faces untouched
+
+
+def test_merge_targets_follow_blenders_rule():
+    # Blender 5.0's Merge by Distance (seen): two vertices merge into the lower index, three or
+    # more into the one nearest their centroid; the target moves to the centroid.
+    positions = np.array([[0, 0, 0], [5, 0, 0], [0.02, 0, 0], [0.01, 0, 0], [5.01, 0, 0], [9, 9, 9]], np.float32)
+    edges = np.array([[0, 1], [1, 2], [2, 3], [3, 4], [4, 5]], np.int32)
+    empty = np.zeros(0, np.int32)
+    ids, n = core.find_submeshes(positions, edges, empty, empty, empty)
+    target, merged, count = core.merge_targets(positions, ids, n, distance=0.05)
+    assert count == 3
+    assert target.tolist() == [3, 1, 3, 3, 1, 5]
+    assert np.allclose(merged[3], [0.01, 0, 0]) and np.allclose(merged[1], [5.005, 0, 0])
+    # never across submeshes: the same points without edges are six submeshes
+    ids, n = core.find_submeshes(positions, np.zeros((0, 2), np.int32), empty, empty, empty)
+    assert core.merge_targets(positions, ids, n, distance=0.05)[2] == 0
+
+
+def test_weld_drops_collapsed_corners_faces_and_edges():
+    # a quad whose corners 0 and 1 merge becomes a triangle; a triangle of the same two becomes
+    # nothing; a quad whose opposite corners merge needs Blender's split
+    positions = np.zeros((6, 3), np.float32)
+    quad = [0, 1, 2, 3]
+    arrays = (positions, np.array([[0, 1], [1, 2], [2, 3], [3, 0], [1, 4], [4, 0]], np.int32),
+              np.array([0, 4], np.int32), np.array([4, 3], np.int32), np.array(quad + [0, 1, 4], np.int32))
+    target = np.array([0, 0, 2, 3, 4, 5], np.int32)
+    w = core.weld(*arrays, target)
+    assert not w["needs_blender"]
+    assert w["vertex_source"].tolist() == [0, 2, 3, 4, 5]
+    assert w["face_source"].tolist() == [0] and w["corner_verts"].tolist() == [0, 1, 2]
+    assert w["edges"].tolist() == [[0, 1], [1, 2], [2, 0], [0, 3]]
+    assert w["corner_edges"].tolist() == [0, 1, 2]
+    split = core.weld(*arrays, np.array([0, 1, 0, 3, 4, 5], np.int32))
+    assert split["needs_blender"]

@@ -228,6 +228,26 @@ def pack_uv_by_height(corner_uv, positions, edges, face_starts, face_sizes, corn
                                    lock_overlapping=bool(lock_overlapping))
 
 
+def merge_targets(positions, submesh_of_vertex, submesh_count, chosen=None, distance=1e-3, threads=0):
+    """Blender's Merge by Distance inside each chosen submesh (mask per submesh, None: all):
+    (target int32 per vertex, merged positions float32 (N, 3), vertices merged away). A vertex
+    merges into target[v] (itself for survivors); targets sit at their cluster's centroid."""
+    count = int(submesh_count)
+    chosen = np.ones(count, np.uint8) if chosen is None else _mask(chosen, "chosen", count)
+    return _core.merge_targets(positions, submesh_of_vertex, count, chosen, float(distance), int(threads))
+
+
+def weld(positions, edges, face_starts, face_sizes, corner_verts, target) -> dict:
+    """The mesh after merging every vertex v into target[v], as Blender's weld leaves it: faces
+    lose corners that merge into the next one and go below 3 corners; edges are the distinct
+    images of the old ones; survivors keep their order. Returns new 'edges', 'face_starts',
+    'corner_verts', 'corner_edges' and, per new element, the old element it comes from
+    ('vertex_source', 'edge_source', 'face_source', 'corner_source'); 'needs_blender' is True
+    when Blender's weld would also split or dedupe faces (then merge with Blender itself)."""
+    return _core.weld_topology(positions, edges, face_starts, face_sizes, corner_verts,
+                               np.ascontiguousarray(target, np.int32))
+
+
 # ---------------------------------------------------------------------------------------------
 # Reference raymarcher (cpp/src/raymarch.cpp; mirrors shaders/glsl, see docs/PREVIEW.md)
 

@@ -138,24 +138,26 @@ def write_selection(mesh, arrays: MeshArrays, vertex_selected) -> None:
     mesh.update()
 
 
-def delete_submeshes(context, plans) -> None:
-    """Delete whole submeshes with Blender's own edit-mode delete, keeping the user's selection
-    on what stays. ``plans``: (object, arrays, delete mask per vertex, selection per vertex).
-    Expects Object Mode with the objects selected; returns in Object Mode."""
-    for ob, arrays, delete, _selection in plans:
-        write_selection(ob.data, arrays, delete)
-    _in_edit_mode(context, [ob for ob, *_ in plans], lambda: bpy.ops.mesh.delete(type="VERT"))
-    for ob, _arrays, delete, selection in plans:
-        # Delete keeps the survivors in their order; submeshes go whole, so the survivors'
-        # topology is the old one with rows removed.
-        write_selection(ob.data, read_mesh(ob.data), selection[~delete])
+# Blender 4.2+ selects by a boolean attribute inside Edit Mode: the tools then change geometry and
+# restore the selection in one Edit Mode session (leaving and re-entering Edit Mode on a million
+# vertices costs most of a second). Older versions take a round trip through Object Mode.
+SELECT_BY_ATTRIBUTE = bpy.app.version >= (4, 2, 0)
+
+
+def _edit_session(context, objects, edit, action):
+    """Run ``action`` in Edit Mode: right away when the operator runs in Edit Mode (already
+    re-entered), else with exactly ``objects`` in Edit Mode and back to Object Mode after."""
+    if edit:
+        action()
+    else:
+        _in_edit_mode(context, objects, action)
 
 
 def _in_edit_mode(context, objects, action):
-    """Run ``action`` (an edit-mode operator call) with exactly ``objects`` in Edit Mode."""
+    """Run ``action`` with exactly ``objects`` in Edit Mode, from and back to Object Mode."""
     view_layer = context.view_layer
     previous_active = view_layer.objects.active
-    previous_selected = [ob for ob in context.selected_objects]
+    previous_selected = list(context.selected_objects)
     for ob in previous_selected:
         ob.select_set(False)
     for ob in objects:
@@ -173,38 +175,195 @@ def _in_edit_mode(context, objects, action):
         view_layer.objects.active = previous_active
 
 
-def merge_by_distance(context, plans, distance, progress=None) -> int:
+def _select_by_attributes(objects, name):
+    """Edit Mode: select exactly the vertices whose boolean attribute ``name`` is set."""
+    bpy.ops.mesh.select_all(action="DESELECT")
+    active = {}
+    for ob in objects:
+        attributes = ob.data.attributes
+        active[ob.name] = attributes.active.name if attributes.active is not None else None
+        attributes.active = attributes[name]
+    bpy.ops.mesh.select_by_attribute()
+    for ob in objects:
+        previous = active[ob.name]
+        if previous is not None and previous in ob.data.attributes:
+            ob.data.attributes.active = ob.data.attributes[previous]
+
+
+def _remove_attributes(objects, names):
+    for ob in objects:
+        for name in names:
+            if name in ob.data.attributes:
+                ob.data.attributes.remove(ob.data.attributes[name])
+
+
+def _store_flags(mesh, name, values):
+    if name in mesh.attributes:
+        mesh.attributes.remove(mesh.attributes[name])
+    mesh.attributes.new(name, "BOOLEAN", "POINT").data.foreach_set("value", np.asarray(values, bool))
+
+
+def delete_vertices(context, plans, edit) -> None:
+    """Delete vertices (whole submeshes) with Blender's own edit-mode delete, keeping the user's
+    selection on what stays. ``plans``: (object, arrays, delete mask, saved selection) for every
+    object in the session (an all-false mask deletes nothing there). Called in Object Mode; the
+    deletion itself runs after the operator is back in Edit Mode when ``edit``."""
+    objects = [ob for ob, *_ in plans]
+    for ob, arrays, delete, selection in plans:
+        write_selection(ob.data, arrays, delete)
+        if SELECT_BY_ATTRIBUTE:
+            _store_flags(ob.data, SAVED_SELECTION_ATTRIBUTE, selection)
+    if SELECT_BY_ATTRIBUTE:
+        def action():
+            bpy.ops.mesh.delete(type="VERT")
+            _select_by_attributes(objects, SAVED_SELECTION_ATTRIBUTE)
+            _remove_attributes(objects, [SAVED_SELECTION_ATTRIBUTE])
+        return lambda: _edit_session(context, objects, edit, action)
+    _in_edit_mode(context, objects, lambda: bpy.ops.mesh.delete(type="VERT"))
+    for ob, _arrays, delete, selection in plans:
+        # Delete keeps the survivors in their order; submeshes go whole, so the survivors'
+        # topology is the old one with rows removed.
+        write_selection(ob.data, read_mesh(ob.data), selection[~delete])
+    return None
+
+
+def _pass_attribute(k):
+    return f"{MERGE_PASS_ATTRIBUTE}_{k}"
+
+
+def merge_by_distance(context, plans, distance, edit, progress=None):
     """Merge by distance inside submeshes with Blender's own Merge by Distance, pass by pass as
-    core.merge_passes planned. ``plans``: (object, arrays, pass per vertex, selection per
-    vertex). Expects and returns Object Mode. Returns the number of vertices removed."""
-    before = sum(len(ob.data.vertices) for ob, *_ in plans)
-    passes = max(int(passes.max()) + 1 for _ob, _arrays, passes, _sel in plans)
+    core.merge_passes planned. ``plans``: (object, arrays, pass per vertex, saved selection)
+    for every object in the session (pass -1 everywhere: nothing merges there). Called in
+    Object Mode. Returns (action, vertex counter): the action runs the merge (when ``edit``, once
+    the operator is back in Edit Mode), the counter tells the vertex total afterwards."""
+    objects = [ob for ob, *_ in plans]
+    passes = max(int(p.max()) + 1 for _ob, _arrays, p, _sel in plans)
+    merge = lambda: bpy.ops.mesh.remove_doubles(threshold=distance, use_unselected=False)
+    if SELECT_BY_ATTRIBUTE:
+        names = [_pass_attribute(k) for k in range(passes)] + [SAVED_SELECTION_ATTRIBUTE]
+        for ob, arrays, pass_of_vertex, selection in plans:
+            for k in range(passes):
+                _store_flags(ob.data, _pass_attribute(k), pass_of_vertex == k)
+            _store_flags(ob.data, SAVED_SELECTION_ATTRIBUTE, selection)
+
+        def action():
+            for k in range(passes):
+                _select_by_attributes(objects, _pass_attribute(k))
+                merge()
+                if progress:
+                    progress(k + 1, passes)
+            _select_by_attributes(objects, SAVED_SELECTION_ATTRIBUTE)
+            _remove_attributes(objects, names)
+        return lambda: _edit_session(context, objects, edit, action)
+
+    # Blender < 4.2: one round trip through Object Mode per pass. The pass and the selection
+    # ride along in attributes (a merged vertex keeps its target's values, and every vertex of
+    # a cluster has the same pass).
     for ob, _arrays, pass_of_vertex, selection in plans:
         mesh = ob.data
-        # Kept in attributes: Blender carries them through the merges (a merged vertex keeps
-        # its target's values, and every vertex of a cluster has the same pass).
         mesh.attributes.new(MERGE_PASS_ATTRIBUTE, "INT", "POINT").data.foreach_set("value", pass_of_vertex)
-        mesh.attributes.new(SAVED_SELECTION_ATTRIBUTE, "BOOLEAN", "POINT").data.foreach_set("value", selection)
+        _store_flags(mesh, SAVED_SELECTION_ATTRIBUTE, selection)
     try:
         for k in range(passes):
-            for ob, *_ in plans:
+            for ob in objects:
                 mesh = ob.data
                 pass_of_vertex = np.empty(len(mesh.vertices), np.int32)
                 mesh.attributes[MERGE_PASS_ATTRIBUTE].data.foreach_get("value", pass_of_vertex)
                 write_selection(mesh, read_mesh(mesh), pass_of_vertex == k)
-            _in_edit_mode(context, [ob for ob, *_ in plans],
-                          lambda: bpy.ops.mesh.remove_doubles(threshold=distance, use_unselected=False))
+            _in_edit_mode(context, objects, merge)
             if progress:
-                progress(k + 1)
+                progress(k + 1, passes)
     finally:
-        for ob, *_ in plans:
+        for ob in objects:
             mesh = ob.data
             selection = np.empty(len(mesh.vertices), bool)
             mesh.attributes[SAVED_SELECTION_ATTRIBUTE].data.foreach_get("value", selection)
-            for name in (MERGE_PASS_ATTRIBUTE, SAVED_SELECTION_ATTRIBUTE):
-                mesh.attributes.remove(mesh.attributes[name])
+            _remove_attributes([ob], [MERGE_PASS_ATTRIBUTE, SAVED_SELECTION_ATTRIBUTE])
             write_selection(mesh, read_mesh(mesh), selection)
-    return before - sum(len(ob.data.vertices) for ob, *_ in plans)
+    return None
+
+
+def vertex_total(objects) -> int:
+    """Vertices of these meshes now, in Edit Mode (the edit mesh) or Object Mode."""
+    import bmesh
+
+    return sum(len(bmesh.from_edit_mesh(ob.data).verts) if ob.mode == "EDIT" else len(ob.data.vertices)
+               for ob in objects)
+
+
+# Attribute types the rebuild carries, with the bulk property and components per element.
+_ATTRIBUTE_LAYOUT = {
+    "FLOAT": ("value", 1, np.float32), "INT": ("value", 1, np.int32), "BOOLEAN": ("value", 1, bool),
+    "INT8": ("value", 1, np.int32), "FLOAT_VECTOR": ("vector", 3, np.float32),
+    "FLOAT2": ("vector", 2, np.float32), "FLOAT_COLOR": ("color", 4, np.float32),
+    "BYTE_COLOR": ("color_srgb", 4, np.float32), "INT32_2D": ("value", 2, np.int32),
+    "INT16_2D": ("value", 2, np.int32), "QUATERNION": ("value", 4, np.float32),
+    "FLOAT4X4": ("value", 16, np.float32),
+}
+_TOPOLOGY_ATTRIBUTES = {"position", ".edge_verts", ".corner_vert", ".corner_edge"}
+
+
+def can_rebuild(mesh) -> bool:
+    """True when rebuilding the mesh from arrays keeps everything it holds: Blender 4.1+ (all
+    data in generic attributes), no shape keys, no object using it with vertex groups, and only
+    attribute types the rebuild knows."""
+    if bpy.app.version < (4, 1, 0) or mesh.shape_keys is not None:
+        return False
+    if any(ob.data == mesh and len(ob.vertex_groups) for ob in bpy.data.objects):
+        return False
+    return all(a.data_type in _ATTRIBUTE_LAYOUT for a in mesh.attributes if a.name not in _TOPOLOGY_ATTRIBUTES)
+
+
+def rebuild_welded(mesh, merged_positions, weld) -> None:
+    """Replace the mesh's geometry by the welded topology (core.weld), carrying every attribute
+    over from the old element each new one comes from. Object Mode; expects can_rebuild."""
+    captured = []
+    for attr in mesh.attributes:
+        if attr.name in _TOPOLOGY_ATTRIBUTES:
+            continue
+        prop, components, dtype = _ATTRIBUTE_LAYOUT[attr.data_type]
+        values = np.empty(len(attr.data) * components, dtype)
+        attr.data.foreach_get(prop, values)
+        captured.append((attr.name, attr.data_type, attr.domain, values.reshape(len(attr.data), components)))
+    active_uv = mesh.uv_layers.active.name if mesh.uv_layers.active else None
+    render_uv = next((uv.name for uv in mesh.uv_layers if uv.active_render), None)
+    colors = mesh.color_attributes
+    active_color, default_color = colors.active_color_name, colors.default_color_name
+
+    mesh.clear_geometry()
+    mesh.vertices.add(len(weld["vertex_source"]))
+    mesh.vertices.foreach_set("co", merged_positions[weld["vertex_source"]].reshape(-1))
+    mesh.edges.add(len(weld["edge_source"]))
+    mesh.edges.foreach_set("vertices", np.ascontiguousarray(weld["edges"]).reshape(-1))
+    mesh.loops.add(len(weld["corner_source"]))
+    mesh.loops.foreach_set("vertex_index", np.ascontiguousarray(weld["corner_verts"]))
+    mesh.loops.foreach_set("edge_index", np.ascontiguousarray(weld["corner_edges"]))
+    mesh.polygons.add(len(weld["face_source"]))
+    mesh.polygons.foreach_set("loop_start", np.ascontiguousarray(weld["face_starts"]))
+    # Adding elements may create flags the mesh did not have (new faces come selected): drop them.
+    captured_names = {name for name, *_ in captured}
+    for name in [a.name for a in mesh.attributes if a.name not in _TOPOLOGY_ATTRIBUTES and a.name not in captured_names]:
+        mesh.attributes.remove(mesh.attributes[name])
+    source = {"POINT": weld["vertex_source"], "EDGE": weld["edge_source"], "FACE": weld["face_source"],
+              "CORNER": weld["corner_source"]}
+    for name, data_type, domain, values in captured:
+        attr = mesh.attributes.get(name)
+        if attr is None or attr.data_type != data_type or attr.domain != domain:
+            if attr is not None:
+                mesh.attributes.remove(attr)
+            attr = mesh.attributes.new(name, data_type, domain)
+        prop = _ATTRIBUTE_LAYOUT[data_type][0]
+        attr.data.foreach_set(prop, np.ascontiguousarray(values[source[domain]]).reshape(-1))
+    if active_uv and active_uv in mesh.uv_layers:
+        mesh.uv_layers.active = mesh.uv_layers[active_uv]
+    if render_uv and render_uv in mesh.uv_layers:
+        mesh.uv_layers[render_uv].active_render = True
+    if active_color:
+        colors.active_color_name = active_color
+    if default_color:
+        colors.default_color_name = default_color
+    mesh.update()
 
 
 def uv_map_name(mesh, requested: str) -> str:

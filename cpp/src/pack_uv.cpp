@@ -31,35 +31,37 @@ void grow(Unit& u, const Unit& other) {
     u.first_face = std::min(u.first_face, other.first_face);
 }
 
-// Rows of units in `order` at scale s; places them when `place`. Returns the number of rows, or
-// 0 when the layout does not fit the unit square.
-size_t layout(std::vector<Unit>& units, const std::vector<uint32_t>& order, double s, double pad,
-              size_t max_per_row, bool place) {
+// Rows of units of widths w[k] and heights h[k] (in placing order, at scale 1) at scale s;
+// writes each unit's lower-left corner into x[k], y[k] when they are not null. Returns the
+// number of rows, or 0 when the layout does not fit the unit square.
+size_t layout(const std::vector<double>& w, const std::vector<double>& h, double s, double pad,
+              size_t max_per_row, double* x_out, double* y_out) {
     double x = pad, top = 1.0 - pad, row_height = 0.0;
     size_t in_row = 0, rows = 0, row_first = 0;
     auto close_row = [&](size_t end) {
-        if (place)
-            for (size_t k = row_first; k < end; ++k) units[order[k]].y = top - row_height;
+        if (y_out)
+            for (size_t k = row_first; k < end; ++k) y_out[k] = top - row_height;
         top -= row_height + pad;
         ++rows;
     };
-    for (size_t k = 0; k < order.size(); ++k) {
-        const Unit& u = units[order[k]];
-        const double w = (u.hi[0] - u.lo[0]) * s, h = (u.hi[1] - u.lo[1]) * s;
-        if (in_row > 0 && ((max_per_row && in_row == max_per_row) || x + w + pad > 1.0)) {
+    const size_t n = w.size();
+    for (size_t k = 0; k < n; ++k) {
+        const double wk = w[k] * s;
+        if (in_row > 0 && ((max_per_row && in_row == max_per_row) || x + wk + pad > 1.0)) {
             close_row(k);
+            if (top < 0.0) return 0;  // already below the square: no need to go on
             x = pad;
             row_height = 0.0;
             in_row = 0;
             row_first = k;
         }
-        if (x + w + pad > 1.0) return 0;
-        if (place) units[order[k]].x = x;
-        x += w + pad;
-        row_height = std::max(row_height, h);
+        if (x + wk + pad > 1.0) return 0;
+        if (x_out) x_out[k] = x;
+        x += wk + pad;
+        row_height = std::max(row_height, h[k] * s);
         ++in_row;
     }
-    close_row(order.size());
+    close_row(n);
     return top >= -1e-12 ? rows : 0;
 }
 
@@ -177,35 +179,59 @@ PackUvReport pack_uv_by_height(float* corner_uv, const MeshView& mesh, const uin
     }
     for (uint32_t k = 0; k < island_count; ++k) grow(units[unit_of_island[k]], islands[k]);
 
+    // Placing order: highest first, ties by lowest face. Sorting compact keys (not indices that
+    // reach into the units) keeps the sort in cache.
+    struct Key {
+        double height;
+        uint32_t first_face, unit;
+        bool operator<(const Key& o) const {
+            return height != o.height ? height > o.height : first_face < o.first_face;
+        }
+    };
+    std::vector<Key> keys(units.size());
+    for (uint32_t k = 0; k < units.size(); ++k) keys[k] = Key{units[k].height, units[k].first_face, k};
+    std::sort(keys.begin(), keys.end());
     std::vector<uint32_t> order(units.size());
-    for (uint32_t k = 0; k < units.size(); ++k) order[k] = k;
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-        if (units[a].height != units[b].height) return units[a].height > units[b].height;
-        return units[a].first_face < units[b].first_face;
-    });
+    for (size_t k = 0; k < keys.size(); ++k) order[k] = keys[k].unit;
 
-    // The largest uniform scale whose layout fits: bisection between 0 and the scale at which
-    // the largest unit alone spans the square.
-    double largest = 0.0;
-    for (const Unit& u : units) largest = std::max({largest, u.hi[0] - u.lo[0], u.hi[1] - u.lo[1]});
-    if (!layout(units, order, 0.0, pad, options.max_per_row, false))
+    // Sizes in placing order, contiguous: the bisection runs the layout a few dozen times.
+    const size_t unit_count = units.size();
+    std::vector<double> w(unit_count), h(unit_count);
+    double largest = 0.0, area = 0.0;
+    for (size_t k = 0; k < unit_count; ++k) {
+        const Unit& u = units[order[k]];
+        w[k] = u.hi[0] - u.lo[0];
+        h[k] = u.hi[1] - u.lo[1];
+        largest = std::max({largest, w[k], h[k]});
+        area += w[k] * h[k];
+    }
+    if (!layout(w, h, 0.0, pad, options.max_per_row, nullptr, nullptr))
         throw std::invalid_argument("padding " + std::to_string(pad) + " leaves no room for " +
-                                    std::to_string(units.size()) + " islands in the unit square");
+                                    std::to_string(unit_count) + " islands in the unit square");
+    // The largest uniform scale whose layout fits, by bisection below the scale at which the
+    // largest unit alone spans the square and the one at which the units' area fills it.
     double scale = 1.0;
     if (largest > 0.0) {
-        double fits = 0.0, fails = (1.0 - 2.0 * pad) / largest;
-        if (layout(units, order, fails, pad, options.max_per_row, false)) fits = fails;
+        double fails = (1.0 - 2.0 * pad) / largest;
+        if (area > 0.0) fails = std::min(fails, std::sqrt(1.0 / area));
+        double fits = 0.0;
+        if (layout(w, h, fails, pad, options.max_per_row, nullptr, nullptr)) fits = fails;
         else
-            for (int it = 0; it < 60 && fails - fits > fits * 1e-7; ++it) {
+            for (int it = 0; it < 80 && fails - fits > fails * 1e-5; ++it) {
                 const double mid = 0.5 * (fits + fails);
-                (layout(units, order, mid, pad, options.max_per_row, false) ? fits : fails) = mid;
+                (layout(w, h, mid, pad, options.max_per_row, nullptr, nullptr) ? fits : fails) = mid;
             }
         scale = fits;
     }
+    std::vector<double> x(unit_count), y(unit_count);
     PackUvReport report;
-    report.rows = layout(units, order, scale, pad, options.max_per_row, true);
+    report.rows = layout(w, h, scale, pad, options.max_per_row, x.data(), y.data());
+    for (size_t k = 0; k < unit_count; ++k) {
+        units[order[k]].x = x[k];
+        units[order[k]].y = y[k];
+    }
     report.islands = island_count;
-    report.groups = units.size();
+    report.groups = unit_count;
     report.scale = scale;
 
     for (uint32_t i = 0; i < faces.size(); ++i) {

@@ -32,13 +32,15 @@ void check_finite_positions(const float* positions, size_t count) {
 
 namespace {
 
+// Positions are kept in their own type (float positions compare exactly in double anyway).
+template <class T>
 struct Grid {
     double origin[3];
     double cell;
     uint64_t mask;
     std::vector<uint32_t> bucket_start;  // mask + 2 entries
     std::vector<uint32_t> items;         // included points, sorted by bucket
-    std::vector<double> sorted_positions;  // xyz of items[k] at 3k
+    std::vector<T> sorted_positions;     // xyz of items[k] at 3k
 };
 
 inline uint64_t cell_hash(int64_t x, int64_t y, int64_t z) {
@@ -50,7 +52,7 @@ inline uint64_t cell_hash(int64_t x, int64_t y, int64_t z) {
 }
 
 template <class T>
-void build(Grid& g, const T* p, const std::vector<uint32_t>& included, double radius) {
+void build(Grid<T>& g, const T* p, const std::vector<uint32_t>& included, double radius) {
     const size_t n = included.size();
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint32_t i : included)
@@ -80,7 +82,7 @@ void build(Grid& g, const T* p, const std::vector<uint32_t>& included, double ra
     size_t table = 16;
     while (table < 2 * n) table <<= 1;
     g.mask = table - 1;
-    std::vector<uint64_t> bucket_of(n);
+    std::vector<uint32_t> bucket_of(n);
     g.bucket_start.assign(table + 1, 0);
     // Clustered points (a dense part inside a wide box) crowd some cells: halve the cell size
     // until the mean number of points sharing a point's bucket is small.
@@ -91,7 +93,7 @@ void build(Grid& g, const T* p, const std::vector<uint32_t>& included, double ra
             const int64_t x = int64_t(std::floor((double(q[0]) - lo[0]) / g.cell));
             const int64_t y = int64_t(std::floor((double(q[1]) - lo[1]) / g.cell));
             const int64_t z = int64_t(std::floor((double(q[2]) - lo[2]) / g.cell));
-            bucket_of[k] = cell_hash(x, y, z) & g.mask;
+            bucket_of[k] = uint32_t(cell_hash(x, y, z) & g.mask);
             ++g.bucket_start[bucket_of[k] + 1];
         }
         double crowding = 0.0;
@@ -107,11 +109,12 @@ void build(Grid& g, const T* p, const std::vector<uint32_t>& included, double ra
     for (size_t k = 0; k < n; ++k) {
         const uint32_t slot = cursor[bucket_of[k]]++;
         g.items[slot] = included[k];
-        for (int d = 0; d < 3; ++d) g.sorted_positions[3 * size_t(slot) + d] = double(p[3 * size_t(included[k]) + d]);
+        for (int d = 0; d < 3; ++d) g.sorted_positions[3 * size_t(slot) + d] = p[3 * size_t(included[k]) + d];
     }
 }
 
-void query_range(const Grid& g, size_t first, size_t last, double radius, const int32_t* group,
+template <class T>
+void query_range(const Grid<T>& g, size_t first, size_t last, double radius, const int32_t* group,
                  std::vector<PointPair>& out) {
     const double r2 = radius * radius;
     // Points within this fraction of a cell of a side look into the neighbour there; the slack
@@ -120,7 +123,8 @@ void query_range(const Grid& g, size_t first, size_t last, double radius, const 
     uint64_t buckets[27];
     for (size_t k = first; k < last; ++k) {
         const uint32_t i = g.items[k];
-        const double* pi = &g.sorted_positions[3 * k];
+        const T* t = &g.sorted_positions[3 * k];
+        const double pi[3] = {double(t[0]), double(t[1]), double(t[2])};
         int64_t cell[3];
         int lo[3], hi[3];
         for (int d = 0; d < 3; ++d) {
@@ -142,7 +146,7 @@ void query_range(const Grid& g, size_t first, size_t last, double radius, const 
             for (uint32_t m = g.bucket_start[buckets[q]], end = g.bucket_start[buckets[q] + 1]; m < end; ++m) {
                 const uint32_t j = g.items[m];
                 if (j <= i || (group && group[j] == gi)) continue;
-                const double* pj = &g.sorted_positions[3 * size_t(m)];
+                const T* pj = &g.sorted_positions[3 * size_t(m)];
                 const double dx = pi[0] - pj[0], dy = pi[1] - pj[1], dz = pi[2] - pj[2];
                 if (dx * dx + dy * dy + dz * dz <= r2) out.emplace_back(i, j);
             }
@@ -160,13 +164,13 @@ std::vector<PointPair> close_pairs(const T* positions, size_t count, double radi
     for (size_t i = 0; i < count; ++i)
         if (!group_of_point || group_of_point[i] >= 0) included.push_back(uint32_t(i));
     if (included.size() < 2) return {};
-    Grid g;
+    Grid<T> g;
     build(g, positions, included, radius);
     const size_t n = included.size(), parts = thread_count(threads, n);
     std::vector<std::vector<PointPair>> found(parts);
     std::vector<std::thread> pool;
     for (size_t t = 1; t < parts; ++t)
-        pool.emplace_back(query_range, std::cref(g), n * t / parts, n * (t + 1) / parts, radius, group_of_point,
+        pool.emplace_back(query_range<T>, std::cref(g), n * t / parts, n * (t + 1) / parts, radius, group_of_point,
                           std::ref(found[t]));
     query_range(g, 0, n / parts, radius, group_of_point, found[0]);
     for (std::thread& th : pool) th.join();

@@ -32,7 +32,7 @@ def ensure_node_group():
     _new_socket(group, "Instance", "INPUT", "NodeSocketObject")
     spacing = _new_socket(group, "Spacing", "INPUT", "NodeSocketFloat")
     spacing.default_value = 1.0
-    spacing.min_value = 1e-4
+    spacing.min_value = 1e-6
     _new_socket(group, "Geometry", "OUTPUT", "NodeSocketGeometry")
 
     nodes, links = group.nodes, group.links
@@ -66,7 +66,7 @@ class BOXMARCH_OT_add_instance_on_curve(bpy.types.Operator):
 
     instance: StringProperty(name="Instance", default="",
                              description="Object to place along the curve (empty: the other selected object)")
-    spacing: FloatProperty(name="Spacing", default=1.0, min=1e-4, soft_max=100.0, subtype="DISTANCE",
+    spacing: FloatProperty(name="Spacing", default=1.0, min=1e-6, soft_max=100.0, subtype="DISTANCE",
                            description="Distance along the curve between copies")
     convert_to_mesh: BoolProperty(name="Convert to Mesh", default=False,
                                   description="Apply the result into a mesh object, ready for UV packing and the bake")

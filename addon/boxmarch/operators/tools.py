@@ -37,10 +37,12 @@ class _SubmeshTool:
                     # Read and check every mesh before changing any.
                     arrays = [mesh_edit.read_mesh(ob.data, self.need_faces) for ob in objects]
                     wm.progress_update(20)
-                    message = self.run(context, objects, arrays, edit, wm)
+                    outcome = self.run(context, objects, arrays, edit, wm)
                 except (mesh_edit.ToolInputError, ValueError) as error:
                     self.report({"ERROR"}, f"Nothing changed: {error}")
                     return {"CANCELLED"}
+            # Geometry edits that finish inside Edit Mode run once the objects are back there.
+            message = outcome() if callable(outcome) else outcome
         finally:
             wm.progress_end()
         self.report({"INFO"}, f"{message} ({time.perf_counter() - start:.2f} s)")
@@ -108,14 +110,14 @@ class BOXMARCH_OT_dedup_submeshes(_SubmeshTool, bpy.types.Operator):
         for ob, a in zip(objects, arrays):
             duplicate_of, count = core.find_duplicate_submeshes(
                 a.positions, a.submesh_of_vertex, a.submesh_count, self.chosen_submeshes(ob, a, edit), self.tolerance)
-            if count:
-                delete = (duplicate_of >= 0)[a.submesh_of_vertex]
-                plans.append((ob, a, delete, mesh_edit.read_vertex_selection(ob.data)))
-                total += count
+            plans.append((ob, a, (duplicate_of >= 0)[a.submesh_of_vertex], mesh_edit.read_vertex_selection(ob.data)))
+            total += count
         wm.progress_update(50)
-        if plans:
-            mesh_edit.delete_submeshes(context, plans)
-        return f"Deleted {total} duplicate submesh(es) in {len(objects)} mesh(es), tolerance {self.tolerance:g}"
+        message = f"Deleted {total} duplicate submesh(es) in {len(objects)} mesh(es), tolerance {self.tolerance:g}"
+        if not total:
+            return message
+        action = mesh_edit.delete_vertices(context, plans, edit)
+        return message if action is None else lambda: (action(), message)[1]
 
 
 class BOXMARCH_OT_merge_by_distance_submeshes(_SubmeshTool, bpy.types.Operator):
@@ -128,18 +130,47 @@ class BOXMARCH_OT_merge_by_distance_submeshes(_SubmeshTool, bpy.types.Operator):
                             subtype="DISTANCE", description="Vertices of one submesh this close merge")
 
     def run(self, context, objects, arrays, edit, wm):
-        plans = []
-        for ob, a in zip(objects, arrays):
-            pass_of_vertex, passes = core.merge_passes(a.positions, a.submesh_of_vertex, a.submesh_count,
-                                                       self.chosen_submeshes(ob, a, edit), self.distance)
-            if passes:
-                plans.append((ob, a, pass_of_vertex, mesh_edit.read_vertex_selection(ob.data)))
-        if not plans:
+        # The merge computed here and written as a rebuilt mesh (fast, Blender 4.1+), or
+        # Blender's own Merge by Distance on a planned selection where a rebuild could lose
+        # data or Blender's weld would do more (split or dedupe faces).
+        chosen = [self.chosen_submeshes(ob, a, edit) for ob, a in zip(objects, arrays)]
+        welds = []
+        for ob, a, c in zip(objects, arrays, chosen):
+            target, merged_positions, count = core.merge_targets(a.positions, a.submesh_of_vertex, a.submesh_count,
+                                                                 c, self.distance)
+            weld = core.weld(*a.topology, target) if count and mesh_edit.can_rebuild(ob.data) else None
+            if count and (weld is None or weld["needs_blender"]):
+                welds = None
+                break
+            welds.append((ob, merged_positions, weld, count))
+        wm.progress_update(50)
+        if welds is not None:
+            removed = 0
+            for ob, merged_positions, weld, count in welds:
+                if count:
+                    mesh_edit.rebuild_welded(ob.data, merged_positions, weld)
+                    removed += count
+            return f"Removed {removed} vertices in {len(objects)} mesh(es), distance {self.distance:g}"
+
+        plans, passes = [], 0
+        for ob, a, c in zip(objects, arrays, chosen):
+            pass_of_vertex, count = core.merge_passes(a.positions, a.submesh_of_vertex, a.submesh_count, c,
+                                                      self.distance)
+            plans.append((ob, a, pass_of_vertex, mesh_edit.read_vertex_selection(ob.data)))
+            passes = max(passes, count)
+        if not passes:
             return "Removed 0 vertices: no submesh has vertices that close"
-        passes = max(int(p.max()) + 1 for _ob, _a, p, _s in plans)
-        removed = mesh_edit.merge_by_distance(context, plans, self.distance,
-                                              lambda k: wm.progress_update(20 + 80 * k // passes))
-        return f"Removed {removed} vertices in {len(plans)} mesh(es) ({passes} pass(es)), distance {self.distance:g}"
+        before = sum(len(a.positions) for a in arrays)
+        action = mesh_edit.merge_by_distance(context, plans, self.distance, edit,
+                                             lambda k, n: wm.progress_update(50 + 50 * k // n))
+
+        def finish():
+            if action is not None:
+                action()
+            removed = before - mesh_edit.vertex_total(objects)
+            return (f"Removed {removed} vertices in {len(objects)} mesh(es) with Blender's merge "
+                    f"({passes} pass(es)), distance {self.distance:g}")
+        return finish
 
 
 class BOXMARCH_OT_pack_uv_by_z(_SubmeshTool, bpy.types.Operator):

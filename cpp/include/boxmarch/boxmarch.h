@@ -225,6 +225,44 @@ size_t merge_passes(int32_t* pass_of_vertex, const float* positions,
                     const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count,
                     const uint8_t* chosen, double distance, int threads);
 
+// Blender's Merge by Distance (5.0) inside each chosen submesh, computed directly: vertices
+// are visited by index; an unassigned one gathers every unassigned vertex of its submesh within
+// `distance` (inclusive) into a cluster; the cluster's target is the lower index of two, else the
+// member nearest the cluster's centroid (ties: lower index), and moves to the centroid. Reads
+// positions, submesh_of_vertex, chosen[submesh_count]; writes target[vertex_count] (the vertex
+// each merges into, itself for survivors) and merged_positions[vertex_count * 3] (positions,
+// with targets at their centroids). Returns the number of vertices merged away.
+// Throws std::invalid_argument on a negative, NaN or infinite distance or a non-finite position.
+size_t merge_targets(int32_t* target, float* merged_positions, const float* positions,
+                     const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count,
+                     const uint8_t* chosen, double distance, int threads);
+
+// weld.cpp: the topology after merging vertices, as Blender's weld leaves it: in every face,
+// a corner whose vertex merges into the next corner's vertex goes; faces left with fewer than 3
+// corners go; edges are the distinct images of the old edges that do not collapse (first old
+// edge wins); survivors keep their order. Old elements named by *_source arrays carry their
+// attributes over. Output arrays have the input sizes as capacity.
+struct WeldCounts {
+    size_t vertices = 0, edges = 0, faces = 0, corners = 0;
+    // True when Blender would do more than this (a face repeating a vertex at non-adjacent
+    // corners is split; two faces become the same; a face edge has no edge): outputs are then
+    // incomplete and the caller must merge another way.
+    bool needs_blender = false;
+};
+
+struct WeldOutput {
+    int32_t* vertex_source;     // [vertex_count]
+    int32_t* edge_source;       // [edge_count]
+    int32_t* edges;             // [edge_count * 2], new vertex indices
+    int32_t* face_source;       // [face_count]
+    int32_t* face_starts;       // [face_count]
+    int32_t* corner_source;     // [corner_count]
+    int32_t* corner_verts;      // [corner_count], new vertex indices
+    int32_t* corner_edges;      // [corner_count], new edge indices
+};
+
+WeldCounts weld_topology(const MeshView& mesh, const int32_t* target, const WeldOutput& out);
+
 // ---------------------------------------------------------------------------------------------
 // pack_uv.cpp: UV islands packed in rows sorted by submesh height
 
