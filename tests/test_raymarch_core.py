@@ -22,9 +22,9 @@ def test_sdf_presets_at_known_points():
 
 
 def test_link_fills_its_box():
-    h = np.array([0.5, 1.0, 0.2])
+    h = np.array([1.0, 0.5, 0.2])
     # outermost points of the link along each axis lie on its surface
-    p = np.array([[0.5, 0, 0], [0, 1.0, 0], [0.375, 0.5, 0.125]], np.float32)
+    p = np.array([[1.0, 0, 0], [0, 0.5, 0], [0.5, 0.375, 0.125]], np.float32)
     d = core.sdf_distance("LINK", p, h)
     assert np.allclose(d[:2], 0.0, atol=1e-6)
     assert d[2] == pytest.approx(0.0, abs=1e-6)  # on the tube: ring 0.375, thickness 0.125
