@@ -78,5 +78,30 @@ boxes.hide_viewport = True
 result["PLANE_rgba"], result["PLANE_depth"] = preview.render(scene, camera, W, H)
 result["plane_matrix"] = np.array(plane.matrix_world)
 
+# The plane away again, the boxes back.
+plane.hide_viewport = True
+boxes.hide_viewport = False
+
+# An orthographic camera: rays share one direction.
+camera.data.type = "ORTHO"
+camera.data.ortho_scale = 9.0
+result["ortho_view"], result["ortho_projection"] = preview.camera_matrices(scene, camera, W, H)
+boxes.boxmarch.sdf = "SPHERE"
+result["ORTHO_rgba"], result["ORTHO_depth"] = preview.render(scene, camera, W, H)
+camera.data.type = "PERSP"
+
+# Geometry edited and baked again: the preview must drop its cached batch.
+shift = np.array([0.0, 0.0, 0.75], np.float32)
+moved = mesh_io.read_positions(mesh) + shift
+mesh.vertices.foreach_set("co", moved.ravel())
+mesh.update()
+for ob in scene.objects:
+    ob.select_set(ob == boxes)
+bpy.context.view_layer.objects.active = boxes
+assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+bpy.context.view_layer.update()
+result["shift"] = shift
+result["MOVED_rgba"], result["MOVED_depth"] = preview.render(scene, camera, W, H)
+
 np.savez_compressed(out_path, **result)
 print("preview_check: wrote", out_path)

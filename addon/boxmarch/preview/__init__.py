@@ -57,6 +57,8 @@ def _draw_viewport():
 
 
 def _geometry_changed(scene, depsgraph):
+    """depsgraph_update_post handler (made persistent in register(), so loading a file keeps it):
+    drop the cached batches of meshes whose geometry changed."""
     from . import draw
 
     for update in depsgraph.updates:
@@ -72,6 +74,7 @@ def register():
     global _handler
     if _handler is None:
         _handler = bpy.types.SpaceView3D.draw_handler_add(_draw_viewport, (), "WINDOW", "POST_VIEW")
+    bpy.app.handlers.persistent(_geometry_changed)
     if _geometry_changed not in bpy.app.handlers.depsgraph_update_post:
         bpy.app.handlers.depsgraph_update_post.append(_geometry_changed)
 
