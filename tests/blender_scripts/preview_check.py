@@ -30,6 +30,7 @@ boxes = bpy.data.objects.new("boxes", mesh)
 scene.collection.objects.link(boxes)
 boxes.location = (0.3, -0.2, 0.1)
 boxes.rotation_euler = (0.2, 0.1, 0.4)
+boxes.scale = (1.15, 0.85, 1.0)  # non-uniform: rays and normals must go through the right matrices
 bpy.context.view_layer.objects.active = boxes
 boxes.select_set(True)
 assert bpy.ops.boxmarch.bake() == {"FINISHED"}
