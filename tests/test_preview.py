@@ -121,3 +121,11 @@ def test_edited_geometry_is_drawn_after_rebake(rendered):
     coverage, depth = agreement(rendered["MOVED_depth"], moved)
     assert coverage >= 0.99 and depth <= 2e-6
     assert ((rendered["MOVED_depth"] < 1.0) != (rendered["SPHERE_SHADED_depth"] < 1.0)).mean() > 0.02
+
+
+def test_object_frame_change(rendered):
+    plain, framed, turned = (rendered[f"{k}_depth"] for k in ("TORUS", "TORUS_FRAMED", "TORUS_TURNED"))
+    assert ((plain < 1.0) == (framed < 1.0)).mean() >= 0.99
+    both = (plain < 1.0) & (framed < 1.0)
+    assert np.percentile(np.abs(plain - framed)[both], 99.9) <= 2e-6
+    assert ((plain < 1.0) != (turned < 1.0)).mean() > 0.01  # without the frame the tori turn

@@ -83,6 +83,34 @@ result["plane_matrix"] = np.array(plane.matrix_world)
 plane.hide_viewport = True
 boxes.hide_viewport = False
 
+# Baked data expressed in another object frame (as an export preset may write it): quaternions
+# turned by F; with F given as the object's frame the preview must draw the same tori.
+boxes.boxmarch.sdf = "TORUS"
+result["TORUS_rgba"], result["TORUS_depth"] = preview.render(scene, camera, W, H)
+F = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]])  # a proper rotation
+F_quat = np.array(mathutils.Matrix(F.tolist()).to_quaternion())  # w, x, y, z
+uv = {}
+for name in ("BoxQuatXY", "BoxQuatZW"):
+    uv[name] = np.empty(len(mesh.loops) * 2, np.float32)
+    mesh.uv_layers[name].data.foreach_get("uv", uv[name])
+q = np.concatenate([uv["BoxQuatXY"].reshape(-1, 2), uv["BoxQuatZW"].reshape(-1, 2)], axis=1).astype(np.float64)
+fw, fv = F_quat[0], F_quat[1:]
+turned = np.empty_like(q)  # Hamilton product F_quat * q, (x, y, z, w) layout
+turned[:, 3] = fw * q[:, 3] - q[:, :3] @ fv
+turned[:, :3] = fw * q[:, :3] + q[:, 3:4] * fv + np.cross(fv, q[:, :3])
+mesh.uv_layers["BoxQuatXY"].data.foreach_set("uv", turned[:, :2].astype(np.float32).ravel())
+mesh.uv_layers["BoxQuatZW"].data.foreach_set("uv", turned[:, 2:].astype(np.float32).ravel())
+mesh.update()
+bpy.context.view_layer.update()
+result["TORUS_TURNED_rgba"], result["TORUS_TURNED_depth"] = preview.render(scene, camera, W, H)
+boxes["boxmarch_frame"] = F.ravel().tolist()
+result["TORUS_FRAMED_rgba"], result["TORUS_FRAMED_depth"] = preview.render(scene, camera, W, H)
+del boxes["boxmarch_frame"]
+mesh.uv_layers["BoxQuatXY"].data.foreach_set("uv", uv["BoxQuatXY"])
+mesh.uv_layers["BoxQuatZW"].data.foreach_set("uv", uv["BoxQuatZW"])
+mesh.update()
+bpy.context.view_layer.update()
+
 # An orthographic camera: rays share one direction.
 camera.data.type = "ORTHO"
 camera.data.ortho_scale = 9.0
