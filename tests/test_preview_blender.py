@@ -67,3 +67,11 @@ def test_toggle_operator_switches_selected_meshes(blender):
     assert ob.boxmarch.preview and plain.boxmarch.preview
     assert blender.ops.boxmarch.preview_toggle() == {"FINISHED"}
     assert not ob.boxmarch.preview and not plain.boxmarch.preview
+
+
+def test_cache_handlers_survive_loading_a_file(blender):
+    from boxmarch import preview
+
+    blender.ops.wm.read_factory_settings(use_empty=True)  # loading a file drops non-persistent handlers
+    for list_name, function in preview._APP_HANDLERS:
+        assert function in getattr(blender.app.handlers, list_name), list_name

@@ -14,9 +14,11 @@ ROTATED_VECTOR_COLOR = (1.0, 0.55, 0.1, 1.0)   # orange: meets at the submesh or
 OUTLINE_COLOR = (0.05, 0.05, 0.05, 1.0)
 SOLID_COLOR = (0.6, 0.6, 0.6, 1.0)
 
-# Batches per mesh datablock, dropped when its geometry changes (depsgraph handler in __init__).
+# Batches per mesh datablock, dropped when its geometry changes, a file loads or undo runs
+# (handlers in __init__).
 _batches: dict = {}
-# Last user SDF compile error per object name (shown in the panel); the outline replaces it.
+# Why an object is not raymarched, per object name (shown in the panel): not baked, a user SDF
+# that does not compile (its outline is drawn instead), a malformed frame property.
 errors: dict = {}
 
 
