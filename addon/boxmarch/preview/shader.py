@@ -40,6 +40,8 @@ def _create_info(fragment: str):
     info.uniform_buf(0, sources.UNIFORM_TYPE, sources.UNIFORM_NAME)
     for slot, type_name, name in sources.FRAGMENT_OUTPUTS:
         info.fragment_out(slot, type_name, name)
+    if hasattr(info, "depth_write"):  # Blender 4+: required where gl_FragDepth is not implied (Metal)
+        info.depth_write("ANY")
     info.vertex_source(sources.vertex_source())
     info.fragment_source(fragment)
     return info, iface
