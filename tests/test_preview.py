@@ -129,3 +129,21 @@ def test_object_frame_change(rendered):
     both = (plain < 1.0) & (framed < 1.0)
     assert np.percentile(np.abs(plain - framed)[both], 99.9) <= 2e-6
     assert ((plain < 1.0) != (turned < 1.0)).mean() > 0.01  # without the frame the tori turn
+
+
+def view_distance(depth, projection):
+    """Distance along the view axis of window depths (perspective projection)."""
+    ndc = 2.0 * depth.astype(np.float64) - 1.0
+    return projection[2, 3] / (ndc + projection[2, 2])
+
+
+def test_camera_inside_a_box(rendered):
+    projection = rendered["inside_projection"]
+    ref = reference(rendered, "SPHERE", rendered["inside_view"], projection)
+    gpu_depth = rendered["INSIDE_depth"]
+    assert (ref.depth < 1.0).mean() > 0.5  # only far-side fragments: without them nothing is drawn
+    assert ((gpu_depth < 1.0) == (ref.depth < 1.0)).mean() >= 0.99
+    both = (gpu_depth < 1.0) & (ref.depth < 1.0)
+    # the GPU marches from the eye, the reference from the near plane: equal within epsilon
+    error = np.abs(view_distance(gpu_depth, projection) - view_distance(ref.depth, projection))[both]
+    assert np.percentile(error, 99.9) <= 2e-3

@@ -119,6 +119,20 @@ boxes.boxmarch.sdf = "SPHERE"
 result["ORTHO_rgba"], result["ORTHO_depth"] = preview.render(scene, camera, W, H)
 camera.data.type = "PERSP"
 
+# The camera inside a box (outside its sphere): only far-side fragments exist, the rays start at
+# the eye.
+inside = boxes.matrix_world @ mathutils.Vector(centres[0] + rotations[0] @ (0.4 * sizes[0]))
+camera.location = inside
+camera.rotation_euler = (boxes.matrix_world @ mathutils.Vector(centres[0]) - inside).to_track_quat("-Z", "Y").to_euler()
+camera.data.clip_start = 0.01
+bpy.context.view_layer.update()
+result["inside_view"], result["inside_projection"] = preview.camera_matrices(scene, camera, W, H)
+result["INSIDE_rgba"], result["INSIDE_depth"] = preview.render(scene, camera, W, H)
+camera.location = (7.5, -8.0, 6.0)
+camera.rotation_euler = (-camera.location).to_track_quat("-Z", "Y").to_euler()
+camera.data.clip_start = 0.5
+bpy.context.view_layer.update()
+
 # Geometry edited and baked again: the preview must drop its cached batch.
 shift = np.array([0.0, 0.0, 0.75], np.float32)
 moved = mesh_io.read_positions(mesh) + shift
