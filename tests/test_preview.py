@@ -47,11 +47,20 @@ def rendered(request, package_parent, tmp_path_factory):  # noqa: F811
     return dict(np.load(out))
 
 
-def reference(r, sdf):
+def reference(r, sdf, view=None, projection=None, shift=0.0):
     height, width = r["BOX_SHADED_depth"].shape
-    model, view, projection = r["matrix_world"], r["view"], r["projection"]
-    return core.render_boxes(r["centres"], quaternions_of(r["rotations"]), r["sizes"] / 2, projection @ view @ model,
-                             view @ model, width, height, sdf=sdf, base_color=r["color"][:3])
+    model = r["matrix_world"]
+    view = r["view"] if view is None else view
+    projection = r["projection"] if projection is None else projection
+    return core.render_boxes(r["centres"] + shift, quaternions_of(r["rotations"]), r["sizes"] / 2,
+                             projection @ view @ model, view @ model, width, height, sdf=sdf,
+                             base_color=r["color"][:3])
+
+
+def agreement(depth, ref):
+    """(coverage agreement, 99.9th percentile of |depth difference| where both hit)."""
+    both = (depth < 1.0) & (ref.depth < 1.0)
+    return ((depth < 1.0) == (ref.depth < 1.0)).mean(), np.percentile(np.abs(depth - ref.depth)[both], 99.9)
 
 
 @pytest.mark.parametrize("sdf", ["BOX", "SPHERE", "ROUNDED_BOX"])
@@ -98,3 +107,43 @@ def test_composites_with_scene_geometry_by_depth(rendered):
     in_front = spheres.depth < plane_depth - 1e-4
     behind = (spheres.depth < 1.0) & (spheres.depth > plane_depth + 1e-4)
     assert in_front.sum() > 100 and behind.sum() > 100  # the plane really cuts through the spheres
+
+
+def test_orthographic_camera(rendered):
+    ref = reference(rendered, "SPHERE", rendered["ortho_view"], rendered["ortho_projection"])
+    assert (ref.depth < 1.0).mean() > 0.05
+    coverage, depth = agreement(rendered["ORTHO_depth"], ref)
+    assert coverage >= 0.99 and depth <= 2e-6
+
+
+def test_edited_geometry_is_drawn_after_rebake(rendered):
+    moved = reference(rendered, "SPHERE", shift=rendered["shift"])
+    coverage, depth = agreement(rendered["MOVED_depth"], moved)
+    assert coverage >= 0.99 and depth <= 2e-6
+    assert ((rendered["MOVED_depth"] < 1.0) != (rendered["SPHERE_SHADED_depth"] < 1.0)).mean() > 0.02
+
+
+def test_object_frame_change(rendered):
+    plain, framed, turned = (rendered[f"{k}_depth"] for k in ("TORUS", "TORUS_FRAMED", "TORUS_TURNED"))
+    assert ((plain < 1.0) == (framed < 1.0)).mean() >= 0.99
+    both = (plain < 1.0) & (framed < 1.0)
+    assert np.percentile(np.abs(plain - framed)[both], 99.9) <= 2e-6
+    assert ((plain < 1.0) != (turned < 1.0)).mean() > 0.01  # without the frame the tori turn
+
+
+def view_distance(depth, projection):
+    """Distance along the view axis of window depths (perspective projection)."""
+    ndc = 2.0 * depth.astype(np.float64) - 1.0
+    return projection[2, 3] / (ndc + projection[2, 2])
+
+
+def test_camera_inside_a_box(rendered):
+    projection = rendered["inside_projection"]
+    ref = reference(rendered, "SPHERE", rendered["inside_view"], projection)
+    gpu_depth = rendered["INSIDE_depth"]
+    assert (ref.depth < 1.0).mean() > 0.5  # only far-side fragments: without them nothing is drawn
+    assert ((gpu_depth < 1.0) == (ref.depth < 1.0)).mean() >= 0.99
+    both = (gpu_depth < 1.0) & (ref.depth < 1.0)
+    # the GPU marches from the eye, the reference from the near plane: equal within epsilon
+    error = np.abs(view_distance(gpu_depth, projection) - view_distance(ref.depth, projection))[both]
+    assert np.percentile(error, 99.9) <= 2e-3

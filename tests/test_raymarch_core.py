@@ -22,9 +22,9 @@ def test_sdf_presets_at_known_points():
 
 
 def test_link_fills_its_box():
-    h = np.array([0.5, 1.0, 0.2])
+    h = np.array([1.0, 0.5, 0.2])
     # outermost points of the link along each axis lie on its surface
-    p = np.array([[0.5, 0, 0], [0, 1.0, 0], [0.375, 0.5, 0.125]], np.float32)
+    p = np.array([[1.0, 0, 0], [0, 0.5, 0], [0.5, 0.375, 0.125]], np.float32)
     d = core.sdf_distance("LINK", p, h)
     assert np.allclose(d[:2], 0.0, atol=1e-6)
     assert d[2] == pytest.approx(0.0, abs=1e-6)  # on the tube: ring 0.375, thickness 0.125
@@ -167,3 +167,23 @@ def test_render_baked_mesh_equals_render_of_known_boxes():
     z_ndc = (proj[2, 2] * view_z + proj[2, 3]) / -view_z
     # silhouette pixels may take the sphere behind: compare the bulk
     assert np.percentile(np.abs(from_mesh.depth[both] - (z_ndc * 0.5 + 0.5)), 99) < 2e-5
+
+
+def test_render_box_crossing_the_eye_plane():
+    # Camera at the origin looking down -z, 120 degree field; the box reaches from z = -1.5 to
+    # z = 0.5, so part of it is behind the eye: the front part must still be drawn in full.
+    width, height = 80, 40
+    proj = perspective(np.radians(120), width / height, 0.05, 50.0)
+    centre, half = np.array([2.0, 0.3, -0.5]), np.array([1.0, 0.8, 1.0])
+    image = core.render_boxes([centre], [[0, 0, 0, 1]], [half], proj, np.eye(4), width, height)
+    xs = ((np.arange(width) + 0.5) / width * 2 - 1) / proj[0, 0]
+    ys = (1 - (np.arange(height) + 0.5) / height * 2) / proj[1, 1]
+    d = np.stack(np.broadcast_arrays(xs[None, :], ys[:, None], -1.0), -1)
+    with np.errstate(divide="ignore"):
+        t_lo = ((centre - half) / d)
+        t_hi = ((centre + half) / d)
+    t_near = np.minimum(t_lo, t_hi).max(-1)
+    t_far = np.maximum(t_lo, t_hi).min(-1)
+    expected = (t_far >= np.maximum(t_near, 0.05)) & (t_far > 0.05)
+    assert expected.mean() > 0.1
+    assert (image.coverage == expected).mean() >= 0.995

@@ -12,7 +12,7 @@ _SDF_DESCRIPTIONS = {
     "CAPSULE": "Capsule along local X, as thick as the box allows",
     "CYLINDER": "Cylinder along local Z filling the box",
     "TORUS": "Ring around local Z filling the box's XY extent",
-    "LINK": "Chain link stretched along local Y, thickness along Z",
+    "LINK": "Chain link stretched along local X, thickness along Z (bake with Sort Axes by Extent)",
 }
 SDF_ITEMS = [(name, name.replace("_", " ").title(), _SDF_DESCRIPTIONS[name], i)
              for i, name in enumerate(core.SDF_PRESETS)]

@@ -147,18 +147,30 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
     for (size_t b = 0; b < box_count; ++b) {
         const glm::quat q(quaternions[4 * b + 3], quaternions[4 * b], quaternions[4 * b + 1], quaternions[4 * b + 2]);
         const vec3 c = glm::make_vec3(origins + 3 * b), h = glm::make_vec3(half_extents + 3 * b);
-        float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
-        int behind = 0;
+        // Clip the box against the near plane (z + w >= 0 in GL clip space): the pixel rectangle
+        // of what lies in front is the box of the front corners and the edge crossings.
+        vec4 clip[8];
+        float front[8];
         for (int k = 0; k < 8; ++k) {
             vec3 corner(k & 1 ? h.x : -h.x, k & 2 ? h.y : -h.y, k & 4 ? h.z : -h.z);
-            vec4 clip = to_clip * vec4(c + q * corner, 1.0f);
-            if (clip.w <= 1e-6f) { ++behind; continue; }
-            float sx = (clip.x / clip.w * 0.5f + 0.5f) * float(W);
-            float sy = (0.5f - clip.y / clip.w * 0.5f) * float(H);
-            x0 = std::min(x0, sx); x1 = std::max(x1, sx); y0 = std::min(y0, sy); y1 = std::max(y1, sy);
+            clip[k] = to_clip * vec4(c + q * corner, 1.0f);
+            front[k] = clip[k].z + clip[k].w;
         }
-        if (behind == 8) rects[b] = glm::ivec4(0, 0, -1, -1);  // wholly behind the eye: no pixel
-        else if (behind) rects[b] = glm::ivec4(0, 0, W - 1, H - 1);  // crosses the eye plane
+        float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
+        auto include = [&](vec4 p) {
+            float sx = (p.x / p.w * 0.5f + 0.5f) * float(W);
+            float sy = (0.5f - p.y / p.w * 0.5f) * float(H);
+            x0 = std::min(x0, sx); x1 = std::max(x1, sx); y0 = std::min(y0, sy); y1 = std::max(y1, sy);
+        };
+        for (int k = 0; k < 8; ++k) {
+            if (front[k] >= 0.0f) include(clip[k]);
+            for (int bit = 1; bit < 8; bit <<= 1) {  // the three edges from k to k | bit
+                const int l = k | bit;
+                if (l == k || (front[k] >= 0.0f) == (front[l] >= 0.0f)) continue;
+                include(clip[k] + (clip[l] - clip[k]) * (front[k] / (front[k] - front[l])));
+            }
+        }
+        if (x0 > x1) rects[b] = glm::ivec4(0, 0, -1, -1);  // wholly behind the near plane: no pixel
         else rects[b] = glm::ivec4(std::max(int(std::floor(x0 - 0.5f)), 0), std::max(int(std::floor(y0 - 0.5f)), 0),
                                    std::min(int(std::ceil(x1 - 0.5f)), W - 1), std::min(int(std::ceil(y1 - 0.5f)), H - 1));
     }

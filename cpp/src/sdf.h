@@ -78,7 +78,7 @@ inline float preset_torus(vec3 p, vec3 h) {
 }
 inline float preset_link(vec3 p, vec3 h) {
     float thickness = std::min(h.z, 0.25f * std::min(h.x, h.y));
-    return sd_link(p, std::max(h.y - h.x, 0.0f), h.x - thickness, thickness);
+    return sd_link(vec3(p.y, p.x, p.z), std::max(h.x - h.y, 0.0f), h.y - thickness, thickness);
 }
 
 inline float preset(SdfPreset kind, vec3 p, vec3 h) {

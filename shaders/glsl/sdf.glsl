@@ -96,5 +96,5 @@ float sdf_preset_torus(vec3 p, vec3 h)
 float sdf_preset_link(vec3 p, vec3 h)
 {
   float thickness = min(h.z, 0.25 * min(h.x, h.y));
-  return sd_link(p, max(h.y - h.x, 0.0), h.x - thickness, thickness);
+  return sd_link(p.yxz, max(h.x - h.y, 0.0), h.y - thickness, thickness);
 }

@@ -136,7 +136,7 @@ float sdf_preset_torus(float3 p, float3 h)
 float sdf_preset_link(float3 p, float3 h)
 {
   float thickness = min(h.z, 0.25 * min(h.x, h.y));
-  return sd_link(p, max(h.y - h.x, 0.0), h.x - thickness, thickness);
+  return sd_link(p.yxz, max(h.x - h.y, 0.0), h.y - thickness, thickness);
 }
 
 #endif  // BOXMARCH_INCLUDED

@@ -1,8 +1,8 @@
 """Blender operators: thin shells over boxmarch.mesh_io and boxmarch.core."""
-from . import bake, export, instance_on_curve, tools
+from . import bake, export, instance_on_curve, preview, tools
 
-classes = bake.classes + tools.classes + instance_on_curve.classes + export.classes
-menus = bake.menus + tools.menus + instance_on_curve.menus + export.menus
+classes = bake.classes + tools.classes + instance_on_curve.classes + preview.classes + export.classes
+menus = bake.menus + tools.menus + instance_on_curve.menus + preview.menus + export.menus
 
 
 def register_enums():

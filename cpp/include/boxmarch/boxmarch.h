@@ -307,7 +307,7 @@ enum class SdfPreset : int {
     Capsule = 3,     // along local x, radius min(h.y, h.z)
     Cylinder = 4,    // along local z, radius min(h.x, h.y), half-height h.z
     Torus = 5,       // around local z, tube radius min(h.z, min(h.x, h.y) / 2), filling x and y
-    Link = 6,        // chain link: ring in the xy plane stretched along y, thickness along z
+    Link = 6,        // chain link: ring in the xy plane stretched along x, thickness along z
 };
 constexpr int kSdfPresetCount = 7;
 
