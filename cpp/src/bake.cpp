@@ -102,9 +102,12 @@ void run_on_threads(size_t threads, Work&& work) {
 
 constexpr uint8_t kUncached = 0xFF;
 
-// Cache routing: kUncached for a submesh whose key no other submesh has (it cannot have a copy),
-// else the thread that owns its key, so every copy meets its prototype in that thread's cache.
-std::vector<uint8_t> route_by_key(const std::vector<uint64_t>& keys, size_t threads) {
+// Cache routing of the submeshes to bake: kUncached for one whose key no other has (it cannot
+// have a copy), else the thread that owns its key, so every copy meets its prototype in that
+// thread's cache.
+std::vector<uint8_t> route_by_key(const std::vector<uint64_t>& keys, const std::vector<uint8_t>& statuses,
+                                  size_t threads) {
+    const auto baked = [&](size_t sm) { return statuses[sm] == uint8_t(SubmeshStatus::Baked); };
     size_t slots = 16;
     while (slots < 2 * keys.size()) slots *= 2;
     std::vector<uint64_t> table(slots);
@@ -114,14 +117,15 @@ std::vector<uint8_t> route_by_key(const std::vector<uint64_t>& keys, size_t thre
         while (seen[i] && table[i] != key) i = (i + 1) & (slots - 1);
         return i;
     };
-    for (uint64_t key : keys) {
-        const size_t i = slot_of(key);
-        table[i] = key;
+    for (size_t sm = 0; sm < keys.size(); ++sm) {
+        if (!baked(sm)) continue;
+        const size_t i = slot_of(keys[sm]);
+        table[i] = keys[sm];
         seen[i] = seen[i] ? 2 : 1;
     }
-    std::vector<uint8_t> route(keys.size());
+    std::vector<uint8_t> route(keys.size(), kUncached);
     for (size_t sm = 0; sm < keys.size(); ++sm)
-        route[sm] = seen[slot_of(keys[sm])] == 2 ? uint8_t(keys[sm] % threads) : kUncached;
+        if (baked(sm) && seen[slot_of(keys[sm])] == 2) route[sm] = uint8_t(keys[sm] % threads);
     return route;
 }
 
@@ -181,31 +185,15 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
     size_t threads = options.threads > 0 ? size_t(options.threads) : std::max(1u, std::thread::hardware_concurrency());
     threads = std::min<size_t>({threads, 255, std::max<size_t>(1, submesh_count / 1024)});
     auto range = [&](size_t t) { return std::make_pair(submesh_count * t / threads, submesh_count * (t + 1) / threads); };
-    // Copies share a cache key, so only submeshes whose key another submesh has use the cache.
-    std::vector<uint64_t> keys;
-    std::vector<uint8_t> route;
-    if (options.use_cache) {
-        keys.resize(submesh_count);
-        run_on_threads(threads, [&](size_t t) {
-            for (size_t sm = range(t).first; sm < range(t).second; ++sm) {
-                const SubmeshView s = view(sm);
-                keys[sm] = CopyCache::key(s, spread_of(s));
-            }
-        });
-        route = route_by_key(keys, threads);
-    }
     std::vector<Accumulated> parts(threads);
+    // Pass 1: fingerprints and what to do with each submesh; cache keys of those to bake.
+    std::vector<uint8_t> statuses(submesh_count);
+    std::vector<uint64_t> keys(options.use_cache ? submesh_count : 0);
     run_on_threads(threads, [&](size_t thread) {
         Accumulated& acc = parts[thread];
-        CopyCache cache(kCacheTolerance);
-        std::vector<glm::dvec3> local, offsets;
-        FrameScratch scratch;
         const auto [first, last] = range(thread);
-        for (size_t sm = 0; sm < submesh_count; ++sm) {
-            const bool cached = !route.empty() && route[sm] != kUncached;
-            if (cached ? route[sm] != thread : sm < first || sm >= last) continue;
+        for (size_t sm = first; sm < last; ++sm) {
             const SubmeshView s = view(sm);
-
             const uint32_t fp = fingerprint_submesh(s, seed);
             bool selected = !bake_mask, unchanged = previous_fingerprints != nullptr;
             for (uint32_t i = 0; i < s.vertex_count; ++i) {
@@ -219,20 +207,40 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
                 const uint32_t v = s.vertices[i];
                 fingerprints[v] = selected ? fp : previous_fingerprints ? previous_fingerprints[v] : 0;
             }
-            float* q_out = out.quaternions + sm * 4;
             const SubmeshStatus status = !selected ? SubmeshStatus::NotSelected
                                          : unchanged ? SubmeshStatus::Unchanged
                                                      : SubmeshStatus::Baked;
-            if (out.statuses) out.statuses[sm] = uint8_t(status);
-            if (status != SubmeshStatus::Baked) {
-                ++(status == SubmeshStatus::Unchanged ? acc.unchanged : acc.not_selected);
-                std::fill(q_out, q_out + 4, 0.0f);
-                if (out.origins) std::fill(out.origins + sm * 3, out.origins + sm * 3 + 3, 0.0);
-                if (out.half_extents) std::fill(out.half_extents + sm * 3, out.half_extents + sm * 3 + 3, 0.0);
-                if (out.scales) out.scales[sm] = 0.0f;
-                if (out.sources) out.sources[sm] = uint8_t(FrameSource::Identity);
+            statuses[sm] = uint8_t(status);
+            if (status == SubmeshStatus::Baked) {
+                if (options.use_cache) keys[sm] = CopyCache::key(s, spread_of(s));
                 continue;
             }
+            ++(status == SubmeshStatus::Unchanged ? acc.unchanged : acc.not_selected);
+            std::fill(out.quaternions + sm * 4, out.quaternions + sm * 4 + 4, 0.0f);
+            if (out.origins) std::fill(out.origins + sm * 3, out.origins + sm * 3 + 3, 0.0);
+            if (out.half_extents) std::fill(out.half_extents + sm * 3, out.half_extents + sm * 3 + 3, 0.0);
+            if (out.scales) out.scales[sm] = 0.0f;
+            if (out.sources) out.sources[sm] = uint8_t(FrameSource::Identity);
+        }
+    });
+    if (out.statuses) std::copy(statuses.begin(), statuses.end(), out.statuses);
+    // Copies share a cache key, so only submeshes whose key another one has use the cache.
+    std::vector<uint8_t> route;
+    if (options.use_cache) route = route_by_key(keys, statuses, threads);
+
+    // Pass 2: frames, offsets, quaternions and the decode check of the submeshes to bake.
+    run_on_threads(threads, [&](size_t thread) {
+        Accumulated& acc = parts[thread];
+        CopyCache cache(kCacheTolerance);
+        std::vector<glm::dvec3> local, offsets;
+        FrameScratch scratch;
+        const auto [first, last] = range(thread);
+        for (size_t sm = 0; sm < submesh_count; ++sm) {
+            if (statuses[sm] != uint8_t(SubmeshStatus::Baked)) continue;
+            const bool cached = !route.empty() && route[sm] != kUncached;
+            if (cached ? route[sm] != thread : sm < first || sm >= last) continue;
+            const SubmeshView s = view(sm);
+            float* q_out = out.quaternions + sm * 4;
             ++acc.baked;
 
             FrameChoice choice;
