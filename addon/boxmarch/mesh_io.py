@@ -187,7 +187,19 @@ class PreparedBake:
             if old is not None:
                 mesh.attributes.remove(old)
             mesh.color_attributes.new(OFFSET_ATTRIBUTE, s.encoding, s.domain)
-        offsets = r.offsets if s.domain == "POINT" else r.offsets[self.corner_verts]
+        offsets = r.offsets
+        if r.baked < r.submesh_count:  # the rows of submeshes not baked keep their stored colour
+            if self.keep_previous:
+                offsets = _read_offsets(mesh, s, self.corner_verts, len(r.submesh_of_vertex))
+            else:  # a first bake of part of the mesh: the rest decodes to f = 0
+                neutral = NEUTRAL_FLOAT if s.encoding == "FLOAT_COLOR" else NEUTRAL_BYTE
+                offsets = np.empty_like(r.offsets)
+                offsets[:] = neutral
+            baked_vertex = r.written.view(bool)[r.submesh_of_vertex]
+            offsets[baked_vertex] = r.offsets[baked_vertex]
+            del baked_vertex
+        if s.domain == "CORNER":
+            offsets = offsets[self.corner_verts]
         if s.encoding == "FLOAT_COLOR":
             mesh.color_attributes[OFFSET_ATTRIBUTE].data.foreach_set("color", offsets.reshape(-1))
         else:
@@ -257,17 +269,9 @@ def prepare_bake(mesh, settings: BakeSettings, selected_only: bool = False) -> P
         fp_attr.data.foreach_get("value", previous)
         previous = previous.view(np.uint32)
     keep_previous = layers_present and (previous is not None or mask is not None)
-    if keep_previous:
-        offsets = _read_offsets(mesh, settings, corner_verts, len(positions))
-    elif mask is not None:  # a first bake of part of the mesh: the rest decodes to f = 0
-        neutral = NEUTRAL_FLOAT if settings.encoding == "FLOAT_COLOR" else NEUTRAL_BYTE
-        offsets = np.empty((len(positions), 4), neutral.dtype)
-        offsets[:] = neutral
-    else:  # every submesh is baked and overwrites its rows
-        offsets = None
     try:
         result = core.bake(positions, edges, face_starts, face_sizes, corner_verts, mask=mask,
-                           previous_fingerprints=previous, offsets=offsets,
+                           previous_fingerprints=previous,
                            angle_epsilon=settings.angle_epsilon, origin=settings.origin,
                            sort_axes_by_extent=settings.sort_axes_by_extent,
                            axis_turn=settings.axis_turn, encoding=settings.encoding,
