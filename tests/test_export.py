@@ -286,3 +286,39 @@ def test_object_transforms_and_shared_meshes_keep_mesh_space_exact(blender, tmp_
     corner_verts = np.empty(len(ob.data.loops), np.int32)
     ob.data.loops.foreach_get("vertex_index", corner_verts)
     assert np.array_equal(raw["position"], positions.astype(np.float64)[corner_verts] @ TO_GLTF.T)
+
+
+def test_patched_glb_is_tidy(blender, tmp_path):
+    """After COLOR_0 is replaced: every accessor and buffer view is used, views are 4-byte
+    aligned inside the one buffer, and the buffer's length is the BIN chunk's."""
+    import json
+    import struct
+
+    baked_boxes(blender, count=8)
+    export(blender, "GLTF", tmp_path / "t.glb")
+    data = (tmp_path / "t.glb").read_bytes()
+    json_length = struct.unpack_from("<I", data, 12)[0]
+    doc = json.loads(data[20:20 + json_length])
+    bin_length = struct.unpack_from("<I", data, 20 + json_length)[0]
+    used = {i for m in doc["meshes"] for p in m["primitives"] for i in [*p["attributes"].values(), p.get("indices")]
+            if i is not None}
+    assert used == set(range(len(doc["accessors"])))
+    assert {a["bufferView"] for a in doc["accessors"]} | {i["bufferView"] for i in doc.get("images", [])
+                                                          if "bufferView" in i} == set(range(len(doc["bufferViews"])))
+    assert all(v.get("byteOffset", 0) % 4 == 0 and v.get("byteOffset", 0) + v["byteLength"] <= bin_length
+               for v in doc["bufferViews"])
+    assert doc["buffers"][0]["byteLength"] == bin_length
+    colour = doc["accessors"][doc["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"]]
+    assert (colour["componentType"], colour["type"], colour.get("normalized", False)) == (5126, "VEC4", False)
+
+
+def test_glb_patch_refuses_a_foreign_index(blender, tmp_path):
+    from boxmarch.export import glb as glb_io
+
+    baked_boxes(blender, count=2)
+    export(blender, "GLTF", tmp_path / "t.glb")
+    gltf, binary = glb_io.read(tmp_path / "t.glb")
+    with pytest.raises(ValueError, match="wrote no mesh named"):
+        glb_io.replace_index_colours(gltf, binary, {"Elsewhere": np.zeros((16, 4), np.float32)})
+    with pytest.raises(ValueError, match="not a glTF binary"):
+        glb_io.read(__file__)
