@@ -57,7 +57,9 @@ class BOXMARCH_PT_preview(bpy.types.Panel):
         layout.active = settings.preview
         layout.prop(settings, "sdf")
         if settings.sdf == "USER":
-            layout.prop_search(settings, "user_text", bpy.data, "texts")
+            row = layout.row(align=True)
+            row.prop_search(settings, "user_text", bpy.data, "texts")
+            row.operator("boxmarch.new_sdf_text", text="", icon="FILE_NEW")
         col = layout.column(align=True)
         col.prop(settings, "max_steps")
         col.prop(settings, "epsilon")
