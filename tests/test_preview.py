@@ -5,6 +5,8 @@ known centres, sizes and rotations (not from the baked data the GPU decodes).
 Tolerances: coverage masks agree on >= 99% of pixels; where both hit, the 99.9th percentile of
 |window depth difference| <= 2e-6, the 99th percentile of the normal angle <= 2 degrees and of
 the largest colour channel difference <= 0.02 (measured: docs/PREVIEW.md)."""
+import json
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -160,3 +162,22 @@ def test_camera_inside_a_box(rendered):
     # the GPU marches from the eye, the reference from the near plane: equal within epsilon
     error = np.abs(view_distance(gpu_depth, projection) - view_distance(ref.depth, projection))[both]
     assert np.percentile(error, 99.9) <= 2e-3
+
+
+def test_draw_handler_in_a_real_viewport(package_parent, tmp_path):  # noqa: F811
+    """Blender 3.4's window under Xvfb: the POST_VIEW handler draws the raymarched shapes."""
+    if shutil.which("xvfb-run") is None:
+        pytest.fail("xvfb-run is missing: run scripts/setup.sh")
+    out, shot = tmp_path / "viewport.json", tmp_path / "viewport.png"
+    proc = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 1024x768x24", shutil.which("blender"),
+                           "--factory-startup", "--python", str(SCRIPT.parent / "viewport_check.py"), "--",
+                           str(package_parent), str(out), str(shot)],
+                          env=blender_env(tmp_path), capture_output=True, text=True, timeout=240)
+    assert out.exists(), proc.stdout[-3000:] + proc.stderr[-3000:]
+    result = json.loads(out.read_text())
+    assert result["error"] is None, result["error"]
+    assert "Traceback" not in proc.stderr, proc.stderr[-3000:]  # the draw handler raised nothing
+    assert result["errors"] == {}
+    assert result["display_type"] == "WIRE"
+    assert result["red_pixels"]["False"] == 0
+    assert result["red_pixels"]["True"] > 2000
