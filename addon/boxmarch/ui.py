@@ -1,4 +1,6 @@
 """The Boxmarch tab of the 3D viewport's sidebar."""
+import textwrap
+
 import bpy
 
 from . import mesh_io
@@ -31,4 +33,50 @@ class BOXMARCH_PT_bake(bpy.types.Panel):
             col.label(text=f"{name}: UV channel {names.index(name)}" if name in names else f"{name}: missing")
 
 
-classes = (BOXMARCH_PT_bake,)
+class BOXMARCH_PT_preview(bpy.types.Panel):
+    bl_label = "Raymarch Preview"
+    bl_idname = "BOXMARCH_PT_preview"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Boxmarch"
+
+    @classmethod
+    def poll(cls, context):
+        return context.active_object is not None and context.active_object.type == "MESH"
+
+    def draw_header(self, context):
+        self.layout.prop(context.active_object.boxmarch, "preview", text="")
+
+    def draw(self, context):
+        from .preview import draw as preview_draw
+
+        ob = context.active_object
+        settings = ob.boxmarch
+        layout = self.layout
+        layout.use_property_split = True
+        layout.active = settings.preview
+        layout.prop(settings, "sdf")
+        if settings.sdf == "USER":
+            row = layout.row(align=True)
+            row.prop_search(settings, "user_text", bpy.data, "texts")
+            row.operator("boxmarch.new_sdf_text", text="", icon="FILE_NEW")
+        col = layout.column(align=True)
+        col.prop(settings, "max_steps")
+        col.prop(settings, "epsilon")
+        col.prop(settings, "relaxation")
+        col.prop(settings, "max_distance")
+        col = layout.column(heading="Show")
+        col.prop(settings, "show_outline")
+        col.prop(settings, "show_vectors")
+        error = preview_draw.errors.get(ob.name)
+        if settings.preview and error:
+            box = layout.box()
+            box.alert = True
+            # wrapped to the sidebar's width (about 9 pixels per character at UI scale 1)
+            chars = int(context.region.width / (9 * context.preferences.view.ui_scale)) - 4
+            lines = textwrap.wrap(error, max(16, chars))
+            for i, line in enumerate(lines[:6]):
+                box.label(text=line, icon="ERROR" if i == 0 else "BLANK1")
+
+
+classes = (BOXMARCH_PT_bake, BOXMARCH_PT_preview)
