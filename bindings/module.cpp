@@ -424,9 +424,14 @@ PYBIND11_MODULE(_core, m) {
 
     m.def("weld_topology",
           [](const py::object& positions, const py::object& edges, const py::object& face_starts,
-             const py::object& face_sizes, const py::object& corner_verts, const py::object& target) {
+             const py::object& face_sizes, const py::object& corner_verts, const py::object& target,
+             const py::object& corner_edges) {
               MeshArrays mesh(positions, edges, face_starts, face_sizes, corner_verts);
               auto t = checked<int32_t>(target, "target", py::ssize_t(mesh.view.vertex_count), 0);
+              py::array_t<int32_t> ce_in;
+              if (!corner_edges.is_none())
+                  ce_in = checked<int32_t>(corner_edges, "corner_edges", py::ssize_t(mesh.view.corner_count), 0);
+              const int32_t* ce_ptr = corner_edges.is_none() ? nullptr : ce_in.data();
               const py::ssize_t nv = py::ssize_t(mesh.view.vertex_count), ne = py::ssize_t(mesh.view.edge_count),
                                 nf = py::ssize_t(mesh.view.face_count), nc = py::ssize_t(mesh.view.corner_count);
               auto vs = empty<int32_t>(nv), es = empty<int32_t>(ne), fs = empty<int32_t>(nf), fst = empty<int32_t>(nf),
@@ -437,7 +442,7 @@ PYBIND11_MODULE(_core, m) {
               WeldCounts counts;
               {
                   py::gil_scoped_release release;
-                  counts = weld_topology(mesh.view, t.data(), out);
+                  counts = weld_topology(mesh.view, ce_ptr, t.data(), out);
               }
               using py::slice;
               py::dict r;
@@ -453,7 +458,7 @@ PYBIND11_MODULE(_core, m) {
               return r;
           },
           py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"),
-          py::arg("corner_verts"), py::arg("target"),
+          py::arg("corner_verts"), py::arg("target"), py::arg("corner_edges") = py::none(),
           "The mesh after merging each vertex into target[v], as Blender's weld leaves it (see boxmarch.core.weld).");
 
     m.def("pack_uv_by_height", &pack_uv_py, py::arg("corner_uv"), py::arg("positions"), py::arg("edges"),

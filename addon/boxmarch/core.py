@@ -234,12 +234,14 @@ def merge_targets(positions, submesh_of_vertex, submesh_count, chosen=None, dist
     return _core.merge_targets(positions, submesh_of_vertex, count, chosen, float(distance), int(threads))
 
 
-def weld(positions, edges, face_starts, face_sizes, corner_verts, target) -> dict:
+def weld(positions, edges, face_starts, face_sizes, corner_verts, target, corner_edges=None) -> dict:
     """The mesh after merging every vertex v into target[v], as Blender's weld leaves it: faces
     lose corners that merge into the next one and go below 3 corners; edges are the distinct
     images of the old ones; survivors keep their order. Returns new 'edges', 'face_starts',
     'corner_verts', 'corner_edges' and, per new element, the old element it comes from
     ('vertex_source', 'edge_source', 'face_source', 'corner_source'); 'needs_blender' is True
-    when Blender's weld would also split or dedupe faces (then merge with Blender itself)."""
+    when Blender's weld would also split or dedupe faces (then merge with Blender itself).
+    ``corner_edges`` (int32 per corner, the edge to the next corner, as Blender stores it) makes
+    the new corner edges a lookup instead of a search."""
     return _core.weld_topology(positions, edges, face_starts, face_sizes, corner_verts,
-                               np.ascontiguousarray(target, np.int32))
+                               np.ascontiguousarray(target, np.int32), corner_edges)

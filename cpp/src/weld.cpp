@@ -16,7 +16,8 @@ inline uint64_t edge_key(uint32_t a, uint32_t b) {
 
 }  // namespace
 
-WeldCounts weld_topology(const MeshView& mesh, const int32_t* target, const WeldOutput& out) {
+WeldCounts weld_topology(const MeshView& mesh, const int32_t* corner_edges, const int32_t* target,
+                        const WeldOutput& out) {
     const size_t n = mesh.vertex_count;
     for (size_t v = 0; v < n; ++v)
         if (target[v] < 0 || size_t(target[v]) >= n || target[size_t(target[v])] != target[v])
@@ -43,6 +44,14 @@ WeldCounts weld_topology(const MeshView& mesh, const int32_t* target, const Weld
     for (size_t k = 0; k < keyed.size(); ++k)
         if (k == 0 || keyed[k].first != keyed[k - 1].first) firsts.push_back(keyed[k].second);
     std::sort(firsts.begin(), firsts.end());
+    // New index of every old edge that does not collapse (its key's first old edge's rank).
+    const uint32_t none = UINT32_MAX;
+    std::vector<uint32_t> new_of_old(mesh.edge_count, none);
+    for (size_t k = 0; k < firsts.size(); ++k) new_of_old[firsts[k]] = uint32_t(k);
+    for (size_t k = 0, first = 0; k < keyed.size(); ++k) {
+        if (keyed[k].first != keyed[first].first) first = k;
+        new_of_old[keyed[k].second] = new_of_old[keyed[first].second];
+    }
     std::vector<uint64_t> keys(firsts.size());
     std::vector<std::pair<uint64_t, uint32_t>> new_edge_of_key(firsts.size());
     for (size_t k = 0; k < firsts.size(); ++k) {
@@ -82,8 +91,20 @@ WeldCounts weld_topology(const MeshView& mesh, const int32_t* target, const Weld
         out.face_starts[counts.faces++] = first;
         touched_face.push_back(touched);
     }
-    // Each face corner's edge, to the next corner.
-    for (size_t f = 0; f < counts.faces; ++f) {
+    // Each face corner's edge, to the next corner. With the old corner edges this is a lookup:
+    // corners dropped after c merged into the next kept corner, so the old edge from c to its
+    // next corner has the new edge's image.
+    if (corner_edges) {
+        for (size_t c = 0; c < counts.corners; ++c) {
+            const int32_t old = corner_edges[out.corner_source[c]];
+            if (old < 0 || size_t(old) >= mesh.edge_count || new_of_old[size_t(old)] == none) {
+                counts.needs_blender = true;
+                out.corner_edges[c] = 0;
+            } else
+                out.corner_edges[c] = int32_t(new_of_old[size_t(old)]);
+        }
+    }
+    for (size_t f = 0; f < (corner_edges ? 0 : counts.faces); ++f) {
         const size_t start = size_t(out.face_starts[f]);
         const size_t end = f + 1 < counts.faces ? size_t(out.face_starts[f + 1]) : counts.corners;
         for (size_t c = start; c < end; ++c) {
@@ -99,7 +120,12 @@ WeldCounts weld_topology(const MeshView& mesh, const int32_t* target, const Weld
         }
     }
     // Two faces over the same vertices where one of them changed: Blender's weld removes one.
-    std::vector<std::pair<uint64_t, uint32_t>> face_keys(counts.faces);
+    // Such a pair shares a vertex that other vertices merged into, so only faces holding one
+    // are compared.
+    std::vector<uint8_t> welded(counts.vertices, 0);
+    for (size_t v = 0; v < n; ++v)
+        if (target[v] != int32_t(v)) welded[size_t(new_index[size_t(target[v])])] = 1;
+    std::vector<std::pair<uint64_t, uint32_t>> face_keys;
     std::vector<int32_t> sorted;
     auto sorted_face = [&](size_t f, std::vector<int32_t>& vs) {
         const size_t start = size_t(out.face_starts[f]);
@@ -108,10 +134,15 @@ WeldCounts weld_topology(const MeshView& mesh, const int32_t* target, const Weld
         std::sort(vs.begin(), vs.end());
     };
     for (size_t f = 0; f < counts.faces; ++f) {
+        const size_t start = size_t(out.face_starts[f]);
+        const size_t end = f + 1 < counts.faces ? size_t(out.face_starts[f + 1]) : counts.corners;
+        bool holds_welded = false;
+        for (size_t c = start; c < end && !holds_welded; ++c) holds_welded = welded[size_t(out.corner_verts[c])];
+        if (!holds_welded) continue;
         sorted_face(f, sorted);
         uint64_t h = 1469598103934665603ull ^ sorted.size();
         for (int32_t v : sorted) h = (h ^ uint64_t(uint32_t(v))) * 1099511628211ull;
-        face_keys[f] = {h, uint32_t(f)};
+        face_keys.emplace_back(h, uint32_t(f));
     }
     std::sort(face_keys.begin(), face_keys.end());
     std::vector<int32_t> other;

@@ -138,7 +138,9 @@ class BOXMARCH_OT_merge_by_distance_submeshes(_SubmeshTool, bpy.types.Operator):
         for ob, a, c in zip(objects, arrays, chosen):
             target, merged_positions, count = core.merge_targets(a.positions, a.submesh_of_vertex, a.submesh_count,
                                                                  c, self.distance)
-            weld = core.weld(*a.topology, target) if count and mesh_edit.can_rebuild(ob.data) else None
+            weld = None
+            if count and mesh_edit.can_rebuild(ob.data):
+                weld = core.weld(*a.topology, target, mesh_edit.read_corner_edges(ob.data))
             if count and (weld is None or weld["needs_blender"]):
                 welds = None
                 break

@@ -261,7 +261,10 @@ struct WeldOutput {
     int32_t* corner_edges;      // [corner_count], new edge indices
 };
 
-WeldCounts weld_topology(const MeshView& mesh, const int32_t* target, const WeldOutput& out);
+// Reads mesh, corner_edges[corner_count] (each corner's edge to the next corner; may be null:
+// then looked up from the new edges) and target[vertex_count] (from merge_targets).
+WeldCounts weld_topology(const MeshView& mesh, const int32_t* corner_edges, const int32_t* target,
+                         const WeldOutput& out);
 
 // ---------------------------------------------------------------------------------------------
 // pack_uv.cpp: UV islands packed in rows sorted by submesh height
