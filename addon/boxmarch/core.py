@@ -245,3 +245,28 @@ def weld(positions, edges, face_starts, face_sizes, corner_verts, target, corner
     the new corner edges a lookup instead of a search."""
     return _core.weld_topology(positions, edges, face_starts, face_sizes, corner_verts,
                                np.ascontiguousarray(target, np.int32), corner_edges)
+
+
+def remove_vertices(positions, edges, face_starts, face_sizes, corner_verts, remove, corner_edges) -> dict:
+    """The mesh without the vertices marked in ``remove`` and every edge and face touching them,
+    survivors in their order: the same dict as :func:`weld` (with 'needs_blender' False)."""
+    keep = ~_mask(remove, "remove", len(positions)).astype(bool)
+    new_index = np.cumsum(keep, dtype=np.int64) - 1
+    edges = np.asarray(edges).reshape(-1, 2)
+    keep_edge = keep[edges[:, 0]] & keep[edges[:, 1]]
+    new_edge = np.cumsum(keep_edge, dtype=np.int64) - 1
+    corner_verts = np.asarray(corner_verts)
+    corner_keep_face = np.logical_and.reduceat(keep[corner_verts], face_starts) if len(face_starts) else np.zeros(0, bool)
+    keep_corner = np.repeat(corner_keep_face, face_sizes)
+    sizes = np.asarray(face_sizes)[corner_keep_face]
+    return {
+        "vertex_source": np.flatnonzero(keep).astype(np.int32),
+        "edge_source": np.flatnonzero(keep_edge).astype(np.int32),
+        "edges": new_index[edges[keep_edge]].astype(np.int32),
+        "face_source": np.flatnonzero(corner_keep_face).astype(np.int32),
+        "face_starts": (np.cumsum(sizes) - sizes).astype(np.int32),
+        "corner_source": np.flatnonzero(keep_corner).astype(np.int32),
+        "corner_verts": new_index[corner_verts[keep_corner]].astype(np.int32),
+        "corner_edges": new_edge[np.asarray(corner_edges)[keep_corner]].astype(np.int32),
+        "needs_blender": False,
+    }

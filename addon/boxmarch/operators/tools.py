@@ -116,6 +116,14 @@ class BOXMARCH_OT_dedup_submeshes(_SubmeshTool, bpy.types.Operator):
         message = f"Deleted {total} duplicate submesh(es) in {len(objects)} mesh(es), tolerance {self.tolerance:g}"
         if not total:
             return message
+        if all(mesh_edit.can_rebuild(ob.data) for ob in objects):
+            # Whole submeshes go: the survivors' rows, rebuilt in one go with every attribute
+            # (the selection included) carried over.
+            for ob, a, delete, _selection in plans:
+                if delete.any():
+                    removed = core.remove_vertices(*a.topology, delete, mesh_edit.read_corner_edges(ob.data))
+                    mesh_edit.rebuild_welded(ob.data, a.positions, removed)
+            return message
         action = mesh_edit.delete_vertices(context, plans, edit)
         return message if action is None else lambda: (action(), message)[1]
 
