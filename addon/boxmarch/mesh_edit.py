@@ -1,9 +1,11 @@
 """Blender mesh reads and writes of the submesh tools (select, dedup, merge, pack UVs).
 
 A sibling of ``mesh_io``: every transfer goes through ``foreach_get``/``foreach_set`` on NumPy
-buffers; nothing loops over vertices, edges or faces in Python. Geometry is removed by Blender's
-own edit-mode operators (``mesh.delete``, ``mesh.remove_doubles``) on a selection computed in
-the core, so every attribute, UV map, vertex group and material follows as Blender moves it.
+buffers; nothing loops over vertices, edges or faces in Python. Geometry changes are either a
+rebuild from arrays the core computed (every generic attribute carried from the old element each
+new one comes from), or, where a rebuild could lose data (vertex groups, shape keys, Blender
+before 4.1), Blender's own edit-mode operators (``mesh.delete``, ``mesh.remove_doubles``) on a
+selection the core planned.
 """
 from __future__ import annotations
 
