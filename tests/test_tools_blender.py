@@ -333,6 +333,30 @@ def test_pack_uv_by_z_selected_faces_inside_square_without_overlap(blender):
     assert np.unique(bottoms, return_counts=True)[1].max() <= 9
 
 
+def test_pack_uv_by_z_packs_multi_object_edit_into_one_square(blender):
+    a, _ = uv_islands_mesh(blender, count=10, seed=1)
+    b, _ = uv_islands_mesh(blender, count=10, seed=2)
+    b.location.z = 50.0  # every submesh of b is higher: b's islands fill the top rows
+    edit(blender, a, b)
+    blender.ops.mesh.select_all(action="SELECT")
+    assert blender.ops.boxmarch.pack_uv_by_z(padding=0.003) == {"FINISHED"}
+    blender.ops.object.mode_set(mode="OBJECT")
+    boxes = []
+    for ob in (a, b):
+        uv = np.empty(len(ob.data.loops) * 2, np.float32)
+        ob.data.uv_layers["Atlas"].uv.foreach_get("vector", uv)
+        uv = uv.reshape(-1, 4, 2).astype(np.float64)
+        boxes.append((uv.min(1), uv.max(1)))
+    lo = np.concatenate([boxes[0][0], boxes[1][0]])
+    hi = np.concatenate([boxes[0][1], boxes[1][1]])
+    assert lo.min() >= 0.003 - 1e-6 and hi.max() <= 1 - 0.003 + 1e-6
+    gap = np.maximum(lo[:, None, :] - hi[None, :, :], lo[None, :, :] - hi[:, None, :]).max(-1)
+    np.fill_diagonal(gap, np.inf)
+    assert gap.min() >= 0.003 - 1e-6  # no island of one object overlaps one of the other
+    # rows are bottom-aligned: every row of b is at or above every row of a
+    assert boxes[1][0][:, 1].min() >= boxes[0][0][:, 1].max() - 1e-6
+
+
 def test_pack_uv_without_uv_map_or_faces_is_refused(blender):
     ob = mesh_object(blender, "plain", *scenes.box_arrays(np.zeros((1, 3)), 1.0, np.eye(3)))
     edit(blender, ob)

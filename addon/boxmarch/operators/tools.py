@@ -68,9 +68,10 @@ class BOXMARCH_OT_select_linked_submeshes(_SubmeshTool, bpy.types.Operator):
     def run(self, context, objects, arrays, edit, wm):
         total = 0
         for ob, a in zip(objects, arrays):
-            selected = mesh_edit.read_vertex_selection(ob.data) & ~mesh_edit.hidden_vertices(ob.data)
+            hidden = mesh_edit.hidden_vertices(ob.data)
+            selected = mesh_edit.read_vertex_selection(ob.data) & ~hidden
             mask, count = core.select_linked_submeshes(selected, a.submesh_of_vertex, a.submesh_count)
-            mesh_edit.write_selection(ob.data, a, mask.astype(bool) & ~mesh_edit.hidden_vertices(ob.data))
+            mesh_edit.write_selection(ob.data, a, mask.astype(bool) & ~hidden)
             total += count
         return f"Selected {total} submesh(es) in {len(objects)} mesh(es)"
 
