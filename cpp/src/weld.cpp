@@ -32,38 +32,38 @@ WeldCounts weld_topology(const MeshView& mesh, const int32_t* corner_edges, cons
         }
     auto image = [&](int32_t v) { return uint32_t(new_index[size_t(target[v])]); };
 
-    // Edges: distinct images of non-collapsing old edges, the first old edge of each.
+    // Edges: distinct images of non-collapsing old edges, the first old edge of each. Only edges
+    // at a welded vertex (merged away, or merged into) can meet another edge's image; the others
+    // keep theirs alone and need no sorting.
+    std::vector<uint8_t> welded_old(n, 0);
+    for (size_t v = 0; v < n; ++v)
+        if (target[v] != int32_t(v)) welded_old[v] = welded_old[size_t(target[v])] = 1;
+    const uint32_t none = UINT32_MAX;
+    std::vector<uint32_t> first_of(mesh.edge_count, none);  // the old edge whose image each keeps
     std::vector<std::pair<uint64_t, uint32_t>> keyed;
-    keyed.reserve(mesh.edge_count);
     for (size_t e = 0; e < mesh.edge_count; ++e) {
-        const uint32_t a = image(mesh.edges[2 * e]), b = image(mesh.edges[2 * e + 1]);
-        if (a != b) keyed.emplace_back(edge_key(a, b), uint32_t(e));
+        const int32_t u = mesh.edges[2 * e], w = mesh.edges[2 * e + 1];
+        const uint32_t a = image(u), b = image(w);
+        if (a == b) continue;  // collapses
+        if (welded_old[size_t(u)] || welded_old[size_t(w)]) keyed.emplace_back(edge_key(a, b), uint32_t(e));
+        else first_of[e] = uint32_t(e);
     }
     std::sort(keyed.begin(), keyed.end());
-    std::vector<uint32_t> firsts;  // first old edge of every distinct key
-    for (size_t k = 0; k < keyed.size(); ++k)
-        if (k == 0 || keyed[k].first != keyed[k - 1].first) firsts.push_back(keyed[k].second);
-    std::sort(firsts.begin(), firsts.end());
-    // New index of every old edge that does not collapse (its key's first old edge's rank).
-    const uint32_t none = UINT32_MAX;
-    std::vector<uint32_t> new_of_old(mesh.edge_count, none);
-    for (size_t k = 0; k < firsts.size(); ++k) new_of_old[firsts[k]] = uint32_t(k);
     for (size_t k = 0, first = 0; k < keyed.size(); ++k) {
         if (keyed[k].first != keyed[first].first) first = k;
-        new_of_old[keyed[k].second] = new_of_old[keyed[first].second];
+        first_of[keyed[k].second] = keyed[first].second;
     }
-    std::vector<uint64_t> keys(firsts.size());
-    std::vector<std::pair<uint64_t, uint32_t>> new_edge_of_key(firsts.size());
-    for (size_t k = 0; k < firsts.size(); ++k) {
-        const uint32_t e = firsts[k];
-        const uint32_t a = image(mesh.edges[2 * e]), b = image(mesh.edges[2 * e + 1]);
-        out.edge_source[k] = int32_t(e);
-        out.edges[2 * k] = int32_t(a);
-        out.edges[2 * k + 1] = int32_t(b);
-        new_edge_of_key[k] = {edge_key(a, b), uint32_t(k)};
-    }
-    counts.edges = firsts.size();
-    std::sort(new_edge_of_key.begin(), new_edge_of_key.end());
+    std::vector<uint32_t> new_of_old(mesh.edge_count, none);
+    for (size_t e = 0; e < mesh.edge_count; ++e)
+        if (first_of[e] == uint32_t(e)) {
+            const uint32_t a = image(mesh.edges[2 * e]), b = image(mesh.edges[2 * e + 1]);
+            out.edge_source[counts.edges] = int32_t(e);
+            out.edges[2 * counts.edges] = int32_t(a);
+            out.edges[2 * counts.edges + 1] = int32_t(b);
+            new_of_old[e] = uint32_t(counts.edges++);
+        }
+    for (size_t e = 0; e < mesh.edge_count; ++e)
+        if (first_of[e] != none) new_of_old[e] = new_of_old[first_of[e]];
 
     // Faces: drop a corner whose vertex equals the next corner's; drop faces under 3 corners.
     std::vector<uint32_t> ring;
@@ -103,6 +103,13 @@ WeldCounts weld_topology(const MeshView& mesh, const int32_t* corner_edges, cons
             } else
                 out.corner_edges[c] = int32_t(new_of_old[size_t(old)]);
         }
+    }
+    std::vector<std::pair<uint64_t, uint32_t>> new_edge_of_key;
+    if (!corner_edges) {
+        new_edge_of_key.resize(counts.edges);
+        for (size_t k = 0; k < counts.edges; ++k)
+            new_edge_of_key[k] = {edge_key(uint32_t(out.edges[2 * k]), uint32_t(out.edges[2 * k + 1])), uint32_t(k)};
+        std::sort(new_edge_of_key.begin(), new_edge_of_key.end());
     }
     for (size_t f = 0; f < (corner_edges ? 0 : counts.faces); ++f) {
         const size_t start = size_t(out.face_starts[f]);
