@@ -174,8 +174,9 @@ def split_boxes(centres, jitter, seed=0):
     return np.concatenate([originals, copies], axis=1).reshape(-1, 3), starts, sizes, corner_verts
 
 
-def blender_merge_per_submesh(bpy, arrays, distance, submesh_count):
-    """Vertex, edge and face counts of Blender's own Merge by Distance on each submesh alone."""
+def blender_merge_per_submesh(bpy, arrays, distance, submesh_count, merged_positions=None):
+    """Vertex, edge and face counts of Blender's own Merge by Distance on each submesh alone
+    (and, into ``merged_positions`` when given, the vertex positions it leaves)."""
     positions, starts, sizes, corners = arrays
     totals = np.zeros(3, int)
     for s in range(submesh_count):
@@ -186,6 +187,8 @@ def blender_merge_per_submesh(bpy, arrays, distance, submesh_count):
         bpy.ops.mesh.remove_doubles(threshold=distance)
         bpy.ops.object.mode_set(mode="OBJECT")
         totals += [len(part.data.vertices), len(part.data.edges), len(part.data.polygons)]
+        if merged_positions is not None:
+            merged_positions.append(positions_of(part.data))
         bpy.data.objects.remove(part)
     return totals
 
@@ -195,7 +198,8 @@ def test_merge_per_submesh_equals_blenders_merge_of_each_submesh(blender):
     centres = np.arange(6)[:, None] * np.array([1.0, 0, 0])
     distance = 1e-3
     arrays = split_boxes(centres, distance / 10)
-    expected = blender_merge_per_submesh(blender, arrays, distance, 6)
+    blender_positions = []
+    expected = blender_merge_per_submesh(blender, arrays, distance, 6, blender_positions)
     ob = faces_object(blender, "split", *arrays)
     mesh = ob.data
     mesh.uv_layers.new(name="Artist")
@@ -216,6 +220,10 @@ def test_merge_per_submesh_equals_blenders_merge_of_each_submesh(blender):
     blender.ops.object.mode_set(mode="OBJECT")
     counts = [len(mesh.vertices), len(mesh.edges), len(mesh.polygons)]
     assert counts == expected.tolist() == [48, 72, 36]
+    # the same vertex positions as Blender leaves (merged ones at their cluster's centroid); which
+    # member of a cluster survives, and so the order, follows Blender's k-d tree and may differ
+    ours, theirs = positions_of(mesh), np.concatenate(blender_positions)
+    assert np.allclose(ours[np.lexsort(ours.T)], theirs[np.lexsort(theirs.T)], atol=1e-7)
     # no degenerate face: every face has 4 distinct vertices
     corner_verts = np.empty(len(mesh.loops), np.int32)
     mesh.loops.foreach_get("vertex_index", corner_verts)
