@@ -274,6 +274,21 @@ def test_merge_falls_back_to_blenders_merge_and_still_matches(blender, case):
         assert sum(1 for v in mesh.vertices if v.groups) > 0
 
 
+def test_merge_and_dedup_on_wire_meshes(blender):
+    # a polyline whose vertex 2 is doubled (2 and 3 within the distance): one vertex and one
+    # edge go; a copy of the whole polyline 1e-6 away is a duplicate submesh
+    line = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [2, 0, 1e-5], [3, 0, 0]], np.float32)
+    edges = np.array([[0, 1], [1, 2], [2, 3], [3, 4]], np.int32)
+    ob = mesh_object(blender, "wire", np.concatenate([line, line + 1e-6]), np.concatenate([edges, edges + 5]),
+                     [], [], [])
+    edit(blender, ob)
+    blender.ops.mesh.select_all(action="SELECT")
+    assert blender.ops.boxmarch.dedup_submeshes() == {"FINISHED"}
+    assert blender.ops.boxmarch.merge_by_distance_submeshes(distance=1e-3) == {"FINISHED"}
+    blender.ops.object.mode_set(mode="OBJECT")
+    assert (len(ob.data.vertices), len(ob.data.edges)) == (4, 3)
+
+
 def test_merge_only_touches_selected_submeshes(blender):
     arrays = split_boxes(np.arange(3)[:, None] * np.array([3.0, 0, 0]), 1e-4)
     ob = faces_object(blender, "split", *arrays)

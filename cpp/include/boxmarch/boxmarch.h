@@ -225,8 +225,9 @@ size_t merge_passes(int32_t* pass_of_vertex, const float* positions,
                     const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count,
                     const uint8_t* chosen, double distance, int threads);
 
-// Blender's Merge by Distance (5.0) inside each chosen submesh, computed directly: vertices
-// are visited by index; an unassigned one gathers every unassigned vertex of its submesh within
+// Merge by Distance inside each chosen submesh as Blender 5.0 does it (Blender visits vertices
+// in its k-d tree's order, so which member of a cluster survives may differ; clusters and
+// positions do not where clusters are unambiguous). Vertices are visited by index; an unassigned one gathers every unassigned vertex of its submesh within
 // `distance` (inclusive) into a cluster; the cluster's target is the lower index of two, else the
 // member nearest the cluster's centroid (ties: lower index), and moves to the centroid. Reads
 // positions, submesh_of_vertex, chosen[submesh_count]; writes target[vertex_count] (the vertex
