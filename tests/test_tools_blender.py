@@ -421,6 +421,19 @@ def test_nan_meshes_are_refused_and_left_unchanged(blender, operator):
     assert len(ob.data.vertices) == 48
 
 
+@pytest.mark.parametrize("operator", ["select_linked_submeshes", "select_linked_across", "dedup_submeshes",
+                                      "merge_by_distance_submeshes", "pack_uv_by_z"])
+def test_empty_selection_is_refused(blender, operator):
+    ob = mesh_object(blender, "boxes", *duplicated_boxes(3, 1e-6))
+    ob.data.uv_layers.new(name="UVMap")
+    edit(blender, ob)
+    blender.ops.mesh.select_all(action="DESELECT")
+    with pytest.raises(RuntimeError, match="no (vertex|face) is selected"):
+        getattr(blender.ops.boxmarch, operator)()
+    blender.ops.object.mode_set(mode="OBJECT")
+    assert len(ob.data.vertices) == 48
+
+
 def test_no_mesh_is_refused(blender):
     empty = blender.data.objects.new("Empty", None)
     blender.context.scene.collection.objects.link(empty)

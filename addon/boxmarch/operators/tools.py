@@ -18,6 +18,7 @@ from .. import core, mesh_edit
 class _SubmeshTool:
     bl_options = {"REGISTER", "UNDO"}
     need_faces = False
+    needs_vertex_selection = True  # in Edit Mode, the selection says which submeshes to work on
 
     @classmethod
     def poll(cls, context):
@@ -36,6 +37,9 @@ class _SubmeshTool:
                 try:
                     # Read and check every mesh before changing any.
                     arrays = [mesh_edit.read_mesh(ob.data, self.need_faces) for ob in objects]
+                    if edit and self.needs_vertex_selection and not any(
+                            mesh_edit.read_vertex_selection(ob.data).any() for ob in objects):
+                        raise mesh_edit.ToolInputError("no vertex is selected")
                     wm.progress_update(20)
                     outcome = self.run(context, objects, arrays, edit, wm)
                 except (mesh_edit.ToolInputError, ValueError) as error:
@@ -190,6 +194,7 @@ class BOXMARCH_OT_pack_uv_by_z(_SubmeshTool, bpy.types.Operator):
     bl_idname = "boxmarch.pack_uv_by_z"
     bl_label = "Pack UV Islands by Z"
     need_faces = True
+    needs_vertex_selection = False  # faces decide, and the core says when none is selected
 
     padding: FloatProperty(name="Padding", default=0.002, min=0.0, max=0.49, precision=4,
                            description="UV space between islands and around the square")
