@@ -517,3 +517,14 @@ def test_tools_and_undo_in_blender_34_window(tmp_path):
     curve = result["instance_on_curve"]
     assert curve["result"] == ["FINISHED"] and curve["evaluated_vertices"] == 72
     assert (curve["modifiers"], curve["modifiers_undone"]) == (1, 0)
+
+
+def test_tools_are_in_the_menus_and_the_panel(blender):
+    from boxmarch.operators import instance_on_curve, tools
+
+    for menu_name, draw in tools.menus + instance_on_curve.menus:
+        assert draw in getattr(blender.types, menu_name).draw._draw_funcs, menu_name
+    assert hasattr(blender.types, "BOXMARCH_PT_submesh_tools")
+    for idname in ("select_linked_submeshes", "select_linked_across", "dedup_submeshes",
+                   "merge_by_distance_submeshes", "pack_uv_by_z", "add_instance_on_curve"):
+        assert getattr(blender.types, "BOXMARCH_OT_" + idname).bl_options >= {"REGISTER", "UNDO"}
