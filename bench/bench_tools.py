@@ -139,7 +139,7 @@ def main(counts):
         boxmarch.register()
     op_rows, core_rows = [], []
     for count in counts:
-        repeats = 3 if count <= 16000 else 2
+        repeats = 3 if count <= 16000 else 4
         merge_boxes = count * 8 // 10
         every_box = lambda ob: select_every(ob, 8)
         ours = {

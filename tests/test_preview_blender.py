@@ -75,3 +75,20 @@ def test_cache_handlers_survive_loading_a_file(blender):
     blender.ops.wm.read_factory_settings(use_empty=True)  # loading a file drops non-persistent handlers
     for list_name, function in preview._APP_HANDLERS:
         assert function in getattr(blender.app.handlers, list_name), list_name
+
+
+def test_new_sdf_text_template_compiles(blender, tmp_path):
+    import shutil
+    import subprocess
+
+    from boxmarch.preview import sources
+    from test_shaders import blender_declarations
+
+    ob, _, _ = baked_boxes(blender)
+    assert blender.ops.boxmarch.new_sdf_text() == {"FINISHED"}
+    assert ob.boxmarch.sdf == "USER"
+    text = blender.data.texts[ob.boxmarch.user_text].as_string()
+    path = tmp_path / "template.frag"
+    path.write_text(blender_declarations("frag") + sources.fragment_source("USER", text))
+    proc = subprocess.run([shutil.which("glslangValidator"), str(path)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout

@@ -103,6 +103,13 @@ def test_bad_options_raise(kwargs, message):
         core.raymarch([[0, 0, -2]], [[0, 0, 1]], [1, 1, 1], **kwargs)
 
 
+def test_non_finite_input_raises():
+    with pytest.raises(ValueError, match="directions holds NaN"):
+        core.raymarch([[0, 0, -2]], [[0, np.nan, 1]], [1, 1, 1])
+    with pytest.raises(ValueError, match="quaternions holds NaN"):
+        core.render_boxes([[0, 0, 0]], [[0, 0, np.inf, 1]], [[1, 1, 1]], np.eye(4), np.eye(4), 8, 8)
+
+
 def test_bad_shapes_raise():
     with pytest.raises(ValueError, match="directions"):
         core.raymarch(np.zeros((3, 3)), np.zeros((2, 3)), [1, 1, 1])

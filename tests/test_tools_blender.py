@@ -118,11 +118,16 @@ def duplicated_boxes(count, jitter, seed=0):
     return joined((positions, edges, starts, sizes, corners), (copy, edges, starts, sizes, corners))
 
 
-@pytest.mark.parametrize("jitter, deleted", [(1e-5, 20), (0.95e-4, 20), (1.05e-4, 0)])
-def test_dedup_deletes_copies_within_tolerance(blender, jitter, deleted):
+@pytest.mark.parametrize("jitter, deleted, vertex_group", [(1e-5, 20, False), (0.95e-4, 20, False),
+                                                         (1.05e-4, 0, False), (1e-5, 20, True)])
+def test_dedup_deletes_copies_within_tolerance(blender, jitter, deleted, vertex_group):
+    """With a vertex group the mesh cannot be rebuilt from attributes: Blender's own delete runs
+    on the planned selection instead, with the same result."""
     arrays = duplicated_boxes(20, jitter)
     ob = mesh_object(blender, "dups", *arrays)
     mesh = ob.data
+    if vertex_group:
+        ob.vertex_groups.new(name="weights").add(list(range(0, 160, 3)), 0.25, "REPLACE")
     paint = mesh.color_attributes.new("Paint", "FLOAT_COLOR", "POINT")
     colours = np.random.default_rng(1).random(len(mesh.vertices) * 4).astype(np.float32)
     paint.data.foreach_set("color", colours)
@@ -138,6 +143,10 @@ def test_dedup_deletes_copies_within_tolerance(blender, jitter, deleted):
     mesh.color_attributes["Paint"].data.foreach_get("color", kept)
     assert np.array_equal(kept[:640], colours[:640])
     assert flags(mesh, "vertices").all()  # the selection stays on what is left
+    assert not [a.name for a in mesh.attributes if a.name.startswith("boxmarch")]
+    if vertex_group:
+        weighted = [v.index for v in mesh.vertices if v.groups]
+        assert weighted == list(range(0, 160, 3))
 
 
 def test_dedup_only_among_selected_submeshes_in_multi_object_edit(blender):
@@ -165,8 +174,9 @@ def split_boxes(centres, jitter, seed=0):
     return np.concatenate([originals, copies], axis=1).reshape(-1, 3), starts, sizes, corner_verts
 
 
-def blender_merge_per_submesh(bpy, arrays, distance, submesh_count):
-    """Vertex, edge and face counts of Blender's own Merge by Distance on each submesh alone."""
+def blender_merge_per_submesh(bpy, arrays, distance, submesh_count, merged_positions=None):
+    """Vertex, edge and face counts of Blender's own Merge by Distance on each submesh alone
+    (and, into ``merged_positions`` when given, the vertex positions it leaves)."""
     positions, starts, sizes, corners = arrays
     totals = np.zeros(3, int)
     for s in range(submesh_count):
@@ -177,6 +187,8 @@ def blender_merge_per_submesh(bpy, arrays, distance, submesh_count):
         bpy.ops.mesh.remove_doubles(threshold=distance)
         bpy.ops.object.mode_set(mode="OBJECT")
         totals += [len(part.data.vertices), len(part.data.edges), len(part.data.polygons)]
+        if merged_positions is not None:
+            merged_positions.append(positions_of(part.data))
         bpy.data.objects.remove(part)
     return totals
 
@@ -186,7 +198,8 @@ def test_merge_per_submesh_equals_blenders_merge_of_each_submesh(blender):
     centres = np.arange(6)[:, None] * np.array([1.0, 0, 0])
     distance = 1e-3
     arrays = split_boxes(centres, distance / 10)
-    expected = blender_merge_per_submesh(blender, arrays, distance, 6)
+    blender_positions = []
+    expected = blender_merge_per_submesh(blender, arrays, distance, 6, blender_positions)
     ob = faces_object(blender, "split", *arrays)
     mesh = ob.data
     mesh.uv_layers.new(name="Artist")
@@ -207,6 +220,10 @@ def test_merge_per_submesh_equals_blenders_merge_of_each_submesh(blender):
     blender.ops.object.mode_set(mode="OBJECT")
     counts = [len(mesh.vertices), len(mesh.edges), len(mesh.polygons)]
     assert counts == expected.tolist() == [48, 72, 36]
+    # the same vertex positions as Blender leaves (merged ones at their cluster's centroid); which
+    # member of a cluster survives, and so the order, follows Blender's k-d tree and may differ
+    ours, theirs = positions_of(mesh), np.concatenate(blender_positions)
+    assert np.allclose(ours[np.lexsort(ours.T)], theirs[np.lexsort(theirs.T)], atol=1e-7)
     # no degenerate face: every face has 4 distinct vertices
     corner_verts = np.empty(len(mesh.loops), np.int32)
     mesh.loops.foreach_get("vertex_index", corner_verts)
@@ -255,6 +272,21 @@ def test_merge_falls_back_to_blenders_merge_and_still_matches(blender, case):
     assert flags(mesh, "vertices").all()
     if case == "vertex_group":
         assert sum(1 for v in mesh.vertices if v.groups) > 0
+
+
+def test_merge_and_dedup_on_wire_meshes(blender):
+    # a polyline whose vertex 2 is doubled (2 and 3 within the distance): one vertex and one
+    # edge go; a copy of the whole polyline 1e-6 away is a duplicate submesh
+    line = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [2, 0, 1e-5], [3, 0, 0]], np.float32)
+    edges = np.array([[0, 1], [1, 2], [2, 3], [3, 4]], np.int32)
+    ob = mesh_object(blender, "wire", np.concatenate([line, line + 1e-6]), np.concatenate([edges, edges + 5]),
+                     [], [], [])
+    edit(blender, ob)
+    blender.ops.mesh.select_all(action="SELECT")
+    assert blender.ops.boxmarch.dedup_submeshes() == {"FINISHED"}
+    assert blender.ops.boxmarch.merge_by_distance_submeshes(distance=1e-3) == {"FINISHED"}
+    blender.ops.object.mode_set(mode="OBJECT")
+    assert (len(ob.data.vertices), len(ob.data.edges)) == (4, 3)
 
 
 def test_merge_only_touches_selected_submeshes(blender):
@@ -324,6 +356,30 @@ def test_pack_uv_by_z_selected_faces_inside_square_without_overlap(blender):
     assert np.unique(bottoms, return_counts=True)[1].max() <= 9
 
 
+def test_pack_uv_by_z_packs_multi_object_edit_into_one_square(blender):
+    a, _ = uv_islands_mesh(blender, count=10, seed=1)
+    b, _ = uv_islands_mesh(blender, count=10, seed=2)
+    b.location.z = 50.0  # every submesh of b is higher: b's islands fill the top rows
+    edit(blender, a, b)
+    blender.ops.mesh.select_all(action="SELECT")
+    assert blender.ops.boxmarch.pack_uv_by_z(padding=0.003) == {"FINISHED"}
+    blender.ops.object.mode_set(mode="OBJECT")
+    boxes = []
+    for ob in (a, b):
+        uv = np.empty(len(ob.data.loops) * 2, np.float32)
+        ob.data.uv_layers["Atlas"].uv.foreach_get("vector", uv)
+        uv = uv.reshape(-1, 4, 2).astype(np.float64)
+        boxes.append((uv.min(1), uv.max(1)))
+    lo = np.concatenate([boxes[0][0], boxes[1][0]])
+    hi = np.concatenate([boxes[0][1], boxes[1][1]])
+    assert lo.min() >= 0.003 - 1e-6 and hi.max() <= 1 - 0.003 + 1e-6
+    gap = np.maximum(lo[:, None, :] - hi[None, :, :], lo[None, :, :] - hi[:, None, :]).max(-1)
+    np.fill_diagonal(gap, np.inf)
+    assert gap.min() >= 0.003 - 1e-6  # no island of one object overlaps one of the other
+    # rows are bottom-aligned: every row of b is at or above every row of a
+    assert boxes[1][0][:, 1].min() >= boxes[0][0][:, 1].max() - 1e-6
+
+
 def test_pack_uv_without_uv_map_or_faces_is_refused(blender):
     ob = mesh_object(blender, "plain", *scenes.box_arrays(np.zeros((1, 3)), 1.0, np.eye(3)))
     edit(blender, ob)
@@ -360,6 +416,19 @@ def test_nan_meshes_are_refused_and_left_unchanged(blender, operator):
     edit(blender, ob)
     blender.ops.mesh.select_all(action="SELECT")
     with pytest.raises(RuntimeError, match="NaN"):
+        getattr(blender.ops.boxmarch, operator)()
+    blender.ops.object.mode_set(mode="OBJECT")
+    assert len(ob.data.vertices) == 48
+
+
+@pytest.mark.parametrize("operator", ["select_linked_submeshes", "select_linked_across", "dedup_submeshes",
+                                      "merge_by_distance_submeshes", "pack_uv_by_z"])
+def test_empty_selection_is_refused(blender, operator):
+    ob = mesh_object(blender, "boxes", *duplicated_boxes(3, 1e-6))
+    ob.data.uv_layers.new(name="UVMap")
+    edit(blender, ob)
+    blender.ops.mesh.select_all(action="DESELECT")
+    with pytest.raises(RuntimeError, match="no (vertex|face) is selected"):
         getattr(blender.ops.boxmarch, operator)()
     blender.ops.object.mode_set(mode="OBJECT")
     assert len(ob.data.vertices) == 48
@@ -448,3 +517,14 @@ def test_tools_and_undo_in_blender_34_window(tmp_path):
     curve = result["instance_on_curve"]
     assert curve["result"] == ["FINISHED"] and curve["evaluated_vertices"] == 72
     assert (curve["modifiers"], curve["modifiers_undone"]) == (1, 0)
+
+
+def test_tools_are_in_the_menus_and_the_panel(blender):
+    from boxmarch.operators import instance_on_curve, tools
+
+    for menu_name, draw in tools.menus + instance_on_curve.menus:
+        assert draw in getattr(blender.types, menu_name).draw._draw_funcs, menu_name
+    assert hasattr(blender.types, "BOXMARCH_PT_submesh_tools")
+    for idname in ("select_linked_submeshes", "select_linked_across", "dedup_submeshes",
+                   "merge_by_distance_submeshes", "pack_uv_by_z", "add_instance_on_curve"):
+        assert getattr(blender.types, "BOXMARCH_OT_" + idname).bl_options >= {"REGISTER", "UNDO"}

@@ -1,9 +1,11 @@
 """Blender mesh reads and writes of the submesh tools (select, dedup, merge, pack UVs).
 
 A sibling of ``mesh_io``: every transfer goes through ``foreach_get``/``foreach_set`` on NumPy
-buffers; nothing loops over vertices, edges or faces in Python. Geometry is removed by Blender's
-own edit-mode operators (``mesh.delete``, ``mesh.remove_doubles``) on a selection computed in
-the core, so every attribute, UV map, vertex group and material follows as Blender moves it.
+buffers; nothing loops over vertices, edges or faces in Python. Geometry changes are either a
+rebuild from arrays the core computed (every generic attribute carried from the old element each
+new one comes from), or, where a rebuild could lose data (vertex groups, shape keys, Blender
+before 4.1), Blender's own edit-mode operators (``mesh.delete``, ``mesh.remove_doubles``) on a
+selection the core planned.
 """
 from __future__ import annotations
 
@@ -315,6 +317,26 @@ def can_rebuild(mesh) -> bool:
     return all(a.data_type in _ATTRIBUTE_LAYOUT for a in mesh.attributes if a.name not in _TOPOLOGY_ATTRIBUTES)
 
 
+def _set_topology(mesh, attribute, prop, collection, rna_prop, values):
+    attr = mesh.attributes.get(attribute)
+    values = np.ascontiguousarray(values).reshape(-1)
+    if attr is not None:
+        attr.data.foreach_set(prop, values)
+    else:
+        collection.foreach_set(rna_prop, values)
+
+
+def read_corner_edges(mesh) -> np.ndarray:
+    """Each corner's edge (to the next corner of its face), int32."""
+    values = np.empty(len(mesh.loops), np.int32)
+    attr = mesh.attributes.get(".corner_edge")
+    if attr is not None:
+        attr.data.foreach_get("value", values)
+    else:
+        mesh.loops.foreach_get("edge_index", values)
+    return values
+
+
 def rebuild_welded(mesh, merged_positions, weld) -> None:
     """Replace the mesh's geometry by the welded topology (core.weld), carrying every attribute
     over from the old element each new one comes from. Object Mode; expects can_rebuild."""
@@ -332,13 +354,15 @@ def rebuild_welded(mesh, merged_positions, weld) -> None:
     active_color, default_color = colors.active_color_name, colors.default_color_name
 
     mesh.clear_geometry()
+    # Topology through its internal attributes where they exist (contiguous, much faster than
+    # the per-element RNA of vertices, edges and loops).
     mesh.vertices.add(len(weld["vertex_source"]))
-    mesh.vertices.foreach_set("co", merged_positions[weld["vertex_source"]].reshape(-1))
+    _set_topology(mesh, "position", "vector", mesh.vertices, "co", merged_positions[weld["vertex_source"]])
     mesh.edges.add(len(weld["edge_source"]))
-    mesh.edges.foreach_set("vertices", np.ascontiguousarray(weld["edges"]).reshape(-1))
+    _set_topology(mesh, ".edge_verts", "value", mesh.edges, "vertices", weld["edges"])
     mesh.loops.add(len(weld["corner_source"]))
-    mesh.loops.foreach_set("vertex_index", np.ascontiguousarray(weld["corner_verts"]))
-    mesh.loops.foreach_set("edge_index", np.ascontiguousarray(weld["corner_edges"]))
+    _set_topology(mesh, ".corner_vert", "value", mesh.loops, "vertex_index", weld["corner_verts"])
+    _set_topology(mesh, ".corner_edge", "value", mesh.loops, "edge_index", weld["corner_edges"])
     mesh.polygons.add(len(weld["face_source"]))
     mesh.polygons.foreach_set("loop_start", np.ascontiguousarray(weld["face_starts"]))
     # Adding elements may create flags the mesh did not have (new faces come selected): drop them.

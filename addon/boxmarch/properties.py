@@ -49,7 +49,7 @@ class BoxmarchObjectSettings(bpy.types.PropertyGroup):
                for p in transforms.PRESETS.values()],
         description="See the SDF as an export preset's engine evaluates it: Unity mirrors every local frame's x, "
                     "so a shape that is not symmetric in local x appears mirrored there (docs/EXPORT.md)")
-    show_vectors: BoolProperty(name="Decoded Vectors", default=False, update=_redraw,
+    show_vectors: BoolProperty(name="Vectors", default=False, update=_redraw,
                                description="Lines from every vertex along the raw offset (blue) and the rotated "
                                            "offset (orange): the orange ones meet at each submesh's origin")
 

@@ -170,9 +170,12 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                 include(clip[k] + (clip[l] - clip[k]) * (front[k] / (front[k] - front[l])));
             }
         }
-        if (x0 > x1) rects[b] = glm::ivec4(0, 0, -1, -1);  // wholly behind the near plane: no pixel
-        else rects[b] = glm::ivec4(std::max(int(std::floor(x0 - 0.5f)), 0), std::max(int(std::floor(y0 - 0.5f)), 0),
-                                   std::min(int(std::ceil(x1 - 0.5f)), W - 1), std::min(int(std::ceil(y1 - 0.5f)), H - 1));
+        // first and last pixel centre inside [lo, hi], clamped before the cast (far-off boxes)
+        auto first = [](float lo, int n) { return int(std::ceil(std::clamp(lo - 0.5f, -1.0f, float(n)))); };
+        auto last = [](float hi, int n) { return int(std::floor(std::clamp(hi - 0.5f, -1.0f, float(n)))); };
+        if (!(x0 <= x1 && y0 <= y1)) rects[b] = glm::ivec4(0, 0, -1, -1);  // wholly behind the near plane
+        else rects[b] = glm::ivec4(std::max(first(x0, W) - 1, 0), std::max(first(y0, H) - 1, 0),
+                                   std::min(last(x1, W) + 1, W - 1), std::min(last(y1, H) + 1, H - 1));
     }
 
     parallel_for(size_t(H), o.threads, [&](size_t row_begin, size_t row_end) {

@@ -16,7 +16,8 @@ inline uint64_t edge_key(uint32_t a, uint32_t b) {
 
 }  // namespace
 
-WeldCounts weld_topology(const MeshView& mesh, const int32_t* target, const WeldOutput& out) {
+WeldCounts weld_topology(const MeshView& mesh, const int32_t* corner_edges, const int32_t* target,
+                        const WeldOutput& out) {
     const size_t n = mesh.vertex_count;
     for (size_t v = 0; v < n; ++v)
         if (target[v] < 0 || size_t(target[v]) >= n || target[size_t(target[v])] != target[v])
@@ -31,30 +32,38 @@ WeldCounts weld_topology(const MeshView& mesh, const int32_t* target, const Weld
         }
     auto image = [&](int32_t v) { return uint32_t(new_index[size_t(target[v])]); };
 
-    // Edges: distinct images of non-collapsing old edges, the first old edge of each.
+    // Edges: distinct images of non-collapsing old edges, the first old edge of each. Only edges
+    // at a welded vertex (merged away, or merged into) can meet another edge's image; the others
+    // keep theirs alone and need no sorting.
+    std::vector<uint8_t> welded_old(n, 0);
+    for (size_t v = 0; v < n; ++v)
+        if (target[v] != int32_t(v)) welded_old[v] = welded_old[size_t(target[v])] = 1;
+    const uint32_t none = UINT32_MAX;
+    std::vector<uint32_t> first_of(mesh.edge_count, none);  // the old edge whose image each keeps
     std::vector<std::pair<uint64_t, uint32_t>> keyed;
-    keyed.reserve(mesh.edge_count);
     for (size_t e = 0; e < mesh.edge_count; ++e) {
-        const uint32_t a = image(mesh.edges[2 * e]), b = image(mesh.edges[2 * e + 1]);
-        if (a != b) keyed.emplace_back(edge_key(a, b), uint32_t(e));
+        const int32_t u = mesh.edges[2 * e], w = mesh.edges[2 * e + 1];
+        const uint32_t a = image(u), b = image(w);
+        if (a == b) continue;  // collapses
+        if (welded_old[size_t(u)] || welded_old[size_t(w)]) keyed.emplace_back(edge_key(a, b), uint32_t(e));
+        else first_of[e] = uint32_t(e);
     }
     std::sort(keyed.begin(), keyed.end());
-    std::vector<uint32_t> firsts;  // first old edge of every distinct key
-    for (size_t k = 0; k < keyed.size(); ++k)
-        if (k == 0 || keyed[k].first != keyed[k - 1].first) firsts.push_back(keyed[k].second);
-    std::sort(firsts.begin(), firsts.end());
-    std::vector<uint64_t> keys(firsts.size());
-    std::vector<std::pair<uint64_t, uint32_t>> new_edge_of_key(firsts.size());
-    for (size_t k = 0; k < firsts.size(); ++k) {
-        const uint32_t e = firsts[k];
-        const uint32_t a = image(mesh.edges[2 * e]), b = image(mesh.edges[2 * e + 1]);
-        out.edge_source[k] = int32_t(e);
-        out.edges[2 * k] = int32_t(a);
-        out.edges[2 * k + 1] = int32_t(b);
-        new_edge_of_key[k] = {edge_key(a, b), uint32_t(k)};
+    for (size_t k = 0, first = 0; k < keyed.size(); ++k) {
+        if (keyed[k].first != keyed[first].first) first = k;
+        first_of[keyed[k].second] = keyed[first].second;
     }
-    counts.edges = firsts.size();
-    std::sort(new_edge_of_key.begin(), new_edge_of_key.end());
+    std::vector<uint32_t> new_of_old(mesh.edge_count, none);
+    for (size_t e = 0; e < mesh.edge_count; ++e)
+        if (first_of[e] == uint32_t(e)) {
+            const uint32_t a = image(mesh.edges[2 * e]), b = image(mesh.edges[2 * e + 1]);
+            out.edge_source[counts.edges] = int32_t(e);
+            out.edges[2 * counts.edges] = int32_t(a);
+            out.edges[2 * counts.edges + 1] = int32_t(b);
+            new_of_old[e] = uint32_t(counts.edges++);
+        }
+    for (size_t e = 0; e < mesh.edge_count; ++e)
+        if (first_of[e] != none) new_of_old[e] = new_of_old[first_of[e]];
 
     // Faces: drop a corner whose vertex equals the next corner's; drop faces under 3 corners.
     std::vector<uint32_t> ring;
@@ -82,8 +91,27 @@ WeldCounts weld_topology(const MeshView& mesh, const int32_t* target, const Weld
         out.face_starts[counts.faces++] = first;
         touched_face.push_back(touched);
     }
-    // Each face corner's edge, to the next corner.
-    for (size_t f = 0; f < counts.faces; ++f) {
+    // Each face corner's edge, to the next corner. With the old corner edges this is a lookup:
+    // corners dropped after c merged into the next kept corner, so the old edge from c to its
+    // next corner has the new edge's image.
+    if (corner_edges) {
+        for (size_t c = 0; c < counts.corners; ++c) {
+            const int32_t old = corner_edges[out.corner_source[c]];
+            if (old < 0 || size_t(old) >= mesh.edge_count || new_of_old[size_t(old)] == none) {
+                counts.needs_blender = true;
+                out.corner_edges[c] = 0;
+            } else
+                out.corner_edges[c] = int32_t(new_of_old[size_t(old)]);
+        }
+    }
+    std::vector<std::pair<uint64_t, uint32_t>> new_edge_of_key;
+    if (!corner_edges) {
+        new_edge_of_key.resize(counts.edges);
+        for (size_t k = 0; k < counts.edges; ++k)
+            new_edge_of_key[k] = {edge_key(uint32_t(out.edges[2 * k]), uint32_t(out.edges[2 * k + 1])), uint32_t(k)};
+        std::sort(new_edge_of_key.begin(), new_edge_of_key.end());
+    }
+    for (size_t f = 0; f < (corner_edges ? 0 : counts.faces); ++f) {
         const size_t start = size_t(out.face_starts[f]);
         const size_t end = f + 1 < counts.faces ? size_t(out.face_starts[f + 1]) : counts.corners;
         for (size_t c = start; c < end; ++c) {
@@ -99,7 +127,12 @@ WeldCounts weld_topology(const MeshView& mesh, const int32_t* target, const Weld
         }
     }
     // Two faces over the same vertices where one of them changed: Blender's weld removes one.
-    std::vector<std::pair<uint64_t, uint32_t>> face_keys(counts.faces);
+    // Such a pair shares a vertex that other vertices merged into, so only faces holding one
+    // are compared.
+    std::vector<uint8_t> welded(counts.vertices, 0);
+    for (size_t v = 0; v < n; ++v)
+        if (target[v] != int32_t(v)) welded[size_t(new_index[size_t(target[v])])] = 1;
+    std::vector<std::pair<uint64_t, uint32_t>> face_keys;
     std::vector<int32_t> sorted;
     auto sorted_face = [&](size_t f, std::vector<int32_t>& vs) {
         const size_t start = size_t(out.face_starts[f]);
@@ -108,10 +141,15 @@ WeldCounts weld_topology(const MeshView& mesh, const int32_t* target, const Weld
         std::sort(vs.begin(), vs.end());
     };
     for (size_t f = 0; f < counts.faces; ++f) {
+        const size_t start = size_t(out.face_starts[f]);
+        const size_t end = f + 1 < counts.faces ? size_t(out.face_starts[f + 1]) : counts.corners;
+        bool holds_welded = false;
+        for (size_t c = start; c < end && !holds_welded; ++c) holds_welded = welded[size_t(out.corner_verts[c])];
+        if (!holds_welded) continue;
         sorted_face(f, sorted);
         uint64_t h = 1469598103934665603ull ^ sorted.size();
         for (int32_t v : sorted) h = (h ^ uint64_t(uint32_t(v))) * 1099511628211ull;
-        face_keys[f] = {h, uint32_t(f)};
+        face_keys.emplace_back(h, uint32_t(f));
     }
     std::sort(face_keys.begin(), face_keys.end());
     std::vector<int32_t> other;

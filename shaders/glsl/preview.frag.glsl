@@ -30,11 +30,12 @@ void main()
   mat3 frame = mat3(preview.frame);
   vec3 rd = normalize(rotate_vector(frame * (ray_object / eye_distance), quat_conjugate(q)));
 
-  // On the face where the ray enters the box the span ahead is longer than the one behind; a
-  // fragment of the far side only marches when the eye is inside the box (from the eye).
+  // A fragment where the ray enters: front-facing, or (whatever the winding) more of the box
+  // ahead than behind. A fragment of the far side only marches when the eye is inside the box
+  // (from the eye).
   vec2 span = bm_box_span(ro, rd, box_half);
   float t_end = span.y;
-  if (span.x + span.y < 0.0) {
+  if (!gl_FrontFacing && span.x + span.y < 0.0) {
     if (preview.eye.w < 0.5 || eye_distance > -span.x) {
       if (preview.mode.x == 2) {
         frag_color = vec4(0.0, 0.0, 0.0, 1.0);

@@ -53,12 +53,12 @@ v2f vert(appdata v)
   return o;
 }
 
-float4 frag(v2f i, out float depth : SV_Depth) : SV_Target
+float4 frag(v2f i, bool frontFacing : SV_IsFrontFace, out float depth : SV_Depth) : SV_Target
 {
   float3 objCamera = mul(unity_WorldToObject, float4(_WorldSpaceCameraPos, 1.0)).xyz;
   float3 halfExtents = _HalfExtents.w > 0.5 ? _HalfExtents.xyz : BoxmarchCubeHalfExtents(i.color);
-  BoxmarchHit h = BoxmarchRaymarch(i.objPos, objCamera, i.color, i.quat, halfExtents, _MaxSteps, _Epsilon,
-                                   _Relaxation, _MaxDistance);
+  BoxmarchHit h = BoxmarchRaymarch(i.objPos, objCamera, i.color, i.quat, halfExtents, frontFacing, _MaxSteps,
+                                   _Epsilon, _Relaxation, _MaxDistance);
   clip(h.hit ? 1.0 : -1.0);
   float4 clipPos = mul(unity_MatrixVP, mul(unity_ObjectToWorld, float4(h.objPos, 1.0)));
   depth = clipPos.z / clipPos.w;

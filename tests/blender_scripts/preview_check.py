@@ -48,8 +48,21 @@ result = {"centres": centres, "sizes": sizes, "rotations": rotations,
 view, projection = preview.camera_matrices(scene, camera, W, H)
 result["view"], result["projection"] = view, projection
 
+# The baked layers as Blender stores them, for the reference of the asymmetric presets.
+corner_verts = np.empty(len(mesh.loops), np.int32)
+mesh.loops.foreach_get("vertex_index", corner_verts)
+offsets = np.empty(len(mesh.vertices) * 4, np.float32)
+mesh.color_attributes["BoxOffset"].data.foreach_get("color", offsets)
+corner_q = []
+for name in ("BoxQuatXY", "BoxQuatZW"):
+    uv = np.empty(len(mesh.loops) * 2, np.float32)
+    mesh.uv_layers[name].data.foreach_get("uv", uv)
+    corner_q.append(uv.reshape(-1, 2))
+result.update(layer_positions=mesh_io.read_positions(mesh), layer_offsets=offsets.reshape(-1, 4),
+              layer_corner_verts=corner_verts, layer_corner_quaternions=np.concatenate(corner_q, axis=1))
+
 boxes.boxmarch.preview = True
-for sdf in ("BOX", "SPHERE", "ROUNDED_BOX"):
+for sdf in ("BOX", "SPHERE", "ROUNDED_BOX", "CAPSULE", "CYLINDER", "TORUS", "LINK"):
     boxes.boxmarch.sdf = sdf
     for output in ("SHADED", "NORMAL"):
         rgba, depth = preview.render(scene, camera, W, H, output=output)

@@ -28,9 +28,44 @@ class BOXMARCH_OT_preview_toggle(bpy.types.Operator):
         return {"FINISHED"}
 
 
+SDF_TEMPLATE = """\
+// boxmarch user SDF: box-local p (origin at the submesh's origin, axes the baked frame);
+// box_half = the box's half-extents. The library of shaders/glsl/sdf.glsl is available
+// (sd_*, op_*, min3, max3, sdf_preset_*); see docs/PREVIEW.md.
+float map(vec3 p)
+{
+  float r = 0.25 * min3(box_half);
+  float shell = sd_round_box(p, box_half - vec3(r), r);
+  float hole = sd_cylinder(p, 0.5 * min(box_half.x, box_half.y), 2.0 * box_half.z);
+  return op_smooth_subtract(shell, hole, 0.5 * r);
+}
+"""
+
+
+class BOXMARCH_OT_new_sdf_text(bpy.types.Operator):
+    """New text block with a template 'float map(vec3 p)', used as the active object's SDF"""
+
+    bl_idname = "boxmarch.new_sdf_text"
+    bl_label = "New SDF Text"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return context.active_object is not None and context.active_object.type == "MESH"
+
+    def execute(self, context):
+        text = bpy.data.texts.new("boxmarch_sdf.glsl")
+        text.write(SDF_TEMPLATE)
+        settings = context.active_object.boxmarch
+        settings.user_text = text.name
+        settings.sdf = "USER"
+        self.report({"INFO"}, f"SDF text '{text.name}' created; edit it in the Text Editor")
+        return {"FINISHED"}
+
+
 def menu_object(self, _context):
     self.layout.operator(BOXMARCH_OT_preview_toggle.bl_idname, icon="SHADING_RENDERED")
 
 
-classes = (BOXMARCH_OT_preview_toggle,)
+classes = (BOXMARCH_OT_preview_toggle, BOXMARCH_OT_new_sdf_text)
 menus = (("VIEW3D_MT_object", menu_object),)

@@ -18,6 +18,7 @@ from .. import core, mesh_edit
 class _SubmeshTool:
     bl_options = {"REGISTER", "UNDO"}
     need_faces = False
+    needs_vertex_selection = True  # in Edit Mode, the selection says which submeshes to work on
 
     @classmethod
     def poll(cls, context):
@@ -36,6 +37,9 @@ class _SubmeshTool:
                 try:
                     # Read and check every mesh before changing any.
                     arrays = [mesh_edit.read_mesh(ob.data, self.need_faces) for ob in objects]
+                    if edit and self.needs_vertex_selection and not any(
+                            mesh_edit.read_vertex_selection(ob.data).any() for ob in objects):
+                        raise mesh_edit.ToolInputError("no vertex is selected")
                     wm.progress_update(20)
                     outcome = self.run(context, objects, arrays, edit, wm)
                 except (mesh_edit.ToolInputError, ValueError) as error:
@@ -68,9 +72,10 @@ class BOXMARCH_OT_select_linked_submeshes(_SubmeshTool, bpy.types.Operator):
     def run(self, context, objects, arrays, edit, wm):
         total = 0
         for ob, a in zip(objects, arrays):
-            selected = mesh_edit.read_vertex_selection(ob.data) & ~mesh_edit.hidden_vertices(ob.data)
+            hidden = mesh_edit.hidden_vertices(ob.data)
+            selected = mesh_edit.read_vertex_selection(ob.data) & ~hidden
             mask, count = core.select_linked_submeshes(selected, a.submesh_of_vertex, a.submesh_count)
-            mesh_edit.write_selection(ob.data, a, mask.astype(bool) & ~mesh_edit.hidden_vertices(ob.data))
+            mesh_edit.write_selection(ob.data, a, mask.astype(bool) & ~hidden)
             total += count
         return f"Selected {total} submesh(es) in {len(objects)} mesh(es)"
 
@@ -116,6 +121,14 @@ class BOXMARCH_OT_dedup_submeshes(_SubmeshTool, bpy.types.Operator):
         message = f"Deleted {total} duplicate submesh(es) in {len(objects)} mesh(es), tolerance {self.tolerance:g}"
         if not total:
             return message
+        if all(mesh_edit.can_rebuild(ob.data) for ob in objects):
+            # Whole submeshes go: the survivors' rows, rebuilt in one go with every attribute
+            # (the selection included) carried over.
+            for ob, a, delete, _selection in plans:
+                if delete.any():
+                    removed = core.remove_vertices(*a.topology, delete, mesh_edit.read_corner_edges(ob.data))
+                    mesh_edit.rebuild_welded(ob.data, a.positions, removed)
+            return message
         action = mesh_edit.delete_vertices(context, plans, edit)
         return message if action is None else lambda: (action(), message)[1]
 
@@ -138,7 +151,9 @@ class BOXMARCH_OT_merge_by_distance_submeshes(_SubmeshTool, bpy.types.Operator):
         for ob, a, c in zip(objects, arrays, chosen):
             target, merged_positions, count = core.merge_targets(a.positions, a.submesh_of_vertex, a.submesh_count,
                                                                  c, self.distance)
-            weld = core.weld(*a.topology, target) if count and mesh_edit.can_rebuild(ob.data) else None
+            weld = None
+            if count and mesh_edit.can_rebuild(ob.data):
+                weld = core.weld(*a.topology, target, mesh_edit.read_corner_edges(ob.data))
             if count and (weld is None or weld["needs_blender"]):
                 welds = None
                 break
@@ -179,6 +194,7 @@ class BOXMARCH_OT_pack_uv_by_z(_SubmeshTool, bpy.types.Operator):
     bl_idname = "boxmarch.pack_uv_by_z"
     bl_label = "Pack UV Islands by Z"
     need_faces = True
+    needs_vertex_selection = False  # faces decide, and the core says when none is selected
 
     padding: FloatProperty(name="Padding", default=0.002, min=0.0, max=0.49, precision=4,
                            description="UV space between islands and around the square")

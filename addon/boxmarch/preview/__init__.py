@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 _handler = None
-_WIRE_BACKUP = "boxmarch_display_type"
+_WIRE_BACKUP = "_boxmarch_display_type"  # leading underscore: hidden in the UI
 
 
 def _tag_redraw():
