@@ -6,7 +6,8 @@ cd "$(dirname "$0")/.."
 PYTHON="${PYTHON:-python3}"
 
 APT_PACKAGES=(blender python3-numpy libglm-dev libnanoflann-dev glslang-tools xvfb xauth
-              libxi6 libxxf86vm1 libxfixes3 libxrender1 libgl1 libxkbcommon0 libsm6)
+              libxi6 libxxf86vm1 libxfixes3 libxrender1 libgl1 libxkbcommon0 libsm6
+              cmake clang-14 libclang-rt-14-dev)  # last line: sanitizer build and libFuzzer target
 missing=()
 for pkg in "${APT_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
@@ -19,6 +20,6 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 echo "[setup] pip install (bpy, build and test tools)" >&2
-"$PYTHON" -m pip install -q --disable-pip-version-check bpy "scikit-build-core>=0.10" "pybind11>=2.12" pytest hypothesis
+"$PYTHON" -m pip install -q --disable-pip-version-check bpy "scikit-build-core>=0.10" "pybind11>=2.12" pytest hypothesis matplotlib
 echo "[setup] building boxmarch" >&2
 "$PYTHON" -m pip install -q --disable-pip-version-check --no-build-isolation .
