@@ -39,7 +39,7 @@ run_python() {
   runtime="$(${CXX:-g++} -print-file-name=libasan.so)"
   stdcxx="$(${CXX:-g++} -print-file-name=libstdc++.so)"
   [ -f "$runtime" ] && [ -f "$stdcxx" ] || { echo "[sanitize] ASan runtime or libstdc++ not found" >&2; exit 1; }
-  PYTHONPATH="$build/pkg" "$PYTHON" -c "import boxmarch._core as c, sys; sys.exit(0 if '/$build/pkg/' in c.__file__ else 'not the sanitized module: ' + c.__file__)"
+  LD_PRELOAD="$runtime $stdcxx" PYTHONPATH="$build/pkg" "$PYTHON" -c "import boxmarch._core as c, sys; sys.exit(0 if '/$build/pkg/' in c.__file__ else 'not the sanitized module: ' + c.__file__)"
   LD_PRELOAD="$runtime $stdcxx" PYTHONPATH="$build/pkg" "$PYTHON" -m pytest -q -p no:cacheprovider \
     tests/test_core.py tests/test_properties.py "${@}"
 }
