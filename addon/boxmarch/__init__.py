@@ -21,12 +21,14 @@ _registered = []
 def register():
     import bpy
 
-    from . import operators, ui
+    from . import operators, preview, properties, ui
 
     operators.register_enums()
-    for cls in operators.classes + ui.classes:
+    for cls in operators.classes + properties.classes + ui.classes:
         bpy.utils.register_class(cls)
         _registered.append(cls)
+    properties.register_properties()
+    preview.register()
     for menu_name, draw in operators.menus:
         getattr(bpy.types, menu_name).append(draw)
 
@@ -34,8 +36,10 @@ def register():
 def unregister():
     import bpy
 
-    from . import operators
+    from . import operators, preview, properties
 
+    preview.unregister()
+    properties.unregister_properties()
     for menu_name, draw in operators.menus:
         getattr(bpy.types, menu_name).remove(draw)
     while _registered:

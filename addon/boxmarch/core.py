@@ -149,3 +149,166 @@ def decode_offsets(rgba) -> np.ndarray:
     rgba = np.asarray(rgba)
     c = rgba.astype(np.float64) / 255.0 if rgba.dtype == np.uint8 else rgba.astype(np.float64)
     return (c[..., :3] * 2.0 - 1.0) / c[..., 3:4]
+
+
+# ---------------------------------------------------------------------------------------------
+# Reference raymarcher (cpp/src/raymarch.cpp; mirrors shaders/glsl, see docs/PREVIEW.md)
+
+SDF_PRESETS = ("BOX", "SPHERE", "ROUNDED_BOX", "CAPSULE", "CYLINDER", "TORUS", "LINK")
+
+
+@dataclass
+class MarchResult:
+    """Per ray: ``hit`` (bool), ``positions`` (float32 (N, 3) box-local: the hit, or where the
+    march stopped), ``normals`` (float32 (N, 3) unit SDF gradient at hits, zero on misses),
+    ``steps`` (int32: SDF evaluations of the march)."""
+
+    hit: np.ndarray
+    positions: np.ndarray
+    normals: np.ndarray
+    steps: np.ndarray
+
+
+@dataclass
+class RenderResult:
+    """Images with row 0 at the TOP: ``rgba`` (H, W, 4) float32, ``depth`` (H, W) window depth (0
+    near plane, 1 far plane and background), ``normals`` (H, W, 3) object-space unit normals
+    (zero where nothing was hit), ``steps`` (H, W) SDF evaluations summed over boxes."""
+
+    rgba: np.ndarray
+    depth: np.ndarray
+    normals: np.ndarray
+    steps: np.ndarray
+
+    @property
+    def coverage(self) -> np.ndarray:
+        return self.depth < 1.0
+
+
+def _preset_index(sdf) -> int:
+    if sdf not in SDF_PRESETS:
+        raise ValueError(f"sdf must be one of {SDF_PRESETS}, got {sdf!r}")
+    return SDF_PRESETS.index(sdf)
+
+
+def _rows3(a, n, name):
+    a = np.asarray(a, np.float32)
+    if a.shape == (3,):
+        a = np.broadcast_to(a, (n, 3))
+    if a.shape != (n, 3):
+        raise ValueError(f"{name} must have shape (3,) or ({n}, 3), got {a.shape}")
+    return np.ascontiguousarray(a)
+
+
+def raymarch(origins, directions, half_extents, *, sdf="BOX", max_steps=64, epsilon=1e-3, relaxation=1.0,
+             max_distance=1e6, threads=0) -> MarchResult:
+    """Sphere-trace rays in box-local coordinates, exactly as the viewport shader does.
+
+    ``origins``, ``directions`` (N, 3) box-local (directions are normalised here);
+    ``half_extents`` (3,) or (N, 3): the box each ray marches in, which also sizes the preset
+    ``sdf`` (one of SDF_PRESETS). A ray starts where it enters its box (at its origin when that
+    is inside) and stops at a hit (distance < ``epsilon``), after ``max_steps`` evaluations, when
+    it leaves the box, or after travelling ``max_distance``. Each step advances ``relaxation`` x
+    the distance. Raises ValueError on bad shapes or options."""
+    origins = np.ascontiguousarray(origins, np.float32)
+    if origins.ndim != 2 or origins.shape[1] != 3:
+        raise ValueError(f"origins must have shape (N, 3), got {origins.shape}")
+    n = len(origins)
+    r = _core.raymarch(origins, _rows3(directions, n, "directions"), _rows3(half_extents, n, "half_extents"),
+                       sdf=_preset_index(sdf), max_steps=int(max_steps), epsilon=float(epsilon),
+                       relaxation=float(relaxation), max_distance=float(max_distance), threads=int(threads))
+    return MarchResult(hit=r["hit"].astype(bool), positions=r["positions"], normals=r["normals"], steps=r["steps"])
+
+
+def sdf_distance(sdf, points, half_extents) -> np.ndarray:
+    """Distance (float32 (N,)) from box-local ``points`` (N, 3) to preset ``sdf`` of boxes with
+    ``half_extents`` ((3,) or (N, 3))."""
+    points = np.ascontiguousarray(points, np.float32).reshape(-1, 3)
+    return _core.sdf_distance(_preset_index(sdf), points, _rows3(half_extents, len(points), "half_extents"))
+
+
+def vertex_values_from_corners(corner_values, corner_verts, vertex_count) -> np.ndarray:
+    """Per-vertex copy of a per-corner array (the bake writes the same quaternion to every corner
+    of a vertex): the value of each vertex's last corner; vertices without corners get zeros."""
+    corner_values = np.asarray(corner_values)
+    out = np.zeros((int(vertex_count),) + corner_values.shape[1:], corner_values.dtype)
+    out[np.asarray(corner_verts)] = corner_values
+    return out
+
+
+def boxes_from_bake(positions, offsets, vertex_quaternions, submesh_of_vertex):
+    """The box of every submesh as a shader sees it, from baked vertex data.
+
+    ``positions`` (N, 3) object space, ``offsets`` (N, 4) the BoxOffset colour (float, or uint8
+    raw bytes), ``vertex_quaternions`` (N, 4) (x, y, z, w), ``submesh_of_vertex`` (N,) ids 0..S-1.
+    Returns float32 ``(origins (S, 3), quaternions (S, 4), half_extents (S, 3))``: origin = mean of
+    the origins decoded at the submesh's vertices, half-extents = the largest |f| per local axis
+    (the bounding box in the baked frame for BOUNDS origins)."""
+    positions = np.asarray(positions, np.float64).reshape(-1, 3)
+    ids = np.asarray(submesh_of_vertex, np.int64)
+    q = np.asarray(vertex_quaternions, np.float64).reshape(-1, 4)
+    f = decode_offsets(offsets)
+    count = int(ids.max()) + 1 if len(ids) else 0
+    decoded = positions + rotate_vector(f, q)
+    origins = np.zeros((count, 3))
+    np.add.at(origins, ids, decoded)
+    origins /= np.maximum(np.bincount(ids, minlength=count), 1)[:, None]
+    half = np.zeros((count, 3))
+    np.maximum.at(half, ids, np.abs(f))
+    quats = np.zeros((count, 4))
+    quats[ids] = q
+    return origins.astype(np.float32), quats.astype(np.float32), half.astype(np.float32)
+
+
+def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_view, width, height, *,
+                 base_color=(0.8, 0.8, 0.8), sdf="BOX", max_steps=64, epsilon=1e-3, relaxation=1.0,
+                 max_distance=1e6, background=(0.0, 0.0, 0.0, 0.0), depth=None, rgba=None,
+                 threads=0) -> RenderResult:
+    """Render boxes as the viewport preview does (docs/PREVIEW.md), on the CPU.
+
+    Boxes: ``origins`` (S, 3), ``quaternions`` (S, 4), ``half_extents`` (S, 3) in object space
+    (see :func:`boxes_from_bake`). ``object_to_clip`` = projection @ view @ object matrix and
+    ``object_to_view`` = view @ object matrix (4x4, row-major NumPy as in mathutils). One sample
+    at each pixel centre. ``depth``/``rgba`` (optional (H, W) / (H, W, 4) float32) are images to
+    composite into (depth-tested, updated in place); otherwise depth starts at 1.0 and rgba at
+    ``background``."""
+    width, height = int(width), int(height)
+    if width <= 0 or height <= 0:
+        raise ValueError(f"width and height must be positive, got {width} x {height}")
+    origins = np.ascontiguousarray(origins, np.float32).reshape(-1, 3)
+    n = len(origins)
+    quaternions = np.ascontiguousarray(quaternions, np.float32).reshape(-1, 4)
+    if depth is None:
+        depth = np.ones((height, width), np.float32)
+    if rgba is None:
+        rgba = np.empty((height, width, 4), np.float32)
+        rgba[:] = np.asarray(background, np.float32)
+    for name, image, shape in (("depth", depth, (height, width)), ("rgba", rgba, (height, width, 4))):
+        if image.shape != shape or image.dtype != np.float32 or not image.flags.c_contiguous:
+            raise ValueError(f"{name} must be a C-contiguous float32 array of shape {shape}")
+    normals = np.zeros((height, width, 3), np.float32)
+    steps = np.zeros((height, width), np.int32)
+    _core.render_boxes(origins, quaternions, _rows3(half_extents, n, "half_extents"),
+                       np.ascontiguousarray(object_to_clip, np.float32), np.ascontiguousarray(object_to_view, np.float32),
+                       np.ascontiguousarray(base_color, np.float32), rgba.reshape(-1, 4), depth,
+                       normals.reshape(-1, 3), steps.reshape(-1), sdf=_preset_index(sdf), max_steps=int(max_steps),
+                       epsilon=float(epsilon), relaxation=float(relaxation), max_distance=float(max_distance),
+                       threads=int(threads))
+    return RenderResult(rgba=rgba, depth=depth, normals=normals, steps=steps)
+
+
+def render_baked_mesh(positions, offsets, corner_verts, corner_quaternions, submesh_of_vertex, object_to_clip,
+                      object_to_view, width, height, **options) -> RenderResult:
+    """:func:`render_boxes` of a baked mesh straight from its layers: ``positions`` (N, 3),
+    ``offsets`` the BoxOffset colour per vertex (N, 4) or per corner (C, 4), ``corner_verts``
+    (C,), ``corner_quaternions`` (C, 4) = BoxQuatXY and BoxQuatZW side by side,
+    ``submesh_of_vertex`` (N,) (from :func:`find_submeshes` or :func:`bake`). Every submesh is
+    drawn as its box (exact for box-shaped submeshes, the case the preview test checks)."""
+    positions = np.asarray(positions).reshape(-1, 3)
+    n = len(positions)
+    offsets = np.asarray(offsets)
+    if len(offsets) != n:
+        offsets = vertex_values_from_corners(offsets, corner_verts, n)
+    q = vertex_values_from_corners(np.asarray(corner_quaternions, np.float32), corner_verts, n)
+    boxes = boxes_from_bake(positions, offsets, q, submesh_of_vertex)
+    return render_boxes(*boxes, object_to_clip, object_to_view, width, height, **options)

@@ -31,4 +31,45 @@ class BOXMARCH_PT_bake(bpy.types.Panel):
             col.label(text=f"{name}: UV channel {names.index(name)}" if name in names else f"{name}: missing")
 
 
-classes = (BOXMARCH_PT_bake,)
+class BOXMARCH_PT_preview(bpy.types.Panel):
+    bl_label = "Raymarch Preview"
+    bl_idname = "BOXMARCH_PT_preview"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Boxmarch"
+
+    @classmethod
+    def poll(cls, context):
+        return context.active_object is not None and context.active_object.type == "MESH"
+
+    def draw_header(self, context):
+        self.layout.prop(context.active_object.boxmarch, "preview", text="")
+
+    def draw(self, context):
+        from .preview import draw as preview_draw
+
+        ob = context.active_object
+        settings = ob.boxmarch
+        layout = self.layout
+        layout.use_property_split = True
+        layout.active = settings.preview
+        layout.prop(settings, "sdf")
+        if settings.sdf == "USER":
+            layout.prop_search(settings, "user_text", bpy.data, "texts")
+        col = layout.column(align=True)
+        col.prop(settings, "max_steps")
+        col.prop(settings, "epsilon")
+        col.prop(settings, "relaxation")
+        col.prop(settings, "max_distance")
+        col = layout.column(heading="Show")
+        col.prop(settings, "show_outline")
+        col.prop(settings, "show_vectors")
+        error = preview_draw.errors.get(ob.name)
+        if settings.preview and error:
+            box = layout.box()
+            box.alert = True
+            for i, line in enumerate(error.splitlines()[:4]):
+                box.label(text=line, icon="ERROR" if i == 0 else "BLANK1")
+
+
+classes = (BOXMARCH_PT_bake, BOXMARCH_PT_preview)

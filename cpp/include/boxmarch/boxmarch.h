@@ -153,4 +153,73 @@ void expand_corner_quaternions(float* corner_uv, int half, const int32_t* corner
 // Fingerprint seed of the options that change the bake's output. Equal options give equal seeds.
 uint32_t options_seed(const BakeOptions& options);
 
+
+// ---------------------------------------------------------------------------------------------
+// raymarch.cpp: the CPU reference raymarcher (mirrors shaders/glsl/*.glsl line for line)
+//
+// Units are box-local: a point p is measured from the submesh's origin along its baked axes, and
+// the SDF presets are sized by the box's half-extents h (a 1 x 0.6 x 0.2 box has h = 0.5, 0.3,
+// 0.1), so no number has to be typed for the common shapes.
+
+enum class SdfPreset : int {
+    Box = 0,         // the box itself: sd_box(p, h)
+    Sphere = 1,      // largest sphere inside the box: radius min(h)
+    RoundedBox = 2,  // the box with edges rounded by min(h) / 4
+    Capsule = 3,     // along local x, radius min(h.y, h.z)
+    Cylinder = 4,    // along local z, radius min(h.x, h.y), half-height h.z
+    Torus = 5,       // around local z, tube radius min(h.z, min(h.x, h.y) / 2), filling x and y
+    Link = 6,        // chain link: ring in the xy plane stretched along x, thickness along z
+};
+constexpr int kSdfPresetCount = 7;
+
+struct MarchOptions {
+    SdfPreset sdf = SdfPreset::Box;
+    int max_steps = 64;
+    float epsilon = 1e-3f;      // hit when the distance falls below this (box-local units)
+    float relaxation = 1.0f;    // each step advances relaxation * distance (below 1: safer)
+    float max_distance = 1e6f;  // longest march from the ray's start (box-local units)
+    int threads = 0;            // 0: hardware concurrency
+};
+
+// Distance from box-local point p[3] to preset `sdf` of a box with half-extents h[3].
+float sdf_distance(SdfPreset sdf, const float* p, const float* h);
+
+// Sphere-traces ray_count box-local rays, each inside its own box.
+// Reads origins, directions (need not be unit; normalised here) and half_extents, each
+// ray_count * 3. A ray marches from where it enters its box (its origin when inside) until it
+// leaves the box or travels options.max_distance; a ray that misses the box takes 0 steps.
+// Writes hit[ray_count] (1 = distance fell below epsilon), positions[ray_count * 3] (last
+// sample point, box-local), normals[ray_count * 3] (unit SDF gradient by 4 tetrahedral taps at
+// distance max(epsilon, max(h) / 1000); zero on a miss) and steps[ray_count] (SDF evaluations of the march).
+// Any output pointer may be null. Throws std::invalid_argument on max_steps < 0,
+// epsilon <= 0, relaxation outside (0, 2] or max_distance <= 0.
+void raymarch(const float* origins, const float* directions, const float* half_extents,
+              size_t ray_count, const MarchOptions& options, uint8_t* hit, float* positions,
+              float* normals, int32_t* steps);
+
+// What render_boxes draws with and writes; matrices are 4x4 column-major (GLM / OpenGL order).
+struct RenderView {
+    const float* object_to_clip = nullptr;  // projection * view * object matrix
+    const float* object_to_view = nullptr;  // view * object matrix (lighting, eye position)
+    uint32_t width = 0, height = 0;
+    float base_color[3] = {0.8f, 0.8f, 0.8f};
+};
+
+struct RenderImages {
+    float* rgba = nullptr;     // height * width * 4, row 0 at the TOP; background left untouched
+    float* depth = nullptr;    // height * width window depth (0 near, 1 far); caller fills with 1
+    float* normals = nullptr;  // height * width * 3 object-space normals (may be null)
+    int32_t* steps = nullptr;  // height * width SDF evaluations, summed over boxes (may be null)
+};
+
+// Renders boxes the way the viewport preview does, one sample at each pixel centre: each box
+// (object-space origin[3], quaternion x,y,z,w [4] mapping local to object, half-extents[3]) is
+// rasterised as its own box, every covered pixel raymarches the preset in box-local space, and
+// the nearest hit wins by depth against the values already in images.depth. Hits are shaded
+// with the preview's Lambert + hemisphere light in view space. Reads box_count boxes; writes the
+// covered pixels of images. Throws std::invalid_argument on bad options (see raymarch).
+void render_boxes(const float* origins, const float* quaternions, const float* half_extents,
+                  size_t box_count, const RenderView& view, const MarchOptions& options,
+                  const RenderImages& images);
+
 }  // namespace boxmarch

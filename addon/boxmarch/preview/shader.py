@@ -1,0 +1,125 @@
+"""Builds the preview shader through ``gpu.shader.create_from_info`` (Blender 3.4 to 5.x) and
+keeps one per (SDF preset or user text); user SDF compile errors become a readable message."""
+from __future__ import annotations
+
+import os
+import re
+import sys
+import tempfile
+
+import gpu
+
+from . import sources
+
+
+class UserSdfError(Exception):
+    """The user's map() did not compile. ``line`` is the line in the text block (None when the
+    compiler blamed something after it, e.g. a missing brace)."""
+
+    def __init__(self, message: str, line: int | None):
+        super().__init__(message)
+        self.line = line
+
+
+_cache: dict = {}
+
+
+def _create_info(fragment: str):
+    iface = gpu.types.GPUStageInterfaceInfo("boxmarch_preview_interface")
+    for interpolation, type_name, name in sources.STAGE_INTERFACE:
+        getattr(iface, interpolation)(type_name, name)
+    info = gpu.types.GPUShaderCreateInfo()
+    for slot, (type_name, name) in enumerate(sources.VERTEX_INPUTS):
+        info.vertex_in(slot, type_name, name)
+    info.vertex_out(iface)
+    info.typedef_source(sources.UNIFORM_STRUCT)
+    info.uniform_buf(0, sources.UNIFORM_TYPE, sources.UNIFORM_NAME)
+    for slot, type_name, name in sources.FRAGMENT_OUTPUTS:
+        info.fragment_out(slot, type_name, name)
+    info.vertex_source(sources.vertex_source())
+    info.fragment_source(fragment)
+    return info, iface
+
+
+def _compile_capturing_log(info):
+    """create_from_info, with the compiler log that Blender prints (to stdout or stderr,
+    depending on the version) captured and passed on."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = {fd: os.dup(fd) for fd in (1, 2)}
+    with tempfile.TemporaryFile(mode="w+b") as log:
+        for fd in saved:
+            os.dup2(log.fileno(), fd)
+        try:
+            shader = gpu.shader.create_from_info(info)
+            error = None
+        except Exception as exc:  # Blender raises a plain Exception on compile errors
+            shader, error = None, exc
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            for fd, copy in saved.items():
+                os.dup2(copy, fd)
+                os.close(copy)
+        log.seek(0)
+        text = log.read().decode("utf-8", "replace")
+    if text:
+        sys.stderr.write(text)
+    return shader, error, text
+
+
+# Blender 4+ reformats the driver's log with the line in the message ("| :12:5: Error: <message>");
+# 3.4 as "   12 | <source line>" ... "   | Error: <message>"; raw logs say "0:12(5): error: <message>".
+_LOCATED_ERROR = re.compile(r"\|\s*:(\d+):\d+:\s*error:?\s*(.*)", re.I)
+_SOURCE_LINE = re.compile(r"^\s*(\d+)\s*\|")
+_BLENDER_ERROR = re.compile(r"\|\s*error:?\s*(.*)", re.I)
+_DRIVER_ERROR = re.compile(r"\b\d+:(\d+)\(\d+\):\s*error:?\s*(.*)", re.I)
+
+
+def _located(line: int, message: str):
+    if line >= sources.USER_END_LINE:
+        return f"after the end of the text: {message}", None
+    return f"line {line}: {message}", line
+
+
+def describe_compile_error(log: str):
+    """(message, user line or None) from a compiler log of a shader holding user text."""
+    for raw in log.splitlines():
+        match = _LOCATED_ERROR.search(raw)
+        if match:
+            return _located(int(match.group(1)), match.group(2).strip())
+    last_line = None
+    for raw in log.splitlines():
+        numbered = _SOURCE_LINE.match(raw)
+        if numbered:
+            last_line = int(numbered.group(1))
+            continue
+        match = _BLENDER_ERROR.search(raw)
+        if match and last_line is not None:
+            return _located(last_line, match.group(1).strip())
+        match = _DRIVER_ERROR.search(raw)
+        if match:
+            return _located(int(match.group(1)), match.group(2).strip())
+    errors = [line.strip() for line in log.splitlines() if "error" in line.lower()]
+    return (errors[0] if errors else "the shader did not compile (see the system console)"), None
+
+
+def preview_shader(sdf: str = "BOX", user_text: str | None = None):
+    """The compiled preview shader for a preset, or for user text defining ``float map(vec3 p)``.
+    Raises UserSdfError with the line for user text that does not compile."""
+    key = (sdf, user_text)
+    if key in _cache:
+        return _cache[key]
+    info, iface = _create_info(sources.fragment_source(sdf, user_text))
+    shader, error, log = _compile_capturing_log(info)
+    del iface  # the create-info refers to it until compiled
+    if shader is None:
+        if user_text is None:
+            raise RuntimeError(f"boxmarch preview shader failed to compile: {error}\n{log}")
+        raise UserSdfError(*describe_compile_error(log))
+    _cache[key] = shader
+    return shader
+
+
+def clear_cache():
+    _cache.clear()

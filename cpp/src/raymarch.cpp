@@ -1,0 +1,206 @@
+// The CPU reference raymarcher. It mirrors shaders/glsl/raymarch.glsl and preview.frag.glsl
+// statement for statement (same slab test, same loop, same normal taps, same light), in float
+// like the GPU, so the viewport preview can be tested against it pixel by pixel.
+#include "boxmarch/boxmarch.h"
+#include "sdf.h"
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace boxmarch {
+namespace {
+
+using glm::vec2;
+using glm::vec3;
+using glm::vec4;
+
+void check_options(const MarchOptions& o) {
+    if (o.max_steps < 0) throw std::invalid_argument("max_steps must be >= 0, got " + std::to_string(o.max_steps));
+    if (!(o.epsilon > 0.0f)) throw std::invalid_argument("epsilon must be > 0, got " + std::to_string(o.epsilon));
+    if (!(o.relaxation > 0.0f && o.relaxation <= 2.0f))
+        throw std::invalid_argument("relaxation must be in (0, 2], got " + std::to_string(o.relaxation));
+    if (!(o.max_distance > 0.0f))
+        throw std::invalid_argument("max_distance must be > 0, got " + std::to_string(o.max_distance));
+    if (int(o.sdf) < 0 || int(o.sdf) >= kSdfPresetCount)
+        throw std::invalid_argument("unknown SDF preset " + std::to_string(int(o.sdf)));
+}
+
+// raymarch.glsl: bm_box_span. Entry and exit distances of the ray with the box |p| <= h.
+vec2 box_span(vec3 ro, vec3 rd, vec3 h) {
+    vec3 s = glm::sign(rd);
+    s = vec3(s.x == 0.0f ? 1.0f : s.x, s.y == 0.0f ? 1.0f : s.y, s.z == 0.0f ? 1.0f : s.z);
+    vec3 inv = 1.0f / glm::max(glm::abs(rd), vec3(1e-12f));
+    vec3 t_near = (-h - s * ro) * inv;
+    vec3 t_far = (h - s * ro) * inv;
+    return vec2(sdf::max3(t_near), sdf::min3(t_far));
+}
+
+struct March {
+    bool hit;
+    float t;
+    int steps;
+};
+
+// raymarch.glsl: bm_march.
+March march(SdfPreset kind, vec3 ro, vec3 rd, vec3 h, float t_end, const MarchOptions& o) {
+    float t = 0.0f;
+    for (int i = 0; i < o.max_steps; ++i) {
+        float d = sdf::preset(kind, ro + rd * t, h);
+        if (d < o.epsilon) return {true, t, i + 1};
+        t += o.relaxation * d;
+        if (t > t_end) return {false, t, i + 1};
+    }
+    return {false, t, o.max_steps};
+}
+
+// raymarch.glsl: bm_normal_tap. Taps closer than a thousandth of the box lose the gradient in
+// float rounding, so small epsilons do not shrink them further.
+float normal_tap(float epsilon, vec3 h) { return std::max(epsilon, 1e-3f * sdf::max3(h)); }
+
+// raymarch.glsl: bm_normal (four tetrahedral taps).
+vec3 normal_at(SdfPreset kind, vec3 p, vec3 h, float e) {
+    const vec3 a(1.0f, -1.0f, -1.0f), b(-1.0f, -1.0f, 1.0f), c(-1.0f, 1.0f, -1.0f), d(1.0f, 1.0f, 1.0f);
+    vec3 n = a * sdf::preset(kind, p + a * e, h) + b * sdf::preset(kind, p + b * e, h) +
+             c * sdf::preset(kind, p + c * e, h) + d * sdf::preset(kind, p + d * e, h);
+    float len = glm::length(n);
+    return len > 0.0f ? n / len : vec3(0.0f);
+}
+
+// preview.frag.glsl: bm_shade (Lambert + hemisphere ambient, light fixed in view space).
+vec3 shade(vec3 n_view, vec3 base) {
+    const vec3 light = glm::normalize(vec3(0.35f, 0.45f, 0.82f));
+    float lambert = std::max(glm::dot(n_view, light), 0.0f);
+    vec3 ambient = glm::mix(vec3(0.20f, 0.19f, 0.18f), vec3(0.42f, 0.45f, 0.50f), 0.5f + 0.5f * n_view.y);
+    return base * (ambient + 0.8f * lambert);
+}
+
+template <class Fn>
+void parallel_for(size_t count, int threads, Fn fn) {
+    size_t n = threads > 0 ? size_t(threads) : std::max(1u, std::thread::hardware_concurrency());
+    n = std::min(n, std::max<size_t>(count / 64, 1));
+    if (n <= 1) {
+        fn(size_t(0), count);
+        return;
+    }
+    std::vector<std::thread> pool;
+    for (size_t k = 0; k < n; ++k) pool.emplace_back(fn, count * k / n, count * (k + 1) / n);
+    for (auto& t : pool) t.join();
+}
+
+}  // namespace
+
+float sdf_distance(SdfPreset kind, const float* p, const float* h) {
+    if (int(kind) < 0 || int(kind) >= kSdfPresetCount)
+        throw std::invalid_argument("unknown SDF preset " + std::to_string(int(kind)));
+    return sdf::preset(kind, glm::make_vec3(p), glm::make_vec3(h));
+}
+
+void raymarch(const float* origins, const float* directions, const float* half_extents, size_t ray_count,
+              const MarchOptions& o, uint8_t* hit, float* positions, float* normals, int32_t* steps) {
+    check_options(o);
+    parallel_for(ray_count, o.threads, [&](size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) {
+            vec3 ro = glm::make_vec3(origins + 3 * i);
+            vec3 rd = glm::make_vec3(directions + 3 * i);
+            vec3 h = glm::make_vec3(half_extents + 3 * i);
+            float len = glm::length(rd);
+            rd = len > 0.0f ? rd / len : vec3(0.0f, 0.0f, 1.0f);
+            vec2 span = box_span(ro, rd, h);
+            float t0 = std::max(span.x, 0.0f);
+            March m{false, 0.0f, 0};
+            vec3 start = ro + rd * t0;
+            if (span.y >= t0) m = march(o.sdf, start, rd, h, std::min(span.y - t0, o.max_distance), o);
+            vec3 p = start + rd * m.t;
+            if (hit) hit[i] = m.hit ? 1 : 0;
+            if (positions) for (int k = 0; k < 3; ++k) positions[3 * i + k] = p[k];
+            if (normals) {
+                vec3 n = m.hit ? normal_at(o.sdf, p, h, normal_tap(o.epsilon, h)) : vec3(0.0f);
+                for (int k = 0; k < 3; ++k) normals[3 * i + k] = n[k];
+            }
+            if (steps) steps[i] = m.steps;
+        }
+    });
+}
+
+void render_boxes(const float* origins, const float* quaternions, const float* half_extents, size_t box_count,
+                  const RenderView& view, const MarchOptions& o, const RenderImages& images) {
+    check_options(o);
+    if (!view.object_to_clip || !view.object_to_view || !images.rgba || !images.depth)
+        throw std::invalid_argument("render_boxes needs both matrices, rgba and depth");
+    const int W = int(view.width), H = int(view.height);
+    const glm::mat4 to_clip = glm::make_mat4(view.object_to_clip);
+    const glm::dmat4 from_clip = glm::inverse(glm::dmat4(to_clip));
+    const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(glm::make_mat4(view.object_to_view))));
+    const vec3 base = glm::make_vec3(view.base_color);
+
+    // Pixel rectangle of every box (x0, y0, x1, y1 inclusive, rows from the top): the rasteriser's
+    // coverage, conservatively; the slab test per pixel decides exactly.
+    std::vector<glm::ivec4> rects(box_count);
+    for (size_t b = 0; b < box_count; ++b) {
+        const glm::quat q(quaternions[4 * b + 3], quaternions[4 * b], quaternions[4 * b + 1], quaternions[4 * b + 2]);
+        const vec3 c = glm::make_vec3(origins + 3 * b), h = glm::make_vec3(half_extents + 3 * b);
+        float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
+        int behind = 0;
+        for (int k = 0; k < 8; ++k) {
+            vec3 corner(k & 1 ? h.x : -h.x, k & 2 ? h.y : -h.y, k & 4 ? h.z : -h.z);
+            vec4 clip = to_clip * vec4(c + q * corner, 1.0f);
+            if (clip.w <= 1e-6f) { ++behind; continue; }
+            float sx = (clip.x / clip.w * 0.5f + 0.5f) * float(W);
+            float sy = (0.5f - clip.y / clip.w * 0.5f) * float(H);
+            x0 = std::min(x0, sx); x1 = std::max(x1, sx); y0 = std::min(y0, sy); y1 = std::max(y1, sy);
+        }
+        if (behind == 8) rects[b] = glm::ivec4(0, 0, -1, -1);  // wholly behind the eye: no pixel
+        else if (behind) rects[b] = glm::ivec4(0, 0, W - 1, H - 1);  // crosses the eye plane
+        else rects[b] = glm::ivec4(std::max(int(std::floor(x0 - 0.5f)), 0), std::max(int(std::floor(y0 - 0.5f)), 0),
+                                   std::min(int(std::ceil(x1 - 0.5f)), W - 1), std::min(int(std::ceil(y1 - 0.5f)), H - 1));
+    }
+
+    parallel_for(size_t(H), o.threads, [&](size_t row_begin, size_t row_end) {
+        for (size_t b = 0; b < box_count; ++b) {
+            const glm::ivec4 r = rects[b];
+            if (r.y > int(row_end) - 1 || r.w < int(row_begin) || r.x > r.z) continue;
+            const glm::quat q(quaternions[4 * b + 3], quaternions[4 * b], quaternions[4 * b + 1], quaternions[4 * b + 2]);
+            const glm::quat iq = glm::conjugate(q);
+            const vec3 c = glm::make_vec3(origins + 3 * b), h = glm::make_vec3(half_extents + 3 * b);
+            for (int y = std::max(r.y, int(row_begin)); y <= std::min(r.w, int(row_end) - 1); ++y) {
+                for (int x = r.x; x <= r.z; ++x) {
+                    const double nx = (x + 0.5) / W * 2.0 - 1.0, ny = 1.0 - (y + 0.5) / H * 2.0;
+                    glm::dvec4 near = from_clip * glm::dvec4(nx, ny, -1.0, 1.0);
+                    glm::dvec4 far = from_clip * glm::dvec4(nx, ny, 1.0, 1.0);
+                    glm::dvec3 near3 = glm::dvec3(near) / near.w, far3 = glm::dvec3(far) / far.w;
+                    vec3 ro = iq * vec3(near3 - glm::dvec3(c));
+                    vec3 rd = iq * vec3(glm::normalize(far3 - near3));
+                    vec2 span = box_span(ro, rd, h);
+                    float t0 = std::max(span.x, 0.0f);
+                    if (span.y < t0) continue;
+                    vec3 start = ro + rd * t0;
+                    March m = march(o.sdf, start, rd, h, std::min(span.y - t0, o.max_distance), o);
+                    const size_t pix = size_t(y) * size_t(W) + size_t(x);
+                    if (images.steps) images.steps[pix] += m.steps;
+                    if (!m.hit) continue;
+                    vec3 local_hit = start + rd * m.t;
+                    vec3 object_hit = c + q * local_hit;
+                    vec4 clip = to_clip * vec4(object_hit, 1.0f);
+                    float depth = clip.z / clip.w * 0.5f + 0.5f;
+                    if (!(depth >= 0.0f && depth < images.depth[pix])) continue;
+                    vec3 n_object = q * normal_at(o.sdf, local_hit, h, normal_tap(o.epsilon, h));
+                    vec3 color = shade(glm::normalize(normal_matrix * n_object), base);
+                    images.depth[pix] = depth;
+                    for (int k = 0; k < 3; ++k) images.rgba[4 * pix + k] = color[k];
+                    images.rgba[4 * pix + 3] = 1.0f;
+                    if (images.normals) for (int k = 0; k < 3; ++k) images.normals[3 * pix + k] = n_object[k];
+                }
+            }
+        }
+    });
+}
+
+}  // namespace boxmarch

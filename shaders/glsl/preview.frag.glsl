@@ -1,0 +1,71 @@
+// boxmarch viewport preview, fragment stage: one fragment of a rasterised submesh recovers its
+// box-local frame, sphere-traces map() inside the box, writes the hit's depth and shades it.
+// Comes after decode.glsl, sdf.glsl, raymarch.glsl and a map() definition.
+// Uniform block `preview` (BoxmarchPreview): object_to_clip; normal_to_view (inverse transpose
+// of the object-to-view rotation part); eye (object-space camera position with w = 1, or for
+// orthographic views the object-space view direction with w = 0); march (epsilon, relaxation,
+// max_distance, max_steps); base_color; mode.x (0 shaded, 1 object-space normal as colour,
+// 2 steps of every fragment in red with alpha 1, for Blender's ADDITIVE blend: src * alpha + dst).
+// Mirrored by cpp/src/raymarch.cpp (render_boxes).
+
+// Lambert from a light fixed in view space plus a sky/ground hemisphere, like the viewport's
+// studio look.
+vec3 bm_shade(vec3 n_view, vec3 base)
+{
+  const vec3 light = normalize(vec3(0.35, 0.45, 0.82));
+  float lambert = max(dot(n_view, light), 0.0);
+  vec3 ambient = mix(vec3(0.20, 0.19, 0.18), vec3(0.42, 0.45, 0.50), 0.5 + 0.5 * n_view.y);
+  return base * (ambient + 0.8 * lambert);
+}
+
+void main()
+{
+  vec4 q = normalize(frag_quat);
+  vec3 f = GetFragToOrigin(frag_offset);
+  box_half = frag_half;
+  vec3 ro = -f;
+  vec3 ray_object = preview.eye.w > 0.5 ? obj_pos - preview.eye.xyz : preview.eye.xyz;
+  float eye_distance = length(ray_object);
+  vec3 rd = normalize(rotate_vector(ray_object / eye_distance, quat_conjugate(q)));
+
+  // On the face where the ray enters the box the span ahead is longer than the one behind; a
+  // fragment of the far side only marches when the eye is inside the box (from the eye).
+  vec2 span = bm_box_span(ro, rd, box_half);
+  float t_end = span.y;
+  if (span.x + span.y < 0.0) {
+    if (preview.eye.w < 0.5 || eye_distance > -span.x) {
+      if (preview.mode.x == 2) {
+        frag_color = vec4(0.0, 0.0, 0.0, 1.0);
+        return;
+      }
+      discard;
+    }
+    ro -= rd * eye_distance;
+    t_end = eye_distance;
+  }
+
+  int max_steps = int(preview.march.w);
+  float t;
+  int steps;
+  bool hit = bm_march(ro, rd, min(t_end, preview.march.z), max_steps, preview.march.x, preview.march.y, t, steps);
+  if (preview.mode.x == 2) {
+    frag_color = vec4(float(steps), 0.0, 0.0, 1.0);
+    return;
+  }
+  if (!hit) {
+    discard;
+  }
+  vec3 local_hit = ro + rd * t;
+  vec3 obj_hit = obj_pos + rotate_vector(local_hit + f, q);
+  vec4 clip = preview.object_to_clip * vec4(obj_hit, 1.0);
+  gl_FragDepth = clip.z / clip.w * 0.5 + 0.5;
+
+  vec3 n_object = rotate_vector(bm_normal(local_hit, bm_normal_tap(preview.march.x, box_half)), q);
+  if (preview.mode.x == 1) {
+    frag_color = vec4(n_object * 0.5 + 0.5, 1.0);
+  }
+  else {
+    vec3 n_view = normalize(mat3(preview.normal_to_view) * n_object);
+    frag_color = vec4(bm_shade(n_view, preview.base_color.rgb), preview.base_color.a);
+  }
+}

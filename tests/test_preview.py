@@ -1,0 +1,100 @@
+"""The viewport preview rendered by Blender's GPU module (Debian's Blender 3.4 program and the
+bpy 5.0 module, both in the background on Mesa llvmpipe here) against the CPU reference raymarcher, which renders the scene from the boxes'
+known centres, sizes and rotations (not from the baked data the GPU decodes).
+
+Tolerances: coverage masks agree on >= 99% of pixels; where both hit, the 99.9th percentile of
+|window depth difference| <= 2e-6, the 99th percentile of the normal angle <= 2 degrees and of
+the largest colour channel difference <= 0.02 (measured: docs/PREVIEW.md)."""
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from boxmarch import core
+from test_blender_app import blender_env, package_parent, run_blender  # noqa: F401  (fixture)
+
+SCRIPT = Path(__file__).parent / "blender_scripts" / "preview_check.py"
+OUTLINE_COLOR = (0.05, 0.05, 0.05)  # preview/draw.py OUTLINE_COLOR (that module needs bpy)
+
+
+def quaternions_of(rotations):
+    """(n, 4) x, y, z, w of proper rotation matrices (n, 3, 3), Shepperd's way with signs from
+    the antisymmetric part: written here independently of the code under test."""
+    m = np.asarray(rotations)
+    w = np.sqrt(np.maximum(0, 1 + m[:, 0, 0] + m[:, 1, 1] + m[:, 2, 2])) / 2
+    x = np.sqrt(np.maximum(0, 1 + m[:, 0, 0] - m[:, 1, 1] - m[:, 2, 2])) / 2
+    y = np.sqrt(np.maximum(0, 1 - m[:, 0, 0] + m[:, 1, 1] - m[:, 2, 2])) / 2
+    z = np.sqrt(np.maximum(0, 1 - m[:, 0, 0] - m[:, 1, 1] + m[:, 2, 2])) / 2
+    x = np.copysign(x, m[:, 2, 1] - m[:, 1, 2])
+    y = np.copysign(y, m[:, 0, 2] - m[:, 2, 0])
+    z = np.copysign(z, m[:, 1, 0] - m[:, 0, 1])
+    return np.stack([x, y, z, w], 1)
+
+
+@pytest.fixture(scope="module", params=["blender-3.4-program", "bpy-5.0-module"])
+def rendered(request, package_parent, tmp_path_factory):  # noqa: F811
+    tmp = tmp_path_factory.mktemp("preview")
+    out = tmp / "preview.npz"
+    if request.param == "blender-3.4-program":
+        run_blender(["--background", "--factory-startup", "--python-exit-code", "1", "--python", str(SCRIPT), "--",
+                     str(package_parent), str(out)], tmp, timeout=600)
+    else:
+        proc = subprocess.run([sys.executable, str(SCRIPT), "--", str(package_parent), str(out)],
+                              env=blender_env(tmp), capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    return dict(np.load(out))
+
+
+def reference(r, sdf):
+    height, width = r["BOX_SHADED_depth"].shape
+    model, view, projection = r["matrix_world"], r["view"], r["projection"]
+    return core.render_boxes(r["centres"], quaternions_of(r["rotations"]), r["sizes"] / 2, projection @ view @ model,
+                             view @ model, width, height, sdf=sdf, base_color=r["color"][:3])
+
+
+@pytest.mark.parametrize("sdf", ["BOX", "SPHERE", "ROUNDED_BOX"])
+def test_preview_matches_cpu_reference(rendered, sdf):
+    ref = reference(rendered, sdf)
+    depth = rendered[f"{sdf}_SHADED_depth"]
+    gpu_hit, cpu_hit = depth < 1.0, ref.depth < 1.0
+    assert cpu_hit.mean() > 0.1  # the scene is in view
+    assert (gpu_hit == cpu_hit).mean() >= 0.99
+    both = gpu_hit & cpu_hit
+    assert np.percentile(np.abs(depth - ref.depth)[both], 99.9) <= 2e-6
+    normals = rendered[f"{sdf}_NORMAL_rgba"][..., :3] * 2.0 - 1.0
+    angle = np.degrees(np.arccos(np.clip((normals * ref.normals).sum(-1)[both], -1.0, 1.0)))
+    assert np.percentile(angle, 99) <= 2.0
+    colour = np.abs(rendered[f"{sdf}_SHADED_rgba"][..., :3] - ref.rgba[..., :3])[both].max(-1)
+    assert np.percentile(colour, 99) <= 0.02
+
+
+def test_sphere_is_inside_box_and_differs_from_it(rendered):
+    box, sphere = rendered["BOX_SHADED_depth"] < 1.0, rendered["SPHERE_SHADED_depth"] < 1.0
+    assert not np.any(sphere & ~box)  # the largest inner sphere never leaves its box
+    assert sphere.sum() < 0.8 * box.sum()
+
+
+def test_user_sdf_text_block_matches_preset(rendered):
+    assert rendered["user_error"] == "None"
+    assert np.array_equal(rendered["USER_SHADED_depth"] < 1.0, rendered["SPHERE_SHADED_depth"] < 1.0)
+    assert np.abs(rendered["USER_SHADED_depth"] - rendered["SPHERE_SHADED_depth"]).max() <= 1e-6
+
+
+def test_user_sdf_error_names_line_and_falls_back_to_outline(rendered):
+    error = str(rendered["broken_error"])
+    assert "broken.glsl" in error and "line 4" in error and "lenght" in error
+    drawn = rendered["BROKEN_depth"] < 1.0
+    assert 0 < drawn.mean() < 0.5 * (rendered["BOX_SHADED_depth"] < 1.0).mean()
+    assert np.allclose(rendered["BROKEN_rgba"][drawn][:, :3], OUTLINE_COLOR[:3], atol=0.01)
+
+
+def test_composites_with_scene_geometry_by_depth(rendered):
+    plane_depth, composite = rendered["PLANE_depth"], rendered["COMPOSITE_depth"]
+    spheres = reference(rendered, "SPHERE")
+    expected = np.minimum(plane_depth, spheres.depth)
+    assert (np.abs(composite - expected) <= 2e-6).mean() >= 0.99
+    in_front = spheres.depth < plane_depth - 1e-4
+    behind = (spheres.depth < 1.0) & (spheres.depth > plane_depth + 1e-4)
+    assert in_front.sum() > 100 and behind.sum() > 100  # the plane really cuts through the spheres

@@ -1,0 +1,134 @@
+"""Compile checks of every shader with glslangValidator (no GPU needed), and the GLSL, HLSL and
+C++ mirrors kept in step by comparing their function lists."""
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from boxmarch import core
+from boxmarch.preview import sources
+
+SHADERS = Path(__file__).resolve().parent.parent / "shaders"
+GLSL_TYPES = {"FLOAT": "float", "INT": "int", "VEC2": "vec2", "VEC3": "vec3", "VEC4": "vec4", "MAT4": "mat4"}
+# Engine-side helpers without a GLSL twin (Blender reads UV maps by name, and the preview's main()
+# is the GLSL form of BoxmarchRaymarch).
+ENGINE_ONLY = {"get_uv_by_channel", "GetRotationFromChannels", "BoxmarchCubeHalfExtents", "BoxmarchRaymarch"}
+
+
+def validator():
+    path = shutil.which("glslangValidator")
+    if path is None:
+        pytest.fail("glslangValidator is missing: apt-get install glslang-tools (scripts/setup.sh)")
+    return path
+
+
+def blender_declarations(stage):
+    """What Blender generates from the preview's create-info before our source (GL backend)."""
+    lines = ["#version 330 core", sources.UNIFORM_STRUCT,
+             f"layout(std140) uniform _{sources.UNIFORM_NAME} {{ {sources.UNIFORM_TYPE} {sources.UNIFORM_NAME}; }};"]
+    if stage == "vert":
+        lines += [f"layout(location = {i}) in {GLSL_TYPES[t]} {name};" for i, (t, name) in enumerate(sources.VERTEX_INPUTS)]
+    direction = "out" if stage == "vert" else "in"
+    lines += [f"{'flat ' if interp == 'flat' else ''}{direction} {GLSL_TYPES[t]} {name};"
+              for interp, t, name in sources.STAGE_INTERFACE]
+    if stage == "frag":
+        lines += [f"layout(location = {slot}) out {GLSL_TYPES[t]} {name};" for slot, t, name in sources.FRAGMENT_OUTPUTS]
+    return "\n".join(lines) + "\n"
+
+
+def compile_glsl(tmp_path, name, stage, source):
+    path = tmp_path / f"{name}.{stage}"
+    path.write_text(blender_declarations(stage) + source)
+    return subprocess.run([validator(), str(path)], capture_output=True, text=True)
+
+
+def test_vertex_stage_compiles(tmp_path):
+    proc = compile_glsl(tmp_path, "preview", "vert", sources.vertex_source())
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+@pytest.mark.parametrize("sdf", core.SDF_PRESETS)
+def test_fragment_stage_compiles_for_every_preset(tmp_path, sdf):
+    proc = compile_glsl(tmp_path, f"preview_{sdf}", "frag", sources.fragment_source(sdf))
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_stages_link(tmp_path):
+    vert = tmp_path / "link.vert"
+    frag = tmp_path / "link.frag"
+    vert.write_text(blender_declarations("vert") + sources.vertex_source())
+    frag.write_text(blender_declarations("frag") + sources.fragment_source("TORUS"))
+    proc = subprocess.run([validator(), "-l", str(vert), str(frag)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_every_glsl_file_is_compiled():
+    used = sources.vertex_source() + sources.fragment_source("BOX")
+    for path in (SHADERS / "glsl").glob("*.glsl"):
+        assert path.read_text() in used, f"{path.name} is not part of the compiled preview"
+
+
+def test_user_text_uses_library_and_errors_report_user_lines(tmp_path):
+    good = "float map(vec3 p)\n{\n  return op_smooth_union(sd_sphere(p, min3(box_half)), sd_torus(p, 0.5, 0.1), 0.1);\n}"
+    proc = compile_glsl(tmp_path, "user_good", "frag", sources.fragment_source("USER", good))
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    bad = "float map(vec3 p)\n{\n  float r = 1.0;\n  return lenght(p) - r;\n}"
+    proc = compile_glsl(tmp_path, "user_bad", "frag", sources.fragment_source("USER", bad))
+    assert proc.returncode != 0
+    assert re.search(r"\b0:4\b.*lenght", proc.stdout), proc.stdout  # line 4 of the user's text
+
+
+@pytest.mark.parametrize("entry", ["vert", "frag"])
+def test_hlsl_example_compiles(tmp_path, entry):
+    proc = subprocess.run([validator(), "-D", "-V", "-e", entry, "-S", entry, str(SHADERS / "hlsl" / "boxmarch_example.hlsl"),
+                           "-o", str(tmp_path / f"{entry}.spv")], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_hlsl_with_a_frame_change_compiles(tmp_path):
+    source = ('#define BOXMARCH_FRAME float3x3(-1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, -1.0, 0.0)\n'
+              '#include "boxmarch_example.hlsl"\n')
+    path = tmp_path / "framed.hlsl"
+    path.write_text(source)
+    proc = subprocess.run([validator(), "-D", "-V", "-e", "frag", "-S", "frag", "-I" + str(SHADERS / "hlsl"), str(path),
+                           "-o", str(tmp_path / "framed.spv")], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+_FUNCTION = re.compile(r"^(?:static\s+)?(\w+)\s+(\w+)\s*\(([^)]*)\)\s*(?:\{|$)", re.M)
+_HLSL_TO_GLSL = {"float2": "vec2", "float3": "vec3", "float4": "vec4", "float3x3": "mat3", "float4x4": "mat4"}
+
+
+def functions(paths, to_glsl=False):
+    """{name: (return type, parameter types)} of top-level function definitions."""
+    found = {}
+    for path in paths:
+        for ret, name, params in _FUNCTION.findall(path.read_text()):
+            if ret in {"return", "else", "struct"} or name == "main":
+                continue
+            types = tuple(p.split()[-2] for p in params.replace("\n", " ").split(",") if p.strip())
+            if to_glsl:
+                ret = _HLSL_TO_GLSL.get(ret, ret)
+                types = tuple(_HLSL_TO_GLSL.get(t, t) for t in types)
+            found[name] = (ret, types)
+    return found
+
+
+def test_glsl_and_hlsl_have_the_same_functions():
+    glsl = functions([SHADERS / "glsl" / n for n in ("decode.glsl", "sdf.glsl", "raymarch.glsl")])
+    hlsl = functions([SHADERS / "hlsl" / n for n in ("boxmarch.hlsl", "boxmarch_raymarch.hlsl")], to_glsl=True)
+    assert len(glsl) > 30
+    assert {k: v for k, v in hlsl.items() if k not in ENGINE_ONLY} == glsl
+    assert ENGINE_ONLY <= set(hlsl)
+
+
+def test_cpp_mirror_has_the_sdf_library():
+    glsl = functions([SHADERS / "glsl" / "sdf.glsl"])
+    cpp = (Path(__file__).resolve().parent.parent / "cpp" / "src" / "sdf.h").read_text()
+    for name in glsl:
+        cpp_name = name.replace("sdf_preset_", "preset_")
+        assert re.search(rf"\b{cpp_name}\(", cpp), f"{name} has no C++ mirror in cpp/src/sdf.h"
+    presets = [n.replace("sdf_preset_", "").upper() for n in glsl if n.startswith("sdf_preset_")]
+    assert presets == list(core.SDF_PRESETS)
