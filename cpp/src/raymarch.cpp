@@ -157,10 +157,15 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
             float sy = (0.5f - clip.y / clip.w * 0.5f) * float(H);
             x0 = std::min(x0, sx); x1 = std::max(x1, sx); y0 = std::min(y0, sy); y1 = std::max(y1, sy);
         }
+        // Screen coordinates are clamped to the viewport before conversion: a corner just in
+        // front of the eye plane projects far outside it, and converting such a float (or NaN)
+        // to int is undefined (it silently dropped the box on x86).
+        const bool finite = std::isfinite(x0) && std::isfinite(x1) && std::isfinite(y0) && std::isfinite(y1);
+        auto pixel = [](float v, int last) { return int(std::clamp(v, -1.0f, float(last + 1))); };
         if (behind == 8) rects[b] = glm::ivec4(0, 0, -1, -1);  // wholly behind the eye: no pixel
-        else if (behind) rects[b] = glm::ivec4(0, 0, W - 1, H - 1);  // crosses the eye plane
-        else rects[b] = glm::ivec4(std::max(int(std::floor(x0 - 0.5f)), 0), std::max(int(std::floor(y0 - 0.5f)), 0),
-                                   std::min(int(std::ceil(x1 - 0.5f)), W - 1), std::min(int(std::ceil(y1 - 0.5f)), H - 1));
+        else if (behind || !finite) rects[b] = glm::ivec4(0, 0, W - 1, H - 1);  // crosses the eye plane
+        else rects[b] = glm::ivec4(std::max(pixel(std::floor(x0 - 0.5f), W - 1), 0), std::max(pixel(std::floor(y0 - 0.5f), H - 1), 0),
+                                   std::min(pixel(std::ceil(x1 - 0.5f), W - 1), W - 1), std::min(pixel(std::ceil(y1 - 0.5f), H - 1), H - 1));
     }
 
     parallel_for(size_t(H), o.threads, [&](size_t row_begin, size_t row_end) {
