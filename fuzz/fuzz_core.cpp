@@ -326,6 +326,90 @@ void fuzz_small_functions(Bytes& in) {
     (void)options_seed(o);
 }
 
+MarchOptions read_march_options(Bytes& in) {
+    MarchOptions o;
+    o.sdf = SdfPreset(int(in.byte() % 9) - 1);  // -1..7: valid is 0..6
+    o.max_steps = int(int8_t(in.byte()));       // negative is invalid
+    const uint8_t e = in.byte();
+    o.epsilon = e == 0 ? 0.0f : e == 1 ? -1e-3f : std::ldexp(1.0f, -int(e % 24));
+    o.relaxation = (in.byte() % 26) * 0.1f;     // 0..2.5: valid is (0, 2]
+    const uint8_t d = in.byte();
+    o.max_distance = d == 0 ? 0.0f : float(d);
+    o.threads = 1;
+    return o;
+}
+
+bool march_options_valid(const MarchOptions& o) {
+    return o.max_steps >= 0 && o.epsilon > 0.0f && o.relaxation > 0.0f && o.relaxation <= 2.0f &&
+           o.max_distance > 0.0f && int(o.sdf) >= 0 && int(o.sdf) < kSdfPresetCount;
+}
+
+void fuzz_raymarch(Bytes& in) {
+    const size_t rays = in.byte() % 9;
+    const bool raw = in.byte() & 1;
+    std::vector<float> origins(rays * 3), directions(rays * 3), half(rays * 3);
+    for (float& x : origins) x = in.coordinate(raw);
+    for (float& x : directions) x = in.coordinate(raw);
+    for (float& x : half) x = in.coordinate(raw);
+    const MarchOptions o = read_march_options(in);
+    std::vector<uint8_t> hit(rays, 7);
+    std::vector<float> positions(rays * 3, 7.0f), normals(rays * 3, 7.0f);
+    std::vector<int32_t> steps(rays, -7);
+    const bool ok = accepted([&] {
+        raymarch(origins.data(), directions.data(), half.data(), rays, o, hit.data(), positions.data(), normals.data(),
+                 steps.data());
+    });
+    if (ok != march_options_valid(o)) fail(ok ? "raymarch accepted invalid options" : "raymarch rejected valid options");
+    for (size_t i = 0; i < rays; ++i) {
+        if (!ok) {
+            if (hit[i] != 7 || steps[i] != -7) fail("rejected raymarch wrote output");
+        } else if (hit[i] > 1 || steps[i] < 0 || steps[i] > o.max_steps) {
+            fail("raymarch wrote a hit flag or step count out of range");
+        }
+    }
+    if (rays) {
+        float distance = 0.0f;
+        const bool preset_ok = int(o.sdf) >= 0 && int(o.sdf) < kSdfPresetCount;
+        if (accepted([&] { distance = sdf_distance(o.sdf, origins.data(), half.data()); }) != preset_ok)
+            fail("sdf_distance disagrees with the preset range");
+        (void)distance;
+    }
+}
+
+void fuzz_render(Bytes& in) {
+    const size_t boxes = in.byte() % 4;
+    const uint32_t width = in.byte() % 17, height = in.byte() % 17;
+    const bool raw = in.byte() & 1;
+    std::vector<float> origins(boxes * 3), quaternions(boxes * 4), half(boxes * 3);
+    for (float& x : origins) x = in.coordinate(raw);
+    for (float& x : quaternions) x = in.coordinate(raw);
+    for (float& x : half) x = in.coordinate(raw);
+    float clip[16], view_matrix[16];
+    for (float& x : clip) x = in.coordinate(raw);
+    for (float& x : view_matrix) x = in.coordinate(raw);
+    RenderView view;
+    view.object_to_clip = clip;
+    view.object_to_view = view_matrix;
+    view.width = width;
+    view.height = height;
+    MarchOptions o = read_march_options(in);
+    o.max_steps = o.max_steps % 33;  // keep one input cheap: pixels x boxes x steps
+    const size_t pixels = size_t(width) * height;
+    // One spare element when empty: render_boxes wants non-null images even with no pixels.
+    std::vector<float> rgba(std::max<size_t>(pixels * 4, 1), 0.0f), depth(std::max<size_t>(pixels, 1), 1.0f),
+        normals(pixels * 3, 0.0f);
+    std::vector<int32_t> steps(pixels, 0);
+    RenderImages images;
+    images.rgba = rgba.data();
+    images.depth = depth.data();
+    images.normals = normals.data();
+    images.steps = steps.data();
+    const bool ok = accepted([&] { render_boxes(origins.data(), quaternions.data(), half.data(), boxes, view, o, images); });
+    if (ok != march_options_valid(o)) fail(ok ? "render_boxes accepted invalid options" : "render_boxes rejected valid options");
+    for (int32_t s : steps)
+        if (s < 0) fail("render_boxes wrote a negative step count");
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -341,5 +425,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     fuzz_group(in);
     fuzz_expand(in);
     fuzz_small_functions(in);
+    fuzz_raymarch(in);
+    fuzz_render(in);
     return 0;
 }
