@@ -3,8 +3,9 @@
 # tests (build/sanitize), then the checks under it:
 #   bash scripts/sanitize.sh [build|cpp|python|all]     (default: all)
 # cpp: ctest (C++ tests and the fuzz corpus replay). python: the native Python test suite
-# (tests/test_core.py, tests/test_properties.py, tests/test_raymarch_core.py) importing the sanitized module, with the ASan
-# runtime preloaded into Python (leak detection off: CPython keeps its objects to the end).
+# (tests/test_core.py, tests/test_properties.py, tests/test_raymarch_core.py) importing the
+# sanitized module, with the ASan runtime preloaded into Python (leak detection off: CPython
+# keeps its objects to the end).
 # Any sanitizer report aborts with a nonzero exit. Assumes scripts/setup.sh ran once.
 set -euo pipefail
 cd "$(dirname "$0")/.."
