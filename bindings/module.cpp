@@ -6,6 +6,10 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+
 #include <cstring>
 #include <sstream>
 #include <string>
@@ -87,6 +91,8 @@ py::array_t<T> empty(py::ssize_t rows, py::ssize_t cols = 0) {
     return cols ? py::array_t<T>({rows, cols}) : py::array_t<T>(rows);
 }
 
+constexpr size_t kTrimAfterVertices = size_t(1) << 20;
+
 py::dict bake_py(const py::object& positions, const py::object& edges, const py::object& face_starts,
                  const py::object& face_sizes, const py::object& corner_verts, const py::object& mask,
                  const py::object& previous_fingerprints, const py::object& offsets_out, double angle_epsilon,
@@ -146,6 +152,12 @@ py::dict bake_py(const py::object& positions, const py::object& edges, const py:
         const uint32_t* pv = previous_fingerprints.is_none() ? nullptr : previous.data();
         py::gil_scoped_release release;
         report = bake(mesh.view, submesh_of_vertex.data(), count, mk, pv, options, fingerprints.mutable_data(), of, ob, out);
+#ifdef __GLIBC__
+        // glibc keeps the freed scratch of a large bake in its heaps; hand it back before Blender
+        // allocates the layers the bake writes, or it adds to the peak of the whole operation.
+        // Trimming walks every heap (milliseconds), so small bakes skip it.
+        if (mesh.view.vertex_count >= kTrimAfterVertices) malloc_trim(0);
+#endif
     }
     py::dict r;
     r["submesh_of_vertex"] = submesh_of_vertex;

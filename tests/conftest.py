@@ -3,7 +3,6 @@ tests that ask for the ``blender`` fixture; the core tests never import it."""
 import os
 import tempfile
 
-import numpy as np
 import pytest
 
 _SANDBOX = tempfile.mkdtemp(prefix="boxmarch-tests-")
@@ -39,18 +38,9 @@ def blender(bpy_module):
 
 def mesh_object(bpy, name, positions, edges, face_starts, face_sizes, corner_verts, select=True):
     """A new object linked to the scene whose mesh holds exactly these arrays."""
-    mesh = bpy.data.meshes.new(name)
-    mesh.vertices.add(len(positions))
-    mesh.vertices.foreach_set("co", np.asarray(positions, np.float32).reshape(-1))
-    mesh.edges.add(len(edges))
-    mesh.edges.foreach_set("vertices", np.asarray(edges, np.int32).reshape(-1))
-    mesh.loops.add(len(corner_verts))
-    mesh.loops.foreach_set("vertex_index", np.asarray(corner_verts, np.int32))
-    mesh.polygons.add(len(face_starts))
-    mesh.polygons.foreach_set("loop_start", np.asarray(face_starts, np.int32))
-    if bpy.app.version < (4, 0, 0):
-        mesh.polygons.foreach_set("loop_total", np.asarray(face_sizes, np.int32))
-    mesh.update(calc_edges=True)
+    from boxmarch import mesh_io
+
+    mesh = mesh_io.new_mesh(name, positions, face_starts, face_sizes, corner_verts, edges=edges)
     ob = bpy.data.objects.new(name, mesh)
     bpy.context.scene.collection.objects.link(ob)
     if select:

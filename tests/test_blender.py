@@ -155,24 +155,29 @@ def test_multi_object_edit_mode(blender):
         assert np.allclose(origins, np.repeat(centres, 24, axis=0), atol=1e-5)
 
 
-def test_rebake_skips_unchanged_submeshes(blender):
+@pytest.mark.parametrize("encoding, domain, tolerance", [("FLOAT_COLOR", "POINT", 1e-5),
+                                                         ("BYTE_COLOR", "CORNER", 0.05)])
+def test_rebake_skips_unchanged_submeshes(blender, encoding, domain, tolerance):
     from boxmarch import mesh_io
 
-    ob, centres, _ = box_scene(blender, count=20)
-    mesh_io.prepare_bake(ob.data, mesh_io.BakeSettings()).write()
+    ob, centres, sizes = box_scene(blender, count=20)
+    settings = mesh_io.BakeSettings(encoding=encoding, domain=domain)
+    mesh_io.prepare_bake(ob.data, settings).write()
     positions = read_positions(ob.data)
     positions[8:16] += np.float32(5.0)  # move box 1
     ob.data.vertices.foreach_set("co", positions.reshape(-1))
     ob.data.update()
-    prepared = mesh_io.prepare_bake(ob.data, mesh_io.BakeSettings())
+    prepared = mesh_io.prepare_bake(ob.data, settings)
     assert (prepared.result.baked, prepared.result.unchanged) == (1, 19)
     prepared.write()
-    origins, _ = decode_corners(ob.data)
+    origins, _ = decode_corners(ob.data, raw_bytes=encoding == "BYTE_COLOR")
     expected = centres.copy()
     expected[1] += 5.0
-    assert np.allclose(origins, np.repeat(expected, 24, axis=0), atol=1e-5)
+    miss = np.linalg.norm(origins - np.repeat(expected, 24, axis=0), axis=1)
+    assert (miss <= tolerance * np.repeat(sizes.max(axis=1), 24)).all()
     # changing an option re-bakes everything
-    assert mesh_io.prepare_bake(ob.data, mesh_io.BakeSettings(origin="MEAN")).result.baked == 20
+    settings.origin = "MEAN"
+    assert mesh_io.prepare_bake(ob.data, settings).result.baked == 20
 
 
 def test_axis_turn_and_sort_keep_decode_exact(blender):

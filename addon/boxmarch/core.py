@@ -35,7 +35,7 @@ class BakeResult:
     RGBA, or uint8 RGBA for BYTE_COLOR). Per submesh: ``quaternions`` (float32 x, y, z, w),
     ``origins`` (float64 object space), ``half_extents`` (float64, local axes), ``scales``
     (float32 alpha), ``sources`` (index into FRAME_SOURCES), ``statuses`` (STATUS_*).
-    Entries of submeshes that were not baked are zero.
+    Entries of submeshes that were not baked are zero, with source ``IDENTITY``.
     """
 
     submesh_of_vertex: np.ndarray

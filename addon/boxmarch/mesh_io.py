@@ -29,12 +29,16 @@ class BakeInputError(ValueError):
     """The mesh cannot be baked as it is; the message says why. Nothing was written."""
 
 
-def new_mesh(name, positions, face_starts, face_sizes, corner_verts):
-    """A new mesh datablock holding these faces; Blender derives the edges (and each corner's
-    edge), as in any mesh made in the editor."""
+def new_mesh(name, positions, face_starts, face_sizes, corner_verts, edges=None):
+    """A new mesh datablock holding these faces, plus ``edges`` (E, 2) when given (loose edges
+    need them); Blender derives the faces' edges (and each corner's edge), as in any mesh made in
+    the editor."""
     mesh = bpy.data.meshes.new(name)
     mesh.vertices.add(len(positions))
     mesh.vertices.foreach_set("co", np.asarray(positions, np.float32).reshape(-1))
+    if edges is not None and len(edges):
+        mesh.edges.add(len(edges))
+        mesh.edges.foreach_set("vertices", np.asarray(edges, np.int32).reshape(-1))
     mesh.loops.add(len(corner_verts))
     mesh.loops.foreach_set("vertex_index", np.asarray(corner_verts, np.int32))
     mesh.polygons.add(len(face_starts))
@@ -168,48 +172,68 @@ class PreparedBake:
     report: dict = field(default_factory=dict)
 
     def write(self) -> dict:
+        """Store the bake. The colour goes first so its buffer (the largest result array) is
+        released before the UV maps are made, and one corner buffer serves both UV maps: peak
+        memory stays close to the size of the layers written."""
         mesh, s, r = self.mesh, self.settings, self.result
         if r.baked == 0:  # nothing changed: the stored data is already this bake's
             return self.report
         corner_count = len(self.corner_verts)
-        # Layers first (UV maps in channel order), all looked up by name when written.
-        new_uv = [name for name in (QUAT_XY_UV, QUAT_ZW_UV) if name not in mesh.uv_layers]
-        if len(mesh.uv_layers) == 0:
-            mesh.uv_layers.new(name="UVMap")
         previous_uv = {name: _read_uv(mesh, name, corner_count)
-                       for name in (QUAT_XY_UV, QUAT_ZW_UV) if self.keep_previous and name not in new_uv}
-        for name in new_uv:
-            mesh.uv_layers.new(name=name)
+                       for name in (QUAT_XY_UV, QUAT_ZW_UV) if self.keep_previous and name in mesh.uv_layers}
+
         if not _colour_matches(mesh, OFFSET_ATTRIBUTE, s.encoding, s.domain):
             old = mesh.attributes.get(OFFSET_ATTRIBUTE)
             if old is not None:
                 mesh.attributes.remove(old)
             mesh.color_attributes.new(OFFSET_ATTRIBUTE, s.encoding, s.domain)
-
-        offsets = r.offsets if s.domain == "POINT" else r.offsets[self.corner_verts]
+        offsets = r.offsets
+        if r.baked < r.submesh_count:  # the rows of submeshes not baked keep their stored colour
+            if self.keep_previous:
+                offsets = _read_offsets(mesh, s, self.corner_verts, len(r.submesh_of_vertex))
+            else:  # a first bake of part of the mesh: the rest decodes to f = 0
+                neutral = NEUTRAL_FLOAT if s.encoding == "FLOAT_COLOR" else NEUTRAL_BYTE
+                offsets = np.empty_like(r.offsets)
+                offsets[:] = neutral
+            baked_vertex = r.written.view(bool)[r.submesh_of_vertex]
+            offsets[baked_vertex] = r.offsets[baked_vertex]
+            del baked_vertex
+        if s.domain == "CORNER":
+            offsets = offsets[self.corner_verts]
         if s.encoding == "FLOAT_COLOR":
             mesh.color_attributes[OFFSET_ATTRIBUTE].data.foreach_set("color", offsets.reshape(-1))
         else:
             # Raw bytes: color_srgb stores byte/255 untouched (color would apply the sRGB curve).
             raw = offsets.reshape(-1).astype(np.float32) / np.float32(255.0)
             mesh.color_attributes[OFFSET_ATTRIBUTE].data.foreach_set("color_srgb", raw)
+            del raw
+        del offsets
+        r.offsets = None  # stored now; released so the UV maps do not add to the peak
 
+        # UV maps in channel order, created without copying the active map's values.
+        if len(mesh.uv_layers) == 0:
+            mesh.uv_layers.new(name="UVMap")
         everything = r.baked == r.submesh_count
+        buffer = None
         for half, name in enumerate((QUAT_XY_UV, QUAT_ZW_UV)):
-            uv = previous_uv.get(name)
+            if name not in mesh.uv_layers:
+                mesh.uv_layers.new(name=name, do_init=False)
+            uv = previous_uv.pop(name, None)
             if uv is None:
-                uv = np.empty((corner_count, 2), np.float32)
+                buffer = uv = np.empty((corner_count, 2), np.float32) if buffer is None else buffer
                 if not everything:  # the identity quaternion where nothing is baked
                     uv[:, 0] = 0.0
                     uv[:, 1] = float(half)
             core.corner_quaternion_uv(uv, half, self.corner_verts, r, write_all=everything)
             _write_uv(mesh, name, uv)
+            del uv
+        del buffer
 
         if mesh.attributes.get(FINGERPRINT_ATTRIBUTE) is None:
             mesh.attributes.new(FINGERPRINT_ATTRIBUTE, "INT", "POINT")
         mesh.attributes[FINGERPRINT_ATTRIBUTE].data.foreach_set("value", r.fingerprints.view(np.int32))
         mesh.update()
-        names = [uv.name for uv in mesh.uv_layers]
+        names = [uv_map.name for uv_map in mesh.uv_layers]
         self.report["uv_channels"] = (names.index(QUAT_XY_UV), names.index(QUAT_ZW_UV))
         return self.report
 
@@ -245,17 +269,9 @@ def prepare_bake(mesh, settings: BakeSettings, selected_only: bool = False) -> P
         fp_attr.data.foreach_get("value", previous)
         previous = previous.view(np.uint32)
     keep_previous = layers_present and (previous is not None or mask is not None)
-    if keep_previous:
-        offsets = _read_offsets(mesh, settings, corner_verts, len(positions))
-    elif mask is not None:  # a first bake of part of the mesh: the rest decodes to f = 0
-        neutral = NEUTRAL_FLOAT if settings.encoding == "FLOAT_COLOR" else NEUTRAL_BYTE
-        offsets = np.empty((len(positions), 4), neutral.dtype)
-        offsets[:] = neutral
-    else:  # every submesh is baked and overwrites its rows
-        offsets = None
     try:
         result = core.bake(positions, edges, face_starts, face_sizes, corner_verts, mask=mask,
-                           previous_fingerprints=previous, offsets=offsets,
+                           previous_fingerprints=previous,
                            angle_epsilon=settings.angle_epsilon, origin=settings.origin,
                            sort_axes_by_extent=settings.sort_axes_by_extent,
                            axis_turn=settings.axis_turn, encoding=settings.encoding,

@@ -22,25 +22,47 @@ namespace {
 // stored submesh by this fraction of its rms radius (room for float32 rounding of far copies).
 constexpr double kCacheTolerance = 1e-5;
 
+// The vertices, faces and edges of every submesh as index lists (CSR). Meshes almost always store
+// submeshes one after another; then each list is a run of the ascending sequence 0, 1, 2, ...
+// and only the offsets take memory, which keeps the bake's peak low on large meshes.
 struct Grouped {
-    std::vector<uint32_t> vertex_offsets, vertices, face_offsets, faces, edge_offsets, edges;
+    std::vector<uint32_t> vertex_offsets, face_offsets, edge_offsets;
+    std::vector<uint32_t> ascending, vertex_items, face_items, edge_items;
+    const uint32_t *vertices = nullptr, *faces = nullptr, *edges = nullptr;
 };
 
-Grouped group(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t submesh_count) {
-    Grouped g;
-    g.vertex_offsets.resize(submesh_count + 1);
-    g.vertices.resize(mesh.vertex_count);
-    group_by_submesh(g.vertex_offsets.data(), g.vertices.data(), submesh_of_vertex, mesh.vertex_count, submesh_count);
-    std::vector<int32_t> owner(std::max(mesh.face_count, mesh.edge_count));
-    for (size_t f = 0; f < mesh.face_count; ++f) owner[f] = submesh_of_vertex[mesh.corner_verts[mesh.face_starts[f]]];
-    g.face_offsets.resize(submesh_count + 1);
-    g.faces.resize(mesh.face_count);
-    group_by_submesh(g.face_offsets.data(), g.faces.data(), owner.data(), mesh.face_count, submesh_count);
-    for (size_t e = 0; e < mesh.edge_count; ++e) owner[e] = submesh_of_vertex[mesh.edges[2 * e]];
-    g.edge_offsets.resize(submesh_count + 1);
-    g.edges.resize(mesh.edge_count);
-    group_by_submesh(g.edge_offsets.data(), g.edges.data(), owner.data(), mesh.edge_count, submesh_count);
-    return g;
+// Counting sort of item_count items by owner(i) into offsets[submesh_count + 1]; fills items
+// only when the owners are not already ascending. Returns the list to use: items or ascending.
+template <class Owner>
+const uint32_t* group_items(std::vector<uint32_t>& offsets, std::vector<uint32_t>& items,
+                            const std::vector<uint32_t>& ascending, size_t item_count, size_t submesh_count,
+                            Owner&& owner) {
+    offsets.assign(submesh_count + 1, 0);
+    bool sorted = true;
+    int32_t previous = 0;
+    for (size_t i = 0; i < item_count; ++i) {
+        const int32_t sm = owner(i);
+        ++offsets[size_t(sm) + 1];
+        sorted = sorted && previous <= sm;
+        previous = sm;
+    }
+    for (size_t sm = 0; sm < submesh_count; ++sm) offsets[sm + 1] += offsets[sm];
+    if (sorted) return ascending.data();
+    items.resize(item_count);
+    std::vector<uint32_t> cursor(offsets.begin(), offsets.end() - 1);
+    for (size_t i = 0; i < item_count; ++i) items[cursor[size_t(owner(i))]++] = uint32_t(i);
+    return items.data();
+}
+
+void group(Grouped& g, const MeshView& mesh, const int32_t* submesh_of_vertex, size_t submesh_count) {
+    g.ascending.resize(std::max({mesh.vertex_count, mesh.face_count, mesh.edge_count}));
+    std::iota(g.ascending.begin(), g.ascending.end(), 0u);
+    g.vertices = group_items(g.vertex_offsets, g.vertex_items, g.ascending, mesh.vertex_count, submesh_count,
+                             [&](size_t v) { return submesh_of_vertex[v]; });
+    g.faces = group_items(g.face_offsets, g.face_items, g.ascending, mesh.face_count, submesh_count,
+                          [&](size_t f) { return submesh_of_vertex[mesh.corner_verts[mesh.face_starts[f]]]; });
+    g.edges = group_items(g.edge_offsets, g.edge_items, g.ascending, mesh.edge_count, submesh_count,
+                          [&](size_t e) { return submesh_of_vertex[mesh.edges[2 * e]]; });
 }
 
 // Local coordinates of every vertex in `frame`; writes their bounds.
@@ -69,6 +91,44 @@ glm::dmat3 sort_by_extent(const glm::dmat3& frame, const glm::dvec3& extent) {
     return glm::dmat3(x, y, glm::cross(x, y));
 }
 
+// Runs work(t) for t = 0..threads-1, thread 0 on the caller's thread, and waits for all.
+template <class Work>
+void run_on_threads(size_t threads, Work&& work) {
+    std::vector<std::thread> pool;
+    for (size_t t = 1; t < threads; ++t) pool.emplace_back(work, t);
+    work(size_t(0));
+    for (std::thread& th : pool) th.join();
+}
+
+constexpr uint8_t kUncached = 0xFF;
+
+// Cache routing of the submeshes to bake: kUncached for one whose key no other has (it cannot
+// have a copy), else the thread that owns its key, so every copy meets its prototype in that
+// thread's cache.
+std::vector<uint8_t> route_by_key(const std::vector<uint64_t>& keys, const std::vector<uint8_t>& statuses,
+                                  size_t threads) {
+    const auto baked = [&](size_t sm) { return statuses[sm] == uint8_t(SubmeshStatus::Baked); };
+    size_t slots = 16;
+    while (slots < 2 * keys.size()) slots *= 2;
+    std::vector<uint64_t> table(slots);
+    std::vector<uint8_t> seen(slots, 0);  // 0 empty, 1 one submesh, 2 several
+    auto slot_of = [&](uint64_t key) {
+        size_t i = size_t(key ^ (key >> 29)) & (slots - 1);
+        while (seen[i] && table[i] != key) i = (i + 1) & (slots - 1);
+        return i;
+    };
+    for (size_t sm = 0; sm < keys.size(); ++sm) {
+        if (!baked(sm)) continue;
+        const size_t i = slot_of(keys[sm]);
+        table[i] = keys[sm];
+        seen[i] = seen[i] ? 2 : 1;
+    }
+    std::vector<uint8_t> route(keys.size(), kUncached);
+    for (size_t sm = 0; sm < keys.size(); ++sm)
+        if (baked(sm) && seen[slot_of(keys[sm])] == 2) route[sm] = uint8_t(keys[sm] % threads);
+    return route;
+}
+
 struct Accumulated {
     size_t baked = 0, cache_hits = 0, unchanged = 0, not_selected = 0, degenerate = 0;
     double max_error = 0.0, max_relative_error = 0.0;
@@ -87,7 +147,7 @@ uint32_t options_seed(const BakeOptions& o) {
     add(uint64_t(o.sort_axes_by_extent));
     add(uint64_t(o.axis_turn));
     add(uint64_t(o.encoding));
-    add(3);  // format version: bump when the bake's output changes for the same options
+    add(4);  // format version: bump when the bake's output changes for the same options
     return uint32_t(h ^ (h >> 32));
 }
 
@@ -106,7 +166,8 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
         if (submesh_of_vertex[v] < 0 || size_t(submesh_of_vertex[v]) >= submesh_count)
             throw std::invalid_argument("submesh_of_vertex does not match submesh_count");
 
-    const Grouped g = group(mesh, submesh_of_vertex, submesh_count);
+    Grouped g;
+    group(g, mesh, submesh_of_vertex, submesh_count);
     for (size_t sm = 0; sm < submesh_count; ++sm)  // every submesh needs a vertex to anchor it
         if (g.vertex_offsets[sm + 1] == g.vertex_offsets[sm])
             throw std::invalid_argument("submesh_of_vertex does not match submesh_count: submesh " +
@@ -117,9 +178,9 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
 
     auto view = [&](size_t sm) {
         SubmeshView s{&mesh,
-                      g.vertices.data() + g.vertex_offsets[sm], g.vertex_offsets[sm + 1] - g.vertex_offsets[sm],
-                      g.faces.data() + g.face_offsets[sm], g.face_offsets[sm + 1] - g.face_offsets[sm],
-                      g.edges.data() + g.edge_offsets[sm], g.edge_offsets[sm + 1] - g.edge_offsets[sm],
+                      g.vertices + g.vertex_offsets[sm], g.vertex_offsets[sm + 1] - g.vertex_offsets[sm],
+                      g.faces + g.face_offsets[sm], g.face_offsets[sm + 1] - g.face_offsets[sm],
+                      g.edges + g.edge_offsets[sm], g.edge_offsets[sm + 1] - g.edge_offsets[sm],
                       glm::dvec3(0.0)};
         const float* p0 = mesh.positions + size_t(s.vertices[0]) * 3;
         s.base = glm::dvec3(p0[0], p0[1], p0[2]);
@@ -127,23 +188,16 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
     };
     size_t threads = options.threads > 0 ? size_t(options.threads) : std::max(1u, std::thread::hardware_concurrency());
     threads = std::min<size_t>({threads, 255, std::max<size_t>(1, submesh_count / 1024)});
-    // With the cache on, thread t takes the submeshes whose cache key falls to it, so every copy
-    // meets its prototype in the same thread's cache; otherwise contiguous ranges.
-    std::vector<uint8_t> shard;
-    if (options.use_cache && threads > 1) {
-        shard.resize(submesh_count);
-        for (size_t sm = 0; sm < submesh_count; ++sm) shard[sm] = uint8_t(CopyCache::key(view(sm)) % threads);
-    }
-    auto run = [&](size_t thread, Accumulated& acc) {
-        CopyCache cache(kCacheTolerance);
-        std::vector<glm::dvec3> local, offsets;
-        FrameScratch scratch;
-        const size_t first = shard.empty() ? submesh_count * thread / threads : 0;
-        const size_t last = shard.empty() ? submesh_count * (thread + 1) / threads : submesh_count;
+    auto range = [&](size_t t) { return std::make_pair(submesh_count * t / threads, submesh_count * (t + 1) / threads); };
+    std::vector<Accumulated> parts(threads);
+    // Pass 1: fingerprints and what to do with each submesh; cache keys of those to bake.
+    std::vector<uint8_t> statuses(submesh_count);
+    std::vector<uint64_t> keys(options.use_cache ? submesh_count : 0);
+    run_on_threads(threads, [&](size_t thread) {
+        Accumulated& acc = parts[thread];
+        const auto [first, last] = range(thread);
         for (size_t sm = first; sm < last; ++sm) {
-            if (!shard.empty() && shard[sm] != thread) continue;
             const SubmeshView s = view(sm);
-
             const uint32_t fp = fingerprint_submesh(s, seed);
             bool selected = !bake_mask, unchanged = previous_fingerprints != nullptr;
             for (uint32_t i = 0; i < s.vertex_count; ++i) {
@@ -157,28 +211,53 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
                 const uint32_t v = s.vertices[i];
                 fingerprints[v] = selected ? fp : previous_fingerprints ? previous_fingerprints[v] : 0;
             }
-            float* q_out = out.quaternions + sm * 4;
             const SubmeshStatus status = !selected ? SubmeshStatus::NotSelected
                                          : unchanged ? SubmeshStatus::Unchanged
                                                      : SubmeshStatus::Baked;
-            if (out.statuses) out.statuses[sm] = uint8_t(status);
-            if (status != SubmeshStatus::Baked) {
-                ++(status == SubmeshStatus::Unchanged ? acc.unchanged : acc.not_selected);
-                std::fill(q_out, q_out + 4, 0.0f);
-                if (out.origins) std::fill(out.origins + sm * 3, out.origins + sm * 3 + 3, 0.0);
-                if (out.half_extents) std::fill(out.half_extents + sm * 3, out.half_extents + sm * 3 + 3, 0.0);
-                if (out.scales) out.scales[sm] = 0.0f;
-                if (out.sources) out.sources[sm] = uint8_t(FrameSource::Identity);
+            statuses[sm] = uint8_t(status);
+            if (status == SubmeshStatus::Baked) {
+                if (options.use_cache) keys[sm] = CopyCache::key(s, spread_of(s));
                 continue;
             }
+            ++(status == SubmeshStatus::Unchanged ? acc.unchanged : acc.not_selected);
+            std::fill(out.quaternions + sm * 4, out.quaternions + sm * 4 + 4, 0.0f);
+            if (out.origins) std::fill(out.origins + sm * 3, out.origins + sm * 3 + 3, 0.0);
+            if (out.half_extents) std::fill(out.half_extents + sm * 3, out.half_extents + sm * 3 + 3, 0.0);
+            if (out.scales) out.scales[sm] = 0.0f;
+            if (out.sources) out.sources[sm] = uint8_t(FrameSource::Identity);
+        }
+    });
+    if (out.statuses) std::copy(statuses.begin(), statuses.end(), out.statuses);
+    // Copies share a cache key, so only submeshes whose key another one has use the cache.
+    std::vector<uint8_t> route;
+    if (options.use_cache) route = route_by_key(keys, statuses, threads);
+
+    // Pass 2: frames, offsets, quaternions and the decode check of the submeshes to bake.
+    run_on_threads(threads, [&](size_t thread) {
+        Accumulated& acc = parts[thread];
+        CopyCache cache(kCacheTolerance);
+        std::vector<glm::dvec3> local, offsets;
+        FrameScratch scratch;
+        const auto [first, last] = range(thread);
+        for (size_t sm = 0; sm < submesh_count; ++sm) {
+            if (statuses[sm] != uint8_t(SubmeshStatus::Baked)) continue;
+            const bool cached = !route.empty() && route[sm] != kUncached;
+            if (cached ? route[sm] != thread : sm < first || sm >= last) continue;
+            const SubmeshView s = view(sm);
+            float* q_out = out.quaternions + sm * 4;
             ++acc.baked;
 
             FrameChoice choice;
-            if (options.use_cache && cache.lookup(s, choice)) {
-                ++acc.cache_hits;
+            if (!cached) {
+                choice = choose_frame(s, cos_epsilon, 0.0, scratch);
             } else {
-                choice = choose_frame(s, cos_epsilon, options.use_cache ? cache.displacement(s) : 0.0, scratch);
-                if (options.use_cache) cache.insert(s, choice);
+                const Spread spread = spread_of(s);
+                if (cache.lookup(s, spread, keys[sm], choice)) {
+                    ++acc.cache_hits;
+                } else {
+                    choice = choose_frame(s, cos_epsilon, cache.displacement(spread), scratch);
+                    cache.insert(s, spread, keys[sm], choice);
+                }
             }
             const FrameSource source = frame_source(choice);
             if (source != FrameSource::Faces) ++acc.degenerate;
@@ -227,13 +306,7 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
             acc.max_error = std::max(acc.max_error, worst);
             acc.max_relative_error = std::max(acc.max_relative_error, extent > 0.0 ? worst / extent : worst);
         }
-    };
-
-    std::vector<Accumulated> parts(threads);
-    std::vector<std::thread> pool;
-    for (size_t t = 1; t < threads; ++t) pool.emplace_back(run, t, std::ref(parts[t]));
-    run(0, parts[0]);
-    for (std::thread& th : pool) th.join();
+    });
 
     BakeReport report;
     report.submesh_count = submesh_count;

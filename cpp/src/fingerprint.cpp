@@ -36,19 +36,6 @@ void visit_topology(const SubmeshView& s, Visit&& visit) {
     }
 }
 
-// Centroid and root-mean-square distance from it.
-void spread(const SubmeshView& s, glm::dvec3& centre, double& rms) {
-    centre = glm::dvec3(0.0);
-    for (uint32_t i = 0; i < s.vertex_count; ++i) centre += s.position(s.vertices[i]);
-    centre /= double(s.vertex_count);
-    double sum = 0.0;
-    for (uint32_t i = 0; i < s.vertex_count; ++i) {
-        const glm::dvec3 d = s.position(s.vertices[i]) - centre;
-        sum += glm::dot(d, d);
-    }
-    rms = std::sqrt(sum / double(s.vertex_count));
-}
-
 // Rotation anchored on two vertices: x towards vertex i0, y towards i1 (made orthogonal).
 bool anchor_frame(const SubmeshView& s, const glm::dvec3& centre, uint32_t i0, uint32_t i1, glm::dmat3& frame) {
     const glm::dvec3 a = s.position(s.vertices[i0]) - centre, b = s.position(s.vertices[i1]) - centre;
@@ -68,6 +55,19 @@ constexpr size_t kMaxPerBucket = 4;                       // bounds the work of 
 
 }  // namespace
 
+Spread spread_of(const SubmeshView& s) {
+    Spread out{glm::dvec3(0.0), 0.0};
+    for (uint32_t i = 0; i < s.vertex_count; ++i) out.centre += s.position(s.vertices[i]);
+    out.centre /= double(s.vertex_count);
+    double sum = 0.0;
+    for (uint32_t i = 0; i < s.vertex_count; ++i) {
+        const glm::dvec3 d = s.position(s.vertices[i]) - out.centre;
+        sum += glm::dot(d, d);
+    }
+    out.rms = std::sqrt(sum / double(s.vertex_count));
+    return out;
+}
+
 struct CopyCache::Impl {
     struct Prototype {
         uint32_t vertex_count, face_count, edge_count;
@@ -77,7 +77,6 @@ struct CopyCache::Impl {
         glm::dmat3 anchors;
         FrameChoice choice;
     };
-    double tolerance;
     std::vector<Prototype> prototypes;
     std::vector<int64_t> topology;
     std::vector<double> positions;
@@ -87,43 +86,25 @@ struct CopyCache::Impl {
 
 // Counts plus similarity-invariant distance ratios, coarsely quantised: copies land in one
 // bucket (a quantisation border only costs a miss, never a wrong match).
-static uint64_t bucket_key(const SubmeshView& s, double rms) {
+uint64_t CopyCache::key(const SubmeshView& s, const Spread& spread) {
     uint64_t h = mix(mix(mix(0, s.vertex_count), s.face_count), s.edge_count);
-    if (s.vertex_count < 2 || !(rms > 0.0)) return h;
+    if (s.vertex_count < 2 || !(spread.rms > 0.0)) return h;
     const glm::dvec3 p0 = s.position(s.vertices[0]);
     // The first few vertices: for a box these span its edges, so boxes of different proportions
     // spread over many buckets.
     for (uint32_t i = 1; i < std::min(s.vertex_count, 5u); ++i) {
-        const double ratio = glm::length(s.position(s.vertices[i]) - p0) / rms;
-        h = mix(h, uint64_t(std::llround(ratio * 64.0)));
+        const double ratio = glm::length(s.position(s.vertices[i]) - p0) / spread.rms;
+        h = mix(h, uint64_t(std::llround(ratio * 1024.0)));
     }
     return h;
 }
 
-uint64_t CopyCache::key(const SubmeshView& s) {
-    glm::dvec3 centre;
-    double rms;
-    spread(s, centre, rms);
-    return bucket_key(s, rms);
-}
-
-CopyCache::CopyCache(double tolerance) : impl_(new Impl) { impl_->tolerance = tolerance; }
+CopyCache::CopyCache(double tolerance) : impl_(new Impl), tolerance_(tolerance) {}
 CopyCache::~CopyCache() { delete impl_; }
 
-double CopyCache::displacement(const SubmeshView& s) const {
-    glm::dvec3 centre;
-    double rms;
-    spread(s, centre, rms);
-    return impl_->tolerance * rms;
-}
-
-bool CopyCache::lookup(const SubmeshView& s, FrameChoice& choice) {
-    if (s.vertex_count < 3) return false;
-    glm::dvec3 centre;
-    double rms;
-    spread(s, centre, rms);
-    if (!(rms > 0.0)) return false;
-    const auto bucket = impl_->buckets.find(bucket_key(s, rms));
+bool CopyCache::lookup(const SubmeshView& s, const Spread& spread, uint64_t key, FrameChoice& choice) const {
+    if (s.vertex_count < 3 || !(spread.rms > 0.0)) return false;
+    const auto bucket = impl_->buckets.find(key);
     if (bucket == impl_->buckets.end()) return false;
     for (uint32_t id : bucket->second) {
         const Impl::Prototype& p = impl_->prototypes[id];
@@ -137,15 +118,15 @@ bool CopyCache::lookup(const SubmeshView& s, FrameChoice& choice) {
         });
         if (!same || at != p.topology_at + p.topology_size) continue;
         glm::dmat3 anchors;
-        if (!anchor_frame(s, centre, p.anchor0, p.anchor1, anchors)) continue;
+        if (!anchor_frame(s, spread.centre, p.anchor0, p.anchor1, anchors)) continue;
         const glm::dmat3 rotation = anchors * glm::transpose(p.anchors);
-        const double scale = rms / p.rms, limit = impl_->tolerance * rms;
+        const double scale = spread.rms / p.rms, limit = tolerance_ * spread.rms;
         const double* stored = impl_->positions.data() + p.positions_at;
         bool fits = true;
         for (uint32_t i = 0; i < s.vertex_count && fits; ++i) {
             const glm::dvec3 q(stored[i * 3], stored[i * 3 + 1], stored[i * 3 + 2]);
             const glm::dvec3 mapped = scale * (rotation * q);
-            fits = glm::length(s.position(s.vertices[i]) - centre - mapped) <= limit;
+            fits = glm::length(s.position(s.vertices[i]) - spread.centre - mapped) <= limit;
         }
         if (!fits) continue;
         choice = p.choice;
@@ -154,14 +135,12 @@ bool CopyCache::lookup(const SubmeshView& s, FrameChoice& choice) {
     return false;
 }
 
-void CopyCache::insert(const SubmeshView& s, const FrameChoice& choice) {
-    if (!choice.stable || s.vertex_count < 3) return;
+void CopyCache::insert(const SubmeshView& s, const Spread& spread, uint64_t key, const FrameChoice& choice) {
+    if (!choice.stable || s.vertex_count < 3 || !(spread.rms > 0.0)) return;
     if (impl_->positions.size() / 3 + s.vertex_count > kMaxStoredVertices) return;
-    glm::dvec3 centre;
-    double rms;
-    spread(s, centre, rms);
-    if (!(rms > 0.0)) return;
-    std::vector<uint32_t>& bucket = impl_->buckets[bucket_key(s, rms)];
+    const glm::dvec3 centre = spread.centre;
+    const double rms = spread.rms;
+    std::vector<uint32_t>& bucket = impl_->buckets[key];
     if (bucket.size() >= kMaxPerBucket) return;
 
     // Anchors: the first vertex well away from the centre, then the vertex farthest off that line.
@@ -200,13 +179,22 @@ void CopyCache::insert(const SubmeshView& s, const FrameChoice& choice) {
 }
 
 uint32_t fingerprint_submesh(const SubmeshView& s, uint32_t seed) {
-    uint64_t h = mix(seed, s.vertex_count);
+    // Four lanes fed round-robin keep the hash order-sensitive with a quarter of the dependency
+    // chain of a single running mix.
+    uint64_t lanes[4] = {mix(seed, s.vertex_count), 1, 2, 3};
+    uint64_t n = 0;
+    auto add = [&](uint64_t x) {
+        lanes[n & 3] = mix(lanes[n & 3], x);
+        ++n;
+    };
     for (uint32_t i = 0; i < s.vertex_count; ++i) {
         uint32_t bits[3];
         std::memcpy(bits, s.mesh->positions + size_t(s.vertices[i]) * 3, sizeof bits);
-        h = mix(mix(h, (uint64_t(bits[0]) << 32) | bits[1]), bits[2]);
+        add((uint64_t(bits[0]) << 32) | bits[1]);
+        add(bits[2]);
     }
-    visit_topology(s, [&](int64_t x) { h = mix(h, uint64_t(x)); });
+    visit_topology(s, [&](int64_t x) { add(uint64_t(x)); });
+    const uint64_t h = mix(mix(mix(mix(lanes[0], lanes[1]), lanes[2]), lanes[3]), n);
     const uint32_t folded = uint32_t(h ^ (h >> 32));
     return folded ? folded : 1;  // 0 is reserved for "never baked"
 }

@@ -79,6 +79,13 @@ glm::dmat3 frame_from_choice(const FrameChoice& choice, const SubmeshView& s);
 // nonzero of x, y, z positive), so the same frame always gives the same four numbers.
 glm::dvec4 quaternion_from_frame(const glm::dmat3& frame);
 
+// Centroid of a submesh's vertices (relative to its base) and the root-mean-square distance from it.
+struct Spread {
+    glm::dvec3 centre;
+    double rms;
+};
+Spread spread_of(const SubmeshView& s);
+
 // Similarity-copy cache of frame choices (fingerprint.cpp). Not thread-safe: one per thread.
 class CopyCache {
 public:
@@ -86,21 +93,23 @@ public:
     ~CopyCache();
     CopyCache(const CopyCache&) = delete;
     CopyCache& operator=(const CopyCache&) = delete;
-    // Returns true and sets choice when a stored submesh maps onto s by a rotation, uniform scale
-    // and translation within tolerance * (s's rms radius) at every vertex, with identical
-    // topology. Mirrored copies never match (the map is a proper rotation).
-    bool lookup(const SubmeshView& s, FrameChoice& choice);
-    // Stores s and its (stable) choice for later copies; silently ignores it past the size cap.
-    void insert(const SubmeshView& s, const FrameChoice& choice);
     // Bucket key of s: equal for every copy that could match (counts and similarity-invariant
-    // distance ratios, coarsely quantised). Lets callers send copies to the same cache.
-    static uint64_t key(const SubmeshView& s);
+    // distance ratios, coarsely quantised). Lets callers send copies to the same cache and skip
+    // the cache for submeshes whose key nobody else has.
+    static uint64_t key(const SubmeshView& s, const Spread& spread);
+    // Returns true and sets choice when a stored submesh with this key maps onto s by a rotation,
+    // uniform scale and translation within tolerance * rms at every vertex, with identical
+    // topology. Mirrored copies never match (the map is a proper rotation).
+    bool lookup(const SubmeshView& s, const Spread& spread, uint64_t key, FrameChoice& choice) const;
+    // Stores s and its (stable) choice for later copies; silently ignores it past the size cap.
+    void insert(const SubmeshView& s, const Spread& spread, uint64_t key, const FrameChoice& choice);
     // Largest vertex displacement a matching copy can have, for choose_frame's stability test.
-    double displacement(const SubmeshView& s) const;
+    double displacement(const Spread& spread) const { return tolerance_ * spread.rms; }
 
 private:
     struct Impl;
     Impl* impl_;
+    double tolerance_;
 };
 
 // encode.cpp: the colour encoding of local offsets f (vector from vertex to origin, box-local).

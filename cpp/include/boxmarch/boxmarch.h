@@ -131,10 +131,10 @@ struct BakeSubmeshes {
 // bake_mask keeps its previous fingerprint, or 0 without one); for baked submeshes only, the
 // colour of each vertex into offset_float[vertex_count * 4] (Float encoding) or
 // offset_byte[vertex_count * 4] (Byte encoding; the other pointer may be null); and the arrays
-// of `out` (every submesh's entry is written; quaternions of unbaked submeshes are computed too,
-// so callers can rewrite them). Returns the report. Throws std::invalid_argument, writing
-// nothing, on invalid options, a missing output array, or a numbering with an id out of range or
-// a submesh without vertices.
+// of `out` (every submesh's entry is written: for a submesh not baked, zeros and source
+// Identity). Returns the report. Throws std::invalid_argument, writing nothing, on invalid
+// options, a missing output array, or a numbering with an id out of range or a submesh without
+// vertices.
 BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t submesh_count,
                 const uint8_t* bake_mask, const uint32_t* previous_fingerprints,
                 const BakeOptions& options, uint32_t* fingerprints, float* offset_float,
