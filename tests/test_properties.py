@@ -450,3 +450,98 @@ def test_mirrored_copies_never_share(rotation, shift):
         p = arrays[0][v].astype(np.float64)
         np.testing.assert_allclose(quat_matrix(r.quaternions[s]), reference_frame(p - p[0], mirrored_faces), atol=1e-5)
     assert_decode_exact(r, arrays[0])
+
+
+# -------------------------------------------------------------------------------------------------
+# Arbitrary arrays through the Python bindings (the fuzz target's contract one layer up; run under
+# ASan and UBSan by scripts/sanitize.sh)
+
+
+@st.composite
+def arbitrary_meshes(draw):
+    """Mostly well-formed small meshes (faces laid out one after another, indices in range, grid
+    coordinates so coincident and collinear vertices are common), half of them then spoiled in
+    one place: an index out of range or negative, a face too small or running past the corners,
+    a non-finite coordinate."""
+    n = draw(st.integers(1, 10))
+    coordinate = st.one_of(st.integers(-4, 4).map(float), st.floats(-4, 4), st.sampled_from([1e30, -1e-30]))
+    positions = np.array(draw(st.lists(coordinate, min_size=3 * n, max_size=3 * n)), np.float32).reshape(n, 3)
+    index = st.integers(0, n - 1)
+    edges = np.array(draw(st.lists(st.tuples(index, index), max_size=10)), np.int32).reshape(-1, 2)
+    face_sizes = np.array(draw(st.lists(st.integers(3, 5), max_size=5)), np.int32)
+    face_starts = np.concatenate([[0], np.cumsum(face_sizes)[:-1]]).astype(np.int32) if len(face_sizes) else \
+        np.zeros(0, np.int32)
+    corner_verts = np.array(draw(st.lists(index, min_size=int(face_sizes.sum()), max_size=int(face_sizes.sum()))),
+                            np.int32)
+    arrays = [positions, edges, face_starts, face_sizes, corner_verts]
+    spoil = draw(st.sampled_from([None, None, None, "position", "edge", "corner", "size", "start"]))
+    target = {"position": 0, "edge": 1, "start": 2, "size": 3, "corner": 4}.get(spoil)
+    if target is not None and arrays[target].size:
+        flat = arrays[target].reshape(-1)
+        at = draw(st.integers(0, flat.size - 1))
+        if spoil == "position":
+            flat[at] = draw(st.sampled_from([np.nan, np.inf, -np.inf]))
+        elif spoil == "size":
+            flat[at] = draw(st.sampled_from([-1, 0, 2, 100]))
+        elif spoil == "start":
+            flat[at] = draw(st.sampled_from([-1, len(corner_verts), 2**31 - 1]))
+        else:
+            flat[at] = draw(st.sampled_from([-1, n, 2**31 - 1, -2**31]))
+    return tuple(arrays)
+
+
+def valid_by_hand(positions, edges, face_starts, face_sizes, corner_verts):
+    """The validation rules of docs and header, written out independently."""
+    n = len(positions)
+    return bool(np.all(np.isfinite(positions)) and np.all((edges >= 0) & (edges < n)) and
+                np.all(face_sizes >= 3) and np.all(face_starts >= 0) and
+                np.all(face_starts.astype(np.int64) + face_sizes <= len(corner_verts)) and
+                np.all((corner_verts >= 0) & (corner_verts < n)))
+
+
+@settings(max_examples=300, deadline=None)
+@given(mesh=arbitrary_meshes(), encoding=st.sampled_from(core.ENCODINGS), data=st.data())
+def test_arbitrary_arrays_are_rejected_or_baked_validly(mesh, encoding, data):
+    n = len(mesh[0])
+    dtype = np.float32 if encoding == "FLOAT_COLOR" else np.uint8
+    offsets = np.full((n, 4), 3, dtype)
+    mask = np.array(data.draw(st.lists(st.integers(0, 1), min_size=n, max_size=n)), np.uint8)
+    valid = valid_by_hand(*mesh)
+    try:
+        r = core.bake(*mesh, offsets=offsets, encoding=encoding, mask=mask if data.draw(st.booleans()) else None)
+    except ValueError:
+        assert not valid
+        np.testing.assert_array_equal(offsets, 3)
+        with pytest.raises(ValueError):
+            core.validate_mesh(*mesh)
+        return
+    assert valid
+    baked = r.statuses[r.submesh_of_vertex] == 0 if n else np.zeros(0, bool)
+    assert_stored_finite(r)
+    q = r.quaternions[r.statuses == 0].astype(np.float64)
+    np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-6)
+    assert np.all(q[:, 3] >= 0)
+    assert np.all(r.offsets[baked][:, 3] > 0)
+    np.testing.assert_array_equal(r.offsets[~baked], 3)  # not baked: left as it was
+
+
+@settings(max_examples=200, deadline=None)
+@given(corner_verts=st.lists(st.integers(-2, 12), max_size=16), data=st.data())
+def test_face_starts_from_arbitrary_corner_edges_never_crash(corner_verts, data):
+    corner_verts = np.array(corner_verts, np.int32)
+    corner_edges = np.array(data.draw(st.lists(st.integers(-2, 12), min_size=len(corner_verts),
+                                               max_size=len(corner_verts))), np.int32)
+    edges = np.array(data.draw(st.lists(st.integers(-2, 12), max_size=20)), np.int32)
+    edges = edges[: len(edges) // 2 * 2].reshape(-1, 2)
+    vertex_count = data.draw(st.integers(0, 12))
+    in_range = (np.all((corner_edges >= 0) & (corner_edges < len(edges))) and
+                np.all((corner_verts >= 0) & (corner_verts < vertex_count)))
+    try:
+        result = core.face_offsets_from_corner_edges(corner_verts, corner_edges, edges, vertex_count, face_count=2)
+    except ValueError:
+        assert not in_range
+        return
+    assert in_range
+    if result is not None:
+        starts, sizes = result
+        assert len(starts) == 2 and np.all(sizes >= 3) and sizes.sum() + starts[0] == len(corner_verts)
