@@ -57,19 +57,6 @@ def quat_matrices(q):
     return scenes.quaternion_matrices(q / np.linalg.norm(q, axis=1, keepdims=True))
 
 
-def shader_rotate(v, q):
-    """The shader's rotate_vector with q as stored: v + 2 u x (u x v + w v)."""
-    q = np.asarray(q, np.float64)
-    u = q[..., :3]
-    return v + 2.0 * np.cross(u, np.cross(u, v) + q[..., 3:4] * v)
-
-
-def decode(rgba):
-    """f = (rgb * 2 - 1) / a in float64 (bytes divided by 255 first)."""
-    c = rgba.astype(np.float64) / 255.0 if rgba.dtype == np.uint8 else rgba.astype(np.float64)
-    return (c[..., :3] * 2.0 - 1.0) / c[..., 3:4]
-
-
 def box_truth(positions, quaternions):
     """Per box of 8 stored vertices: the bounds centre in the baked frame (float64, relative to
     the first vertex) and the largest local half-extent."""
@@ -84,16 +71,16 @@ def box_truth(positions, quaternions):
 def relative_errors(positions, colours, quaternions, centre, half):
     """Per box: worst |decoded origin - centre| over its 8 vertices / its largest half-extent.
     colours (8n, 4) as stored, quaternions (n, 4) as stored."""
-    f = decode(colours).reshape(-1, 8, 3)
+    f = core.decode_offsets(colours).reshape(-1, 8, 3)
     q = np.repeat(np.asarray(quaternions)[:, None, :], 8, axis=1)
-    decoded = positions.astype(np.float64).reshape(-1, 8, 3) + shader_rotate(f, q)
+    decoded = positions.astype(np.float64).reshape(-1, 8, 3) + core.rotate_vector(f, q)
     return np.linalg.norm(decoded - centre[:, None, :], axis=2).max(1) / half
 
 
 def plain_bytes(colours_float):
     """Plain rounding of the float encoding to bytes: alpha byte = round(255 s) clamped to 1..255,
     rgb = round(255 (0.5 + 0.5 a f)) clamped, f taken from the float encoding."""
-    f = decode(colours_float)
+    f = core.decode_offsets(colours_float)
     s = colours_float[:, 3].astype(np.float64)
     alpha = np.clip(np.rint(255.0 * s), 1, 255)
     rgb = np.clip(np.rint(255.0 * (0.5 + 0.5 * (alpha / 255.0)[:, None] * f)), 0, 255)
