@@ -23,7 +23,6 @@ import shutil
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -40,7 +39,8 @@ def in_blender(args):
     import boxmarch
     from boxmarch import core, preview
     from boxmarch.preview import draw, mesh_data, sources
-    from common import boxes_object
+    from common import best_of, boxes_object
+    from mathutils import Matrix
 
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -114,7 +114,7 @@ def in_blender(args):
             fb = gpu.state.active_framebuffer_get()
             fb.clear(color=(0.0, 0.0, 0.0, 0.0))
             naive_shader.bind()
-            naive_shader.uniform_float("clip_to_object", _matrix(np.linalg.inv(tile_clip)))
+            naive_shader.uniform_float("clip_to_object", Matrix(np.linalg.inv(tile_clip).tolist()))
             naive_shader.uniform_float("march", (settings.epsilon, settings.relaxation, settings.max_distance,
                                                  settings.max_steps))
             naive_shader.uniform_int("sizes", (box_count, tw, th, 0))
@@ -151,32 +151,22 @@ def in_blender(args):
     }
 
 
-def best_of(repeats, fn):
-    best = float("inf")
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return best
-
-
-def _matrix(array):
-    from mathutils import Matrix
-
-    return Matrix(array.tolist())
-
-
 def report(r):
     from common import table
 
     evaluations_naive = r["naive_steps_per_pixel"] * r["boxes"]
+
+    def relative(ms):
+        ratio = ms / r["boxed_ms"]
+        return f"{ratio:.{0 if ratio >= 10 else 1}f}x slower" if ratio >= 1 else f"{1 / ratio:.1f}x faster"
+
     rows = [
         ("boxed (preview, 1 draw call)", f"{r['boxed_ms']:.1f}", f"{r['boxed_steps_per_pixel']:.2f}",
          f"{r['boxed_steps_per_pixel']:.2f}", "1.0x"),
         ("naive full-screen, all boxes per step", f"{r['naive_ms']:.0f}", f"{r['naive_steps_per_pixel']:.1f}",
-         f"{evaluations_naive:.0f}", f"{r['naive_ms'] / r['boxed_ms']:.0f}x slower"),
+         f"{evaluations_naive:.0f}", relative(r["naive_ms"])),
         ("CPU reference (C++, boxed)", f"{r['cpu_ms']:.0f}", f"{r['cpu_steps_per_pixel']:.2f}",
-         f"{r['cpu_steps_per_pixel']:.2f}", f"{r['cpu_ms'] / r['boxed_ms']:.1f}x slower"),
+         f"{r['cpu_steps_per_pixel']:.2f}", relative(r["cpu_ms"])),
     ]
     print(f"{r['boxes']} boxes, {WIDTH} x {HEIGHT}, SPHERE preset, {r['renderer']}; "
           f"{100 * r['coverage']:.1f} % of pixels covered")

@@ -180,11 +180,15 @@ py::dict bake_py(const py::object& positions, const py::object& edges, const py:
     return r;
 }
 
-MarchOptions march_options(int sdf, int max_steps, float epsilon, float relaxation, float max_distance, int threads) {
+SdfPreset preset_of(int sdf) {
     if (sdf < 0 || sdf >= kSdfPresetCount)
         throw py::value_error("sdf must be a preset index 0.." + std::to_string(kSdfPresetCount - 1) + ", got " + std::to_string(sdf));
+    return SdfPreset(sdf);
+}
+
+MarchOptions march_options(int sdf, int max_steps, float epsilon, float relaxation, float max_distance, int threads) {
     MarchOptions o;
-    o.sdf = SdfPreset(sdf);
+    o.sdf = preset_of(sdf);
     o.max_steps = max_steps;
     o.epsilon = epsilon;
     o.relaxation = relaxation;
@@ -362,10 +366,10 @@ PYBIND11_MODULE(_core, m) {
           [](int sdf, const py::object& points, const py::object& half_extents) {
               auto p = checked<float>(points, "points", -1, 3);
               auto h = checked<float>(half_extents, "half_extents", p.shape(0), 3);
-              march_options(sdf, 1, 1.0f, 1.0f, 1.0f, 0);
+              const SdfPreset preset = preset_of(sdf);
               py::array_t<float> d = empty<float>(p.shape(0));
               for (py::ssize_t i = 0; i < p.shape(0); ++i)
-                  d.mutable_data()[i] = sdf_distance(SdfPreset(sdf), p.data() + 3 * i, h.data() + 3 * i);
+                  d.mutable_data()[i] = sdf_distance(preset, p.data() + 3 * i, h.data() + 3 * i);
               return d;
           },
           py::arg("sdf"), py::arg("points"), py::arg("half_extents"), "Distances of box-local points to a preset.");

@@ -55,3 +55,40 @@ def test_unbaked_mesh_is_refused(blender):
     ob = mesh_object(blender, "plain", *arrays)
     with pytest.raises(mesh_data.NotBakedError, match="not baked"):
         mesh_data.read_baked(ob.data)
+
+
+def test_toggle_operator_switches_selected_meshes(blender):
+    ob, _, _ = baked_boxes(blender)
+    arrays, *_ = scenes.random_boxes(2, seed=9)
+    plain = mesh_object(blender, "plain", *arrays)
+    ob.select_set(True)
+    plain.select_set(True)
+    assert blender.ops.boxmarch.preview_toggle() == {"FINISHED"}
+    assert ob.boxmarch.preview and plain.boxmarch.preview
+    assert blender.ops.boxmarch.preview_toggle() == {"FINISHED"}
+    assert not ob.boxmarch.preview and not plain.boxmarch.preview
+
+
+def test_cache_handlers_survive_loading_a_file(blender):
+    from boxmarch import preview
+
+    blender.ops.wm.read_factory_settings(use_empty=True)  # loading a file drops non-persistent handlers
+    for list_name, function in preview._APP_HANDLERS:
+        assert function in getattr(blender.app.handlers, list_name), list_name
+
+
+def test_new_sdf_text_template_compiles(blender, tmp_path):
+    import shutil
+    import subprocess
+
+    from boxmarch.preview import sources
+    from test_shaders import blender_declarations
+
+    ob, _, _ = baked_boxes(blender)
+    assert blender.ops.boxmarch.new_sdf_text() == {"FINISHED"}
+    assert ob.boxmarch.sdf == "USER"
+    text = blender.data.texts[ob.boxmarch.user_text].as_string()
+    path = tmp_path / "template.frag"
+    path.write_text(blender_declarations("frag") + sources.fragment_source("USER", text))
+    proc = subprocess.run([shutil.which("glslangValidator"), str(path)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout

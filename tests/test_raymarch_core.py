@@ -103,6 +103,13 @@ def test_bad_options_raise(kwargs, message):
         core.raymarch([[0, 0, -2]], [[0, 0, 1]], [1, 1, 1], **kwargs)
 
 
+def test_non_finite_input_raises():
+    with pytest.raises(ValueError, match="directions holds NaN"):
+        core.raymarch([[0, 0, -2]], [[0, np.nan, 1]], [1, 1, 1])
+    with pytest.raises(ValueError, match="quaternions holds NaN"):
+        core.render_boxes([[0, 0, 0]], [[0, 0, np.inf, 1]], [[1, 1, 1]], np.eye(4), np.eye(4), 8, 8)
+
+
 def test_bad_shapes_raise():
     with pytest.raises(ValueError, match="directions"):
         core.raymarch(np.zeros((3, 3)), np.zeros((2, 3)), [1, 1, 1])
@@ -167,3 +174,23 @@ def test_render_baked_mesh_equals_render_of_known_boxes():
     z_ndc = (proj[2, 2] * view_z + proj[2, 3]) / -view_z
     # silhouette pixels may take the sphere behind: compare the bulk
     assert np.percentile(np.abs(from_mesh.depth[both] - (z_ndc * 0.5 + 0.5)), 99) < 2e-5
+
+
+def test_render_box_crossing_the_eye_plane():
+    # Camera at the origin looking down -z, 120 degree field; the box reaches from z = -1.5 to
+    # z = 0.5, so part of it is behind the eye: the front part must still be drawn in full.
+    width, height = 80, 40
+    proj = perspective(np.radians(120), width / height, 0.05, 50.0)
+    centre, half = np.array([2.0, 0.3, -0.5]), np.array([1.0, 0.8, 1.0])
+    image = core.render_boxes([centre], [[0, 0, 0, 1]], [half], proj, np.eye(4), width, height)
+    xs = ((np.arange(width) + 0.5) / width * 2 - 1) / proj[0, 0]
+    ys = (1 - (np.arange(height) + 0.5) / height * 2) / proj[1, 1]
+    d = np.stack(np.broadcast_arrays(xs[None, :], ys[:, None], -1.0), -1)
+    with np.errstate(divide="ignore"):
+        t_lo = ((centre - half) / d)
+        t_hi = ((centre + half) / d)
+    t_near = np.minimum(t_lo, t_hi).max(-1)
+    t_far = np.maximum(t_lo, t_hi).min(-1)
+    expected = (t_far >= np.maximum(t_near, 0.05)) & (t_far > 0.05)
+    assert expected.mean() > 0.1
+    assert (image.coverage == expected).mean() >= 0.995

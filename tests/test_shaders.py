@@ -132,3 +132,14 @@ def test_cpp_mirror_has_the_sdf_library():
         assert re.search(rf"\b{cpp_name}\(", cpp), f"{name} has no C++ mirror in cpp/src/sdf.h"
     presets = [n.replace("sdf_preset_", "").upper() for n in glsl if n.startswith("sdf_preset_")]
     assert presets == list(core.SDF_PRESETS)
+
+
+def test_benchmark_baseline_shader_compiles(tmp_path):
+    path = tmp_path / "naive.frag"
+    path.write_text("\n".join([
+        "#version 330 core", "uniform mat4 clip_to_object;", "uniform vec4 march;", "uniform ivec4 sizes;",
+        "uniform sampler2D boxes;", "layout(location = 0) out vec4 frag_color;",
+        sources.read_glsl("decode.glsl"), sources.read_glsl("sdf.glsl"),
+        (SHADERS.parent / "bench" / "naive_fullscreen.frag.glsl").read_text()]))
+    proc = subprocess.run([validator(), str(path)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout + proc.stderr

@@ -200,6 +200,12 @@ def _rows3(a, n, name):
     return np.ascontiguousarray(a)
 
 
+def _check_finite(**arrays):
+    for name, array in arrays.items():
+        if not np.all(np.isfinite(array)):
+            raise ValueError(f"{name} holds NaN or infinite values (first at row {int(np.argwhere(~np.isfinite(array))[0][0])})")
+
+
 def raymarch(origins, directions, half_extents, *, sdf="BOX", max_steps=64, epsilon=1e-3, relaxation=1.0,
              max_distance=1e6, threads=0) -> MarchResult:
     """Sphere-trace rays in box-local coordinates, exactly as the viewport shader does.
@@ -214,7 +220,9 @@ def raymarch(origins, directions, half_extents, *, sdf="BOX", max_steps=64, epsi
     if origins.ndim != 2 or origins.shape[1] != 3:
         raise ValueError(f"origins must have shape (N, 3), got {origins.shape}")
     n = len(origins)
-    r = _core.raymarch(origins, _rows3(directions, n, "directions"), _rows3(half_extents, n, "half_extents"),
+    directions, half_extents = _rows3(directions, n, "directions"), _rows3(half_extents, n, "half_extents")
+    _check_finite(origins=origins, directions=directions, half_extents=half_extents)
+    r = _core.raymarch(origins, directions, half_extents,
                        sdf=_preset_index(sdf), max_steps=int(max_steps), epsilon=float(epsilon),
                        relaxation=float(relaxation), max_distance=float(max_distance), threads=int(threads))
     return MarchResult(hit=r["hit"].astype(bool), positions=r["positions"], normals=r["normals"], steps=r["steps"])
@@ -286,9 +294,11 @@ def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_v
     for name, image, shape in (("depth", depth, (height, width)), ("rgba", rgba, (height, width, 4))):
         if image.shape != shape or image.dtype != np.float32 or not image.flags.c_contiguous:
             raise ValueError(f"{name} must be a C-contiguous float32 array of shape {shape}")
+    half_extents = _rows3(half_extents, n, "half_extents")
+    _check_finite(origins=origins, quaternions=quaternions, half_extents=half_extents)
     normals = np.zeros((height, width, 3), np.float32)
     steps = np.zeros((height, width), np.int32)
-    _core.render_boxes(origins, quaternions, _rows3(half_extents, n, "half_extents"),
+    _core.render_boxes(origins, quaternions, half_extents,
                        np.ascontiguousarray(object_to_clip, np.float32), np.ascontiguousarray(object_to_view, np.float32),
                        np.ascontiguousarray(base_color, np.float32), rgba.reshape(-1, 4), depth,
                        normals.reshape(-1, 3), steps.reshape(-1), sdf=_preset_index(sdf), max_steps=int(max_steps),

@@ -42,7 +42,7 @@ class BoxmarchObjectSettings(bpy.types.PropertyGroup):
                                 description="Longest march inside a box (box-local units)")
     show_outline: BoolProperty(name="Box Outline", default=False, update=_redraw,
                                description="Draw the mesh edges over the preview")
-    show_vectors: BoolProperty(name="Decoded Vectors", default=False, update=_redraw,
+    show_vectors: BoolProperty(name="Vectors", default=False, update=_redraw,
                                description="Lines from every vertex along the raw offset (blue) and the rotated "
                                            "offset (orange): the orange ones meet at each submesh's origin")
 

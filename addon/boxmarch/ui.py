@@ -1,4 +1,6 @@
 """The Boxmarch tab of the 3D viewport's sidebar."""
+import textwrap
+
 import bpy
 
 from . import mesh_io
@@ -55,7 +57,9 @@ class BOXMARCH_PT_preview(bpy.types.Panel):
         layout.active = settings.preview
         layout.prop(settings, "sdf")
         if settings.sdf == "USER":
-            layout.prop_search(settings, "user_text", bpy.data, "texts")
+            row = layout.row(align=True)
+            row.prop_search(settings, "user_text", bpy.data, "texts")
+            row.operator("boxmarch.new_sdf_text", text="", icon="FILE_NEW")
         col = layout.column(align=True)
         col.prop(settings, "max_steps")
         col.prop(settings, "epsilon")
@@ -68,7 +72,10 @@ class BOXMARCH_PT_preview(bpy.types.Panel):
         if settings.preview and error:
             box = layout.box()
             box.alert = True
-            for i, line in enumerate(error.splitlines()[:4]):
+            # wrapped to the sidebar's width (about 9 pixels per character at UI scale 1)
+            chars = int(context.region.width / (9 * context.preferences.view.ui_scale)) - 4
+            lines = textwrap.wrap(error, max(16, chars))
+            for i, line in enumerate(lines[:6]):
                 box.label(text=line, icon="ERROR" if i == 0 else "BLANK1")
 
 

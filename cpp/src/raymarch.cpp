@@ -147,25 +147,35 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
     for (size_t b = 0; b < box_count; ++b) {
         const glm::quat q(quaternions[4 * b + 3], quaternions[4 * b], quaternions[4 * b + 1], quaternions[4 * b + 2]);
         const vec3 c = glm::make_vec3(origins + 3 * b), h = glm::make_vec3(half_extents + 3 * b);
-        float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
-        int behind = 0;
+        // Clip the box against the near plane (z + w >= 0 in GL clip space): the pixel rectangle
+        // of what lies in front is the box of the front corners and the edge crossings.
+        vec4 clip[8];
+        float front[8];
         for (int k = 0; k < 8; ++k) {
             vec3 corner(k & 1 ? h.x : -h.x, k & 2 ? h.y : -h.y, k & 4 ? h.z : -h.z);
-            vec4 clip = to_clip * vec4(c + q * corner, 1.0f);
-            if (clip.w <= 1e-6f) { ++behind; continue; }
-            float sx = (clip.x / clip.w * 0.5f + 0.5f) * float(W);
-            float sy = (0.5f - clip.y / clip.w * 0.5f) * float(H);
-            x0 = std::min(x0, sx); x1 = std::max(x1, sx); y0 = std::min(y0, sy); y1 = std::max(y1, sy);
+            clip[k] = to_clip * vec4(c + q * corner, 1.0f);
+            front[k] = clip[k].z + clip[k].w;
         }
-        // Screen coordinates are clamped to the viewport before conversion: a corner just in
-        // front of the eye plane projects far outside it, and converting such a float (or NaN)
-        // to int is undefined (it silently dropped the box on x86).
-        const bool finite = std::isfinite(x0) && std::isfinite(x1) && std::isfinite(y0) && std::isfinite(y1);
-        auto pixel = [](float v, int last) { return int(std::clamp(v, -1.0f, float(last + 1))); };
-        if (behind == 8) rects[b] = glm::ivec4(0, 0, -1, -1);  // wholly behind the eye: no pixel
-        else if (behind || !finite) rects[b] = glm::ivec4(0, 0, W - 1, H - 1);  // crosses the eye plane
-        else rects[b] = glm::ivec4(std::max(pixel(std::floor(x0 - 0.5f), W - 1), 0), std::max(pixel(std::floor(y0 - 0.5f), H - 1), 0),
-                                   std::min(pixel(std::ceil(x1 - 0.5f), W - 1), W - 1), std::min(pixel(std::ceil(y1 - 0.5f), H - 1), H - 1));
+        float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
+        auto include = [&](vec4 p) {
+            float sx = (p.x / p.w * 0.5f + 0.5f) * float(W);
+            float sy = (0.5f - p.y / p.w * 0.5f) * float(H);
+            x0 = std::min(x0, sx); x1 = std::max(x1, sx); y0 = std::min(y0, sy); y1 = std::max(y1, sy);
+        };
+        for (int k = 0; k < 8; ++k) {
+            if (front[k] >= 0.0f) include(clip[k]);
+            for (int bit = 1; bit < 8; bit <<= 1) {  // the three edges from k to k | bit
+                const int l = k | bit;
+                if (l == k || (front[k] >= 0.0f) == (front[l] >= 0.0f)) continue;
+                include(clip[k] + (clip[l] - clip[k]) * (front[k] / (front[k] - front[l])));
+            }
+        }
+        // first and last pixel centre inside [lo, hi], clamped before the cast (far-off boxes)
+        auto first = [](float lo, int n) { return int(std::ceil(std::clamp(lo - 0.5f, -1.0f, float(n)))); };
+        auto last = [](float hi, int n) { return int(std::floor(std::clamp(hi - 0.5f, -1.0f, float(n)))); };
+        if (!(x0 <= x1 && y0 <= y1)) rects[b] = glm::ivec4(0, 0, -1, -1);  // wholly behind the near plane
+        else rects[b] = glm::ivec4(std::max(first(x0, W) - 1, 0), std::max(first(y0, H) - 1, 0),
+                                   std::min(last(x1, W) + 1, W - 1), std::min(last(y1, H) + 1, H - 1));
     }
 
     parallel_for(size_t(H), o.threads, [&](size_t row_begin, size_t row_end) {

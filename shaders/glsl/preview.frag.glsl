@@ -2,7 +2,8 @@
 // box-local frame, sphere-traces map() inside the box, writes the hit's depth and shades it.
 // Comes after decode.glsl, sdf.glsl, raymarch.glsl and a map() definition.
 // Uniform block `preview` (BoxmarchPreview): object_to_clip; normal_to_view (inverse transpose
-// of the object-to-view rotation part); eye (object-space camera position with w = 1, or for
+// of the object-to-view rotation part); frame (the baked data's object frame from Blender's object
+// frame: identity, or an export preset's orthonormal axis change); eye (object-space camera position with w = 1, or for
 // orthographic views the object-space view direction with w = 0); march (epsilon, relaxation,
 // max_distance, max_steps); base_color; mode.x (0 shaded, 1 object-space normal as colour,
 // 2 steps of every fragment in red with alpha 1, for Blender's ADDITIVE blend: src * alpha + dst).
@@ -26,13 +27,15 @@ void main()
   vec3 ro = -f;
   vec3 ray_object = preview.eye.w > 0.5 ? obj_pos - preview.eye.xyz : preview.eye.xyz;
   float eye_distance = length(ray_object);
-  vec3 rd = normalize(rotate_vector(ray_object / eye_distance, quat_conjugate(q)));
+  mat3 frame = mat3(preview.frame);
+  vec3 rd = normalize(rotate_vector(frame * (ray_object / eye_distance), quat_conjugate(q)));
 
-  // On the face where the ray enters the box the span ahead is longer than the one behind; a
-  // fragment of the far side only marches when the eye is inside the box (from the eye).
+  // A fragment where the ray enters: front-facing, or (whatever the winding) more of the box
+  // ahead than behind. A fragment of the far side only marches when the eye is inside the box
+  // (from the eye).
   vec2 span = bm_box_span(ro, rd, box_half);
   float t_end = span.y;
-  if (span.x + span.y < 0.0) {
+  if (!gl_FrontFacing && span.x + span.y < 0.0) {
     if (preview.eye.w < 0.5 || eye_distance > -span.x) {
       if (preview.mode.x == 2) {
         frag_color = vec4(0.0, 0.0, 0.0, 1.0);
@@ -56,11 +59,11 @@ void main()
     discard;
   }
   vec3 local_hit = ro + rd * t;
-  vec3 obj_hit = obj_pos + rotate_vector(local_hit + f, q);
+  vec3 obj_hit = obj_pos + transpose(frame) * rotate_vector(local_hit + f, q);
   vec4 clip = preview.object_to_clip * vec4(obj_hit, 1.0);
   gl_FragDepth = clip.z / clip.w * 0.5 + 0.5;
 
-  vec3 n_object = rotate_vector(bm_normal(local_hit, bm_normal_tap(preview.march.x, box_half)), q);
+  vec3 n_object = transpose(frame) * rotate_vector(bm_normal(local_hit, bm_normal_tap(preview.march.x, box_half)), q);
   if (preview.mode.x == 1) {
     frag_color = vec4(n_object * 0.5 + 0.5, 1.0);
   }

@@ -53,15 +53,18 @@ v2f vert(appdata v)
   return o;
 }
 
-float4 frag(v2f i, out float depth : SV_Depth) : SV_Target
+float4 frag(v2f i, bool frontFacing : SV_IsFrontFace, out float depth : SV_Depth) : SV_Target
 {
   float3 objCamera = mul(unity_WorldToObject, float4(_WorldSpaceCameraPos, 1.0)).xyz;
   float3 halfExtents = _HalfExtents.w > 0.5 ? _HalfExtents.xyz : BoxmarchCubeHalfExtents(i.color);
-  BoxmarchHit h = BoxmarchRaymarch(i.objPos, objCamera, i.color, i.quat, halfExtents, _MaxSteps, _Epsilon,
-                                   _Relaxation, _MaxDistance);
+  BoxmarchHit h = BoxmarchRaymarch(i.objPos, objCamera, i.color, i.quat, halfExtents, frontFacing, _MaxSteps,
+                                   _Epsilon, _Relaxation, _MaxDistance);
   clip(h.hit ? 1.0 : -1.0);
   float4 clipPos = mul(unity_MatrixVP, mul(unity_ObjectToWorld, float4(h.objPos, 1.0)));
   depth = clipPos.z / clipPos.w;
+#if defined(UNITY_CG_INCLUDED) && !defined(UNITY_REVERSED_Z)
+  depth = depth * 0.5 + 0.5;  // OpenGL-style clip space: z / w in [-1, 1]
+#endif
   float3 worldNormal = normalize(mul(h.objNormal, (float3x3)unity_WorldToObject));
   float lambert = max(dot(worldNormal, normalize(_WorldSpaceLightPos0.xyz)), 0.0);
   float3 ambient = lerp(float3(0.20, 0.19, 0.18), float3(0.42, 0.45, 0.50), 0.5 + 0.5 * worldNormal.y);

@@ -78,9 +78,10 @@ struct BoxmarchHit {
 
 // The whole per-fragment raymarch (as the Blender preview does it): objPos = the fragment's
 // interpolated object-space position, objCamera = the camera in object space, color/quat = the
-// decoded vertex data, halfExtents = the box's half-extents (or BoxmarchCubeHalfExtents).
+// decoded vertex data, halfExtents = the box's half-extents (or BoxmarchCubeHalfExtents),
+// frontFacing = SV_IsFrontFace.
 BoxmarchHit BoxmarchRaymarch(float3 objPos, float3 objCamera, float4 color, float4 quat, float3 halfExtents,
-                             int maxSteps, float epsilon, float relaxation, float maxDistance)
+                             bool frontFacing, int maxSteps, float epsilon, float relaxation, float maxDistance)
 {
   BoxmarchHit o;
   o.hit = false;
@@ -97,7 +98,9 @@ BoxmarchHit BoxmarchRaymarch(float3 objPos, float3 objCamera, float4 color, floa
   float3 rd = normalize(rotate_vector(mul(transpose(BOXMARCH_FRAME), rayObject / eyeDistance), quat_conjugate(q)));
   float2 span = bm_box_span(ro, rd, box_half);
   float tEnd = span.y;
-  if (span.x + span.y < 0.0) {  // far side of the box: only when the camera is inside it
+  // entry: front-facing, or (whatever the winding) more box ahead than behind; the far side
+  // only marches when the camera is inside the box
+  if (!frontFacing && span.x + span.y < 0.0) {
     if (eyeDistance > -span.x) return o;
     ro -= rd * eyeDistance;
     tEnd = eyeDistance;

@@ -30,6 +30,7 @@ boxes = bpy.data.objects.new("boxes", mesh)
 scene.collection.objects.link(boxes)
 boxes.location = (0.3, -0.2, 0.1)
 boxes.rotation_euler = (0.2, 0.1, 0.4)
+boxes.scale = (1.15, 0.85, 1.0)  # non-uniform: rays and normals must go through the right matrices
 bpy.context.view_layer.objects.active = boxes
 boxes.select_set(True)
 assert bpy.ops.boxmarch.bake() == {"FINISHED"}
@@ -47,8 +48,21 @@ result = {"centres": centres, "sizes": sizes, "rotations": rotations,
 view, projection = preview.camera_matrices(scene, camera, W, H)
 result["view"], result["projection"] = view, projection
 
+# The baked layers as Blender stores them, for the reference of the asymmetric presets.
+corner_verts = np.empty(len(mesh.loops), np.int32)
+mesh.loops.foreach_get("vertex_index", corner_verts)
+offsets = np.empty(len(mesh.vertices) * 4, np.float32)
+mesh.color_attributes["BoxOffset"].data.foreach_get("color", offsets)
+corner_q = []
+for name in ("BoxQuatXY", "BoxQuatZW"):
+    uv = np.empty(len(mesh.loops) * 2, np.float32)
+    mesh.uv_layers[name].data.foreach_get("uv", uv)
+    corner_q.append(uv.reshape(-1, 2))
+result.update(layer_positions=mesh_io.read_positions(mesh), layer_offsets=offsets.reshape(-1, 4),
+              layer_corner_verts=corner_verts, layer_corner_quaternions=np.concatenate(corner_q, axis=1))
+
 boxes.boxmarch.preview = True
-for sdf in ("BOX", "SPHERE", "ROUNDED_BOX"):
+for sdf in ("BOX", "SPHERE", "ROUNDED_BOX", "CAPSULE", "CYLINDER", "TORUS", "LINK"):
     boxes.boxmarch.sdf = sdf
     for output in ("SHADED", "NORMAL"):
         rgba, depth = preview.render(scene, camera, W, H, output=output)
@@ -77,6 +91,73 @@ result["COMPOSITE_rgba"], result["COMPOSITE_depth"] = preview.render(scene, came
 boxes.hide_viewport = True
 result["PLANE_rgba"], result["PLANE_depth"] = preview.render(scene, camera, W, H)
 result["plane_matrix"] = np.array(plane.matrix_world)
+
+# The plane away again, the boxes back.
+plane.hide_viewport = True
+boxes.hide_viewport = False
+
+# Baked data expressed in another object frame (as an export preset may write it): quaternions
+# turned by F; with F given as the object's frame the preview must draw the same tori.
+boxes.boxmarch.sdf = "TORUS"
+result["TORUS_rgba"], result["TORUS_depth"] = preview.render(scene, camera, W, H)
+F = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]])  # a proper rotation
+F_quat = np.array(mathutils.Matrix(F.tolist()).to_quaternion())  # w, x, y, z
+uv = {}
+for name in ("BoxQuatXY", "BoxQuatZW"):
+    uv[name] = np.empty(len(mesh.loops) * 2, np.float32)
+    mesh.uv_layers[name].data.foreach_get("uv", uv[name])
+q = np.concatenate([uv["BoxQuatXY"].reshape(-1, 2), uv["BoxQuatZW"].reshape(-1, 2)], axis=1).astype(np.float64)
+fw, fv = F_quat[0], F_quat[1:]
+turned = np.empty_like(q)  # Hamilton product F_quat * q, (x, y, z, w) layout
+turned[:, 3] = fw * q[:, 3] - q[:, :3] @ fv
+turned[:, :3] = fw * q[:, :3] + q[:, 3:4] * fv + np.cross(fv, q[:, :3])
+mesh.uv_layers["BoxQuatXY"].data.foreach_set("uv", turned[:, :2].astype(np.float32).ravel())
+mesh.uv_layers["BoxQuatZW"].data.foreach_set("uv", turned[:, 2:].astype(np.float32).ravel())
+mesh.update()
+bpy.context.view_layer.update()
+result["TORUS_TURNED_rgba"], result["TORUS_TURNED_depth"] = preview.render(scene, camera, W, H)
+boxes["boxmarch_frame"] = F.ravel().tolist()
+result["TORUS_FRAMED_rgba"], result["TORUS_FRAMED_depth"] = preview.render(scene, camera, W, H)
+del boxes["boxmarch_frame"]
+mesh.uv_layers["BoxQuatXY"].data.foreach_set("uv", uv["BoxQuatXY"])
+mesh.uv_layers["BoxQuatZW"].data.foreach_set("uv", uv["BoxQuatZW"])
+mesh.update()
+bpy.context.view_layer.update()
+
+# An orthographic camera: rays share one direction.
+camera.data.type = "ORTHO"
+camera.data.ortho_scale = 9.0
+result["ortho_view"], result["ortho_projection"] = preview.camera_matrices(scene, camera, W, H)
+boxes.boxmarch.sdf = "SPHERE"
+result["ORTHO_rgba"], result["ORTHO_depth"] = preview.render(scene, camera, W, H)
+camera.data.type = "PERSP"
+
+# The camera inside a box (outside its sphere): only far-side fragments exist, the rays start at
+# the eye.
+inside = boxes.matrix_world @ mathutils.Vector(centres[0] + rotations[0] @ (0.4 * sizes[0]))
+camera.location = inside
+camera.rotation_euler = (boxes.matrix_world @ mathutils.Vector(centres[0]) - inside).to_track_quat("-Z", "Y").to_euler()
+camera.data.clip_start = 0.01
+bpy.context.view_layer.update()
+result["inside_view"], result["inside_projection"] = preview.camera_matrices(scene, camera, W, H)
+result["INSIDE_rgba"], result["INSIDE_depth"] = preview.render(scene, camera, W, H)
+camera.location = (7.5, -8.0, 6.0)
+camera.rotation_euler = (-camera.location).to_track_quat("-Z", "Y").to_euler()
+camera.data.clip_start = 0.5
+bpy.context.view_layer.update()
+
+# Geometry edited and baked again: the preview must drop its cached batch.
+shift = np.array([0.0, 0.0, 0.75], np.float32)
+moved = mesh_io.read_positions(mesh) + shift
+mesh.vertices.foreach_set("co", moved.ravel())
+mesh.update()
+for ob in scene.objects:
+    ob.select_set(ob == boxes)
+bpy.context.view_layer.objects.active = boxes
+assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+bpy.context.view_layer.update()
+result["shift"] = shift
+result["MOVED_rgba"], result["MOVED_depth"] = preview.render(scene, camera, W, H)
 
 np.savez_compressed(out_path, **result)
 print("preview_check: wrote", out_path)

@@ -1,8 +1,8 @@
 """Blender operators: thin shells over boxmarch.mesh_io and boxmarch.core."""
-from . import bake
+from . import bake, preview
 
-classes = bake.classes
-menus = bake.menus
+classes = bake.classes + preview.classes
+menus = bake.menus + preview.menus
 
 
 def register_enums():

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 _handler = None
-_WIRE_BACKUP = "boxmarch_display_type"
+_WIRE_BACKUP = "_boxmarch_display_type"  # leading underscore: hidden in the UI
 
 
 def _tag_redraw():
@@ -57,6 +57,7 @@ def _draw_viewport():
 
 
 def _geometry_changed(scene, depsgraph):
+    """depsgraph_update_post handler: drop the cached batches of meshes whose geometry changed."""
     from . import draw
 
     for update in depsgraph.updates:
@@ -66,14 +67,29 @@ def _geometry_changed(scene, depsgraph):
             draw.forget(update.id.name_full)
 
 
+def _data_replaced(*_args):
+    """load_post / undo_post / redo_post handler: meshes were replaced wholesale (a new file may
+    reuse a mesh name), so every cached batch goes."""
+    from . import draw
+
+    draw.forget()
+
+
+# (handler list, function): all persistent, so loading a file keeps them.
+_APP_HANDLERS = (("depsgraph_update_post", _geometry_changed), ("load_post", _data_replaced),
+                 ("undo_post", _data_replaced), ("redo_post", _data_replaced))
+
+
 def register():
     import bpy
 
     global _handler
     if _handler is None:
         _handler = bpy.types.SpaceView3D.draw_handler_add(_draw_viewport, (), "WINDOW", "POST_VIEW")
-    if _geometry_changed not in bpy.app.handlers.depsgraph_update_post:
-        bpy.app.handlers.depsgraph_update_post.append(_geometry_changed)
+    for list_name, function in _APP_HANDLERS:
+        handlers = getattr(bpy.app.handlers, list_name)
+        if function not in handlers:
+            handlers.append(bpy.app.handlers.persistent(function))
 
 
 def unregister():
@@ -85,8 +101,10 @@ def unregister():
     if _handler is not None:
         bpy.types.SpaceView3D.draw_handler_remove(_handler, "WINDOW")
         _handler = None
-    if _geometry_changed in bpy.app.handlers.depsgraph_update_post:
-        bpy.app.handlers.depsgraph_update_post.remove(_geometry_changed)
+    for list_name, function in _APP_HANDLERS:
+        handlers = getattr(bpy.app.handlers, list_name)
+        if function in handlers:
+            handlers.remove(function)
     draw.forget()
     shader.clear_cache()
 

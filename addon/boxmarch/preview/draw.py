@@ -14,9 +14,11 @@ ROTATED_VECTOR_COLOR = (1.0, 0.55, 0.1, 1.0)   # orange: meets at the submesh or
 OUTLINE_COLOR = (0.05, 0.05, 0.05, 1.0)
 SOLID_COLOR = (0.6, 0.6, 0.6, 1.0)
 
-# Batches per mesh datablock, dropped when its geometry changes (depsgraph handler in __init__).
+# Batches per mesh datablock, dropped when its geometry changes, a file loads or undo runs
+# (handlers in __init__).
 _batches: dict = {}
-# Last user SDF compile error per object name (shown in the panel); the outline replaces it.
+# Why an object is not raymarched, per object name (shown in the panel): not baked, a user SDF
+# that does not compile (its outline is drawn instead), a malformed frame property.
 errors: dict = {}
 
 
@@ -50,27 +52,47 @@ def _mesh_batches(ob):
     return _batches[key]
 
 
+# Custom object property: 9 floats, row-major 3x3, the object frame the baked data is expressed
+# in, from Blender's object frame (orthonormal). Set by export presets that write engine axes.
+FRAME_PROPERTY = "boxmarch_frame"
+
+
+def object_frame(ob) -> np.ndarray:
+    """The 3x3 frame of ob's baked data (identity unless FRAME_PROPERTY is set)."""
+    values = ob.get(FRAME_PROPERTY)
+    if values is None:
+        return np.eye(3)
+    frame = np.asarray(list(values), np.float64)
+    if frame.shape != (9,) or not np.allclose(frame.reshape(3, 3) @ frame.reshape(3, 3).T, np.eye(3), atol=1e-5):
+        raise ValueError(f"{ob.name}['{FRAME_PROPERTY}'] must be 9 numbers of an orthonormal 3x3 matrix")
+    return frame.reshape(3, 3)
+
+
 def uniform_block_data(object_to_clip, object_to_view, perspective, settings, output_mode=0,
-                       base_color=(0.8, 0.8, 0.8, 1.0)) -> np.ndarray:
+                       base_color=(0.8, 0.8, 0.8, 1.0), frame=None) -> np.ndarray:
     """The BoxmarchPreview block (shaders/glsl/preview.frag.glsl) as std140 float32 words."""
     object_to_clip = np.asarray(object_to_clip, np.float64)
     object_to_view = np.asarray(object_to_view, np.float64)
-    data = np.zeros(48, np.float32)
+    data = np.zeros(64, np.float32)
     data[0:16] = object_to_clip.T.ravel()   # GLSL matrices are column-major
     normal = np.eye(4)
     normal[:3, :3] = np.linalg.inv(object_to_view[:3, :3]).T
     data[16:32] = normal.T.ravel()
+    frame4 = np.eye(4)
+    if frame is not None:
+        frame4[:3, :3] = frame
+    data[32:48] = frame4.T.ravel()
     view_to_object = np.linalg.inv(object_to_view)
     if perspective:
-        data[32:36] = view_to_object @ np.array([0.0, 0.0, 0.0, 1.0])
-        data[35] = 1.0
+        data[48:52] = view_to_object @ np.array([0.0, 0.0, 0.0, 1.0])
+        data[51] = 1.0
     else:
         direction = (view_to_object @ np.array([0.0, 0.0, -1.0, 0.0]))[:3]
-        data[32:35] = direction / np.linalg.norm(direction)
-        data[35] = 0.0
-    data[36:40] = settings.epsilon, settings.relaxation, settings.max_distance, settings.max_steps
-    data[40:44] = base_color
-    data.view(np.int32)[44] = output_mode
+        data[48:51] = direction / np.linalg.norm(direction)
+        data[51] = 0.0
+    data[52:56] = settings.epsilon, settings.relaxation, settings.max_distance, settings.max_steps
+    data[56:60] = base_color
+    data.view(np.int32)[60] = output_mode
     return data
 
 
@@ -106,9 +128,14 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0):
         return False
     settings = ob.boxmarch
     shader = _marching_shader(ob)
+    try:
+        frame = object_frame(ob)
+    except ValueError as exc:
+        errors[ob.name] = str(exc)
+        shader = None
     if shader is not None:
         block = uniform_block_data(object_to_clip, object_to_view, perspective, settings, output_mode,
-                                   tuple(ob.color[:3]) + (1.0,))
+                                   tuple(ob.color[:3]) + (1.0,), frame)
         ubo = gpu.types.GPUUniformBuf(block.tobytes())
         shader.bind()
         shader.uniform_block(sources.UNIFORM_NAME, ubo)

@@ -22,6 +22,10 @@ class UserSdfError(Exception):
 
 
 _cache: dict = {}
+# User texts that failed, so a broken text is compiled once, not at every redraw.
+_failed: dict = {}
+# Compiled user texts kept (typing in the text editor makes a new one at each change).
+MAX_USER_SHADERS = 8
 
 
 def _create_info(fragment: str):
@@ -36,6 +40,8 @@ def _create_info(fragment: str):
     info.uniform_buf(0, sources.UNIFORM_TYPE, sources.UNIFORM_NAME)
     for slot, type_name, name in sources.FRAGMENT_OUTPUTS:
         info.fragment_out(slot, type_name, name)
+    if hasattr(info, "depth_write"):  # Blender 4+: required where gl_FragDepth is not implied (Metal)
+        info.depth_write("ANY")
     info.vertex_source(sources.vertex_source())
     info.fragment_source(fragment)
     return info, iface
@@ -110,16 +116,24 @@ def preview_shader(sdf: str = "BOX", user_text: str | None = None):
     key = (sdf, user_text)
     if key in _cache:
         return _cache[key]
+    if key in _failed:
+        raise UserSdfError(*_failed[key])
     info, iface = _create_info(sources.fragment_source(sdf, user_text))
     shader, error, log = _compile_capturing_log(info)
     del iface  # the create-info refers to it until compiled
     if shader is None:
         if user_text is None:
             raise RuntimeError(f"boxmarch preview shader failed to compile: {error}\n{log}")
-        raise UserSdfError(*describe_compile_error(log))
+        _failed[key] = describe_compile_error(log)
+        raise UserSdfError(*_failed[key])
+    if user_text is not None:
+        user_keys = [k for k in _cache if k[1] is not None]
+        for old in user_keys[:max(0, len(user_keys) - MAX_USER_SHADERS + 1)]:
+            del _cache[old]
     _cache[key] = shader
     return shader
 
 
 def clear_cache():
     _cache.clear()
+    _failed.clear()

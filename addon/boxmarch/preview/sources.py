@@ -29,12 +29,13 @@ VERTEX_INPUTS = (("VEC3", "pos"), ("VEC4", "offset_color"), ("VEC4", "quat"), ("
 STAGE_INTERFACE = (("smooth", "VEC3", "obj_pos"), ("smooth", "VEC4", "frag_offset"),
                    ("flat", "VEC4", "frag_quat"), ("flat", "VEC3", "frag_half"))
 # Everything per draw travels in one uniform block (push constants are limited to 128 bytes).
-# std140: two mat4 then vec4s, no padding; preview/draw.py packs it (uniform_block_data).
+# std140: three mat4 then vec4s, no padding; preview/draw.py packs it (uniform_block_data).
 UNIFORM_TYPE = "BoxmarchPreview"
 UNIFORM_NAME = "preview"
 UNIFORM_STRUCT = """struct BoxmarchPreview {
   mat4 object_to_clip;
   mat4 normal_to_view;
+  mat4 frame;
   vec4 eye;
   vec4 march;
   vec4 base_color;
