@@ -276,3 +276,16 @@ def test_operator_is_registered_for_search_and_menus(blender):
     assert op.bl_label == "Bake Box Frames"
     assert math.isclose(blender.ops.boxmarch.bake.get_rna_type().properties["angle_epsilon"].default, 0.1, rel_tol=1e-6)
     assert blender.types.BOXMARCH_PT_bake.bl_category == "Boxmarch"
+
+
+def test_new_mesh_edges_have_a_readable_selection(blender):
+    """Blender 5.0.1 gives edges it derives an INT32_2D '.select_edge' that crashes edge-selection
+    access; meshes from mesh_io.new_mesh must not carry it."""
+    from boxmarch import mesh_io
+
+    (positions, _edges, face_starts, face_sizes, corner_verts), *_ = scenes.random_boxes(3)
+    mesh = mesh_io.new_mesh("derived", positions, face_starts, face_sizes, corner_verts)
+    assert all(a.data_type == "BOOLEAN" for a in mesh.attributes if a.name.startswith(".select"))
+    selected = np.ones(len(mesh.edges), bool)
+    mesh.edges.foreach_get("select", selected)
+    assert len(mesh.edges) == 36 and not selected.any()

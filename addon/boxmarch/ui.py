@@ -4,7 +4,9 @@ import textwrap
 import bpy
 
 from . import mesh_io
+from .operators import tools
 from .operators.bake import BOXMARCH_OT_bake
+from .operators.instance_on_curve import BOXMARCH_OT_add_instance_on_curve
 
 
 class BOXMARCH_PT_bake(bpy.types.Panel):
@@ -31,6 +33,20 @@ class BOXMARCH_PT_bake(bpy.types.Panel):
         col.label(text=f"{mesh_io.OFFSET_ATTRIBUTE}: {offset.data_type}, {offset.domain}")
         for name in (mesh_io.QUAT_XY_UV, mesh_io.QUAT_ZW_UV):
             col.label(text=f"{name}: UV channel {names.index(name)}" if name in names else f"{name}: missing")
+
+
+class BOXMARCH_PT_submesh_tools(bpy.types.Panel):
+    bl_label = "Submesh Tools"
+    bl_idname = "BOXMARCH_PT_submesh_tools"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Boxmarch"
+
+    def draw(self, context):
+        col = self.layout.column(align=True)
+        for cls in tools.classes:
+            col.operator(cls.bl_idname)
+        self.layout.operator(BOXMARCH_OT_add_instance_on_curve.bl_idname, icon="CURVE_DATA")
 
 
 class BOXMARCH_PT_preview(bpy.types.Panel):
@@ -79,4 +95,4 @@ class BOXMARCH_PT_preview(bpy.types.Panel):
                 box.label(text=line, icon="ERROR" if i == 0 else "BLANK1")
 
 
-classes = (BOXMARCH_PT_bake, BOXMARCH_PT_preview)
+classes = (BOXMARCH_PT_bake, BOXMARCH_PT_submesh_tools, BOXMARCH_PT_preview)

@@ -1,8 +1,8 @@
 """Blender operators: thin shells over boxmarch.mesh_io and boxmarch.core."""
-from . import bake, preview
+from . import bake, instance_on_curve, preview, tools
 
-classes = bake.classes + preview.classes
-menus = bake.menus + preview.menus
+classes = bake.classes + tools.classes + instance_on_curve.classes + preview.classes
+menus = bake.menus + tools.menus + instance_on_curve.menus + preview.menus
 
 
 def register_enums():

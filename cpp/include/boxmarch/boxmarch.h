@@ -153,7 +153,6 @@ void expand_corner_quaternions(float* corner_uv, int half, const int32_t* corner
 // Fingerprint seed of the options that change the bake's output. Equal options give equal seeds.
 uint32_t options_seed(const BakeOptions& options);
 
-
 // ---------------------------------------------------------------------------------------------
 // raymarch.cpp: the CPU reference raymarcher (mirrors shaders/glsl/*.glsl line for line)
 //
@@ -221,5 +220,151 @@ struct RenderImages {
 void render_boxes(const float* origins, const float* quaternions, const float* half_extents,
                   size_t box_count, const RenderView& view, const MarchOptions& options,
                   const RenderImages& images);
+
+// =============================================================================================
+// Submesh tools (select linked, select across, dedup, merge per submesh, pack UVs by Z).
+// Positions are compared in double from the stored float32 values; "within r" means a true
+// Euclidean distance <= r, whatever the positions (no grid quantisation decides a pair).
+
+// ---------------------------------------------------------------------------------------------
+// spatial_hash.cpp: fixed-radius neighbour pairs
+
+// Reads positions[count * 3]; group_of_point[count] may be null, else only pairs whose points
+// lie in different groups count. threads 0: hardware concurrency. Finds every unordered pair
+// i < j with |p_i - p_j| <= radius (radius >= 0, finite) with a hash grid whose cells are at
+// least radius wide (exact: cells only decide where to look). Writes the first `capacity`
+// pairs found, as (i, j), into pairs[capacity * 2] (null when capacity is 0), ordered by i then
+// j; returns the total count, so a caller with too little room calls again with more.
+// Throws std::invalid_argument on a negative, NaN or infinite radius or a non-finite position.
+size_t find_close_pairs(uint32_t* pairs, size_t capacity, const float* positions, size_t count,
+                        double radius, const int32_t* group_of_point, int threads);
+
+// kdtree_pairs.cpp: the same contract as find_close_pairs, answered by nanoflann radius searches
+// (one per point). Kept as the reference the benchmark and tests compare the hash with.
+size_t find_close_pairs_kdtree(uint32_t* pairs, size_t capacity, const float* positions,
+                               size_t count, double radius, const int32_t* group_of_point);
+
+// ---------------------------------------------------------------------------------------------
+// select_linked.cpp: selection flood fills over whole submeshes
+
+// Reads submesh_of_vertex[vertex_count] (ids 0..submesh_count-1, from find_submeshes) and
+// selected[vertex_count]; writes out_selected[vertex_count] = 1 for every vertex of a submesh
+// holding a selected vertex, else 0 (may alias selected). Returns the number of such submeshes.
+size_t select_linked_submeshes(uint8_t* out_selected, const uint8_t* selected,
+                               const int32_t* submesh_of_vertex, size_t vertex_count,
+                               size_t submesh_count);
+
+// Flood fill through edges and through vertices of other submeshes within epsilon (true
+// Euclidean distance <= epsilon) of a reached vertex. Reads positions[vertex_count * 3],
+// submesh_of_vertex (from find_submeshes), selected[vertex_count]; writes out_selected as above
+// (may alias selected). Returns the number of submeshes selected. Throws std::invalid_argument
+// on a negative, NaN or infinite epsilon or a non-finite position.
+size_t select_linked_across(uint8_t* out_selected, const uint8_t* selected, const float* positions,
+                            const int32_t* submesh_of_vertex, size_t vertex_count,
+                            size_t submesh_count, double epsilon, int threads);
+
+// ---------------------------------------------------------------------------------------------
+// dedup.cpp: duplicate submeshes
+
+// A submesh B duplicates A when both have the same vertex count and every vertex of B lies
+// within tolerance of a distinct vertex of A (a perfect matching; order and index do not
+// matter). Submeshes are visited by id (lowest vertex first); a candidate submesh (candidate
+// != null and candidate[s] != 0, or every submesh when null) that duplicates an earlier kept
+// candidate is marked, so the lowest-index copy of each set stays. Reads positions,
+// submesh_of_vertex (from find_submeshes); writes duplicate_of[submesh_count] (-1: kept or not a
+// candidate; else the kept submesh it duplicates). Returns the number of duplicates. Candidates
+// come from a hash of submesh centroids, never from comparing all pairs. Throws
+// std::invalid_argument on a negative, NaN or infinite tolerance or a non-finite position.
+size_t find_duplicate_submeshes(int32_t* duplicate_of, const float* positions,
+                                const int32_t* submesh_of_vertex, size_t vertex_count,
+                                size_t submesh_count, const uint8_t* candidate, double tolerance,
+                                int threads);
+
+// ---------------------------------------------------------------------------------------------
+// merge.cpp: merge by distance inside each submesh
+
+// Plans a merge by distance inside each chosen submesh (chosen[s] != 0) for a merge that works
+// on a vertex selection (Blender's own Merge by Distance): only vertices with a partner of their
+// own submesh within `distance` can merge, so only they need selecting; and submeshes whose such
+// vertices come within `distance` of each other go to different passes, so a pass never merges
+// across submeshes. A relative margin of 1e-6 on the distance makes the plan safe for a merge
+// comparing with < or <=. Greedy colouring in submesh id order. Reads positions,
+// submesh_of_vertex (from find_submeshes); writes pass_of_vertex[vertex_count] (-1: nothing to
+// merge at this vertex). Returns the number of passes (0: nothing to merge).
+// Throws std::invalid_argument on a negative, NaN or infinite distance or a non-finite position.
+size_t merge_passes(int32_t* pass_of_vertex, const float* positions,
+                    const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count,
+                    const uint8_t* chosen, double distance, int threads);
+
+// Merge by Distance inside each chosen submesh as Blender 5.0 does it (Blender visits vertices
+// in its k-d tree's order, so which member of a cluster survives may differ; clusters and
+// positions do not where clusters are unambiguous). Vertices are visited by index; an unassigned one gathers every unassigned vertex of its submesh within
+// `distance` (inclusive) into a cluster; the cluster's target is the lower index of two, else the
+// member nearest the cluster's centroid (ties: lower index), and moves to the centroid. Reads
+// positions, submesh_of_vertex, chosen[submesh_count]; writes target[vertex_count] (the vertex
+// each merges into, itself for survivors) and merged_positions[vertex_count * 3] (positions,
+// with targets at their centroids). Returns the number of vertices merged away.
+// Throws std::invalid_argument on a negative, NaN or infinite distance or a non-finite position.
+size_t merge_targets(int32_t* target, float* merged_positions, const float* positions,
+                     const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count,
+                     const uint8_t* chosen, double distance, int threads);
+
+// weld.cpp: the topology after merging vertices, as Blender's weld leaves it: in every face,
+// a corner whose vertex merges into the next corner's vertex goes; faces left with fewer than 3
+// corners go; edges are the distinct images of the old edges that do not collapse (first old
+// edge wins); survivors keep their order. Old elements named by *_source arrays carry their
+// attributes over. Output arrays have the input sizes as capacity.
+struct WeldCounts {
+    size_t vertices = 0, edges = 0, faces = 0, corners = 0;
+    // True when Blender would do more than this (a face repeating a vertex at non-adjacent
+    // corners is split; two faces become the same; a face edge has no edge): outputs are then
+    // incomplete and the caller must merge another way.
+    bool needs_blender = false;
+};
+
+struct WeldOutput {
+    int32_t* vertex_source;     // [vertex_count]
+    int32_t* edge_source;       // [edge_count]
+    int32_t* edges;             // [edge_count * 2], new vertex indices
+    int32_t* face_source;       // [face_count]
+    int32_t* face_starts;       // [face_count]
+    int32_t* corner_source;     // [corner_count]
+    int32_t* corner_verts;      // [corner_count], new vertex indices
+    int32_t* corner_edges;      // [corner_count], new edge indices
+};
+
+// Reads mesh, corner_edges[corner_count] (each corner's edge to the next corner; may be null:
+// then looked up from the new edges) and target[vertex_count] (from merge_targets).
+WeldCounts weld_topology(const MeshView& mesh, const int32_t* corner_edges, const int32_t* target,
+                         const WeldOutput& out);
+
+// ---------------------------------------------------------------------------------------------
+// pack_uv.cpp: UV islands packed in rows sorted by submesh height
+
+struct PackUvOptions {
+    double padding = 0.002;      // UV units between islands and at the square's border
+    size_t max_per_row = 0;      // 0: as many as fit the width
+    bool lock_overlapping = false;  // islands whose UV bounds overlap before packing move together
+};
+
+struct PackUvReport {
+    size_t islands = 0;
+    size_t groups = 0;   // units moved as one (islands, or overlapping sets when locked)
+    size_t rows = 0;
+    double scale = 0.0;  // uniform scale applied to every island
+};
+
+// Reads mesh (corner_verts, faces), face_mask[face_count] (null: every face), corner_uv
+// [corner_count * 2] (in/out), vertex_height[vertex_count] (e.g. world Z) and
+// submesh_of_vertex. Islands: selected faces joined where they share a vertex with equal UVs
+// (within 1e-6). Each island takes the height of its submesh (centre of the submesh's height
+// range); units are sorted highest first (ties: lowest face first) and placed in rows from the
+// top of the unit square, left to right, at one uniform scale, the largest whose layout fits
+// [0, 1] with `padding` between units and at the border. Writes corner_uv of selected faces
+// only. Throws std::invalid_argument (nothing written) on non-finite UVs or heights, a padding
+// outside [0, 0.5) or too large for the number of islands, or no selected face.
+PackUvReport pack_uv_by_height(float* corner_uv, const MeshView& mesh, const uint8_t* face_mask,
+                               const float* vertex_height, const int32_t* submesh_of_vertex,
+                               size_t submesh_count, const PackUvOptions& options);
 
 }  // namespace boxmarch
