@@ -334,7 +334,9 @@ struct WeldOutput {
 };
 
 // Reads mesh, corner_edges[corner_count] (each corner's edge to the next corner; may be null:
-// then looked up from the new edges) and target[vertex_count] (from merge_targets).
+// then looked up from the new edges) and target[vertex_count] (from merge_targets). Throws
+// std::invalid_argument (nothing written) when a target is not a surviving vertex or when faces
+// name more corners than corner_count (overlapping faces).
 WeldCounts weld_topology(const MeshView& mesh, const int32_t* corner_edges, const int32_t* target,
                          const WeldOutput& out);
 
