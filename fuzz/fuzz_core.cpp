@@ -410,6 +410,88 @@ void fuzz_render(Bytes& in) {
         if (s < 0) fail("render_boxes wrote a negative step count");
 }
 
+double read_distance(Bytes& in) {  // mostly small, sometimes invalid (negative, NaN, infinite)
+    const uint8_t b = in.byte();
+    if (b == 255) return std::nan("");
+    if (b == 254) return -0.5;
+    if (b == 253) return INFINITY;
+    return (b % 64) * 0.0625;
+}
+
+// The submesh tools (issue 3), called as their contracts allow: with the numbering from
+// find_submeshes (the Python bindings check caller-made numberings), arbitrary positions,
+// distances, selections and UVs. The hash and k-d tree pair searches must agree exactly.
+void fuzz_tools(Bytes& in, const FuzzMesh& m, const MeshView& view) {
+    const size_t n = view.vertex_count;
+    std::vector<int32_t> ids(n);
+    const size_t count = find_submeshes(ids.data(), view);
+    const double radius = read_distance(in);
+    const bool grouped = in.byte() & 1;
+    const size_t capacity = in.byte() % 40;
+    std::vector<uint32_t> hash_pairs(std::max<size_t>(capacity * 2, 1)), tree_pairs(std::max<size_t>(capacity * 2, 1));
+    size_t hash_count = 0, tree_count = 0;
+    const bool hash_ok = accepted([&] {
+        hash_count = find_close_pairs(hash_pairs.data(), capacity, m.positions.data(), n, radius,
+                                      grouped ? ids.data() : nullptr, 1);
+    });
+    const bool tree_ok = accepted([&] {
+        tree_count = find_close_pairs_kdtree(tree_pairs.data(), capacity, m.positions.data(), n, radius,
+                                             grouped ? ids.data() : nullptr);
+    });
+    if (hash_ok != tree_ok) fail("hash and k-d tree pair searches disagree on accepting the input");
+    if (hash_ok) {
+        if (hash_count != tree_count) fail("hash and k-d tree pair searches found different pair counts");
+        const size_t shown = std::min(hash_count, capacity);
+        for (size_t i = 0; i < shown * 2; ++i)
+            if (hash_pairs[i] != tree_pairs[i] || hash_pairs[i] >= n) fail("pair lists differ or name a vertex out of range");
+    }
+
+    std::vector<uint8_t> selected(n), out(n), chosen(count);
+    for (uint8_t& x : selected) x = in.byte() & 1;
+    for (uint8_t& x : chosen) x = in.byte() & 1;
+    if (select_linked_submeshes(out.data(), selected.data(), ids.data(), n, count) > count)
+        fail("select_linked_submeshes selected more submeshes than exist");
+    const double epsilon = read_distance(in), tolerance = read_distance(in), distance = read_distance(in);
+    size_t linked = 0;
+    if (accepted([&] { linked = select_linked_across(out.data(), selected.data(), m.positions.data(), ids.data(), n, count, epsilon, 1); }) &&
+        linked > count)
+        fail("select_linked_across selected more submeshes than exist");
+    std::vector<int32_t> duplicate_of(count, -7);
+    if (accepted([&] { find_duplicate_submeshes(duplicate_of.data(), m.positions.data(), ids.data(), n, count, chosen.data(), tolerance, 1); }))
+        for (size_t s = 0; s < count; ++s)
+            if (duplicate_of[s] < -1 || duplicate_of[s] >= int32_t(s)) fail("duplicate_of names a later or invalid submesh");
+    std::vector<int32_t> pass_of_vertex(n), target(n);
+    std::vector<float> merged(n * 3);
+    accepted([&] { merge_passes(pass_of_vertex.data(), m.positions.data(), ids.data(), n, count, chosen.data(), distance, 1); });
+    if (accepted([&] { merge_targets(target.data(), merged.data(), m.positions.data(), ids.data(), n, count, chosen.data(), distance, 1); })) {
+        for (size_t v = 0; v < n; ++v)
+            if (target[v] < 0 || size_t(target[v]) >= n || ids[size_t(target[v])] != ids[v]) fail("merge target outside the submesh");
+        const size_t e = view.edge_count, f = view.face_count, c = view.corner_count;
+        std::vector<int32_t> vertex_source(n), edge_source(e), edges(e * 2), face_source(f), face_starts(f),
+            corner_source(c), corner_verts(c), corner_edges(c);
+        const WeldOutput w{vertex_source.data(), edge_source.data(), edges.data(), face_source.data(), face_starts.data(),
+                           corner_source.data(), corner_verts.data(), corner_edges.data()};
+        accepted([&] { weld_topology(view, nullptr, target.data(), w); });
+    }
+    std::vector<float> uv(view.corner_count * 2), height(n);
+    const bool raw = in.byte() & 1;
+    for (float& x : uv) x = in.coordinate(raw);
+    for (float& x : height) x = in.coordinate(raw);
+    std::vector<uint8_t> face_mask(view.face_count);
+    for (uint8_t& x : face_mask) x = in.byte() & 1;
+    PackUvOptions options;
+    options.padding = (in.byte() % 8) * 0.1 - 0.1;  // -0.1..0.6: valid is [0, 0.5)
+    options.max_per_row = in.byte() % 4;
+    options.lock_overlapping = in.byte() & 1;
+    std::vector<float> before = uv;
+    if (accepted([&] { pack_uv_by_height(uv.data(), view, face_mask.data(), height.data(), ids.data(), count, options); })) {
+        for (float x : uv)
+            if (!std::isfinite(x)) fail("pack_uv_by_height wrote a non-finite UV");
+    } else if (uv != before) {
+        fail("rejected pack_uv_by_height wrote UVs");
+    }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -420,6 +502,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (accepted([&] { validate_mesh(view); })) {
         fuzz_bake(in, m, view);
         fuzz_bake_numbering(in, view);
+        fuzz_tools(in, m, view);
     }
     fuzz_face_starts(in, m, view);
     fuzz_group(in);

@@ -545,3 +545,14 @@ def test_face_starts_from_arbitrary_corner_edges_never_crash(corner_verts, data)
     if result is not None:
         starts, sizes = result
         assert len(starts) == 2 and np.all(sizes >= 3) and sizes.sum() + starts[0] == len(corner_verts)
+
+
+def test_weld_refuses_faces_that_share_corners():
+    # Two triangles over the same three corners pass validate_mesh but name 6 corners of 3: the
+    # weld's outputs (sized by the input) would overflow. Found by the fuzz target under ASan.
+    positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
+    arrays = (positions, np.array([[0, 1], [1, 2], [2, 0]], np.int32), np.array([0, 0], np.int32),
+              np.array([3, 3], np.int32), np.array([0, 1, 2], np.int32))
+    core.validate_mesh(*arrays)
+    with pytest.raises(ValueError, match="faces overlap"):
+        core.weld(*arrays, np.array([0, 1, 1], np.int32))
