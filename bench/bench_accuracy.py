@@ -12,7 +12,8 @@ Sections (each measured here, from NumPy box scenes, with the native core; no Bl
   which face gives axis 2 for faces nearly angle_epsilon apart;
 * raymarch: hit error of the preview's sphere tracer (the CPU reference, core.raymarch) against
   the closed-form sphere, by max steps, epsilon and relaxation, with the average steps per ray;
-* scaling: bake time and peak memory from 1,000 to 1,000,000 boxes (log-log, fitted slope).
+* scaling: time and peak memory of the bake and the submesh tools from 1,000 to 1,000,000 boxes
+  (log-log, fitted slopes).
 
 Truth never comes from the bake: box centres and axes are the generator's; the origin a decode
 is compared with is the bounds centre of the stored float32 vertices, computed here in float64.
@@ -372,60 +373,88 @@ def plot_raymarch(step_points, relax_points, path):
 # Scaling
 
 
-def scaling_child(n):
+def tool_runs(arrays):
+    """The operations whose scaling is measured, each a function of no arguments over the same
+    scene: the bake and the submesh tools (issue 3) at their operator defaults."""
+    positions, edges, face_starts, face_sizes, corner_verts = arrays
+    ids, count = core.find_submeshes(*arrays)
+    selected = np.zeros(len(positions), np.uint8)
+    selected[::100] = 1
+    square = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float32)
+    corner_uv = np.tile(square, (len(face_starts), 1))  # every face its own island
+    height = np.ascontiguousarray(positions[:, 2])
+    return {
+        "bake": lambda: core.bake(*arrays),
+        "select linked across": lambda: core.select_linked_across(positions, selected, ids, count, epsilon=1e-4),
+        "find duplicates": lambda: core.find_duplicate_submeshes(positions, ids, count, tolerance=1e-4),
+        "merge by distance": lambda: core.merge_targets(positions, ids, count, distance=1e-3),
+        "pack UVs by height": lambda: core.pack_uv_by_height(corner_uv.copy(), *arrays, vertex_height=height,
+                                                             submesh_of_vertex=ids, submesh_count=count),
+    }
+
+
+TOOLS = ["bake", "select linked across", "find duplicates", "merge by distance", "pack UVs by height"]
+
+
+def scaling_child(n, tool):
     """One measurement in a fresh process (so freed memory of earlier work cannot hide the peak):
-    the peak resident-set rise of a first core.bake on n boxes, then the best wall and CPU time
-    of further bakes. Prints JSON."""
+    the peak resident-set rise of a first run of `tool` on n boxes, then the best wall and CPU
+    time of further runs. Prints JSON."""
     arrays, _, _, _ = scenes.random_boxes(n, seed=5)
-    # Memory first: memory freed by an earlier bake stays in the allocator and would hide the peak.
+    run = tool_runs(arrays)[tool]
+    # Memory first: memory freed by an earlier run stays in the allocator and would hide the peak.
     base = rss_bytes()
     reset_peak_rss()
-    result = core.bake(*arrays)
+    result = run()
     peak = rss_bytes("VmHWM") - base
     del result
     repeats = 3 if n <= 316_228 else 2
     wall, cpu = float("inf"), float("inf")
     for _ in range(repeats):
         w0, c0 = time.perf_counter(), time.process_time()
-        core.bake(*arrays)
+        run()
         wall, cpu = min(wall, time.perf_counter() - w0), min(cpu, time.process_time() - c0)
     print(json.dumps(dict(n=n, wall=wall, cpu=cpu, peak=peak, inputs=sum(a.nbytes for a in arrays))))
 
 
 def scaling(counts):
-    rows, points = [], []
-    for n in counts:
-        child = subprocess.run([sys.executable, os.path.abspath(__file__), "--scaling-child", str(n)],
-                               capture_output=True, text=True, check=True)
-        m = json.loads(child.stdout.strip().splitlines()[-1])
-        rows.append([f"{n:,}", f"{m['wall'] * 1e3:.1f}", f"{m['cpu'] * 1e3:.1f}", f"{m['cpu'] / n * 1e9:.0f}",
-                     f"{m['peak'] / 2**20:.1f}", f"{m['inputs'] / 2**20:.1f}", f"{m['peak'] / n:.0f}"])
-        points.append((n, m["wall"], m["cpu"], m["peak"]))
-        print(f"scaling {n} done", file=sys.stderr, flush=True)
-    n, wall, cpu, peak = map(np.array, zip(*points))
-    big = n >= 10_000
-    slopes = {name: np.polyfit(np.log(n[big]), np.log(np.maximum(v[big], 1e-9)), 1)[0]
-              for name, v in (("wall", wall), ("cpu", cpu), ("memory", peak))}
+    """Per tool: table rows, points (n, wall, cpu, peak) and fitted log-log slopes."""
+    rows, points, slopes = [], {}, {}
+    for tool in TOOLS:
+        for n in counts:
+            child = subprocess.run([sys.executable, os.path.abspath(__file__), "--scaling-child", str(n), tool],
+                                   capture_output=True, text=True, check=True)
+            m = json.loads(child.stdout.strip().splitlines()[-1])
+            rows.append([tool, f"{n:,}", f"{m['wall'] * 1e3:.1f}", f"{m['cpu'] * 1e3:.1f}", f"{m['cpu'] / n * 1e9:.0f}",
+                         f"{m['peak'] / 2**20:.1f}", f"{m['peak'] / n:.0f}"])
+            points.setdefault(tool, []).append((n, m["wall"], m["cpu"], m["peak"]))
+        n, wall, cpu, peak = map(np.array, zip(*points[tool]))
+        big = n >= 10_000
+        slopes[tool] = {name: np.polyfit(np.log(n[big]), np.log(np.maximum(v[big], 1e-9)), 1)[0]
+                        for name, v in (("wall", wall), ("cpu", cpu), ("memory", peak))}
+        print(f"scaling {tool} done", file=sys.stderr, flush=True)
     return rows, points, slopes
 
 
 def plot_scaling(points, slopes, path):
-    n, wall, cpu, peak = map(np.array, zip(*points))
-    fig, (a, b) = plt.subplots(1, 2, figsize=(9, 3.6))
-    a.loglog(n, wall, "o-", label=f"wall (slope {slopes['wall']:.2f})")
-    a.loglog(n, cpu, "s-", label=f"CPU, all threads (slope {slopes['cpu']:.2f})")
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
+    for tool in TOOLS:
+        n, wall, cpu, peak = map(np.array, zip(*points[tool]))
+        line, = a.loglog(n, cpu, "o-", label=f"{tool} (slope {slopes[tool]['cpu']:.2f})")
+        b.loglog(n, np.maximum(peak, 1) / 2**20, "o-", color=line.get_color(),
+                 label=f"{tool} (slope {slopes[tool]['memory']:.2f})")
+    n = np.array([p[0] for p in points["bake"]])
+    cpu = np.array([p[2] for p in points["bake"]])
     a.loglog(n, cpu[-1] * n / n[-1], "k:", lw=0.8, label="slope 1")
     a.set_xlabel("boxes")
-    a.set_ylabel("time (s)")
-    a.legend(fontsize=8)
+    a.set_ylabel("CPU time, all threads (s)")
+    a.legend(fontsize=7)
     a.grid(True, alpha=0.3)
-    b.loglog(n, np.maximum(peak, 1) / 2**20, "o-", label=f"peak extra memory (slope {slopes['memory']:.2f})")
-    b.loglog(n, peak[-1] / 2**20 * n / n[-1], "k:", lw=0.8, label="slope 1")
     b.set_xlabel("boxes")
-    b.set_ylabel("MiB")
-    b.legend(fontsize=8)
+    b.set_ylabel("peak extra memory (MiB)")
+    b.legend(fontsize=7)
     b.grid(True, alpha=0.3)
-    fig.suptitle("Scaling of core.bake")
+    fig.suptitle("Scaling of the bake and the submesh tools (boxmarch.core)")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -438,10 +467,10 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer boxes: a smoke run, not for the docs")
     parser.add_argument("--out", default=str(DOCS), help="directory for ACCURACY.md and the plots")
-    parser.add_argument("--scaling-child", type=int, help=argparse.SUPPRESS)
+    parser.add_argument("--scaling-child", nargs=2, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.scaling_child:
-        return scaling_child(args.scaling_child)
+        return scaling_child(int(args.scaling_child[0]), args.scaling_child[1])
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     quick = args.quick
@@ -500,8 +529,9 @@ interior point).
 * Raymarch at the preview's defaults (64 steps, epsilon 1e-3, relaxation 1), SPHERE preset:
   hit error median **{ray_default["median"]:.1e}**, max **{ray_default["max"]:.1e}** of the radius;
   {100 * ray_default["false_miss"]:.2f}% of true hits missed; {ray_default["steps"]:.1f} steps per ray on average.
-* Bake time scales with slope **{slopes["cpu"]:.2f}** in CPU time ({slopes["wall"]:.2f} wall) (log-log,
-  10,000..{counts[-1]:,} boxes); peak memory slope {slopes["memory"]:.2f}.
+* Bake time scales with slope **{slopes["bake"]["cpu"]:.2f}** in CPU time ({slopes["bake"]["wall"]:.2f} wall) (log-log,
+  10,000..{counts[-1]:,} boxes); peak memory slope {slopes["bake"]["memory"]:.2f}. Submesh tools (CPU time slope):
+  {", ".join(f"{t} {slopes[t]['cpu']:.2f}" for t in TOOLS[1:])}.
 
 ## Encoding error by box size and distance
 
@@ -582,18 +612,22 @@ those rays need changes nothing. The default settings march {"20,000" if quick e
 
 ## Scaling
 
-`core.bake` of N random boxes (sizes 0.05..2, within 100 units, 8 vertices each), default
-threads, each N in a fresh process. Wall is the best of 2-3 runs; CPU is the process's CPU time
-over all threads (less sensitive to other load on the shared machine, which was busy during the
-run: compare docs/BENCHMARKS.md for quiet-machine times). Peak extra memory is the rise of the
-process's peak resident set during one bake (inputs excluded, outputs included).
+`core.bake` and the submesh tools of N random boxes (sizes 0.05..2, within 100 units, 8 vertices
+each), default threads, every tool and N in a fresh process: *select linked across* from every
+100th vertex with epsilon 1e-4, *find duplicates* with tolerance 1e-4, *merge by distance*
+(`merge_targets`, 1e-3), *pack UVs by height* with every face its own island. Wall is the best of
+2-3 runs; CPU is the process's CPU time over all threads (less sensitive to other load on the
+shared machine, which was busy during the run: compare docs/BENCHMARKS.md for quiet-machine
+times). Peak extra memory is the rise of the process's peak resident set during the first run
+(inputs excluded, outputs included).
 
-{table(["boxes", "wall ms", "CPU ms", "CPU ns per box", "peak extra MiB", "input MiB", "peak bytes per box"], scale_rows)}
+{table(["operation", "boxes", "wall ms", "CPU ms", "CPU ns per box", "peak extra MiB", "peak bytes per box"], scale_rows)}
 
-![Bake time and peak memory against box count, log-log](accuracy_scaling.png)
+![Time and peak memory against box count, log-log](accuracy_scaling.png)
 
-Fitted slopes over 10,000..{counts[-1]:,} boxes: CPU time {slopes["cpu"]:.2f}, wall time {slopes["wall"]:.2f},
-memory {slopes["memory"]:.2f} (1.0 is linear). The submesh tools of issue 3 are not on this page yet.
+Fitted log-log slopes over 10,000..{counts[-1]:,} boxes (1.0 is linear):
+
+{table(["operation", "CPU time", "wall time", "memory"], [[t, f"{slopes[t]['cpu']:.2f}", f"{slopes[t]['wall']:.2f}", f"{slopes[t]['memory']:.2f}"] for t in TOOLS])}
 """
     (out / "ACCURACY.md").write_text(page)
     print(page)
