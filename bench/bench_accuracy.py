@@ -22,6 +22,7 @@ is compared with is the bounds centre of the stored float32 vertices, computed h
 from __future__ import annotations
 
 import argparse
+import ctypes
 import datetime
 import os
 import pathlib
@@ -404,7 +405,9 @@ def scaling_child(n, tool):
     time of further runs. Prints JSON."""
     arrays, _, _, _ = scenes.random_boxes(n, seed=5)
     run = tool_runs(arrays)[tool]
-    # Memory first: memory freed by an earlier run stays in the allocator and would hide the peak.
+    # Memory first, with the scene's freed temporaries returned to the system: memory the
+    # allocator keeps from earlier work would otherwise be reused unseen and hide the peak.
+    ctypes.CDLL("libc.so.6").malloc_trim(0)
     base = rss_bytes()
     reset_peak_rss()
     result = run()
