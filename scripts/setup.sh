@@ -7,7 +7,8 @@ PYTHON="${PYTHON:-python3}"
 
 APT_PACKAGES=(blender python3-numpy libglm-dev libnanoflann-dev glslang-tools xvfb xauth
               libxi6 libxxf86vm1 libxfixes3 libxrender1 libgl1 libxkbcommon0 libsm6
-              libgl1-mesa-dri libegl1 libegl-mesa0)  # Mesa llvmpipe: the preview's GPU tests without a GPU
+              libgl1-mesa-dri libegl1 libegl-mesa0  # Mesa llvmpipe: the preview's GPU tests without a GPU
+              cmake clang-14 libclang-rt-14-dev)  # sanitizer build and libFuzzer target
 missing=()
 for pkg in "${APT_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
@@ -20,6 +21,6 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 echo "[setup] pip install (bpy, build and test tools)" >&2
-"$PYTHON" -m pip install -q --disable-pip-version-check bpy "scikit-build-core>=0.10" "pybind11>=2.12" pytest hypothesis
+"$PYTHON" -m pip install -q --disable-pip-version-check bpy "scikit-build-core>=0.10" "pybind11>=2.12" pytest hypothesis matplotlib
 echo "[setup] building boxmarch" >&2
 "$PYTHON" -m pip install -q --disable-pip-version-check --no-build-isolation .

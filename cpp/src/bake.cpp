@@ -168,6 +168,10 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
 
     Grouped g;
     group(g, mesh, submesh_of_vertex, submesh_count);
+    for (size_t sm = 0; sm < submesh_count; ++sm)  // every submesh needs a vertex to anchor it
+        if (g.vertex_offsets[sm + 1] == g.vertex_offsets[sm])
+            throw std::invalid_argument("submesh_of_vertex does not match submesh_count: submesh " +
+                                        std::to_string(sm) + " has no vertex");
     const glm::dmat3 turn_matrix(turn[0], turn[1], turn[2], turn[3], turn[4], turn[5], turn[6], turn[7], turn[8]);
     const double cos_epsilon = std::cos(options.angle_epsilon);
     const uint32_t seed = options_seed(options);

@@ -76,6 +76,11 @@ size_t face_starts_from_corner_edges(int32_t* face_starts, const int32_t* corner
 
 void group_by_submesh(uint32_t* offsets, uint32_t* items, const int32_t* submesh_of_item,
                       size_t item_count, size_t submesh_count) {
+    for (size_t i = 0; i < item_count; ++i)
+        if (submesh_of_item[i] < 0 || size_t(submesh_of_item[i]) >= submesh_count)
+            throw std::invalid_argument("item " + std::to_string(i) + " names submesh " +
+                                        std::to_string(submesh_of_item[i]) + ", outside 0.." +
+                                        std::to_string(submesh_count) + "-1");
     for (size_t s = 0; s <= submesh_count; ++s) offsets[s] = 0;
     bool sorted = true;
     for (size_t i = 0; i < item_count; ++i) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace boxmarch {
@@ -22,6 +23,13 @@ WeldCounts weld_topology(const MeshView& mesh, const int32_t* corner_edges, cons
     for (size_t v = 0; v < n; ++v)
         if (target[v] < 0 || size_t(target[v]) >= n || target[size_t(target[v])] != target[v])
             throw std::invalid_argument("target[" + std::to_string(v) + "] is not a surviving vertex");
+    // The outputs hold corner_count corners: faces sharing corners (valid for validate_mesh, never
+    // stored by Blender) could need more, so they are refused before anything is written.
+    size_t corners_named = 0;
+    for (size_t f = 0; f < mesh.face_count; ++f) corners_named += size_t(mesh.face_sizes[f]);
+    if (corners_named > mesh.corner_count)
+        throw std::invalid_argument("faces name " + std::to_string(corners_named) + " corners but there are " +
+                                    std::to_string(mesh.corner_count) + ": faces overlap");
     WeldCounts counts;
     // Survivors keep their order.
     std::vector<int32_t> new_index(n, -1);

@@ -54,7 +54,8 @@ size_t face_starts_from_corner_edges(int32_t* face_starts, const int32_t* corner
 
 // Counting sort of items by their submesh. Reads submesh_of_item[item_count] (values in
 // 0..submesh_count-1); writes offsets[submesh_count + 1] and items[item_count] so the items of
-// submesh s are items[offsets[s] .. offsets[s+1]-1], ascending.
+// submesh s are items[offsets[s] .. offsets[s+1]-1], ascending. Throws std::invalid_argument
+// (writing nothing) on a value out of range.
 void group_by_submesh(uint32_t* offsets, uint32_t* items, const int32_t* submesh_of_item,
                       size_t item_count, size_t submesh_count);
 
@@ -131,7 +132,9 @@ struct BakeSubmeshes {
 // colour of each vertex into offset_float[vertex_count * 4] (Float encoding) or
 // offset_byte[vertex_count * 4] (Byte encoding; the other pointer may be null); and the arrays
 // of `out` (every submesh's entry is written: for a submesh not baked, zeros and source
-// Identity). Returns the report.
+// Identity). Returns the report. Throws std::invalid_argument, writing nothing, on invalid
+// options, a missing output array, or a numbering with an id out of range or a submesh without
+// vertices.
 BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t submesh_count,
                 const uint8_t* bake_mask, const uint32_t* previous_fingerprints,
                 const BakeOptions& options, uint32_t* fingerprints, float* offset_float,
@@ -331,7 +334,9 @@ struct WeldOutput {
 };
 
 // Reads mesh, corner_edges[corner_count] (each corner's edge to the next corner; may be null:
-// then looked up from the new edges) and target[vertex_count] (from merge_targets).
+// then looked up from the new edges) and target[vertex_count] (from merge_targets). Throws
+// std::invalid_argument (nothing written) when a target is not a surviving vertex or when faces
+// name more corners than corner_count (overlapping faces).
 WeldCounts weld_topology(const MeshView& mesh, const int32_t* corner_edges, const int32_t* target,
                          const WeldOutput& out);
 
