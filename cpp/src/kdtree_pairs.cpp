@@ -4,7 +4,6 @@
 
 #include <nanoflann.hpp>
 
-#include <algorithm>
 #include <cmath>
 
 namespace boxmarch {
@@ -53,12 +52,7 @@ size_t find_close_pairs_kdtree(uint32_t* pairs, size_t capacity, const float* po
             if (dx * dx + dy * dy + dz * dz <= r2) found.emplace_back(uint32_t(i), j);
         }
     }
-    std::sort(found.begin(), found.end());
-    for (size_t k = 0; k < std::min(capacity, found.size()); ++k) {
-        pairs[2 * k] = found[k].first;
-        pairs[2 * k + 1] = found[k].second;
-    }
-    return found.size();
+    return write_sorted_pairs(pairs, capacity, found);
 }
 
 }  // namespace boxmarch

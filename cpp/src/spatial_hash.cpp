@@ -181,17 +181,21 @@ std::vector<PointPair> close_pairs(const T* positions, size_t count, double radi
 template std::vector<PointPair> close_pairs<float>(const float*, size_t, double, const int32_t*, int);
 template std::vector<PointPair> close_pairs<double>(const double*, size_t, double, const int32_t*, int);
 
-size_t find_close_pairs(uint32_t* pairs, size_t capacity, const float* positions, size_t count,
-                        double radius, const int32_t* group_of_point, int threads) {
-    check_radius(radius, "radius");
-    check_finite_positions(positions, count);
-    std::vector<PointPair> found = close_pairs(positions, count, radius, group_of_point, threads);
+size_t write_sorted_pairs(uint32_t* pairs, size_t capacity, std::vector<PointPair>& found) {
     std::sort(found.begin(), found.end());
     for (size_t k = 0; k < std::min(capacity, found.size()); ++k) {
         pairs[2 * k] = found[k].first;
         pairs[2 * k + 1] = found[k].second;
     }
     return found.size();
+}
+
+size_t find_close_pairs(uint32_t* pairs, size_t capacity, const float* positions, size_t count,
+                        double radius, const int32_t* group_of_point, int threads) {
+    check_radius(radius, "radius");
+    check_finite_positions(positions, count);
+    std::vector<PointPair> found = close_pairs(positions, count, radius, group_of_point, threads);
+    return write_sorted_pairs(pairs, capacity, found);
 }
 
 }  // namespace boxmarch

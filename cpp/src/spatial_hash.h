@@ -18,6 +18,10 @@ template <class T>
 std::vector<PointPair> close_pairs(const T* positions, size_t count, double radius,
                                    const int32_t* group_of_point, int threads);
 
+// Sorts found (by i, then j) and writes the first `capacity` pairs into pairs[capacity * 2], the
+// output contract of find_close_pairs; returns how many pairs there are in all.
+size_t write_sorted_pairs(uint32_t* pairs, size_t capacity, std::vector<PointPair>& found);
+
 // Threads to use for `work_items` items when the caller asked for `requested` (0: all cores).
 size_t thread_count(int requested, size_t work_items);
 

@@ -1,12 +1,13 @@
 """Run inside a Blender program with a window (under Xvfb): each submesh tool in Edit Mode, then
 undo, recording the mesh before, after and after undo. Also proves the tools run in this Blender.
 Usage: blender --factory-startup --python tools_undo_check.py -- PACKAGE_PARENT OUT_JSON"""
-import json
+import os
 import sys
-import traceback
 
-argv = sys.argv[sys.argv.index("--") + 1:]
-sys.path.insert(0, argv[0])
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from window_harness import arguments, run_in_window  # noqa: E402
+
+argv = arguments()
 
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
@@ -61,62 +62,56 @@ TOOLS = [("select_linked_submeshes", {}, "one"), ("select_linked_across", {"epsi
          ("pack_uv_by_z", {}, "all")]
 
 
-def check():
-    report = {"error": None, "version": list(bpy.app.version), "tools": {}}
-    try:
-        with window_context():
-            for name, args, selection in TOOLS:
-                if bpy.context.object is not None and bpy.context.object.mode != "OBJECT":
-                    bpy.ops.object.mode_set(mode="OBJECT")
-                for ob in list(bpy.data.objects):
-                    bpy.data.objects.remove(ob)
-                ob = build_mesh()
-                select = np.zeros(len(ob.data.vertices), bool)
-                select[0 if selection == "one" else slice(None)] = True
-                ob.data.vertices.foreach_set("select", select)
-                for collection in (ob.data.edges, ob.data.polygons):  # new elements come selected
-                    collection.foreach_set("select", np.zeros(len(collection), bool))
-                bpy.ops.ed.undo_push(message="mesh " + name)  # as an add-mesh operator would
-                report["running"] = name
-                bpy.ops.object.mode_set(mode="EDIT")
-                bpy.ops.mesh.select_mode(type="VERT")
-                if selection == "all":
-                    bpy.ops.mesh.select_all(action="SELECT")
-                bpy.ops.ed.undo_push(message="before " + name)
-                state = {"before": snapshot()}
-                state["result"] = list(getattr(bpy.ops.boxmarch, name)(**args))
-                # Operators called from a script push no undo step of their own (the UI pushes
-                # one after an operator with the UNDO option): push it as the UI would.
-                bpy.ops.ed.undo_push(message=name)
-                state["after"] = snapshot()
-                state["undo_option"] = "UNDO" in getattr(bpy.types, "BOXMARCH_OT_" + name).bl_options
-                bpy.ops.ed.undo()
-                state["undone"] = snapshot()
-                report["tools"][name] = state
-
-            bpy.ops.object.mode_set(mode="OBJECT")
+def check(report):
+    report.update({"version": list(bpy.app.version), "tools": {}})
+    with window_context():
+        for name, args, selection in TOOLS:
+            if bpy.context.object is not None and bpy.context.object.mode != "OBJECT":
+                bpy.ops.object.mode_set(mode="OBJECT")
             for ob in list(bpy.data.objects):
                 bpy.data.objects.remove(ob)
-            bpy.ops.mesh.primitive_cube_add(size=0.2)
-            cube = bpy.context.active_object.name
-            bpy.ops.curve.primitive_nurbs_path_add()
-            bpy.ops.ed.undo_push(message="curve")
-            result = bpy.ops.boxmarch.add_instance_on_curve(instance=cube, spacing=0.5)
-            bpy.ops.ed.undo_push(message="instance on curve")
-            curve = bpy.context.active_object
-            evaluated = curve.evaluated_get(bpy.context.evaluated_depsgraph_get())
-            mesh = evaluated.to_mesh()
-            state = {"result": list(result), "evaluated_vertices": len(mesh.vertices),
-                     "modifiers": len(curve.modifiers)}
-            evaluated.to_mesh_clear()
+            ob = build_mesh()
+            select = np.zeros(len(ob.data.vertices), bool)
+            select[0 if selection == "one" else slice(None)] = True
+            ob.data.vertices.foreach_set("select", select)
+            for collection in (ob.data.edges, ob.data.polygons):  # new elements come selected
+                collection.foreach_set("select", np.zeros(len(collection), bool))
+            bpy.ops.ed.undo_push(message="mesh " + name)  # as an add-mesh operator would
+            report["running"] = name
+            bpy.ops.object.mode_set(mode="EDIT")
+            bpy.ops.mesh.select_mode(type="VERT")
+            if selection == "all":
+                bpy.ops.mesh.select_all(action="SELECT")
+            bpy.ops.ed.undo_push(message="before " + name)
+            state = {"before": snapshot()}
+            state["result"] = list(getattr(bpy.ops.boxmarch, name)(**args))
+            # Operators called from a script push no undo step of their own (the UI pushes
+            # one after an operator with the UNDO option): push it as the UI would.
+            bpy.ops.ed.undo_push(message=name)
+            state["after"] = snapshot()
+            state["undo_option"] = "UNDO" in getattr(bpy.types, "BOXMARCH_OT_" + name).bl_options
             bpy.ops.ed.undo()
-            state["modifiers_undone"] = len(bpy.context.active_object.modifiers)
-            report["instance_on_curve"] = state
-    except Exception:
-        report["error"] = traceback.format_exc()
-    with open(argv[1], "w") as out:
-        json.dump(report, out)
-    bpy.ops.wm.quit_blender()
+            state["undone"] = snapshot()
+            report["tools"][name] = state
+
+        bpy.ops.object.mode_set(mode="OBJECT")
+        for ob in list(bpy.data.objects):
+            bpy.data.objects.remove(ob)
+        bpy.ops.mesh.primitive_cube_add(size=0.2)
+        cube = bpy.context.active_object.name
+        bpy.ops.curve.primitive_nurbs_path_add()
+        bpy.ops.ed.undo_push(message="curve")
+        result = bpy.ops.boxmarch.add_instance_on_curve(instance=cube, spacing=0.5)
+        bpy.ops.ed.undo_push(message="instance on curve")
+        curve = bpy.context.active_object
+        evaluated = curve.evaluated_get(bpy.context.evaluated_depsgraph_get())
+        mesh = evaluated.to_mesh()
+        state = {"result": list(result), "evaluated_vertices": len(mesh.vertices),
+                 "modifiers": len(curve.modifiers)}
+        evaluated.to_mesh_clear()
+        bpy.ops.ed.undo()
+        state["modifiers_undone"] = len(bpy.context.active_object.modifiers)
+        report["instance_on_curve"] = state
 
 
-bpy.app.timers.register(check, first_interval=1.0)
+run_in_window(check, argv[1])

@@ -1,12 +1,13 @@
 """Run inside a Blender program with a window (under Xvfb): bake and undo, in Object and Edit
 Mode, and record whether the baked layers exist at each step.
 Usage: blender --factory-startup --python undo_check.py -- PACKAGE_PARENT OUT_JSON"""
-import json
+import os
 import sys
-import traceback
 
-argv = sys.argv[sys.argv.index("--") + 1:]
-sys.path.insert(0, argv[0])
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from window_harness import arguments, run_in_window  # noqa: E402
+
+argv = arguments()
 
 import bpy  # noqa: E402
 
@@ -27,36 +28,29 @@ def window_context():
     return bpy.context.temp_override(window=window, area=area)
 
 
-def check():
-    report = {"error": None}
-    try:
-        with window_context():
-            for ob in list(bpy.data.objects):
-                bpy.data.objects.remove(ob)
-            bpy.ops.mesh.primitive_cube_add()
-            ob = bpy.context.active_object
-            bpy.ops.ed.undo_push(message="cube")
-            bpy.ops.boxmarch.bake()
-            state = {"after_bake": baked(ob)}
-            bpy.ops.ed.undo()
-            ob = bpy.context.active_object
-            state["after_undo"] = baked(ob)
-            report["object_mode"] = state
+def check(report):
+    with window_context():
+        for ob in list(bpy.data.objects):
+            bpy.data.objects.remove(ob)
+        bpy.ops.mesh.primitive_cube_add()
+        ob = bpy.context.active_object
+        bpy.ops.ed.undo_push(message="cube")
+        bpy.ops.boxmarch.bake()
+        state = {"after_bake": baked(ob)}
+        bpy.ops.ed.undo()
+        ob = bpy.context.active_object
+        state["after_undo"] = baked(ob)
+        report["object_mode"] = state
 
-            bpy.ops.object.mode_set(mode="EDIT")
-            bpy.ops.mesh.select_all(action="SELECT")
-            bpy.ops.ed.undo_push(message="select")
-            bpy.ops.boxmarch.bake()
-            state = {"after_bake": baked(bpy.context.active_object)}
-            bpy.ops.ed.undo()
-            bpy.ops.object.mode_set(mode="OBJECT")
-            state["after_undo"] = baked(bpy.context.active_object)
-            report["edit_mode"] = state
-    except Exception:
-        report["error"] = traceback.format_exc()
-    with open(argv[1], "w") as out:
-        json.dump(report, out)
-    bpy.ops.wm.quit_blender()
+        bpy.ops.object.mode_set(mode="EDIT")
+        bpy.ops.mesh.select_all(action="SELECT")
+        bpy.ops.ed.undo_push(message="select")
+        bpy.ops.boxmarch.bake()
+        state = {"after_bake": baked(bpy.context.active_object)}
+        bpy.ops.ed.undo()
+        bpy.ops.object.mode_set(mode="OBJECT")
+        state["after_undo"] = baked(bpy.context.active_object)
+        report["edit_mode"] = state
 
 
-bpy.app.timers.register(check, first_interval=1.0)
+run_in_window(check, argv[1])
