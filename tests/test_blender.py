@@ -289,3 +289,28 @@ def test_new_mesh_edges_have_a_readable_selection(blender):
     selected = np.ones(len(mesh.edges), bool)
     mesh.edges.foreach_get("select", selected)
     assert len(mesh.edges) == 36 and not selected.any()
+
+
+def test_baking_a_copied_mesh_leaves_the_original_alone(blender):
+    """Blender 4+ shares layer arrays between a mesh and its copy until one is written; the bake
+    must write its own arrays, not the shared ones (Shift+D duplicates share them)."""
+    ob, centres, _ = box_scene(blender, count=4)
+    assert blender.ops.boxmarch.bake() == {"FINISHED"}
+    before = {name: read_uv(ob.data, name).copy() for name in ("BoxQuatXY", "BoxQuatZW")}
+    colour_before = read_colour(ob.data, "BoxOffset").copy()
+    copy = ob.copy()
+    copy.data = ob.data.copy()
+    blender.context.scene.collection.objects.link(copy)
+    positions = read_positions(copy.data)
+    turn = np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1]], np.float32)  # a quarter turn about z
+    copy.data.vertices.foreach_set("co", (positions @ turn.T).reshape(-1))
+    copy.data.update()
+    ob.select_set(False)
+    copy.select_set(True)
+    blender.context.view_layer.objects.active = copy
+    assert blender.ops.boxmarch.bake() == {"FINISHED"}
+    for name, values in before.items():
+        assert np.array_equal(read_uv(ob.data, name), values), name
+    assert np.array_equal(read_colour(ob.data, "BoxOffset"), colour_before)
+    origins, _ = decode_corners(copy.data)
+    assert np.allclose(origins, np.repeat(centres @ turn.T.astype(np.float64), 24, axis=0), atol=1e-4)

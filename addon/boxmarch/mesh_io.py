@@ -126,6 +126,12 @@ def _read_uv(mesh, name, corner_count) -> np.ndarray:
 
 
 def _write_uv(mesh, name, values: np.ndarray) -> None:
+    # From 3.5 a UV map is a FLOAT2 attribute. Writing it through the attribute API un-shares the
+    # array first; uv_layer.uv writes straight into an array a copied mesh (Shift+D) may share.
+    attr = mesh.attributes.get(name)
+    if attr is not None and attr.data_type == "FLOAT2":
+        attr.data.foreach_set("vector", values.reshape(-1))
+        return
     collection, prop = _uv_buffer_accessor(mesh.uv_layers[name])
     collection.foreach_set(prop, values.reshape(-1))
 
