@@ -11,6 +11,7 @@
 // Built by CMake with BOXMARCH_FUZZ=ON (clang, -fsanitize=fuzzer); replayed over fuzz/corpus by
 // fuzz_replay (BOXMARCH_TESTS=ON, any compiler) as a regression test.
 #include "boxmarch/boxmarch.h"
+#include "../tests/cpp/owned_mesh.h"
 
 #include <algorithm>
 #include <cmath>
@@ -77,23 +78,7 @@ bool accepted(Fn&& fn) {
     }
 }
 
-struct FuzzMesh {
-    std::vector<float> positions;
-    std::vector<int32_t> edges, face_starts, face_sizes, corner_verts;
-    MeshView view() const {
-        MeshView m;
-        m.positions = positions.data();
-        m.vertex_count = positions.size() / 3;
-        m.edges = edges.data();
-        m.edge_count = edges.size() / 2;
-        m.face_starts = face_starts.data();
-        m.face_sizes = face_sizes.data();
-        m.face_count = face_starts.size();
-        m.corner_verts = corner_verts.data();
-        m.corner_count = corner_verts.size();
-        return m;
-    }
-};
+using FuzzMesh = OwnedMesh;
 
 FuzzMesh read_mesh(Bytes& in, uint8_t flags) {
     const bool raw_coordinates = flags & 1, raw_indices = flags & 2;

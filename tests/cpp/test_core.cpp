@@ -4,6 +4,7 @@
 // normally and in the sanitizer build (BOXMARCH_SANITIZE=ON). A tiny harness: CHECK records a
 // failure and goes on; main returns nonzero when anything failed.
 #include "boxmarch/boxmarch.h"
+#include "owned_mesh.h"
 
 #include <algorithm>
 #include <array>
@@ -59,23 +60,7 @@ Vec3 apply(const Mat3& m, const Vec3& v) {
             m[6] * v[0] + m[7] * v[1] + m[8] * v[2]};
 }
 
-struct Mesh {
-    std::vector<float> positions;
-    std::vector<int32_t> edges, face_starts, face_sizes, corner_verts;
-    MeshView view() const {
-        MeshView m;
-        m.positions = positions.data();
-        m.vertex_count = positions.size() / 3;
-        m.edges = edges.data();
-        m.edge_count = edges.size() / 2;
-        m.face_starts = face_starts.data();
-        m.face_sizes = face_sizes.data();
-        m.face_count = face_starts.size();
-        m.corner_verts = corner_verts.data();
-        m.corner_count = corner_verts.size();
-        return m;
-    }
-};
+using Mesh = OwnedMesh;
 
 struct Box {
     Vec3 centre, size;
