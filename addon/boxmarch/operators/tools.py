@@ -63,6 +63,19 @@ class _SubmeshTool:
         return chosen
 
 
+def _grow_selection(objects, arrays, grow) -> int:
+    """Replace each mesh's visible vertex selection by what grow(selected, arrays) returns as
+    (mask, submeshes selected); hidden vertices stay unselected. Returns the submeshes selected."""
+    total = 0
+    for ob, a in zip(objects, arrays):
+        hidden = mesh_edit.hidden_vertices(ob.data)
+        selected = mesh_edit.read_vertex_selection(ob.data) & ~hidden
+        mask, count = grow(selected, a)
+        mesh_edit.write_selection(ob.data, a, mask.astype(bool) & ~hidden)
+        total += count
+    return total
+
+
 class BOXMARCH_OT_select_linked_submeshes(_SubmeshTool, bpy.types.Operator):
     """Select every submesh that has at least one selected vertex, whole (Ctrl+L for all of them at once)"""
 
@@ -70,13 +83,8 @@ class BOXMARCH_OT_select_linked_submeshes(_SubmeshTool, bpy.types.Operator):
     bl_label = "Select Linked Submeshes"
 
     def run(self, context, objects, arrays, edit, wm):
-        total = 0
-        for ob, a in zip(objects, arrays):
-            hidden = mesh_edit.hidden_vertices(ob.data)
-            selected = mesh_edit.read_vertex_selection(ob.data) & ~hidden
-            mask, count = core.select_linked_submeshes(selected, a.submesh_of_vertex, a.submesh_count)
-            mesh_edit.write_selection(ob.data, a, mask.astype(bool) & ~hidden)
-            total += count
+        total = _grow_selection(objects, arrays, lambda selected, a: core.select_linked_submeshes(
+            selected, a.submesh_of_vertex, a.submesh_count))
         return f"Selected {total} submesh(es) in {len(objects)} mesh(es)"
 
 
@@ -90,14 +98,8 @@ class BOXMARCH_OT_select_linked_across(_SubmeshTool, bpy.types.Operator):
                            description="Vertices of different submeshes this close (true distance) link them")
 
     def run(self, context, objects, arrays, edit, wm):
-        total = 0
-        for ob, a in zip(objects, arrays):
-            hidden = mesh_edit.hidden_vertices(ob.data)
-            selected = mesh_edit.read_vertex_selection(ob.data) & ~hidden
-            mask, count = core.select_linked_across(a.positions, selected, a.submesh_of_vertex, a.submesh_count,
-                                                    self.epsilon)
-            mesh_edit.write_selection(ob.data, a, mask.astype(bool) & ~hidden)
-            total += count
+        total = _grow_selection(objects, arrays, lambda selected, a: core.select_linked_across(
+            a.positions, selected, a.submesh_of_vertex, a.submesh_count, self.epsilon))
         return f"Selected {total} submesh(es) in {len(objects)} mesh(es), epsilon {self.epsilon:g}"
 
 
