@@ -183,9 +183,10 @@ class PreparedBake:
     report: dict = field(default_factory=dict)
 
     def write(self) -> dict:
-        """Store the bake. The colour goes first so its buffer (the largest result array) is
-        released before the UV maps are made, and one corner buffer serves both UV maps: peak
-        memory stays close to the size of the layers written."""
+        """Store the bake; call it once. The colour goes first so its buffer (the largest result
+        array) is released before the UV maps are made, one corner buffer serves both UV maps, and
+        the corner array is released once expanded: peak memory stays close to the size of the
+        layers written. The result's per-submesh arrays stay for the caller."""
         mesh, s, r = self.mesh, self.settings, self.result
         if r.baked == 0:  # nothing changed: the stored data is already this bake's
             return self.report
@@ -227,8 +228,6 @@ class PreparedBake:
         everything = r.baked == r.submesh_count
         buffer = None
         for half, name in enumerate((QUAT_XY_UV, QUAT_ZW_UV)):
-            if name not in mesh.uv_layers:
-                mesh.uv_layers.new(name=name, do_init=False)
             uv = previous_uv.pop(name, None)
             if uv is None:
                 buffer = uv = np.empty((corner_count, 2), np.float32) if buffer is None else buffer
@@ -236,6 +235,10 @@ class PreparedBake:
                     uv[:, 0] = 0.0
                     uv[:, 1] = float(half)
             core.corner_quaternion_uv(uv, half, self.corner_verts, r, write_all=everything)
+            if half == 1:  # expanded for the last time: gone before the last layer is made
+                self.corner_verts = None
+            if name not in mesh.uv_layers:
+                mesh.uv_layers.new(name=name, do_init=False)
             _write_uv(mesh, name, uv)
             del uv
         del buffer
