@@ -37,18 +37,6 @@ def baked_layers(mesh):
             mesh_io._read_uv(mesh, mesh_io.QUAT_ZW_UV, corners), corner_verts)
 
 
-def _write_uv_of_copy(mesh, name, values) -> None:
-    """Write a UV map of a mesh made by ``Mesh.copy()``. In Blender 5.0 the copy shares its
-    arrays with the original (implicit sharing) and ``uv_layer.uv.foreach_set`` writes into the
-    shared array, changing the original too; the attribute API un-shares first. 3.4 has neither
-    sharing nor UV maps as attributes."""
-    attr = mesh.attributes.get(name)
-    if attr is not None and attr.data_type == "FLOAT2":
-        attr.data.foreach_set("vector", values.reshape(-1))
-    else:
-        mesh.uv_layers[name].data.foreach_set("uv", values.reshape(-1))
-
-
 def _target_copy(mesh, preset, index_colour: bool):
     """A copy of ``mesh`` whose only colour attribute is BoxOffset in the target's numbers (or,
     for glTF, each vertex's index, replaced in the file afterwards) and whose quaternion UV maps
@@ -79,8 +67,10 @@ def _target_copy(mesh, preset, index_colour: bool):
     colour.data.foreach_set("color", (glb.index_colours(len(mesh.vertices)) if index_colour else target_rgba).reshape(-1))
     copy.color_attributes.active_color_index = 0
     copy.color_attributes.render_color_index = 0
-    _write_uv_of_copy(copy, mesh_io.QUAT_XY_UV, transforms.uv_for_exporter(target_q[:, :2], preset))
-    _write_uv_of_copy(copy, mesh_io.QUAT_ZW_UV, transforms.uv_for_exporter(target_q[:, 2:], preset))
+    # mesh_io._write_uv writes through the attribute API, which un-shares the copy's arrays from
+    # the original's first (Blender 5 implicit sharing).
+    mesh_io._write_uv(copy, mesh_io.QUAT_XY_UV, transforms.uv_for_exporter(target_q[:, :2], preset))
+    mesh_io._write_uv(copy, mesh_io.QUAT_ZW_UV, transforms.uv_for_exporter(target_q[:, 2:], preset))
     names = [uv.name for uv in copy.uv_layers]
     stats = {"mesh": mesh.name, "vertices": len(mesh.vertices), "corners": len(corner_verts),
              "uv_channels": [names.index(mesh_io.QUAT_XY_UV), names.index(mesh_io.QUAT_ZW_UV)],
