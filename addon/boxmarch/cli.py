@@ -423,7 +423,8 @@ def _preview_picture(bpy, np, objects, sdfs, path, renderer="AUTO"):
     """Render the preview picture: the GPU raymarch preview when a GPU context can be made (or
     ``renderer`` is 'GPU'), else the CPU reference raymarcher (same decode, same SDFs). Returns
     the method used."""
-    from . import core, mesh_io, preview
+    from . import core, preview
+    from .preview import mesh_data
 
     scene = bpy.context.scene
     camera = _demo_camera(bpy)
@@ -445,18 +446,11 @@ def _preview_picture(bpy, np, objects, sdfs, path, renderer="AUTO"):
         depth = np.ones((height, width), np.float32)
         rgba = np.zeros((height, width, 4), np.float32)
         for ob, sdf in zip(objects, sdfs):
-            mesh = ob.data
-            positions = mesh_io.read_positions(mesh)
-            _edges, _starts, _sizes, corner_verts = mesh_io.read_topology(mesh)
-            colour = np.empty(len(mesh.vertices) * 4, np.float32)
-            mesh.color_attributes[mesh_io.OFFSET_ATTRIBUTE].data.foreach_get("color", colour)
-            q = np.concatenate([mesh_io._read_uv(mesh, mesh_io.QUAT_XY_UV, len(corner_verts)),
-                                mesh_io._read_uv(mesh, mesh_io.QUAT_ZW_UV, len(corner_verts))], axis=1)
-            submesh_of_vertex, _count = core.find_submeshes(positions, *mesh_io.read_topology(mesh))
+            baked = mesh_data.read_baked(ob.data)  # the boxes the GPU preview draws
             world = np.array(ob.matrix_world, np.float64)
-            core.render_baked_mesh(positions, colour.reshape(-1, 4), corner_verts, q, submesh_of_vertex,
-                                   projection @ view @ world, view @ world, width, height, sdf=sdf,
-                                   depth=depth, rgba=rgba)
+            core.render_boxes(baked.origins, baked.box_quaternions, baked.box_half_extents,
+                              projection @ view @ world, view @ world, width, height, sdf=sdf,
+                              depth=depth, rgba=rgba)
         method = "CPU reference raymarcher"
     image = bpy.data.images.new("boxmarch_demo", width, height, alpha=True)
     try:
