@@ -48,16 +48,21 @@ def read_baked(mesh) -> BakedMesh:
     submesh_of_vertex, _count = core.find_submeshes(positions, edges, face_starts, face_sizes, corner_verts)
     origins, box_q, box_half = core.boxes_from_bake(positions, colour, quaternions, submesh_of_vertex)
     return BakedMesh(positions=positions, offsets=colour, quaternions=quaternions,
-                     half_extents=box_half[submesh_of_vertex], triangles=read_triangles(mesh)[1], edges=edges,
+                     half_extents=box_half[submesh_of_vertex], triangles=_triangles(mesh), edges=edges,
                      origins=origins, box_quaternions=box_q, box_half_extents=box_half)
+
+
+def _triangles(mesh) -> np.ndarray:
+    """int32 (T, 3) vertex indices of the mesh's triangulation."""
+    mesh.calc_loop_triangles()
+    triangles = np.empty(len(mesh.loop_triangles) * 3, np.int32)
+    mesh.loop_triangles.foreach_get("vertices", triangles)
+    return triangles.reshape(-1, 3)
 
 
 def read_triangles(mesh):
     """(positions float32 (N, 3), triangles int32 (T, 3) vertex indices) of any mesh."""
-    mesh.calc_loop_triangles()
-    triangles = np.empty(len(mesh.loop_triangles) * 3, np.int32)
-    mesh.loop_triangles.foreach_get("vertices", triangles)
-    return mesh_io.read_positions(mesh), triangles.reshape(-1, 3)
+    return mesh_io.read_positions(mesh), _triangles(mesh)
 
 
 def vector_lines(baked: BakedMesh):
