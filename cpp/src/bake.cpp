@@ -31,26 +31,16 @@ struct Grouped {
     const uint32_t *vertices = nullptr, *faces = nullptr, *edges = nullptr;
 };
 
-// Counting sort of item_count items by owner(i) into offsets[submesh_count + 1]; fills items
-// only when the owners are not already ascending. Returns the list to use: items or ascending.
+// Groups items by owner(i) into offsets; returns the list to use: items, or ascending when the
+// owners are already in order.
 template <class Owner>
 const uint32_t* group_items(std::vector<uint32_t>& offsets, std::vector<uint32_t>& items,
                             const std::vector<uint32_t>& ascending, size_t item_count, size_t submesh_count,
                             Owner&& owner) {
-    offsets.assign(submesh_count + 1, 0);
-    bool sorted = true;
-    int32_t previous = 0;
-    for (size_t i = 0; i < item_count; ++i) {
-        const int32_t sm = owner(i);
-        ++offsets[size_t(sm) + 1];
-        sorted = sorted && previous <= sm;
-        previous = sm;
-    }
-    for (size_t sm = 0; sm < submesh_count; ++sm) offsets[sm + 1] += offsets[sm];
-    if (sorted) return ascending.data();
+    offsets.resize(submesh_count + 1);
+    if (count_by_owner(offsets.data(), item_count, submesh_count, owner)) return ascending.data();
     items.resize(item_count);
-    std::vector<uint32_t> cursor(offsets.begin(), offsets.end() - 1);
-    for (size_t i = 0; i < item_count; ++i) items[cursor[size_t(owner(i))]++] = uint32_t(i);
+    scatter_by_owner(items.data(), offsets.data(), item_count, submesh_count, owner);
     return items.data();
 }
 

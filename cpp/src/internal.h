@@ -5,6 +5,7 @@
 
 #include <glm/glm.hpp>
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -28,6 +29,33 @@ struct SubmeshView {
         return glm::dvec3(p[0], p[1], p[2]) - base;
     }
 };
+
+// Counting sort of items by their submesh owner(i) (ids in 0..submesh_count-1; callers check),
+// in two halves so callers can skip the second. count_by_owner writes offsets[submesh_count + 1]
+// (the items of submesh s take places offsets[s] .. offsets[s+1]-1) and returns true when the
+// owners are already ascending: then the grouped order is the items' own order.
+template <class Owner>
+bool count_by_owner(uint32_t* offsets, size_t item_count, size_t submesh_count, Owner&& owner) {
+    std::fill(offsets, offsets + submesh_count + 1, 0u);
+    bool sorted = true;
+    int32_t previous = 0;
+    for (size_t i = 0; i < item_count; ++i) {
+        const int32_t sm = owner(i);
+        ++offsets[size_t(sm) + 1];
+        sorted = sorted && previous <= sm;
+        previous = sm;
+    }
+    for (size_t sm = 0; sm < submesh_count; ++sm) offsets[sm + 1] += offsets[sm];
+    return sorted;
+}
+
+// Writes items[item_count]: the item indices in grouped order, from count_by_owner's offsets.
+template <class Owner>
+void scatter_by_owner(uint32_t* items, const uint32_t* offsets, size_t item_count, size_t submesh_count,
+                      Owner&& owner) {
+    std::vector<uint32_t> cursor(offsets, offsets + submesh_count);
+    for (size_t i = 0; i < item_count; ++i) items[cursor[size_t(owner(i))]++] = uint32_t(i);
+}
 
 // Relative band inside which two face areas (or edge lengths, or extents) count as equal; the
 // lowest index wins such a tie, so float noise cannot pick between opposite faces of a box.

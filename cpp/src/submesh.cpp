@@ -1,5 +1,6 @@
 // Connected components of a mesh through its edges and face corners (union-find).
 #include "boxmarch/boxmarch.h"
+#include "internal.h"
 
 #include <stdexcept>
 #include <string>
@@ -81,19 +82,13 @@ void group_by_submesh(uint32_t* offsets, uint32_t* items, const int32_t* submesh
             throw std::invalid_argument("item " + std::to_string(i) + " names submesh " +
                                         std::to_string(submesh_of_item[i]) + ", outside 0.." +
                                         std::to_string(submesh_count) + "-1");
-    for (size_t s = 0; s <= submesh_count; ++s) offsets[s] = 0;
-    bool sorted = true;
-    for (size_t i = 0; i < item_count; ++i) {
-        ++offsets[submesh_of_item[i] + 1];
-        sorted = sorted && (i == 0 || submesh_of_item[i - 1] <= submesh_of_item[i]);
-    }
-    for (size_t s = 0; s < submesh_count; ++s) offsets[s + 1] += offsets[s];
-    if (sorted) {  // the common case (submeshes stored one after another): no scatter needed
+    const auto owner = [&](size_t i) { return submesh_of_item[i]; };
+    if (count_by_owner(offsets, item_count, submesh_count, owner)) {
+        // the common case (submeshes stored one after another): no scatter needed
         for (size_t i = 0; i < item_count; ++i) items[i] = uint32_t(i);
-        return;
+    } else {
+        scatter_by_owner(items, offsets, item_count, submesh_count, owner);
     }
-    std::vector<uint32_t> cursor(offsets, offsets + submesh_count);
-    for (size_t i = 0; i < item_count; ++i) items[cursor[submesh_of_item[i]]++] = uint32_t(i);
 }
 
 }  // namespace boxmarch
