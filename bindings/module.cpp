@@ -119,9 +119,12 @@ py::dict bake_py(const py::object& positions, const py::object& edges, const py:
     if (!mask.is_none()) mask_arr = checked<uint8_t>(mask, "mask", n, 0);
     if (!previous_fingerprints.is_none()) previous = checked<uint32_t>(previous_fingerprints, "previous_fingerprints", n, 0);
     py::array offsets;
-    if (offsets_out.is_none()) {  // zeros where nothing is baked, as for the per-submesh arrays
+    if (offsets_out.is_none()) {
         offsets = bytes ? py::array(empty<uint8_t>(n, 4)) : py::array(empty<float>(n, 4));
-        std::memset(offsets.mutable_data(), 0, size_t(offsets.nbytes()));
+        // Zeros where nothing is baked, as for the per-submesh arrays. Without a mask or previous
+        // fingerprints every submesh is baked and every row is written.
+        if (!mask.is_none() || !previous_fingerprints.is_none())
+            std::memset(offsets.mutable_data(), 0, size_t(offsets.nbytes()));
     }
     else offsets = bytes ? py::array(checked<uint8_t>(offsets_out, "offsets", n, 4, true))
                          : py::array(checked<float>(offsets_out, "offsets", n, 4, true));

@@ -137,7 +137,7 @@ uint32_t options_seed(const BakeOptions& o) {
     add(uint64_t(o.sort_axes_by_extent));
     add(uint64_t(o.axis_turn));
     add(uint64_t(o.encoding));
-    add(4);  // format version: bump when the bake's output changes for the same options
+    add(5);  // format version: bump when the bake's output changes for the same options
     return uint32_t(h ^ (h >> 32));
 }
 
@@ -152,9 +152,8 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
     const bool bytes = options.encoding == ColorEncoding::Byte;
     if (bytes ? !offset_byte : !offset_float) throw std::invalid_argument("no output array for the chosen colour encoding");
     if (!out.quaternions || !fingerprints) throw std::invalid_argument("quaternion and fingerprint outputs are required");
-    for (size_t v = 0; v < mesh.vertex_count; ++v)
-        if (submesh_of_vertex[v] < 0 || size_t(submesh_of_vertex[v]) >= submesh_count)
-            throw std::invalid_argument("submesh_of_vertex does not match submesh_count");
+    if (first_out_of_range(submesh_of_vertex, mesh.vertex_count, submesh_count) < mesh.vertex_count)
+        throw std::invalid_argument("submesh_of_vertex does not match submesh_count");
 
     Grouped g;
     group(g, mesh, submesh_of_vertex, submesh_count);
@@ -238,12 +237,14 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
             ++acc.baked;
 
             FrameChoice choice;
+            const FrameScratch* measured = &scratch;  // null once the choice comes from the cache
             if (!cached) {
                 choice = choose_frame(s, cos_epsilon, 0.0, scratch);
             } else {
                 const Spread spread = spread_of(s);
                 if (cache.lookup(s, spread, keys[sm], choice)) {
                     ++acc.cache_hits;
+                    measured = nullptr;
                 } else {
                     choice = choose_frame(s, cos_epsilon, cache.displacement(spread), scratch);
                     cache.insert(s, spread, keys[sm], choice);
@@ -253,7 +254,7 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
             if (source != FrameSource::Faces) ++acc.degenerate;
             if (out.sources) out.sources[sm] = uint8_t(source);
 
-            glm::dmat3 frame = frame_from_choice(choice, s);
+            glm::dmat3 frame = frame_from_choice(choice, s, measured);
             local.resize(s.vertex_count);
             offsets.resize(s.vertex_count);
             glm::dvec3 lo, hi;
@@ -316,18 +317,22 @@ void expand_corner_quaternions(float* corner_uv, int half, const int32_t* corner
                                const int32_t* submesh_of_vertex, size_t vertex_count, const float* quaternions,
                                size_t submesh_count, const uint8_t* write_submesh) {
     if (half != 0 && half != 1) throw std::invalid_argument("half must be 0 (x, y) or 1 (z, w)");
-    for (size_t c = 0; c < corner_count; ++c)
-        if (corner_verts[c] < 0 || size_t(corner_verts[c]) >= vertex_count)
-            throw std::invalid_argument("corner " + std::to_string(c) + " names a vertex out of range");
-    for (size_t v = 0; v < vertex_count; ++v)
-        if (submesh_of_vertex[v] < 0 || size_t(submesh_of_vertex[v]) >= submesh_count)
-            throw std::invalid_argument("submesh_of_vertex does not match submesh_count");
-    const int k = half ? 2 : 0;
+    const size_t bad_corner = first_out_of_range(corner_verts, corner_count, vertex_count);
+    if (bad_corner < corner_count)
+        throw std::invalid_argument("corner " + std::to_string(bad_corner) + " names a vertex out of range");
+    if (first_out_of_range(submesh_of_vertex, vertex_count, submesh_count) < vertex_count)
+        throw std::invalid_argument("submesh_of_vertex does not match submesh_count");
+    const float* q = quaternions + (half ? 2 : 0);
+    if (!write_submesh) {  // a whole-mesh bake: no per-corner test
+        for (size_t c = 0; c < corner_count; ++c) {
+            const size_t sm = size_t(submesh_of_vertex[corner_verts[c]]);
+            std::memcpy(corner_uv + 2 * c, q + sm * 4, 2 * sizeof(float));
+        }
+        return;
+    }
     for (size_t c = 0; c < corner_count; ++c) {
-        const int32_t sm = submesh_of_vertex[corner_verts[c]];
-        if (write_submesh && !write_submesh[sm]) continue;
-        corner_uv[2 * c] = quaternions[sm * 4 + k];
-        corner_uv[2 * c + 1] = quaternions[sm * 4 + k + 1];
+        const size_t sm = size_t(submesh_of_vertex[corner_verts[c]]);
+        if (write_submesh[sm]) std::memcpy(corner_uv + 2 * c, q + sm * 4, 2 * sizeof(float));
     }
 }
 

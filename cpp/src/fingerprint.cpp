@@ -56,16 +56,18 @@ constexpr size_t kMaxPerBucket = 4;                       // bounds the work of 
 }  // namespace
 
 Spread spread_of(const SubmeshView& s) {
-    Spread out{glm::dvec3(0.0), 0.0};
-    for (uint32_t i = 0; i < s.vertex_count; ++i) out.centre += s.position(s.vertices[i]);
-    out.centre /= double(s.vertex_count);
-    double sum = 0.0;
+    // One pass of sums; positions are relative to the submesh's base, so the variance formula's
+    // cancellation is limited to the submesh's own extent against its spread.
+    glm::dvec3 sum(0.0);
+    double squares = 0.0;
     for (uint32_t i = 0; i < s.vertex_count; ++i) {
-        const glm::dvec3 d = s.position(s.vertices[i]) - out.centre;
-        sum += glm::dot(d, d);
+        const glm::dvec3 p = s.position(s.vertices[i]);
+        sum += p;
+        squares += glm::dot(p, p);
     }
-    out.rms = std::sqrt(sum / double(s.vertex_count));
-    return out;
+    const double inv = 1.0 / double(s.vertex_count);
+    const glm::dvec3 centre = sum * inv;
+    return Spread{centre, std::sqrt(std::max(0.0, squares * inv - glm::dot(centre, centre)))};
 }
 
 struct CopyCache::Impl {
@@ -180,21 +182,32 @@ void CopyCache::insert(const SubmeshView& s, const Spread& spread, uint64_t key,
 
 uint32_t fingerprint_submesh(const SubmeshView& s, uint32_t seed) {
     // Four lanes fed round-robin keep the hash order-sensitive with a quarter of the dependency
-    // chain of a single running mix.
+    // chain of a single running mix; every mix takes 64 bits (two 32-bit values), so a vertex
+    // costs 1.5 mixes and a topology entry half of one.
     uint64_t lanes[4] = {mix(seed, s.vertex_count), 1, 2, 3};
-    uint64_t n = 0;
-    auto add = [&](uint64_t x) {
-        lanes[n & 3] = mix(lanes[n & 3], x);
+    uint64_t n = 0, pending = 0;
+    bool half = false;
+    auto add = [&](uint32_t x) {
+        if (!half) {
+            pending = x;
+            half = true;
+            return;
+        }
+        lanes[n & 3] = mix(lanes[n & 3], (pending << 32) | x);
         ++n;
+        half = false;
     };
     for (uint32_t i = 0; i < s.vertex_count; ++i) {
         uint32_t bits[3];
         std::memcpy(bits, s.mesh->positions + size_t(s.vertices[i]) * 3, sizeof bits);
-        add((uint64_t(bits[0]) << 32) | bits[1]);
+        add(bits[0]);
+        add(bits[1]);
         add(bits[2]);
     }
-    visit_topology(s, [&](int64_t x) { add(uint64_t(x)); });
-    const uint64_t h = mix(mix(mix(mix(lanes[0], lanes[1]), lanes[2]), lanes[3]), n);
+    // Relative indices and negated face sizes fit in 32 bits (vertex counts are below 2^31).
+    visit_topology(s, [&](int64_t x) { add(uint32_t(x)); });
+    if (half) lanes[n & 3] = mix(lanes[n & 3], pending);
+    const uint64_t h = mix(mix(mix(mix(lanes[0], lanes[1]), lanes[2]), lanes[3]), 2 * n + uint64_t(half));
     const uint32_t folded = uint32_t(h ^ (h >> 32));
     return folded ? folded : 1;  // 0 is reserved for "never baked"
 }

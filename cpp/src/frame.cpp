@@ -34,7 +34,7 @@ void face_measure(const SubmeshView& s, uint32_t f, glm::dvec3& normal, double& 
     if (perimeter) *perimeter = length;
     const double len = glm::length(sum);
     area = 0.5 * len;
-    normal = len > 0.0 ? sum / len : glm::dvec3(0.0);
+    normal = len > 0.0 ? sum * (1.0 / len) : glm::dvec3(0.0);
 }
 
 void edge_measure(const SubmeshView& s, uint32_t e, glm::dvec3& direction, double& length) {
@@ -88,18 +88,26 @@ void mark_usable(std::vector<Candidate>& c) {
 void measure_faces(const SubmeshView& s, double d2, std::vector<Candidate>& faces) {
     faces.resize(s.face_count);
     // Perimeters bound how far a copy's displacement moves areas and normals; without a
-    // displacement (no cache) they are not needed, and the area scale stands in for them.
-    double longest = 0.0;
+    // displacement (no cache) they are not needed, every slack is zero, and the largest area
+    // stands in for the squared scale.
+    double scale2 = 0.0;
     for (uint32_t i = 0; i < s.face_count; ++i) {
-        double perimeter = 0.0;
-        face_measure(s, s.faces[i], faces[i].direction, faces[i].size, d2 > 0.0 ? &perimeter : nullptr);
-        if (d2 <= 0.0) perimeter = std::sqrt(faces[i].size);
-        faces[i].size_slack = d2 * perimeter;
-        faces[i].angle_slack = faces[i].size > 0.0 ? d2 * perimeter / faces[i].size : 1.0;
-        longest = std::max(longest, perimeter);
+        Candidate& f = faces[i];
+        if (d2 > 0.0) {
+            double perimeter = 0.0;
+            face_measure(s, s.faces[i], f.direction, f.size, &perimeter);
+            f.size_slack = d2 * perimeter;
+            f.angle_slack = f.size > 0.0 ? d2 * perimeter / f.size : 1.0;
+            scale2 = std::max(scale2, perimeter * perimeter);
+        } else {
+            face_measure(s, s.faces[i], f.direction, f.size, nullptr);
+            f.size_slack = 0.0;
+            f.angle_slack = f.size > 0.0 ? 0.0 : 1.0;
+            scale2 = std::max(scale2, f.size);
+        }
     }
     // Areas this small next to the largest face's scale are rounding noise: zero-area faces.
-    const double min_area = 1e-18 * longest * longest;
+    const double min_area = 1e-18 * scale2;
     for (Candidate& f : faces) f.usable = f.size > min_area;
 }
 
@@ -179,8 +187,11 @@ FrameChoice choose_frame(const SubmeshView& s, double cos_epsilon, double displa
     return choice;
 }
 
-glm::dmat3 frame_from_choice(const FrameChoice& choice, const SubmeshView& s) {
+glm::dmat3 frame_from_choice(const FrameChoice& choice, const SubmeshView& s, const FrameScratch* measured) {
+    // A fresh choice reuses the directions choose_frame measured: the same function on the same
+    // vertices, so the frame is bit for bit the one a cached choice rebuilds.
     auto direction = [&](DirectionKind kind, uint32_t index) {
+        if (measured) return (kind == DirectionKind::Face ? measured->faces : measured->edges)[index].direction;
         glm::dvec3 d;
         double size;
         if (kind == DirectionKind::Face) face_measure(s, s.faces[index], d, size, nullptr);

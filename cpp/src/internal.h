@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 namespace boxmarch {
@@ -29,6 +30,45 @@ struct SubmeshView {
         return glm::dvec3(p[0], p[1], p[2]) - base;
     }
 };
+
+// Index of the first value outside 0..limit-1, or count when every value is inside. Blocks are
+// scanned without early exit (an OR of compares, which vectorises on plain SSE2), so checking valid input
+// runs at memory speed; only a block holding a bad value is searched element by element.
+inline size_t first_out_of_range(const int32_t* values, size_t count, size_t limit) {
+    constexpr size_t kBlock = 1024;
+    // As unsigned, a negative value is above any limit below 2^31.
+    const uint32_t bound = uint32_t(std::min<size_t>(limit, size_t(1) << 31));
+    size_t i = 0;
+    for (; i + kBlock <= count; i += kBlock) {
+        uint32_t bad = 0;
+        for (size_t j = i; j < i + kBlock; ++j) bad |= uint32_t(values[j]) >= bound;
+        if (bad) break;
+    }
+    for (; i < count; ++i)
+        if (uint32_t(values[i]) >= bound) return i;
+    return count;
+}
+
+// Index of the first NaN or infinite value, or count when all are finite; blocked as above (a
+// float is not finite exactly when its exponent bits are all set).
+inline size_t first_non_finite(const float* values, size_t count) {
+    constexpr size_t kBlock = 1024;
+    constexpr uint32_t kExponent = 0x7F800000u;
+    const auto magnitude = [&](size_t j) {
+        uint32_t bits;
+        std::memcpy(&bits, values + j, sizeof bits);
+        return bits & 0x7FFFFFFFu;
+    };
+    size_t i = 0;
+    for (; i + kBlock <= count; i += kBlock) {
+        uint32_t bad = 0;
+        for (size_t j = i; j < i + kBlock; ++j) bad |= magnitude(j) >= kExponent;
+        if (bad) break;
+    }
+    for (; i < count; ++i)
+        if (magnitude(i) >= kExponent) return i;
+    return count;
+}
 
 // Counting sort of items by their submesh owner(i) (ids in 0..submesh_count-1; callers check),
 // in two halves so callers can skip the second. count_by_owner writes offsets[submesh_count + 1]
@@ -101,7 +141,9 @@ FrameChoice choose_frame(const SubmeshView& s, double cos_epsilon, double displa
 
 // Builds the orthonormal right-handed frame (columns = local axes in object space) that a choice
 // names, from the submesh's own geometry. The same arithmetic serves fresh and cached choices.
-glm::dmat3 frame_from_choice(const FrameChoice& choice, const SubmeshView& s);
+// measured: the scratch choose_frame just filled for this submesh and choice (its directions are
+// reused), or null (a cached choice: the two directions are measured here).
+glm::dmat3 frame_from_choice(const FrameChoice& choice, const SubmeshView& s, const FrameScratch* measured);
 
 // Unit quaternion (x, y, z, w) of a rotation matrix with w >= 0 (and, at w == 0, the first
 // nonzero of x, y, z positive), so the same frame always gives the same four numbers.

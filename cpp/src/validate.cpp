@@ -1,7 +1,10 @@
 // Input checks shared by every entry point: a malformed mesh is rejected before anything is written.
 #include "boxmarch/boxmarch.h"
+#include "internal.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 
@@ -16,27 +19,34 @@ void validate_mesh(const MeshView& mesh) {
         throw std::invalid_argument("face starts or sizes are missing");
     if (mesh.corner_count && !mesh.corner_verts) throw std::invalid_argument("corner vertices are missing");
 
-    for (size_t v = 0; v < n; ++v)
-        for (int k = 0; k < 3; ++k)
-            if (!std::isfinite(mesh.positions[v * 3 + k]))
-                throw std::invalid_argument("vertex " + std::to_string(v) +
-                                            " has a NaN or infinite coordinate");
-    for (size_t e = 0; e < mesh.edge_count * 2; ++e)
-        if (mesh.edges[e] < 0 || size_t(mesh.edges[e]) >= n)
-            throw std::invalid_argument("edge " + std::to_string(e / 2) + " names vertex " +
-                                        std::to_string(mesh.edges[e]) + ", outside 0.." +
-                                        std::to_string(n) + "-1");
+    const size_t bad_coordinate = first_non_finite(mesh.positions, n * 3);
+    if (bad_coordinate < n * 3)
+        throw std::invalid_argument("vertex " + std::to_string(bad_coordinate / 3) +
+                                    " has a NaN or infinite coordinate");
+    const size_t bad_end = first_out_of_range(mesh.edges, mesh.edge_count * 2, n);
+    if (bad_end < mesh.edge_count * 2)
+        throw std::invalid_argument("edge " + std::to_string(bad_end / 2) + " names vertex " +
+                                    std::to_string(mesh.edges[bad_end]) + ", outside 0.." +
+                                    std::to_string(n) + "-1");
+    // Sizes and starts in one branch-free sweep; the loop that names the culprit runs only on failure.
+    // With start >= 0 and size >= 3, start + size cannot wrap in 32 unsigned bits.
+    const uint32_t corner_limit = uint32_t(std::min<size_t>(mesh.corner_count, UINT32_MAX));
+    uint32_t faces_bad = 0;
     for (size_t f = 0; f < mesh.face_count; ++f) {
+        const int32_t start = mesh.face_starts[f], size = mesh.face_sizes[f];
+        faces_bad |= (size < 3) | (start < 0) | (uint32_t(start) + uint32_t(size) > corner_limit);
+    }
+    for (size_t f = 0; faces_bad && f < mesh.face_count; ++f) {
         const int64_t start = mesh.face_starts[f], size = mesh.face_sizes[f];
         if (size < 3) throw std::invalid_argument("face " + std::to_string(f) + " has fewer than 3 corners");
         if (start < 0 || start + size > int64_t(mesh.corner_count))
             throw std::invalid_argument("face " + std::to_string(f) + " runs outside the corner array");
     }
-    for (size_t c = 0; c < mesh.corner_count; ++c)
-        if (mesh.corner_verts[c] < 0 || size_t(mesh.corner_verts[c]) >= n)
-            throw std::invalid_argument("corner " + std::to_string(c) + " names vertex " +
-                                        std::to_string(mesh.corner_verts[c]) + ", outside 0.." +
-                                        std::to_string(n) + "-1");
+    const size_t bad_corner = first_out_of_range(mesh.corner_verts, mesh.corner_count, n);
+    if (bad_corner < mesh.corner_count)
+        throw std::invalid_argument("corner " + std::to_string(bad_corner) + " names vertex " +
+                                    std::to_string(mesh.corner_verts[bad_corner]) + ", outside 0.." +
+                                    std::to_string(n) + "-1");
 }
 
 }  // namespace boxmarch
