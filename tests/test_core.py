@@ -906,6 +906,46 @@ def test_find_submeshes_numbers_components_by_lowest_vertex():
     np.testing.assert_array_equal(ids, [0, 0, 1, 0, 1, 0, 1, 2])
 
 
+def test_faces_join_submeshes_with_or_without_their_edges():
+    # With edges, faces only confirm the components; without, their corners must join them. Boxes
+    # are shuffled (vertex order and face order) so submeshes are not runs of indices.
+    (positions, edges, face_starts, face_sizes, corner_verts), _, _, _ = scenes.random_boxes(300, seed=4)
+    rng = np.random.default_rng(4)
+    order = rng.permutation(len(positions))
+    rename = np.empty_like(order)
+    rename[order] = np.arange(len(order))
+    positions, edges, corner_verts = positions[order], rename[edges].astype(np.int32), rename[corner_verts].astype(np.int32)
+    for mesh_edges in (edges, np.zeros((0, 2), np.int32)):
+        ids, count = core.find_submeshes(positions, mesh_edges, face_starts, face_sizes, corner_verts)
+        assert count == 300
+        # one id per box and one box per id: the partition is the boxes
+        pairs = np.unique(np.stack([ids, order // 8], axis=1), axis=0)
+        assert len(pairs) == 300 and len(np.unique(pairs[:, 0])) == 300
+        # numbered by lowest vertex
+        lowest = np.full(count, len(ids))
+        np.minimum.at(lowest, ids, np.arange(len(ids)))
+        assert np.all(np.diff(lowest) > 0)
+
+
+@pytest.mark.parametrize("what, index, value, message", [
+    ("positions", (2000, 1), np.nan, "vertex 2000 "),
+    ("corner_verts", 5000, 2400, "corner 5000 "),
+    ("edges", (3000, 0), -7, "edge 3000 "),
+])
+def test_checks_name_the_first_bad_element_of_a_large_mesh(what, index, value, message):
+    # The checks scan blocks of 1,024 values before searching one: a later bad value in the same
+    # block must not hide the first.
+    arrays = dict(zip(("positions", "edges", "face_starts", "face_sizes", "corner_verts"),
+                      scenes.random_boxes(300, seed=5)[0]))
+    bad = arrays[what].copy()
+    bad[index] = value
+    later = (index[0] + 40, index[1]) if isinstance(index, tuple) else index + 40
+    bad[later] = value
+    arrays[what] = bad
+    with pytest.raises(ValueError, match=message):
+        core.validate_mesh(**arrays)
+
+
 def test_empty_mesh():
     z = np.zeros((0, 3), np.float32), np.zeros((0, 2), np.int32), *(np.zeros(0, np.int32),) * 3
     r = core.bake(*z)

@@ -287,12 +287,14 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
             if (out.scales) out.scales[sm] = scale;
 
             // Decode what was stored, as a shader would, and measure the miss.
-            double worst = 0.0;
+            double worst2 = 0.0;  // squared: one square root per submesh, not one per vertex
             for (uint32_t i = 0; i < s.vertex_count; ++i) {
                 const uint32_t v = s.vertices[i];
                 const glm::dvec3 f = bytes ? decode_byte(offset_byte + size_t(v) * 4) : decode_float(offset_float + size_t(v) * 4);
-                worst = std::max(worst, glm::length(s.position(v) + rotate_vector(f, q_out) - origin));
+                const glm::dvec3 miss = s.position(v) + rotate_vector(f, q_out) - origin;
+                worst2 = std::max(worst2, glm::dot(miss, miss));
             }
+            const double worst = std::sqrt(worst2);
             const double extent = std::max({half.x, half.y, half.z});
             acc.max_error = std::max(acc.max_error, worst);
             acc.max_relative_error = std::max(acc.max_relative_error, extent > 0.0 ? worst / extent : worst);
@@ -322,17 +324,17 @@ void expand_corner_quaternions(float* corner_uv, int half, const int32_t* corner
         throw std::invalid_argument("corner " + std::to_string(bad_corner) + " names a vertex out of range");
     if (first_out_of_range(submesh_of_vertex, vertex_count, submesh_count) < vertex_count)
         throw std::invalid_argument("submesh_of_vertex does not match submesh_count");
-    const float* q = quaternions + (half ? 2 : 0);
+    const size_t k = half ? 2 : 0;
     if (!write_submesh) {  // a whole-mesh bake: no per-corner test
         for (size_t c = 0; c < corner_count; ++c) {
             const size_t sm = size_t(submesh_of_vertex[corner_verts[c]]);
-            std::memcpy(corner_uv + 2 * c, q + sm * 4, 2 * sizeof(float));
+            std::memcpy(corner_uv + 2 * c, quaternions + sm * 4 + k, 2 * sizeof(float));
         }
         return;
     }
     for (size_t c = 0; c < corner_count; ++c) {
         const size_t sm = size_t(submesh_of_vertex[corner_verts[c]]);
-        if (write_submesh[sm]) std::memcpy(corner_uv + 2 * c, q + sm * 4, 2 * sizeof(float));
+        if (write_submesh[sm]) std::memcpy(corner_uv + 2 * c, quaternions + sm * 4 + k, 2 * sizeof(float));
     }
 }
 

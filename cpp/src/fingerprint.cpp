@@ -93,10 +93,12 @@ uint64_t CopyCache::key(const SubmeshView& s, const Spread& spread) {
     if (s.vertex_count < 2 || !(spread.rms > 0.0)) return h;
     const glm::dvec3 p0 = s.position(s.vertices[0]);
     // The first few vertices: for a box these span its edges, so boxes of different proportions
-    // spread over many buckets.
+    // spread over many buckets. Squared ratios need no square roots; they are >= 0, so adding
+    // one half and truncating rounds them.
+    const double inv_rms2 = 1.0 / (spread.rms * spread.rms);
     for (uint32_t i = 1; i < std::min(s.vertex_count, 5u); ++i) {
-        const double ratio = glm::length(s.position(s.vertices[i]) - p0) / spread.rms;
-        h = mix(h, uint64_t(std::llround(ratio * 1024.0)));
+        const glm::dvec3 d = s.position(s.vertices[i]) - p0;
+        h = mix(h, uint64_t(glm::dot(d, d) * inv_rms2 * 1024.0 + 0.5));
     }
     return h;
 }

@@ -196,11 +196,12 @@ float encode_float(const glm::dvec3* offsets, const uint32_t* vertices, uint32_t
 float encode_byte(const glm::dvec3* offsets, const uint32_t* vertices, uint32_t count, uint8_t* rgba);
 
 // The decode formula, in double, from stored values.
+// (One division per vertex: the three components share 1 / a, as shader compilers make them.)
 inline glm::dvec3 decode_float(const float* rgba) {
-    return (glm::dvec3(rgba[0], rgba[1], rgba[2]) * 2.0 - 1.0) / double(rgba[3]);
+    return (glm::dvec3(rgba[0], rgba[1], rgba[2]) * 2.0 - 1.0) * (1.0 / double(rgba[3]));
 }
 inline glm::dvec3 decode_byte(const uint8_t* rgba) {
-    return (glm::dvec3(rgba[0], rgba[1], rgba[2]) / 255.0 * 2.0 - 1.0) / (rgba[3] / 255.0);
+    return (glm::dvec3(rgba[0], rgba[1], rgba[2]) * (2.0 / 255.0) - 1.0) * (255.0 / double(rgba[3]));
 }
 
 // The shader's rotate_vector: v + 2 cross(q.xyz, cross(q.xyz, v) + q.w v), with q as stored.
