@@ -325,16 +325,9 @@ void expand_corner_quaternions(float* corner_uv, int half, const int32_t* corner
     if (first_out_of_range(submesh_of_vertex, vertex_count, submesh_count) < vertex_count)
         throw std::invalid_argument("submesh_of_vertex does not match submesh_count");
     const size_t k = half ? 2 : 0;
-    if (!write_submesh) {  // a whole-mesh bake: no per-corner test
-        for (size_t c = 0; c < corner_count; ++c) {
-            const size_t sm = size_t(submesh_of_vertex[corner_verts[c]]);
-            std::memcpy(corner_uv + 2 * c, quaternions + sm * 4 + k, 2 * sizeof(float));
-        }
-        return;
-    }
     for (size_t c = 0; c < corner_count; ++c) {
         const size_t sm = size_t(submesh_of_vertex[corner_verts[c]]);
-        if (write_submesh[sm]) std::memcpy(corner_uv + 2 * c, quaternions + sm * 4 + k, 2 * sizeof(float));
+        if (!write_submesh || write_submesh[sm]) std::memcpy(corner_uv + 2 * c, quaternions + sm * 4 + k, 2 * sizeof(float));
     }
 }
 

@@ -3,6 +3,7 @@
 // tolerance too (the mean of the paired differences is no longer than the longest of them), so
 // only nearby submeshes are ever compared.
 #include "boxmarch/boxmarch.h"
+#include "internal.h"
 #include "spatial_hash.h"
 
 #include <algorithm>

@@ -31,44 +31,42 @@ struct SubmeshView {
     }
 };
 
-// Index of the first value outside 0..limit-1, or count when every value is inside. Blocks are
-// scanned without early exit (an OR of compares, which vectorises on plain SSE2), so checking valid input
-// runs at memory speed; only a block holding a bad value is searched element by element.
-inline size_t first_out_of_range(const int32_t* values, size_t count, size_t limit) {
+// Index of the first i in 0..count-1 with bad(i), or count when there is none. Blocks are
+// scanned without early exit (an OR of compares, which vectorises on plain SSE2), so checking valid
+// input runs at memory speed; only a block holding a bad value is searched element by element.
+template <class Bad>
+size_t first_failing(size_t count, Bad&& bad) {
     constexpr size_t kBlock = 1024;
-    // As unsigned, a negative value is above any limit below 2^31.
-    const uint32_t bound = uint32_t(std::min<size_t>(limit, size_t(1) << 31));
     size_t i = 0;
     for (; i + kBlock <= count; i += kBlock) {
-        uint32_t bad = 0;
-        for (size_t j = i; j < i + kBlock; ++j) bad |= uint32_t(values[j]) >= bound;
-        if (bad) break;
+        uint32_t any = 0;
+        for (size_t j = i; j < i + kBlock; ++j) any |= uint32_t(bad(j));
+        if (any) break;
     }
     for (; i < count; ++i)
-        if (uint32_t(values[i]) >= bound) return i;
+        if (bad(i)) return i;
     return count;
 }
 
-// Index of the first NaN or infinite value, or count when all are finite; blocked as above (a
-// float is not finite exactly when its exponent bits are all set).
-inline size_t first_non_finite(const float* values, size_t count) {
-    constexpr size_t kBlock = 1024;
-    constexpr uint32_t kExponent = 0x7F800000u;
-    const auto magnitude = [&](size_t j) {
-        uint32_t bits;
-        std::memcpy(&bits, values + j, sizeof bits);
-        return bits & 0x7FFFFFFFu;
-    };
-    size_t i = 0;
-    for (; i + kBlock <= count; i += kBlock) {
-        uint32_t bad = 0;
-        for (size_t j = i; j < i + kBlock; ++j) bad |= magnitude(j) >= kExponent;
-        if (bad) break;
-    }
-    for (; i < count; ++i)
-        if (magnitude(i) >= kExponent) return i;
-    return count;
+// Index of the first value outside 0..limit-1, or count when every value is inside.
+inline size_t first_out_of_range(const int32_t* values, size_t count, size_t limit) {
+    // As unsigned, a negative value is above any limit below 2^31.
+    const uint32_t bound = uint32_t(std::min<size_t>(limit, size_t(1) << 31));
+    return first_failing(count, [&](size_t i) { return uint32_t(values[i]) >= bound; });
 }
+
+// Index of the first NaN or infinite value, or count when all are finite (a float is not finite
+// exactly when its exponent bits are all set).
+inline size_t first_non_finite(const float* values, size_t count) {
+    return first_failing(count, [&](size_t i) {
+        uint32_t bits;
+        std::memcpy(&bits, values + i, sizeof bits);
+        return (bits & 0x7FFFFFFFu) >= 0x7F800000u;
+    });
+}
+
+// Throws std::invalid_argument naming the first vertex with a NaN or infinite coordinate.
+void check_finite_positions(const float* positions, size_t count);
 
 // Counting sort of items by their submesh owner(i) (ids in 0..submesh_count-1; callers check),
 // in two halves so callers can skip the second. count_by_owner writes offsets[submesh_count + 1]

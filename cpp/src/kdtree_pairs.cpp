@@ -1,5 +1,6 @@
 // Fixed-radius neighbour pairs by nanoflann radius searches: the reference for the hash grid.
 #include "boxmarch/boxmarch.h"
+#include "internal.h"
 #include "spatial_hash.h"
 
 #include <nanoflann.hpp>

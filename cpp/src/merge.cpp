@@ -3,6 +3,7 @@
 // put submeshes whose selected vertices come within the distance of each other into different
 // passes, so one pass never merges across submeshes.
 #include "boxmarch/boxmarch.h"
+#include "internal.h"
 #include "spatial_hash.h"
 
 #include <cmath>

@@ -1,6 +1,7 @@
 // Selection flood fills over whole submeshes: through edges only, or also across to other
 // submeshes whose vertices come within epsilon.
 #include "boxmarch/boxmarch.h"
+#include "internal.h"
 #include "spatial_hash.h"
 
 #include <vector>

@@ -4,6 +4,7 @@
 // role. Cells are made as wide as the point density allows (few points per cell), which makes
 // almost every point look only at its own cell: one contiguous run of the sorted points.
 #include "boxmarch/boxmarch.h"
+#include "internal.h"
 #include "spatial_hash.h"
 
 #include <algorithm>
@@ -22,12 +23,6 @@ size_t thread_count(int requested, size_t work_items) {
 void check_radius(double value, const char* what) {
     if (!std::isfinite(value) || value < 0.0)
         throw std::invalid_argument(std::string(what) + " must be a finite number >= 0, got " + std::to_string(value));
-}
-
-void check_finite_positions(const float* positions, size_t count) {
-    for (size_t i = 0; i < count * 3; ++i)
-        if (!std::isfinite(positions[i]))
-            throw std::invalid_argument("vertex " + std::to_string(i / 3) + " has a NaN or infinite coordinate");
 }
 
 namespace {

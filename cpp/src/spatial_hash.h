@@ -28,9 +28,6 @@ size_t thread_count(int requested, size_t work_items);
 // Throws std::invalid_argument naming `what` when value is negative, NaN or infinite.
 void check_radius(double value, const char* what);
 
-// Throws std::invalid_argument naming the first vertex with a NaN or infinite coordinate.
-void check_finite_positions(const float* positions, size_t count);
-
 }  // namespace boxmarch
 
 namespace boxmarch {

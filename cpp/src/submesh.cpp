@@ -29,10 +29,6 @@ void unite(std::vector<int32_t>& parent, int32_t a, int32_t b) {
     else if (b < a) parent[a] = b;
 }
 
-}  // namespace
-
-namespace {
-
 // Numbers the sets of `parent` into submesh_of_vertex; returns how many there are. Roots are the
 // lowest vertex of their set, so numbering roots in vertex order numbers submeshes by their
 // lowest vertex.

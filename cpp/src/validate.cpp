@@ -10,6 +10,12 @@
 
 namespace boxmarch {
 
+void check_finite_positions(const float* positions, size_t count) {
+    const size_t bad = first_non_finite(positions, count * 3);
+    if (bad < count * 3)
+        throw std::invalid_argument("vertex " + std::to_string(bad / 3) + " has a NaN or infinite coordinate");
+}
+
 void validate_mesh(const MeshView& mesh) {
     const size_t n = mesh.vertex_count;
     if (n > size_t(INT32_MAX)) throw std::invalid_argument("too many vertices for 32-bit indices");
@@ -19,10 +25,7 @@ void validate_mesh(const MeshView& mesh) {
         throw std::invalid_argument("face starts or sizes are missing");
     if (mesh.corner_count && !mesh.corner_verts) throw std::invalid_argument("corner vertices are missing");
 
-    const size_t bad_coordinate = first_non_finite(mesh.positions, n * 3);
-    if (bad_coordinate < n * 3)
-        throw std::invalid_argument("vertex " + std::to_string(bad_coordinate / 3) +
-                                    " has a NaN or infinite coordinate");
+    check_finite_positions(mesh.positions, n);
     const size_t bad_end = first_out_of_range(mesh.edges, mesh.edge_count * 2, n);
     if (bad_end < mesh.edge_count * 2)
         throw std::invalid_argument("edge " + std::to_string(bad_end / 2) + " names vertex " +
