@@ -137,7 +137,7 @@ uint32_t options_seed(const BakeOptions& o) {
     add(uint64_t(o.sort_axes_by_extent));
     add(uint64_t(o.axis_turn));
     add(uint64_t(o.encoding));
-    add(5);  // format version: bump when the bake's output changes for the same options
+    add(6);  // format version: bump when the bake's output changes for the same options
     return uint32_t(h ^ (h >> 32));
 }
 
@@ -184,10 +184,11 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
     std::vector<uint64_t> keys(options.use_cache ? submesh_count : 0);
     run_on_threads(threads, [&](size_t thread) {
         Accumulated& acc = parts[thread];
+        std::vector<uint32_t> words;
         const auto [first, last] = range(thread);
         for (size_t sm = first; sm < last; ++sm) {
             const SubmeshView s = view(sm);
-            const uint32_t fp = fingerprint_submesh(s, seed);
+            const uint32_t fp = fingerprint_submesh(s, seed, words);
             bool selected = !bake_mask, unchanged = previous_fingerprints != nullptr;
             for (uint32_t i = 0; i < s.vertex_count; ++i) {
                 const uint32_t v = s.vertices[i];

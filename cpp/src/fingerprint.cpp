@@ -18,21 +18,29 @@ uint64_t mix(uint64_t h, uint64_t x) {
     return h * 0xBF58476D1CE4E5B9ull;
 }
 
-// Walks the submesh's topology with vertex indices taken relative to its lowest vertex, so a
-// copy made by duplicating geometry (same internal order) yields the same sequence.
-template <class Visit>
-void visit_topology(const SubmeshView& s, Visit&& visit) {
+// Appends the submesh's topology to out: its vertices, then each face as its negated size and
+// its corners, then each edge's two ends, every vertex taken relative to the submesh's lowest
+// one, so a copy made by duplicating geometry (same internal order) yields the same words.
+// Offsets are below 2^31, so a negated size (above 2^31 as unsigned) cannot collide with one.
+void append_topology(const SubmeshView& s, std::vector<uint32_t>& out) {
     const MeshView& m = *s.mesh;
-    const int64_t first = s.vertices[0];
-    for (uint32_t i = 0; i < s.vertex_count; ++i) visit(int64_t(s.vertices[i]) - first);
+    size_t corners = 0;
+    for (uint32_t i = 0; i < s.face_count; ++i) corners += size_t(m.face_sizes[s.faces[i]]);
+    const size_t at = out.size();
+    out.resize(at + s.vertex_count + s.face_count + corners + 2 * size_t(s.edge_count));
+    uint32_t* w = out.data() + at;
+    const uint32_t first = s.vertices[0];
+    for (uint32_t i = 0; i < s.vertex_count; ++i) *w++ = s.vertices[i] - first;
     for (uint32_t i = 0; i < s.face_count; ++i) {
-        const int32_t f = int32_t(s.faces[i]);
-        visit(-int64_t(m.face_sizes[f]));  // negative: cannot collide with a vertex offset
-        for (int32_t c = 0; c < m.face_sizes[f]; ++c) visit(m.corner_verts[m.face_starts[f] + c] - first);
+        const uint32_t f = s.faces[i];
+        const int32_t* corner = m.corner_verts + m.face_starts[f];
+        *w++ = 0u - uint32_t(m.face_sizes[f]);
+        for (int32_t c = 0; c < m.face_sizes[f]; ++c) *w++ = uint32_t(corner[c]) - first;
     }
     for (uint32_t i = 0; i < s.edge_count; ++i) {
-        visit(m.edges[s.edges[i] * 2] - first);
-        visit(m.edges[s.edges[i] * 2 + 1] - first);
+        const int32_t* ends = m.edges + size_t(s.edges[i]) * 2;
+        *w++ = uint32_t(ends[0]) - first;
+        *w++ = uint32_t(ends[1]) - first;
     }
 }
 
@@ -80,7 +88,8 @@ struct CopyCache::Impl {
         FrameChoice choice;
     };
     std::vector<Prototype> prototypes;
-    std::vector<int64_t> topology;
+    std::vector<uint32_t> topology;
+    std::vector<uint32_t> scratch;  // the topology of the submesh being looked up
     std::vector<double> positions;
     std::unordered_map<uint64_t, std::vector<uint32_t>> buckets;
 
@@ -110,17 +119,16 @@ bool CopyCache::lookup(const SubmeshView& s, const Spread& spread, uint64_t key,
     if (s.vertex_count < 3 || !(spread.rms > 0.0)) return false;
     const auto bucket = impl_->buckets.find(key);
     if (bucket == impl_->buckets.end()) return false;
+    impl_->scratch.clear();
     for (uint32_t id : bucket->second) {
         const Impl::Prototype& p = impl_->prototypes[id];
         if (p.vertex_count != s.vertex_count || p.face_count != s.face_count || p.edge_count != s.edge_count)
             continue;
-        size_t at = p.topology_at;
-        bool same = true;
-        visit_topology(s, [&](int64_t x) {
-            same = same && at < p.topology_at + p.topology_size && impl_->topology[at] == x;
-            ++at;
-        });
-        if (!same || at != p.topology_at + p.topology_size) continue;
+        std::vector<uint32_t>& words = impl_->scratch;
+        if (words.empty()) append_topology(s, words);  // once per lookup, only when needed
+        if (words.size() != p.topology_size ||
+            !std::equal(words.begin(), words.end(), impl_->topology.begin() + ptrdiff_t(p.topology_at)))
+            continue;
         glm::dmat3 anchors;
         if (!anchor_frame(s, spread.centre, p.anchor0, p.anchor1, anchors)) continue;
         const glm::dmat3 rotation = anchors * glm::transpose(p.anchors);
@@ -171,7 +179,7 @@ void CopyCache::insert(const SubmeshView& s, const Spread& spread, uint64_t key,
     p.anchor1 = a1;
     p.choice = choice;
     p.topology_at = impl_->topology.size();
-    visit_topology(s, [&](int64_t v) { impl_->topology.push_back(v); });
+    append_topology(s, impl_->topology);
     p.topology_size = impl_->topology.size() - p.topology_at;
     p.positions_at = impl_->positions.size();
     for (uint32_t i = 0; i < s.vertex_count; ++i) {
@@ -182,34 +190,29 @@ void CopyCache::insert(const SubmeshView& s, const Spread& spread, uint64_t key,
     impl_->prototypes.push_back(p);
 }
 
-uint32_t fingerprint_submesh(const SubmeshView& s, uint32_t seed) {
-    // Four lanes fed round-robin keep the hash order-sensitive with a quarter of the dependency
-    // chain of a single running mix; every mix takes 64 bits (two 32-bit values), so a vertex
-    // costs 1.5 mixes and a topology entry half of one.
-    uint64_t lanes[4] = {mix(seed, s.vertex_count), 1, 2, 3};
-    uint64_t n = 0, pending = 0;
-    bool half = false;
-    auto add = [&](uint32_t x) {
-        if (!half) {
-            pending = x;
-            half = true;
-            return;
-        }
-        lanes[n & 3] = mix(lanes[n & 3], (pending << 32) | x);
-        ++n;
-        half = false;
-    };
-    for (uint32_t i = 0; i < s.vertex_count; ++i) {
-        uint32_t bits[3];
-        std::memcpy(bits, s.mesh->positions + size_t(s.vertices[i]) * 3, sizeof bits);
-        add(bits[0]);
-        add(bits[1]);
-        add(bits[2]);
+uint32_t fingerprint_submesh(const SubmeshView& s, uint32_t seed, std::vector<uint32_t>& words) {
+    // The exact position bits, then the topology (relative indices and negated face sizes fit in
+    // 32 bits, since vertex counts are below 2^31), gathered into one word list and hashed by four
+    // independent lanes that each take 64 bits a round: a quarter of the dependency chain of one
+    // running mix, and every lane stays in a register.
+    words.resize(size_t(s.vertex_count) * 3);
+    for (uint32_t i = 0; i < s.vertex_count; ++i)
+        std::memcpy(words.data() + size_t(i) * 3, s.mesh->positions + size_t(s.vertices[i]) * 3, 3 * sizeof(uint32_t));
+    append_topology(s, words);
+    const uint32_t* w = words.data();
+    const size_t n = words.size();
+    auto pair = [&](size_t i) { return (uint64_t(w[i]) << 32) | w[i + 1]; };
+    uint64_t l0 = mix(seed, s.vertex_count), l1 = 1, l2 = 2, l3 = 3;
+    size_t i = 0;
+    for (; i + 8 <= n; i += 8) {
+        l0 = mix(l0, pair(i));
+        l1 = mix(l1, pair(i + 2));
+        l2 = mix(l2, pair(i + 4));
+        l3 = mix(l3, pair(i + 6));
     }
-    // Relative indices and negated face sizes fit in 32 bits (vertex counts are below 2^31).
-    visit_topology(s, [&](int64_t x) { add(uint32_t(x)); });
-    if (half) lanes[n & 3] = mix(lanes[n & 3], pending);
-    const uint64_t h = mix(mix(mix(mix(lanes[0], lanes[1]), lanes[2]), lanes[3]), 2 * n + uint64_t(half));
+    for (; i + 2 <= n; i += 2) l0 = mix(l0, pair(i));
+    if (i < n) l1 = mix(l1, w[i]);
+    const uint64_t h = mix(mix(mix(mix(l0, l1), l2), l3), n);
     const uint32_t folded = uint32_t(h ^ (h >> 32));
     return folded ? folded : 1;  // 0 is reserved for "never baked"
 }

@@ -13,67 +13,100 @@ namespace boxmarch {
 
 namespace {
 
-// A candidate direction (face or edge) with the size that ranks it and how far a copy's
-// vertex displacement could move that size and the direction itself.
-
-// Newell's normal of face f: robust for non-planar and concave polygons. Writes its unit normal
-// and area (the normal is zero when the area is) and, when asked, its perimeter.
-void face_measure(const SubmeshView& s, uint32_t f, glm::dvec3& normal, double& area, double* perimeter) {
+// Newell's vector of face f (twice its vector area): robust for non-planar and concave polygons.
+// Triangles and quads, nearly every face, take the one-cross-product form of the same sum.
+// Writes the face's perimeter when asked.
+glm::dvec3 face_vector(const SubmeshView& s, uint32_t f, double* perimeter) {
     const MeshView& m = *s.mesh;
     const int32_t* corners = m.corner_verts + m.face_starts[f];
     const int32_t n = m.face_sizes[f];
-    const glm::dvec3 first = s.position(uint32_t(corners[0]));
-    glm::dvec3 sum(0.0), prev(0.0);
-    double length = 0.0;
-    for (int32_t c = 1; c <= n; ++c) {
-        const glm::dvec3 cur = c < n ? s.position(uint32_t(corners[c])) - first : glm::dvec3(0.0);
-        sum += glm::cross(prev, cur);
-        if (perimeter) length += glm::length(cur - prev);
-        prev = cur;
-    }
-    if (perimeter) *perimeter = length;
-    const double len = glm::length(sum);
-    area = 0.5 * len;
-    normal = len > 0.0 ? sum * (1.0 / len) : glm::dvec3(0.0);
-}
-
-void edge_measure(const SubmeshView& s, uint32_t e, glm::dvec3& direction, double& length) {
-    const int32_t* ends = s.mesh->edges + size_t(e) * 2;
-    const glm::dvec3 d = s.position(uint32_t(ends[1])) - s.position(uint32_t(ends[0]));
-    length = glm::length(d);
-    direction = length > 0.0 ? d / length : glm::dvec3(0.0);
-}
-
-// Among eligible candidates, the lowest index whose size is within the tie band of the largest.
-// Returns -1 when none is eligible. Clears `stable` when a copy's displacement could change which
-// candidates are eligible (margin <= 0) or which fall inside the band.
-int64_t pick_largest(const std::vector<Candidate>& c, bool& stable) {
-    double best = 0.0, best_slack = 0.0;
-    for (const Candidate& x : c) {
-        if (x.margin <= 0.0) stable = false;
-        if (x.eligible && x.size > best) {
-            best = x.size;
-            best_slack = x.size_slack;
+    const glm::dvec3 p0 = s.position(uint32_t(corners[0]));
+    glm::dvec3 sum;
+    if (n == 3) {
+        sum = glm::cross(s.position(uint32_t(corners[1])) - p0, s.position(uint32_t(corners[2])) - p0);
+    } else if (n == 4) {
+        // cross(p1-p0, p2-p0) + cross(p2-p0, p3-p0) = cross(p2-p0, p3-p1)
+        sum = glm::cross(s.position(uint32_t(corners[2])) - p0,
+                         s.position(uint32_t(corners[3])) - s.position(uint32_t(corners[1])));
+    } else {
+        sum = glm::dvec3(0.0);
+        glm::dvec3 prev = s.position(uint32_t(corners[1])) - p0;
+        for (int32_t c = 2; c < n; ++c) {
+            const glm::dvec3 cur = s.position(uint32_t(corners[c])) - p0;
+            sum += glm::cross(prev, cur);
+            prev = cur;
         }
     }
-    if (best <= 0.0) return -1;
-    const double cut = (1.0 - kTieBand) * best;
-    int64_t pick = -1;
+    if (perimeter) {
+        double length = 0.0;
+        glm::dvec3 prev = p0;
+        for (int32_t c = 1; c <= n; ++c) {
+            const glm::dvec3 cur = s.position(uint32_t(corners[c % n]));
+            length += glm::length(cur - prev);
+            prev = cur;
+        }
+        *perimeter = length;
+    }
+    return sum;
+}
+
+glm::dvec3 edge_vector(const SubmeshView& s, uint32_t e) {
+    const int32_t* ends = s.mesh->edges + size_t(e) * 2;
+    return s.position(uint32_t(ends[1])) - s.position(uint32_t(ends[0]));
+}
+
+// The unit direction of a vector (zero for a zero vector), the one normalisation every frame
+// axis goes through: fresh and cached choices build bit-identical frames from it.
+glm::dvec3 unit(const glm::dvec3& v) {
+    const double len = glm::length(v);
+    return len > 0.0 ? v * (1.0 / len) : glm::dvec3(0.0);
+}
+
+// (1 - kTieBand)^2: the tie band on squared sizes.
+constexpr double kTieBand2 = (1.0 - kTieBand) * (1.0 - kTieBand);
+
+// Among eligible candidates, the lowest index whose size is within the tie band of the largest.
+// Returns -1 when none is eligible. With slack (the copy cache), clears `stable` when a copy's
+// displacement could change which candidates are eligible (margin <= 0) or which fall inside the band.
+int64_t pick_largest(const std::vector<Candidate>& c, bool slack, bool& stable) {
+    double best2 = 0.0;
+    size_t best_index = 0;
     for (size_t i = 0; i < c.size(); ++i) {
-        if (!c[i].eligible) continue;
-        // The largest itself is inside the band by definition; only the others can cross the cut.
-        if (c[i].size != best && std::abs(c[i].size - cut) <= c[i].size_slack + best_slack) stable = false;
-        if (pick < 0 && c[i].size >= cut) pick = int64_t(i);
+        if (c[i].eligible && c[i].size2 > best2) {
+            best2 = c[i].size2;
+            best_index = i;
+        }
+    }
+    if (best2 <= 0.0) return -1;
+    const double cut2 = kTieBand2 * best2;
+    int64_t pick = -1;
+    for (size_t i = 0; i < c.size() && pick < 0; ++i)
+        if (c[i].eligible && c[i].size2 >= cut2) pick = int64_t(i);
+    if (slack) {
+        const Candidate& best = c[best_index];
+        const double cut = (1.0 - kTieBand) * best.size;
+        for (const Candidate& x : c) {
+            if (x.margin <= 0.0) stable = false;
+            // The largest itself is inside the band by definition; only the others can cross the cut.
+            if (x.eligible && x.size2 != best2 && std::abs(x.size - cut) <= x.size_slack + best.size_slack)
+                stable = false;
+        }
     }
     return pick;
 }
 
-// Marks candidates for the second axis: usable ones more than angle_epsilon off the first axis.
-void mark_second(std::vector<Candidate>& c, const Candidate& first, double cos_epsilon) {
+// Marks candidates for the second axis: usable ones more than angle_epsilon off the first axis
+// (|cos| below cos_epsilon, compared squared against the unnormalised vectors).
+void mark_second(std::vector<Candidate>& c, const Candidate& first, double cos_epsilon, bool slack) {
+    const glm::dvec3 axis = unit(first.vector);
+    const double cos2 = cos_epsilon * cos_epsilon;
     for (Candidate& x : c) {
-        const double dot = std::abs(glm::dot(x.direction, first.direction));
-        x.eligible = x.usable && dot < cos_epsilon;
-        x.margin = x.usable ? std::abs(dot - cos_epsilon) - (x.angle_slack + first.angle_slack) : 1.0;
+        const double d = glm::dot(x.vector, axis);
+        x.eligible = x.usable && d * d < cos2 * x.size2;
+        if (slack)
+            x.margin = x.usable ? std::abs(std::abs(d) / std::sqrt(x.size2) - cos_epsilon) -
+                                      (x.angle_slack + first.angle_slack)
+                                : 1.0;
     }
 }
 
@@ -87,40 +120,51 @@ void mark_usable(std::vector<Candidate>& c) {
 
 void measure_faces(const SubmeshView& s, double d2, std::vector<Candidate>& faces) {
     faces.resize(s.face_count);
-    // Perimeters bound how far a copy's displacement moves areas and normals; without a
-    // displacement (no cache) they are not needed, every slack is zero, and the largest area
-    // stands in for the squared scale.
-    double scale2 = 0.0;
-    for (uint32_t i = 0; i < s.face_count; ++i) {
-        Candidate& f = faces[i];
-        if (d2 > 0.0) {
+    if (d2 > 0.0) {
+        // Perimeters bound how far a copy's displacement moves areas and normals.
+        double scale2 = 0.0;
+        for (uint32_t i = 0; i < s.face_count; ++i) {
+            Candidate& f = faces[i];
             double perimeter = 0.0;
-            face_measure(s, s.faces[i], f.direction, f.size, &perimeter);
+            f.vector = face_vector(s, s.faces[i], &perimeter);
+            f.size2 = glm::dot(f.vector, f.vector);
+            f.size = 0.5 * std::sqrt(f.size2);
             f.size_slack = d2 * perimeter;
             f.angle_slack = f.size > 0.0 ? d2 * perimeter / f.size : 1.0;
             scale2 = std::max(scale2, perimeter * perimeter);
-        } else {
-            face_measure(s, s.faces[i], f.direction, f.size, nullptr);
-            f.size_slack = 0.0;
-            f.angle_slack = f.size > 0.0 ? 0.0 : 1.0;
-            scale2 = std::max(scale2, f.size);
         }
+        // Areas this small next to the largest face's scale are rounding noise: zero-area faces.
+        const double min_area = 1e-18 * scale2;
+        for (Candidate& f : faces) f.usable = f.size > min_area;
+        return;
     }
-    // Areas this small next to the largest face's scale are rounding noise: zero-area faces.
-    const double min_area = 1e-18 * scale2;
-    for (Candidate& f : faces) f.usable = f.size > min_area;
+    // Without a displacement the largest area stands in for the squared scale (in squares here).
+    double largest2 = 0.0;
+    for (uint32_t i = 0; i < s.face_count; ++i) {
+        Candidate& f = faces[i];
+        f.vector = face_vector(s, s.faces[i], nullptr);
+        f.size2 = glm::dot(f.vector, f.vector);
+        largest2 = std::max(largest2, f.size2);
+    }
+    const double min_size2 = 1e-36 * largest2;
+    for (Candidate& f : faces) f.usable = f.size2 > min_size2;
 }
 
 void measure_edges(const SubmeshView& s, double d2, std::vector<Candidate>& edges) {
     edges.resize(s.edge_count);
-    double longest = 0.0;
+    double longest2 = 0.0;
     for (uint32_t i = 0; i < s.edge_count; ++i) {
-        edge_measure(s, s.edges[i], edges[i].direction, edges[i].size);
-        edges[i].size_slack = d2;
-        edges[i].angle_slack = edges[i].size > 0.0 ? d2 / edges[i].size : 1.0;
-        longest = std::max(longest, edges[i].size);
+        Candidate& e = edges[i];
+        e.vector = edge_vector(s, s.edges[i]);
+        e.size2 = glm::dot(e.vector, e.vector);
+        if (d2 > 0.0) {
+            e.size = std::sqrt(e.size2);
+            e.size_slack = d2;
+            e.angle_slack = e.size > 0.0 ? d2 / e.size : 1.0;
+        }
+        longest2 = std::max(longest2, e.size2);
     }
-    for (Candidate& e : edges) e.usable = e.size > 1e-9 * longest;
+    for (Candidate& e : edges) e.usable = e.size2 > 1e-18 * longest2;
 }
 
 glm::dvec3 orthogonal_part(const glm::dvec3& d, const glm::dvec3& axis) {
@@ -150,53 +194,50 @@ FrameChoice choose_frame(const SubmeshView& s, double cos_epsilon, double displa
     std::vector<Candidate>& faces = scratch.faces;
     std::vector<Candidate>& edges = scratch.edges;
     const double d2 = 2.0 * displacement;
+    const bool slack = d2 > 0.0;
     FrameChoice choice;
     choice.stable = true;
 
     measure_faces(s, d2, faces);
     mark_usable(faces);
-    const int64_t a = pick_largest(faces, choice.stable);
+    const int64_t a = pick_largest(faces, slack, choice.stable);
     if (a >= 0) {
         choice.first_kind = DirectionKind::Face;
         choice.first = uint32_t(a);
         const Candidate first = faces[a];
-        mark_second(faces, first, cos_epsilon);
-        const int64_t b = pick_largest(faces, choice.stable);
+        mark_second(faces, first, cos_epsilon, slack);
+        const int64_t b = pick_largest(faces, slack, choice.stable);
         if (b >= 0) {
             choice.second_kind = DirectionKind::Face;
             choice.second = uint32_t(b);
             return choice;
         }
         measure_edges(s, d2, edges);
-        mark_second(edges, first, cos_epsilon);
-        const int64_t e = pick_largest(edges, choice.stable);
+        mark_second(edges, first, cos_epsilon, slack);
+        const int64_t e = pick_largest(edges, slack, choice.stable);
         choice.second_kind = e >= 0 ? DirectionKind::Edge : DirectionKind::World;
         choice.second = e >= 0 ? uint32_t(e) : 0;
         return choice;
     }
     measure_edges(s, d2, edges);
     mark_usable(edges);
-    const int64_t e = pick_largest(edges, choice.stable);
+    const int64_t e = pick_largest(edges, slack, choice.stable);
     if (e < 0) return choice;  // Identity: nothing has a direction
     choice.first_kind = DirectionKind::Edge;
     choice.first = uint32_t(e);
-    mark_second(edges, edges[e], cos_epsilon);
-    const int64_t f = pick_largest(edges, choice.stable);
+    mark_second(edges, edges[e], cos_epsilon, slack);
+    const int64_t f = pick_largest(edges, slack, choice.stable);
     choice.second_kind = f >= 0 ? DirectionKind::Edge : DirectionKind::World;
     choice.second = f >= 0 ? uint32_t(f) : 0;
     return choice;
 }
 
 glm::dmat3 frame_from_choice(const FrameChoice& choice, const SubmeshView& s, const FrameScratch* measured) {
-    // A fresh choice reuses the directions choose_frame measured: the same function on the same
+    // A fresh choice reuses the vectors choose_frame measured: the same function on the same
     // vertices, so the frame is bit for bit the one a cached choice rebuilds.
     auto direction = [&](DirectionKind kind, uint32_t index) {
-        if (measured) return (kind == DirectionKind::Face ? measured->faces : measured->edges)[index].direction;
-        glm::dvec3 d;
-        double size;
-        if (kind == DirectionKind::Face) face_measure(s, s.faces[index], d, size, nullptr);
-        else edge_measure(s, s.edges[index], d, size);
-        return d;
+        if (measured) return unit((kind == DirectionKind::Face ? measured->faces : measured->edges)[index].vector);
+        return unit(kind == DirectionKind::Face ? face_vector(s, s.faces[index], nullptr) : edge_vector(s, s.edges[index]));
     };
     if (choice.first_kind == DirectionKind::None) return glm::dmat3(1.0);
     const glm::dvec3 x = direction(choice.first_kind, choice.first);

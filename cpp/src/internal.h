@@ -115,11 +115,14 @@ struct FrameChoice {
 
 FrameSource frame_source(const FrameChoice& choice);
 
-// A candidate direction (face normal or edge) with the size that ranks it and how far a copy's
-// vertex displacement could move that size and the direction itself.
+// A candidate direction (face or edge): its vector (a face's Newell sum, twice its vector area,
+// or an edge's span), whose squared length ranks it, so ranking and the angle test need no square
+// root. The slacks, the size and the margin are filled only for the copy cache (displacement > 0):
+// how far a copy's vertex displacement could move the size and turn the direction.
 struct Candidate {
-    glm::dvec3 direction;
-    double size;          // face area or edge length
+    glm::dvec3 vector;
+    double size2;         // squared length of vector: 4 area^2 for faces, length^2 for edges
+    double size;          // face area or edge length (displacement > 0 only)
     double size_slack;    // how much the size may move on a copy within the displacement
     double angle_slack;   // radians the direction may turn on that copy
     bool usable;          // not degenerate (zero area or length)
@@ -134,7 +137,8 @@ struct FrameScratch {
 
 // Reads the submesh's faces (and edges when faces cannot orient it); returns the choice the bake's rules make (largest face,
 // next face at least angle_epsilon off its plane, fallbacks for flat and face-less submeshes).
-// stable is judged for vertex displacements up to `displacement` (object units).
+// stable is judged for vertex displacements up to `displacement` (object units) when that is
+// positive; a choice made with displacement 0 is not judged (stable stays true).
 FrameChoice choose_frame(const SubmeshView& s, double cos_epsilon, double displacement, FrameScratch& scratch);
 
 // Builds the orthonormal right-handed frame (columns = local axes in object space) that a choice
@@ -208,7 +212,8 @@ inline glm::dvec3 rotate_vector(const glm::dvec3& v, const float* q) {
     return v + 2.0 * glm::cross(u, glm::cross(u, v) + double(q[3]) * v);
 }
 
-// 32-bit fingerprint of a submesh's exact positions and topology, mixed with seed.
-uint32_t fingerprint_submesh(const SubmeshView& s, uint32_t seed);
+// 32-bit fingerprint of a submesh's exact positions and topology, mixed with seed. words is
+// scratch reused from one submesh to the next.
+uint32_t fingerprint_submesh(const SubmeshView& s, uint32_t seed, std::vector<uint32_t>& words);
 
 }  // namespace boxmarch
