@@ -3,7 +3,8 @@
 For N random boxes (8 vertices each) it prints the operator's time for a first bake, the time of
 the pure data transfer the bake cannot avoid (foreach_get of positions plus foreach_set of the
 three output attributes, with the same fast calls the add-on uses), their ratio, the same transfer
-done by an operator called through bpy.ops as the bake is (and the re-bake's ratio to it), the core's own
+done by an operator called through bpy.ops as the bake is (and the re-bake's ratio to it), the floor
+(that operator plus reading the topology layers: the least any bake operator does), the core's own
 time, the peak extra memory of the bake against the size of the attributes it writes, and the
 worst decode error of what Blender stores, for FLOAT_COLOR and BYTE_COLOR.
 
@@ -37,6 +38,18 @@ def transfer(mesh):
     return run
 
 
+def read_topology_layers(mesh):
+    """Read the three topology layers the bake reads (edge ends, corner vertices, corner edges)
+    into fresh arrays, and nothing more: without them no bake can know its submeshes and faces."""
+    arrays = []
+    for name, count in ((".edge_verts", len(mesh.edges) * 2), (".corner_vert", len(mesh.loops)),
+                        (".corner_edge", len(mesh.loops))):
+        values = np.empty(count, np.int32)
+        mesh.attributes[name].data.foreach_get("value", values)
+        arrays.append(values)
+    return arrays
+
+
 class BENCH_OT_transfer(bpy.types.Operator):
     """The transfer alone as an operator (tagging the mesh as the bake does), called like the bake
     through bpy.ops: before each call Blender re-evaluates the changed mesh, which then shares its
@@ -49,6 +62,22 @@ class BENCH_OT_transfer(bpy.types.Operator):
 
     def execute(self, context):
         mesh = context.object.data
+        transfer(mesh)()
+        mesh.update()
+        return {"FINISHED"}
+
+
+class BENCH_OT_floor(bpy.types.Operator):
+    """The least any bake operator does: the transfer plus reading the topology, no computation.
+    A bake through bpy.ops cannot be faster than this on the same Blender."""
+
+    bl_idname = "bench.floor"
+    bl_label = "Floor"
+    bl_options = {"REGISTER", "UNDO"}
+
+    def execute(self, context):
+        mesh = context.object.data
+        read_topology_layers(mesh)
         transfer(mesh)()
         mesh.update()
         return {"FINISHED"}
@@ -70,6 +99,7 @@ def main(counts):
     if not hasattr(bpy.types, "BOXMARCH_OT_bake"):
         boxmarch.register()
     bpy.utils.register_class(BENCH_OT_transfer)
+    bpy.utils.register_class(BENCH_OT_floor)
     rows = []
     for count in counts:
         repeats = 5 if count <= 16000 else 1
@@ -87,6 +117,7 @@ def main(counts):
         run_transfer()  # the first access after the last bake's evaluation un-shares the layers: not timed
         transfer_time = best_of(repeats, run_transfer)  # overwrites the baked data: measured last
         operator_transfer = best_of(repeats, bpy.ops.bench.transfer)
+        floor = best_of(repeats, bpy.ops.bench.floor)
         rebake_after_transfer = best_of(repeats, lambda: bpy.ops.boxmarch.bake(incremental=False))
 
         bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -103,13 +134,15 @@ def main(counts):
         rebake = min(rebake, rebake_after_transfer)
         rows.append([f"{count:,}", f"{first * 1e3:.1f}", f"{rebake * 1e3:.1f}", f"{skip * 1e3:.1f}",
                      f"{transfer_time * 1e3:.2f}", f"{first / transfer_time:.1f}x", f"{rebake / transfer_time:.1f}x",
-                     f"{operator_transfer * 1e3:.2f}", f"{rebake / operator_transfer:.1f}x", f"{core_time * 1e3:.1f}",
+                     f"{operator_transfer * 1e3:.2f}", f"{rebake / operator_transfer:.1f}x",
+                     f"{floor * 1e3:.2f}", f"{floor / transfer_time:.1f}x", f"{rebake / floor:.1f}x", f"{core_time * 1e3:.1f}",
                      f"{peak / 2**20:.0f}", f"{written / 2**20:.0f}", f"{peak / written:.2f}",
                      f"{float_error:.1e}", f"{byte_error:.1e}", f"{centre_error:.1e}"])
         print(f"done {count}", file=sys.stderr, flush=True)
     print(f"Blender {bpy.app.version_string}, boxes of 0.05-2 units within 100 units of the origin; times in ms (best of runs)")
     print(table(["boxes", "bake (first)", "re-bake", "re-bake, unchanged", "transfer", "bake / transfer",
-                 "re-bake / transfer", "transfer as operator", "re-bake / operator transfer", "core only", "peak extra MiB", "attributes MiB", "peak / attributes",
+                 "re-bake / transfer", "transfer as operator", "re-bake / operator transfer",
+                 "floor operator", "floor / transfer", "re-bake / floor", "core only", "peak extra MiB", "attributes MiB", "peak / attributes",
                  "decode error float", "decode error 8-bit", "origin vs generated centre"], rows))
     print("decode error: |decoded origin - baked origin| / largest half-extent, decoding the stored attributes "
           "in float64; origin vs generated centre: the float64 centre the boxes were generated around, which "
