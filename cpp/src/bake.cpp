@@ -206,7 +206,7 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
                                                      : SubmeshStatus::Baked;
             statuses[sm] = uint8_t(status);
             if (status == SubmeshStatus::Baked) {
-                if (options.use_cache) keys[sm] = CopyCache::key(s);
+                if (options.use_cache) keys[sm] = CopyCache::key(s, spread_of(s));
                 continue;
             }
             ++(status == SubmeshStatus::Unchanged ? acc.unchanged : acc.not_selected);

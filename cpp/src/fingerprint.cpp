@@ -97,23 +97,18 @@ struct CopyCache::Impl {
 
 // Counts plus similarity-invariant distance ratios, coarsely quantised: copies land in one
 // bucket (a quantisation border only costs a miss, never a wrong match).
-uint64_t CopyCache::key(const SubmeshView& s) {
+uint64_t CopyCache::key(const SubmeshView& s, const Spread& spread) {
     uint64_t h = mix(mix(mix(0, s.vertex_count), s.face_count), s.edge_count);
-    // Squared distances from the first vertex to the next few: for a box these span its edges,
-    // so boxes of different proportions spread over many buckets. Their shares of the sum need
-    // no square roots and no pass over the whole submesh; they lie in [0, 1], so adding one half
-    // and truncating rounds them.
-    const uint32_t count = std::min(s.vertex_count, 5u);
-    double d2[4] = {0.0, 0.0, 0.0, 0.0}, total = 0.0;
+    if (s.vertex_count < 2 || !(spread.rms > 0.0)) return h;
     const glm::dvec3 p0 = s.position(s.vertices[0]);
-    for (uint32_t i = 1; i < count; ++i) {
+    // The first few vertices: for a box these span its edges, so boxes of different proportions
+    // spread over many buckets. Squared ratios need no square roots; they are >= 0, so adding
+    // one half and truncating rounds them.
+    const double inv_rms2 = 1.0 / (spread.rms * spread.rms);
+    for (uint32_t i = 1; i < std::min(s.vertex_count, 5u); ++i) {
         const glm::dvec3 d = s.position(s.vertices[i]) - p0;
-        d2[i - 1] = glm::dot(d, d);
-        total += d2[i - 1];
+        h = mix(h, uint64_t(glm::dot(d, d) * inv_rms2 * 1024.0 + 0.5));
     }
-    if (!(total > 0.0)) return h;
-    const double inv_total = 1.0 / total;
-    for (uint32_t i = 1; i < count; ++i) h = mix(h, uint64_t(d2[i - 1] * inv_total * 1024.0 + 0.5));
     return h;
 }
 

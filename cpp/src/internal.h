@@ -168,7 +168,7 @@ public:
     // Bucket key of s: equal for every copy that could match (counts and similarity-invariant
     // distance ratios, coarsely quantised). Lets callers send copies to the same cache and skip
     // the cache for submeshes whose key nobody else has.
-    static uint64_t key(const SubmeshView& s);
+    static uint64_t key(const SubmeshView& s, const Spread& spread);
     // Returns true and sets choice when a stored submesh with this key maps onto s by a rotation,
     // uniform scale and translation within tolerance * rms at every vertex, with identical
     // topology. Mirrored copies never match (the map is a proper rotation).
