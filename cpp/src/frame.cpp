@@ -120,34 +120,25 @@ void mark_usable(std::vector<Candidate>& c) {
 
 void measure_faces(const SubmeshView& s, double d2, std::vector<Candidate>& faces) {
     faces.resize(s.face_count);
-    if (d2 > 0.0) {
-        // Perimeters bound how far a copy's displacement moves areas and normals.
-        double scale2 = 0.0;
-        for (uint32_t i = 0; i < s.face_count; ++i) {
-            Candidate& f = faces[i];
-            double perimeter = 0.0;
-            f.vector = face_vector(s, s.faces[i], &perimeter);
-            f.size2 = glm::dot(f.vector, f.vector);
+    // With a displacement (the copy cache), perimeters bound how far it moves areas and normals,
+    // and the largest squared perimeter is the scale; without one the largest area stands in.
+    double scale2 = 0.0, largest2 = 0.0;
+    for (uint32_t i = 0; i < s.face_count; ++i) {
+        Candidate& f = faces[i];
+        double perimeter = 0.0;
+        f.vector = face_vector(s, s.faces[i], d2 > 0.0 ? &perimeter : nullptr);
+        f.size2 = glm::dot(f.vector, f.vector);
+        largest2 = std::max(largest2, f.size2);
+        if (d2 > 0.0) {
             f.size = 0.5 * std::sqrt(f.size2);
             f.size_slack = d2 * perimeter;
             f.angle_slack = f.size > 0.0 ? d2 * perimeter / f.size : 1.0;
             scale2 = std::max(scale2, perimeter * perimeter);
         }
-        // Areas this small next to the largest face's scale are rounding noise: zero-area faces.
-        const double min_area = 1e-18 * scale2;
-        for (Candidate& f : faces) f.usable = f.size > min_area;
-        return;
     }
-    // Without a displacement the largest area stands in for the squared scale (in squares here).
-    double largest2 = 0.0;
-    for (uint32_t i = 0; i < s.face_count; ++i) {
-        Candidate& f = faces[i];
-        f.vector = face_vector(s, s.faces[i], nullptr);
-        f.size2 = glm::dot(f.vector, f.vector);
-        largest2 = std::max(largest2, f.size2);
-    }
-    const double min_size2 = 1e-36 * largest2;
-    for (Candidate& f : faces) f.usable = f.size2 > min_size2;
+    // Areas this small next to the scale are rounding noise: zero-area faces (compared in
+    // squares without a displacement: 4 area^2 against 4 (1e-18 largest area)^2).
+    for (Candidate& f : faces) f.usable = d2 > 0.0 ? f.size > 1e-18 * scale2 : f.size2 > 1e-36 * largest2;
 }
 
 void measure_edges(const SubmeshView& s, double d2, std::vector<Candidate>& edges) {
