@@ -50,8 +50,8 @@ def vertex_of(target_positions, blender_positions, axes):
     return np.array([lookup[tuple(row)] for row in target_positions.astype(np.float32).tolist()])
 
 
-def export(bpy, preset, path):
-    assert bpy.ops.boxmarch.export(filepath=str(path), preset=preset) == {"FINISHED"}
+def export(bpy, preset, path, layout="DEFAULT"):
+    assert bpy.ops.boxmarch.export(filepath=str(path), preset=preset, layout=layout) == {"FINISHED"}
     assert path.exists()
 
 
@@ -60,7 +60,7 @@ def export(bpy, preset, path):
     ("BYTE_COLOR", "POINT", 0.05)])  # 8-bit: the bake's own quantisation bound (docs/FORMAT.md)
 def test_gltf_round_trip_lands_on_box_centres_in_gltf_frame(blender, tmp_path, encoding, domain, tolerance):
     ob, positions, centres, sizes = baked_boxes(blender, encoding=encoding, domain=domain)
-    export(blender, "GLTF", tmp_path / "boxes.glb")
+    export(blender, "GLTF", tmp_path / "boxes.glb", layout="CLASSIC")
     meshes = read_glb(tmp_path / "boxes.glb")
     assert [m["name"] for m in meshes] == ["Boxes"]
     seen = np.zeros(len(positions), bool)
@@ -123,7 +123,7 @@ def test_unity_fbx_decodes_in_unity_frame_and_reimports_exactly(blender, tmp_pat
         stored = np.rint(stored * 255) / 255
     q = np.concatenate([np.array([d.uv[:] for d in mesh.uv_layers[name].data]) for name in ("BoxQuatXY", "BoxQuatZW")], 1)
 
-    export(bpy, "UNITY", tmp_path / "boxes.fbx")
+    export(bpy, "UNITY", tmp_path / "boxes.fbx", layout="CLASSIC")
     raw = read_fbx_geometry(tmp_path / "boxes.fbx")
     assert raw["uv_maps"] == ["UVMap", "BoxQuatXY", "BoxQuatZW"]  # Unity's UV channels 0, 1, 2
     assert raw["colours"] == ["BoxOffset"]  # Unity reads one colour layer: it must be ours
@@ -244,7 +244,7 @@ def test_unity_export_warns_about_float_offsets(blender, tmp_path):
     from boxmarch.export import scene
 
     ob, _, _, _ = baked_boxes(blender, count=5)
-    report = scene.export_objects(blender.context, [ob], "UNITY", str(tmp_path / "w.fbx"))
+    report = scene.export_objects(blender.context, [ob], "UNITY", str(tmp_path / "w.fbx"), "CLASSIC")
     assert len(report["warnings"]) == 1 and "Color32" in report["warnings"][0]
     assert blender.ops.boxmarch.bake(encoding="BYTE_COLOR") == {"FINISHED"}
     assert scene.export_objects(blender.context, [ob], "UNITY", str(tmp_path / "w.fbx"))["warnings"] == []
@@ -272,7 +272,7 @@ def test_object_transforms_and_shared_meshes_keep_mesh_space_exact(blender, tmp_
     twin = bpy.data.objects.new("Twin", ob.data)  # a second object sharing the mesh
     bpy.context.scene.collection.objects.link(twin)
     twin.select_set(True)
-    export(bpy, "GLTF", tmp_path / "t.glb")
+    export(bpy, "GLTF", tmp_path / "t.glb", layout="CLASSIC")
     meshes = read_glb(tmp_path / "t.glb")
     assert [m["name"] for m in meshes] == ["Boxes"]  # one mesh, two nodes
     primitive = meshes[0]["primitives"][0]
@@ -288,14 +288,17 @@ def test_object_transforms_and_shared_meshes_keep_mesh_space_exact(blender, tmp_
     assert np.array_equal(raw["position"], positions.astype(np.float64)[corner_verts] @ TO_GLTF.T)
 
 
-def test_patched_glb_is_tidy(blender, tmp_path):
-    """After COLOR_0 is replaced: every accessor and buffer view is used, views are 4-byte
+@pytest.mark.parametrize("layout, channels", [
+    ("CLASSIC", {"COLOR_0": "VEC4", "TEXCOORD_1": "VEC2", "TEXCOORD_2": "VEC2"}),
+    ("NORMAL_FRAME", {"NORMAL": "VEC3", "TANGENT": "VEC4", "TEXCOORD_1": "VEC2", "TEXCOORD_4": "VEC2"})])
+def test_patched_glb_is_tidy(blender, tmp_path, layout, channels):
+    """After the channels are written: every accessor and buffer view is used, views are 4-byte
     aligned inside the one buffer, and the buffer's length is the BIN chunk's."""
     import json
     import struct
 
     baked_boxes(blender, count=8)
-    export(blender, "GLTF", tmp_path / "t.glb")
+    export(blender, "GLTF", tmp_path / "t.glb", layout=layout)
     data = (tmp_path / "t.glb").read_bytes()
     json_length = struct.unpack_from("<I", data, 12)[0]
     doc = json.loads(data[20:20 + json_length])
@@ -308,8 +311,10 @@ def test_patched_glb_is_tidy(blender, tmp_path):
     assert all(v.get("byteOffset", 0) % 4 == 0 and v.get("byteOffset", 0) + v["byteLength"] <= bin_length
                for v in doc["bufferViews"])
     assert doc["buffers"][0]["byteLength"] == bin_length
-    colour = doc["accessors"][doc["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"]]
-    assert (colour["componentType"], colour["type"], colour.get("normalized", False)) == (5126, "VEC4", False)
+    attributes = doc["meshes"][0]["primitives"][0]["attributes"]
+    for name, kind in channels.items():
+        accessor = doc["accessors"][attributes[name]]
+        assert (accessor["componentType"], accessor["type"], accessor.get("normalized", False)) == (5126, kind, False)
 
 
 def test_glb_patch_refuses_a_foreign_index(blender, tmp_path):
@@ -319,6 +324,6 @@ def test_glb_patch_refuses_a_foreign_index(blender, tmp_path):
     export(blender, "GLTF", tmp_path / "t.glb")
     gltf, binary = glb_io.read(tmp_path / "t.glb")
     with pytest.raises(ValueError, match="wrote no mesh named"):
-        glb_io.replace_index_colours(gltf, binary, {"Elsewhere": np.zeros((16, 4), np.float32)})
+        glb_io.replace_vertex_channels(gltf, binary, {"Elsewhere": {"COLOR": np.zeros((16, 4), np.float32)}})
     with pytest.raises(ValueError, match="not a glTF binary"):
         glb_io.read(__file__)

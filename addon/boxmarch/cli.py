@@ -222,13 +222,14 @@ def step_export(bpy, objects, args) -> dict:
         raise InputError("export needs --to PATH (the .fbx, .glb or .blend to write)")
     _progress(f"export: {args.preset} -> {args.to}")
     try:
-        report = scene.export_objects(bpy.context, objects, args.preset, args.to)
+        report = scene.export_objects(bpy.context, objects, args.preset, args.to, args.layout)
     except scene.ExportInputError as error:
         raise InputError(f"nothing exported: {error}") from None
     for warning in report["warnings"]:
         _progress(f"warning: {warning}")
     return {"step": "export", **report,
-            "summary": f"{args.preset} -> {report['path']}, transform error {report['transform_error']:.1e} of the offset reach"}
+            "summary": f"{args.preset} ({report['layout']}) -> {report['path']}, transform error "
+                       f"{report['transform_error']:.1e} of the offset reach; import settings: {report['import_settings']}"}
 
 
 def _run_steps(args, steps) -> int:
@@ -604,9 +605,12 @@ def _cleanup_options(p, command):
 
 
 def _export_options(p, required):
+    from .export.layouts import LAYOUTS
     from .export.transforms import PRESETS
 
     p.add_argument("--preset", choices=sorted(PRESETS), default="GLTF")
+    p.add_argument("--layout", choices=sorted(LAYOUTS), default=None,
+                   help="channels to write (default: the preset's own, docs/ENGINES.md)")
     p.add_argument("--to", required=required, metavar="PATH", help="file to export (.fbx, .glb or .blend)")
 
 

@@ -1,12 +1,12 @@
 """Reading and rewriting glTF binary (.glb) files: the container, accessors, and the one patch
-the GLTF preset needs (a float COLOR_0). Blender-free.
+the glTF presets need (the layout's channels as float32 accessors). Blender-free.
 
-Blender's glTF exporter (4.x and 5.0) writes colours as normalised unsigned shorts clipped to
-[0, 1]: the offset alpha (up to 1 / smallest half-extent) would be clipped, and 16-bit steps alone
-cost up to 1.5e-5 of the half-extent. (3.4 writes floats, but its CORNER-domain colours land on
-the wrong vertices.) So the preset exports each vertex's *index* as the colour (exact in
-two 16-bit channels) and this module replaces that COLOR_0 with float32 offsets looked up by
-index, which glTF allows (COLOR_n may be FLOAT).
+Blender's exporter cannot write what the layouts need: it writes colours as normalised unsigned
+shorts clipped to [0, 1] (4.x, 5.0; 3.4 writes floats but attaches CORNER-domain colours to the
+wrong vertices), flips every UV map's v, and writes its own normals and tangents. So the presets
+export each vertex's *index* as the colour (exact in two 16-bit channels), and this module
+replaces it with the layout's channels (float COLOR_0, NORMAL, TANGENT, TEXCOORD_1..n) looked up
+by index: the file holds exactly the float32 numbers of the layout, with no flip to undo.
 """
 from __future__ import annotations
 
@@ -21,6 +21,7 @@ COMPONENT_DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint
 TYPE_SIZES = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
 FLOAT, ARRAY_BUFFER = 5126, 34962
 INDEX_COLOUR_SCALE = 65535.0
+GLTF_ATTRIBUTES = {"COLOR": "COLOR_0", "NORMAL": "NORMAL", "TANGENT": "TANGENT"}
 
 
 def read(path):
@@ -80,39 +81,43 @@ def index_colours(count: int) -> np.ndarray:
     return out
 
 
-def replace_index_colours(gltf, binary, colours_by_mesh: dict):
-    """Swap every COLOR_0 written from :func:`index_colours` in the meshes named in
-    ``colours_by_mesh`` (mesh name -> float32 (vertices, 4)) for a float32 VEC4 accessor of the
-    colours of those vertices. Returns (gltf, binary) with unused buffer views dropped.
+def replace_vertex_channels(gltf, binary, channels_by_mesh: dict):
+    """Rewrite the meshes named in ``channels_by_mesh`` (mesh name -> {layout channel: float32
+    (Blender vertices, k)}, export/layouts.py) whose COLOR_0 holds :func:`index_colours`: each
+    channel becomes a float32 accessor of the values of the file vertices' Blender vertices
+    ("COLOR" -> COLOR_0, "NORMAL", "TANGENT", "UVn" -> TEXCOORD_n), and the index COLOR_0 goes
+    when the layout has no colour. Returns (gltf, binary) with unused buffer views dropped.
     Raises ValueError when a named mesh is missing or an index is out of range."""
     binary = bytearray(binary)
     found = set()
     for mesh in gltf.get("meshes", []):
-        colours = colours_by_mesh.get(mesh.get("name"))
-        if colours is None:
+        channels = channels_by_mesh.get(mesh.get("name"))
+        if channels is None:
             continue
+        vertex_count = len(next(iter(channels.values())))
         for primitive in mesh["primitives"]:
             attrs = primitive["attributes"]
             if "COLOR_0" not in attrs:
                 raise ValueError(f"mesh '{mesh['name']}' was exported without COLOR_0")
-            code = accessor_array(gltf, bytes(binary), attrs["COLOR_0"])
+            code = accessor_array(gltf, bytes(binary), attrs.pop("COLOR_0"))
             if code.dtype.kind == "f":  # 3.4 writes float colours, later versions unsigned shorts
                 code = np.rint(code.astype(np.float64) * INDEX_COLOUR_SCALE)
             code = code.astype(np.int64)
             index = code[:, 0] + (code[:, 1] << 16)
-            if index.size and index.max() >= len(colours):
+            if index.size and index.max() >= vertex_count:
                 raise ValueError(f"mesh '{mesh['name']}': COLOR_0 holds vertex {index.max()}, "
-                                 f"the mesh has {len(colours)}")
-            values = np.ascontiguousarray(colours[index], np.float32)
-            binary += b"\0" * (-len(binary) % 4)
-            gltf["bufferViews"].append({"buffer": 0, "byteOffset": len(binary),
-                                        "byteLength": values.nbytes, "target": ARRAY_BUFFER})
-            binary += values.tobytes()
-            gltf["accessors"].append({"bufferView": len(gltf["bufferViews"]) - 1, "componentType": FLOAT,
-                                      "count": len(values), "type": "VEC4"})
-            attrs["COLOR_0"] = len(gltf["accessors"]) - 1
+                                 f"the mesh has {vertex_count}")
+            for channel, per_vertex in channels.items():
+                values = np.ascontiguousarray(per_vertex[index], np.float32)
+                binary += b"\0" * (-len(binary) % 4)
+                gltf["bufferViews"].append({"buffer": 0, "byteOffset": len(binary),
+                                            "byteLength": values.nbytes, "target": ARRAY_BUFFER})
+                binary += values.tobytes()
+                gltf["accessors"].append({"bufferView": len(gltf["bufferViews"]) - 1, "componentType": FLOAT,
+                                          "count": len(values), "type": f"VEC{values.shape[1]}"})
+                attrs[GLTF_ATTRIBUTES.get(channel, channel.replace("UV", "TEXCOORD_"))] = len(gltf["accessors"]) - 1
         found.add(mesh.get("name"))
-    missing = set(colours_by_mesh) - found
+    missing = set(channels_by_mesh) - found
     if missing:
         raise ValueError(f"the exporter wrote no mesh named {sorted(missing)}")
     return _drop_unused(gltf, bytes(binary))

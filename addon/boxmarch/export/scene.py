@@ -11,7 +11,7 @@ import bpy
 import numpy as np
 
 from .. import core, mesh_io
-from . import glb, transforms
+from . import glb, godot, layouts, transforms
 
 
 class ExportInputError(ValueError):
@@ -37,47 +37,81 @@ def baked_layers(mesh):
             mesh_io._read_uv(mesh, mesh_io.QUAT_ZW_UV, corners), corner_verts)
 
 
-def _target_copy(mesh, preset, index_colour: bool):
-    """A copy of ``mesh`` whose only colour attribute is BoxOffset in the target's numbers (or,
-    for glTF, each vertex's index, replaced in the file afterwards) and whose quaternion UV maps
-    hold the target's quaternion as the exporter must receive it. Returns (copy, offsets the file
-    must hold per vertex, stats)."""
-    offsets, quat_xy, quat_zw, corner_verts = baked_layers(mesh)
-    q = np.concatenate([quat_xy, quat_zw], axis=1)
-    target_q = transforms.target_quaternions(q, preset).astype(np.float32)
-    target_rgba = transforms.target_offsets(offsets, preset)
-    # Self-check, per vertex (the baked quaternion is the same on every corner of a vertex): the
-    # decode in the target frame must land where the target frame puts Blender's decode.
-    positions = mesh_io.read_positions(mesh).astype(np.float64)
-    vertex_q = np.zeros((len(positions), 4), np.float32)
-    vertex_q[corner_verts] = q
-    vertex_target_q = np.zeros((len(positions), 4), np.float32)
-    vertex_target_q[corner_verts] = target_q
-    f = core.decode_offsets(offsets)
-    blender_origin = positions + core.rotate_vector(f, vertex_q)
-    target_origin = (transforms.target_positions(positions, preset)
-                     + core.rotate_vector(core.decode_offsets(target_rgba), vertex_target_q))
-    reach = max(float(np.abs(f).max()) if len(f) else 0.0, 1e-30)
-    error = float(np.abs(target_origin - transforms.target_positions(blender_origin, preset)).max() / reach)
+# UV map names of the layouts' channels UV1..UV6 in FBX files (glTF files number them).
+CHANNEL_UV_NAMES = {"UV1": mesh_io.QUAT_XY_UV, "UV2": mesh_io.QUAT_ZW_UV, "UV3": "BoxOffsetXY",
+                    "UV4": "BoxOffsetZIndex", "UV5": "BoxHalfXY", "UV6": "BoxHalfZ"}
+_BOXMARCH_UV_NAMES = set(CHANNEL_UV_NAMES.values())
 
+
+def box_data(mesh, preset, index_base: int = 0):
+    """(layouts.BoxData in the target's frame, corner_verts, stats) of a baked mesh: the stored
+    offsets and quaternion, each vertex's box half-extents (largest |f| per local axis over its
+    submesh) and box number (``index_base`` + submesh id)."""
+    offsets, quat_xy, quat_zw, corner_verts = baked_layers(mesh)
+    positions = mesh_io.read_positions(mesh).astype(np.float64)
+    edges, face_starts, face_sizes, _ = mesh_io.read_topology(mesh)
+    q = core.vertex_values_from_corners(np.concatenate([quat_xy, quat_zw], axis=1), corner_verts, len(positions))
+    submesh_of_vertex, count = core.find_submeshes(positions.astype(np.float32), edges, face_starts, face_sizes,
+                                                   corner_verts)
+    _, _, box_half = core.boxes_from_bake(positions, offsets, q, submesh_of_vertex)
+    target_q = transforms.target_quaternions(q, preset)
+    f = core.decode_offsets(offsets)
+    target_f = transforms.target_local(f, preset)
+    target_half = box_half.astype(np.float64) * preset.length_scale
+    data = layouts.BoxData(quaternions=target_q, offsets=target_f, half_extents=target_half[submesh_of_vertex],
+                           index=index_base + submesh_of_vertex.astype(np.int64),
+                           classic_rgba=transforms.target_offsets(offsets, preset), box_half_extents=target_half)
+    # Self-check: the decode in the target frame must land where the target frame puts Blender's.
+    blender_origin = positions + core.rotate_vector(f, q)
+    target_origin = transforms.target_positions(positions, preset) + core.rotate_vector(target_f, target_q)
+    reach = max(float(np.abs(f).max()) if len(f) else 0.0, 1e-30) * preset.length_scale
+    error = float(np.abs(target_origin - transforms.target_positions(blender_origin, preset)).max() / reach)
+    stats = {"mesh": mesh.name, "vertices": len(positions), "corners": len(corner_verts), "boxes": int(count),
+             "colour": mesh.color_attributes[mesh_io.OFFSET_ATTRIBUTE].data_type,
+             "max_alpha": float(data.classic_rgba[:, 3].max()) if len(positions) else 0.0,
+             "transform_error": error}
+    return data, corner_verts, stats
+
+
+def _keep_artist_uv0(copy) -> None:
+    """Remove every UV map but the artist's first (made empty if there is none): the layout's
+    channels follow it as UV1, UV2, ..."""
+    artist = [uv.name for uv in copy.uv_layers if uv.name not in _BOXMARCH_UV_NAMES]
+    for name in [uv.name for uv in copy.uv_layers if uv.name not in artist[:1]]:
+        copy.uv_layers.remove(copy.uv_layers[name])
+    if not artist:
+        copy.uv_layers.new(name="UVMap")
+
+
+def _target_copy(mesh, preset, layout, index_base):
+    """A copy of ``mesh`` holding what the exporter must write, and the channels the file must
+    hold per Blender vertex. glTF targets: the copy's only colour is each vertex's index (the
+    channels are written into the .glb afterwards, glb.replace_vertex_channels); FBX targets: the
+    channels as the copy's colour and UV maps (Blender's FBX exporter writes them unchanged)."""
+    data, corner_verts, stats = box_data(mesh, preset, index_base)
+    channels = layouts.channels(layout, data)
     copy = mesh.copy()
     for name in [a.name for a in copy.color_attributes]:
         copy.attributes.remove(copy.attributes[name])
-    colour = copy.color_attributes.new(mesh_io.OFFSET_ATTRIBUTE, "FLOAT_COLOR", "POINT")
-    colour.data.foreach_set("color", (glb.index_colours(len(mesh.vertices)) if index_colour else target_rgba).reshape(-1))
-    copy.color_attributes.active_color_index = 0
-    copy.color_attributes.render_color_index = 0
-    # mesh_io._write_uv writes through the attribute API, which un-shares the copy's arrays from
-    # the original's first (Blender 5 implicit sharing).
-    mesh_io._write_uv(copy, mesh_io.QUAT_XY_UV, transforms.uv_for_exporter(target_q[:, :2], preset))
-    mesh_io._write_uv(copy, mesh_io.QUAT_ZW_UV, transforms.uv_for_exporter(target_q[:, 2:], preset))
-    names = [uv.name for uv in copy.uv_layers]
-    stats = {"mesh": mesh.name, "vertices": len(mesh.vertices), "corners": len(corner_verts),
-             "uv_channels": [names.index(mesh_io.QUAT_XY_UV), names.index(mesh_io.QUAT_ZW_UV)],
-             "colour": mesh.color_attributes[mesh_io.OFFSET_ATTRIBUTE].data_type,
-             "max_alpha": float(target_rgba[:, 3].max()) if len(target_rgba) else 0.0,
-             "transform_error": error}
-    return copy, target_rgba, stats
+    _keep_artist_uv0(copy)
+    if preset.extension == ".glb":
+        colour = glb.index_colours(len(data.index))
+    else:
+        colour = channels.get("COLOR")
+        for channel in sorted(c for c in channels if c.startswith("UV")):
+            name = CHANNEL_UV_NAMES[channel]
+            copy.uv_layers.new(name=name)
+            # mesh_io._write_uv writes through the attribute API, which un-shares the copy's
+            # arrays from the original's first (Blender 5 implicit sharing).
+            mesh_io._write_uv(copy, name, transforms.uv_in_file(channels[channel][corner_verts], preset))
+    if colour is not None:
+        attr = copy.color_attributes.new(mesh_io.OFFSET_ATTRIBUTE, "FLOAT_COLOR", "POINT")
+        attr.data.foreach_set("color", np.ascontiguousarray(colour, np.float32).reshape(-1))
+        copy.color_attributes.active_color_index = 0
+        copy.color_attributes.render_color_index = 0
+    uv_channels = sorted(int(c[2:]) for c in channels if c.startswith("UV"))
+    stats.update(layout=layout, uv_channels=uv_channels, channels=sorted(channels))
+    return copy, channels, stats
 
 
 def _operator_kwargs(operator, wanted: dict) -> dict:
@@ -86,8 +120,8 @@ def _operator_kwargs(operator, wanted: dict) -> dict:
     return {k: v for k, v in wanted.items() if k in known}
 
 
-def _run_exporter(preset, path):
-    if preset.name == "UNITY":
+def _run_exporter(preset, layout, path):
+    if preset.extension == ".fbx":
         op = bpy.ops.export_scene.fbx
         op(**_operator_kwargs(op, dict(
             filepath=path, use_selection=True, use_mesh_modifiers=False, axis_forward="-Z", axis_up="Y",
@@ -97,16 +131,26 @@ def _run_exporter(preset, path):
         op = bpy.ops.export_scene.gltf
         op(**_operator_kwargs(op, dict(
             filepath=path, export_format="GLB", use_selection=True, export_yup=True, export_apply=False,
+            export_normals=not layouts.LAYOUTS[layout].skin_safe,  # those layouts write their own
             export_colors=True, export_vertex_color="ACTIVE", export_all_vertex_colors=False,
             export_active_vertex_color_when_no_material=True, export_animations=False)))
 
 
-def export_objects(context, objects, preset_name: str, filepath: str) -> dict:
-    """Export ``objects`` (baked meshes) with a preset to ``filepath``. Returns a report dict.
-    Raises ExportInputError (nothing written) for unbaked or non-mesh objects."""
+def table_path(filepath: str) -> str:
+    """Where the NORMAL_COLOR layout's box table goes: beside the file, ``NAME.boxes.tres``."""
+    return os.path.splitext(filepath)[0] + ".boxes.tres"
+
+
+def export_objects(context, objects, preset_name: str, filepath: str, layout: str | None = None) -> dict:
+    """Export ``objects`` (baked meshes) with a preset (and one of its layouts; None = its
+    default) to ``filepath``. Returns a report dict. Raises ExportInputError (nothing written)
+    for unbaked or non-mesh objects or a layout the preset cannot carry."""
     preset = transforms.PRESETS.get(preset_name)
     if preset is None:
         raise ExportInputError(f"preset must be one of {sorted(transforms.PRESETS)}, got {preset_name!r}")
+    layout = layout or preset.layouts[0]
+    if layout not in preset.layouts:
+        raise ExportInputError(f"{preset.label} carries the layouts {', '.join(preset.layouts)}, not {layout}")
     if not objects:
         raise ExportInputError("no objects to export")
     for ob in objects:
@@ -119,17 +163,24 @@ def export_objects(context, objects, preset_name: str, filepath: str) -> dict:
     folder = os.path.dirname(os.path.abspath(filepath))
     if not os.path.isdir(folder):
         raise ExportInputError(f"folder '{folder}' does not exist")
-    temp = os.path.join(folder, f".{os.path.basename(filepath)}.boxmarch-partial{preset.extension}")
+    partial = lambda path: os.path.join(folder, f".{os.path.basename(path)}.boxmarch-partial{os.path.splitext(path)[1]}")
+    outputs = {partial(filepath): filepath}
+    if layout == "NORMAL_COLOR":
+        outputs[partial(table_path(filepath))] = table_path(filepath)
     warnings = []
-    if preset.name == "UNITY" and context.scene.unit_settings.scale_length != 1.0:
-        warnings.append("unit scale is not 1: Unity will scale positions by it and the offsets will not match")
+    if preset.extension == ".fbx" and context.scene.unit_settings.scale_length != 1.0:
+        warnings.append(f"unit scale is not 1: {preset.label} will scale positions by it and the offsets will not match")
     try:
+        temp = partial(filepath)
         if preset.name == "BLENDER":
             stats = [{"mesh": mesh.name, "vertices": len(mesh.vertices), "transform_error": 0.0} for mesh in meshes]
             bpy.data.libraries.write(temp, set(objects), fake_user=True, compress=False)
         else:
-            stats = _export_with_copies(context, objects, meshes, preset, temp)
-            if preset.name == "UNITY":
+            stats, table = _export_with_copies(context, objects, meshes, preset, layout, temp)
+            if table is not None:
+                with open(partial(table_path(filepath)), "w") as f:
+                    f.write(godot.image_texture_tres(table))
+            if preset.name == "UNITY" and layout == "CLASSIC":
                 floats = [m for m in stats if m["colour"] == "FLOAT_COLOR"]
                 if floats:
                     warnings.append(
@@ -137,28 +188,36 @@ def export_objects(context, objects, preset_name: str, filepath: str) -> dict:
                         f"{max(m['max_alpha'] for m in floats):.3g}); Unity usually stores vertex colours as "
                         "8-bit Color32, which clips alpha above 1 and rounds the rest: bake with 8-bit colour "
                         "for Unity (docs/EXPORT.md)")
-        os.replace(temp, filepath)
+        for temp, final in outputs.items():
+            os.replace(temp, final)
     finally:
-        if os.path.exists(temp):
-            os.remove(temp)
-    return {"preset": preset.name, "path": os.path.abspath(filepath), "objects": [ob.name for ob in objects],
-            "meshes": stats, "seconds": time.perf_counter() - start, "warnings": warnings,
+        for temp in outputs:
+            if os.path.exists(temp):
+                os.remove(temp)
+    return {"preset": preset.name, "layout": layout, "path": os.path.abspath(filepath),
+            "table": os.path.abspath(table_path(filepath)) if layout == "NORMAL_COLOR" else None,
+            "objects": [ob.name for ob in objects], "meshes": stats, "seconds": time.perf_counter() - start,
+            "warnings": warnings, "import_settings": preset.import_settings,
             "transform_error": max((s["transform_error"] for s in stats), default=0.0)}
 
 
-def _export_with_copies(context, objects, meshes, preset, temp):
-    index_colour = preset.name == "GLTF"
-    copies, originals, file_colours, stats = {}, {}, {}, []
+def _export_with_copies(context, objects, meshes, preset, layout, temp):
+    """Exports temporary copies of ``meshes`` in place of the originals; returns (stats, the
+    box table of the file or None)."""
+    copies, originals, file_channels, stats, tables = {}, {}, {}, [], []
     selection = [ob for ob in context.view_layer.objects if ob.select_get()]
     active = context.view_layer.objects.active
     users = {}
     try:
         for mesh in meshes:
-            copy, rgba, mesh_stats = _target_copy(mesh, preset, index_colour)
+            index_base = sum(len(t) for t in tables)  # box numbers run on across the file's meshes
+            copy, channels, mesh_stats = _target_copy(mesh, preset, layout, index_base)
+            if "TABLE" in channels:
+                tables.append(channels.pop("TABLE"))
             name = mesh.name
             mesh.name = name + ".boxmarch-original"
             copy.name = name  # the file names the mesh as the artist did
-            copies[mesh.as_pointer()], originals[name], file_colours[name] = copy, mesh, rgba
+            copies[mesh.as_pointer()], originals[name], file_channels[name] = copy, mesh, channels
             stats.append(mesh_stats)
         for ob in objects:
             users[ob.name] = ob.data
@@ -168,12 +227,12 @@ def _export_with_copies(context, objects, meshes, preset, temp):
         for ob in objects:
             ob.select_set(True)
         context.view_layer.objects.active = objects[0]
-        _run_exporter(preset, temp)
+        _run_exporter(preset, layout, temp)
         if not os.path.exists(temp):
             raise RuntimeError(f"the {preset.label} exporter wrote nothing")
-        if index_colour:
+        if preset.extension == ".glb":
             gltf, binary = glb.read(temp)
-            gltf, binary = glb.replace_index_colours(gltf, binary, file_colours)
+            gltf, binary = glb.replace_vertex_channels(gltf, binary, file_channels)
             glb.write(temp, gltf, binary)
     finally:
         for ob in objects:
@@ -186,4 +245,4 @@ def _export_with_copies(context, objects, meshes, preset, temp):
         for ob in context.view_layer.objects:
             ob.select_set(ob in selection)
         context.view_layer.objects.active = active
-    return stats
+    return stats, (np.concatenate(tables) if tables else None)

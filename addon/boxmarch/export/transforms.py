@@ -27,7 +27,9 @@ import numpy as np
 # written with axis_forward='-Z', axis_up='Y': (x, y, z) -> (x, z, -y).
 Z_UP_TO_Y_UP = np.array([[1, 0, 0], [0, 0, 1], [0, -1, 0]], np.float64)
 # Unity's FBX importer turns the right-handed file into its left-handed frame by negating x:
-# the UNITY preset's mirror is diag(-1, 1, 1).
+# the UNITY preset's mirror is diag(-1, 1, 1). Unreal's converts any FBX back to Blender's Z-up
+# axes, then negates y into its left-handed frame and scales metres to centimetres: whatever the
+# exporter's axis options, Unreal's object frame is (x, -y, z) * 100 of Blender's.
 
 
 @dataclass(frozen=True)
@@ -37,8 +39,11 @@ class Preset:
     extension: str
     rotation: np.ndarray   # A0 (3, 3), det +1
     mirror: np.ndarray     # diagonal of N (3,), +-1, at most one -1
-    flip_v_on_export: bool  # the exporter writes v -> 1 - v on every UV map
     description: str
+    layouts: tuple = ("CLASSIC",)  # export/layouts.py names this target can carry; the first is the default
+    length_scale: float = 1.0      # the importer's unit conversion of positions (Unreal: metres to cm)
+    flip_v_on_import: bool = False  # the importer reads v as 1 - v (Unreal's FBX importer)
+    import_settings: str = ""      # what the engine's importer must be told so the data stays float32
 
     @property
     def axes(self) -> np.ndarray:
@@ -47,14 +52,34 @@ class Preset:
 
 
 PRESETS = {
-    "UNITY": Preset(
-        "UNITY", "Unity (FBX)", ".fbx", Z_UP_TO_Y_UP, np.array([-1.0, 1.0, 1.0]), False,
-        "FBX for Unity's importer: left-handed Y-up object frame, colour and UVs as Unity reads them"),
     "GLTF": Preset(
-        "GLTF", "glTF Binary", ".glb", Z_UP_TO_Y_UP, np.ones(3), True,
-        "glTF binary: right-handed Y-up, TEXCOORD_1/2 = quaternion and float COLOR_0 = offset as stored"),
+        "GLTF", "glTF Binary", ".glb", Z_UP_TO_Y_UP, np.ones(3),
+        "glTF binary for three.js, Godot 4, Babylon: right-handed Y-up, frame in NORMAL + TANGENT",
+        layouts=("NORMAL_FRAME", "UV_FRAME", "CLASSIC"),
+        import_settings="three.js and Babylon: none. Godot 4: Mesh Compression off in the scene import "
+                        "(Godot 4 stores vertex colours as 8 bits: the default layout uses none)"),
+    "GODOT3": Preset(
+        "GODOT3", "Godot 3 (glTF + box table)", ".glb", Z_UP_TO_Y_UP, np.ones(3),
+        "glTF binary for Godot 3's importer (two UV sets): frame in NORMAL + TANGENT, offset and index in a "
+        "float colour, half-extents in a .tres float texture beside it",
+        layouts=("NORMAL_COLOR",),
+        import_settings="Import dock of the .glb: Meshes > Compress off (else colour is 8-bit and normals, "
+                        "tangents and UV2 are packed); keep the .boxes.tres beside it and assign it to the "
+                        "shader's box_table"),
+    "UNITY": Preset(
+        "UNITY", "Unity (FBX)", ".fbx", Z_UP_TO_Y_UP, np.array([-1.0, 1.0, 1.0]),
+        "FBX for Unity's importer: left-handed Y-up object frame, box data in float UV channels",
+        layouts=("UV_FRAME", "CLASSIC"),
+        import_settings="Model import: Read/Write on (or Player > Vertex Compression: untick Tex Coord 2-7), "
+                        "Mesh Compression Off; UV_FRAME needs no vertex colour"),
+    "UNREAL": Preset(
+        "UNREAL", "Unreal (FBX)", ".fbx", np.eye(3), np.array([1.0, -1.0, 1.0]),
+        "FBX for Unreal's importer: left-handed Z-up centimetres (y mirrored), V flipped, box data in float UVs",
+        layouts=("UV_FRAME",), length_scale=100.0, flip_v_on_import=True,
+        import_settings="Static mesh import: Use Full Precision UVs on (else UVs are 16-bit halves), "
+                        "Generate Lightmap UVs off (it writes into UV channel 1), Convert Scene on (default)"),
     "BLENDER": Preset(
-        "BLENDER", "Blender (raw)", ".blend", np.eye(3), np.ones(3), False,
+        "BLENDER", "Blender (raw)", ".blend", np.eye(3), np.ones(3),
         "The selected objects in a .blend, baked data in Blender's own object space"),
 }
 
@@ -106,27 +131,32 @@ def target_quaternions(q, preset: Preset) -> np.ndarray:
     return canonical_sign(turned)
 
 
-def target_offsets(rgba, preset: Preset, length_scale: float = 1.0) -> np.ndarray:
-    """(n, 4) float32 offsets for the target: f' = N f, so a mirrored channel c becomes 1 - c
-    (the encoding 0.5 + 0.5 s f is symmetric about 0.5); positions the importer scales by
-    ``length_scale`` scale f too, which the alpha s absorbs: s' = s / length_scale.
+def target_offsets(rgba, preset: Preset) -> np.ndarray:
+    """(n, 4) float32 CLASSIC offset colours for the target: f' = N f, so a mirrored channel c
+    becomes 1 - c (the encoding 0.5 + 0.5 s f is symmetric about 0.5); positions the importer
+    scales by the preset's length scale L scale f too, which the alpha s absorbs: s' = s / L.
     ``rgba`` is float (values as the shader reads them: bytes already divided by 255)."""
     out = np.array(rgba, np.float64).reshape(-1, 4)
     mirrored = preset.mirror < 0
     out[:, :3][:, mirrored] = 1.0 - out[:, :3][:, mirrored]
-    out[:, 3] /= length_scale
+    out[:, 3] /= preset.length_scale
     return out.astype(np.float32)
 
 
-def uv_for_exporter(uv, preset: Preset) -> np.ndarray:
-    """(n, 2) float32 UVs to hand the exporter so that it writes ``uv``: the glTF exporter writes
-    1 - v, so it gets 1 - v (round-off: at most half an ulp of values up to 2, 1.2e-7)."""
-    out = np.array(uv, np.float32).reshape(-1, 2)
-    if preset.flip_v_on_export:
-        out[:, 1] = np.float32(1.0) - out[:, 1]
-    return out
+def uv_in_file(uv, preset: Preset) -> np.ndarray:
+    """(n, 2) float32 UVs to write so that the engine's importer reads ``uv``: Unreal's FBX
+    importer reads 1 - v, so the file holds 1 - v (round-off: half an ulp of 1 - v)."""
+    out = np.array(uv, np.float64).reshape(-1, 2)
+    if preset.flip_v_on_import:
+        out[:, 1] = 1.0 - out[:, 1]
+    return out.astype(np.float32)
 
 
-def target_positions(positions, preset: Preset, length_scale: float = 1.0) -> np.ndarray:
+def target_positions(positions, preset: Preset) -> np.ndarray:
     """(n, 3) float64: where the target's object frame puts Blender object-space points."""
-    return np.asarray(positions, np.float64) @ preset.axes.T * length_scale
+    return np.asarray(positions, np.float64) @ preset.axes.T * preset.length_scale
+
+
+def target_local(vectors, preset: Preset) -> np.ndarray:
+    """(n, 3) float64 box-local vectors (offsets f) in the target's local convention: f' = N f L."""
+    return np.asarray(vectors, np.float64) * preset.mirror * preset.length_scale

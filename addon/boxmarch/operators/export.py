@@ -8,7 +8,7 @@ import bpy
 from bpy.props import EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper
 
-from ..export import scene, transforms
+from ..export import layouts, scene, transforms
 
 
 class BOXMARCH_OT_export(bpy.types.Operator, ExportHelper):
@@ -23,6 +23,11 @@ class BOXMARCH_OT_export(bpy.types.Operator, ExportHelper):
     preset: EnumProperty(
         name="Engine", default="UNITY",
         items=[(p.name, p.label, p.description) for p in transforms.PRESETS.values()])
+    layout: EnumProperty(
+        name="Layout", default="DEFAULT",
+        items=[("DEFAULT", "Preset's Own", "The layout the engine's importer carries best (docs/ENGINES.md)")]
+        + [(l.name, l.label, l.description) for l in layouts.LAYOUTS.values()],
+        description="Which vertex channels carry the box data")
 
     @classmethod
     def poll(cls, context):
@@ -38,23 +43,24 @@ class BOXMARCH_OT_export(bpy.types.Operator, ExportHelper):
 
     def execute(self, context):
         self.check(context)
-        if not run_export(self, context, self.preset, self.filepath):
+        layout = None if self.layout == "DEFAULT" else self.layout
+        if not run_export(self, context, self.preset, self.filepath, layout):
             return {"CANCELLED"}
         # Remembered on the scene (saved with the .blend) for Quick Export.
-        context.scene[LAST_EXPORT] = {"preset": self.preset, "filepath": self.filepath}
+        context.scene[LAST_EXPORT] = {"preset": self.preset, "filepath": self.filepath, "layout": self.layout}
         return {"FINISHED"}
 
 
 LAST_EXPORT = "boxmarch_last_export"
 
 
-def run_export(operator, context, preset, filepath) -> bool:
+def run_export(operator, context, preset, filepath, layout=None) -> bool:
     """Export the selected meshes and report in the status bar; False when nothing was written."""
     objects = [ob for ob in context.selected_objects if ob.type == "MESH"]
     wm = context.window_manager
     wm.progress_begin(0, 1)
     try:
-        report = scene.export_objects(context, objects, preset, filepath)
+        report = scene.export_objects(context, objects, preset, filepath, layout)
     except scene.ExportInputError as error:
         operator.report({"ERROR"}, f"Nothing exported: {error}")
         return False
@@ -64,9 +70,13 @@ def run_export(operator, context, preset, filepath) -> bool:
         operator.report({"WARNING"}, warning)
     channels = sorted({tuple(m.get("uv_channels", ())) for m in report["meshes"]} - {()})
     text = (f"Exported {len(report['objects'])} object(s) for {transforms.PRESETS[preset].label} "
-            f"to {report['path']} in {report['seconds']:.2f} s")
+            f"({report['layout']}) to {report['path']} in {report['seconds']:.2f} s")
     if channels:
-        text += "; quaternion in UV channels " + ", ".join(f"{a} and {b}" for a, b in channels)
+        text += "; box data in UV channels " + ", ".join(", ".join(map(str, c)) for c in channels)
+    if report["table"]:
+        text += f"; box table {report['table']}"
+    if report["import_settings"]:
+        operator.report({"INFO"}, f"Import settings: {report['import_settings']}")
     operator.report({"INFO"}, text)
     return True
 
@@ -92,7 +102,9 @@ class BOXMARCH_OT_quick_export(bpy.types.Operator):
         if last is None or last.get("preset") not in transforms.PRESETS:
             self.report({"ERROR"}, "Nothing exported yet in this scene: use File > Export > Boxmarch Box Frames first")
             return {"CANCELLED"}
-        return {"FINISHED"} if run_export(self, context, last["preset"], last["filepath"]) else {"CANCELLED"}
+        layout = last.get("layout", "DEFAULT")
+        return ({"FINISHED"} if run_export(self, context, last["preset"], last["filepath"],
+                                           None if layout == "DEFAULT" else layout) else {"CANCELLED"})
 
 
 def menu_export(self, _context):
