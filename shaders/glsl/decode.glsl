@@ -25,3 +25,46 @@ vec4 quat_conjugate(vec4 q)
 {
   return vec4(-q.xyz, q.w);
 }
+
+// ---- Engine layouts (docs/ENGINES.md). The NORMAL_* layouts carry the frame in the normal
+// (local z) and the tangent (local x, w = +1), the two vectors every engine's skinning
+// transforms; UV_FRAME carries the quaternion as CLASSIC does. The offset f, the box index and
+// the half-extents h ride in float channels: UVa = f.xy, UVb = (f.z, index), UVc = h.xy,
+// UVd = (h.z, 0) (NORMAL_COLOR: colour = (f, index), h from the box table).
+
+// Local y axis of a NORMAL_* frame: the glTF bitangent cross(normal, tangent.xyz) * tangent.w.
+vec3 bm_axis_y(vec3 normal, vec4 tangent)
+{
+  return cross(normal, tangent.xyz) * tangent.w;
+}
+
+// Box-local coordinates of v, given the frame's unit axes x, y, z in v's space.
+vec3 bm_to_local(vec3 v, vec3 x, vec3 y, vec3 z)
+{
+  return vec3(dot(v, x), dot(v, y), dot(v, z));
+}
+
+// The vector with box-local coordinates l, in the space of the axes x, y, z.
+vec3 bm_from_local(vec3 l, vec3 x, vec3 y, vec3 z)
+{
+  return x * l.x + y * l.y + z * l.z;
+}
+
+// f from the offset pair of channels (f.xy, (f.z, index)).
+vec3 bm_offset(vec2 offset_xy, vec2 offset_z_index)
+{
+  return vec3(offset_xy, offset_z_index.x);
+}
+
+// The box number from its interpolated channel (constant over a box; rounding absorbs
+// interpolation round-off).
+float bm_box_index(float channel)
+{
+  return floor(channel + 0.5);
+}
+
+// h from the half-extent pair of channels (h.xy, (h.z, 0)).
+vec3 bm_half_extents(vec2 half_xy, vec2 half_z)
+{
+  return vec3(half_xy, half_z.x);
+}

@@ -1,23 +1,11 @@
 // boxmarch.hlsl: decode + SDF library for engines (Unity built-in / URP shader code, any HLSL).
-// Mirrors shaders/glsl/decode.glsl and sdf.glsl function for function (tests/test_shaders.py
-// compares the lists). See docs/UNITY.md.
+// The decode is generated from shaders/glsl/decode.glsl (shaders/generate.py); the SDF library
+// mirrors sdf.glsl function for function (tests/test_shaders.py compares the lists). See docs/UNITY.md.
 #ifndef BOXMARCH_INCLUDED
 #define BOXMARCH_INCLUDED
 
-// ---- decode (docs/FORMAT.md)
-
-// f = vector from the fragment to its submesh's origin, in box-local coordinates.
-// color = the BoxOffset vertex colour (rgb = 0.5 + 0.5 * s * f, a = s).
-float3 GetFragToOrigin(float4 color)
-{
-  return (color.rgb * 2.0 - 1.0) / color.a;
-}
-
-// q = the submesh's frame (x, y, z, w), local to object space, from BoxQuatXY and BoxQuatZW.
-float4 GetRotation(float2 quat_xy, float2 quat_zw)
-{
-  return float4(quat_xy, quat_zw);
-}
+// ---- decode (docs/FORMAT.md, docs/ENGINES.md): generated from shaders/glsl/decode.glsl
+#include "boxmarch_decode.hlsl"
 
 // The UV channel `channel` (0..3) of a vertex's first four UV sets.
 float2 get_uv_by_channel(float2 uv0, float2 uv1, float2 uv2, float2 uv3, int channel)
@@ -31,17 +19,6 @@ float4 GetRotationFromChannels(float2 uv0, float2 uv1, float2 uv2, float2 uv3, f
 {
   return GetRotation(get_uv_by_channel(uv0, uv1, uv2, uv3, (int)uv_channels.x),
                      get_uv_by_channel(uv0, uv1, uv2, uv3, (int)uv_channels.y));
-}
-
-// q v q* for a unit quaternion q; rotate_vector(v, quat_conjugate(q)) is the inverse rotation.
-float3 rotate_vector(float3 v, float4 q)
-{
-  return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v);
-}
-
-float4 quat_conjugate(float4 q)
-{
-  return float4(-q.xyz, q.w);
 }
 
 // ---- SDF library. Units are box-local; box_half holds the box's half-extents.
