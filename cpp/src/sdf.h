@@ -59,7 +59,7 @@ inline float op_round(float d, float r) { return d - r; }
 inline float op_onion(float d, float thickness) { return std::abs(d) - thickness; }
 // Domain repetition: copies every `spacing`, limit copies each side of the centre per axis.
 inline vec3 op_repeat_limited(vec3 p, vec3 spacing, vec3 limit) {
-    return p - spacing * glm::clamp(glm::round(p / spacing), -limit, limit);
+    return p - spacing * glm::clamp(glm::floor(p / spacing + 0.5f), -limit, limit);
 }
 
 // The presets (shaders/glsl/sdf.glsl, sdf_preset_*).

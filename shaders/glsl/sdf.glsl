@@ -72,9 +72,10 @@ float op_round(float d, float r) { return d - r; }
 float op_onion(float d, float thickness) { return abs(d) - thickness; }
 
 // Finite repetition: copies every `spacing`, `limit` copies each side of the centre per axis.
+// floor(x + 0.5), not round(): GLSL ES 1.00 (WebGL 1) has no round().
 vec3 op_repeat_limited(vec3 p, vec3 spacing, vec3 limit)
 {
-  return p - spacing * clamp(round(p / spacing), -limit, limit);
+  return p - spacing * clamp(floor(p / spacing + 0.5), -limit, limit);
 }
 
 // ---- presets of the preview's SDF menu, sized by the box

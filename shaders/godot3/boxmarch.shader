@@ -147,9 +147,10 @@ float op_smooth_subtract(float a, float b, float k) { return op_smooth_intersect
 float op_round(float d, float r) { return d - r; }
 float op_onion(float d, float thickness) { return abs(d) - thickness; }
 // Finite repetition: copies every `spacing`, `limit` copies each side of the centre per axis.
+// floor(x + 0.5), not round(): GLSL ES 1.00 (WebGL 1) has no round().
 vec3 op_repeat_limited(vec3 p, vec3 spacing, vec3 limit)
 {
-  return p - spacing * clamp(round(p / spacing), -limit, limit);
+  return p - spacing * clamp(floor(p / spacing + 0.5), -limit, limit);
 }
 // ---- presets of the preview's SDF menu, sized by the box
 float sdf_preset_box(vec3 p, vec3 h) { return sd_box(p, h); }

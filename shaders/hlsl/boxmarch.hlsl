@@ -91,7 +91,7 @@ float op_onion(float d, float thickness) { return abs(d) - thickness; }
 // Finite repetition: copies every `spacing`, `limit` copies each side of the centre per axis.
 float3 op_repeat_limited(float3 p, float3 spacing, float3 limit)
 {
-  return p - spacing * clamp(round(p / spacing), -limit, limit);
+  return p - spacing * clamp(floor(p / spacing + 0.5), -limit, limit);
 }
 
 // Presets of the Blender preview's SDF menu, sized by the box.

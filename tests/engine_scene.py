@@ -1,0 +1,110 @@
+"""The scene the engine tests export: boxes of very different shapes whose geometry the tests know
+independently of boxmarch (centres, sizes, rotations chosen here), and the checks that compare what
+an engine received or drew with that geometry. Blender-free except :func:`baked_scene`."""
+import numpy as np
+
+from boxmarch import scenes
+
+# Blender object space -> glTF / Godot (x, z, -y).
+TO_Y_UP = np.array([[1, 0, 0], [0, 0, 1], [0, -1, 0]], float)
+
+
+def mixed_boxes():
+    """(centres, sizes, rotations) of 1 x 0.6 x 0.2, 0.02 x 0.02 x 0.1 and 5 x 5 x 5 boxes, in
+    Blender's frame. Small boxes sit near the origin, where float32 positions are exact to well
+    under 1e-5 of their half-extent, so the generating centres are a fair reference."""
+    rng = np.random.default_rng(12)
+    rotations = scenes.random_rotations(9, rng)
+    centres = np.array([[-3.0, 0.0, 0.5], [-1.2, 1.0, -0.8], [1.0, -0.5, 1.2],        # 1 x 0.6 x 0.2
+                        [0.05, 0.0, 0.0], [-0.05, 0.03, 0.02], [0.0, -0.04, -0.05],   # 0.02 x 0.02 x 0.1
+                        [5.5, 2.0, -1.0], [-0.4, -2.0, -2.2], [2.2, 1.5, -2.0]])     # 5 x 5 x 5, 1 x 0.6 x 0.2 x 2
+    sizes = np.array([[1.0, 0.6, 0.2]] * 3 + [[0.02, 0.02, 0.1]] * 3 + [[5.0, 5.0, 5.0]]
+                     + [[1.0, 0.6, 0.2]] * 2)
+    return centres, sizes, rotations
+
+
+def baked_scene(bpy, name="Mixed"):
+    """A baked object holding :func:`mixed_boxes` (default bake). Returns (object, centres,
+    sizes, rotations)."""
+    from boxmarch import mesh_io
+
+    centres, sizes, rotations = mixed_boxes()
+    arrays = scenes.box_arrays(centres, sizes, rotations)
+    mesh = mesh_io.new_mesh(name, arrays[0], arrays[2], arrays[3], arrays[4], edges=arrays[1])
+    ob = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(ob)
+    for other in bpy.context.selected_objects:
+        other.select_set(False)
+    ob.select_set(True)
+    bpy.context.view_layer.objects.active = ob
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+    return ob, centres, sizes, rotations
+
+
+def box_of_vertex(engine_positions, centres, sizes, rotations, to_engine):
+    """The generating box of every engine vertex: the box whose corner it is (nearest corner,
+    which must lie within 1e-5 of the smallest half-extent)."""
+    corners = np.concatenate([box_corners(c, s, r) for c, s, r in zip(centres, sizes, rotations)]) @ to_engine.T
+    d = np.linalg.norm(engine_positions[:, None, :] - corners[None, :, :], axis=2)
+    nearest = d.argmin(axis=1)
+    assert d[np.arange(len(d)), nearest].max() < 1e-5 * sizes.min(), "a vertex is not at a box corner"
+    return nearest // 8
+
+
+def box_corners(centre, size, rotation):
+    """(8, 3) corners of a box (Blender frame)."""
+    signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+    return centre + (signs * np.asarray(size) / 2) @ np.asarray(rotation).T
+
+
+def decode_normal_frame(position, normal, tangent, offset, half):
+    """The NORMAL_* layouts' decode as docs/ENGINES.md states it, in float64: axes x = tangent,
+    z = normal, y = cross(z, x) * tangent.w; origin = position + x f.x + y f.y + z f.z.
+    Returns (origins, axes (n, 3, 3) with columns x, y, z, half-extents)."""
+    z, x = normal, tangent[:, :3]
+    y = np.cross(z, x) * tangent[:, 3:4]
+    axes = np.stack([x, y, z], axis=2)
+    return position + np.einsum("nij,nj->ni", axes, offset), axes, half
+
+
+def frame_and_size_errors(origins, axes, half, box, centres, sizes, rotations, to_engine):
+    """Worst (origin error / largest half-extent, axis error, half-extent error / half-extent):
+    each decoded local axis must be +- one generating box axis, and its half-extent that axis's
+    half size."""
+    true_centre = centres[box] @ to_engine.T
+    reach = sizes[box].max(axis=1) / 2
+    origin_error = (np.linalg.norm(origins - true_centre, axis=1) / reach).max()
+    true_axes = np.einsum("ij,njk->nik", to_engine, rotations[box])  # columns: box axes in engine frame
+    cosines = np.abs(np.einsum("nik,nil->nkl", axes, true_axes))      # decoded k vs true l
+    match = cosines.argmax(axis=2)
+    axis_error = float((1.0 - cosines.max(axis=2)).max())
+    true_half = np.take_along_axis(sizes[box] / 2, match, axis=1)
+    half_error = float((np.abs(half - true_half) / true_half).max())
+    return float(origin_error), axis_error, half_error
+
+
+def convex_hull(points):
+    """Convex hull (counter-clockwise, Andrew's monotone chain) of 2D points."""
+    pts = sorted(map(tuple, np.asarray(points, float)))
+    cross = lambda o, a, b: (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    lower, upper = [], []
+    for p in pts:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
+            lower.pop()
+        lower.append(p)
+    for p in reversed(pts):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
+            upper.pop()
+        upper.append(p)
+    return np.array(lower[:-1] + upper[:-1])
+
+
+def silhouettes(shot, centres, sizes, rotations, to_engine, shrink=0.0):
+    """Pixel-space convex silhouettes of the boxes (shrunk by ``shrink`` of their smallest
+    half-extent on every side: the core a rounded box must cover), projected with the engine's
+    camera."""
+    out = []
+    for c, s, r in zip(centres, sizes, rotations):
+        inner = np.asarray(s, float) - 2 * shrink * min(s) / 2
+        out.append(convex_hull(shot.project(box_corners(c, inner, r) @ to_engine.T)))
+    return out
