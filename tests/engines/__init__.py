@@ -1,0 +1,78 @@
+"""Harnesses that load files into real engines and report what the engine received and drew.
+
+``threejs`` runs three.js r111 (Debian's libjs-three) in headless Chromium on SwiftShader;
+``godot3`` runs Debian's Godot 3.2 (headless import, rendering under xvfb on llvmpipe). Neither
+imports Blender. Both ``render`` functions return a :class:`Shot`, and :func:`coverage_mismatch`
+checks drawn pixels against polygons projected with the engine's own camera.
+"""
+from typing import NamedTuple, Optional
+
+import numpy as np
+
+
+class Shot(NamedTuple):
+    """One rendered frame and the camera the engine used for it.
+
+    ``pixels``: (H, W, 4) uint8 RGBA, row 0 = top of the image.
+    ``view``: 4x4 world -> camera matrix as the engine computed it.
+    ``to_pixels``: 3x4 world -> homogeneous pixel matrix derived from the engine's own camera:
+    x grows right, y grows down, (0, 0) is the top-left corner of the image, so pixel (i, j) has
+    its centre at (j + 0.5, i + 0.5).
+    """
+
+    pixels: np.ndarray
+    view: np.ndarray
+    to_pixels: np.ndarray
+
+    def project(self, points) -> np.ndarray:
+        """(N, 2) pixel coordinates (x right, y down) of (N, 3) world points."""
+        p = np.asarray(points, dtype=np.float64)
+        h = np.c_[p, np.ones(len(p))] @ self.to_pixels.T
+        return h[:, :2] / h[:, 2:3]
+
+
+def polygon_mask(shape, polygon) -> np.ndarray:
+    """Boolean (H, W) mask of the pixels whose centres lie inside a convex 2D ``polygon``
+    (pixel coordinates as :meth:`Shot.project` returns them, either winding)."""
+    poly = np.asarray(polygon, dtype=np.float64)
+    ys, xs = np.mgrid[0 : shape[0], 0 : shape[1]] + 0.5
+    sides = []
+    for a, b in zip(poly, np.roll(poly, -1, axis=0)):
+        sides.append((b[0] - a[0]) * (ys - a[1]) - (b[1] - a[1]) * (xs - a[0]))
+    sides = np.array(sides)
+    return np.all(sides >= 0, axis=0) | np.all(sides <= 0, axis=0)
+
+
+def _grow(mask, n):
+    """``mask`` dilated by n pixels (3x3 square steps)."""
+    for _ in range(n):
+        p = np.pad(mask, 1)
+        mask = np.zeros_like(mask)
+        for dy in range(3):
+            for dx in range(3):
+                mask |= p[dy : dy + mask.shape[0], dx : dx + mask.shape[1]]
+    return mask
+
+
+def coverage_mismatch(covered, polygons, tol: int = 1) -> Optional[str]:
+    """None when the (H, W) boolean ``covered`` mask equals the union of the convex pixel-space
+    ``polygons`` up to ``tol`` pixels at every edge; else a message saying where it differs.
+
+    Every covered pixel must lie within ``tol`` px of a polygon, and every pixel deeper than
+    ``tol`` px inside one must be covered, so a shape drawn ``tol + 1`` px off fails.
+    """
+    covered = np.asarray(covered, dtype=bool)
+    expected = np.zeros_like(covered)
+    for poly in polygons:
+        expected |= polygon_mask(covered.shape, poly)
+    stray = covered & ~_grow(expected, tol)
+    missing = ~covered & ~_grow(~expected, tol)
+    if not stray.any() and not missing.any():
+        return None
+    msg = []
+    for name, bad in (("covered outside", stray), ("uncovered inside", missing)):
+        if bad.any():
+            ys, xs = np.nonzero(bad)
+            msg.append(f"{len(ys)} px {name} the expected shapes, rows {ys.min()}..{ys.max()}, "
+                       f"columns {xs.min()}..{xs.max()}")
+    return "; ".join(msg)
