@@ -42,12 +42,12 @@ def baked_scene(bpy, name="Mixed"):
 
 
 def box_of_vertex(engine_positions, centres, sizes, rotations, to_engine):
-    """The generating box of every engine vertex: the box whose corner it is (nearest corner,
-    which must lie within 1e-5 of the smallest half-extent)."""
+    """The generating box of every engine vertex: the box whose corner it is (the nearest corner,
+    which must lie within float32 rounding of the vertex: 1e-6 units here)."""
     corners = np.concatenate([box_corners(c, s, r) for c, s, r in zip(centres, sizes, rotations)]) @ to_engine.T
     d = np.linalg.norm(engine_positions[:, None, :] - corners[None, :, :], axis=2)
     nearest = d.argmin(axis=1)
-    assert d[np.arange(len(d)), nearest].max() < 1e-5 * sizes.min(), "a vertex is not at a box corner"
+    assert d[np.arange(len(d)), nearest].max() < 1e-6, "a vertex is not at a box corner"
     return nearest // 8
 
 

@@ -16,8 +16,13 @@ from engines import coverage_mismatch, polygon_mask, threejs
 
 W, H = 320, 240
 WIDE = {"position": [2.0, 9.0, 14.0], "target": [0.5, -0.5, 0.0], "fov": 50, "near": 0.5, "far": 100}
-CLOSE = {"position": [0.12, 0.2, 0.3], "target": [0.0, 0.0, 0.0], "fov": 30, "near": 0.01, "far": 10}
-BOX_MAP = "return sd_box(p, box_half);"
+# The far plane leaves only the three 0.02 x 0.02 x 0.1 boxes (numbers 3-5) in this view.
+CLOSE = {"position": [0.12, 0.2, 0.3], "target": [0.0, 0.0, 0.0], "fov": 30, "near": 0.01, "far": 0.6}
+IN_VIEW = {id(WIDE): slice(None), id(CLOSE): slice(3, 6)}
+# A box at 0.6 of each box's half-extents about its decoded origin: unlike the full box, which
+# the rasterised mesh already outlines, it lands right only if origin, axes and extents do.
+BOX_MAP = "return sd_box(p, 0.6 * box_half);"
+INNER = 0.6
 ROUNDED_MAP = "return sd_round_box(p, box_half, 0.1 * min3(box_half));"
 
 
@@ -40,7 +45,7 @@ def setup_js(sdf_body, tamper=""):
     """Gives every mesh the shipped material; ``tamper`` (JS, with ``g`` the geometry) runs first."""
     return (f"gltf.scene.traverse(function (o) {{ if (!o.isMesh) return; var g = o.geometry; {tamper}\n"
             f"useBoxmarchMaterial(THREE, o, createBoxmarchMaterial(THREE, {{map: {json.dumps(sdf_body)}, "
-            f"color: new THREE.Color(1, 1, 1)}})); }});")
+            f"color: new THREE.Color(1, 1, 1), maxSteps: 256}})); }});")
 
 
 def covered(shot):
@@ -71,7 +76,8 @@ def test_threejs_receives_every_channel_and_decodes_to_the_boxes(exported):
 def test_threejs_raymarches_each_box_at_its_own_size(exported, camera):
     glb, centres, sizes, rotations = exported
     shot = threejs.render(glb, material_js(), setup_js(BOX_MAP), W, H, camera)
-    expected = silhouettes(shot, centres, sizes, rotations, TO_Y_UP)
+    view = IN_VIEW[id(camera)]
+    expected = silhouettes(shot, centres[view], INNER * sizes[view], rotations[view], TO_Y_UP)
     mismatch = coverage_mismatch(covered(shot), expected)
     assert mismatch is None, mismatch
     assert covered(shot).sum() > 500
@@ -83,8 +89,9 @@ def test_threejs_rounded_boxes_lie_between_the_box_and_its_core(exported):
     glb, centres, sizes, rotations = exported
     for camera in (WIDE, CLOSE):
         shot = threejs.render(glb, material_js(), setup_js(ROUNDED_MAP), W, H, camera)
-        outer = silhouettes(shot, centres, sizes, rotations, TO_Y_UP)
-        core = silhouettes(shot, centres, sizes, rotations, TO_Y_UP, shrink=0.1)
+        view = IN_VIEW[id(camera)]
+        outer = silhouettes(shot, centres[view], sizes[view], rotations[view], TO_Y_UP)
+        core = silhouettes(shot, centres[view], sizes[view], rotations[view], TO_Y_UP, shrink=0.1)
         stray = coverage_mismatch(covered(shot), outer)
         assert stray is None or "covered outside" not in stray, stray
         inside = np.zeros((H, W), bool)
@@ -101,7 +108,7 @@ def test_threejs_rounded_boxes_lie_between_the_box_and_its_core(exported):
 def test_threejs_negative_controls_fail(exported, tamper):
     glb, centres, sizes, rotations = exported
     shot = threejs.render(glb, material_js(), setup_js(BOX_MAP, tamper), W, H, WIDE)
-    assert coverage_mismatch(covered(shot), silhouettes(shot, centres, sizes, rotations, TO_Y_UP)) is not None
+    assert coverage_mismatch(covered(shot), silhouettes(shot, centres, INNER * sizes, rotations, TO_Y_UP)) is not None
 
 
 def test_material_refuses_a_classic_export(blender, tmp_path):

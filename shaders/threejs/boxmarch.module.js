@@ -99,7 +99,7 @@ var BOXMARCH_VERTEX = [
   '  vObjPos = transformed;',
   '  vAxisZ = objectNormal;',
   '  vAxisX = axisX;',
-  '  vAxisY = bm_axis_y_vertex(objectNormal, vec4(axisX, tangent.w));',
+  '  vAxisY = bm_axis_y(objectNormal, vec4(axisX, tangent.w));',
   '  vOffset = bm_offset(bmOffsetXY, bmOffsetZIndex);',
   '  vIndex = bmOffsetZIndex.y;',
   '  vHalf = bm_half_extents(bmHalfXY, bmHalfZ);',
@@ -108,6 +108,10 @@ var BOXMARCH_VERTEX = [
 ].join('\n');
 
 var BOXMARCH_FRAGMENT = [
+  // three.js declares these for the vertex stage only.
+  'uniform mat4 projectionMatrix;',
+  'uniform mat4 modelViewMatrix;',
+  'uniform mat3 normalMatrix;',
   'uniform vec4 bmEye;',
   'uniform vec3 bmColor;',
   'uniform vec4 bmMarch;',
