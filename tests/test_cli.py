@@ -85,11 +85,17 @@ def assert_glb_decodes_to_centres(path, tolerance=1e-5):
     worst = 0.0
     for primitive in read_glb(path)[0]["primitives"]:
         box = np.array([lookup[tuple(r)] for r in primitive["POSITION"].astype(np.float32).tolist()]) // 8
-        c = primitive["COLOR_0"]
-        q = np.concatenate([primitive["TEXCOORD_1"], primitive["TEXCOORD_2"]], axis=1)
-        f = (c[:, :3] * 2 - 1) / c[:, 3:4]
-        u, w = q[:, :3], q[:, 3:4]
-        origin = primitive["POSITION"] + f + 2 * np.cross(u, np.cross(u, f) + w * f)
+        if "TANGENT" in primitive:  # NORMAL_FRAME (docs/ENGINES.md): x = tangent, z = normal
+            t, z = primitive["TANGENT"], primitive["NORMAL"]
+            f = np.concatenate([primitive["TEXCOORD_1"], primitive["TEXCOORD_2"][:, :1]], axis=1)
+            y = np.cross(z, t[:, :3]) * t[:, 3:4]
+            origin = primitive["POSITION"] + t[:, :3] * f[:, :1] + y * f[:, 1:2] + z * f[:, 2:3]
+        else:  # CLASSIC (docs/FORMAT.md)
+            c = primitive["COLOR_0"]
+            q = np.concatenate([primitive["TEXCOORD_1"], primitive["TEXCOORD_2"]], axis=1)
+            f = (c[:, :3] * 2 - 1) / c[:, 3:4]
+            u, w = q[:, :3], q[:, 3:4]
+            origin = primitive["POSITION"] + f + 2 * np.cross(u, np.cross(u, f) + w * f)
         worst = max(worst, float((np.linalg.norm(origin - centres[box] @ TO_GLTF.T, axis=1) / half[box]).max()))
     assert worst <= tolerance, worst
     return worst
@@ -130,7 +136,7 @@ def test_module_bake_export_pipeline_on_a_file(boxes_blend_34, tmp_path):
     bake, export = report["steps"]
     assert (bake["step"], bake["baked"], bake["submeshes"]) == ("bake", COUNT, COUNT)
     assert bake["max_relative_error"] < 1e-5
-    assert export["preset"] == "GLTF" and export["meshes"][0]["uv_channels"] == [1, 2]
+    assert export["preset"] == "GLTF" and export["meshes"][0]["uv_channels"] == [1, 2, 3, 4]
     assert digest(source) == before  # the input is never written
     assert_glb_decodes_to_centres(tmp_path / "boxes.glb")
     # The written .blend holds the bake: export from it alone gives the same file content.
@@ -206,8 +212,8 @@ def test_blender_34_form_bake_export_and_exit_codes(boxes_blend_34, package_pare
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     assert_glb_decodes_to_centres(tmp_path / "b.glb")
     # 3.4's FBX exporter: the raw file decodes in Unity's frame (x negated) onto the centres.
-    proc = run_blender_cli(tmp_path / "baked.blend", ["export", "--preset", "UNITY", "--to", str(tmp_path / "b.fbx")],
-                           package_parent, tmp_path)
+    proc = run_blender_cli(tmp_path / "baked.blend", ["export", "--preset", "UNITY", "--layout", "CLASSIC",
+                                                      "--to", str(tmp_path / "b.fbx")], package_parent, tmp_path)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     raw = read_fbx_geometry(tmp_path / "b.fbx")
     _positions, centres, half = boxes_reference()

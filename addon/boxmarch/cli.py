@@ -379,7 +379,7 @@ def _glb_decode_error(np, path, objects, prepared):
     """Read ``path`` back (boxmarch.export.glb) and decode every vertex in glTF's frame with the
     shader's formula; worst distance to the baked centre of its submesh put in glTF's frame, over
     that submesh's largest half-extent."""
-    from . import core, mesh_io
+    from . import mesh_io
     from .export import glb, transforms
 
     preset = transforms.PRESETS["GLTF"]
@@ -393,8 +393,11 @@ def _glb_decode_error(np, path, objects, prepared):
         half = result.half_extents.max(axis=1)
         for primitive in mesh_entry["primitives"]:
             a = {k: glb.accessor_array(gltf, binary, i).astype(np.float64) for k, i in primitive["attributes"].items()}
-            q = np.concatenate([a["TEXCOORD_1"], a["TEXCOORD_2"]], axis=1)
-            origin = a["POSITION"] + core.rotate_vector(core.decode_offsets(a["COLOR_0"]), q)
+            # The GLTF preset's NORMAL_FRAME layout (docs/ENGINES.md): x = tangent, z = normal.
+            x, z = a["TANGENT"][:, :3], a["NORMAL"]
+            y = np.cross(z, x) * a["TANGENT"][:, 3:]
+            f = np.concatenate([a["TEXCOORD_1"], a["TEXCOORD_2"][:, :1]], axis=1)
+            origin = a["POSITION"] + x * f[:, :1] + y * f[:, 1:2] + z * f[:, 2:]
             # The submesh of each file vertex: the Blender vertex at exactly that position, found
             # by sorting (positions are a signed permutation of float32 values, so exact).
             _, group = np.unique(np.concatenate([ours, a["POSITION"].astype(np.float32)]), axis=0, return_inverse=True)
