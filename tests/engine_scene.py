@@ -43,11 +43,11 @@ def baked_scene(bpy, name="Mixed"):
 
 def box_of_vertex(engine_positions, centres, sizes, rotations, to_engine):
     """The generating box of every engine vertex: the box whose corner it is (the nearest corner,
-    which must lie within float32 rounding of the vertex: 1e-6 units here)."""
+    which must lie within float32 rounding of the vertex: 1e-6 of the scene's reach here)."""
     corners = np.concatenate([box_corners(c, s, r) for c, s, r in zip(centres, sizes, rotations)]) @ to_engine.T
     d = np.linalg.norm(engine_positions[:, None, :] - corners[None, :, :], axis=2)
     nearest = d.argmin(axis=1)
-    assert d[np.arange(len(d)), nearest].max() < 1e-6, "a vertex is not at a box corner"
+    assert d[np.arange(len(d)), nearest].max() < 1e-6 * max(1.0, np.abs(corners).max()), "a vertex is not at a box corner"
     return nearest // 8
 
 

@@ -101,3 +101,37 @@ def channels(layout: str, data: BoxData) -> dict[str, np.ndarray]:
         table[:, :3] = data.box_half_extents
         out["TABLE"] = table.astype(np.float32)
     return out
+
+
+def to_origin(layout: str, channels: dict) -> np.ndarray:
+    """(n, 3) float64 object-space vectors from each vertex to its box origin, decoded from
+    ``channels`` as docs/ENGINES.md states for ``layout`` (UV_FRAME, NORMAL_FRAME)."""
+    c = {k: np.asarray(v, np.float64) for k, v in channels.items()}
+    if layout == "UV_FRAME":
+        q, f = np.concatenate([c["UV1"], c["UV2"]], 1), np.concatenate([c["UV3"], c["UV4"][:, :1]], 1)
+        u = q[:, :3]
+        return f + 2.0 * np.cross(u, np.cross(u, f) + q[:, 3:] * f)
+    if layout == "NORMAL_FRAME":
+        x, z = c["TANGENT"][:, :3], c["NORMAL"]
+        f = np.concatenate([c["UV1"], c["UV2"][:, :1]], 1)
+        return x * f[:, :1] + np.cross(z, x) * c["TANGENT"][:, 3:] * f[:, 1:2] + z * f[:, 2:]
+    raise ValueError(f"no decode of {layout} here")
+
+
+def half_float_error(layout: str, channels: dict, half_float_uvs, flip_v: bool) -> float:
+    """Worst decode error, over the largest half-extent of the vertex's box, when an importer
+    stores the UV channels ``half_float_uvs`` (numbers n of "UVn") as half floats (v read as
+    1 - v first when ``flip_v``, as the file then holds it)."""
+    stored = dict(channels)
+    for n in half_float_uvs:
+        uv = np.array(channels[f"UV{n}"], np.float32)
+        if flip_v:
+            uv[:, 1] = np.float32(1.0) - uv[:, 1]
+        uv = uv.astype(np.float16).astype(np.float32)
+        if flip_v:
+            uv[:, 1] = np.float32(1.0) - uv[:, 1]
+        stored[f"UV{n}"] = uv
+    half = np.concatenate([channels["UV5"], channels["UV6"][:, :1]], 1) if layout == "UV_FRAME" else \
+        np.concatenate([channels["UV3"], channels["UV4"][:, :1]], 1)
+    miss = np.linalg.norm(to_origin(layout, stored) - to_origin(layout, channels), axis=1)
+    return float((miss / np.maximum(half.max(axis=1), 1e-30)).max()) if len(miss) else 0.0

@@ -111,6 +111,9 @@ def _target_copy(mesh, preset, layout, index_base):
         copy.color_attributes.render_color_index = 0
     uv_channels = sorted(int(c[2:]) for c in channels if c.startswith("UV"))
     stats.update(layout=layout, uv_channels=uv_channels, channels=sorted(channels))
+    if preset.half_float_uvs and layout in ("UV_FRAME", "NORMAL_FRAME"):
+        stats["default_import_error"] = layouts.half_float_error(
+            layout, channels, [n for n in preset.half_float_uvs if n in uv_channels], preset.flip_v_on_import)
     return copy, channels, stats
 
 
@@ -194,7 +197,12 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
         for temp in outputs:
             if os.path.exists(temp):
                 os.remove(temp)
+    default_errors = [m["default_import_error"] for m in stats if "default_import_error" in m]
+    if default_errors:
+        warnings.append(f"with {preset.label}'s default import settings (half-float UVs) the decode error is "
+                        f"{max(default_errors):.1e} of the half-extent, not float32's: {preset.import_settings}")
     return {"preset": preset.name, "layout": layout, "path": os.path.abspath(filepath),
+            "default_import_error": max(default_errors) if default_errors else None,
             "table": os.path.abspath(table_path(filepath)) if layout == "NORMAL_COLOR" else None,
             "objects": [ob.name for ob in objects], "meshes": stats, "seconds": time.perf_counter() - start,
             "warnings": warnings, "import_settings": preset.import_settings,

@@ -44,6 +44,7 @@ class Preset:
     length_scale: float = 1.0      # the importer's unit conversion of positions (Unreal: metres to cm)
     flip_v_on_import: bool = False  # the importer reads v as 1 - v (Unreal's FBX importer)
     import_settings: str = ""      # what the engine's importer must be told so the data stays float32
+    half_float_uvs: tuple = ()     # UV channels the engine stores as half floats unless told otherwise
 
     @property
     def axes(self) -> np.ndarray:
@@ -71,13 +72,15 @@ PRESETS = {
         "FBX for Unity's importer: left-handed Y-up object frame, box data in float UV channels",
         layouts=("UV_FRAME", "CLASSIC"),
         import_settings="Model import: Read/Write on (or Player > Vertex Compression: untick Tex Coord 2-7), "
-                        "Mesh Compression Off; UV_FRAME needs no vertex colour"),
+                        "Mesh Compression Off; UV_FRAME needs no vertex colour",
+        half_float_uvs=(2, 3, 4, 5, 6)),
     "UNREAL": Preset(
         "UNREAL", "Unreal (FBX)", ".fbx", np.eye(3), np.array([1.0, -1.0, 1.0]),
         "FBX for Unreal's importer: left-handed Z-up centimetres (y mirrored), V flipped, box data in float UVs",
         layouts=("UV_FRAME",), length_scale=100.0, flip_v_on_import=True,
         import_settings="Static mesh import: Use Full Precision UVs on (else UVs are 16-bit halves), "
-                        "Generate Lightmap UVs off (it writes into UV channel 1), Convert Scene on (default)"),
+                        "Generate Lightmap UVs off (it writes into UV channel 1), Convert Scene on (default)",
+        half_float_uvs=(1, 2, 3, 4, 5, 6)),
     "BLENDER": Preset(
         "BLENDER", "Blender (raw)", ".blend", np.eye(3), np.ones(3),
         "The selected objects in a .blend, baked data in Blender's own object space"),
