@@ -247,7 +247,7 @@ def test_unity_export_warns_about_float_offsets(blender, tmp_path):
     report = scene.export_objects(blender.context, [ob], "UNITY", str(tmp_path / "w.fbx"), "CLASSIC")
     assert len(report["warnings"]) == 1 and "Color32" in report["warnings"][0]
     assert blender.ops.boxmarch.bake(encoding="BYTE_COLOR") == {"FINISHED"}
-    assert scene.export_objects(blender.context, [ob], "UNITY", str(tmp_path / "w.fbx"))["warnings"] == []
+    assert scene.export_objects(blender.context, [ob], "UNITY", str(tmp_path / "w.fbx"), "CLASSIC")["warnings"] == []
 
 
 def test_quick_export_repeats_the_last_preset_and_file(blender, tmp_path):
