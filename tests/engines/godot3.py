@@ -1,0 +1,313 @@
+"""Godot 3 (Debian's godot3 / godot3-server 3.2) importing a .glb and drawing it.
+
+``import_gltf`` writes a minimal project and runs the editor's headless import; ``dump_arrays``
+runs a SceneTree script that writes every surface array as float64 to a binary file (no text
+printing, so float32 values come back bit-exactly); ``render`` draws one frame with ``godot3``
+under ``xvfb-run`` (Mesa llvmpipe) and saves the viewport. Every Godot run gets a temporary
+HOME/XDG tree and a time limit; failures raise ``RuntimeError`` with Godot's output.
+"""
+import json
+import os
+import shutil
+import signal
+import struct
+import subprocess
+import tempfile
+
+import numpy as np
+
+from . import Shot
+
+GODOT = "godot3"
+GODOT_SERVER = "godot3-server"
+TIMEOUT_S = 60
+# Godot's Mesh.ARRAY_* order and the values per vertex of each.
+ARRAYS = {"vertex": 3, "normal": 3, "tangent": 4, "color": 4, "uv": 2, "uv2": 2, "bones": 4,
+          "weights": 4, "index": 1}
+
+_PROJECT = 'config_version=4\n\n[application]\n\nconfig/name="boxmarch-engine-test"\n'
+
+# The mesh-array part shared by both scripts: walks the instanced scene, yields MeshInstances.
+_COMMON = """extends SceneTree
+
+func mesh_instances(node, out):
+    if node is MeshInstance:
+        out.append(node)
+    for child in node.get_children():
+        mesh_instances(child, out)
+    return out
+
+func global_xform(node, top):
+    var t = node.transform
+    while node != top:
+        node = node.get_parent()
+        t = node.transform * t
+    return t
+
+func store_xform(f, t):
+    for v in [t.basis.x, t.basis.y, t.basis.z, t.origin]:
+        f.store_double(v.x)
+        f.store_double(v.y)
+        f.store_double(v.z)
+"""
+
+_DUMP = _COMMON + """
+func store_array(f, a):
+    if a == null:
+        f.store_32(0)
+        return
+    var flat = []
+    for e in a:
+        match typeof(e):
+            TYPE_VECTOR2:
+                flat += [e.x, e.y]
+            TYPE_VECTOR3:
+                flat += [e.x, e.y, e.z]
+            TYPE_COLOR:
+                flat += [e.r, e.g, e.b, e.a]
+            _:
+                flat.append(e)
+    f.store_32(1)
+    f.store_32(flat.size())
+    for x in flat:
+        f.store_double(x)
+
+func _init():
+    var scene = load("res://model.glb").instance()
+    var f = File.new()
+    f.open(OS.get_environment("BOXMARCH_OUT"), File.WRITE)
+    for mi in mesh_instances(scene, []):
+        for s in range(mi.mesh.get_surface_count()):
+            var arrays = mi.mesh.surface_get_arrays(s)
+            f.store_pascal_string(mi.name)
+            store_xform(f, global_xform(mi, scene))
+            for k in range(Mesh.ARRAY_MAX):
+                store_array(f, arrays[k])
+    f.close()
+    quit()
+"""
+
+_SHOT = _COMMON + """
+var params
+var camera
+var frames = 0
+
+func uniform_value(v):
+    if typeof(v) == TYPE_STRING:
+        return load(v)
+    if typeof(v) == TYPE_ARRAY:
+        match v.size():
+            2: return Vector2(v[0], v[1])
+            3: return Vector3(v[0], v[1], v[2])
+            4: return Plane(v[0], v[1], v[2], v[3])
+    return v
+
+func _init():
+    var f = File.new()
+    f.open(OS.get_environment("BOXMARCH_PARAMS"), File.READ)
+    params = parse_json(f.get_as_text())
+    f.close()
+    VisualServer.set_default_clear_color(Color(0, 0, 0, 1))
+    var shader = Shader.new()
+    shader.code = params.shader
+    var material = ShaderMaterial.new()
+    material.shader = shader
+    for name in params.uniforms:
+        material.set_shader_param(name, uniform_value(params.uniforms[name]))
+    var scene = load("res://model.glb").instance()
+    root.add_child(scene)
+    for mi in mesh_instances(scene, []):
+        for s in range(mi.mesh.get_surface_count()):
+            mi.set_surface_material(s, material)
+    var c = params.camera
+    camera = Camera.new()
+    root.add_child(camera)
+    var up = c.get("up", [0, 1, 0])
+    camera.look_at_from_position(uniform_value(c.position), uniform_value(c.target), uniform_value(up))
+    if c.has("ortho"):
+        camera.set_orthogonal(2.0 * c.ortho, c.get("near", 0.1), c.get("far", 1000.0))
+    else:
+        camera.set_perspective(c.fov, c.get("near", 0.1), c.get("far", 1000.0))
+    camera.make_current()
+
+func _idle(_delta):
+    frames += 1
+    if frames > 60:  # _init failed: a script error does not stop Godot
+        quit()
+    if frames < 4:
+        return
+    var image = root.get_texture().get_data()
+    image.flip_y()
+    image.convert(Image.FORMAT_RGBA8)
+    var f = File.new()
+    f.open(OS.get_environment("BOXMARCH_OUT"), File.WRITE)
+    f.store_32(image.get_width())
+    f.store_32(image.get_height())
+    f.store_buffer(image.get_data())
+    var t = camera.get_camera_transform()
+    store_xform(f, t)
+    for p in params.probes:
+        var world = t.xform(Vector3(p[0], p[1], p[2]))
+        var px = camera.unproject_position(world)
+        for x in [world.x, world.y, world.z, px.x, px.y]:
+            f.store_double(x)
+    f.close()
+    quit()
+"""
+
+# Camera-space points (x, y, -depth) where the camera's world -> pixel matrix is sampled.
+_PROBES = [[x * d * 0.1, y * d * 0.1, -d] for d in (1.0, 3.0, 7.0) for x in (-1, 1) for y in (-1, 0.5)]
+
+
+def available():
+    """None when godot3, godot3-server and xvfb-run are installed, else the reason."""
+    for tool, package in ((GODOT, "godot3"), (GODOT_SERVER, "godot3-server"), ("xvfb-run", "xvfb")):
+        if shutil.which(tool) is None:
+            return f"{tool} is not installed (apt-get install {package})"
+    return None
+
+
+def _godot(cmd, project_dir, extra_env=()):
+    """Runs a Godot command with a throw-away HOME; returns its combined output."""
+    with tempfile.TemporaryDirectory(prefix="boxmarch-godot-home-") as home:
+        env = dict(os.environ, HOME=home, XDG_CONFIG_HOME=os.path.join(home, "config"),
+                   XDG_DATA_HOME=os.path.join(home, "data"), XDG_CACHE_HOME=os.path.join(home, "cache"))
+        env.update(extra_env)
+        # own session: on timeout the whole group (xvfb-run, Xvfb, godot) is killed
+        proc = subprocess.Popen(cmd + ["--audio-driver", "Dummy", "--path", str(project_dir)],
+                                env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                text=True, start_new_session=True)
+        try:
+            return proc.communicate(timeout=TIMEOUT_S)[0]
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            raise RuntimeError(f"{cmd[0]} timed out after {TIMEOUT_S} s:\n{proc.communicate()[0]}") from None
+
+
+def _run_script(cmd, project_dir, script, extra_env=()):
+    """Runs a SceneTree ``script`` that writes to $BOXMARCH_OUT; returns that path and the output."""
+    tmp = tempfile.mkdtemp(prefix="boxmarch-godot-")
+    script_path = os.path.join(tmp, "script.gd")
+    with open(script_path, "w") as f:
+        f.write(script)
+    out_path = os.path.join(tmp, "out.bin")
+    log = _godot(cmd + ["-s", script_path], project_dir, dict(extra_env, BOXMARCH_OUT=out_path))
+    if not os.path.isfile(out_path):
+        shutil.rmtree(tmp)
+        raise RuntimeError(f"Godot wrote no result:\n{log[-6000:]}")
+    return tmp, out_path
+
+
+def import_gltf(glb_bytes, project_dir, *, compress, extra_files=None):
+    """Writes a Godot 3 project holding ``model.glb`` (and ``extra_files``: relative path ->
+    bytes) into ``project_dir`` and imports it headless with ``meshes/compress`` set to
+    ``compress``. The import settings are written as ``model.glb.import`` before the first
+    import, which Godot honours. Returns None; raises ``RuntimeError`` with Godot's output when
+    the imported scene is missing afterwards."""
+    os.makedirs(project_dir, exist_ok=True)
+    files = {"project.godot": _PROJECT.encode(), "model.glb": glb_bytes,
+             "model.glb.import": ('[remap]\n\nimporter="scene"\ntype="PackedScene"\n\n[params]\n\n'
+                                  f"meshes/compress={'true' if compress else 'false'}\n").encode()}
+    files.update(extra_files or {})
+    for name, data in files.items():
+        path = os.path.join(project_dir, name)
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        with open(path, "wb") as f:
+            f.write(data)
+    shutil.rmtree(os.path.join(project_dir, ".import"), ignore_errors=True)
+    log = _godot([GODOT_SERVER, "-e", "--quit"], project_dir)
+    imported = os.path.join(project_dir, ".import")
+    if not os.path.isdir(imported) or not any(n.startswith("model.glb-") and n.endswith(".scn")
+                                              for n in os.listdir(imported)):
+        raise RuntimeError(f"Godot did not import model.glb:\n{log[-6000:]}")
+
+
+def _read_xform(data, at):
+    """4x4 matrix from the 12 doubles store_xform wrote (basis columns, then origin)."""
+    cols = np.array(struct.unpack_from("<12d", data, at)).reshape(4, 3)
+    m = np.eye(4)
+    m[:3, :] = cols.T
+    return m, at + 96
+
+
+def dump_arrays(project_dir):
+    """What Godot's importer stored: one dict per surface of every MeshInstance of the imported
+    ``res://model.glb`` (tree order): ``{"name": node name, "surface": index, "transform": 4x4
+    node -> scene-root matrix, "vertex", "normal", "tangent", "color", "uv", "uv2", "bones",
+    "weights", "index": float64 arrays or None}``. Per-vertex arrays are (count, width): vertex
+    and normal 3, uv and uv2 2, tangent, color, bones and weights 4; index is (n,). Values are the
+    float32 Godot holds, widened exactly."""
+    tmp, out = _run_script([GODOT_SERVER, "--quit"], project_dir, _DUMP)
+    with open(out, "rb") as f:
+        data = f.read()
+    shutil.rmtree(tmp)
+    surfaces, at, surface_of = [], 0, {}
+    while at < len(data):
+        (n,) = struct.unpack_from("<I", data, at)
+        name = data[at + 4 : at + 4 + n].decode()
+        transform, at = _read_xform(data, at + 4 + n)
+        surface_of[name] = surface_of.get(name, -1) + 1
+        entry = {"name": name, "surface": surface_of[name], "transform": transform}
+        for key, width in ARRAYS.items():
+            (present,) = struct.unpack_from("<I", data, at)
+            at += 4
+            if not present:
+                entry[key] = None
+                continue
+            (size,) = struct.unpack_from("<I", data, at)
+            values = np.array(struct.unpack_from(f"<{size}d", data, at + 4))
+            at += 4 + 8 * size
+            entry[key] = values if key == "index" else values.reshape(-1, width)
+        surfaces.append(entry)
+    return surfaces
+
+
+def _fit_to_pixels(world, pixels):
+    """The 3x4 matrix P with pixel ~ P @ [world, 1] (homogeneous), by least squares (DLT)."""
+    rows = []
+    for (x, y, z), (u, v) in zip(world, pixels):
+        p = [x, y, z, 1.0]
+        rows.append(p + [0.0] * 4 + [-u * c for c in p])
+        rows.append([0.0] * 4 + p + [-v * c for c in p])
+    m = np.linalg.svd(np.array(rows))[2][-1].reshape(3, 4)
+    return m / np.linalg.norm(m[2, :3]) if np.linalg.norm(m[2, :3]) > 1e-9 else m / m[2, 3]
+
+
+def render(project_dir, shader_code, *, width, height, camera, uniforms=None):
+    """Draws the imported ``res://model.glb`` once with ``godot3`` (GLES3 on llvmpipe under
+    xvfb-run) and returns a :class:`Shot`.
+
+    Every MeshInstance surface gets one ShaderMaterial with ``shader_code`` (a ``shader_type
+    spatial;`` shader; use ``render_mode unshaded;`` to write exact colours, ALBEDO is still
+    converted to sRGB). ``uniforms``: name -> float, [x, y] / [x, y, z] / [x, y, z, w] lists, or a
+    ``res://`` path of a resource (an imported texture). ``camera`` is the dict threejs.render
+    takes: perspective with vertical ``fov`` degrees, or ``ortho`` half-height; ``near``/``far``
+    optional. The background is opaque black (0, 0, 0, 255). ``Shot.view`` inverts
+    ``Camera.get_camera_transform()``; ``Shot.to_pixels`` is fitted to
+    ``Camera.unproject_position`` of probe points (the fit must reproduce them within 1e-3 px).
+    """
+    params = {"shader": shader_code, "uniforms": uniforms or {}, "camera": camera,
+              "probes": _PROBES}
+    params_path = os.path.join(project_dir, ".boxmarch_shot.json")
+    with open(params_path, "w") as f:
+        json.dump(params, f)
+    cmd = ["xvfb-run", "-a", "-s", f"-screen 0 {max(width, 640)}x{max(height, 480)}x24",
+           GODOT, "--resolution", f"{width}x{height}"]
+    tmp, out = _run_script(cmd, project_dir, _SHOT, {"BOXMARCH_PARAMS": params_path})
+    with open(out, "rb") as f:
+        data = f.read()
+    shutil.rmtree(tmp)
+    os.remove(params_path)
+    w, h = struct.unpack_from("<II", data)
+    pixels = np.frombuffer(data, dtype=np.uint8, count=w * h * 4, offset=8).reshape(h, w, 4).copy()
+    cam_to_world, at = _read_xform(data, 8 + w * h * 4)
+    probes = np.array(struct.unpack_from(f"<{5 * len(_PROBES)}d", data, at)).reshape(-1, 5)
+    to_pixels = _fit_to_pixels(probes[:, :3], probes[:, 3:])
+    h = np.c_[probes[:, :3], np.ones(len(probes))] @ to_pixels.T
+    residual = np.abs(h[:, :2] / h[:, 2:3] - probes[:, 3:]).max()
+    if residual > 1e-3:
+        raise RuntimeError(f"Godot's camera is not a 3x4 projection (fit residual {residual} px)")
+    if pixels.shape[:2] != (height, width):
+        raise RuntimeError(f"Godot drew {pixels.shape[1]}x{pixels.shape[0]}, not {width}x{height}")
+    return Shot(pixels, np.linalg.inv(cam_to_world), to_pixels)
+
