@@ -12,7 +12,7 @@ render_mode unshaded, cull_disabled;
 
 uniform sampler2D box_table;            // NAME.boxes.tres: texel index = (h, 0)
 uniform vec4 base_color : hint_color = vec4(0.8, 0.8, 0.8, 1.0);
-uniform float epsilon = 0.0001;
+uniform float march_epsilon = 0.0001;
 uniform int max_steps = 96;
 
 varying vec3 v_obj_pos;
@@ -41,7 +41,7 @@ float march(vec3 ro, vec3 rd, vec3 h, float index, float t_end)
       break;
     }
     float d = map(ro + rd * t, h, index);
-    if (d < epsilon) {
+    if (d < march_epsilon) {
       return t;
     }
     t += d;
@@ -109,6 +109,6 @@ void fragment()
   vec4 clip = PROJECTION_MATRIX * INV_CAMERA_MATRIX * WORLD_MATRIX * vec4(obj_hit, 1.0);
   DEPTH = 0.5 + 0.5 * clip.z / clip.w;
   vec3 n = normalize((INV_CAMERA_MATRIX * WORLD_MATRIX * vec4(bm_from_local(
-      sdf_normal(local_hit, h, index, bm_normal_tap(epsilon, h)), x, y, z), 0.0)).xyz);
+      sdf_normal(local_hit, h, index, bm_normal_tap(march_epsilon, h)), x, y, z), 0.0)).xyz);
   ALBEDO = base_color.rgb * (0.35 + 0.65 * max(n.z, 0.0));
 }

@@ -185,7 +185,8 @@ def _godot(cmd, project_dir, extra_env=()):
 
 
 def _run_script(cmd, project_dir, script, extra_env=()):
-    """Runs a SceneTree ``script`` that writes to $BOXMARCH_OUT; returns that path and the output."""
+    """Runs a SceneTree ``script`` that writes to $BOXMARCH_OUT; returns (the temporary folder,
+    that path, Godot's output)."""
     tmp = tempfile.mkdtemp(prefix="boxmarch-godot-")
     script_path = os.path.join(tmp, "script.gd")
     with open(script_path, "w") as f:
@@ -195,7 +196,7 @@ def _run_script(cmd, project_dir, script, extra_env=()):
     if not os.path.isfile(out_path):
         shutil.rmtree(tmp)
         raise RuntimeError(f"Godot wrote no result:\n{log[-6000:]}")
-    return tmp, out_path
+    return tmp, out_path, log
 
 
 def import_gltf(glb_bytes, project_dir, *, compress, extra_files=None):
@@ -237,7 +238,7 @@ def dump_arrays(project_dir):
     "weights", "index": float64 arrays or None}``. Per-vertex arrays are (count, width): vertex
     and normal 3, uv and uv2 2, tangent, color, bones and weights 4; index is (n,). Values are the
     float32 Godot holds, widened exactly."""
-    tmp, out = _run_script([GODOT_SERVER, "--quit"], project_dir, _DUMP)
+    tmp, out, _log = _run_script([GODOT_SERVER, "--quit"], project_dir, _DUMP)
     with open(out, "rb") as f:
         data = f.read()
     shutil.rmtree(tmp)
@@ -293,7 +294,10 @@ def render(project_dir, shader_code, *, width, height, camera, uniforms=None):
         json.dump(params, f)
     cmd = ["xvfb-run", "-a", "-s", f"-screen 0 {max(width, 640)}x{max(height, 480)}x24",
            GODOT, "--resolution", f"{width}x{height}"]
-    tmp, out = _run_script(cmd, project_dir, _SHOT, {"BOXMARCH_PARAMS": params_path})
+    tmp, out, log = _run_script(cmd, project_dir, _SHOT, {"BOXMARCH_PARAMS": params_path})
+    if "SHADER ERROR" in log:  # Godot draws nothing with a shader that failed to compile
+        shutil.rmtree(tmp)
+        raise RuntimeError("Godot could not compile the shader:\n" + log[log.index("SHADER ERROR") - 3000:][:6000])
     with open(out, "rb") as f:
         data = f.read()
     shutil.rmtree(tmp)

@@ -1,0 +1,80 @@
+"""Proof in a real engine: the GODOT3 preset's .glb and box table imported unmodified by Debian's
+Godot 3.2 (headless import, compression off as its report asks). The test decodes the arrays
+Godot stored with the documented formula (docs/ENGINES.md) against the generating geometry, then
+Godot renders the shipped shader (shaders/godot3/boxmarch.shader) under xvfb and the pixels must
+cover each box's projected silhouette within 1 px; a frame replaced by the identity must fail."""
+import re
+
+import numpy as np
+import pytest
+
+from boxmarch.preview import sources
+from engine_scene import TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame, frame_and_size_errors, silhouettes
+from engines import coverage_mismatch, godot3
+
+W, H = 320, 240
+WIDE = {"position": [2.0, 9.0, 14.0], "target": [0.5, -0.5, 0.0], "fov": 50, "near": 0.5, "far": 100}
+SHIPPED_MAP = "return sd_round_box(p, h, 0.1 * min3(h));"
+INNER = 0.6
+
+
+def table_texels(tres_text):
+    """float32 (texels, 4) of the RGBAFloat image in a Godot .tres (what Godot loads)."""
+    data = re.search(r"PoolByteArray\(([^)]*)\)", tres_text).group(1)
+    return np.frombuffer(bytes(int(b) for b in data.split(",")), "<f4").reshape(-1, 4).astype(np.float64)
+
+
+@pytest.fixture
+def imported(blender, tmp_path):
+    reason = godot3.available()
+    if reason:
+        pytest.skip(reason)
+    ob, centres, sizes, rotations = baked_scene(blender)
+    path = tmp_path / "mixed.glb"
+    assert blender.ops.boxmarch.export(filepath=str(path), preset="GODOT3") == {"FINISHED"}
+    table = (tmp_path / "mixed.boxes.tres").read_text()
+    project = tmp_path / "project"
+    godot3.import_gltf(path.read_bytes(), str(project), compress=False,
+                       extra_files={"model.boxes.tres": table.encode()})
+    return str(project), table, centres, sizes, rotations
+
+
+def test_godot3_keeps_every_channel_and_decodes_to_the_boxes(imported):
+    project, table, centres, sizes, rotations = imported
+    (surface,) = godot3.dump_arrays(project)
+    box = box_of_vertex(surface["vertex"], centres, sizes, rotations, TO_Y_UP)
+    colour = surface["color"]
+    index = colour[:, 3]
+    assert np.array_equal(index, np.rint(index))
+    half = table_texels(table)[index.astype(int), :3]
+    origins, axes, half = decode_normal_frame(surface["vertex"], surface["normal"], surface["tangent"],
+                                              colour[:, :3], half)
+    errors = frame_and_size_errors(origins, axes, half, box, centres, sizes, rotations, TO_Y_UP)
+    assert errors[0] < 1e-5 and errors[1] < 1e-6 and errors[2] < 1e-5, errors
+    assert sorted(set(index)) == list(range(len(centres)))
+    for b in range(len(centres)):
+        assert len(set(index[box == b])) == 1
+
+
+def shader(frame_replacement=None):
+    code = (sources.shader_dir() / "godot3" / "boxmarch.shader").read_text()
+    assert SHIPPED_MAP in code
+    code = code.replace(SHIPPED_MAP, "return sd_box(p, 0.6 * h);")
+    if frame_replacement:
+        code = code.replace("  v_axis_z = NORMAL;\n  v_axis_x = TANGENT;\n  v_axis_y = BINORMAL;", frame_replacement)
+        assert frame_replacement in code
+    return code
+
+
+def test_godot3_renders_each_box_at_its_own_size_and_the_negative_control_fails(imported):
+    project, _table, centres, sizes, rotations = imported
+    uniforms = {"box_table": "res://model.boxes.tres", "max_steps": 256}
+    shot = godot3.render(project, shader(), width=W, height=H, camera=WIDE, uniforms=uniforms)
+    covered = shot.pixels[..., :3].max(axis=2) > 20
+    expected = silhouettes(shot, centres, INNER * sizes, rotations, TO_Y_UP)
+    mismatch = coverage_mismatch(covered, expected)
+    assert mismatch is None, mismatch
+    assert covered.sum() > 500
+    identity = "  v_axis_z = vec3(0.0, 0.0, 1.0);\n  v_axis_x = vec3(1.0, 0.0, 0.0);\n  v_axis_y = vec3(0.0, 1.0, 0.0);"
+    wrong = godot3.render(project, shader(identity), width=W, height=H, camera=WIDE, uniforms=uniforms)
+    assert coverage_mismatch(wrong.pixels[..., :3].max(axis=2) > 20, expected) is not None
