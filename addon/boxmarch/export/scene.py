@@ -107,8 +107,11 @@ def export_objects(context, objects, preset_name: str, filepath: str) -> dict:
     preset = transforms.PRESETS.get(preset_name)
     if preset is None:
         raise ExportInputError(f"preset must be one of {sorted(transforms.PRESETS)}, got {preset_name!r}")
+    objects = list({ob.name_full: ob for ob in objects}.values())  # each object once
     if not objects:
         raise ExportInputError("no objects to export")
+    if bpy.data.filepath and os.path.abspath(filepath) == os.path.abspath(bpy.data.filepath):
+        raise ExportInputError(f"'{filepath}' is the open .blend file: export to another path")
     for ob in objects:
         if ob.type != "MESH":
             raise ExportInputError(f"object '{ob.name}' is a {ob.type}, not a mesh")
@@ -120,7 +123,7 @@ def export_objects(context, objects, preset_name: str, filepath: str) -> dict:
     if not os.path.isdir(folder):
         raise ExportInputError(f"folder '{folder}' does not exist")
     temp = os.path.join(folder, f".{os.path.basename(filepath)}.boxmarch-partial{preset.extension}")
-    warnings = []
+    warnings = mesh_io.modifier_warnings(objects, "export")
     if preset.name == "UNITY" and context.scene.unit_settings.scale_length != 1.0:
         warnings.append("unit scale is not 1: Unity will scale positions by it and the offsets will not match")
     try:
