@@ -112,10 +112,9 @@ def _check_cleanup_options(bpy, args, steps) -> None:
         if command not in CLEANUP_OPERATORS:
             continue
         op_id, options = CLEANUP_OPERATORS[command]
-        rna = getattr(bpy.types, "BOXMARCH_OT_" + op_id, None)
-        if rna is None:
+        if not hasattr(bpy.types, "BOXMARCH_OT_" + op_id):
             continue  # step_cleanup says it is missing
-        props = rna.bl_rna.properties
+        props = getattr(bpy.ops.boxmarch, op_id).get_rna_type().properties
         for option, prop in options.items():
             value = getattr(args, option, None)
             if value is None or prop not in props or props[prop].type not in ("FLOAT", "INT"):

@@ -6,6 +6,8 @@ docs/PREVIEW.md. ``bpy`` and ``gpu`` are imported lazily so ``preview.sources`` 
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 _handler = None
