@@ -176,7 +176,11 @@ def render(scene, camera_object, width, height, *, output="SHADED"):
     1.0 far plane and where nothing was drawn), row 0 at the TOP, one sample per pixel centre.
     ``output``: 'SHADED' (the viewport look), 'NORMAL' (object-space normals of raymarched hits
     as 0.5 + 0.5 n), or 'STEPS' (red = SDF evaluations summed over all raymarch fragments of a
-    pixel, no depth test; for the benchmark)."""
+    pixel, no depth test; for the benchmark).
+
+    An object that cannot be drawn (a NaN coordinate, broken baked data) is left out and the
+    others still draw; ``last_skipped`` then lists "name: reason" for each, and a RuntimeWarning
+    says so."""
     import bpy
     import gpu
 
