@@ -71,6 +71,17 @@ function useBoxmarchMaterial(THREE, mesh, material) {
   return mesh;
 }
 
+// The vertex stage's outputs, the fragment stage's inputs.
+var BOXMARCH_VARYINGS = [
+  'varying vec3 vObjPos;',
+  'varying vec3 vAxisX;',
+  'varying vec3 vAxisY;',
+  'varying vec3 vAxisZ;',
+  'varying vec3 vOffset;',
+  'varying vec3 vHalf;',
+  'varying float vIndex;'
+].join('\n');
+
 var BOXMARCH_VERTEX = [
   '#include <common>',
   '#include <skinning_pars_vertex>',
@@ -79,13 +90,7 @@ var BOXMARCH_VERTEX = [
   'attribute vec2 bmOffsetZIndex;',
   'attribute vec2 bmHalfXY;',
   'attribute vec2 bmHalfZ;',
-  'varying vec3 vObjPos;',
-  'varying vec3 vAxisX;',
-  'varying vec3 vAxisY;',
-  'varying vec3 vAxisZ;',
-  'varying vec3 vOffset;',
-  'varying vec3 vHalf;',
-  'varying float vIndex;',
+  BOXMARCH_VARYINGS,
   'void main() {',
   '  #include <beginnormal_vertex>',
   '  #include <skinbase_vertex>',
@@ -115,13 +120,7 @@ var BOXMARCH_FRAGMENT = [
   'uniform vec4 bmEye;',
   'uniform vec3 bmColor;',
   'uniform vec4 bmMarch;',
-  'varying vec3 vObjPos;',
-  'varying vec3 vAxisX;',
-  'varying vec3 vAxisY;',
-  'varying vec3 vAxisZ;',
-  'varying vec3 vOffset;',
-  'varying vec3 vHalf;',
-  'varying float vIndex;',
+  BOXMARCH_VARYINGS,
   'void main() {',
   '  vec3 z = normalize(vAxisZ);',
   '  vec3 x = normalize(vAxisX);',
