@@ -68,6 +68,63 @@ def _write_atomically(path: str, write) -> str:
     return path
 
 
+def _check_outputs(bpy, args, steps) -> None:
+    """Every check on the output paths, run before anything is written (docs/CLI.md): each
+    folder exists and is writable, no output is a folder, the input .blend or another output,
+    --out names a .blend and --to carries the preset's extension."""
+    outputs = []
+    if getattr(args, "out", None):
+        if not args.out.lower().endswith(".blend"):
+            raise InputError(f"--out must name a .blend file, got '{args.out}'")
+        outputs.append(("--out", args.out))
+    if "export" in steps and getattr(args, "to", None):
+        from .export.transforms import PRESETS
+
+        extension = PRESETS[args.preset].extension
+        if not args.to.lower().endswith(extension):
+            raise InputError(f"--preset {args.preset} writes a {extension} file: --to must end in {extension}, "
+                             f"got '{args.to}'")
+        outputs.append(("--to", args.to))
+    if getattr(args, "json", None):
+        outputs.append(("--json", args.json))
+    inputs = {os.path.abspath(p) for p in (getattr(args, "blend", None), bpy.data.filepath if bpy else None) if p}
+    seen = {}
+    for option, path in outputs:
+        full = os.path.abspath(path)
+        folder = os.path.dirname(full)
+        if not os.path.isdir(folder):
+            raise InputError(f"{option}: folder '{folder}' does not exist")
+        if os.path.isdir(full):
+            raise InputError(f"{option}: '{path}' is a folder")
+        if not os.access(folder, os.W_OK | os.X_OK) or (os.path.exists(full) and not os.access(full, os.W_OK)):
+            raise InputError(f"{option}: cannot write '{full}' (permission denied)")
+        if any(os.path.exists(full) and os.path.exists(i) and os.path.samefile(full, i) or full == i for i in inputs):
+            raise InputError(f"{option} '{path}' is the input file, which is never written: choose another path")
+        if full in seen:
+            raise InputError(f"{option} and {seen[full]} name the same file '{path}'")
+        seen[full] = option
+
+
+def _check_cleanup_options(bpy, args, steps) -> None:
+    """Cleanup options outside what the operator accepts are refused (the operator would clamp
+    them silently, and the report would record the unclamped value)."""
+    for command in steps:
+        if command not in CLEANUP_OPERATORS:
+            continue
+        op_id, options = CLEANUP_OPERATORS[command]
+        if not hasattr(bpy.types, "BOXMARCH_OT_" + op_id):
+            continue  # step_cleanup says it is missing
+        props = getattr(bpy.ops.boxmarch, op_id).get_rna_type().properties
+        for option, prop in options.items():
+            value = getattr(args, option, None)
+            if value is None or prop not in props or props[prop].type not in ("FLOAT", "INT"):
+                continue
+            lo, hi = props[prop].hard_min, props[prop].hard_max
+            if not (math.isfinite(value) and lo <= value <= hi):
+                raise InputError(f"--{option.replace('_', '-')} must be a finite number in [{lo:g}, {hi:g}], "
+                                 f"got {value!r}")
+
+
 def _save_blend(bpy, path: str) -> str:
     if not path.lower().endswith(".blend"):
         raise InputError(f"--out must name a .blend file, got '{path}'")
@@ -168,9 +225,12 @@ def step_bake(bpy, objects, args) -> dict:
         raise InputError(f"nothing baked: {error}") from None
     reports = [bake.write() for bake in prepared]
     seconds = time.perf_counter() - start
+    warnings = mesh_io.modifier_warnings(objects)
+    for warning in warnings:
+        _progress(f"WARNING: {warning}")
     totals = {key: sum(r[key] for r in reports)
               for key in ("submeshes", "baked", "cache_hits", "unchanged", "degenerate")}
-    return {"step": "bake", "seconds": seconds, **totals, "skipped": totals["unchanged"],
+    return {"step": "bake", "seconds": seconds, **totals, "warnings": warnings, "skipped": totals["unchanged"],
             "max_relative_error": max(r["max_relative_error"] for r in reports),
             "meshes": [{k: (list(v) if isinstance(v, tuple) else v) for k, v in r.items()} for r in reports],
             "summary": (f"{totals['baked']:,} of {totals['submeshes']:,} submeshes baked, "
@@ -226,7 +286,7 @@ def step_export(bpy, objects, args) -> dict:
     except scene.ExportInputError as error:
         raise InputError(f"nothing exported: {error}") from None
     for warning in report["warnings"]:
-        _progress(f"warning: {warning}")
+        _progress(f"WARNING: {warning}")
     return {"step": "export", **report,
             "summary": f"{args.preset} ({report['layout']}) -> {report['path']}, transform error "
                        f"{report['transform_error']:.1e} of the offset reach; import settings: {report['import_settings']}"}
@@ -236,7 +296,10 @@ def _run_steps(args, steps) -> int:
     import bpy
 
     start = time.perf_counter()
+    _check_outputs(None, args, steps)  # before opening: nothing is loaded for a bad path
     _open(bpy, args)
+    _check_outputs(bpy, args, steps)  # the file Blender itself opened is an input too
+    _check_cleanup_options(bpy, args, steps)
     hidden = [ob.name for ob in bpy.context.view_layer.objects if ob.hide_get()]
     objects = _objects(bpy, args)
     names = [ob.name for ob in objects]
@@ -573,7 +636,8 @@ def demo(args) -> int:
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # one line, exit code 2
-        raise InputError(f"{self.prog}: {message}")
+        command = self.prog.split(" ", 1)[1:]  # "boxmarch bake" -> "bake: ..."; top level: the message
+        raise InputError(f"{command[0]}: {message}" if command else message)
 
 
 def _target_options(p, out_help="write the result as a new .blend (the input file is never changed)"):

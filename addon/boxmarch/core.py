@@ -85,8 +85,8 @@ def bake(positions, edges, face_starts, face_sizes, corner_verts, *, mask=None,
     r = _core.bake(positions, edges, face_starts, face_sizes, corner_verts, mask=mask,
                    previous_fingerprints=previous_fingerprints, offsets=offsets,
                    angle_epsilon=float(angle_epsilon), origin=origin,
-                   sort_axes_by_extent=bool(sort_axes_by_extent), axis_turn=int(axis_turn),
-                   encoding=encoding, use_cache=bool(use_cache), threads=int(threads))
+                   sort_axes_by_extent=bool(sort_axes_by_extent), axis_turn=_int(axis_turn, "axis_turn", 0, 23),
+                   encoding=encoding, use_cache=bool(use_cache), threads=_int(threads, "threads", -2**31))
     return BakeResult(**r)
 
 
@@ -99,7 +99,7 @@ def find_submeshes(positions, edges, face_starts, face_sizes, corner_verts):
 def face_offsets_from_corner_edges(corner_verts, corner_edges, edges, vertex_count, face_count):
     """(face_starts, face_sizes) recovered from corner data, or None when they do not give exactly
     ``face_count`` faces of 3 or more corners (then read the face arrays themselves)."""
-    starts, count = _core.face_starts_from_corner_edges(corner_verts, corner_edges, edges, int(vertex_count))
+    starts, count = _core.face_starts_from_corner_edges(corner_verts, corner_edges, edges, _int(vertex_count, "vertex_count"))
     if count != face_count:
         return None
     sizes = np.diff(starts, append=np.int32(len(corner_verts))).astype(np.int32)
@@ -127,9 +127,21 @@ def axis_turn_matrices() -> np.ndarray:
     return _core.axis_turn_matrices()
 
 
+def _int(value, name, lo=0, hi=2**31 - 1) -> int:
+    """value as an int in [lo, hi], else a one-line ValueError (the bindings' own TypeError for
+    an integer past 32 bits lists every overload)."""
+    try:
+        number = int(value)
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{name} must be an integer, got {value!r}") from None
+    if not lo <= number <= hi:
+        raise ValueError(f"{name} must be in {lo}..{hi}, got {value!r}")
+    return number
+
+
 def axis_turn_label(index: int) -> str:
     """Short human label of turn ``index``, e.g. 'x=+Y y=-Z z=-X' (new axes in old ones)."""
-    m = axis_turn_matrices()[index]
+    m = axis_turn_matrices()[_int(index, "axis turn", 0, 23)]
     parts = []
     for col, name in enumerate("xyz"):
         row = int(np.flatnonzero(m[:, col])[0])
@@ -226,8 +238,8 @@ def raymarch(origins, directions, half_extents, *, sdf="BOX", max_steps=64, epsi
     directions, half_extents = _rows3(directions, n, "directions"), _rows3(half_extents, n, "half_extents")
     _check_finite(origins=origins, directions=directions, half_extents=half_extents)
     r = _core.raymarch(origins, directions, half_extents,
-                       sdf=_preset_index(sdf), max_steps=int(max_steps), epsilon=float(epsilon),
-                       relaxation=float(relaxation), max_distance=float(max_distance), threads=int(threads))
+                       sdf=_preset_index(sdf), max_steps=_int(max_steps, "max_steps", -2**31), epsilon=float(epsilon),
+                       relaxation=float(relaxation), max_distance=float(max_distance), threads=_int(threads, "threads", -2**31))
     return MarchResult(hit=r["hit"].astype(bool), positions=r["positions"], normals=r["normals"], steps=r["steps"])
 
 
@@ -304,9 +316,9 @@ def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_v
     _core.render_boxes(origins, quaternions, half_extents,
                        np.ascontiguousarray(object_to_clip, np.float32), np.ascontiguousarray(object_to_view, np.float32),
                        np.ascontiguousarray(base_color, np.float32), rgba.reshape(-1, 4), depth,
-                       normals.reshape(-1, 3), steps.reshape(-1), sdf=_preset_index(sdf), max_steps=int(max_steps),
+                       normals.reshape(-1, 3), steps.reshape(-1), sdf=_preset_index(sdf), max_steps=_int(max_steps, "max_steps", -2**31),
                        epsilon=float(epsilon), relaxation=float(relaxation), max_distance=float(max_distance),
-                       threads=int(threads))
+                       threads=_int(threads, "threads", -2**31))
     return RenderResult(rgba=rgba, depth=depth, normals=normals, steps=steps)
 
 
@@ -340,13 +352,13 @@ def find_close_pairs(positions, radius, groups=None, method="HASH", threads=0) -
     ``groups`` (int32 per point, optional): only pairs from different groups; negative groups
     leave the point out. ``method``: 'HASH' (hash grid, threaded) or 'KDTREE' (nanoflann radius
     searches, the reference)."""
-    return _core.find_close_pairs(positions, float(radius), groups=groups, method=method, threads=int(threads))
+    return _core.find_close_pairs(positions, float(radius), groups=groups, method=method, threads=_int(threads, "threads", -2**31))
 
 
 def select_linked_submeshes(selected, submesh_of_vertex, submesh_count):
     """(uint8 mask per vertex, submeshes selected): every submesh with a selected vertex, whole."""
     ids = np.asarray(submesh_of_vertex)
-    return _core.select_linked_submeshes(_mask(selected, "selected", len(ids)), ids, int(submesh_count))
+    return _core.select_linked_submeshes(_mask(selected, "selected", len(ids)), ids, _int(submesh_count, "submesh_count"))
 
 
 def select_linked_across(positions, selected, submesh_of_vertex, submesh_count, epsilon=1e-4, threads=0):
@@ -354,7 +366,7 @@ def select_linked_across(positions, selected, submesh_of_vertex, submesh_count, 
     and through vertices of other submeshes within ``epsilon`` (true distance, inclusive)."""
     ids = np.asarray(submesh_of_vertex)
     return _core.select_linked_across(positions, _mask(selected, "selected", len(ids)), ids,
-                                      int(submesh_count), float(epsilon), int(threads))
+                                      _int(submesh_count, "submesh_count"), float(epsilon), _int(threads, "threads", -2**31))
 
 
 def find_duplicate_submeshes(positions, submesh_of_vertex, submesh_count, candidates=None,
@@ -364,18 +376,18 @@ def find_duplicate_submeshes(positions, submesh_of_vertex, submesh_count, candid
     count and its vertices pair one-to-one with that one's within ``tolerance``; duplicate_of
     names the kept submesh, -1 where the submesh is kept or not a candidate."""
     if candidates is not None:
-        candidates = _mask(candidates, "candidates", int(submesh_count))
-    return _core.find_duplicate_submeshes(positions, submesh_of_vertex, int(submesh_count), candidates,
-                                          float(tolerance), int(threads))
+        candidates = _mask(candidates, "candidates", _int(submesh_count, "submesh_count"))
+    return _core.find_duplicate_submeshes(positions, submesh_of_vertex, _int(submesh_count, "submesh_count"), candidates,
+                                          float(tolerance), _int(threads, "threads", -2**31))
 
 
 def merge_passes(positions, submesh_of_vertex, submesh_count, chosen=None, distance=1e-3, threads=0):
     """(pass_of_vertex int32, passes): a plan for merging by distance inside each chosen
     submesh (mask per submesh, None: all) with a selection-based merge: pass k selects the
     vertices marked k and merges them; -1 marks vertices with no partner in their submesh."""
-    count = int(submesh_count)
+    count = _int(submesh_count, "submesh_count")
     chosen = np.ones(count, np.uint8) if chosen is None else _mask(chosen, "chosen", count)
-    return _core.merge_passes(positions, submesh_of_vertex, count, chosen, float(distance), int(threads))
+    return _core.merge_passes(positions, submesh_of_vertex, count, chosen, float(distance), _int(threads, "threads", -2**31))
 
 
 def pack_uv_by_height(corner_uv, positions, edges, face_starts, face_sizes, corner_verts, *,
@@ -388,12 +400,11 @@ def pack_uv_by_height(corner_uv, positions, edges, face_starts, face_sizes, corn
     {'islands', 'groups', 'rows', 'scale'}. Raises ValueError (nothing written) on bad input."""
     if face_mask is not None:
         face_mask = _mask(face_mask, "face_mask", len(face_starts))
-    if int(max_per_row) < 0:
-        raise ValueError(f"max_per_row must be >= 0, got {max_per_row}")
+    max_per_row = _int(max_per_row, "max_per_row")
     return _core.pack_uv_by_height(corner_uv, positions, edges, face_starts, face_sizes, corner_verts,
                                    face_mask=face_mask,
                                    vertex_height=np.ascontiguousarray(vertex_height, np.float32),
-                                   submesh_of_vertex=submesh_of_vertex, submesh_count=int(submesh_count),
+                                   submesh_of_vertex=submesh_of_vertex, submesh_count=_int(submesh_count, "submesh_count"),
                                    padding=float(padding), max_per_row=int(max_per_row),
                                    lock_overlapping=bool(lock_overlapping))
 
@@ -402,9 +413,9 @@ def merge_targets(positions, submesh_of_vertex, submesh_count, chosen=None, dist
     """Blender's Merge by Distance inside each chosen submesh (mask per submesh, None: all):
     (target int32 per vertex, merged positions float32 (N, 3), vertices merged away). A vertex
     merges into target[v] (itself for survivors); targets sit at their cluster's centroid."""
-    count = int(submesh_count)
+    count = _int(submesh_count, "submesh_count")
     chosen = np.ones(count, np.uint8) if chosen is None else _mask(chosen, "chosen", count)
-    return _core.merge_targets(positions, submesh_of_vertex, count, chosen, float(distance), int(threads))
+    return _core.merge_targets(positions, submesh_of_vertex, count, chosen, float(distance), _int(threads, "threads", -2**31))
 
 
 def weld(positions, edges, face_starts, face_sizes, corner_verts, target, corner_edges=None) -> dict:
@@ -424,6 +435,12 @@ def remove_vertices(positions, edges, face_starts, face_sizes, corner_verts, rem
     """The mesh without the vertices marked in ``remove`` and every edge and face touching them,
     survivors in their order: the same dict as :func:`weld` (with 'needs_blender' False)."""
     keep = ~_mask(remove, "remove", len(positions)).astype(bool)
+    for name, values, limit in (("edges", edges, len(positions)), ("corner_verts", corner_verts, len(positions)),
+                                ("corner_edges", corner_edges, len(np.asarray(edges).reshape(-1, 2)))):
+        values = np.asarray(values)
+        bad = np.flatnonzero((values < 0) | (values >= limit))
+        if len(bad):
+            raise ValueError(f"{name}[{int(bad[0])}] = {int(values.reshape(-1)[bad[0]])} is outside 0..{limit - 1}")
     new_index = np.cumsum(keep, dtype=np.int64) - 1
     edges = np.asarray(edges).reshape(-1, 2)
     keep_edge = keep[edges[:, 0]] & keep[edges[:, 1]]

@@ -136,6 +136,51 @@ def _write_uv(mesh, name, values: np.ndarray) -> None:
     collection.foreach_set(prop, values.reshape(-1))
 
 
+def modifier_warnings(objects, action: str = "bake") -> list:
+    """One line per object whose enabled modifiers change what the viewport shows: the bake and
+    the export read the mesh data (the base mesh), so the shown mesh would not decode."""
+    warnings = []
+    for ob in objects:
+        mods = [m for m in getattr(ob, "modifiers", ()) if m.show_viewport or m.show_render]
+        moving = [m.name for m in mods if m.type != "ARMATURE"]
+        armature = [m.name for m in mods if m.type == "ARMATURE"]
+        if moving:
+            warnings.append(f"object '{ob.name}' has modifiers that move vertices ({', '.join(moving)}): "
+                            f"the {action} uses the base mesh, so the mesh shown with modifiers does not decode "
+                            "(apply them first)")
+        if armature:
+            warnings.append(f"object '{ob.name}' has an Armature modifier ({', '.join(armature)}): "
+                            f"the {action} uses the rest geometry; posed boxes decode only where the pose "
+                            "moves whole submeshes rigidly")
+    return warnings
+
+
+LAYERS_DIGEST = "_boxmarch_layers"  # mesh custom property: checksum of the stored layers
+
+
+def stored_layers_digest(mesh):
+    """Checksum (hex string) of what the bake stored: BoxOffset and both quaternion UV maps as
+    they are now, or None when one of them is missing."""
+    import zlib
+
+    attr = mesh.color_attributes.get(OFFSET_ATTRIBUTE)
+    if attr is None or QUAT_XY_UV not in mesh.uv_layers or QUAT_ZW_UV not in mesh.uv_layers:
+        return None
+    count = len(mesh.vertices) if attr.domain == "POINT" else len(mesh.loops)
+    buf = np.empty(count * 4, np.float32)
+    if attr.data_type == "BYTE_COLOR":
+        attr.data.foreach_get("color_srgb", buf)
+        data = np.rint(buf * 255.0).astype(np.uint8)
+    else:
+        attr.data.foreach_get("color", buf)
+        data = buf
+    crc = zlib.crc32(memoryview(data).cast("B"))
+    crc = zlib.crc32(f"{attr.data_type}/{attr.domain}/{count}".encode(), crc)
+    for name in (QUAT_XY_UV, QUAT_ZW_UV):
+        crc = zlib.crc32(memoryview(_read_uv(mesh, name, len(mesh.loops))).cast("B"), crc)
+    return f"{crc:08x}"
+
+
 def _colour_matches(mesh, name, data_type, domain) -> bool:
     attr = mesh.color_attributes.get(name)
     return attr is not None and attr.data_type == data_type and attr.domain == domain
@@ -247,6 +292,8 @@ class PreparedBake:
             mesh.attributes.new(FINGERPRINT_ATTRIBUTE, "INT", "POINT")
         mesh.attributes[FINGERPRINT_ATTRIBUTE].data.foreach_set("value", r.fingerprints.view(np.int32))
         mesh.update()
+        # What is stored now, so a later Skip Unchanged can tell whether it still is.
+        mesh[LAYERS_DIGEST] = stored_layers_digest(mesh)
         names = [uv_map.name for uv_map in mesh.uv_layers]
         self.report["uv_channels"] = (names.index(QUAT_XY_UV), names.index(QUAT_ZW_UV))
         return self.report
@@ -261,6 +308,10 @@ def prepare_bake(mesh, settings: BakeSettings, selected_only: bool = False) -> P
         raise BakeInputError(f"mesh '{mesh.name}' is empty")
     if len(mesh.polygons) == 0:
         raise BakeInputError(f"mesh '{mesh.name}' has no faces (loose vertices or edges only)")
+    other = mesh.attributes.get(OFFSET_ATTRIBUTE)
+    if other is not None and mesh.color_attributes.get(OFFSET_ATTRIBUTE) is None:
+        raise BakeInputError(f"mesh '{mesh.name}' has an attribute '{OFFSET_ATTRIBUTE}' that is not a colour "
+                             f"({other.data_type} on {other.domain}): rename or remove it, the bake would replace it")
     existing_uv = [uv.name for uv in mesh.uv_layers]
     needed = max(len(existing_uv), 1) + sum(n not in existing_uv for n in (QUAT_XY_UV, QUAT_ZW_UV))
     if needed > MAX_UV_MAPS:
@@ -279,9 +330,13 @@ def prepare_bake(mesh, settings: BakeSettings, selected_only: bool = False) -> P
     previous = None
     fp_attr = mesh.attributes.get(FINGERPRINT_ATTRIBUTE)
     if settings.incremental and layers_present and fp_attr is not None and fp_attr.domain == "POINT":
-        previous = np.empty(len(mesh.vertices), np.int32)
-        fp_attr.data.foreach_get("value", previous)
-        previous = previous.view(np.uint32)
+        # The fingerprints cover geometry and options; the checksum covers what is stored (an
+        # edit to BoxOffset or the quaternion maps, e.g. a UV unwrap on the active map, would
+        # otherwise survive as "unchanged"). A changed checksum re-bakes the whole mesh.
+        if mesh.get(LAYERS_DIGEST) == stored_layers_digest(mesh):
+            previous = np.empty(len(mesh.vertices), np.int32)
+            fp_attr.data.foreach_get("value", previous)
+            previous = previous.view(np.uint32)
     keep_previous = layers_present and (previous is not None or mask is not None)
     try:
         result = core.bake(positions, edges, face_starts, face_sizes, corner_verts, mask=mask,

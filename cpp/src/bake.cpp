@@ -81,15 +81,6 @@ glm::dmat3 sort_by_extent(const glm::dmat3& frame, const glm::dvec3& extent) {
     return glm::dmat3(x, y, glm::cross(x, y));
 }
 
-// Runs work(t) for t = 0..threads-1, thread 0 on the caller's thread, and waits for all.
-template <class Work>
-void run_on_threads(size_t threads, Work&& work) {
-    std::vector<std::thread> pool;
-    for (size_t t = 1; t < threads; ++t) pool.emplace_back(work, t);
-    work(size_t(0));
-    for (std::thread& th : pool) th.join();
-}
-
 constexpr uint8_t kUncached = 0xFF;
 
 // Cache routing of the submeshes to bake: kUncached for one whose key no other has (it cannot
@@ -175,14 +166,14 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
         s.base = glm::dvec3(p0[0], p0[1], p0[2]);
         return s;
     };
-    size_t threads = options.threads > 0 ? size_t(options.threads) : std::max(1u, std::thread::hardware_concurrency());
+    size_t threads = hardware_threads(options.threads);
     threads = std::min<size_t>({threads, 255, std::max<size_t>(1, submesh_count / 1024)});
     auto range = [&](size_t t) { return std::make_pair(submesh_count * t / threads, submesh_count * (t + 1) / threads); };
     std::vector<Accumulated> parts(threads);
     // Pass 1: fingerprints and what to do with each submesh; cache keys of those to bake.
     std::vector<uint8_t> statuses(submesh_count);
     std::vector<uint64_t> keys(options.use_cache ? submesh_count : 0);
-    run_on_threads(threads, [&](size_t thread) {
+    run_parallel(threads, [&](size_t thread) {
         Accumulated& acc = parts[thread];
         std::vector<uint32_t> words;
         const auto [first, last] = range(thread);
@@ -223,7 +214,7 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
     if (options.use_cache) route = route_by_key(keys, statuses, threads);
 
     // Pass 2: frames, offsets, quaternions and the decode check of the submeshes to bake.
-    run_on_threads(threads, [&](size_t thread) {
+    run_parallel(threads, [&](size_t thread) {
         Accumulated& acc = parts[thread];
         CopyCache cache(kCacheTolerance);
         std::vector<glm::dvec3> local, offsets;

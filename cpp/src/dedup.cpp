@@ -112,7 +112,7 @@ struct Matcher {
 size_t find_duplicate_submeshes(int32_t* duplicate_of, const float* positions,
                                 const int32_t* submesh_of_vertex, size_t vertex_count,
                                 size_t submesh_count, const uint8_t* candidate, double tolerance,
-                                int threads) {
+                                int /*threads*/) {
     check_radius(tolerance, "tolerance");
     check_finite_positions(positions, vertex_count);
     std::vector<uint32_t> offsets(submesh_count + 1), items(vertex_count);
@@ -136,21 +136,48 @@ size_t find_duplicate_submeshes(int32_t* duplicate_of, const float* positions,
     }
     // Centroid rounding is far below 1e-9 of the coordinates' size: widen by that much.
     const double reach = tolerance * (1 + 1e-9) + largest * 1e-9;
-    std::vector<PointPair> pairs = close_pairs(centroids.data(), submesh_count, reach, own_group.data(), threads);
-    for (PointPair& p : pairs) std::swap(p.first, p.second);  // (later, earlier)
-    std::sort(pairs.begin(), pairs.end());
+    // Submeshes in id order, each compared with the kept ones near it (earliest first): the grid
+    // starts empty and takes each submesh found not to be a duplicate, so a pile of copies costs
+    // a comparison with the kept original each, and no list of pairs is ever made.
+    std::vector<uint32_t> listed;
+    for (size_t s = 0; s < submesh_count; ++s)
+        if (own_group[s] >= 0) listed.push_back(uint32_t(s));
+    Grid<double> g;
+    build_grid(g, centroids.data(), listed, reach, nullptr);
+    g.bucket_end.assign(g.bucket_start.begin(), g.bucket_start.end() - 1);  // nothing kept yet
+    std::vector<uint32_t> slot_of(submesh_count, UINT32_MAX), bucket_of_slot(g.items.size());
+    for (uint32_t m = 0; m < g.items.size(); ++m) slot_of[g.items[m]] = m;
+    for (size_t bk = 0; bk + 1 < g.bucket_start.size(); ++bk)
+        std::fill(bucket_of_slot.begin() + g.bucket_start[bk], bucket_of_slot.begin() + g.bucket_start[bk + 1], uint32_t(bk));
+    const double reach2 = reach * reach;
 
     Matcher matcher{positions, tolerance * tolerance, {}, {}, {}, {}, {}, {}, {}, {}, {}};
     size_t duplicates = 0;
-    for (const PointPair& p : pairs) {
-        const uint32_t later = p.first, earlier = p.second;
-        if (duplicate_of[later] >= 0 || duplicate_of[earlier] >= 0) continue;  // decided, or not kept
+    std::vector<uint32_t> near;
+    for (uint32_t later : listed) {
+        const double* c = &centroids[3 * size_t(later)];
         const uint32_t n = offsets[later + 1] - offsets[later];
-        if (offsets[earlier + 1] - offsets[earlier] != n) continue;
-        if (matcher.matches(&items[offsets[later]], &items[offsets[earlier]], n)) {
-            duplicate_of[later] = int32_t(earlier);
-            ++duplicates;
-        }
+        near.clear();
+        visit_near(g, c, reach, 0, [&](uint32_t m) {
+            const uint32_t earlier = g.items[m];
+            if (offsets[earlier + 1] - offsets[earlier] == n && distance2(g, c, m) <= reach2) near.push_back(earlier);
+            return false;
+        });
+        std::sort(near.begin(), near.end());
+        for (uint32_t earlier : near)
+            if (matcher.matches(&items[offsets[later]], &items[offsets[earlier]], n)) {
+                duplicate_of[later] = int32_t(earlier);
+                ++duplicates;
+                break;
+            }
+        if (duplicate_of[later] >= 0) continue;
+        // Kept: move it into its bucket's kept prefix.
+        const uint32_t m = slot_of[later], bk = bucket_of_slot[m], to = g.bucket_end[bk]++;
+        const uint32_t other = g.items[to];
+        std::swap(g.items[m], g.items[to]);
+        for (int d = 0; d < 3; ++d) std::swap(g.sorted_positions[3 * size_t(m) + d], g.sorted_positions[3 * size_t(to) + d]);
+        slot_of[other] = m;
+        slot_of[later] = to;
     }
     return duplicates;
 }

@@ -8,9 +8,19 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <vector>
 
 namespace boxmarch {
+
+// parallel.cpp: the only place the core starts threads.
+// Threads for a job when the caller asked for `requested` (0 or less: all cores).
+size_t hardware_threads(int requested);
+// Runs work(part) for part = 0..parts-1, part 0 on the caller's thread, and waits for all. An
+// exception thrown by any part (std::bad_alloc included) is rethrown here after every part has
+// finished (the first part's, in part order); when no thread can be started the parts run on the
+// caller's thread. Never lets an exception reach std::terminate.
+void run_parallel(size_t parts, const std::function<void(size_t)>& work);
 
 // One submesh seen through the whole mesh: its vertices (ascending), faces and edges as lists of
 // indices into the mesh's arrays. base is the position of its lowest vertex in double: every

@@ -2,6 +2,7 @@
 // statement for statement (same slab test, same loop, same normal taps, same light), in float
 // like the GPU, so the viewport preview can be tested against it pixel by pixel.
 #include "boxmarch/boxmarch.h"
+#include "internal.h"
 #include "sdf.h"
 
 #include <glm/glm.hpp>
@@ -84,15 +85,8 @@ vec3 shade(vec3 n_view, vec3 base) {
 
 template <class Fn>
 void parallel_for(size_t count, int threads, Fn fn) {
-    size_t n = threads > 0 ? size_t(threads) : std::max(1u, std::thread::hardware_concurrency());
-    n = std::min(n, std::max<size_t>(count / 64, 1));
-    if (n <= 1) {
-        fn(size_t(0), count);
-        return;
-    }
-    std::vector<std::thread> pool;
-    for (size_t k = 0; k < n; ++k) pool.emplace_back(fn, count * k / n, count * (k + 1) / n);
-    for (auto& t : pool) t.join();
+    const size_t n = std::min(hardware_threads(threads), std::max<size_t>(count / 64, 1));
+    run_parallel(n, [&](size_t k) { fn(count * k / n, count * (k + 1) / n); });
 }
 
 }  // namespace

@@ -11,12 +11,11 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
-#include <thread>
 
 namespace boxmarch {
 
 size_t thread_count(int requested, size_t work_items) {
-    size_t threads = requested > 0 ? size_t(requested) : std::max(1u, std::thread::hardware_concurrency());
+    const size_t threads = hardware_threads(requested);
     return std::max<size_t>(1, std::min<size_t>({threads, 64, work_items / 4096}));
 }
 
@@ -25,29 +24,10 @@ void check_radius(double value, const char* what) {
         throw std::invalid_argument(std::string(what) + " must be a finite number >= 0, got " + std::to_string(value));
 }
 
-namespace {
-
-// Positions are kept in their own type (float positions compare exactly in double anyway).
 template <class T>
-struct Grid {
-    double origin[3];
-    double cell;
-    uint64_t mask;
-    std::vector<uint32_t> bucket_start;  // mask + 2 entries
-    std::vector<uint32_t> items;         // included points, sorted by bucket
-    std::vector<T> sorted_positions;     // xyz of items[k] at 3k
-};
-
-inline uint64_t cell_hash(int64_t x, int64_t y, int64_t z) {
-    uint64_t h = uint64_t(x) * 0x9E3779B97F4A7C15ull + uint64_t(y) * 0xC2B2AE3D27D4EB4Full +
-                 uint64_t(z) * 0x165667B19E3779F9ull;
-    h ^= h >> 29;
-    h *= 0xBF58476D1CE4E5B9ull;
-    return h ^ (h >> 32);
-}
-
-template <class T>
-void build(Grid<T>& g, const T* p, const std::vector<uint32_t>& included, double radius) {
+void build_grid(Grid<T>& g, const T* p, const std::vector<uint32_t>& included, double radius, const int32_t* key) {
+    g.key = key;
+    g.bucket_end.clear();
     const size_t n = included.size();
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint32_t i : included)
@@ -55,6 +35,8 @@ void build(Grid<T>& g, const T* p, const std::vector<uint32_t>& included, double
             lo[k] = std::min(lo[k], double(p[3 * size_t(i) + k]));
             hi[k] = std::max(hi[k], double(p[3 * size_t(i) + k]));
         }
+    if (n == 0)
+        for (int k = 0; k < 3; ++k) lo[k] = hi[k] = 0.0;
     const double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
     for (int k = 0; k < 3; ++k) g.origin[k] = lo[k];
     // At most 2^26 cells per axis keeps the fraction inside a cell exact to ~1e-8 of a cell.
@@ -88,12 +70,13 @@ void build(Grid<T>& g, const T* p, const std::vector<uint32_t>& included, double
             const int64_t x = int64_t(std::floor((double(q[0]) - lo[0]) / g.cell));
             const int64_t y = int64_t(std::floor((double(q[1]) - lo[1]) / g.cell));
             const int64_t z = int64_t(std::floor((double(q[2]) - lo[2]) / g.cell));
-            bucket_of[k] = uint32_t(cell_hash(x, y, z) & g.mask);
+            bucket_of[k] = uint32_t(cell_hash(x, y, z, key ? key[included[k]] : 0) & g.mask);
             ++g.bucket_start[bucket_of[k] + 1];
         }
         double crowding = 0.0;
         for (size_t b2 = 1; b2 <= table; ++b2) crowding += double(g.bucket_start[b2]) * double(g.bucket_start[b2]);
         crowding /= std::max<size_t>(1, n);
+        g.crowding = crowding;
         if (crowding <= 24.0 || g.cell <= min_cell || attempt >= 40) break;
         g.cell = std::max(min_cell, g.cell * 0.5);
     }
@@ -108,44 +91,34 @@ void build(Grid<T>& g, const T* p, const std::vector<uint32_t>& included, double
     }
 }
 
+template void build_grid<float>(Grid<float>&, const float*, const std::vector<uint32_t>&, double, const int32_t*);
+template void build_grid<double>(Grid<double>&, const double*, const std::vector<uint32_t>&, double, const int32_t*);
+
+namespace {
+
+std::vector<uint32_t> included_points(size_t count, const int32_t* group_of_point) {
+    std::vector<uint32_t> included;
+    included.reserve(count);
+    for (size_t i = 0; i < count; ++i)
+        if (!group_of_point || group_of_point[i] >= 0) included.push_back(uint32_t(i));
+    return included;
+}
+
 template <class T>
 void query_range(const Grid<T>& g, size_t first, size_t last, double radius, const int32_t* group,
                  std::vector<PointPair>& out) {
     const double r2 = radius * radius;
-    // Points within this fraction of a cell of a side look into the neighbour there; the slack
-    // covers rounding of the cell coordinate.
-    const double near = radius / g.cell + 1e-6;
-    uint64_t buckets[27];
     for (size_t k = first; k < last; ++k) {
         const uint32_t i = g.items[k];
         const T* t = &g.sorted_positions[3 * k];
         const double pi[3] = {double(t[0]), double(t[1]), double(t[2])};
-        int64_t cell[3];
-        int lo[3], hi[3];
-        for (int d = 0; d < 3; ++d) {
-            const double u = (pi[d] - g.origin[d]) / g.cell;
-            const double f = std::floor(u);
-            cell[d] = int64_t(f);
-            lo[d] = (u - f < near) ? -1 : 0;
-            hi[d] = (u - f > 1.0 - near) ? 1 : 0;
-        }
-        int nb = 0;
-        for (int dx = lo[0]; dx <= hi[0]; ++dx)
-            for (int dy = lo[1]; dy <= hi[1]; ++dy)
-                for (int dz = lo[2]; dz <= hi[2]; ++dz) {
-                    const uint64_t b = cell_hash(cell[0] + dx, cell[1] + dy, cell[2] + dz) & g.mask;
-                    if (std::find(buckets, buckets + nb, b) == buckets + nb) buckets[nb++] = b;
-                }
         const int32_t gi = group ? group[i] : 0;
-        for (int q = 0; q < nb; ++q) {
-            for (uint32_t m = g.bucket_start[buckets[q]], end = g.bucket_start[buckets[q] + 1]; m < end; ++m) {
-                const uint32_t j = g.items[m];
-                if (j <= i || (group && group[j] == gi)) continue;
-                const T* pj = &g.sorted_positions[3 * size_t(m)];
-                const double dx = pi[0] - pj[0], dy = pi[1] - pj[1], dz = pi[2] - pj[2];
-                if (dx * dx + dy * dy + dz * dz <= r2) out.emplace_back(i, j);
-            }
-        }
+        visit_near(g, pi, radius, 0, [&](uint32_t m) {
+            const uint32_t j = g.items[m];
+            if (j <= i || (group && group[j] == gi)) return false;
+            if (distance2(g, pi, m) <= r2) out.emplace_back(i, j);
+            return false;
+        });
     }
 }
 
@@ -154,27 +127,52 @@ void query_range(const Grid<T>& g, size_t first, size_t last, double radius, con
 template <class T>
 std::vector<PointPair> close_pairs(const T* positions, size_t count, double radius,
                                    const int32_t* group_of_point, int threads) {
-    std::vector<uint32_t> included;
-    included.reserve(count);
-    for (size_t i = 0; i < count; ++i)
-        if (!group_of_point || group_of_point[i] >= 0) included.push_back(uint32_t(i));
+    const std::vector<uint32_t> included = included_points(count, group_of_point);
     if (included.size() < 2) return {};
     Grid<T> g;
-    build(g, positions, included, radius);
+    build_grid(g, positions, included, radius, nullptr);
     const size_t n = included.size(), parts = thread_count(threads, n);
     std::vector<std::vector<PointPair>> found(parts);
-    std::vector<std::thread> pool;
-    for (size_t t = 1; t < parts; ++t)
-        pool.emplace_back(query_range<T>, std::cref(g), n * t / parts, n * (t + 1) / parts, radius, group_of_point,
-                          std::ref(found[t]));
-    query_range(g, 0, n / parts, radius, group_of_point, found[0]);
-    for (std::thread& th : pool) th.join();
-    for (size_t t = 1; t < parts; ++t) found[0].insert(found[0].end(), found[t].begin(), found[t].end());
+    run_parallel(parts, [&](size_t t) {
+        query_range(g, n * t / parts, n * (t + 1) / parts, radius, group_of_point, found[t]);
+    });
+    size_t total = 0;
+    for (const auto& f : found) total += f.size();
+    found[0].reserve(total);
+    for (size_t t = 1; t < parts; ++t) {
+        found[0].insert(found[0].end(), found[t].begin(), found[t].end());
+        std::vector<PointPair>().swap(found[t]);
+    }
     return std::move(found[0]);
 }
 
 template std::vector<PointPair> close_pairs<float>(const float*, size_t, double, const int32_t*, int);
 template std::vector<PointPair> close_pairs<double>(const double*, size_t, double, const int32_t*, int);
+
+void mark_points_with_partner(uint8_t* has_partner, const float* positions, size_t count, double radius,
+                              const int32_t* group_of_point, int threads) {
+    std::fill(has_partner, has_partner + count, uint8_t(0));
+    const std::vector<uint32_t> included = included_points(count, group_of_point);
+    if (included.size() < 2) return;
+    Grid<float> g;
+    build_grid(g, positions, included, radius, group_of_point);
+    const double r2 = radius * radius;
+    const size_t n = included.size(), parts = thread_count(threads, n);
+    run_parallel(parts, [&](size_t t) {
+        for (size_t k = n * t / parts; k < n * (t + 1) / parts; ++k) {
+            const uint32_t i = g.items[k];
+            const float* q = &g.sorted_positions[3 * k];
+            const double pi[3] = {q[0], q[1], q[2]};
+            const int32_t gi = group_of_point ? group_of_point[i] : 0;
+            visit_near(g, pi, radius, gi, [&](uint32_t m) {
+                const uint32_t j = g.items[m];
+                if (j == i || (group_of_point && group_of_point[j] != gi) || distance2(g, pi, m) > r2) return false;
+                has_partner[i] = 1;
+                return true;
+            });
+        }
+    });
+}
 
 size_t write_sorted_pairs(uint32_t* pairs, size_t capacity, std::vector<PointPair>& found) {
     std::sort(found.begin(), found.end());

@@ -154,8 +154,11 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     layout = layout or preset.layouts[0]
     if layout not in preset.layouts:
         raise ExportInputError(f"{preset.label} carries the layouts {', '.join(preset.layouts)}, not {layout}")
+    objects = list({ob.name_full: ob for ob in objects}.values())  # each object once
     if not objects:
         raise ExportInputError("no objects to export")
+    if bpy.data.filepath and os.path.abspath(filepath) == os.path.abspath(bpy.data.filepath):
+        raise ExportInputError(f"'{filepath}' is the open .blend file: export to another path")
     for ob in objects:
         if ob.type != "MESH":
             raise ExportInputError(f"object '{ob.name}' is a {ob.type}, not a mesh")
@@ -170,7 +173,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     outputs = {partial(filepath): filepath}
     if layout == "NORMAL_COLOR":
         outputs[partial(table_path(filepath))] = table_path(filepath)
-    warnings = []
+    warnings = mesh_io.modifier_warnings(objects, "export")
     if preset.extension == ".fbx" and context.scene.unit_settings.scale_length != 1.0:
         warnings.append(f"unit scale is not 1: {preset.label} will scale positions by it and the offsets will not match")
     try:

@@ -85,6 +85,15 @@ class BOXMARCH_OT_bake(bpy.types.Operator):
         wm.progress_begin(0, 2 * len(meshes))
         if edit:
             bpy.ops.object.mode_set(mode="OBJECT")
+            # Multi-object Edit Mode: a mesh with nothing selected is left alone (as dedup, merge
+            # and select do); only when no mesh has a selected vertex is there nothing to bake.
+            chosen = [mesh for mesh in meshes if len(mesh.vertices) and mesh_io.read_vertex_selection(mesh).any()]
+            if not chosen:
+                bpy.ops.object.mode_set(mode="EDIT")
+                wm.progress_end()
+                self.report({"ERROR"}, "Nothing baked: no vertex is selected")
+                return {"CANCELLED"}
+            meshes = chosen
         try:
             # Compute everything before writing anything: one bad mesh leaves all of them untouched.
             prepared = []
@@ -102,7 +111,12 @@ class BOXMARCH_OT_bake(bpy.types.Operator):
             if edit:
                 bpy.ops.object.mode_set(mode="EDIT")
             wm.progress_end()
-        self.report({"INFO"}, summary(reports, time.perf_counter() - start))
+        text = summary(reports, time.perf_counter() - start)
+        warnings = mesh_io.modifier_warnings(objects)
+        if warnings:
+            self.report({"WARNING"}, text + ". WARNING: " + " ".join(warnings))
+        else:
+            self.report({"INFO"}, text)
         return {"FINISHED"}
 
 

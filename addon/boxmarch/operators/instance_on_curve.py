@@ -100,6 +100,12 @@ class BOXMARCH_OT_add_instance_on_curve(bpy.types.Operator):
         if instance == curve:
             self.report({"ERROR"}, "The curve cannot be placed along itself")
             return {"CANCELLED"}
+        copies, vertices = planned_size(curve, instance, self.spacing)
+        if copies > MAX_COPIES or vertices > MAX_VERTICES:
+            self.report({"ERROR"}, f"Spacing {self.spacing:g} would create {copies:,} copies ({vertices:,} vertices) "
+                        f"along '{curve.name}': the limit is {MAX_COPIES:,} copies and {MAX_VERTICES:,} vertices; "
+                        "raise the spacing")
+            return {"CANCELLED"}
         group = ensure_node_group()
         # Running it again on the same curve updates its modifier instead of stacking another.
         modifier = next((m for m in curve.modifiers if m.type == "NODES" and m.node_group == group), None)
@@ -118,6 +124,22 @@ class BOXMARCH_OT_add_instance_on_curve(bpy.types.Operator):
         self.report({"INFO"}, f"'{instance.name}' every {self.spacing:g} along '{curve.name}'"
                     + (", converted to a mesh" if self.convert_to_mesh else ""))
         return {"FINISHED"}
+
+
+MAX_COPIES = 1_000_000
+MAX_VERTICES = 50_000_000
+
+
+def planned_size(curve, instance, spacing):
+    """(copies, vertices) Curve to Points at ``spacing`` would make on ``curve`` (object space,
+    each spline's evaluated length), checked before the node group allocates anything."""
+    copies = 0
+    for spline in curve.data.splines:
+        length = spline.calc_length()
+        copies += int(length / max(spacing, 1e-6)) + 1 if length > 0 else 0
+    data = getattr(instance, "data", None)
+    per_copy = len(data.vertices) if hasattr(data, "vertices") else 1
+    return copies, copies * max(per_copy, 1)
 
 
 def menu_add(self, _context):

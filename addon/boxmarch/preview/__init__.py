@@ -6,6 +6,8 @@ docs/PREVIEW.md. ``bpy`` and ``gpu`` are imported lazily so ``preview.sources`` 
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 _handler = None
@@ -163,6 +165,9 @@ def _read(buffer, shape):
     return np.array(buffer, np.float32).reshape(shape)
 
 
+last_skipped: list = []  # objects the last render() left out, as "name: reason"
+
+
 def render(scene, camera_object, width, height, *, output="SHADED"):
     """Renders the scene headless from ``camera_object``: ordinary visible meshes in one flat
     colour, previewed objects raymarched (with their outline/vectors when switched on).
@@ -171,7 +176,11 @@ def render(scene, camera_object, width, height, *, output="SHADED"):
     1.0 far plane and where nothing was drawn), row 0 at the TOP, one sample per pixel centre.
     ``output``: 'SHADED' (the viewport look), 'NORMAL' (object-space normals of raymarched hits
     as 0.5 + 0.5 n), or 'STEPS' (red = SDF evaluations summed over all raymarch fragments of a
-    pixel, no depth test; for the benchmark)."""
+    pixel, no depth test; for the benchmark).
+
+    An object that cannot be drawn (a NaN coordinate, broken baked data) is left out and the
+    others still draw; ``last_skipped`` then lists "name: reason" for each, and a RuntimeWarning
+    says so."""
     import bpy
     import gpu
 
@@ -204,11 +213,15 @@ def render(scene, camera_object, width, height, *, output="SHADED"):
                 else:
                     gpu.state.depth_test_set("LESS_EQUAL")
                     gpu.state.depth_mask_set(True)
+                skipped = []
                 for ob in objects:
-                    if _previewed(ob):
-                        draw.draw_object(ob, view, projection, perspective, mode)
-                    elif mode == 0:
-                        draw.draw_solid(ob, depsgraph)
+                    try:
+                        if _previewed(ob):
+                            draw.draw_object(ob, view, projection, perspective, mode)
+                        elif mode == 0:
+                            draw.draw_solid(ob, depsgraph)
+                    except (ValueError, RuntimeError) as error:  # one bad object: the rest still draw
+                        skipped.append(f"{ob.name}: {error}")
                 gpu.state.blend_set("NONE")
                 gpu.state.depth_test_set("NONE")
                 gpu.state.depth_mask_set(False)
@@ -216,6 +229,9 @@ def render(scene, camera_object, width, height, *, output="SHADED"):
             depth = _read(framebuffer.read_depth(0, 0, width, height), (height, width))
     finally:
         offscreen.free()
+    last_skipped[:] = skipped
+    if skipped:
+        warnings.warn("preview.render left out " + "; ".join(skipped), RuntimeWarning, stacklevel=2)
     return np.ascontiguousarray(rgba[::-1]), np.ascontiguousarray(depth[::-1])
 
 

@@ -1,0 +1,225 @@
+"""Hostile inputs through the add-on and the command line (issue 14; docs/CHECKS.md lists them):
+no crash, no data loss, nothing silently wrong, one clear message."""
+import hashlib
+import os
+
+import numpy as np
+import pytest
+
+from boxmarch import core, mesh_io, scenes
+from conftest import mesh_object
+from test_cli import run_module
+
+
+def boxes(bpy, name="Boxes", count=4, offset=0.0, select=True):
+    (arrays, *_), = [scenes.random_boxes(count, seed=3, spread=5.0, size_range=(0.5, 1.5))]
+    positions = arrays[0] + np.float32(offset)
+    return mesh_object(bpy, name, positions, *arrays[1:], select=select)
+
+
+def worst_decode_error(bpy, ob):
+    """Worst distance between a vertex's decode and its submesh's bounds centre, over the half-extent."""
+    from boxmarch.export import scene
+
+    mesh = ob.data
+    offsets, qxy, qzw, corner_verts = scene.baked_layers(mesh)
+    q = np.zeros((len(mesh.vertices), 4), np.float32)
+    q[corner_verts] = np.concatenate([qxy, qzw], 1)
+    positions = mesh_io.read_positions(mesh).astype(np.float64)
+    origins = positions + core.rotate_vector(core.decode_offsets(offsets), q)
+    sub, count = core.find_submeshes(positions.astype(np.float32), *mesh_io.read_topology(mesh))
+    worst = 0.0
+    for s in range(count):
+        o = origins[sub == s]
+        worst = max(worst, float(np.abs(o - o.mean(0)).max() / (np.ptp(positions[sub == s], 0).max() / 2)))
+    return worst
+
+
+def test_stale_layers_do_not_survive_skip_unchanged(blender):
+    bpy = blender
+    ob = boxes(bpy)
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+    assert worst_decode_error(bpy, ob) < 1e-5
+    # An artist unwraps with BoxQuatXY active: the stored quaternion is overwritten.
+    corners = len(ob.data.loops)
+    mesh_io._write_uv(ob.data, mesh_io.QUAT_XY_UV, np.random.default_rng(0).random((corners, 2)).astype(np.float32))
+    assert worst_decode_error(bpy, ob) > 0.1
+    prepared = mesh_io.prepare_bake(ob.data, mesh_io.BakeSettings())
+    assert prepared.result.baked == prepared.result.submesh_count  # nothing skipped as "unchanged"
+    prepared.write()
+    assert worst_decode_error(bpy, ob) < 1e-5
+    # Untouched since: now the skip is right.
+    again = mesh_io.prepare_bake(ob.data, mesh_io.BakeSettings())
+    assert again.result.baked == 0 and again.result.unchanged == again.result.submesh_count
+
+
+def test_modifiers_are_warned_about_in_bake_and_export(blender, tmp_path):
+    bpy = blender
+    ob = boxes(bpy)
+    ob.modifiers.new("Mirror", "MIRROR")
+    warnings = mesh_io.modifier_warnings([ob])
+    assert len(warnings) == 1
+    assert "modifiers that move vertices (Mirror): the bake uses the base mesh" in warnings[0]
+    arm = bpy.data.objects.new("Rig", bpy.data.armatures.new("Rig"))
+    bpy.context.scene.collection.objects.link(arm)
+    ob.modifiers.new("Armature", "ARMATURE").object = arm
+    warnings = mesh_io.modifier_warnings([ob])
+    assert any("Armature modifier (Armature): the bake uses the rest geometry" in w for w in warnings)
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}  # baked, with a WARNING report
+    from boxmarch.export import scene
+
+    report = scene.export_objects(bpy.context, [ob], "GLTF", str(tmp_path / "m.glb"))
+    assert any("the export uses the base mesh" in w for w in report["warnings"])
+
+
+def test_export_of_the_same_object_twice_exports_it_once(blender, tmp_path):
+    bpy = blender
+    ob = boxes(bpy, "Baked")
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+    from boxmarch.export import scene
+
+    report = scene.export_objects(bpy.context, [ob, ob], "GLTF", str(tmp_path / "twice.glb"))
+    assert report["objects"] == ["Baked"]
+    assert bpy.data.objects.get("Baked") is not None and ob.data.users == 1
+    assert ob.name in bpy.context.scene.objects
+
+
+def test_multi_object_edit_mode_bakes_what_is_selected(blender):
+    bpy = blender
+    a = boxes(bpy, "A")
+    b = boxes(bpy, "B", offset=20.0)
+    bpy.context.view_layer.objects.active = a
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="SELECT")
+    bpy.ops.object.mode_set(mode="OBJECT")
+    for items in (b.data.vertices, b.data.edges, b.data.polygons):
+        items.foreach_set("select", np.zeros(len(items), bool))
+    bpy.ops.object.mode_set(mode="EDIT")
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+    bpy.ops.object.mode_set(mode="OBJECT")
+    assert a.data.color_attributes.get(mesh_io.OFFSET_ATTRIBUTE) is not None
+    assert b.data.color_attributes.get(mesh_io.OFFSET_ATTRIBUTE) is None  # left alone
+
+
+def test_a_non_colour_boxoffset_attribute_is_not_replaced(blender):
+    bpy = blender
+    ob = boxes(bpy)
+    ob.data.attributes.new(mesh_io.OFFSET_ATTRIBUTE, "FLOAT_VECTOR", "POINT")
+    with pytest.raises(RuntimeError, match="not a colour"):
+        bpy.ops.boxmarch.bake()
+    assert ob.data.attributes[mesh_io.OFFSET_ATTRIBUTE].data_type == "FLOAT_VECTOR"
+
+
+def test_instance_on_curve_refuses_a_spacing_that_would_create_millions(blender):
+    bpy = blender
+    curve_data = bpy.data.curves.new("Path", "CURVE")
+    spline = curve_data.splines.new("POLY")
+    spline.points.add(1)
+    spline.points[0].co = (0, 0, 0, 1)
+    spline.points[1].co = (10, 0, 0, 1)
+    curve = bpy.data.objects.new("Path", curve_data)
+    bpy.context.scene.collection.objects.link(curve)
+    cube = boxes(bpy, "Link", count=1, select=False)
+    bpy.context.view_layer.objects.active = curve
+    curve.select_set(True)
+    with pytest.raises(RuntimeError, match="would create 10,000,001 copies"):
+        bpy.ops.boxmarch.add_instance_on_curve(instance=cube.name, spacing=0.0)
+    assert not curve.modifiers
+
+
+def test_preview_render_draws_the_others_when_one_object_is_bad(blender):
+    bpy = blender
+    from boxmarch import preview
+
+    good = boxes(bpy, "Good")
+    bad = boxes(bpy, "Bad", offset=0.5)
+    for ob in (good, bad):
+        ob.select_set(True)
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+    good.boxmarch.preview = bad.boxmarch.preview = True
+    bad.data.vertices[0].co = (float("nan"), 0.0, 0.0)
+    bad.data.update()
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    bpy.context.scene.collection.objects.link(camera)
+    camera.location = (0.0, -30.0, 0.0)
+    camera.rotation_euler = (np.pi / 2, 0.0, 0.0)
+    with pytest.warns(RuntimeWarning, match="Bad"):
+        rgba, _ = preview.render(bpy.context.scene, camera, 64, 48)
+    assert (rgba[..., 3] > 0).sum() > 20
+    assert [s.split(":")[0] for s in preview.last_skipped] == ["Bad"]
+
+
+def test_integer_arguments_out_of_range_give_one_line(blender):
+    arrays = scenes.box_arrays(np.zeros((1, 3)), np.ones((1, 3)), np.eye(3)[None])
+    for call in (lambda: core.bake(*arrays, axis_turn=2**40), lambda: core.axis_turn_label(24),
+                 lambda: core.merge_targets(arrays[0], np.zeros(8, np.int32), -1)):
+        with pytest.raises(ValueError) as info:
+            call()
+        assert len(str(info.value)) < 120 and "\n" not in str(info.value)
+    edges = arrays[1].copy()
+    edges[0, 0] = -1
+    with pytest.raises(ValueError, match="edges"):
+        core.remove_vertices(arrays[0], edges, *arrays[2:], np.zeros(8, np.uint8), np.zeros(24, np.int32))
+
+
+# ---------------------------------------------------------------------------------------------
+# command line: every check before the first byte is written
+
+
+@pytest.fixture
+def baked_blend(blender, tmp_path):
+    bpy = blender
+    boxes(bpy, "Baked")
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+    path = tmp_path / "world.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    return path
+
+
+def digest(path):
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def test_cli_never_writes_the_input_or_a_partial_set_of_outputs(baked_blend, tmp_path):
+    before = digest(baked_blend)
+    r = run_module(["export", str(baked_blend), "--preset", "BLENDER", "--to", str(baked_blend)], tmp_path)
+    assert r.returncode == 2 and "is the input file" in r.stderr, r.stderr
+    assert digest(baked_blend) == before
+    (tmp_path / "out").mkdir()
+    r = run_module(["export", str(baked_blend), "--to", "out/q.glb", "--out", "missing_dir/q.blend"], tmp_path)
+    assert r.returncode == 2 and "missing_dir" in r.stderr, r.stderr
+    assert not (tmp_path / "out" / "q.glb").exists()
+    r = run_module(["export", str(baked_blend), "--to", "out/q.glb", "--out", "out/q.blend",
+                    "--json", "nowhere/r.json"], tmp_path)
+    assert r.returncode == 2 and "nowhere" in r.stderr, r.stderr
+    assert not os.listdir(tmp_path / "out")
+    r = run_module(["export", str(baked_blend), "--preset", "GLTF", "--to", "out/x.fbx"], tmp_path)
+    assert r.returncode == 2 and "must end in .glb" in r.stderr, r.stderr
+    assert not os.listdir(tmp_path / "out")
+    r = run_module(["export", str(baked_blend), "--objects", "Baked", "Baked", "--to", "out/twice.glb"], tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert digest(baked_blend) == before
+
+
+def test_cli_messages_and_clamped_values(baked_blend, tmp_path):
+    r = run_module([], tmp_path)
+    assert r.returncode == 2 and "boxmarch: error: boxmarch:" not in r.stderr, r.stderr
+    r = run_module(["pack-uv", str(baked_blend), "--padding", "-1"], tmp_path)
+    assert r.returncode == 2 and "--padding must be" in r.stderr, r.stderr
+    r = run_module(["dedup", str(baked_blend), "--tolerance", "inf"], tmp_path)
+    assert r.returncode == 2 and "--tolerance must be" in r.stderr, r.stderr
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only folders")
+def test_cli_read_only_out_folder_is_refused_first(baked_blend, tmp_path):
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    (tmp_path / "out").mkdir()
+    locked.chmod(0o555)
+    try:
+        r = run_module(["export", str(baked_blend), "--to", "out/q.glb", "--out", "locked/q.blend"], tmp_path)
+    finally:
+        locked.chmod(0o755)
+    assert r.returncode == 2 and "locked" in r.stderr, r.stderr
+    assert not os.listdir(tmp_path / "out")

@@ -1,0 +1,142 @@
+"""Hostile inputs through boxmarch.core (issue 14): allocation failures in worker threads, dense
+clusters at any epsilon, and the messages of out-of-range arguments. docs/CHECKS.md lists them."""
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from boxmarch import core
+
+HERE = Path(__file__).parent
+ADDON = HERE.parent / "addon"
+LIMIT_KB = 1_000_000  # the bare interpreter with numpy and boxmarch maps about 130 MB
+
+
+def run_limited(*args):
+    env = dict(os.environ, PYTHONPATH=str(ADDON))
+    cmd = f"ulimit -v {LIMIT_KB}; exec {sys.executable} {HERE / 'hostile' / 'memory_child.py'} " + " ".join(args)
+    return subprocess.run(["bash", "-c", cmd], env=env, capture_output=True, text=True, timeout=120)
+
+
+@pytest.mark.parametrize("args, allowed", [
+    (("pairs",), {"MemoryError"}),           # 1.8e9 pairs: the worker threads' lists cannot grow
+    (("merge", "2000000"), {"ok"}),          # 2,000,000 coincident vertices: linear memory
+    (("across", "2000000"), {"ok"}),         # an epsilon joining everything: linear memory
+    (("bake", "2600000"), {"MemoryError"}),  # 2.6 million boxes do not fit in 1 GB
+    (("bake", "200000"), {"ok"}),
+    (("render", "2000000"), {"ok"}),
+])
+def test_threaded_paths_raise_memory_error_under_an_address_space_limit(args, allowed):
+    r = run_limited(*args)
+    assert r.returncode == 0, (r.returncode, r.stdout, r.stderr[-2000:])
+    assert "terminate called" not in r.stderr
+    result = r.stdout.split()
+    assert result[:1] == [args[0]] and result[-1] in allowed, (r.stdout, r.stderr[-2000:])
+
+
+def test_run_parallel_carries_a_worker_exception_back_for_every_tool():
+    # One thread per part even on small inputs; each tool raises ValueError in the caller on bad
+    # input (checked before the threads), and works with many threads on good input.
+    pos = np.random.default_rng(3).random((50000, 3)).astype(np.float32)
+    sub = (np.arange(50000) // 10).astype(np.int32)
+    for threads in (1, 7, 64):
+        core.merge_targets(pos, sub, 5000, distance=1e-3, threads=threads)
+        core.select_linked_across(pos, np.zeros(50000, np.uint8), sub, 5000, epsilon=1e-3, threads=threads)
+
+
+def reference_merge(pos, sub, distance):
+    """Blender's star merge per submesh, by brute force (docs/TOOLS.md)."""
+    n = len(pos)
+    target = np.full(n, -1)
+    merged = pos.astype(np.float32).copy()
+    for v in range(n):
+        if target[v] >= 0:
+            continue
+        d = np.sqrt(((pos.astype(np.float64) - pos[v]) ** 2).sum(1))
+        members = [v] + [j for j in range(n) if j != v and target[j] < 0 and sub[j] == sub[v] and d[j] <= distance]
+        centroid = pos[members].astype(np.float64).mean(0)
+        if len(members) == 2:
+            t = members[0]
+        else:
+            dd = ((pos[members].astype(np.float64) - centroid) ** 2).sum(1)
+            t = members[int(np.argmin(dd))]
+        target[members] = t
+        if len(members) > 1:
+            merged[t] = centroid
+    return target
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_merge_targets_match_the_star_rule_on_dense_and_sparse_clusters(seed):
+    rng = np.random.default_rng(seed)
+    spots = rng.random((6, 3)) * 3
+    pos = (spots[rng.integers(0, 6, 400)] + rng.normal(0, 1e-3, (400, 3))).astype(np.float32)
+    pos[:50] = spots[0]  # a coincident pile
+    sub = rng.integers(0, 4, 400).astype(np.int32)
+    target, _, _ = core.merge_targets(pos, sub, 4, distance=2e-3)
+    assert np.array_equal(target, reference_merge(pos, sub, 2e-3))
+
+
+def test_merge_of_a_million_coincident_vertices_is_linear():
+    n = 1_000_000
+    pos = np.zeros((n, 3), np.float32)
+    t = time.perf_counter()
+    target, merged, count = core.merge_targets(pos, np.zeros(n, np.int32), 1, distance=1e-3)
+    assert time.perf_counter() - t < 5.0
+    assert count == n - 1 and (target == target[0]).all()
+    pass_of_vertex, passes = core.merge_passes(pos, np.zeros(n, np.int32), 1, distance=1e-3)
+    assert passes == 1 and (pass_of_vertex == 0).all()
+
+
+@pytest.mark.parametrize("epsilon", [0.0, 1e-4, 0.05, 100.0])
+def test_select_across_matches_pairs_at_any_epsilon(epsilon):
+    rng = np.random.default_rng(7)
+    pos = (rng.random((3000, 3)) * 0.5).astype(np.float32)
+    pos[:1000] = pos[0]  # dense: coincident vertices of many submeshes
+    sub = (np.arange(3000) // 3).astype(np.int32)
+    count = 1000
+    sel = np.zeros(3000, np.uint8)
+    sel[[5, 2000]] = 1
+    out = core.select_linked_across(pos, sel, sub, count, epsilon=epsilon)
+    out = out[0] if isinstance(out, tuple) else out
+    # Reference: components of the submeshes linked by the close pairs.
+    pairs = core.find_close_pairs(pos, epsilon, groups=sub)
+    parent = list(range(count))
+
+    def find(x):
+        while parent[x] != x:
+            x = parent[x]
+        return x
+    for i, j in pairs:
+        a, b = find(sub[i]), find(sub[j])
+        if a != b:
+            parent[max(a, b)] = min(a, b)
+    roots = {find(sub[5]), find(sub[2000])}
+    expected = np.array([find(s) in roots for s in sub], np.uint8)
+    assert np.array_equal(out, expected)
+
+
+def test_select_across_with_an_epsilon_joining_everything_is_linear():
+    n = 1_000_000
+    pos = np.random.default_rng(0).random((n, 3)).astype(np.float32)
+    sub = (np.arange(n) // 8).astype(np.int32)
+    sel = np.zeros(n, np.uint8)
+    sel[0] = 1
+    t = time.perf_counter()
+    out = core.select_linked_across(pos, sel, sub, n // 8, epsilon=10.0)
+    assert time.perf_counter() - t < 5.0
+    out = out[0] if isinstance(out, tuple) else out
+    assert out.all()
+
+
+def test_dedup_of_a_pile_of_copies_keeps_the_first():
+    box = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], np.float32)
+    k = 20000
+    pos = np.tile(box, (k, 1))
+    sub = (np.arange(8 * k) // 8).astype(np.int32)
+    duplicate_of, count = core.find_duplicate_submeshes(pos, sub, k, tolerance=1e-4)
+    assert count == k - 1 and duplicate_of[0] == -1 and (duplicate_of[1:] == 0).all()
