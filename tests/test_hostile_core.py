@@ -9,15 +9,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import boxmarch
 from boxmarch import core
 
 HERE = Path(__file__).parent
-ADDON = HERE.parent / "addon"
+# The child imports the same boxmarch as this test (an installed build in a clean clone, the
+# add-on folder in a developer build).
+PACKAGE_PARENT = Path(boxmarch.__file__).parent.parent
 LIMIT_KB = 1_000_000  # the bare interpreter with numpy and boxmarch maps about 130 MB
 
 
 def run_limited(*args):
-    env = dict(os.environ, PYTHONPATH=str(ADDON))
+    env = dict(os.environ, PYTHONPATH=str(PACKAGE_PARENT))
     cmd = f"ulimit -v {LIMIT_KB}; exec {sys.executable} {HERE / 'hostile' / 'memory_child.py'} " + " ".join(args)
     return subprocess.run(["bash", "-c", cmd], env=env, capture_output=True, text=True, timeout=120)
 

@@ -13,11 +13,11 @@ if case == "pairs":
     pos = np.zeros((60000, 3), np.float32)
     outcome(lambda: core.find_close_pairs(pos, 1.0, threads=4))
 if case == "merge":
-    n = 4_000_000
+    n = int(sys.argv[2])
     pos = np.zeros((n, 3), np.float32)
     outcome(lambda: core.merge_targets(pos, np.zeros(n, np.int32), 1, distance=1e-3, threads=4))
 if case == "across":
-    n = 4_000_000
+    n = int(sys.argv[2])
     pos = np.random.default_rng(0).random((n, 3), dtype=np.float32)
     sub = (np.arange(n) // 8).astype(np.int32)
     sel = np.zeros(n, np.uint8); sel[0] = 1
