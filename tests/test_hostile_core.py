@@ -106,20 +106,21 @@ def test_select_across_matches_pairs_at_any_epsilon(epsilon):
     sel[[5, 2000]] = 1
     out = core.select_linked_across(pos, sel, sub, count, epsilon=epsilon)
     out = out[0] if isinstance(out, tuple) else out
-    # Reference: components of the submeshes linked by the close pairs.
-    pairs = core.find_close_pairs(pos, epsilon, groups=sub)
-    parent = list(range(count))
-
-    def find(x):
-        while parent[x] != x:
-            x = parent[x]
-        return x
-    for i, j in pairs:
-        a, b = find(sub[i]), find(sub[j])
-        if a != b:
-            parent[max(a, b)] = min(a, b)
-    roots = {find(sub[5]), find(sub[2000])}
-    expected = np.array([find(s) in roots for s in sub], np.uint8)
+    # Reference, independent of the core's searches: submeshes joined by any vertex pair within
+    # epsilon (brute-force distances), grown from the selected submeshes until nothing is added.
+    p64 = pos.astype(np.float64)
+    close = ((p64[:, None, :] - p64[None, :, :]) ** 2).sum(-1) <= epsilon * epsilon
+    member = np.zeros((3000, count), bool)
+    member[np.arange(3000), sub] = True
+    linked = (member.T.astype(np.float32) @ close.astype(np.float32) @ member.astype(np.float32)) > 0
+    reached = np.zeros(count, bool)
+    reached[sub[[5, 2000]]] = True
+    while True:
+        grown = reached | linked[reached].any(0)
+        if (grown == reached).all():
+            break
+        reached = grown
+    expected = reached[sub].astype(np.uint8)
     assert np.array_equal(out, expected)
 
 
