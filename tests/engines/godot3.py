@@ -184,18 +184,23 @@ def _godot(cmd, project_dir, extra_env=()):
             raise RuntimeError(f"{cmd[0]} timed out after {TIMEOUT_S} s:\n{proc.communicate()[0]}") from None
 
 
-def _run_script(cmd, project_dir, script, extra_env=()):
-    """Runs a SceneTree ``script`` that writes to $BOXMARCH_OUT; returns that path and the output."""
-    tmp = tempfile.mkdtemp(prefix="boxmarch-godot-")
-    script_path = os.path.join(tmp, "script.gd")
-    with open(script_path, "w") as f:
-        f.write(script)
-    out_path = os.path.join(tmp, "out.bin")
-    log = _godot(cmd + ["-s", script_path], project_dir, dict(extra_env, BOXMARCH_OUT=out_path))
-    if not os.path.isfile(out_path):
-        shutil.rmtree(tmp)
-        raise RuntimeError(f"Godot wrote no result:\n{log[-6000:]}")
-    return tmp, out_path
+def _run_script(cmd, project_dir, script, params=None):
+    """Runs a SceneTree ``script`` that reads ``params`` (JSON) from $BOXMARCH_PARAMS and writes
+    $BOXMARCH_OUT; returns the bytes written. Raises with Godot's output when the script or a
+    shader failed to compile or run (Godot itself carries on after both)."""
+    with tempfile.TemporaryDirectory(prefix="boxmarch-godot-") as tmp:
+        paths = {name: os.path.join(tmp, name) for name in ("script.gd", "params.json", "out.bin")}
+        with open(paths["script.gd"], "w") as f:
+            f.write(script)
+        with open(paths["params.json"], "w") as f:
+            json.dump(params, f)
+        log = _godot(cmd + ["-s", paths["script.gd"]], project_dir,
+                     {"BOXMARCH_PARAMS": paths["params.json"], "BOXMARCH_OUT": paths["out.bin"]})
+        failed = [e for e in ("SCRIPT ERROR", "SHADER ERROR", "Parse Error") if e in log]
+        if failed or not os.path.isfile(paths["out.bin"]):
+            raise RuntimeError(f"Godot failed ({', '.join(failed) or 'no result'}):\n{log[-6000:]}")
+        with open(paths["out.bin"], "rb") as f:
+            return f.read()
 
 
 def import_gltf(glb_bytes, project_dir, *, compress, extra_files=None):
@@ -237,10 +242,7 @@ def dump_arrays(project_dir):
     "weights", "index": float64 arrays or None}``. Per-vertex arrays are (count, width): vertex
     and normal 3, uv and uv2 2, tangent, color, bones and weights 4; index is (n,). Values are the
     float32 Godot holds, widened exactly."""
-    tmp, out = _run_script([GODOT_SERVER, "--quit"], project_dir, _DUMP)
-    with open(out, "rb") as f:
-        data = f.read()
-    shutil.rmtree(tmp)
+    data = _run_script([GODOT_SERVER, "--quit"], project_dir, _DUMP)
     surfaces, at, surface_of = [], 0, {}
     while at < len(data):
         (n,) = struct.unpack_from("<I", data, at)
@@ -288,23 +290,16 @@ def render(project_dir, shader_code, *, width, height, camera, uniforms=None):
     """
     params = {"shader": shader_code, "uniforms": uniforms or {}, "camera": camera,
               "probes": _PROBES}
-    params_path = os.path.join(project_dir, ".boxmarch_shot.json")
-    with open(params_path, "w") as f:
-        json.dump(params, f)
     cmd = ["xvfb-run", "-a", "-s", f"-screen 0 {max(width, 640)}x{max(height, 480)}x24",
            GODOT, "--resolution", f"{width}x{height}"]
-    tmp, out = _run_script(cmd, project_dir, _SHOT, {"BOXMARCH_PARAMS": params_path})
-    with open(out, "rb") as f:
-        data = f.read()
-    shutil.rmtree(tmp)
-    os.remove(params_path)
+    data = _run_script(cmd, project_dir, _SHOT, params)
     w, h = struct.unpack_from("<II", data)
     pixels = np.frombuffer(data, dtype=np.uint8, count=w * h * 4, offset=8).reshape(h, w, 4).copy()
     cam_to_world, at = _read_xform(data, 8 + w * h * 4)
     probes = np.array(struct.unpack_from(f"<{5 * len(_PROBES)}d", data, at)).reshape(-1, 5)
     to_pixels = _fit_to_pixels(probes[:, :3], probes[:, 3:])
-    h = np.c_[probes[:, :3], np.ones(len(probes))] @ to_pixels.T
-    residual = np.abs(h[:, :2] / h[:, 2:3] - probes[:, 3:]).max()
+    fitted = np.c_[probes[:, :3], np.ones(len(probes))] @ to_pixels.T
+    residual = np.abs(fitted[:, :2] / fitted[:, 2:3] - probes[:, 3:]).max()
     if residual > 1e-3:
         raise RuntimeError(f"Godot's camera is not a 3x4 projection (fit residual {residual} px)")
     if pixels.shape[:2] != (height, width):
