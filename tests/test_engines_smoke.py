@@ -144,8 +144,11 @@ def test_threejs_reports_page_errors():
 
 WHITE_GDSHADER = """shader_type spatial;
 render_mode unshaded, cull_disabled;
-void fragment() { ALBEDO = vec3(1.0); }
+uniform float level = 0.0;
+uniform vec3 mask = vec3(0.0);
+void fragment() { ALBEDO = level * mask; }
 """
+WHITE_UNIFORMS = {"level": 1.0, "mask": [1.0, 1.0, 1.0]}  # black unless uniforms arrive
 
 
 @pytest.fixture(scope="module")
@@ -200,7 +203,8 @@ def test_godot_compressed_import_is_8_bit_colour_and_half_float_uv2(godot_projec
 
 @pytest.mark.parametrize("camera", [CAMERA, ORTHO], ids=["perspective", "ortho"])
 def test_godot_draws_where_its_camera_projects(godot_projects, tmp_path, camera):
-    shot = godot3.render(godot_projects[False], WHITE_GDSHADER, width=W, height=H, camera=camera)
+    shot = godot3.render(godot_projects[False], WHITE_GDSHADER, width=W, height=H, camera=camera,
+                         uniforms=WHITE_UNIFORMS)
     assert shot.pixels.shape == (H, W, 4)
     assert check_shot(shot) is None, check_shot(shot)
     if not threejs.available():  # the two engines' cameras agree for the same camera dict
@@ -210,7 +214,8 @@ def test_godot_draws_where_its_camera_projects(godot_projects, tmp_path, camera)
     # negative control: the Right quad's node moved 0.1 units in the file
     moved_project = tmp_path / "moved"
     godot3.import_gltf(make_glb(moved(0.1)), moved_project, compress=False)
-    moved_shot = godot3.render(moved_project, WHITE_GDSHADER, width=W, height=H, camera=camera)
+    moved_shot = godot3.render(moved_project, WHITE_GDSHADER, width=W, height=H, camera=camera,
+                          uniforms=WHITE_UNIFORMS)
     assert check_shot(moved_shot) is not None
 
 
