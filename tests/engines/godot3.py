@@ -3,7 +3,7 @@
 ``import_gltf`` writes a minimal project and runs the editor's headless import; ``dump_arrays``
 runs a SceneTree script that writes every surface array as float64 to a binary file (no text
 printing, so float32 values come back bit-exactly); ``render`` draws one frame with ``godot3``
-under ``xvfb-run`` (Mesa llvmpipe) and saves the viewport. Every Godot run gets a temporary
+under ``xvfb-run`` (Mesa llvmpipe) and writes the viewport's RGBA8 bytes. Every Godot run gets a temporary
 HOME/XDG tree and a time limit; failures raise ``RuntimeError`` with Godot's output.
 """
 import json
@@ -27,7 +27,8 @@ ARRAYS = {"vertex": 3, "normal": 3, "tangent": 4, "color": 4, "uv": 2, "uv2": 2,
 
 _PROJECT = 'config_version=4\n\n[application]\n\nconfig/name="boxmarch-engine-test"\n'
 
-# The mesh-array part shared by both scripts: walks the instanced scene, yields MeshInstances.
+# Shared by both scripts: the MeshInstances under a node, node -> root transforms, and
+# transforms written as 12 doubles.
 _COMMON = """extends SceneTree
 
 func mesh_instances(node, out):
@@ -206,8 +207,9 @@ def _run_script(cmd, project_dir, script, params=None):
 def import_gltf(glb_bytes, project_dir, *, compress, extra_files=None):
     """Writes a Godot 3 project holding ``model.glb`` (and ``extra_files``: relative path ->
     bytes) into ``project_dir`` and imports it headless with ``meshes/compress`` set to
-    ``compress``. The import settings are written as ``model.glb.import`` before the first
-    import, which Godot honours. Returns None; raises ``RuntimeError`` with Godot's output when
+    ``compress``. The settings go into ``model.glb.import`` and the cached import (``.import/``)
+    is deleted first: Godot honours an .import file present at import time, but editing it
+    alone does not trigger a re-import. Returns None; raises ``RuntimeError`` with Godot's output when
     the imported scene is missing afterwards."""
     os.makedirs(project_dir, exist_ok=True)
     files = {"project.godot": _PROJECT.encode(), "model.glb": glb_bytes,
