@@ -3,7 +3,7 @@
 ``import_gltf`` writes a minimal project and runs the editor's headless import; ``dump_arrays``
 runs a SceneTree script that writes every surface array as float64 to a binary file (no text
 printing, so float32 values come back bit-exactly); ``render`` draws one frame with ``godot3``
-under ``xvfb-run`` (Mesa llvmpipe) and saves the viewport. Every Godot run gets a temporary
+under ``xvfb-run`` (Mesa llvmpipe) and writes the viewport's RGBA8 bytes. Every Godot run gets a temporary
 HOME/XDG tree and a time limit; failures raise ``RuntimeError`` with Godot's output.
 """
 import json
@@ -27,7 +27,8 @@ ARRAYS = {"vertex": 3, "normal": 3, "tangent": 4, "color": 4, "uv": 2, "uv2": 2,
 
 _PROJECT = 'config_version=4\n\n[application]\n\nconfig/name="boxmarch-engine-test"\n'
 
-# The mesh-array part shared by both scripts: walks the instanced scene, yields MeshInstances.
+# Shared by both scripts: the MeshInstances under a node, node -> root transforms, and
+# transforms written as 12 doubles.
 _COMMON = """extends SceneTree
 
 func mesh_instances(node, out):
@@ -184,26 +185,31 @@ def _godot(cmd, project_dir, extra_env=()):
             raise RuntimeError(f"{cmd[0]} timed out after {TIMEOUT_S} s:\n{proc.communicate()[0]}") from None
 
 
-def _run_script(cmd, project_dir, script, extra_env=()):
-    """Runs a SceneTree ``script`` that writes to $BOXMARCH_OUT; returns (the temporary folder,
-    that path, Godot's output)."""
-    tmp = tempfile.mkdtemp(prefix="boxmarch-godot-")
-    script_path = os.path.join(tmp, "script.gd")
-    with open(script_path, "w") as f:
-        f.write(script)
-    out_path = os.path.join(tmp, "out.bin")
-    log = _godot(cmd + ["-s", script_path], project_dir, dict(extra_env, BOXMARCH_OUT=out_path))
-    if not os.path.isfile(out_path):
-        shutil.rmtree(tmp)
-        raise RuntimeError(f"Godot wrote no result:\n{log[-6000:]}")
-    return tmp, out_path, log
+def _run_script(cmd, project_dir, script, params=None):
+    """Runs a SceneTree ``script`` that reads ``params`` (JSON) from $BOXMARCH_PARAMS and writes
+    $BOXMARCH_OUT; returns the bytes written. Raises with Godot's output when the script or a
+    shader failed to compile or run (Godot itself carries on after both)."""
+    with tempfile.TemporaryDirectory(prefix="boxmarch-godot-") as tmp:
+        paths = {name: os.path.join(tmp, name) for name in ("script.gd", "params.json", "out.bin")}
+        with open(paths["script.gd"], "w") as f:
+            f.write(script)
+        with open(paths["params.json"], "w") as f:
+            json.dump(params, f)
+        log = _godot(cmd + ["-s", paths["script.gd"]], project_dir,
+                     {"BOXMARCH_PARAMS": paths["params.json"], "BOXMARCH_OUT": paths["out.bin"]})
+        failed = [e for e in ("SCRIPT ERROR", "SHADER ERROR", "Parse Error") if e in log]
+        if failed or not os.path.isfile(paths["out.bin"]):
+            raise RuntimeError(f"Godot failed ({', '.join(failed) or 'no result'}):\n{log[-6000:]}")
+        with open(paths["out.bin"], "rb") as f:
+            return f.read()
 
 
 def import_gltf(glb_bytes, project_dir, *, compress, extra_files=None):
     """Writes a Godot 3 project holding ``model.glb`` (and ``extra_files``: relative path ->
     bytes) into ``project_dir`` and imports it headless with ``meshes/compress`` set to
-    ``compress``. The import settings are written as ``model.glb.import`` before the first
-    import, which Godot honours. Returns None; raises ``RuntimeError`` with Godot's output when
+    ``compress``. The settings go into ``model.glb.import`` and the cached import (``.import/``)
+    is deleted first: Godot honours an .import file present at import time, but editing it
+    alone does not trigger a re-import. Returns None; raises ``RuntimeError`` with Godot's output when
     the imported scene is missing afterwards."""
     os.makedirs(project_dir, exist_ok=True)
     files = {"project.godot": _PROJECT.encode(), "model.glb": glb_bytes,
@@ -238,10 +244,7 @@ def dump_arrays(project_dir):
     "weights", "index": float64 arrays or None}``. Per-vertex arrays are (count, width): vertex
     and normal 3, uv and uv2 2, tangent, color, bones and weights 4; index is (n,). Values are the
     float32 Godot holds, widened exactly."""
-    tmp, out, _log = _run_script([GODOT_SERVER, "--quit"], project_dir, _DUMP)
-    with open(out, "rb") as f:
-        data = f.read()
-    shutil.rmtree(tmp)
+    data = _run_script([GODOT_SERVER, "--quit"], project_dir, _DUMP)
     surfaces, at, surface_of = [], 0, {}
     while at < len(data):
         (n,) = struct.unpack_from("<I", data, at)
@@ -289,26 +292,16 @@ def render(project_dir, shader_code, *, width, height, camera, uniforms=None):
     """
     params = {"shader": shader_code, "uniforms": uniforms or {}, "camera": camera,
               "probes": _PROBES}
-    params_path = os.path.join(project_dir, ".boxmarch_shot.json")
-    with open(params_path, "w") as f:
-        json.dump(params, f)
     cmd = ["xvfb-run", "-a", "-s", f"-screen 0 {max(width, 640)}x{max(height, 480)}x24",
            GODOT, "--resolution", f"{width}x{height}"]
-    tmp, out, log = _run_script(cmd, project_dir, _SHOT, {"BOXMARCH_PARAMS": params_path})
-    if "SHADER ERROR" in log:  # Godot draws nothing with a shader that failed to compile
-        shutil.rmtree(tmp)
-        raise RuntimeError("Godot could not compile the shader:\n" + log[log.index("SHADER ERROR") - 3000:][:6000])
-    with open(out, "rb") as f:
-        data = f.read()
-    shutil.rmtree(tmp)
-    os.remove(params_path)
+    data = _run_script(cmd, project_dir, _SHOT, params)
     w, h = struct.unpack_from("<II", data)
     pixels = np.frombuffer(data, dtype=np.uint8, count=w * h * 4, offset=8).reshape(h, w, 4).copy()
     cam_to_world, at = _read_xform(data, 8 + w * h * 4)
     probes = np.array(struct.unpack_from(f"<{5 * len(_PROBES)}d", data, at)).reshape(-1, 5)
     to_pixels = _fit_to_pixels(probes[:, :3], probes[:, 3:])
-    h = np.c_[probes[:, :3], np.ones(len(probes))] @ to_pixels.T
-    residual = np.abs(h[:, :2] / h[:, 2:3] - probes[:, 3:]).max()
+    fitted = np.c_[probes[:, :3], np.ones(len(probes))] @ to_pixels.T
+    residual = np.abs(fitted[:, :2] / fitted[:, 2:3] - probes[:, 3:]).max()
     if residual > 1e-3:
         raise RuntimeError(f"Godot's camera is not a 3x4 projection (fit residual {residual} px)")
     if pixels.shape[:2] != (height, width):

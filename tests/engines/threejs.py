@@ -13,6 +13,7 @@ import json
 import os
 import re
 import shutil
+import signal
 import subprocess
 import tempfile
 
@@ -23,7 +24,7 @@ from . import Shot
 THREE_JS = "/usr/share/javascript/three/build/three.min.js"
 GLTF_LOADER_JS = "/usr/share/javascript/three/examples/js/loaders/GLTFLoader.js"
 CHROMIUM = "chromium"
-TIMEOUT_S = 120
+TIMEOUT_S = 60
 
 _PAGE = """<!DOCTYPE html><html><body><pre id="out"></pre>
 <script>
@@ -133,13 +134,17 @@ def _run(glb_bytes, job_js, material_js=""):
         cmd = [CHROMIUM, "--headless", "--no-sandbox", "--use-angle=swiftshader",
                "--enable-unsafe-swiftshader", "--virtual-time-budget=10000",
                f"--user-data-dir={os.path.join(tmp, 'profile')}", "--dump-dom", "file://" + path]
+        # own session: on timeout every Chromium process (GPU, renderer) is killed with it
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                start_new_session=True)
         try:
-            proc = subprocess.run(cmd, capture_output=True, text=True, timeout=TIMEOUT_S)
-        except subprocess.TimeoutExpired as e:
-            raise RuntimeError(f"chromium timed out after {TIMEOUT_S} s:\n{e.stderr}") from None
-    found = re.search(r'<pre id="out">(.*?)</pre>', proc.stdout, re.S)
+            stdout, stderr = proc.communicate(timeout=TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            raise RuntimeError(f"chromium timed out after {TIMEOUT_S} s:\n{proc.communicate()[1][-4000:]}") from None
+    found = re.search(r'<pre id="out">(.*?)</pre>', stdout, re.S)
     if proc.returncode != 0 or not found or not found.group(1):
-        raise RuntimeError(f"chromium (exit {proc.returncode}) wrote no result:\n{proc.stderr[-4000:]}")
+        raise RuntimeError(f"chromium (exit {proc.returncode}) wrote no result:\n{stderr[-4000:]}")
     result = json.loads(html.unescape(found.group(1)))
     if isinstance(result, dict) and "errors" in result:
         raise RuntimeError("three.js page failed:\n" + "\n".join(result["errors"]))
