@@ -105,23 +105,23 @@ def channels(layout: str, data: BoxData) -> dict[str, np.ndarray]:
 
 def to_origin(layout: str, channels: dict) -> np.ndarray:
     """(n, 3) float64 object-space vectors from each vertex to its box origin, decoded from
-    ``channels`` as docs/ENGINES.md states for ``layout`` (UV_FRAME, NORMAL_FRAME)."""
+    ``channels`` as docs/ENGINES.md states for ``layout`` (UV_FRAME, NORMAL_FRAME, NORMAL_COLOR)."""
     c = {k: np.asarray(v, np.float64) for k, v in channels.items()}
     if layout == "UV_FRAME":
         q, f = np.concatenate([c["UV1"], c["UV2"]], 1), np.concatenate([c["UV3"], c["UV4"][:, :1]], 1)
         u = q[:, :3]
         return f + 2.0 * np.cross(u, np.cross(u, f) + q[:, 3:] * f)
-    if layout == "NORMAL_FRAME":
+    if layout in ("NORMAL_FRAME", "NORMAL_COLOR"):
         x, z = c["TANGENT"][:, :3], c["NORMAL"]
-        f = np.concatenate([c["UV1"], c["UV2"][:, :1]], 1)
+        f = np.concatenate([c["UV1"], c["UV2"][:, :1]], 1) if layout == "NORMAL_FRAME" else c["COLOR"][:, :3]
         return x * f[:, :1] + np.cross(z, x) * c["TANGENT"][:, 3:] * f[:, 1:2] + z * f[:, 2:]
     raise ValueError(f"no decode of {layout} here")
 
 
-def half_float_error(layout: str, channels: dict, half_float_uvs, flip_v: bool) -> float:
-    """Worst decode error, over the largest half-extent of the vertex's box, when an importer
-    stores the UV channels ``half_float_uvs`` (numbers n of "UVn") as half floats (v read as
-    1 - v first when ``flip_v``, as the file then holds it)."""
+def with_half_float_uvs(channels: dict, half_float_uvs, flip_v: bool) -> dict:
+    """``channels`` as an importer holds them when it stores the UV channels ``half_float_uvs``
+    (numbers n of "UVn") as half floats, rounded to nearest (v read as 1 - v first when
+    ``flip_v``, as the file then holds it): Unity's vertex compression, Unreal's default UVs."""
     stored = dict(channels)
     for n in half_float_uvs:
         uv = np.array(channels[f"UV{n}"], np.float32)
@@ -131,7 +131,31 @@ def half_float_error(layout: str, channels: dict, half_float_uvs, flip_v: bool) 
         if flip_v:
             uv[:, 1] = np.float32(1.0) - uv[:, 1]
         stored[f"UV{n}"] = uv
-    half = np.concatenate([channels["UV5"], channels["UV6"][:, :1]], 1) if layout == "UV_FRAME" else \
-        np.concatenate([channels["UV3"], channels["UV4"][:, :1]], 1)
+    return stored
+
+
+def with_godot3_compression(channels: dict) -> dict:
+    """``channels`` as Godot 3.2's glTF import holds them with mesh compression on (its
+    default), as measured by tests/test_engines_smoke.py: colour 8-bit unorm, truncated and
+    clamped to [0, 1]; normal and tangent 8-bit snorm, truncated."""
+    stored = dict(channels)
+    if "COLOR" in channels:
+        stored["COLOR"] = np.clip(np.floor(np.asarray(channels["COLOR"], np.float32) * np.float32(255))
+                                  / np.float32(255), 0.0, 1.0)
+    for name in ("NORMAL", "TANGENT"):
+        if name in channels:
+            stored[name] = np.trunc(np.asarray(channels[name], np.float32) * np.float32(127)) / np.float32(127)
+    return stored
+
+
+def import_error(layout: str, channels: dict, stored: dict) -> float:
+    """Worst decode error, over the largest half-extent of the vertex's box, of the channels an
+    importer ``stored`` against the exported ``channels``."""
+    if layout == "UV_FRAME":
+        half = np.concatenate([channels["UV5"], channels["UV6"][:, :1]], 1)
+    elif layout == "NORMAL_FRAME":
+        half = np.concatenate([channels["UV3"], channels["UV4"][:, :1]], 1)
+    else:
+        half = np.asarray(channels["TABLE"])[np.asarray(channels["COLOR"])[:, 3].astype(np.int64), :3]
     miss = np.linalg.norm(to_origin(layout, stored) - to_origin(layout, channels), axis=1)
-    return float((miss / np.maximum(half.max(axis=1), 1e-30)).max()) if len(miss) else 0.0
+    return float((miss / np.maximum(np.abs(half).max(axis=1), 1e-30)).max()) if len(miss) else 0.0

@@ -112,8 +112,11 @@ def _target_copy(mesh, preset, layout, index_base):
     uv_channels = sorted(int(c[2:]) for c in channels if c.startswith("UV"))
     stats.update(layout=layout, uv_channels=uv_channels, channels=sorted(channels))
     if preset.half_float_uvs and layout in ("UV_FRAME", "NORMAL_FRAME"):
-        stats["default_import_error"] = layouts.half_float_error(
-            layout, channels, [n for n in preset.half_float_uvs if n in uv_channels], preset.flip_v_on_import)
+        stored = layouts.with_half_float_uvs(channels, [n for n in preset.half_float_uvs if n in uv_channels],
+                                             preset.flip_v_on_import)
+        stats["default_import_error"] = layouts.import_error(layout, channels, stored)
+    if preset.godot3_compression:
+        stats["default_import_error"] = layouts.import_error(layout, channels, layouts.with_godot3_compression(channels))
     return copy, channels, stats
 
 
@@ -202,7 +205,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
                 os.remove(temp)
     default_errors = [m["default_import_error"] for m in stats if "default_import_error" in m]
     if default_errors:
-        warnings.append(f"with {preset.label}'s default import settings (half-float UVs) the decode error is "
+        warnings.append(f"with {preset.label}'s default import settings ({preset.default_import_loss}) the decode error is "
                         f"{max(default_errors):.1e} of the half-extent, not float32's: {preset.import_settings}")
     return {"preset": preset.name, "layout": layout, "path": os.path.abspath(filepath),
             "default_import_error": max(default_errors) if default_errors else None,
