@@ -54,6 +54,16 @@ def _grow(mask, n):
     return mask
 
 
+def coverage_errors(covered, polygons, tol: int = 1):
+    """(stray, missing) (H, W) boolean masks: covered pixels farther than ``tol`` px from every
+    convex pixel-space polygon, and uncovered pixels deeper than ``tol`` px inside one."""
+    covered = np.asarray(covered, dtype=bool)
+    expected = np.zeros_like(covered)
+    for poly in polygons:
+        expected |= polygon_mask(covered.shape, poly)
+    return covered & ~_grow(expected, tol), ~covered & ~_grow(~expected, tol)
+
+
 def coverage_mismatch(covered, polygons, tol: int = 1) -> Optional[str]:
     """None when the (H, W) boolean ``covered`` mask equals the union of the convex pixel-space
     ``polygons`` up to ``tol`` pixels at every edge; else a message saying where it differs.
@@ -61,12 +71,7 @@ def coverage_mismatch(covered, polygons, tol: int = 1) -> Optional[str]:
     Every covered pixel must lie within ``tol`` px of a polygon, and every pixel deeper than
     ``tol`` px inside one must be covered, so a shape drawn ``tol + 1`` px off fails.
     """
-    covered = np.asarray(covered, dtype=bool)
-    expected = np.zeros_like(covered)
-    for poly in polygons:
-        expected |= polygon_mask(covered.shape, poly)
-    stray = covered & ~_grow(expected, tol)
-    missing = ~covered & ~_grow(~expected, tol)
+    stray, missing = coverage_errors(covered, polygons, tol)
     if not stray.any() and not missing.any():
         return None
     msg = []

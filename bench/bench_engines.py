@@ -1,0 +1,161 @@
+"""Engine figures: per engine and layout, what arrives after the engine's importer and how close
+the shipped shader's pixels land, on the mixed scene of tests/engine_scene.py (1 x 0.6 x 0.2,
+0.02 x 0.02 x 0.1 and 5 x 5 x 5 boxes).
+
+Decode columns: worst origin error / largest half-extent, axis error (1 - cos), half-extent
+error / half-extent, decoding what the engine holds with docs/ENGINES.md's formulas against the
+generating boxes. Render columns (real engines only): the tightest tolerance in pixels at which
+the raymarched boxes at 0.6 of each box's half-extents cover their projected silhouettes (the
+tests require <= 1), for the shipped shader and for its identity-frame negative control.
+Unity and Unreal do not run here: their rows decode the exported FBX numbers through the
+documented importer rules (tests/test_engine_fbx_models.py).
+
+    python bench/bench_engines.py
+"""
+import os
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path[:0] = [HERE, os.path.join(HERE, "..", "tests")]
+import bpy  # noqa: E402
+
+import boxmarch  # noqa: E402
+from boxmarch.export import scene as export_scene  # noqa: E402
+from common import table  # noqa: E402
+from engine_scene import (TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame,  # noqa: E402
+                          frame_and_size_errors, silhouettes)
+from engines import coverage_errors, godot3, threejs  # noqa: E402
+from fbx_reader import read_fbx_geometry  # noqa: E402
+import test_engine_fbx_models as fbx_models  # noqa: E402
+import test_engine_godot3 as godot_test  # noqa: E402
+import test_engine_threejs as three_test  # noqa: E402
+
+IDENTITY_JS = ("var n = g.getAttribute('normal').array, t = g.getAttribute('tangent').array;"
+               "for (var i = 0; i < n.length / 3; i++) { n.set([0, 0, 1], 3 * i); t.set([1, 0, 0, 1], 4 * i); }")
+IDENTITY_GODOT = ("  v_axis_z = vec3(0.0, 0.0, 1.0);\n  v_axis_x = vec3(1.0, 0.0, 0.0);\n"
+                  "  v_axis_y = vec3(0.0, 1.0, 0.0);")
+
+
+def tightest_tolerance(covered, polygons, limit=64):
+    """Smallest tolerance in px at which ``covered`` matches ``polygons`` (limit + 1: none)."""
+    for tol in range(limit + 1):
+        stray, missing = coverage_errors(covered, polygons, tol)
+        if not stray.any() and not missing.any():
+            return tol
+    return limit + 1
+
+
+def fmt(x):
+    return f"{x:.1e}"
+
+
+def threejs_rows(ob, scene, folder):
+    centres, sizes, rotations = scene
+    rows = []
+    for layout in ("NORMAL_FRAME", "UV_FRAME"):
+        path = os.path.join(folder, f"{layout}.glb")
+        report = export_scene.export_objects(bpy.context, [ob], "GLTF", path, layout)
+        glb = open(path, "rb").read()
+        start = time.perf_counter()
+        (mesh,) = threejs.load_attributes(glb)
+        a = mesh["attributes"]
+        box = box_of_vertex(a["position"], centres, sizes, rotations, TO_Y_UP)
+        if layout == "NORMAL_FRAME":
+            offset = np.concatenate([a["uv2"], a["texcoord_2"][:, :1]], axis=1)
+            half = np.concatenate([a["texcoord_3"], a["texcoord_4"][:, :1]], axis=1)
+            decoded = decode_normal_frame(a["position"], a["normal"], a["tangent"], offset, half)
+        else:  # UV1..UV6 = uv2, texcoord_2 .. texcoord_6
+            uvs = [a["uv2"]] + [a[f"texcoord_{n}"] for n in range(2, 7)]
+            decoded = fbx_models.decode_uv_frame(a["position"], uvs)[:3]
+        errors = frame_and_size_errors(*decoded, box, centres, sizes, rotations, TO_Y_UP)
+        render = negative = "-"
+        if layout == "NORMAL_FRAME":  # the shipped material reads the NORMAL_FRAME layout
+            expected = None
+            for name, tamper in (("shipped", ""), ("identity", IDENTITY_JS)):
+                shot = threejs.render(glb, three_test.material_js(), three_test.setup_js(three_test.BOX_MAP, tamper),
+                                      three_test.W, three_test.H, three_test.WIDE)
+                expected = silhouettes(shot, centres, three_test.INNER * sizes, rotations, TO_Y_UP)
+                tol = tightest_tolerance(three_test.covered(shot), expected)
+                render, negative = (tol, negative) if name == "shipped" else (render, tol)
+        rows.append(["three.js r111", "GLTF", layout, ", ".join(report["meshes"][0]["channels"]),
+                     *map(fmt, errors), render, negative, f"{time.perf_counter() - start:.1f}"])
+    return rows
+
+
+def godot_rows(ob, scene, folder):
+    centres, sizes, rotations = scene
+    path = os.path.join(folder, "godot.glb")
+    report = export_scene.export_objects(bpy.context, [ob], "GODOT3", path)
+    table_text = open(report["table"]).read()
+    rows = []
+    for compress in (False, True):
+        start = time.perf_counter()
+        project = os.path.join(folder, f"godot-{compress}")
+        godot3.import_gltf(open(path, "rb").read(), project, compress=compress,
+                           extra_files={"model.boxes.tres": table_text.encode()})
+        (s,) = godot3.dump_arrays(project)
+        box = box_of_vertex(s["vertex"], centres, sizes, rotations, TO_Y_UP)
+        index = np.clip(np.rint(s["color"][:, 3]).astype(int), 0, len(centres) - 1)
+        half = godot_test.table_texels(table_text)[index, :3]
+        decoded = decode_normal_frame(s["vertex"], s["normal"], s["tangent"], s["color"][:, :3], half)
+        errors = frame_and_size_errors(*decoded, box, centres, sizes, rotations, TO_Y_UP)
+        render = negative = "-"
+        if not compress:
+            uniforms = {"box_table": "res://model.boxes.tres", "max_steps": 256}
+            tols = []
+            for replacement in (None, IDENTITY_GODOT):
+                shot = godot3.render(project, godot_test.shader(replacement), width=godot_test.W,
+                                     height=godot_test.H, camera=godot_test.WIDE, uniforms=uniforms)
+                expected = silhouettes(shot, centres, godot_test.INNER * sizes, rotations, TO_Y_UP)
+                tols.append(tightest_tolerance(shot.pixels[..., :3].max(axis=2) > 20, expected))
+            render, negative = tols
+        label = "compress on (default)" if compress else "compress off"
+        rows.append([f"Godot 3.2, {label}", "GODOT3", "NORMAL_COLOR", ", ".join(report["meshes"][0]["channels"]),
+                     *map(fmt, errors), render, negative, f"{time.perf_counter() - start:.1f}"])
+    return rows
+
+
+def fbx_rows(ob, scene, folder):
+    centres, sizes, rotations = scene
+    rows = []
+    for preset, engine, compressed in (("UNITY", fbx_models.UNITY, (2, 3, 4, 5, 6)),
+                                       ("UNREAL", fbx_models.UNREAL, (1, 2, 3, 4, 5, 6))):
+        path = os.path.join(folder, f"{preset}.fbx")
+        report = export_scene.export_objects(bpy.context, [ob], preset, path)
+        raw = read_fbx_geometry(path)
+        for label, halves in (("full precision", ()), ("default (half UVs)", compressed)):
+            start = time.perf_counter()
+            positions, uvs = fbx_models.imported(raw, engine, halves)
+            box = box_of_vertex(positions, centres, sizes, rotations, engine["to_engine"])
+            origins, axes, half, _index = fbx_models.decode_uv_frame(positions, uvs)
+            scale = engine["scale"]
+            errors = frame_and_size_errors(origins, axes, half, box, centres * scale, sizes * scale, rotations,
+                                           engine["to_engine"] / scale)
+            rows.append([f"{preset.title()} (model), {label}", preset, "UV_FRAME",
+                         ", ".join(report["meshes"][0]["channels"]), *map(fmt, errors), "-", "-",
+                         f"{time.perf_counter() - start:.1f}"])
+    return rows
+
+
+def main():
+    boxmarch.register()
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    ob, centres, sizes, rotations = baked_scene(bpy)
+    scene = (centres, sizes, rotations)
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        if threejs.available() is None:
+            rows += threejs_rows(ob, scene, folder)
+        if godot3.available() is None:
+            rows += godot_rows(ob, scene, folder)
+        rows += fbx_rows(ob, scene, folder)
+    print(table(["engine", "preset", "layout", "channels", "origin err", "axis err", "half err",
+                 "render px", "identity px", "s"], rows))
+
+
+if __name__ == "__main__":
+    main()
