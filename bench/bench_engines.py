@@ -27,10 +27,9 @@ import boxmarch  # noqa: E402
 from boxmarch.export import scene as export_scene  # noqa: E402
 from common import table  # noqa: E402
 from engine_scene import (TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame,  # noqa: E402
-                          frame_and_size_errors, silhouettes)
+                          decode_uv_frame, frame_and_size_errors, imported, silhouettes, table_texels, UNITY, UNREAL)
 from engines import coverage_errors, godot3, threejs  # noqa: E402
 from fbx_reader import read_fbx_geometry  # noqa: E402
-import test_engine_fbx_models as fbx_models  # noqa: E402
 import test_engine_godot3 as godot_test  # noqa: E402
 import test_engine_threejs as three_test  # noqa: E402
 
@@ -70,7 +69,7 @@ def threejs_rows(ob, scene, folder):
             decoded = decode_normal_frame(a["position"], a["normal"], a["tangent"], offset, half)
         else:  # UV1..UV6 = uv2, texcoord_2 .. texcoord_6
             uvs = [a["uv2"]] + [a[f"texcoord_{n}"] for n in range(2, 7)]
-            decoded = fbx_models.decode_uv_frame(a["position"], uvs)[:3]
+            decoded = decode_uv_frame(a["position"], uvs)[:3]
         errors = frame_and_size_errors(*decoded, box, centres, sizes, rotations, TO_Y_UP)
         render = negative = "-"
         if layout == "NORMAL_FRAME":  # the shipped material reads the NORMAL_FRAME layout
@@ -100,7 +99,7 @@ def godot_rows(ob, scene, folder):
         (s,) = godot3.dump_arrays(project)
         box = box_of_vertex(s["vertex"], centres, sizes, rotations, TO_Y_UP)
         index = np.clip(np.rint(s["color"][:, 3]).astype(int), 0, len(centres) - 1)
-        half = godot_test.table_texels(table_text)[index, :3]
+        half = table_texels(table_text)[index, :3]
         decoded = decode_normal_frame(s["vertex"], s["normal"], s["tangent"], s["color"][:, :3], half)
         errors = frame_and_size_errors(*decoded, box, centres, sizes, rotations, TO_Y_UP)
         render = negative = "-"
@@ -122,16 +121,16 @@ def godot_rows(ob, scene, folder):
 def fbx_rows(ob, scene, folder):
     centres, sizes, rotations = scene
     rows = []
-    for preset, engine, compressed in (("UNITY", fbx_models.UNITY, (2, 3, 4, 5, 6)),
-                                       ("UNREAL", fbx_models.UNREAL, (1, 2, 3, 4, 5, 6))):
+    for preset, engine, compressed in (("UNITY", UNITY, (2, 3, 4, 5, 6)),
+                                       ("UNREAL", UNREAL, (1, 2, 3, 4, 5, 6))):
         path = os.path.join(folder, f"{preset}.fbx")
         report = export_scene.export_objects(bpy.context, [ob], preset, path)
         raw = read_fbx_geometry(path)
         for label, halves in (("full precision", ()), ("default (half UVs)", compressed)):
             start = time.perf_counter()
-            positions, uvs = fbx_models.imported(raw, engine, halves)
+            positions, uvs = imported(raw, engine, halves)
             box = box_of_vertex(positions, centres, sizes, rotations, engine["to_engine"])
-            origins, axes, half, _index = fbx_models.decode_uv_frame(positions, uvs)
+            origins, axes, half, _index = decode_uv_frame(positions, uvs)
             scale = engine["scale"]
             errors = frame_and_size_errors(origins, axes, half, box, centres * scale, sizes * scale, rotations,
                                            engine["to_engine"] / scale)

@@ -1,6 +1,8 @@
 """The scene the engine tests export: boxes of very different shapes whose geometry the tests know
 independently of boxmarch (centres, sizes, rotations chosen here), and the checks that compare what
 an engine received or drew with that geometry. Blender-free except :func:`baked_scene`."""
+import re
+
 import numpy as np
 
 from boxmarch import scenes
@@ -67,6 +69,21 @@ def decode_normal_frame(position, normal, tangent, offset, half):
     return position + np.einsum("nij,nj->ni", axes, offset), axes, half
 
 
+def rotate(v, q):
+    """v rotated by unit quaternions q (x, y, z, w), float64, row by row."""
+    u, w = q[:, :3], q[:, 3:4]
+    return v + 2.0 * np.cross(u, np.cross(u, v) + w * v)
+
+
+def decode_uv_frame(positions, uvs):
+    """docs/ENGINES.md, UV_FRAME: q = (UV1, UV2), f = (UV3, UV4.x), index = UV4.y, h = (UV5, UV6.x)."""
+    q = np.concatenate(uvs[0:2], axis=1)
+    f = np.concatenate([uvs[2], uvs[3][:, :1]], axis=1)
+    h = np.concatenate([uvs[4], uvs[5][:, :1]], axis=1)
+    x, y, z = (rotate(np.tile(e, (len(q), 1)), q) for e in np.eye(3))
+    return positions + rotate(f, q), np.stack([x, y, z], axis=2), h, uvs[3][:, 1]
+
+
 def frame_and_size_errors(origins, axes, half, box, centres, sizes, rotations, to_engine):
     """Worst (origin error / largest half-extent, axis error, half-extent error / half-extent):
     each decoded local axis must be +- one generating box axis, and its half-extent that axis's
@@ -108,3 +125,32 @@ def silhouettes(shot, centres, sizes, rotations, to_engine, shrink=0.0):
         inner = np.asarray(s, float) - 2 * shrink * min(s) / 2
         out.append(convex_hull(shot.project(box_corners(c, inner, r) @ to_engine.T)))
     return out
+
+
+# The Unity and Unreal FBX importers, modelled from their documentation (docs/ENGINES.md).
+UNITY = {"to_engine": np.diag([-1.0, 1.0, 1.0]) @ TO_Y_UP, "from_file": np.diag([-1.0, 1.0, 1.0]), "scale": 1.0,
+         "flip_v": False}
+UNREAL = {"to_engine": np.diag([1.0, -1.0, 1.0]) * 100.0, "from_file": np.diag([1.0, -1.0, 1.0]) @ TO_Y_UP.T * 100.0,
+          "scale": 100.0, "flip_v": True}
+UV_NAMES = ["BoxQuatXY", "BoxQuatZW", "BoxOffsetXY", "BoxOffsetZIndex", "BoxHalfXY", "BoxHalfZ"]
+
+
+def imported(raw, engine, half_float_channels=()):
+    """(positions, UV1..UV6) as the engine stores them: positions through the importer's axes,
+    each UV map flipped if the importer flips v, then rounded to half floats where compressed."""
+    positions = raw["position"] @ engine["from_file"].T
+    uvs = []
+    for channel, name in enumerate(UV_NAMES, start=1):
+        uv = raw[name].astype(np.float32).copy()  # the engines keep float32 UVs
+        if engine["flip_v"]:
+            uv[:, 1] = np.float32(1.0) - uv[:, 1]
+        if channel in half_float_channels:
+            uv = uv.astype(np.float16).astype(np.float32)
+        uvs.append(uv.astype(np.float64))
+    return positions, uvs
+
+
+def table_texels(tres_text):
+    """float32 (texels, 4) of the RGBAFloat image in a Godot .tres (what Godot loads)."""
+    data = re.search(r"PoolByteArray\(([^)]*)\)", tres_text).group(1)
+    return np.frombuffer(bytes(int(b) for b in data.split(",")), "<f4").reshape(-1, 4).astype(np.float64)

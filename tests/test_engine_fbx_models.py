@@ -11,44 +11,8 @@ read as (u, 1 - v), UVs stored as half floats unless Use Full Precision UVs is o
 import numpy as np
 import pytest
 
-from engine_scene import TO_Y_UP, baked_scene, box_of_vertex, frame_and_size_errors
+from engine_scene import UNITY, UNREAL, UV_NAMES, baked_scene, box_of_vertex, decode_uv_frame, frame_and_size_errors, imported
 from fbx_reader import read_fbx_geometry
-
-UNITY = {"to_engine": np.diag([-1.0, 1.0, 1.0]) @ TO_Y_UP, "from_file": np.diag([-1.0, 1.0, 1.0]), "scale": 1.0,
-         "flip_v": False}
-UNREAL = {"to_engine": np.diag([1.0, -1.0, 1.0]) * 100.0, "from_file": np.diag([1.0, -1.0, 1.0]) @ TO_Y_UP.T * 100.0,
-          "scale": 100.0, "flip_v": True}
-UV_NAMES = ["BoxQuatXY", "BoxQuatZW", "BoxOffsetXY", "BoxOffsetZIndex", "BoxHalfXY", "BoxHalfZ"]
-
-
-def rotate(v, q):
-    u, w = q[:, :3], q[:, 3:4]
-    return v + 2.0 * np.cross(u, np.cross(u, v) + w * v)
-
-
-def imported(raw, engine, half_float_channels=()):
-    """(positions, UV1..UV6) as the engine stores them: positions through the importer's axes,
-    each UV map flipped if the importer flips v, then rounded to half floats where compressed."""
-    positions = raw["position"] @ engine["from_file"].T
-    uvs = []
-    for channel, name in enumerate(UV_NAMES, start=1):
-        uv = raw[name].astype(np.float32).copy()  # the engines keep float32 UVs
-        if engine["flip_v"]:
-            uv[:, 1] = np.float32(1.0) - uv[:, 1]
-        if channel in half_float_channels:
-            uv = uv.astype(np.float16).astype(np.float32)
-        uvs.append(uv.astype(np.float64))
-    return positions, uvs
-
-
-def decode_uv_frame(positions, uvs):
-    """docs/ENGINES.md, UV_FRAME: q = (UV1, UV2), f = (UV3, UV4.x), index = UV4.y, h = (UV5, UV6.x)."""
-    q = np.concatenate(uvs[0:2], axis=1)
-    f = np.concatenate([uvs[2], uvs[3][:, :1]], axis=1)
-    h = np.concatenate([uvs[4], uvs[5][:, :1]], axis=1)
-    x, y, z = (rotate(np.tile(e, (len(q), 1)), q) for e in np.eye(3))
-    return positions + rotate(f, q), np.stack([x, y, z], axis=2), h, uvs[3][:, 1]
-
 
 @pytest.fixture
 def scene(blender):

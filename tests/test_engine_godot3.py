@@ -3,25 +3,19 @@ Godot 3.2 (headless import, compression off as its report asks). The test decode
 Godot stored with the documented formula (docs/ENGINES.md) against the generating geometry, then
 Godot renders the shipped shader (shaders/godot3/boxmarch.shader) under xvfb and the pixels must
 cover each box's projected silhouette within 1 px; a frame replaced by the identity must fail."""
-import re
 
 import numpy as np
 import pytest
 
 from boxmarch.preview import sources
-from engine_scene import TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame, frame_and_size_errors, silhouettes
+from engine_scene import (TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame, frame_and_size_errors, silhouettes,
+                          table_texels)
 from engines import coverage_mismatch, godot3
 
 W, H = 320, 240
 WIDE = {"position": [2.0, 9.0, 14.0], "target": [0.5, -0.5, 0.0], "fov": 50, "near": 0.5, "far": 100}
 SHIPPED_MAP = "return sd_round_box(p, h, 0.1 * min3(h));"
 INNER = 0.6
-
-
-def table_texels(tres_text):
-    """float32 (texels, 4) of the RGBAFloat image in a Godot .tres (what Godot loads)."""
-    data = re.search(r"PoolByteArray\(([^)]*)\)", tres_text).group(1)
-    return np.frombuffer(bytes(int(b) for b in data.split(",")), "<f4").reshape(-1, 4).astype(np.float64)
 
 
 @pytest.fixture

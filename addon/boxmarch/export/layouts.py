@@ -148,14 +148,9 @@ def with_godot3_compression(channels: dict) -> dict:
     return stored
 
 
-def import_error(layout: str, channels: dict, stored: dict) -> float:
-    """Worst decode error, over the largest half-extent of the vertex's box, of the channels an
-    importer ``stored`` against the exported ``channels``."""
-    if layout == "UV_FRAME":
-        half = np.concatenate([channels["UV5"], channels["UV6"][:, :1]], 1)
-    elif layout == "NORMAL_FRAME":
-        half = np.concatenate([channels["UV3"], channels["UV4"][:, :1]], 1)
-    else:
-        half = np.asarray(channels["TABLE"])[np.asarray(channels["COLOR"])[:, 3].astype(np.int64), :3]
+def import_error(layout: str, channels: dict, stored: dict, half_extents) -> float:
+    """Worst decode error, over the largest half-extent ``half_extents`` (n, 3) of the vertex's
+    box, of the channels an importer ``stored`` against the exported ``channels``."""
     miss = np.linalg.norm(to_origin(layout, stored) - to_origin(layout, channels), axis=1)
-    return float((miss / np.maximum(np.abs(half).max(axis=1), 1e-30)).max()) if len(miss) else 0.0
+    reach = np.maximum(np.abs(np.asarray(half_extents, np.float64)).max(axis=1), 1e-30) if len(miss) else 1.0
+    return float((miss / reach).max()) if len(miss) else 0.0

@@ -114,9 +114,10 @@ def _target_copy(mesh, preset, layout, index_base):
     if preset.half_float_uvs and layout in ("UV_FRAME", "NORMAL_FRAME"):
         stored = layouts.with_half_float_uvs(channels, [n for n in preset.half_float_uvs if n in uv_channels],
                                              preset.flip_v_on_import)
-        stats["default_import_error"] = layouts.import_error(layout, channels, stored)
+        stats["default_import_error"] = layouts.import_error(layout, channels, stored, data.half_extents)
     if preset.godot3_compression:
-        stats["default_import_error"] = layouts.import_error(layout, channels, layouts.with_godot3_compression(channels))
+        stats["default_import_error"] = layouts.import_error(layout, channels, layouts.with_godot3_compression(channels),
+                                                             data.half_extents)
     return copy, channels, stats
 
 
