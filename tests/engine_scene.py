@@ -127,6 +127,22 @@ def silhouettes(shot, centres, sizes, rotations, to_engine, shrink=0.0):
     return out
 
 
+def rounded_box_mismatch(covered, shot, centres, sizes, rotations, to_engine, radius=0.1):
+    """None when rounded boxes of radius ``radius`` x the smallest half-extent lie between each
+    box and its core: every covered pixel within 1 px of a box silhouette, every pixel of a core
+    (the box shrunk by the radius) covered; else what differs."""
+    from engines import coverage_mismatch, polygon_mask
+
+    stray = coverage_mismatch(covered, silhouettes(shot, centres, sizes, rotations, to_engine))
+    if stray is not None and "covered outside" in stray:
+        return stray
+    inside = np.zeros(covered.shape, bool)
+    for polygon in silhouettes(shot, centres, sizes, rotations, to_engine, shrink=radius):
+        inside |= polygon_mask(covered.shape, polygon)
+    height, width = covered.shape
+    return coverage_mismatch(covered | ~inside, [np.array([[0, 0], [width, 0], [width, height], [0, height]])])
+
+
 # The Unity and Unreal FBX importers, modelled from their documentation (docs/ENGINES.md).
 UNITY = {"to_engine": np.diag([-1.0, 1.0, 1.0]) @ TO_Y_UP, "from_file": np.diag([-1.0, 1.0, 1.0]), "scale": 1.0,
          "flip_v": False}

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from boxmarch.preview import sources
-from engine_scene import (TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame, frame_and_size_errors, silhouettes,
-                          table_texels)
+from engine_scene import (TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame, frame_and_size_errors,
+                          rounded_box_mismatch, silhouettes, table_texels)
 from engines import coverage_mismatch, godot3
 
 W, H = 320, 240
@@ -73,6 +73,24 @@ def test_godot3_renders_each_box_at_its_own_size_and_the_negative_control_fails(
     wrong = godot3.render(project, shader(identity), width=W, height=H, camera=WIDE, uniforms=uniforms)
     assert coverage_mismatch(wrong.pixels[..., :3].max(axis=2) > 20, expected) is not None
 
+
+
+def test_godot3_shipped_shader_raymarches_a_rounded_box_of_each_box_own_size(imported):
+    """The shipped shader as it is (sd_round_box of the box's own half-extents, radius 0.1 x the
+    smallest): every covered pixel within 1 px of its box, every pixel of the box's core covered;
+    with every box given the first box's half-extents (a table of one size) the check fails."""
+    project, table, centres, sizes, rotations = imported
+    uniforms = {"box_table": "res://model.boxes.tres", "max_steps": 256}
+    code = (sources.shader_dir() / "godot3" / "boxmarch.shader").read_text()
+    shot = godot3.render(project, code, width=W, height=H, camera=WIDE, uniforms=uniforms)
+    covered = shot.pixels[..., :3].max(axis=2) > 20
+    mismatch = rounded_box_mismatch(covered, shot, centres, sizes, rotations, TO_Y_UP)
+    assert mismatch is None, mismatch
+    one_size = code.replace("texelFetch(box_table, ivec2(i % size.x, i / size.x), 0).xyz", "texelFetch(box_table, ivec2(0, 0), 0).xyz")
+    assert one_size != code
+    wrong = godot3.render(project, one_size, width=W, height=H, camera=WIDE, uniforms=uniforms)
+    assert rounded_box_mismatch(wrong.pixels[..., :3].max(axis=2) > 20, wrong, centres, sizes, rotations,
+                                TO_Y_UP) is not None
 
 def test_godot3_default_compression_error_is_what_the_report_states(blender, tmp_path):
     """Godot's default import (mesh compression on) quantizes the colour to clamped 8 bits and the
