@@ -144,3 +144,29 @@ def test_dedup_of_a_pile_of_copies_keeps_the_first():
     sub = (np.arange(8 * k) // 8).astype(np.int32)
     duplicate_of, count = core.find_duplicate_submeshes(pos, sub, k, tolerance=1e-4)
     assert count == k - 1 and duplicate_of[0] == -1 and (duplicate_of[1:] == 0).all()
+
+
+@pytest.mark.parametrize("size", [1e-30, 1e-36, 1e-38])
+def test_tiny_boxes_decode_exactly(size):
+    """Boxes down to 1e-38 units: every offset fits float32 once scaled (alpha up to 2e38), so the
+    decode is as exact as for a 1-unit box and nothing is called degenerate."""
+    from boxmarch import scenes
+
+    rotations = scenes.random_rotations(3, np.random.default_rng(5))
+    centres = np.array([[0.0, 0.0, 0.0], [4.0, 0.0, 0.0], [0.0, 4.0, 0.0]]) * size
+    arrays = scenes.box_arrays(centres, np.array([[1.0, 0.6, 0.2]] * 3) * size, rotations)
+    r = core.bake(*arrays)
+    assert r.degenerate == 0 and r.max_relative_error < 1e-6, (r.degenerate, r.max_relative_error)
+    f = (r.offsets[:, :3].astype(np.float64) * 2 - 1) / r.offsets[:, 3:].astype(np.float64)
+    assert np.isfinite(f).all()
+
+
+def test_boxes_below_float32_normal_range_are_reported_degenerate():
+    """1e-40 units: the positions are denormal float32 and the offsets cannot be scaled into a
+    finite alpha; the bake counts the box as degenerate instead of reporting it baked."""
+    from boxmarch import scenes
+
+    arrays = scenes.box_arrays(np.zeros((1, 3)), np.array([[1.0, 0.6, 0.2]]) * 1e-40, np.eye(3)[None])
+    r = core.bake(*arrays)
+    assert r.degenerate == 1
+    assert np.isfinite(r.offsets).all()

@@ -288,6 +288,9 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
             }
             const double worst = std::sqrt(worst2);
             const double extent = std::max({half.x, half.y, half.z});
+            // A box too small for its offsets to be encoded (denormal float32 positions) is as
+            // unusable as one without a frame.
+            if (source == FrameSource::Faces && extent > 0.0 && extent <= kSmallestEncodableOffset) ++acc.degenerate;
             acc.max_error = std::max(acc.max_error, worst);
             acc.max_relative_error = std::max(acc.max_relative_error, extent > 0.0 ? worst / extent : worst);
         }

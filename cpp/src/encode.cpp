@@ -15,10 +15,6 @@ double largest_component(const glm::dvec3* offsets, uint32_t count) {
     return m;
 }
 
-// Offsets smaller than this relative to float precision cannot be told from zero; treating them
-// as zero keeps 1 / largest finite in float32.
-constexpr double kSmallestScaledOffset = 1e-30;
-
 uint8_t byte_of(double unit) {  // unit in [0, 1] (clamped), rounded to the nearest byte
     return uint8_t(std::lround(std::clamp(unit, 0.0, 1.0) * 255.0));
 }
@@ -27,7 +23,7 @@ uint8_t byte_of(double unit) {  // unit in [0, 1] (clamped), rounded to the near
 
 float encode_float(const glm::dvec3* offsets, const uint32_t* vertices, uint32_t count, float* rgba) {
     const double largest = largest_component(offsets, count);
-    const double scale = largest > kSmallestScaledOffset ? 1.0 / largest : 1.0;
+    const double scale = largest > kSmallestEncodableOffset ? 1.0 / largest : 1.0;
     for (uint32_t i = 0; i < count; ++i) {
         float* out = rgba + size_t(vertices[i]) * 4;
         for (int k = 0; k < 3; ++k) out[k] = float(0.5 + 0.5 * scale * offsets[i][k]);

@@ -197,6 +197,11 @@ private:
 // encode.cpp: the colour encoding of local offsets f (vector from vertex to origin, box-local).
 // Decoding is the seed's GetFragToOrigin: f = (rgb * 2 - 1) / a, with one alpha per submesh.
 
+// Offsets up to this size are encoded as zero, so 1 / largest stays finite in float32: boxes of
+// 1e-30 units still encode exactly; smaller ones have denormal float32 positions and are counted
+// as degenerate by the bake.
+constexpr double kSmallestEncodableOffset = 1.0 / 3.4028234663852886e38;
+
 // Writes rgba[v * 4 ..] for each listed vertex v from offsets[i] (i-th listed vertex): rgb =
 // 0.5 + 0.5 * s * f, a = s, s = 1 / largest |component| (1 when every offset is zero).
 // Returns s.
