@@ -211,15 +211,26 @@ def test_cli_messages_and_clamped_values(baked_blend, tmp_path):
     assert r.returncode == 2 and "--tolerance must be" in r.stderr, r.stderr
 
 
-@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only folders")
-def test_cli_read_only_out_folder_is_refused_first(baked_blend, tmp_path):
+def test_cli_read_only_out_folder_is_refused_first(baked_blend, tmp_path, monkeypatch, capsys):
+    """Run in-process so that, as root (who may write into a mode 555 folder, so the kernel
+    would let the write through), the folder can be made unwritable the way the kernel reports
+    it to anyone else: os.access denies W_OK under it."""
+    from boxmarch import cli
+
     locked = tmp_path / "locked"
     locked.mkdir()
     (tmp_path / "out").mkdir()
     locked.chmod(0o555)
+    if os.geteuid() == 0:
+        real_access = os.access
+        monkeypatch.setattr(os, "access", lambda path, mode, *a, **k: (
+            False if mode & os.W_OK and str(os.path.abspath(path)).startswith(str(locked))
+            else real_access(path, mode, *a, **k)))
+    monkeypatch.chdir(tmp_path)
     try:
-        r = run_module(["export", str(baked_blend), "--to", "out/q.glb", "--out", "locked/q.blend"], tmp_path)
+        code = cli.run(["export", str(baked_blend), "--to", "out/q.glb", "--out", "locked/q.blend"])
     finally:
         locked.chmod(0o755)
-    assert r.returncode == 2 and "locked" in r.stderr, r.stderr
+    err = capsys.readouterr().err
+    assert code == 2 and "locked" in err, err
     assert not os.listdir(tmp_path / "out")
