@@ -121,9 +121,9 @@ def test_module_demo_prints_table_and_writes_checked_files(tmp_path, renderer):
         assert report["preview"] == "CPU reference raymarcher"
     meshes = read_glb(tmp_path / "out" / "demo.glb")
     assert [m["name"] for m in meshes] == ["BoxWorld", "Chains"]
-    assert sorted(os.listdir(tmp_path / "out")) == ["demo.blend", "demo.glb", "demo.png", "demo_godot3.boxes.tres",
-                                                    "demo_godot3.glb", "demo_gltf.glb", "demo_unity.fbx",
-                                                    "demo_unreal.fbx"]
+    assert sorted(os.listdir(tmp_path / "out")) == sorted([
+        "demo.blend", "demo.glb", "demo.png", "demo_gltf.glb", "demo_godot3.glb", "demo_godot3.boxes.tres",
+        "demo_unity.fbx", "demo_unreal.fbx"])
     for preset, layout in (("GLTF", "NORMAL_FRAME"), ("GODOT3", "NORMAL_COLOR"), ("UNITY", "UV_FRAME"),
                            ("UNREAL", "UV_FRAME")):
         assert re.search(rf"export {preset} .*layout {layout}", proc.stdout), proc.stdout
