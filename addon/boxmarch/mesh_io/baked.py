@@ -1,23 +1,21 @@
-"""The one place that reads and writes Blender mesh data.
-
-Everything moves through ``foreach_get``/``foreach_set`` on NumPy buffers of exactly the right
-type and size; nothing loops over vertices, corners or faces in Python. Layers are always looked
-up by name right before they are used: adding a layer may move the others in memory, so no
-reference to a layer is held across a call that adds one.
-"""
+"""The baked layers of a mesh: computing a bake (prepare_bake), storing it (PreparedBake.write) and
+reading what is stored (read_baked_layers: the one reader, used by the re-bake, the export and the
+preview)."""
 from __future__ import annotations
 
+import zlib
 from dataclasses import dataclass, field
 
-import bpy
 import numpy as np
 
-from . import core
+from .. import core
+from .arrays import read_positions, read_topology, read_uv, read_vertex_selection, write_uv
 
 OFFSET_ATTRIBUTE = "BoxOffset"
 QUAT_XY_UV = "BoxQuatXY"
 QUAT_ZW_UV = "BoxQuatZW"
 FINGERPRINT_ATTRIBUTE = ".boxmarch_fingerprint"
+LAYERS_DIGEST = "_boxmarch_layers"  # mesh custom property: checksum of the stored layers
 MAX_UV_MAPS = 8
 
 # Colour written where nothing was baked yet: decodes to f = 0 (float) and the identity frame.
@@ -29,111 +27,8 @@ class BakeInputError(ValueError):
     """The mesh cannot be baked as it is; the message says why. Nothing was written."""
 
 
-def new_mesh(name, positions, face_starts, face_sizes, corner_verts, edges=None):
-    """A new mesh datablock holding these faces, plus ``edges`` (E, 2) when given (loose edges
-    need them); Blender derives the faces' edges (and each corner's edge), as in any mesh made in
-    the editor."""
-    mesh = bpy.data.meshes.new(name)
-    mesh.vertices.add(len(positions))
-    mesh.vertices.foreach_set("co", np.asarray(positions, np.float32).reshape(-1))
-    if edges is not None and len(edges):
-        mesh.edges.add(len(edges))
-        mesh.edges.foreach_set("vertices", np.asarray(edges, np.int32).reshape(-1))
-    mesh.loops.add(len(corner_verts))
-    mesh.loops.foreach_set("vertex_index", np.asarray(corner_verts, np.int32))
-    mesh.polygons.add(len(face_starts))
-    mesh.polygons.foreach_set("loop_start", np.asarray(face_starts, np.int32))
-    if bpy.app.version < (4, 0, 0):  # 4.0 derives sizes from the starts
-        mesh.polygons.foreach_set("loop_total", np.asarray(face_sizes, np.int32))
-    mesh.update(calc_edges=True)
-    # Blender 5.0.1 leaves the edges it derives with an INT32_2D '.select_edge' (a copy of the
-    # edge layout), and RNA access to edge selection then crashes; selection layers are optional.
-    select_edge = mesh.attributes.get(".select_edge")
-    if select_edge is not None and select_edge.data_type != "BOOLEAN":
-        mesh.attributes.remove(select_edge)
-    return mesh
-
-
-def _fast_attribute(mesh, name):
-    """Blender 4+ keeps topology in internal attributes with contiguous storage (much faster to
-    read than the per-element RNA of mesh.loops or mesh.edges); 3.x has none of them."""
-    attr = mesh.attributes.get(name)
-    return attr if attr is not None and name.startswith(".") else None
-
-
-def read_positions(mesh) -> np.ndarray:
-    positions = np.empty(len(mesh.vertices) * 3, np.float32)
-    attr = mesh.attributes.get("position")
-    if attr is not None and attr.data_type == "FLOAT_VECTOR" and bpy.app.version >= (4, 0, 0):
-        attr.data.foreach_get("vector", positions)
-    else:
-        mesh.vertices.foreach_get("co", positions)
-    return positions.reshape(-1, 3)
-
-
-def read_topology(mesh):
-    """(edges (E, 2), face_starts (F,), face_sizes (F,), corner_verts (C,)), all int32."""
-    edges = np.empty(len(mesh.edges) * 2, np.int32)
-    attr = _fast_attribute(mesh, ".edge_verts")
-    if attr is not None:
-        attr.data.foreach_get("value", edges)
-    else:
-        mesh.edges.foreach_get("vertices", edges)
-    corner_verts = np.empty(len(mesh.loops), np.int32)
-    attr = _fast_attribute(mesh, ".corner_vert")
-    if attr is not None:
-        attr.data.foreach_get("value", corner_verts)
-    else:
-        mesh.loops.foreach_get("vertex_index", corner_verts)
-    edges = edges.reshape(-1, 2)
-    faces = None
-    attr = _fast_attribute(mesh, ".corner_edge")
-    if attr is not None:
-        corner_edges = np.empty(len(mesh.loops), np.int32)
-        attr.data.foreach_get("value", corner_edges)
-        faces = core.face_offsets_from_corner_edges(corner_verts, corner_edges, edges,
-                                                    len(mesh.vertices), len(mesh.polygons))
-    if faces is None:
-        face_starts = np.empty(len(mesh.polygons), np.int32)
-        mesh.polygons.foreach_get("loop_start", face_starts)
-        face_sizes = np.empty(len(mesh.polygons), np.int32)
-        mesh.polygons.foreach_get("loop_total", face_sizes)
-        faces = face_starts, face_sizes
-    return edges, faces[0], faces[1], corner_verts
-
-
-def read_vertex_selection(mesh) -> np.ndarray:
-    """uint8 per vertex, 1 where selected (object-mode data: leave Edit Mode first)."""
-    selected = np.zeros(len(mesh.vertices), bool)
-    attr = _fast_attribute(mesh, ".select_vert")
-    if attr is not None:
-        attr.data.foreach_get("value", selected)
-    elif bpy.app.version < (4, 0, 0):
-        mesh.vertices.foreach_get("select", selected)
-    return selected.view(np.uint8)
-
-
-def _uv_buffer_accessor(uv_layer):
-    """(collection, property) for bulk UV access: uv_layer.uv/'vector' from 3.5, data/'uv' before."""
-    return (uv_layer.uv, "vector") if hasattr(uv_layer, "uv") else (uv_layer.data, "uv")
-
-
-def _read_uv(mesh, name, corner_count) -> np.ndarray:
-    buf = np.empty(corner_count * 2, np.float32)
-    collection, prop = _uv_buffer_accessor(mesh.uv_layers[name])
-    collection.foreach_get(prop, buf)
-    return buf.reshape(-1, 2)
-
-
-def _write_uv(mesh, name, values: np.ndarray) -> None:
-    # From 3.5 a UV map is a FLOAT2 attribute. Writing it through the attribute API un-shares the
-    # array first; uv_layer.uv writes straight into an array a copied mesh (Shift+D) may share.
-    attr = mesh.attributes.get(name)
-    if attr is not None and attr.data_type == "FLOAT2":
-        attr.data.foreach_set("vector", values.reshape(-1))
-        return
-    collection, prop = _uv_buffer_accessor(mesh.uv_layers[name])
-    collection.foreach_set(prop, values.reshape(-1))
+class NotBakedError(ValueError):
+    """The mesh lacks a baked layer; the message names the mesh and the missing layers."""
 
 
 def modifier_warnings(objects, action: str = "bake") -> list:
@@ -155,30 +50,79 @@ def modifier_warnings(objects, action: str = "bake") -> list:
     return warnings
 
 
-LAYERS_DIGEST = "_boxmarch_layers"  # mesh custom property: checksum of the stored layers
+def _read_offset_colour(attr, count) -> np.ndarray:
+    """The stored BoxOffset colour, (count, 4) in the core's layout: float32 for FLOAT_COLOR, the
+    raw bytes (uint8) for BYTE_COLOR (color_srgb holds byte/255 untouched; color would apply the
+    sRGB curve)."""
+    buf = np.empty(count * 4, np.float32)
+    if attr.data_type == "BYTE_COLOR":
+        attr.data.foreach_get("color_srgb", buf)
+        return np.rint(buf * 255.0).astype(np.uint8).reshape(-1, 4)
+    attr.data.foreach_get("color", buf)
+    return buf.reshape(-1, 4)
 
 
 def stored_layers_digest(mesh):
     """Checksum (hex string) of what the bake stored: BoxOffset and both quaternion UV maps as
     they are now, or None when one of them is missing."""
-    import zlib
-
     attr = mesh.color_attributes.get(OFFSET_ATTRIBUTE)
     if attr is None or QUAT_XY_UV not in mesh.uv_layers or QUAT_ZW_UV not in mesh.uv_layers:
         return None
     count = len(mesh.vertices) if attr.domain == "POINT" else len(mesh.loops)
-    buf = np.empty(count * 4, np.float32)
-    if attr.data_type == "BYTE_COLOR":
-        attr.data.foreach_get("color_srgb", buf)
-        data = np.rint(buf * 255.0).astype(np.uint8)
-    else:
-        attr.data.foreach_get("color", buf)
-        data = buf
-    crc = zlib.crc32(memoryview(data).cast("B"))
+    crc = zlib.crc32(memoryview(np.ascontiguousarray(_read_offset_colour(attr, count))).cast("B"))
     crc = zlib.crc32(f"{attr.data_type}/{attr.domain}/{count}".encode(), crc)
     for name in (QUAT_XY_UV, QUAT_ZW_UV):
-        crc = zlib.crc32(memoryview(_read_uv(mesh, name, len(mesh.loops))).cast("B"), crc)
+        crc = zlib.crc32(memoryview(read_uv(mesh, name)).cast("B"), crc)
     return f"{crc:08x}"
+
+
+@dataclass
+class BakedLayers:
+    """What a bake stored in a mesh, as arrays."""
+
+    encoding: str             # FLOAT_COLOR or BYTE_COLOR
+    offsets: np.ndarray       # (vertices, 4) BoxOffset per vertex in the core's layout (float32 or uint8 raw bytes)
+    quat_xy: np.ndarray       # float32 (corners, 2)
+    quat_zw: np.ndarray       # float32 (corners, 2)
+    corner_verts: np.ndarray  # int32 (corners,)
+
+    def shader_offsets(self) -> np.ndarray:
+        """float32 (vertices, 4) BoxOffset as a shader reads it (raw bytes / 255 for 8-bit colour)."""
+        if self.offsets.dtype == np.uint8:
+            return self.offsets.astype(np.float32) / np.float32(255.0)
+        return self.offsets
+
+    def vertex_quaternions(self) -> np.ndarray:
+        """float32 (vertices, 4) (x, y, z, w): the quaternion of each vertex's last corner."""
+        return core.vertex_values_from_corners(np.concatenate([self.quat_xy, self.quat_zw], axis=1),
+                                               self.corner_verts, len(self.offsets))
+
+
+def _offsets_per_vertex(attr, corner_verts, vertex_count) -> np.ndarray:
+    """The stored BoxOffset per vertex in the core's layout; from the corner domain each vertex
+    takes its last corner's colour (the bake writes one colour to every corner of a vertex), a
+    vertex without corners the neutral colour."""
+    if attr.domain == "POINT":
+        return _read_offset_colour(attr, vertex_count)
+    corners = _read_offset_colour(attr, len(corner_verts))
+    per_vertex = np.empty((vertex_count, 4), corners.dtype)
+    per_vertex[:] = NEUTRAL_BYTE if corners.dtype == np.uint8 else NEUTRAL_FLOAT
+    per_vertex[corner_verts] = corners
+    return per_vertex
+
+
+def read_baked_layers(mesh, corner_verts=None) -> BakedLayers:
+    """The baked layers of ``mesh`` (``corner_verts`` as read_topology gives it, read when None).
+    Raises NotBakedError naming the missing layers."""
+    attr = mesh.color_attributes.get(OFFSET_ATTRIBUTE)
+    missing = ([OFFSET_ATTRIBUTE] if attr is None else []) + [
+        name for name in (QUAT_XY_UV, QUAT_ZW_UV) if name not in mesh.uv_layers]
+    if missing:
+        raise NotBakedError(f"mesh '{mesh.name}' is not baked (missing {', '.join(missing)})")
+    if corner_verts is None:
+        corner_verts = read_topology(mesh)[3]
+    return BakedLayers(attr.data_type, _offsets_per_vertex(attr, corner_verts, len(mesh.vertices)),
+                       read_uv(mesh, QUAT_XY_UV), read_uv(mesh, QUAT_ZW_UV), corner_verts)
 
 
 def _colour_matches(mesh, name, data_type, domain) -> bool:
@@ -186,28 +130,11 @@ def _colour_matches(mesh, name, data_type, domain) -> bool:
     return attr is not None and attr.data_type == data_type and attr.domain == domain
 
 
-def _read_offsets(mesh, settings, corner_verts, vertex_count) -> np.ndarray:
-    """The stored BoxOffset per vertex in the core's layout (float32 or uint8 RGBA)."""
-    attr = mesh.color_attributes[OFFSET_ATTRIBUTE]
-    count = vertex_count if attr.domain == "POINT" else len(corner_verts)
-    buf = np.empty(count * 4, np.float32)
-    attr.data.foreach_get("color" if settings.encoding == "FLOAT_COLOR" else "color_srgb", buf)
-    buf = buf.reshape(-1, 4)
-    if attr.domain == "CORNER":
-        per_vertex = np.empty((vertex_count, 4), np.float32)
-        per_vertex[:] = NEUTRAL_FLOAT
-        per_vertex[corner_verts] = buf
-        buf = per_vertex
-    if settings.encoding == "BYTE_COLOR":
-        return np.rint(buf * 255.0).astype(np.uint8)
-    return buf
-
-
 @dataclass
 class BakeSettings:
     angle_epsilon: float = 0.1
-    origin: str = "BOUNDS"
-    encoding: str = "FLOAT_COLOR"
+    origin: str = core.ORIGIN_MODES[0]
+    encoding: str = core.ENCODINGS[0]
     domain: str = "POINT"
     axis_turn: int = 0
     sort_axes_by_extent: bool = False
@@ -236,7 +163,7 @@ class PreparedBake:
         if r.baked == 0:  # nothing changed: the stored data is already this bake's
             return self.report
         corner_count = len(self.corner_verts)
-        previous_uv = {name: _read_uv(mesh, name, corner_count)
+        previous_uv = {name: read_uv(mesh, name)
                        for name in (QUAT_XY_UV, QUAT_ZW_UV) if self.keep_previous and name in mesh.uv_layers}
 
         if not _colour_matches(mesh, OFFSET_ATTRIBUTE, s.encoding, s.domain):
@@ -247,7 +174,8 @@ class PreparedBake:
         offsets = r.offsets
         if r.baked < r.submesh_count:  # the rows of submeshes not baked keep their stored colour
             if self.keep_previous:
-                offsets = _read_offsets(mesh, s, self.corner_verts, len(r.submesh_of_vertex))
+                offsets = _offsets_per_vertex(mesh.color_attributes[OFFSET_ATTRIBUTE], self.corner_verts,
+                                              len(r.submesh_of_vertex))
             else:  # a first bake of part of the mesh: the rest decodes to f = 0
                 neutral = NEUTRAL_FLOAT if s.encoding == "FLOAT_COLOR" else NEUTRAL_BYTE
                 offsets = np.empty_like(r.offsets)
@@ -284,7 +212,7 @@ class PreparedBake:
                 self.corner_verts = None
             if name not in mesh.uv_layers:
                 mesh.uv_layers.new(name=name, do_init=False)
-            _write_uv(mesh, name, uv)
+            write_uv(mesh, name, uv)
             del uv
         del buffer
 
@@ -321,7 +249,7 @@ def prepare_bake(mesh, settings: BakeSettings, selected_only: bool = False) -> P
     edges, face_starts, face_sizes, corner_verts = read_topology(mesh)
     mask = None
     if selected_only:
-        mask = read_vertex_selection(mesh)
+        mask = read_vertex_selection(mesh).view(np.uint8)
         if not mask.any():
             raise BakeInputError(f"mesh '{mesh.name}' has no selected vertex")
 
