@@ -27,6 +27,7 @@ def _build_axis_turn_items():
 # UI words of core.ORIGIN_MODES (the one list of them).
 _ORIGIN_LABELS = {"BOUNDS": ("Bounds Centre", "Centre of the submesh's bounding box in its own frame"),
                   "MEAN": ("Vertex Mean", "Average of the submesh's vertex positions")}
+_ORIGIN_ITEMS = [(mode, *_ORIGIN_LABELS[mode]) for mode in core.ORIGIN_MODES]
 
 
 class BOXMARCH_OT_bake(bpy.types.Operator):
@@ -41,7 +42,7 @@ class BOXMARCH_OT_bake(bpy.types.Operator):
         description="The second axis comes from the largest face at least this far from the first axis's plane")
     origin: EnumProperty(
         name="Origin", default=core.ORIGIN_MODES[0],
-        items=[(mode, *_ORIGIN_LABELS[mode]) for mode in core.ORIGIN_MODES])
+        items=_ORIGIN_ITEMS)
     encoding: EnumProperty(
         name="Colour", default="FLOAT_COLOR",
         items=[("FLOAT_COLOR", "Float", "32-bit float colour: exact decode"),
