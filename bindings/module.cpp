@@ -140,7 +140,8 @@ py::dict bake_py(const py::object& positions, const py::object& edges, const py:
     py::array_t<float> quaternions = empty<float>(m, 4), scales = empty<float>(m);
     py::array_t<double> origins = empty<double>(m, 3), half_extents = empty<double>(m, 3);
     py::array_t<uint8_t> sources = empty<uint8_t>(m), statuses = empty<uint8_t>(m);
-    BakeSubmeshes out;
+    BakeOutput out;
+    out.fingerprints = fingerprints.mutable_data();
     out.quaternions = quaternions.mutable_data();
     out.origins = origins.mutable_data();
     out.half_extents = half_extents.mutable_data();
@@ -149,12 +150,12 @@ py::dict bake_py(const py::object& positions, const py::object& edges, const py:
     out.statuses = statuses.mutable_data();
     BakeReport report;
     {
-        float* of = bytes ? nullptr : static_cast<float*>(offsets.mutable_data());
-        uint8_t* ob = bytes ? static_cast<uint8_t*>(offsets.mutable_data()) : nullptr;
+        if (bytes) out.offset_byte = static_cast<uint8_t*>(offsets.mutable_data());
+        else out.offset_float = static_cast<float*>(offsets.mutable_data());
         const uint8_t* mk = mask.is_none() ? nullptr : mask_arr.data();
         const uint32_t* pv = previous_fingerprints.is_none() ? nullptr : previous.data();
         py::gil_scoped_release release;
-        report = bake(mesh.view, submesh_of_vertex.data(), count, mk, pv, options, fingerprints.mutable_data(), of, ob, out);
+        report = bake(mesh.view, submesh_of_vertex.data(), count, mk, pv, options, out);
 #ifdef __GLIBC__
         // glibc keeps the freed scratch of a large bake in its heaps; hand it back before Blender
         // allocates the layers the bake writes, or it adds to the peak of the whole operation.
@@ -213,15 +214,9 @@ std::vector<float> column_major(const py::object& m, const char* name) {
 
 // ---- submesh tools ----
 
-// submesh_of_vertex as int32[vertex_count] with every id in 0..submesh_count-1.
-py::array_t<int32_t> checked_submeshes(const py::object& obj, py::ssize_t vertex_count, size_t submesh_count) {
-    auto ids = checked<int32_t>(obj, "submesh_of_vertex", vertex_count, 0);
-    const int32_t* d = ids.data();
-    for (py::ssize_t v = 0; v < ids.shape(0); ++v)
-        if (d[v] < 0 || size_t(d[v]) >= submesh_count)
-            throw py::value_error("submesh_of_vertex[" + std::to_string(v) + "] = " + std::to_string(d[v]) +
-                                  " is outside 0.." + std::to_string(submesh_count) + "-1");
-    return ids;
+// submesh_of_vertex as int32[vertex_count]; the core checks the ids' range.
+py::array_t<int32_t> checked_submeshes(const py::object& obj, py::ssize_t vertex_count) {
+    return checked<int32_t>(obj, "submesh_of_vertex", vertex_count, 0);
 }
 
 py::array_t<uint32_t> close_pairs_py(const py::object& positions, double radius, const py::object& groups,
@@ -258,7 +253,7 @@ py::dict pack_uv_py(const py::object& corner_uv, const py::object& positions, co
     auto uv = checked<float>(corner_uv, "corner_uv", py::ssize_t(mesh.view.corner_count), 2, true);
     const py::ssize_t n = py::ssize_t(mesh.view.vertex_count);
     auto height = checked<float>(vertex_height, "vertex_height", n, 0);
-    auto ids = checked_submeshes(submesh_of_vertex, n, submesh_count);
+    auto ids = checked_submeshes(submesh_of_vertex, n);
     py::array_t<uint8_t> mask;
     if (!face_mask.is_none()) mask = checked<uint8_t>(face_mask, "face_mask", py::ssize_t(mesh.view.face_count), 0);
     PackUvOptions options;
@@ -453,7 +448,7 @@ PYBIND11_MODULE(_core, m) {
     m.def("select_linked_submeshes",
           [](const py::object& selected, const py::object& submesh_of_vertex, size_t submesh_count) {
               auto sel = checked<uint8_t>(selected, "selected", -1, 0);
-              auto ids = checked_submeshes(submesh_of_vertex, sel.shape(0), submesh_count);
+              auto ids = checked_submeshes(submesh_of_vertex, sel.shape(0));
               py::array_t<uint8_t> out = empty<uint8_t>(sel.shape(0));
               size_t count;
               {
@@ -471,7 +466,7 @@ PYBIND11_MODULE(_core, m) {
              size_t submesh_count, double epsilon, int threads) {
               auto p = checked<float>(positions, "positions", -1, 3);
               auto sel = checked<uint8_t>(selected, "selected", p.shape(0), 0);
-              auto ids = checked_submeshes(submesh_of_vertex, p.shape(0), submesh_count);
+              auto ids = checked_submeshes(submesh_of_vertex, p.shape(0));
               py::array_t<uint8_t> out = empty<uint8_t>(p.shape(0));
               size_t count;
               {
@@ -490,7 +485,7 @@ PYBIND11_MODULE(_core, m) {
           [](const py::object& positions, const py::object& submesh_of_vertex, size_t submesh_count,
              const py::object& candidate, double tolerance, int threads) {
               auto p = checked<float>(positions, "positions", -1, 3);
-              auto ids = checked_submeshes(submesh_of_vertex, p.shape(0), submesh_count);
+              auto ids = checked_submeshes(submesh_of_vertex, p.shape(0));
               py::array_t<uint8_t> cand;
               if (!candidate.is_none()) cand = checked<uint8_t>(candidate, "candidate", py::ssize_t(submesh_count), 0);
               py::array_t<int32_t> out = empty<int32_t>(py::ssize_t(submesh_count));
@@ -512,7 +507,7 @@ PYBIND11_MODULE(_core, m) {
           [](const py::object& positions, const py::object& submesh_of_vertex, size_t submesh_count,
              const py::object& chosen, double distance, int threads) {
               auto p = checked<float>(positions, "positions", -1, 3);
-              auto ids = checked_submeshes(submesh_of_vertex, p.shape(0), submesh_count);
+              auto ids = checked_submeshes(submesh_of_vertex, p.shape(0));
               auto ch = checked<uint8_t>(chosen, "chosen", py::ssize_t(submesh_count), 0);
               py::array_t<int32_t> out = empty<int32_t>(p.shape(0));
               size_t passes;
@@ -532,7 +527,7 @@ PYBIND11_MODULE(_core, m) {
           [](const py::object& positions, const py::object& submesh_of_vertex, size_t submesh_count,
              const py::object& chosen, double distance, int threads) {
               auto p = checked<float>(positions, "positions", -1, 3);
-              auto ids = checked_submeshes(submesh_of_vertex, p.shape(0), submesh_count);
+              auto ids = checked_submeshes(submesh_of_vertex, p.shape(0));
               auto ch = checked<uint8_t>(chosen, "chosen", py::ssize_t(submesh_count), 0);
               py::array_t<int32_t> target = empty<int32_t>(p.shape(0));
               py::array_t<float> merged = empty<float>(p.shape(0), 3);
@@ -582,7 +577,7 @@ PYBIND11_MODULE(_core, m) {
               r["corner_source"] = cs[slice(0, counts.corners, 1)];
               r["corner_verts"] = cv[slice(0, counts.corners, 1)];
               r["corner_edges"] = ce[slice(0, counts.corners, 1)];
-              r["needs_blender"] = counts.needs_blender;
+              r["incomplete"] = counts.incomplete;
               return r;
           },
           py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"),

@@ -334,13 +334,13 @@ def test_weld_drops_collapsed_corners_faces_and_edges():
               np.array([0, 4], np.int32), np.array([4, 3], np.int32), np.array(quad + [0, 1, 4], np.int32))
     target = np.array([0, 0, 2, 3, 4, 5], np.int32)
     w = core.weld(*arrays, target)
-    assert not w["needs_blender"]
+    assert not w["incomplete"]
     assert w["vertex_source"].tolist() == [0, 2, 3, 4, 5]
     assert w["face_source"].tolist() == [0] and w["corner_verts"].tolist() == [0, 1, 2]
     assert w["edges"].tolist() == [[0, 1], [1, 2], [2, 0], [0, 3]]
     assert w["corner_edges"].tolist() == [0, 1, 2]
     # with Blender's corner edges the new ones come by lookup, with the same result
     by_lookup = core.weld(*arrays, target, corner_edges=np.array([0, 1, 2, 3, 0, 4, 5], np.int32))
-    assert all(np.array_equal(by_lookup[k], w[k]) for k in w if k != "needs_blender")
+    assert all(np.array_equal(by_lookup[k], w[k]) for k in w if k != "incomplete")
     split = core.weld(*arrays, np.array([0, 1, 0, 3, 4, 5], np.int32))
-    assert split["needs_blender"]
+    assert split["incomplete"]

@@ -213,7 +213,7 @@ class MergeByDistance:
             weld = None
             if count and mesh_io.can_rebuild(m.ob.data):
                 weld = core.weld(*m.topology, target, mesh_io.read_corner_edges(m.ob.data))
-            if count and (weld is None or weld["needs_blender"]):
+            if count and (weld is None or weld["incomplete"]):
                 return None
             welds.append((merged_positions, weld, count))
         return welds

@@ -1,6 +1,7 @@
 // UV islands packed in rows sorted by the height of their submesh: the highest at the top of the
 // unit square, one uniform scale for all, the largest whose row layout fits.
 #include "boxmarch/boxmarch.h"
+#include "internal.h"
 #include "spatial_hash.h"
 
 #include <algorithm>
@@ -70,6 +71,7 @@ size_t layout(const std::vector<double>& w, const std::vector<double>& h, double
 PackUvReport pack_uv_by_height(float* corner_uv, const MeshView& mesh, const uint8_t* face_mask,
                                const float* vertex_height, const int32_t* submesh_of_vertex,
                                size_t submesh_count, const PackUvOptions& options) {
+    check_submesh_ids(submesh_of_vertex, mesh.vertex_count, submesh_count);
     const double pad = options.padding;
     if (!std::isfinite(pad) || pad < 0.0 || pad >= 0.5)
         throw std::invalid_argument("padding must be in [0, 0.5), got " + std::to_string(pad));
