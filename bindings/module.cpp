@@ -275,11 +275,8 @@ py::dict pack_uv_py(const py::object& corner_uv, const py::object& positions, co
     return r;
 }
 
-}  // namespace
-
-PYBIND11_MODULE(_core, m) {
-    m.doc() = "boxmarch native core: submeshes, frames, offset encoding (see boxmarch.core for the documented API)";
-
+// Mesh checks and submeshes.
+void bind_mesh(py::module_& m) {
     m.def("validate_mesh", [](const py::object& p, const py::object& e, const py::object& fs, const py::object& fz,
                               const py::object& cv) { MeshArrays mesh(p, e, fs, fz, cv); },
           py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"), py::arg("corner_verts"),
@@ -317,7 +314,10 @@ PYBIND11_MODULE(_core, m) {
           },
           py::arg("corner_verts"), py::arg("corner_edges"), py::arg("edges"), py::arg("vertex_count"),
           "(face_starts int32, count): face boundaries recovered from corner edges; compare count with the real face count.");
+}
 
+// The bake and its corner expansion.
+void bind_bake(py::module_& m) {
     m.def("bake", &bake_py, py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"),
           py::arg("corner_verts"), py::kw_only(), py::arg("mask") = py::none(),
           py::arg("previous_fingerprints") = py::none(), py::arg("offsets") = py::none(),
@@ -355,7 +355,10 @@ PYBIND11_MODULE(_core, m) {
         }
         return all;
     }, "The 24 axis-aligned turns as row-major 3x3 matrices; column i is the new local axis i in the derived frame.");
+}
 
+// The CPU reference raymarcher and renderer.
+void bind_raymarch(py::module_& m) {
     m.def("raymarch",
           [](const py::object& origins, const py::object& directions, const py::object& half_extents, int sdf,
              int max_steps, float epsilon, float relaxation, float max_distance, int threads) {
@@ -441,6 +444,10 @@ PYBIND11_MODULE(_core, m) {
           },
           py::arg("sdf"), py::arg("points"), py::arg("half_extents"), "Distances of box-local points to a preset.");
     // ---- submesh tools ----
+}
+
+// Close pairs, the two selection tools and dedup.
+void bind_selection_tools(py::module_& m) {
     m.def("find_close_pairs", &close_pairs_py, py::arg("positions"), py::arg("radius"), py::kw_only(),
           py::arg("groups") = py::none(), py::arg("method") = "HASH", py::arg("threads") = 0,
           "uint32 (P, 2): every pair i < j within radius (inclusive), sorted; see boxmarch.core.find_close_pairs.");
@@ -502,7 +509,10 @@ PYBIND11_MODULE(_core, m) {
           py::arg("positions"), py::arg("submesh_of_vertex"), py::arg("submesh_count"), py::arg("candidate"),
           py::arg("tolerance"), py::arg("threads") = 0,
           "(duplicate_of int32 per submesh, -1 where kept; number of duplicates).");
+}
 
+// Merge per submesh and the weld.
+void bind_merge_tools(py::module_& m) {
     m.def("merge_passes",
           [](const py::object& positions, const py::object& submesh_of_vertex, size_t submesh_count,
              const py::object& chosen, double distance, int threads) {
@@ -583,7 +593,10 @@ PYBIND11_MODULE(_core, m) {
           py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"),
           py::arg("corner_verts"), py::arg("target"), py::arg("corner_edges") = py::none(),
           "The mesh after merging each vertex into target[v], as Blender's weld leaves it (see boxmarch.core.weld).");
+}
 
+// Pack UVs by height.
+void bind_pack_uv(py::module_& m) {
     m.def("pack_uv_by_height", &pack_uv_py, py::arg("corner_uv"), py::arg("positions"), py::arg("edges"),
           py::arg("face_starts"), py::arg("face_sizes"), py::arg("corner_verts"), py::kw_only(),
           py::arg("face_mask"), py::arg("vertex_height"), py::arg("submesh_of_vertex"), py::arg("submesh_count"),
@@ -600,4 +613,17 @@ PYBIND11_MODULE(_core, m) {
         .value("BAKED", SubmeshStatus::Baked)
         .value("UNCHANGED", SubmeshStatus::Unchanged)
         .value("NOT_SELECTED", SubmeshStatus::NotSelected);
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+    m.doc() = "boxmarch native core: submeshes, frames, offset encoding (see boxmarch.core for the documented API)";
+
+    bind_mesh(m);
+    bind_bake(m);
+    bind_raymarch(m);
+    bind_selection_tools(m);
+    bind_merge_tools(m);
+    bind_pack_uv(m);
 }
