@@ -88,6 +88,14 @@ def read_topology(mesh):
     return edges, faces[0], faces[1], corner_verts
 
 
+def read_triangles(mesh) -> np.ndarray:
+    """int32 (T, 3) vertex indices of the mesh's triangulation (Blender's loop triangles)."""
+    mesh.calc_loop_triangles()
+    triangles = np.empty(len(mesh.loop_triangles) * 3, np.int32)
+    mesh.loop_triangles.foreach_get("vertices", triangles)
+    return triangles.reshape(-1, 3)
+
+
 def read_corner_edges(mesh) -> np.ndarray:
     """Each corner's edge (to the next corner of its face), int32."""
     values = np.empty(len(mesh.loops), np.int32)

@@ -1,4 +1,4 @@
-"""Reads a baked mesh for the preview (the preview's side of mesh_io: foreach_get only)."""
+"""What the preview draws from a baked mesh, read through mesh_io."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -36,21 +36,13 @@ def read_baked(mesh) -> BakedMesh:
     submesh_of_vertex, _count = core.find_submeshes(positions, edges, face_starts, face_sizes, corner_verts)
     origins, box_q, box_half = core.boxes_from_bake(positions, colour, quaternions, submesh_of_vertex)
     return BakedMesh(positions=positions, offsets=colour, quaternions=quaternions,
-                     half_extents=box_half[submesh_of_vertex], triangles=_triangles(mesh), edges=edges,
+                     half_extents=box_half[submesh_of_vertex], triangles=mesh_io.read_triangles(mesh), edges=edges,
                      origins=origins, box_quaternions=box_q, box_half_extents=box_half)
-
-
-def _triangles(mesh) -> np.ndarray:
-    """int32 (T, 3) vertex indices of the mesh's triangulation."""
-    mesh.calc_loop_triangles()
-    triangles = np.empty(len(mesh.loop_triangles) * 3, np.int32)
-    mesh.loop_triangles.foreach_get("vertices", triangles)
-    return triangles.reshape(-1, 3)
 
 
 def read_triangles(mesh):
     """(positions float32 (N, 3), triangles int32 (T, 3) vertex indices) of any mesh."""
-    return mesh_io.read_positions(mesh), _triangles(mesh)
+    return mesh_io.read_positions(mesh), mesh_io.read_triangles(mesh)
 
 
 def vector_lines(baked: BakedMesh):
