@@ -8,7 +8,7 @@ import pytest
 
 from boxmarch import core, mesh_io, scenes
 from conftest import mesh_object
-from test_cli import run_module
+from helpers.blender_program import run_module
 
 
 def boxes(bpy, name="Boxes", count=4, offset=0.0, select=True):

@@ -159,7 +159,7 @@ def rotate_vector(v, q):
 
 
 def decode_offsets(rgba) -> np.ndarray:
-    """The seed's GetFragToOrigin in float64: f = (rgb * 2 - 1) / a. Accepts float RGBA, or uint8
+    """The blog post's GetFragToOrigin in float64: f = (rgb * 2 - 1) / a. Accepts float RGBA, or uint8
     RGBA (divided by 255 first, as a GPU reads normalised bytes)."""
     rgba = np.asarray(rgba)
     c = rgba.astype(np.float64) / 255.0 if rgba.dtype == np.uint8 else rgba.astype(np.float64)

@@ -206,7 +206,7 @@ private:
 };
 
 // encode.cpp: the colour encoding of local offsets f (vector from vertex to origin, box-local).
-// Decoding is the seed's GetFragToOrigin: f = (rgb * 2 - 1) / a, with one alpha per submesh.
+// Decoding is the blog post's GetFragToOrigin: f = (rgb * 2 - 1) / a, with one alpha per submesh.
 
 // Writes rgba[v * 4 ..] for each listed vertex v from offsets[i] (i-th listed vertex): rgb =
 // 0.5 + 0.5 * s * f, a = s, s = 1 / largest |component| (1 when every offset is zero).
