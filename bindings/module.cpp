@@ -140,7 +140,8 @@ py::dict bake_py(const py::object& positions, const py::object& edges, const py:
     py::array_t<float> quaternions = empty<float>(m, 4), scales = empty<float>(m);
     py::array_t<double> origins = empty<double>(m, 3), half_extents = empty<double>(m, 3);
     py::array_t<uint8_t> sources = empty<uint8_t>(m), statuses = empty<uint8_t>(m);
-    BakeSubmeshes out;
+    BakeOutput out;
+    out.fingerprints = fingerprints.mutable_data();
     out.quaternions = quaternions.mutable_data();
     out.origins = origins.mutable_data();
     out.half_extents = half_extents.mutable_data();
@@ -149,12 +150,12 @@ py::dict bake_py(const py::object& positions, const py::object& edges, const py:
     out.statuses = statuses.mutable_data();
     BakeReport report;
     {
-        float* of = bytes ? nullptr : static_cast<float*>(offsets.mutable_data());
-        uint8_t* ob = bytes ? static_cast<uint8_t*>(offsets.mutable_data()) : nullptr;
+        if (bytes) out.offset_byte = static_cast<uint8_t*>(offsets.mutable_data());
+        else out.offset_float = static_cast<float*>(offsets.mutable_data());
         const uint8_t* mk = mask.is_none() ? nullptr : mask_arr.data();
         const uint32_t* pv = previous_fingerprints.is_none() ? nullptr : previous.data();
         py::gil_scoped_release release;
-        report = bake(mesh.view, submesh_of_vertex.data(), count, mk, pv, options, fingerprints.mutable_data(), of, ob, out);
+        report = bake(mesh.view, submesh_of_vertex.data(), count, mk, pv, options, out);
 #ifdef __GLIBC__
         // glibc keeps the freed scratch of a large bake in its heaps; hand it back before Blender
         // allocates the layers the bake writes, or it adds to the peak of the whole operation.
@@ -213,15 +214,9 @@ std::vector<float> column_major(const py::object& m, const char* name) {
 
 // ---- submesh tools ----
 
-// submesh_of_vertex as int32[vertex_count] with every id in 0..submesh_count-1.
-py::array_t<int32_t> checked_submeshes(const py::object& obj, py::ssize_t vertex_count, size_t submesh_count) {
-    auto ids = checked<int32_t>(obj, "submesh_of_vertex", vertex_count, 0);
-    const int32_t* d = ids.data();
-    for (py::ssize_t v = 0; v < ids.shape(0); ++v)
-        if (d[v] < 0 || size_t(d[v]) >= submesh_count)
-            throw py::value_error("submesh_of_vertex[" + std::to_string(v) + "] = " + std::to_string(d[v]) +
-                                  " is outside 0.." + std::to_string(submesh_count) + "-1");
-    return ids;
+// submesh_of_vertex as int32[vertex_count]; the core checks the ids' range.
+py::array_t<int32_t> checked_submeshes(const py::object& obj, py::ssize_t vertex_count) {
+    return checked<int32_t>(obj, "submesh_of_vertex", vertex_count, 0);
 }
 
 py::array_t<uint32_t> close_pairs_py(const py::object& positions, double radius, const py::object& groups,
@@ -258,7 +253,7 @@ py::dict pack_uv_py(const py::object& corner_uv, const py::object& positions, co
     auto uv = checked<float>(corner_uv, "corner_uv", py::ssize_t(mesh.view.corner_count), 2, true);
     const py::ssize_t n = py::ssize_t(mesh.view.vertex_count);
     auto height = checked<float>(vertex_height, "vertex_height", n, 0);
-    auto ids = checked_submeshes(submesh_of_vertex, n, submesh_count);
+    auto ids = checked_submeshes(submesh_of_vertex, n);
     py::array_t<uint8_t> mask;
     if (!face_mask.is_none()) mask = checked<uint8_t>(face_mask, "face_mask", py::ssize_t(mesh.view.face_count), 0);
     PackUvOptions options;
@@ -280,11 +275,8 @@ py::dict pack_uv_py(const py::object& corner_uv, const py::object& positions, co
     return r;
 }
 
-}  // namespace
-
-PYBIND11_MODULE(_core, m) {
-    m.doc() = "boxmarch native core: submeshes, frames, offset encoding (see boxmarch.core for the documented API)";
-
+// Mesh checks and submeshes.
+void bind_mesh(py::module_& m) {
     m.def("validate_mesh", [](const py::object& p, const py::object& e, const py::object& fs, const py::object& fz,
                               const py::object& cv) { MeshArrays mesh(p, e, fs, fz, cv); },
           py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"), py::arg("corner_verts"),
@@ -322,7 +314,10 @@ PYBIND11_MODULE(_core, m) {
           },
           py::arg("corner_verts"), py::arg("corner_edges"), py::arg("edges"), py::arg("vertex_count"),
           "(face_starts int32, count): face boundaries recovered from corner edges; compare count with the real face count.");
+}
 
+// The bake and its corner expansion.
+void bind_bake(py::module_& m) {
     m.def("bake", &bake_py, py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"),
           py::arg("corner_verts"), py::kw_only(), py::arg("mask") = py::none(),
           py::arg("previous_fingerprints") = py::none(), py::arg("offsets") = py::none(),
@@ -360,7 +355,10 @@ PYBIND11_MODULE(_core, m) {
         }
         return all;
     }, "The 24 axis-aligned turns as row-major 3x3 matrices; column i is the new local axis i in the derived frame.");
+}
 
+// The CPU reference raymarcher and renderer.
+void bind_raymarch(py::module_& m) {
     m.def("raymarch",
           [](const py::object& origins, const py::object& directions, const py::object& half_extents, int sdf,
              int max_steps, float epsilon, float relaxation, float max_distance, int threads) {
@@ -446,6 +444,10 @@ PYBIND11_MODULE(_core, m) {
           },
           py::arg("sdf"), py::arg("points"), py::arg("half_extents"), "Distances of box-local points to a preset.");
     // ---- submesh tools ----
+}
+
+// Close pairs, the two selection tools and dedup.
+void bind_selection_tools(py::module_& m) {
     m.def("find_close_pairs", &close_pairs_py, py::arg("positions"), py::arg("radius"), py::kw_only(),
           py::arg("groups") = py::none(), py::arg("method") = "HASH", py::arg("threads") = 0,
           "uint32 (P, 2): every pair i < j within radius (inclusive), sorted; see boxmarch.core.find_close_pairs.");
@@ -453,7 +455,7 @@ PYBIND11_MODULE(_core, m) {
     m.def("select_linked_submeshes",
           [](const py::object& selected, const py::object& submesh_of_vertex, size_t submesh_count) {
               auto sel = checked<uint8_t>(selected, "selected", -1, 0);
-              auto ids = checked_submeshes(submesh_of_vertex, sel.shape(0), submesh_count);
+              auto ids = checked_submeshes(submesh_of_vertex, sel.shape(0));
               py::array_t<uint8_t> out = empty<uint8_t>(sel.shape(0));
               size_t count;
               {
@@ -471,7 +473,7 @@ PYBIND11_MODULE(_core, m) {
              size_t submesh_count, double epsilon, int threads) {
               auto p = checked<float>(positions, "positions", -1, 3);
               auto sel = checked<uint8_t>(selected, "selected", p.shape(0), 0);
-              auto ids = checked_submeshes(submesh_of_vertex, p.shape(0), submesh_count);
+              auto ids = checked_submeshes(submesh_of_vertex, p.shape(0));
               py::array_t<uint8_t> out = empty<uint8_t>(p.shape(0));
               size_t count;
               {
@@ -490,7 +492,7 @@ PYBIND11_MODULE(_core, m) {
           [](const py::object& positions, const py::object& submesh_of_vertex, size_t submesh_count,
              const py::object& candidate, double tolerance, int threads) {
               auto p = checked<float>(positions, "positions", -1, 3);
-              auto ids = checked_submeshes(submesh_of_vertex, p.shape(0), submesh_count);
+              auto ids = checked_submeshes(submesh_of_vertex, p.shape(0));
               py::array_t<uint8_t> cand;
               if (!candidate.is_none()) cand = checked<uint8_t>(candidate, "candidate", py::ssize_t(submesh_count), 0);
               py::array_t<int32_t> out = empty<int32_t>(py::ssize_t(submesh_count));
@@ -507,12 +509,15 @@ PYBIND11_MODULE(_core, m) {
           py::arg("positions"), py::arg("submesh_of_vertex"), py::arg("submesh_count"), py::arg("candidate"),
           py::arg("tolerance"), py::arg("threads") = 0,
           "(duplicate_of int32 per submesh, -1 where kept; number of duplicates).");
+}
 
+// Merge per submesh and the weld.
+void bind_merge_tools(py::module_& m) {
     m.def("merge_passes",
           [](const py::object& positions, const py::object& submesh_of_vertex, size_t submesh_count,
              const py::object& chosen, double distance, int threads) {
               auto p = checked<float>(positions, "positions", -1, 3);
-              auto ids = checked_submeshes(submesh_of_vertex, p.shape(0), submesh_count);
+              auto ids = checked_submeshes(submesh_of_vertex, p.shape(0));
               auto ch = checked<uint8_t>(chosen, "chosen", py::ssize_t(submesh_count), 0);
               py::array_t<int32_t> out = empty<int32_t>(p.shape(0));
               size_t passes;
@@ -532,7 +537,7 @@ PYBIND11_MODULE(_core, m) {
           [](const py::object& positions, const py::object& submesh_of_vertex, size_t submesh_count,
              const py::object& chosen, double distance, int threads) {
               auto p = checked<float>(positions, "positions", -1, 3);
-              auto ids = checked_submeshes(submesh_of_vertex, p.shape(0), submesh_count);
+              auto ids = checked_submeshes(submesh_of_vertex, p.shape(0));
               auto ch = checked<uint8_t>(chosen, "chosen", py::ssize_t(submesh_count), 0);
               py::array_t<int32_t> target = empty<int32_t>(p.shape(0));
               py::array_t<float> merged = empty<float>(p.shape(0), 3);
@@ -582,13 +587,16 @@ PYBIND11_MODULE(_core, m) {
               r["corner_source"] = cs[slice(0, counts.corners, 1)];
               r["corner_verts"] = cv[slice(0, counts.corners, 1)];
               r["corner_edges"] = ce[slice(0, counts.corners, 1)];
-              r["needs_blender"] = counts.needs_blender;
+              r["incomplete"] = counts.incomplete;
               return r;
           },
           py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"),
           py::arg("corner_verts"), py::arg("target"), py::arg("corner_edges") = py::none(),
           "The mesh after merging each vertex into target[v], as Blender's weld leaves it (see boxmarch.core.weld).");
+}
 
+// Pack UVs by height.
+void bind_pack_uv(py::module_& m) {
     m.def("pack_uv_by_height", &pack_uv_py, py::arg("corner_uv"), py::arg("positions"), py::arg("edges"),
           py::arg("face_starts"), py::arg("face_sizes"), py::arg("corner_verts"), py::kw_only(),
           py::arg("face_mask"), py::arg("vertex_height"), py::arg("submesh_of_vertex"), py::arg("submesh_count"),
@@ -605,4 +613,17 @@ PYBIND11_MODULE(_core, m) {
         .value("BAKED", SubmeshStatus::Baked)
         .value("UNCHANGED", SubmeshStatus::Unchanged)
         .value("NOT_SELECTED", SubmeshStatus::NotSelected);
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+    m.doc() = "boxmarch native core: submeshes, frames, offset encoding (see boxmarch.core for the documented API)";
+
+    bind_mesh(m);
+    bind_bake(m);
+    bind_raymarch(m);
+    bind_selection_tools(m);
+    bind_merge_tools(m);
+    bind_pack_uv(m);
 }

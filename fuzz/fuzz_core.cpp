@@ -12,6 +12,7 @@
 // fuzz_replay (BOXMARCH_TESTS=ON, any compiler) as a regression test.
 #include "boxmarch/boxmarch.h"
 #include "../tests/cpp/owned_mesh.h"
+#include "../cpp/src/internal.h"  // group_by_submesh: internal, fuzzed on its own
 
 #include <algorithm>
 #include <cmath>
@@ -127,7 +128,7 @@ struct BakeBuffers {
     std::vector<float> offset_float, quaternions, scales;
     std::vector<uint8_t> offset_byte, sources, statuses;
     std::vector<double> origins, half_extents;
-    BakeSubmeshes out;
+    BakeOutput out;
     // The required outputs get one spare element when empty (bake wants non-null pointers even
     // for an empty mesh); check_bake verifies the spare is never written.
     BakeBuffers(size_t vertex_count, size_t submesh_count)
@@ -135,6 +136,9 @@ struct BakeBuffers {
           quaternions(std::max<size_t>(submesh_count * 4, 1), 9.0f),
           scales(submesh_count, 9.0f), offset_byte(std::max<size_t>(vertex_count * 4, 1), 9), sources(submesh_count, 9),
           statuses(submesh_count, 9), origins(submesh_count * 3, 9.0), half_extents(submesh_count * 3, 9.0) {
+        out.fingerprints = fingerprints.data();
+        out.offset_float = offset_float.data();
+        out.offset_byte = offset_byte.data();
         out.quaternions = quaternions.data();
         out.origins = origins.data();
         out.half_extents = half_extents.data();
@@ -201,8 +205,7 @@ void fuzz_bake(Bytes& in, const FuzzMesh& m, const MeshView& view) {
     BakeReport report;
     const bool ok = accepted([&] {
         report = bake(view, submesh_of_vertex.data(), count, mask.empty() ? nullptr : mask.data(),
-                      previous.empty() ? nullptr : previous.data(), options, b.fingerprints.data(),
-                      b.offset_float.data(), b.offset_byte.data(), b.out);
+                      previous.empty() ? nullptr : previous.data(), options, b.out);
     });
     const bool options_valid = options.angle_epsilon > 0.0 && options.angle_epsilon <= M_PI / 2 &&
                                options.axis_turn >= 0 && options.axis_turn < 24;
@@ -224,7 +227,6 @@ void fuzz_bake(Bytes& in, const FuzzMesh& m, const MeshView& view) {
     if (mask.empty()) {
         BakeBuffers again(view.vertex_count, count);
         const BakeReport r2 = bake(view, submesh_of_vertex.data(), count, nullptr, b.fingerprints.data(), options,
-                                   again.fingerprints.data(), again.offset_float.data(), again.offset_byte.data(),
                                    again.out);
         if (r2.unchanged != count || r2.baked != 0) fail("re-bake with its own fingerprints was not all unchanged");
     }
@@ -240,8 +242,7 @@ void fuzz_bake_numbering(Bytes& in, const MeshView& view) {
     BakeBuffers b(view.vertex_count, count);
     BakeReport report;
     if (!accepted([&] {
-            report = bake(view, submesh_of_vertex.data(), count, nullptr, nullptr, options, b.fingerprints.data(),
-                          b.offset_float.data(), b.offset_byte.data(), b.out);
+            report = bake(view, submesh_of_vertex.data(), count, nullptr, nullptr, options, b.out);
         })) {
         if (!b.untouched()) fail("bake with a rejected numbering wrote output");
     }

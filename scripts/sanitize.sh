@@ -3,7 +3,7 @@
 # tests (build/sanitize), then the checks under it:
 #   bash scripts/sanitize.sh [build|cpp|python|all]     (default: all)
 # cpp: ctest (C++ tests and the fuzz corpus replay). python: the native Python test suite
-# (tests/test_core.py, test_properties.py, test_raymarch_core.py, test_tools_core.py) importing the
+# (tests/test_core.py, test_core_properties.py, test_raymarch_core.py, test_tools_core.py) importing the
 # sanitized module, with the ASan runtime preloaded into Python (leak detection off: CPython
 # keeps its objects to the end).
 # Any sanitizer report aborts with a nonzero exit. Assumes scripts/setup.sh ran once.
@@ -41,7 +41,7 @@ run_python() {
   stdcxx="$(${CXX:-g++} -print-file-name=libstdc++.so)"
   [ -f "$runtime" ] && [ -f "$stdcxx" ] || { echo "[sanitize] ASan runtime or libstdc++ not found" >&2; exit 1; }
   LD_PRELOAD="$runtime $stdcxx" PYTHONPATH="$build/pkg" "$PYTHON" -c "import boxmarch._core as c, sys; sys.exit(0 if '/$build/pkg/' in c.__file__ else 'not the sanitized module: ' + c.__file__)"
-  local suites=(tests/test_core.py tests/test_properties.py)
+  local suites=(tests/test_core.py tests/test_core_properties.py)
   [ -f tests/test_raymarch_core.py ] && suites+=(tests/test_raymarch_core.py)  # the CPU raymarcher (issue 4)
   [ -f tests/test_tools_core.py ] && suites+=(tests/test_tools_core.py)  # the submesh tools (issue 3)
   LD_PRELOAD="$runtime $stdcxx" PYTHONPATH="$build/pkg" "$PYTHON" -m pytest -q -p no:cacheprovider \

@@ -2,6 +2,7 @@
 tests that ask for the ``blender`` fixture; the core tests never import it."""
 import os
 import tempfile
+from pathlib import Path
 
 import pytest
 
@@ -47,3 +48,14 @@ def mesh_object(bpy, name, positions, edges, face_starts, face_sizes, corner_ver
         ob.select_set(True)
         bpy.context.view_layer.objects.active = ob
     return ob
+
+
+@pytest.fixture(scope="module")
+def package_parent(tmp_path_factory):
+    """A folder holding only the installed boxmarch package: Blender's own Python must not see
+    the rest of this Python's site-packages."""
+    import boxmarch
+
+    parent = tmp_path_factory.mktemp("blender_path")
+    (parent / "boxmarch").symlink_to(Path(boxmarch.__file__).parent, target_is_directory=True)
+    return parent

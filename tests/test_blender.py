@@ -64,7 +64,7 @@ def test_bake_operator_decodes_to_box_centres(blender):
     assert blender.ops.boxmarch.bake() == {"FINISHED"}
     mesh = ob.data
     names = [uv.name for uv in mesh.uv_layers]
-    assert names == ["UVMap", "BoxQuatXY", "BoxQuatZW"]  # quaternion in channels 1 and 2, as the seed reads it
+    assert names == ["UVMap", "BoxQuatXY", "BoxQuatZW"]  # quaternion in channels 1 and 2, as the blog post's shader reads it
     origins, q = decode_corners(mesh)
     truth = np.repeat(centres, 24, axis=0)
     half = np.repeat(sizes.max(axis=1) / 2, 24)

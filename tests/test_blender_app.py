@@ -1,46 +1,12 @@
 """The add-on inside Debian's Blender program (3.4): a background bake, and undo in a real window
 under Xvfb (the bpy module has no window, so undo needs the program)."""
 import json
-import os
 import shutil
 import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
-import boxmarch
-
-SCRIPTS = Path(__file__).parent / "blender_scripts"
-
-
-@pytest.fixture(scope="module")
-def package_parent(tmp_path_factory):
-    """A folder holding only the installed boxmarch package: Blender's own Python must not see
-    the rest of this Python's site-packages."""
-    parent = tmp_path_factory.mktemp("blender_path")
-    (parent / "boxmarch").symlink_to(Path(boxmarch.__file__).parent, target_is_directory=True)
-    return parent
-
-
-def blender_env(tmp_path):
-    env = dict(os.environ)
-    for var in ("HOME", "TMPDIR", "XDG_CACHE_HOME", "XDG_CONFIG_HOME"):
-        env[var] = str(tmp_path)
-    env.pop("PYTHONPATH", None)
-    # Debian's Blender finds its Python home through the first python3 on PATH: it must be the
-    # system one, not the (pyenv or venv) Python running these tests.
-    env["PATH"] = "/usr/bin:/bin:" + env.get("PATH", "")
-    return env
-
-
-def run_blender(args, tmp_path, timeout=240):
-    blender = shutil.which("blender")
-    assert blender, "Debian's blender is missing: run scripts/setup.sh"
-    proc = subprocess.run([blender, *args], env=blender_env(tmp_path), capture_output=True, text=True,
-                          timeout=timeout)
-    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    return proc
+from helpers.blender_program import SCRIPTS, blender_env, run_blender
 
 
 @pytest.mark.parametrize("encoding, tolerance", [("FLOAT_COLOR", 1e-5), ("BYTE_COLOR", 0.05)])

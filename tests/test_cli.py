@@ -7,17 +7,15 @@ import os
 import re
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-import boxmarch
 from boxmarch import scenes
 from fbx_reader import read_fbx_geometry
 from gltf_reader import read_glb
-from test_blender_app import SCRIPTS, blender_env, package_parent  # noqa: F401 (fixture)
+from helpers.blender_program import SCRIPTS, blender_env, run_module
 
 TO_GLTF = np.array([[1, 0, 0], [0, 0, 1], [0, -1, 0]], float)
 COUNT, SEED = 60, 11
@@ -27,16 +25,6 @@ def boxes_reference():
     """Centres and half-extents of the boxes make_boxes.py writes (same seed, same generator)."""
     (positions, *_), centres, sizes, _ = scenes.random_boxes(COUNT, seed=SEED, spread=10.0, size_range=(0.5, 3.0))
     return positions, centres, sizes.max(axis=1) / 2
-
-
-def run_module(args, cwd, timeout=240):
-    env = dict(os.environ, PYTHONPATH=str(Path(boxmarch.__file__).parent.parent))
-    home = Path(cwd).parent / f"{Path(cwd).name}-home"  # Blender's caches, outside the checked folder
-    home.mkdir(exist_ok=True)
-    for var in ("HOME", "TMPDIR", "XDG_CACHE_HOME"):
-        env[var] = str(home)
-    return subprocess.run([sys.executable, "-m", "boxmarch", *args], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=timeout)
 
 
 def run_blender_cli(blend, args, package_parent, cwd, timeout=240):

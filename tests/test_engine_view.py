@@ -6,7 +6,7 @@ import numpy as np
 from boxmarch import scenes
 from boxmarch.preview import sources
 from conftest import mesh_object
-from test_shaders import compile_glsl
+from helpers.glsl import compile_glsl
 
 # A sphere off-centre along local +x: not symmetric in local x, so a mirror moves it.
 OFF_CENTRE = "float map(vec3 p)\n{\n  return length(p - vec3(0.45, 0.0, 0.0)) - 0.3;\n}\n"

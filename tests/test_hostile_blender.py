@@ -8,7 +8,7 @@ import pytest
 
 from boxmarch import core, mesh_io, scenes
 from conftest import mesh_object
-from test_cli import run_module
+from helpers.blender_program import run_module
 
 
 def boxes(bpy, name="Boxes", count=4, offset=0.0, select=True):
@@ -19,12 +19,11 @@ def boxes(bpy, name="Boxes", count=4, offset=0.0, select=True):
 
 def worst_decode_error(bpy, ob):
     """Worst distance between a vertex's decode and its submesh's bounds centre, over the half-extent."""
-    from boxmarch.export import scene
-
     mesh = ob.data
-    offsets, qxy, qzw, corner_verts = scene.baked_layers(mesh)
+    layers = mesh_io.read_baked_layers(mesh)
+    offsets = layers.shader_offsets()
     q = np.zeros((len(mesh.vertices), 4), np.float32)
-    q[corner_verts] = np.concatenate([qxy, qzw], 1)
+    q[layers.corner_verts] = np.concatenate([layers.quat_xy, layers.quat_zw], 1)
     positions = mesh_io.read_positions(mesh).astype(np.float64)
     origins = positions + core.rotate_vector(core.decode_offsets(offsets), q)
     sub, count = core.find_submeshes(positions.astype(np.float32), *mesh_io.read_topology(mesh))
@@ -42,7 +41,7 @@ def test_stale_layers_do_not_survive_skip_unchanged(blender):
     assert worst_decode_error(bpy, ob) < 1e-5
     # An artist unwraps with BoxQuatXY active: the stored quaternion is overwritten.
     corners = len(ob.data.loops)
-    mesh_io._write_uv(ob.data, mesh_io.QUAT_XY_UV, np.random.default_rng(0).random((corners, 2)).astype(np.float32))
+    mesh_io.write_uv(ob.data, mesh_io.QUAT_XY_UV, np.random.default_rng(0).random((corners, 2)).astype(np.float32))
     assert worst_decode_error(bpy, ob) > 0.1
     prepared = mesh_io.prepare_bake(ob.data, mesh_io.BakeSettings())
     assert prepared.result.baked == prepared.result.submesh_count  # nothing skipped as "unchanged"

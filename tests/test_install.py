@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from test_blender_app import SCRIPTS, blender_env
+from helpers.blender_program import SCRIPTS, blender_env
 
 REPO = Path(__file__).resolve().parent.parent
 

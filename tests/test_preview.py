@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from boxmarch import core
-from test_blender_app import blender_env, package_parent, run_blender  # noqa: F401  (fixture)
+from helpers.blender_program import blender_env, run_blender
 
 SCRIPT = Path(__file__).parent / "blender_scripts" / "preview_check.py"
 OUTLINE_COLOR = (0.05, 0.05, 0.05)  # preview/draw.py OUTLINE_COLOR (that module needs bpy)

@@ -82,7 +82,7 @@ def test_new_sdf_text_template_compiles(blender, tmp_path):
     import subprocess
 
     from boxmarch.preview import sources
-    from test_shaders import blender_declarations
+    from helpers.glsl import blender_declarations
 
     ob, _, _ = baked_boxes(blender)
     assert blender.ops.boxmarch.new_sdf_text() == {"FINISHED"}

@@ -488,7 +488,7 @@ def test_tools_and_undo_in_blender_34_window(tmp_path):
     import subprocess
     from pathlib import Path
 
-    from test_blender_app import SCRIPTS, blender_env
+    from helpers.blender_program import SCRIPTS, blender_env
 
     import boxmarch
 

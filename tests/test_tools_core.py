@@ -26,7 +26,7 @@ def test_hash_and_kdtree_find_exactly_the_brute_force_pairs(radius):
 
 def test_pairs_straddling_cell_borders_and_zero():
     eps = 1e-4
-    # Pairs 1e-9 apart around 0 and around multiples of eps (the seed's grid borders), pairs just
+    # Pairs 1e-9 apart around 0 and around multiples of eps (the blog post's grid borders), pairs just
     # inside and just outside eps, at small and large coordinates.
     base = np.array([0.0, eps, -eps, 3 * eps, 1.0, -7.25, 100.0])
     points, expect = [], []
@@ -95,7 +95,7 @@ def test_select_across_follows_chains_touching_at_corners(gap, joined):
 
 
 def test_select_across_joins_exactly_the_pairs_within_epsilon_anywhere():
-    # The seed's grid joined 427 of 500 pairs 1e-5 apart; here every pair within eps is joined
+    # The blog post's grid joined 427 of 500 pairs 1e-5 apart; here every pair within eps is joined
     # and none beyond, wherever the pair lies (random positions, many near cell borders).
     rng = np.random.default_rng(2)
     count, eps = 500, 1e-4
@@ -150,7 +150,7 @@ def test_dedup_finds_jittered_shuffled_copies(jitter, expected):
     arrays = boxes_with_copies(100, jitter)
     ids, n = core.find_submeshes(*arrays)
     duplicate_of, count = core.find_duplicate_submeshes(arrays[0], ids, n, tolerance=1e-4)
-    # the seed's rounding removed 35 of 100 at jitter 1e-5
+    # the blog post's rounding removed 35 of 100 at jitter 1e-5
     assert count == expected
     if expected:
         assert np.array_equal(duplicate_of, np.r_[np.full(100, -1), np.arange(100)])
@@ -334,13 +334,13 @@ def test_weld_drops_collapsed_corners_faces_and_edges():
               np.array([0, 4], np.int32), np.array([4, 3], np.int32), np.array(quad + [0, 1, 4], np.int32))
     target = np.array([0, 0, 2, 3, 4, 5], np.int32)
     w = core.weld(*arrays, target)
-    assert not w["needs_blender"]
+    assert not w["incomplete"]
     assert w["vertex_source"].tolist() == [0, 2, 3, 4, 5]
     assert w["face_source"].tolist() == [0] and w["corner_verts"].tolist() == [0, 1, 2]
     assert w["edges"].tolist() == [[0, 1], [1, 2], [2, 0], [0, 3]]
     assert w["corner_edges"].tolist() == [0, 1, 2]
     # with Blender's corner edges the new ones come by lookup, with the same result
     by_lookup = core.weld(*arrays, target, corner_edges=np.array([0, 1, 2, 3, 0, 4, 5], np.int32))
-    assert all(np.array_equal(by_lookup[k], w[k]) for k in w if k != "needs_blender")
+    assert all(np.array_equal(by_lookup[k], w[k]) for k in w if k != "incomplete")
     split = core.weld(*arrays, np.array([0, 1, 0, 3, 4, 5], np.int32))
-    assert split["needs_blender"]
+    assert split["incomplete"]

@@ -33,6 +33,15 @@ def register():
         getattr(bpy.types, menu_name).append(draw)
 
 
+def ensure_registered():
+    """Register the add-on unless it is registered already (scripts and the command line, which
+    import the package without Blender loading it as an add-on)."""
+    import bpy
+
+    if not hasattr(bpy.types, "BOXMARCH_OT_bake"):
+        register()
+
+
 def unregister():
     import bpy
 

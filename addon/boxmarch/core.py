@@ -159,7 +159,7 @@ def rotate_vector(v, q):
 
 
 def decode_offsets(rgba) -> np.ndarray:
-    """The seed's GetFragToOrigin in float64: f = (rgb * 2 - 1) / a. Accepts float RGBA, or uint8
+    """The blog post's GetFragToOrigin in float64: f = (rgb * 2 - 1) / a. Accepts float RGBA, or uint8
     RGBA (divided by 255 first, as a GPU reads normalised bytes)."""
     rgba = np.asarray(rgba)
     c = rgba.astype(np.float64) / 255.0 if rgba.dtype == np.uint8 else rgba.astype(np.float64)
@@ -423,7 +423,7 @@ def weld(positions, edges, face_starts, face_sizes, corner_verts, target, corner
     lose corners that merge into the next one and go below 3 corners; edges are the distinct
     images of the old ones; survivors keep their order. Returns new 'edges', 'face_starts',
     'corner_verts', 'corner_edges' and, per new element, the old element it comes from
-    ('vertex_source', 'edge_source', 'face_source', 'corner_source'); 'needs_blender' is True
+    ('vertex_source', 'edge_source', 'face_source', 'corner_source'); 'incomplete' is True
     when Blender's weld would also split or dedupe faces (then merge with Blender itself).
     ``corner_edges`` (int32 per corner, the edge to the next corner, as Blender stores it) makes
     the new corner edges a lookup instead of a search."""
@@ -433,7 +433,7 @@ def weld(positions, edges, face_starts, face_sizes, corner_verts, target, corner
 
 def remove_vertices(positions, edges, face_starts, face_sizes, corner_verts, remove, corner_edges) -> dict:
     """The mesh without the vertices marked in ``remove`` and every edge and face touching them,
-    survivors in their order: the same dict as :func:`weld` (with 'needs_blender' False)."""
+    survivors in their order: the same dict as :func:`weld` (with 'incomplete' False)."""
     keep = ~_mask(remove, "remove", len(positions)).astype(bool)
     for name, values, limit in (("edges", edges, len(positions)), ("corner_verts", corner_verts, len(positions)),
                                 ("corner_edges", corner_edges, len(np.asarray(edges).reshape(-1, 2)))):
@@ -458,5 +458,5 @@ def remove_vertices(positions, edges, face_starts, face_sizes, corner_verts, rem
         "corner_source": np.flatnonzero(keep_corner).astype(np.int32),
         "corner_verts": new_index[corner_verts[keep_corner]].astype(np.int32),
         "corner_edges": new_edge[np.asarray(corner_edges)[keep_corner]].astype(np.int32),
-        "needs_blender": False,
+        "incomplete": False,
     }

@@ -132,31 +132,23 @@ uint32_t options_seed(const BakeOptions& o) {
     return uint32_t(h ^ (h >> 32));
 }
 
-BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t submesh_count,
-                const uint8_t* bake_mask, const uint32_t* previous_fingerprints,
-                const BakeOptions& options, uint32_t* fingerprints, float* offset_float,
-                uint8_t* offset_byte, const BakeSubmeshes& out) {
-    if (!(options.angle_epsilon > 0.0 && options.angle_epsilon <= M_PI / 2))
-        throw std::invalid_argument("angle_epsilon must be in (0, pi/2] radians");
-    double turn[9];
-    if (!axis_turn_matrix(turn, options.axis_turn)) throw std::invalid_argument("axis_turn must be in 0..23");
-    const bool bytes = options.encoding == ColorEncoding::Byte;
-    if (bytes ? !offset_byte : !offset_float) throw std::invalid_argument("no output array for the chosen colour encoding");
-    if (!out.quaternions || !fingerprints) throw std::invalid_argument("quaternion and fingerprint outputs are required");
-    if (first_out_of_range(submesh_of_vertex, mesh.vertex_count, submesh_count) < mesh.vertex_count)
-        throw std::invalid_argument("submesh_of_vertex does not match submesh_count");
+namespace {
 
-    Grouped g;
-    group(g, mesh, submesh_of_vertex, submesh_count);
-    for (size_t sm = 0; sm < submesh_count; ++sm)  // every submesh needs a vertex to anchor it
-        if (g.vertex_offsets[sm + 1] == g.vertex_offsets[sm])
-            throw std::invalid_argument("submesh_of_vertex does not match submesh_count: submesh " +
-                                        std::to_string(sm) + " has no vertex");
-    const glm::dmat3 turn_matrix(turn[0], turn[1], turn[2], turn[3], turn[4], turn[5], turn[6], turn[7], turn[8]);
-    const double cos_epsilon = std::cos(options.angle_epsilon);
-    const uint32_t seed = options_seed(options);
+// What every submesh of one bake shares: the mesh grouped by submesh, the options and outputs.
+struct BakeJob {
+    const MeshView& mesh;
+    const Grouped& grouped;
+    const uint8_t* bake_mask;
+    const uint32_t* previous_fingerprints;
+    const BakeOptions& options;
+    const BakeOutput& out;
+    glm::dmat3 turn_matrix;
+    double cos_epsilon;
+    uint32_t seed;
+    bool bytes;
 
-    auto view = [&](size_t sm) {
+    SubmeshView view(size_t sm) const {
+        const Grouped& g = grouped;
         SubmeshView s{&mesh,
                       g.vertices + g.vertex_offsets[sm], g.vertex_offsets[sm + 1] - g.vertex_offsets[sm],
                       g.faces + g.face_offsets[sm], g.face_offsets[sm + 1] - g.face_offsets[sm],
@@ -165,137 +157,121 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
         const float* p0 = mesh.positions + size_t(s.vertices[0]) * 3;
         s.base = glm::dvec3(p0[0], p0[1], p0[2]);
         return s;
-    };
-    size_t threads = hardware_threads(options.threads);
-    threads = std::min<size_t>({threads, 255, std::max<size_t>(1, submesh_count / 1024)});
-    auto range = [&](size_t t) { return std::make_pair(submesh_count * t / threads, submesh_count * (t + 1) / threads); };
-    std::vector<Accumulated> parts(threads);
-    // Pass 1: fingerprints and what to do with each submesh; cache keys of those to bake.
-    std::vector<uint8_t> statuses(submesh_count);
-    std::vector<uint64_t> keys(options.use_cache ? submesh_count : 0);
-    run_parallel(threads, [&](size_t thread) {
-        Accumulated& acc = parts[thread];
-        std::vector<uint32_t> words;
-        const auto [first, last] = range(thread);
-        for (size_t sm = first; sm < last; ++sm) {
-            const SubmeshView s = view(sm);
-            const uint32_t fp = fingerprint_submesh(s, seed, words);
-            bool selected = !bake_mask, unchanged = previous_fingerprints != nullptr;
-            for (uint32_t i = 0; i < s.vertex_count; ++i) {
-                const uint32_t v = s.vertices[i];
-                selected = selected || bake_mask[v];
-                unchanged = unchanged && previous_fingerprints[v] == fp;
-            }
-            // A submesh left out keeps its old fingerprint (0: never baked), so a later bake
-            // cannot mistake it for one already baked.
-            for (uint32_t i = 0; i < s.vertex_count; ++i) {
-                const uint32_t v = s.vertices[i];
-                fingerprints[v] = selected ? fp : previous_fingerprints ? previous_fingerprints[v] : 0;
-            }
-            const SubmeshStatus status = !selected ? SubmeshStatus::NotSelected
-                                         : unchanged ? SubmeshStatus::Unchanged
-                                                     : SubmeshStatus::Baked;
-            statuses[sm] = uint8_t(status);
-            if (status == SubmeshStatus::Baked) {
-                if (options.use_cache) keys[sm] = CopyCache::key(s, spread_of(s));
-                continue;
-            }
-            ++(status == SubmeshStatus::Unchanged ? acc.unchanged : acc.not_selected);
-            std::fill(out.quaternions + sm * 4, out.quaternions + sm * 4 + 4, 0.0f);
-            if (out.origins) std::fill(out.origins + sm * 3, out.origins + sm * 3 + 3, 0.0);
-            if (out.half_extents) std::fill(out.half_extents + sm * 3, out.half_extents + sm * 3 + 3, 0.0);
-            if (out.scales) out.scales[sm] = 0.0f;
-            if (out.sources) out.sources[sm] = uint8_t(FrameSource::Identity);
-        }
-    });
-    if (out.statuses) std::copy(statuses.begin(), statuses.end(), out.statuses);
-    // Copies share a cache key, so only submeshes whose key another one has use the cache.
-    std::vector<uint8_t> route;
-    if (options.use_cache) route = route_by_key(keys, statuses, threads);
+    }
+};
 
-    // Pass 2: frames, offsets, quaternions and the decode check of the submeshes to bake.
-    run_parallel(threads, [&](size_t thread) {
-        Accumulated& acc = parts[thread];
-        CopyCache cache(kCacheTolerance);
-        std::vector<glm::dvec3> local, offsets;
-        FrameScratch scratch;
-        const auto [first, last] = range(thread);
-        for (size_t sm = 0; sm < submesh_count; ++sm) {
-            if (statuses[sm] != uint8_t(SubmeshStatus::Baked)) continue;
-            const bool cached = !route.empty() && route[sm] != kUncached;
-            if (cached ? route[sm] != thread : sm < first || sm >= last) continue;
-            const SubmeshView s = view(sm);
-            float* q_out = out.quaternions + sm * 4;
-            ++acc.baked;
+void check_bake_arguments(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t submesh_count,
+                          const BakeOptions& options, const BakeOutput& out) {
+    if (!(options.angle_epsilon > 0.0 && options.angle_epsilon <= M_PI / 2))
+        throw std::invalid_argument("angle_epsilon must be in (0, pi/2] radians");
+    if (options.axis_turn < 0 || options.axis_turn >= 24) throw std::invalid_argument("axis_turn must be in 0..23");
+    const bool bytes = options.encoding == ColorEncoding::Byte;
+    if (bytes ? !out.offset_byte : !out.offset_float)
+        throw std::invalid_argument("no output array for the chosen colour encoding");
+    if (!out.quaternions || !out.fingerprints) throw std::invalid_argument("quaternion and fingerprint outputs are required");
+    if (first_out_of_range(submesh_of_vertex, mesh.vertex_count, submesh_count) < mesh.vertex_count)
+        throw std::invalid_argument("submesh_of_vertex does not match submesh_count");
+}
 
-            FrameChoice choice;
-            const FrameScratch* measured = &scratch;  // null once the choice comes from the cache
-            if (!cached) {
-                choice = choose_frame(s, cos_epsilon, 0.0, scratch);
-            } else {
-                const Spread spread = spread_of(s);
-                if (cache.lookup(s, spread, keys[sm], choice)) {
-                    ++acc.cache_hits;
-                    measured = nullptr;
-                } else {
-                    choice = choose_frame(s, cos_epsilon, cache.displacement(spread), scratch);
-                    cache.insert(s, spread, keys[sm], choice);
-                }
-            }
-            const FrameSource source = frame_source(choice);
-            if (source != FrameSource::Faces) ++acc.degenerate;
-            if (out.sources) out.sources[sm] = uint8_t(source);
+// Pass 1 for one submesh: its fingerprint and whether it is baked, left unchanged or not
+// selected; writes its fingerprints, and zeros (source Identity) as the results of one not baked.
+SubmeshStatus classify_submesh(const BakeJob& job, size_t sm, const SubmeshView& s, std::vector<uint32_t>& words) {
+    const uint32_t fp = fingerprint_submesh(s, job.seed, words);
+    const uint32_t* previous = job.previous_fingerprints;
+    bool selected = !job.bake_mask, unchanged = previous != nullptr;
+    for (uint32_t i = 0; i < s.vertex_count; ++i) {
+        const uint32_t v = s.vertices[i];
+        selected = selected || job.bake_mask[v];
+        unchanged = unchanged && previous[v] == fp;
+    }
+    // A submesh left out keeps its old fingerprint (0: never baked), so a later bake cannot
+    // mistake it for one already baked.
+    for (uint32_t i = 0; i < s.vertex_count; ++i) {
+        const uint32_t v = s.vertices[i];
+        job.out.fingerprints[v] = selected ? fp : previous ? previous[v] : 0;
+    }
+    const SubmeshStatus status = !selected ? SubmeshStatus::NotSelected
+                                 : unchanged ? SubmeshStatus::Unchanged
+                                             : SubmeshStatus::Baked;
+    if (status == SubmeshStatus::Baked) return status;
+    const BakeOutput& out = job.out;
+    std::fill(out.quaternions + sm * 4, out.quaternions + sm * 4 + 4, 0.0f);
+    if (out.origins) std::fill(out.origins + sm * 3, out.origins + sm * 3 + 3, 0.0);
+    if (out.half_extents) std::fill(out.half_extents + sm * 3, out.half_extents + sm * 3 + 3, 0.0);
+    if (out.scales) out.scales[sm] = 0.0f;
+    if (out.sources) out.sources[sm] = uint8_t(FrameSource::Identity);
+    return status;
+}
 
-            glm::dmat3 frame = frame_from_choice(choice, s, measured);
-            local.resize(s.vertex_count);
-            offsets.resize(s.vertex_count);
-            glm::dvec3 lo, hi;
-            if (options.sort_axes_by_extent) {
-                local_bounds(s, frame, local, lo, hi);
-                frame = sort_by_extent(frame, hi - lo);
-            }
-            frame = frame * turn_matrix;
-            local_bounds(s, frame, local, lo, hi);
-            const glm::dvec3 half = 0.5 * (hi - lo);
-            glm::dvec3 origin_local;  // origin relative to base, in local coordinates
-            if (options.origin == OriginMode::Bounds) {
-                origin_local = 0.5 * (lo + hi);
-            } else {
-                origin_local = glm::dvec3(0.0);
-                for (uint32_t i = 0; i < s.vertex_count; ++i) origin_local += local[i];
-                origin_local /= double(s.vertex_count);
-            }
-            for (uint32_t i = 0; i < s.vertex_count; ++i) offsets[i] = origin_local - local[i];
-            const float scale = bytes ? encode_byte(offsets.data(), s.vertices, s.vertex_count, offset_byte)
-                                      : encode_float(offsets.data(), s.vertices, s.vertex_count, offset_float);
+// Scratch one thread reuses from submesh to submesh.
+struct BakeScratch {
+    std::vector<glm::dvec3> local, offsets;
+    FrameScratch frame;
+};
 
-            const glm::dvec4 q = quaternion_from_frame(frame);
-            for (int k = 0; k < 4; ++k) q_out[k] = float(q[k]);
-            const glm::dvec3 origin = frame * origin_local;  // relative to base, object axes
-            if (out.origins)
-                for (int k = 0; k < 3; ++k) out.origins[sm * 3 + k] = s.base[k] + origin[k];
-            if (out.half_extents)
-                for (int k = 0; k < 3; ++k) out.half_extents[sm * 3 + k] = half[k];
-            if (out.scales) out.scales[sm] = scale;
+// Pass 2 for one submesh with its frame chosen: axis sort and turn, origin, offsets (encoded
+// into the colour output), quaternion, and the decode check of what was stored.
+void bake_submesh(const BakeJob& job, size_t sm, const SubmeshView& s, const FrameChoice& choice,
+                  const FrameScratch* measured, BakeScratch& scratch, Accumulated& acc) {
+    const BakeOutput& out = job.out;
+    const FrameSource source = frame_source(choice);
+    if (source != FrameSource::Faces) ++acc.degenerate;
+    if (out.sources) out.sources[sm] = uint8_t(source);
 
-            // Decode what was stored, as a shader would, and measure the miss.
-            double worst2 = 0.0;  // squared: one square root per submesh, not one per vertex
-            for (uint32_t i = 0; i < s.vertex_count; ++i) {
-                const uint32_t v = s.vertices[i];
-                const glm::dvec3 f = bytes ? decode_byte(offset_byte + size_t(v) * 4) : decode_float(offset_float + size_t(v) * 4);
-                const glm::dvec3 miss = s.position(v) + rotate_vector(f, q_out) - origin;
-                worst2 = std::max(worst2, glm::dot(miss, miss));
-            }
-            const double worst = std::sqrt(worst2);
-            const double extent = std::max({half.x, half.y, half.z});
-            // A box too small for its offsets to be encoded (denormal float32 positions) is as
-            // unusable as one without a frame.
-            if (source == FrameSource::Faces && extent > 0.0 && extent <= kSmallestEncodableOffset) ++acc.degenerate;
-            acc.max_error = std::max(acc.max_error, worst);
-            acc.max_relative_error = std::max(acc.max_relative_error, extent > 0.0 ? worst / extent : worst);
-        }
-    });
+    glm::dmat3 frame = frame_from_choice(choice, s, measured);
+    std::vector<glm::dvec3>& local = scratch.local;
+    std::vector<glm::dvec3>& offsets = scratch.offsets;
+    local.resize(s.vertex_count);
+    offsets.resize(s.vertex_count);
+    glm::dvec3 lo, hi;
+    if (job.options.sort_axes_by_extent) {
+        local_bounds(s, frame, local, lo, hi);
+        frame = sort_by_extent(frame, hi - lo);
+    }
+    frame = frame * job.turn_matrix;
+    local_bounds(s, frame, local, lo, hi);
+    const glm::dvec3 half = 0.5 * (hi - lo);
+    glm::dvec3 origin_local;  // origin relative to base, in local coordinates
+    if (job.options.origin == OriginMode::Bounds) {
+        origin_local = 0.5 * (lo + hi);
+    } else {
+        origin_local = glm::dvec3(0.0);
+        for (uint32_t i = 0; i < s.vertex_count; ++i) origin_local += local[i];
+        origin_local /= double(s.vertex_count);
+    }
+    for (uint32_t i = 0; i < s.vertex_count; ++i) offsets[i] = origin_local - local[i];
+    const float scale = job.bytes ? encode_byte(offsets.data(), s.vertices, s.vertex_count, out.offset_byte)
+                                  : encode_float(offsets.data(), s.vertices, s.vertex_count, out.offset_float);
 
+    float* q_out = out.quaternions + sm * 4;
+    const glm::dvec4 q = quaternion_from_frame(frame);
+    for (int k = 0; k < 4; ++k) q_out[k] = float(q[k]);
+    const glm::dvec3 origin = frame * origin_local;  // relative to base, object axes
+    if (out.origins)
+        for (int k = 0; k < 3; ++k) out.origins[sm * 3 + k] = s.base[k] + origin[k];
+    if (out.half_extents)
+        for (int k = 0; k < 3; ++k) out.half_extents[sm * 3 + k] = half[k];
+    if (out.scales) out.scales[sm] = scale;
+
+    // Decode what was stored, as a shader would, and measure the miss.
+    double worst2 = 0.0;  // squared: one square root per submesh, not one per vertex
+    for (uint32_t i = 0; i < s.vertex_count; ++i) {
+        const uint32_t v = s.vertices[i];
+        const glm::dvec3 f = job.bytes ? decode_byte(out.offset_byte + size_t(v) * 4)
+                                       : decode_float(out.offset_float + size_t(v) * 4);
+        const glm::dvec3 miss = s.position(v) + rotate_vector(f, q_out) - origin;
+        worst2 = std::max(worst2, glm::dot(miss, miss));
+    }
+    const double worst = std::sqrt(worst2);
+    const double extent = std::max({half.x, half.y, half.z});
+    // A box too small for its offsets to be encoded (denormal float32 positions) is as
+    // unusable as one without a frame.
+    if (source == FrameSource::Faces && extent > 0.0 && extent <= kSmallestEncodableOffset) ++acc.degenerate;
+    acc.max_error = std::max(acc.max_error, worst);
+    acc.max_relative_error = std::max(acc.max_relative_error, extent > 0.0 ? worst / extent : worst);
+}
+
+BakeReport sum_parts(const std::vector<Accumulated>& parts, size_t submesh_count) {
     BakeReport report;
     report.submesh_count = submesh_count;
     for (const Accumulated& a : parts) {
@@ -308,6 +284,81 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
         report.max_relative_error = std::max(report.max_relative_error, a.max_relative_error);
     }
     return report;
+}
+
+}  // namespace
+
+BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t submesh_count,
+                const uint8_t* bake_mask, const uint32_t* previous_fingerprints, const BakeOptions& options,
+                const BakeOutput& out) {
+    check_bake_arguments(mesh, submesh_of_vertex, submesh_count, options, out);
+    Grouped g;
+    group(g, mesh, submesh_of_vertex, submesh_count);
+    for (size_t sm = 0; sm < submesh_count; ++sm)  // every submesh needs a vertex to anchor it
+        if (g.vertex_offsets[sm + 1] == g.vertex_offsets[sm])
+            throw std::invalid_argument("submesh_of_vertex does not match submesh_count: submesh " +
+                                        std::to_string(sm) + " has no vertex");
+    double turn[9];
+    axis_turn_matrix(turn, options.axis_turn);
+    const BakeJob job{mesh, g, bake_mask, previous_fingerprints, options, out,
+                      glm::dmat3(turn[0], turn[1], turn[2], turn[3], turn[4], turn[5], turn[6], turn[7], turn[8]),
+                      std::cos(options.angle_epsilon), options_seed(options), options.encoding == ColorEncoding::Byte};
+
+    size_t threads = hardware_threads(options.threads);
+    threads = std::min<size_t>({threads, 255, std::max<size_t>(1, submesh_count / 1024)});
+    auto range = [&](size_t t) { return std::make_pair(submesh_count * t / threads, submesh_count * (t + 1) / threads); };
+    std::vector<Accumulated> parts(threads);
+    // Pass 1: fingerprints and what to do with each submesh; cache keys of those to bake.
+    std::vector<uint8_t> statuses(submesh_count);
+    std::vector<uint64_t> keys(options.use_cache ? submesh_count : 0);
+    run_parallel(threads, [&](size_t thread) {
+        std::vector<uint32_t> words;
+        const auto [first, last] = range(thread);
+        for (size_t sm = first; sm < last; ++sm) {
+            const SubmeshView s = job.view(sm);
+            const SubmeshStatus status = classify_submesh(job, sm, s, words);
+            statuses[sm] = uint8_t(status);
+            if (status == SubmeshStatus::Unchanged) ++parts[thread].unchanged;
+            if (status == SubmeshStatus::NotSelected) ++parts[thread].not_selected;
+            if (status == SubmeshStatus::Baked && options.use_cache) keys[sm] = CopyCache::key(s, spread_of(s));
+        }
+    });
+    if (out.statuses) std::copy(statuses.begin(), statuses.end(), out.statuses);
+    // Copies share a cache key, so only submeshes whose key another one has use the cache.
+    std::vector<uint8_t> route;
+    if (options.use_cache) route = route_by_key(keys, statuses, threads);
+
+    // Pass 2: the frame of each submesh to bake (fresh, or from this thread's copy cache), then
+    // the rest of its bake.
+    run_parallel(threads, [&](size_t thread) {
+        Accumulated& acc = parts[thread];
+        CopyCache cache(kCacheTolerance);
+        BakeScratch scratch;
+        const auto [first, last] = range(thread);
+        for (size_t sm = 0; sm < submesh_count; ++sm) {
+            if (statuses[sm] != uint8_t(SubmeshStatus::Baked)) continue;
+            const bool cached = !route.empty() && route[sm] != kUncached;
+            if (cached ? route[sm] != thread : sm < first || sm >= last) continue;
+            const SubmeshView s = job.view(sm);
+            ++acc.baked;
+            FrameChoice choice;
+            const FrameScratch* measured = &scratch.frame;  // null once the choice comes from the cache
+            if (!cached) {
+                choice = choose_frame(s, job.cos_epsilon, 0.0, scratch.frame);
+            } else {
+                const Spread spread = spread_of(s);
+                if (cache.lookup(s, spread, keys[sm], choice)) {
+                    ++acc.cache_hits;
+                    measured = nullptr;
+                } else {
+                    choice = choose_frame(s, job.cos_epsilon, cache.displacement(spread), scratch.frame);
+                    cache.insert(s, spread, keys[sm], choice);
+                }
+            }
+            bake_submesh(job, sm, s, choice, measured, scratch, acc);
+        }
+    });
+    return sum_parts(parts, submesh_count);
 }
 
 void expand_corner_quaternions(float* corner_uv, int half, const int32_t* corner_verts, size_t corner_count,

@@ -113,6 +113,7 @@ size_t find_duplicate_submeshes(int32_t* duplicate_of, const float* positions,
                                 const int32_t* submesh_of_vertex, size_t vertex_count,
                                 size_t submesh_count, const uint8_t* candidate, double tolerance,
                                 int /*threads*/) {
+    check_submesh_ids(submesh_of_vertex, vertex_count, submesh_count);
     check_radius(tolerance, "tolerance");
     check_finite_positions(positions, vertex_count);
     std::vector<uint32_t> offsets(submesh_count + 1), items(vertex_count);

@@ -78,6 +78,17 @@ inline size_t first_non_finite(const float* values, size_t count) {
 // Throws std::invalid_argument naming the first vertex with a NaN or infinite coordinate.
 void check_finite_positions(const float* positions, size_t count);
 
+// Throws std::invalid_argument naming the first vertex whose submesh id is outside
+// 0..submesh_count-1 (the range every function taking submesh_of_vertex promises to check).
+void check_submesh_ids(const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count);
+
+// Counting sort of items by their submesh. Reads submesh_of_item[item_count] (values in
+// 0..submesh_count-1); writes offsets[submesh_count + 1] and items[item_count] so the items of
+// submesh s are items[offsets[s] .. offsets[s+1]-1], ascending. Throws std::invalid_argument
+// (writing nothing) on a value out of range. Internal: dedup's grouping, tested on its own.
+void group_by_submesh(uint32_t* offsets, uint32_t* items, const int32_t* submesh_of_item,
+                      size_t item_count, size_t submesh_count);
+
 // Counting sort of items by their submesh owner(i) (ids in 0..submesh_count-1; callers check),
 // in two halves so callers can skip the second. count_by_owner writes offsets[submesh_count + 1]
 // (the items of submesh s take places offsets[s] .. offsets[s+1]-1) and returns true when the
@@ -195,7 +206,7 @@ private:
 };
 
 // encode.cpp: the colour encoding of local offsets f (vector from vertex to origin, box-local).
-// Decoding is the seed's GetFragToOrigin: f = (rgb * 2 - 1) / a, with one alpha per submesh.
+// Decoding is the blog post's GetFragToOrigin: f = (rgb * 2 - 1) / a, with one alpha per submesh.
 
 // Offsets up to this size are encoded as zero, so 1 / largest stays finite in float32: boxes of
 // 1e-30 units still encode exactly; smaller ones have denormal float32 positions and are counted

@@ -39,6 +39,7 @@ std::vector<uint32_t> marked_vertices(const std::vector<uint8_t>& mark) {
 size_t merge_passes(int32_t* pass_of_vertex, const float* positions,
                     const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count,
                     const uint8_t* chosen, double distance, int threads) {
+    check_submesh_ids(submesh_of_vertex, vertex_count, submesh_count);
     check_radius(distance, "distance");
     check_finite_positions(positions, vertex_count);
     const double radius = distance * (1 + 1e-6);
@@ -119,6 +120,7 @@ size_t merge_passes(int32_t* pass_of_vertex, const float* positions,
 size_t merge_targets(int32_t* target, float* merged_positions, const float* positions,
                      const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count,
                      const uint8_t* chosen, double distance, int threads) {
+    check_submesh_ids(submesh_of_vertex, vertex_count, submesh_count);
     check_radius(distance, "distance");
     check_finite_positions(positions, vertex_count);
     (void)submesh_count;

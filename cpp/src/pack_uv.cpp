@@ -1,6 +1,7 @@
 // UV islands packed in rows sorted by the height of their submesh: the highest at the top of the
 // unit square, one uniform scale for all, the largest whose row layout fits.
 #include "boxmarch/boxmarch.h"
+#include "internal.h"
 #include "spatial_hash.h"
 
 #include <algorithm>
@@ -65,12 +66,9 @@ size_t layout(const std::vector<double>& w, const std::vector<double>& h, double
     return top >= -1e-12 ? rows : 0;
 }
 
-}  // namespace
-
-PackUvReport pack_uv_by_height(float* corner_uv, const MeshView& mesh, const uint8_t* face_mask,
-                               const float* vertex_height, const int32_t* submesh_of_vertex,
-                               size_t submesh_count, const PackUvOptions& options) {
-    const double pad = options.padding;
+// The selected faces, after checking the padding, the UVs of those faces and every height.
+std::vector<uint32_t> checked_selected_faces(const float* corner_uv, const MeshView& mesh, const uint8_t* face_mask,
+                                             const float* vertex_height, double pad) {
     if (!std::isfinite(pad) || pad < 0.0 || pad >= 0.5)
         throw std::invalid_argument("padding must be in [0, 0.5), got " + std::to_string(pad));
     std::vector<uint32_t> faces;
@@ -84,16 +82,27 @@ PackUvReport pack_uv_by_height(float* corner_uv, const MeshView& mesh, const uin
     for (size_t v = 0; v < mesh.vertex_count; ++v)
         if (!std::isfinite(vertex_height[v]))
             throw std::invalid_argument("vertex " + std::to_string(v) + " has a NaN or infinite height");
+    return faces;
+}
 
-    // Submesh heights: the centre of each submesh's height range.
+// The height of every submesh: the centre of its vertices' height range.
+std::vector<double> submesh_heights(const MeshView& mesh, const float* vertex_height,
+                                    const int32_t* submesh_of_vertex, size_t submesh_count) {
     std::vector<double> low(submesh_count, INFINITY), high(submesh_count, -INFINITY);
     for (size_t v = 0; v < mesh.vertex_count; ++v) {
         const size_t s = size_t(submesh_of_vertex[v]);
         low[s] = std::min(low[s], double(vertex_height[v]));
         high[s] = std::max(high[s], double(vertex_height[v]));
     }
+    for (size_t s = 0; s < submesh_count; ++s) low[s] = 0.5 * (low[s] + high[s]);
+    return low;
+}
 
-    // Islands: selected faces (numbered 0..) linked where two corners share a vertex and a UV.
+// Islands: the selected faces (numbered 0.. in `faces`) linked where two corners share a vertex
+// and a UV; writes island_of_face and returns each island's UV bounds, lowest face and height.
+std::vector<Unit> find_islands(std::vector<uint32_t>& island_of_face, const float* corner_uv, const MeshView& mesh,
+                               const std::vector<uint32_t>& faces, const std::vector<double>& heights,
+                               const int32_t* submesh_of_vertex) {
     // Corners of selected faces grouped by vertex (CSR), compared within each vertex.
     std::vector<uint32_t> vstart(mesh.vertex_count + 1, 0);
     for (uint32_t f : faces)
@@ -117,9 +126,7 @@ PackUvReport pack_uv_by_height(float* corner_uv, const MeshView& mesh, const uin
                     std::abs(double(ua[1]) - ub[1]) <= kUvEqual)
                     links.emplace_back(vface[a], vface[b]);
             }
-    std::vector<uint32_t> island_of_face;
-    const size_t island_count = label_components(island_of_face, faces.size(), links);
-    std::vector<Unit> islands(island_count);
+    std::vector<Unit> islands(label_components(island_of_face, faces.size(), links));
     for (uint32_t i = 0; i < faces.size(); ++i) {
         Unit& u = islands[island_of_face[i]];
         const int32_t start = mesh.face_starts[faces[i]];
@@ -130,57 +137,55 @@ PackUvReport pack_uv_by_height(float* corner_uv, const MeshView& mesh, const uin
             }
         if (u.first_face == UINT32_MAX) {  // faces come in index order: the first is the lowest
             u.first_face = faces[i];
-            const size_t s = size_t(submesh_of_vertex[mesh.corner_verts[start]]);
-            u.height = 0.5 * (low[s] + high[s]);
+            u.height = heights[size_t(submesh_of_vertex[mesh.corner_verts[start]])];
         }
     }
+    return islands;
+}
 
-    // Units that move as one: islands, or sets of islands whose UV bounds overlap (with area).
-    std::vector<uint32_t> unit_of_island(island_count);
-    std::vector<Unit> units;
-    if (options.lock_overlapping) {
-        std::vector<uint32_t> by_left(island_count);
-        for (uint32_t k = 0; k < island_count; ++k) by_left[k] = k;
-        std::sort(by_left.begin(), by_left.end(), [&](uint32_t a, uint32_t b) {
-            const Unit &p = islands[a], &q = islands[b];
-            if (p.lo[0] != q.lo[0]) return p.lo[0] < q.lo[0];
-            if (p.lo[1] != q.lo[1]) return p.lo[1] < q.lo[1];
-            if (p.hi[0] != q.hi[0]) return p.hi[0] < q.hi[0];
-            if (p.hi[1] != q.hi[1]) return p.hi[1] < q.hi[1];
-            return a < b;
-        });
-        // Sweep along u; identical bounds are linked to their first copy and never swept twice,
-        // so stacks of identical layouts stay linear.
-        std::vector<PointPair> overlaps;
-        std::vector<uint32_t> active;
-        for (size_t k = 0; k < island_count; ++k) {
-            const Unit& q = islands[by_left[k]];
-            if (k > 0) {
-                const Unit& p = islands[by_left[k - 1]];
-                if (p.lo[0] == q.lo[0] && p.lo[1] == q.lo[1] && p.hi[0] == q.hi[0] && p.hi[1] == q.hi[1]) {
-                    if (q.hi[0] > q.lo[0] && q.hi[1] > q.lo[1]) overlaps.emplace_back(by_left[k - 1], by_left[k]);
-                    continue;
-                }
+// Sets of islands whose UV bounds overlap (with area), by a sweep along u; writes the set of
+// each island into unit_of_island and returns the number of sets.
+size_t overlapping_sets(std::vector<uint32_t>& unit_of_island, const std::vector<Unit>& islands) {
+    const size_t island_count = islands.size();
+    std::vector<uint32_t> by_left(island_count);
+    for (uint32_t k = 0; k < island_count; ++k) by_left[k] = k;
+    std::sort(by_left.begin(), by_left.end(), [&](uint32_t a, uint32_t b) {
+        const Unit &p = islands[a], &q = islands[b];
+        if (p.lo[0] != q.lo[0]) return p.lo[0] < q.lo[0];
+        if (p.lo[1] != q.lo[1]) return p.lo[1] < q.lo[1];
+        if (p.hi[0] != q.hi[0]) return p.hi[0] < q.hi[0];
+        if (p.hi[1] != q.hi[1]) return p.hi[1] < q.hi[1];
+        return a < b;
+    });
+    // Identical bounds are linked to their first copy and never swept twice, so stacks of
+    // identical layouts stay linear.
+    std::vector<PointPair> overlaps;
+    std::vector<uint32_t> active;
+    for (size_t k = 0; k < island_count; ++k) {
+        const Unit& q = islands[by_left[k]];
+        if (k > 0) {
+            const Unit& p = islands[by_left[k - 1]];
+            if (p.lo[0] == q.lo[0] && p.lo[1] == q.lo[1] && p.hi[0] == q.hi[0] && p.hi[1] == q.hi[1]) {
+                if (q.hi[0] > q.lo[0] && q.hi[1] > q.lo[1]) overlaps.emplace_back(by_left[k - 1], by_left[k]);
+                continue;
             }
-            size_t kept = 0;
-            for (uint32_t a : active) {
-                const Unit& p = islands[a];
-                if (p.hi[0] <= q.lo[0]) continue;  // ends before q starts: never overlaps again
-                active[kept++] = a;
-                if (p.lo[1] < q.hi[1] && q.lo[1] < p.hi[1] && p.lo[0] < q.hi[0]) overlaps.emplace_back(a, by_left[k]);
-            }
-            active.resize(kept);
-            active.push_back(by_left[k]);
         }
-        units.resize(label_components(unit_of_island, island_count, overlaps));
-    } else {
-        for (uint32_t k = 0; k < island_count; ++k) unit_of_island[k] = k;
-        units.resize(island_count);
+        size_t kept = 0;
+        for (uint32_t a : active) {
+            const Unit& p = islands[a];
+            if (p.hi[0] <= q.lo[0]) continue;  // ends before q starts: never overlaps again
+            active[kept++] = a;
+            if (p.lo[1] < q.hi[1] && q.lo[1] < p.hi[1] && p.lo[0] < q.hi[0]) overlaps.emplace_back(a, by_left[k]);
+        }
+        active.resize(kept);
+        active.push_back(by_left[k]);
     }
-    for (uint32_t k = 0; k < island_count; ++k) grow(units[unit_of_island[k]], islands[k]);
+    return label_components(unit_of_island, island_count, overlaps);
+}
 
-    // Placing order: highest first, ties by lowest face. Sorting compact keys (not indices that
-    // reach into the units) keeps the sort in cache.
+// Placing order of the units: highest first, ties by lowest face. Sorting compact keys (not
+// indices that reach into the units) keeps the sort in cache.
+std::vector<uint32_t> placing_order(const std::vector<Unit>& units) {
     struct Key {
         double height;
         uint32_t first_face, unit;
@@ -193,36 +198,67 @@ PackUvReport pack_uv_by_height(float* corner_uv, const MeshView& mesh, const uin
     std::sort(keys.begin(), keys.end());
     std::vector<uint32_t> order(units.size());
     for (size_t k = 0; k < keys.size(); ++k) order[k] = keys[k].unit;
+    return order;
+}
 
-    // Sizes in placing order, contiguous: the bisection runs the layout a few dozen times.
-    const size_t unit_count = units.size();
-    std::vector<double> w(unit_count), h(unit_count);
+// The largest uniform scale whose layout of units w x h (in placing order) fits the square, by
+// bisection below the scale at which the largest unit alone spans the square and the one at
+// which the units' area fills it. Throws when the padding alone leaves no room.
+double largest_fitting_scale(const std::vector<double>& w, const std::vector<double>& h, double pad,
+                             size_t max_per_row) {
     double largest = 0.0, area = 0.0;
-    for (size_t k = 0; k < unit_count; ++k) {
-        const Unit& u = units[order[k]];
-        w[k] = u.hi[0] - u.lo[0];
-        h[k] = u.hi[1] - u.lo[1];
+    for (size_t k = 0; k < w.size(); ++k) {
         largest = std::max({largest, w[k], h[k]});
         area += w[k] * h[k];
     }
-    if (!layout(w, h, 0.0, pad, options.max_per_row, nullptr, nullptr))
+    if (!layout(w, h, 0.0, pad, max_per_row, nullptr, nullptr))
         throw std::invalid_argument("padding " + std::to_string(pad) + " leaves no room for " +
-                                    std::to_string(unit_count) + " islands in the unit square");
-    // The largest uniform scale whose layout fits, by bisection below the scale at which the
-    // largest unit alone spans the square and the one at which the units' area fills it.
-    double scale = 1.0;
-    if (largest > 0.0) {
-        double fails = (1.0 - 2.0 * pad) / largest;
-        if (area > 0.0) fails = std::min(fails, std::sqrt(1.0 / area));
-        double fits = 0.0;
-        if (layout(w, h, fails, pad, options.max_per_row, nullptr, nullptr)) fits = fails;
-        else
-            for (int it = 0; it < 80 && fails - fits > fails * 1e-5; ++it) {
-                const double mid = 0.5 * (fits + fails);
-                (layout(w, h, mid, pad, options.max_per_row, nullptr, nullptr) ? fits : fails) = mid;
-            }
-        scale = fits;
+                                    std::to_string(w.size()) + " islands in the unit square");
+    if (largest <= 0.0) return 1.0;
+    double fails = (1.0 - 2.0 * pad) / largest;
+    if (area > 0.0) fails = std::min(fails, std::sqrt(1.0 / area));
+    double fits = 0.0;
+    if (layout(w, h, fails, pad, max_per_row, nullptr, nullptr)) return fails;
+    for (int it = 0; it < 80 && fails - fits > fails * 1e-5; ++it) {
+        const double mid = 0.5 * (fits + fails);
+        (layout(w, h, mid, pad, max_per_row, nullptr, nullptr) ? fits : fails) = mid;
     }
+    return fits;
+}
+
+}  // namespace
+
+PackUvReport pack_uv_by_height(float* corner_uv, const MeshView& mesh, const uint8_t* face_mask,
+                               const float* vertex_height, const int32_t* submesh_of_vertex,
+                               size_t submesh_count, const PackUvOptions& options) {
+    check_submesh_ids(submesh_of_vertex, mesh.vertex_count, submesh_count);
+    const double pad = options.padding;
+    const std::vector<uint32_t> faces = checked_selected_faces(corner_uv, mesh, face_mask, vertex_height, pad);
+    const std::vector<double> heights = submesh_heights(mesh, vertex_height, submesh_of_vertex, submesh_count);
+    std::vector<uint32_t> island_of_face;
+    const std::vector<Unit> islands = find_islands(island_of_face, corner_uv, mesh, faces, heights, submesh_of_vertex);
+    const size_t island_count = islands.size();
+
+    // Units that move as one: islands, or sets of islands whose UV bounds overlap.
+    std::vector<uint32_t> unit_of_island(island_count);
+    std::vector<Unit> units;
+    if (options.lock_overlapping) {
+        units.resize(overlapping_sets(unit_of_island, islands));
+    } else {
+        for (uint32_t k = 0; k < island_count; ++k) unit_of_island[k] = k;
+        units.resize(island_count);
+    }
+    for (uint32_t k = 0; k < island_count; ++k) grow(units[unit_of_island[k]], islands[k]);
+
+    // Sizes in placing order, contiguous: the bisection runs the layout a few dozen times.
+    const std::vector<uint32_t> order = placing_order(units);
+    const size_t unit_count = units.size();
+    std::vector<double> w(unit_count), h(unit_count);
+    for (size_t k = 0; k < unit_count; ++k) {
+        w[k] = units[order[k]].hi[0] - units[order[k]].lo[0];
+        h[k] = units[order[k]].hi[1] - units[order[k]].lo[1];
+    }
+    const double scale = largest_fitting_scale(w, h, pad, options.max_per_row);
     std::vector<double> x(unit_count), y(unit_count);
     PackUvReport report;
     report.rows = layout(w, h, scale, pad, options.max_per_row, x.data(), y.data());

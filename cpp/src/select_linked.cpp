@@ -34,6 +34,7 @@ std::vector<uint8_t> touched_submeshes(const uint8_t* selected, const int32_t* s
 size_t select_linked_submeshes(uint8_t* out_selected, const uint8_t* selected,
                                const int32_t* submesh_of_vertex, size_t vertex_count,
                                size_t submesh_count) {
+    check_submesh_ids(submesh_of_vertex, vertex_count, submesh_count);
     const std::vector<uint8_t> marked = touched_submeshes(selected, submesh_of_vertex, vertex_count, submesh_count);
     return expand_submeshes(out_selected, marked, submesh_of_vertex, vertex_count);
 }
@@ -156,6 +157,7 @@ bool link_by_cells(DisjointSets& sets, const float* positions, size_t vertex_cou
 size_t select_linked_across(uint8_t* out_selected, const uint8_t* selected, const float* positions,
                             const int32_t* submesh_of_vertex, size_t vertex_count,
                             size_t submesh_count, double epsilon, int threads) {
+    check_submesh_ids(submesh_of_vertex, vertex_count, submesh_count);
     check_radius(epsilon, "epsilon");
     check_finite_positions(positions, vertex_count);
     std::vector<uint8_t> marked = touched_submeshes(selected, submesh_of_vertex, vertex_count, submesh_count);

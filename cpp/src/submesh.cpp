@@ -89,6 +89,14 @@ size_t face_starts_from_corner_edges(int32_t* face_starts, const int32_t* corner
     return count;
 }
 
+void check_submesh_ids(const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count) {
+    const size_t bad = first_out_of_range(submesh_of_vertex, vertex_count, submesh_count);
+    if (bad < vertex_count)
+        throw std::invalid_argument("submesh_of_vertex[" + std::to_string(bad) + "] = " +
+                                    std::to_string(submesh_of_vertex[bad]) + " is outside 0.." +
+                                    std::to_string(submesh_count) + "-1");
+}
+
 void group_by_submesh(uint32_t* offsets, uint32_t* items, const int32_t* submesh_of_item,
                       size_t item_count, size_t submesh_count) {
     const size_t bad = first_out_of_range(submesh_of_item, item_count, submesh_count);

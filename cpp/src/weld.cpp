@@ -1,5 +1,5 @@
-// Topology after merging vertices, as Blender's weld (Merge by Distance) leaves it in the common
-// case; the caller falls back to Blender itself where the weld would split or dedupe faces.
+// Topology after merging vertices, as a host's weld (Blender's Merge by Distance) leaves it in the
+// common case; the caller falls back to the host itself where the weld would split or dedupe faces.
 #include "boxmarch/boxmarch.h"
 
 #include <algorithm>
@@ -91,7 +91,7 @@ WeldCounts weld_topology(const MeshView& mesh, const int32_t* corner_edges, cons
         for (uint32_t c : ring) {
             const uint32_t v = image(mesh.corner_verts[c]);
             for (int32_t k = first; k < int32_t(counts.corners); ++k)
-                if (out.corner_verts[k] == int32_t(v)) counts.needs_blender = true;  // would be split
+                if (out.corner_verts[k] == int32_t(v)) counts.incomplete = true;  // would be split
             out.corner_source[counts.corners] = int32_t(c);
             out.corner_verts[counts.corners++] = int32_t(v);
         }
@@ -106,7 +106,7 @@ WeldCounts weld_topology(const MeshView& mesh, const int32_t* corner_edges, cons
         for (size_t c = 0; c < counts.corners; ++c) {
             const int32_t old = corner_edges[out.corner_source[c]];
             if (old < 0 || size_t(old) >= mesh.edge_count || new_of_old[size_t(old)] == none) {
-                counts.needs_blender = true;
+                counts.incomplete = true;
                 out.corner_edges[c] = 0;
             } else
                 out.corner_edges[c] = int32_t(new_of_old[size_t(old)]);
@@ -128,7 +128,7 @@ WeldCounts weld_topology(const MeshView& mesh, const int32_t* corner_edges, cons
             const uint64_t key = edge_key(a, b);
             auto it = std::lower_bound(new_edge_of_key.begin(), new_edge_of_key.end(), std::make_pair(key, 0u));
             if (it == new_edge_of_key.end() || it->first != key) {
-                counts.needs_blender = true;  // a face edge with no edge: not a valid Blender mesh
+                counts.incomplete = true;  // a face edge with no edge: not a valid Blender mesh
                 out.corner_edges[c] = 0;
             } else
                 out.corner_edges[c] = int32_t(it->second);
@@ -167,7 +167,7 @@ WeldCounts weld_topology(const MeshView& mesh, const int32_t* corner_edges, cons
             if (!touched_face[a] && !touched_face[b]) continue;  // doubled before: Blender leaves it
             sorted_face(a, sorted);
             sorted_face(b, other);
-            if (sorted == other) counts.needs_blender = true;
+            if (sorted == other) counts.incomplete = true;
         }
     return counts;
 }

@@ -5,6 +5,7 @@
 // failure and goes on; main returns nonzero when anything failed.
 #include "boxmarch/boxmarch.h"
 #include "owned_mesh.h"
+#include "../../cpp/src/internal.h"  // group_by_submesh: internal, tested on its own
 
 #include <algorithm>
 #include <array>
@@ -104,13 +105,16 @@ struct Outputs {
     std::vector<float> offset_float, quaternions, scales;
     std::vector<uint8_t> offset_byte, sources, statuses;
     std::vector<double> origins, half_extents;
-    BakeSubmeshes out;
+    BakeOutput out;
     explicit Outputs(const MeshView& view)
         : submesh_of_vertex(view.vertex_count), fingerprints(view.vertex_count, 5u), offset_float(view.vertex_count * 4, -2.0f),
           quaternions(view.vertex_count * 4, -2.0f), scales(view.vertex_count, -2.0f), offset_byte(view.vertex_count * 4, 77),
           sources(view.vertex_count, 99), statuses(view.vertex_count, 99), origins(view.vertex_count * 3),
           half_extents(view.vertex_count * 3) {
         count = find_submeshes(submesh_of_vertex.data(), view);
+        out.fingerprints = fingerprints.data();
+        out.offset_float = offset_float.data();
+        out.offset_byte = offset_byte.data();
         out.quaternions = quaternions.data();
         out.origins = origins.data();
         out.half_extents = half_extents.data();
@@ -120,8 +124,7 @@ struct Outputs {
     }
     BakeReport bake(const MeshView& view, const BakeOptions& options, const uint32_t* previous = nullptr,
                     const uint8_t* mask = nullptr) {
-        return boxmarch::bake(view, submesh_of_vertex.data(), count, mask, previous, options, fingerprints.data(),
-                              offset_float.data(), offset_byte.data(), out);
+        return boxmarch::bake(view, submesh_of_vertex.data(), count, mask, previous, options, out);
     }
     bool colours_untouched() const {
         for (float x : offset_float) if (x != -2.0f) return false;
@@ -355,8 +358,9 @@ void test_bake_rejects_bad_options_and_numbering_and_writes_nothing() {
         BakeOptions options;
         options.encoding = ColorEncoding::Byte;
         CHECK(rejects([&] {
-            boxmarch::bake(view, o.submesh_of_vertex.data(), o.count, nullptr, nullptr, options, o.fingerprints.data(),
-                           o.offset_float.data(), nullptr, o.out);
+            BakeOutput no_byte_colour = o.out;
+            no_byte_colour.offset_byte = nullptr;
+            boxmarch::bake(view, o.submesh_of_vertex.data(), o.count, nullptr, nullptr, options, no_byte_colour);
         }, "no output array"));
         CHECK(o.colours_untouched());
     }

@@ -10,7 +10,7 @@ import time
 import bpy
 import numpy as np
 
-from .. import core, mesh_io
+from .. import core, edit_mode, files, mesh_io
 from . import glb, godot, layouts, transforms
 
 
@@ -18,23 +18,13 @@ class ExportInputError(ValueError):
     """The selection cannot be exported as it is; the message says why. Nothing was written."""
 
 
-def baked_layers(mesh):
-    """(offsets float32 (vertices, 4) as the shader reads them, quat_xy, quat_zw float32
-    (corners, 2), corner_verts) of a baked mesh. Raises ExportInputError when it is not baked."""
-    missing = [name for name in (mesh_io.QUAT_XY_UV, mesh_io.QUAT_ZW_UV) if name not in mesh.uv_layers]
-    attr = mesh.color_attributes.get(mesh_io.OFFSET_ATTRIBUTE)
-    if attr is None:
-        missing.insert(0, mesh_io.OFFSET_ATTRIBUTE)
-    if missing:
-        raise ExportInputError(f"mesh '{mesh.name}' is not baked (no {', '.join(missing)}): run Bake Box Frames first")
-    _, _, _, corner_verts = mesh_io.read_topology(mesh)
-    settings = mesh_io.BakeSettings(encoding=attr.data_type)
-    offsets = mesh_io._read_offsets(mesh, settings, corner_verts, len(mesh.vertices))
-    if offsets.dtype == np.uint8:
-        offsets = offsets.astype(np.float32) / np.float32(255.0)
-    corners = len(corner_verts)
-    return (offsets, mesh_io._read_uv(mesh, mesh_io.QUAT_XY_UV, corners),
-            mesh_io._read_uv(mesh, mesh_io.QUAT_ZW_UV, corners), corner_verts)
+def baked_layers(mesh) -> mesh_io.BakedLayers:
+    """The stored layers of a baked mesh (mesh_io.read_baked_layers). Raises ExportInputError
+    when it is not baked."""
+    try:
+        return mesh_io.read_baked_layers(mesh)
+    except mesh_io.NotBakedError as error:
+        raise ExportInputError(f"{error}: run Bake Box Frames first") from None
 
 
 # UV map names of the layouts' channels UV1..UV6 in FBX files (glTF files number them).
@@ -47,10 +37,10 @@ def box_data(mesh, preset, index_base: int = 0):
     """(layouts.BoxData in the target's frame, corner_verts, stats) of a baked mesh: the stored
     offsets and quaternion, each vertex's box half-extents (largest |f| per local axis over its
     submesh) and box number (``index_base`` + submesh id)."""
-    offsets, quat_xy, quat_zw, corner_verts = baked_layers(mesh)
+    layers = baked_layers(mesh)
+    offsets, corner_verts, q = layers.shader_offsets(), layers.corner_verts, layers.vertex_quaternions()
     positions = mesh_io.read_positions(mesh).astype(np.float64)
     edges, face_starts, face_sizes, _ = mesh_io.read_topology(mesh)
-    q = core.vertex_values_from_corners(np.concatenate([quat_xy, quat_zw], axis=1), corner_verts, len(positions))
     submesh_of_vertex, count = core.find_submeshes(positions.astype(np.float32), edges, face_starts, face_sizes,
                                                    corner_verts)
     _, _, box_half = core.boxes_from_bake(positions, offsets, q, submesh_of_vertex)
@@ -101,9 +91,9 @@ def _target_copy(mesh, preset, layout, index_base):
         for channel in sorted(c for c in channels if c.startswith("UV")):
             name = CHANNEL_UV_NAMES[channel]
             copy.uv_layers.new(name=name)
-            # mesh_io._write_uv writes through the attribute API, which un-shares the copy's
+            # mesh_io.write_uv writes through the attribute API, which un-shares the copy's
             # arrays from the original's first (Blender 5 implicit sharing).
-            mesh_io._write_uv(copy, name, transforms.uv_in_file(channels[channel][corner_verts], preset))
+            mesh_io.write_uv(copy, name, transforms.uv_in_file(channels[channel][corner_verts], preset))
     if colour is not None:
         attr = copy.color_attributes.new(mesh_io.OFFSET_ATTRIBUTE, "FLOAT_COLOR", "POINT")
         attr.data.foreach_set("color", np.ascontiguousarray(colour, np.float32).reshape(-1))
@@ -166,14 +156,14 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     for ob in objects:
         if ob.type != "MESH":
             raise ExportInputError(f"object '{ob.name}' is a {ob.type}, not a mesh")
-    meshes = list({ob.data.name_full: ob.data for ob in objects}.values())
+    meshes = [ob.data for ob in mesh_io.one_object_per_mesh(objects)]
     for mesh in meshes:
         baked_layers(mesh)  # refuses unbaked meshes before anything is changed
     start = time.perf_counter()
     folder = os.path.dirname(os.path.abspath(filepath))
     if not os.path.isdir(folder):
         raise ExportInputError(f"folder '{folder}' does not exist")
-    partial = lambda path: os.path.join(folder, f".{os.path.basename(path)}.boxmarch-partial{os.path.splitext(path)[1]}")
+    partial = files.partial_path
     outputs = {partial(filepath): filepath}
     if layout == "NORMAL_COLOR":
         outputs[partial(table_path(filepath))] = table_path(filepath)
@@ -237,11 +227,7 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp):
         for ob in objects:
             users[ob.name] = ob.data
             ob.data = copies[ob.data.as_pointer()]
-        for ob in selection:
-            ob.select_set(False)
-        for ob in objects:
-            ob.select_set(True)
-        context.view_layer.objects.active = objects[0]
+        edit_mode.select_only(context.view_layer, objects)
         _run_exporter(preset, layout, temp)
         if not os.path.exists(temp):
             raise RuntimeError(f"the {preset.label} exporter wrote nothing")

@@ -7,7 +7,7 @@ import time
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty
 
-from .. import core, mesh_io
+from .. import bake_job, core, edit_mode, mesh_io
 
 
 def _axis_turn_items(_self, _context):
@@ -24,6 +24,12 @@ def _build_axis_turn_items():
                            for i in range(24)]
 
 
+# UI words of core.ORIGIN_MODES (the one list of them).
+_ORIGIN_LABELS = {"BOUNDS": ("Bounds Centre", "Centre of the submesh's bounding box in its own frame"),
+                  "MEAN": ("Vertex Mean", "Average of the submesh's vertex positions")}
+_ORIGIN_ITEMS = [(mode, *_ORIGIN_LABELS[mode]) for mode in core.ORIGIN_MODES]
+
+
 class BOXMARCH_OT_bake(bpy.types.Operator):
     """Bake each submesh's origin and orientation into vertex colour and two UV maps"""
 
@@ -35,9 +41,8 @@ class BOXMARCH_OT_bake(bpy.types.Operator):
         name="Angle Epsilon", subtype="ANGLE", default=0.1, min=1e-6, max=1.5707963,
         description="The second axis comes from the largest face at least this far from the first axis's plane")
     origin: EnumProperty(
-        name="Origin", default="BOUNDS",
-        items=[("BOUNDS", "Bounds Centre", "Centre of the submesh's bounding box in its own frame"),
-               ("MEAN", "Vertex Mean", "Average of the submesh's vertex positions")])
+        name="Origin", default=core.ORIGIN_MODES[0],
+        items=_ORIGIN_ITEMS)
     encoding: EnumProperty(
         name="Colour", default="FLOAT_COLOR",
         items=[("FLOAT_COLOR", "Float", "32-bit float colour: exact decode"),
@@ -67,12 +72,9 @@ class BOXMARCH_OT_bake(bpy.types.Operator):
             layout.prop(self, name)
 
     def execute(self, context):
-        edit = context.mode == "EDIT_MESH"
-        if edit:
-            objects = [ob for ob in context.objects_in_mode_unique_data if ob.type == "MESH"]
-        else:
-            objects = [ob for ob in context.selected_objects if ob.type == "MESH"]
-        meshes = list({ob.data.name_full: ob.data for ob in objects}.values())
+        in_mode = context.objects_in_mode_unique_data if context.mode == "EDIT_MESH" else context.selected_objects
+        objects = [ob for ob in in_mode if ob.type == "MESH"]
+        meshes = [ob.data for ob in mesh_io.one_object_per_mesh(objects)]
         if not meshes:
             self.report({"ERROR"}, "Select at least one mesh object to bake")
             return {"CANCELLED"}
@@ -83,35 +85,24 @@ class BOXMARCH_OT_bake(bpy.types.Operator):
         start = time.perf_counter()
         wm = context.window_manager
         wm.progress_begin(0, 2 * len(meshes))
-        if edit:
-            bpy.ops.object.mode_set(mode="OBJECT")
-            # Multi-object Edit Mode: a mesh with nothing selected is left alone (as dedup, merge
-            # and select do); only when no mesh has a selected vertex is there nothing to bake.
-            chosen = [mesh for mesh in meshes if len(mesh.vertices) and mesh_io.read_vertex_selection(mesh).any()]
-            if not chosen:
-                bpy.ops.object.mode_set(mode="EDIT")
-                wm.progress_end()
-                self.report({"ERROR"}, "Nothing baked: no vertex is selected")
-                return {"CANCELLED"}
-            meshes = chosen
         try:
-            # Compute everything before writing anything: one bad mesh leaves all of them untouched.
-            prepared = []
-            for i, mesh in enumerate(meshes):
-                prepared.append(mesh_io.prepare_bake(mesh, settings, selected_only=edit))
-                wm.progress_update(i + 1)
-            reports = []
-            for i, bake in enumerate(prepared):
-                reports.append(bake.write())
-                wm.progress_update(len(meshes) + i + 1)
+            with edit_mode.object_mode(context) as edit:
+                if edit:
+                    # Multi-object Edit Mode: a mesh with nothing selected is left alone (as dedup,
+                    # merge and select do); only when no mesh has a selected vertex is there nothing
+                    # to bake.
+                    meshes = [mesh for mesh in meshes if mesh_io.read_vertex_selection(mesh).any()]
+                    if not meshes:
+                        self.report({"ERROR"}, "Nothing baked: no vertex is selected")
+                        return {"CANCELLED"}
+                prepared = bake_job.bake_meshes(meshes, settings, selected_only=edit,
+                                                progress=lambda step, _steps, _what: wm.progress_update(step))
         except mesh_io.BakeInputError as error:
             self.report({"ERROR"}, f"Nothing baked: {error}")
             return {"CANCELLED"}
         finally:
-            if edit:
-                bpy.ops.object.mode_set(mode="EDIT")
             wm.progress_end()
-        text = summary(reports, time.perf_counter() - start)
+        text = summary([bake.report for bake in prepared], time.perf_counter() - start)
         warnings = mesh_io.modifier_warnings(objects)
         if warnings:
             self.report({"WARNING"}, text + ". WARNING: " + " ".join(warnings))
@@ -121,13 +112,11 @@ class BOXMARCH_OT_bake(bpy.types.Operator):
 
 
 def summary(reports, seconds) -> str:
-    total = {key: sum(r[key] for r in reports)
-             for key in ("submeshes", "baked", "cache_hits", "unchanged", "not_selected", "degenerate")}
-    worst = max(r["max_relative_error"] for r in reports)
+    total = bake_job.report_totals(reports)
     channels = sorted({r["uv_channels"] for r in reports if "uv_channels" in r})
     text = (f"Baked {total['baked']} of {total['submeshes']} submeshes in {len(reports)} mesh(es), "
             f"{seconds:.3f} s: {total['cache_hits']} cache hits, {total['unchanged']} unchanged skipped, "
-            f"{total['degenerate']} degenerate, worst decode error {worst:.2g} of half-extent")
+            f"{total['degenerate']} degenerate, worst decode error {total['max_relative_error']:.2g} of half-extent")
     if total["not_selected"]:
         text += f", {total['not_selected']} not selected"
     if channels:

@@ -1,79 +1,48 @@
 """Submesh tools: select linked submeshes, select linked across, deduplicate, merge by distance
-per submesh, pack UVs by Z. Thin shells over boxmarch.mesh_edit and boxmarch.core.
+per submesh, pack UVs by Z. Thin operators over the jobs in boxmarch.tool_jobs (which the command
+line runs too): each operator's properties become the tool's options.
 
 Each works in Edit Mode on every object in (multi-object) Edit Mode, and in Object Mode on the
 selected mesh objects (whole meshes for dedup, merge and pack; the stored selection for the two
 select tools). Bad input cancels with a message before anything is changed."""
 from __future__ import annotations
 
+import dataclasses
 import time
 
 import bpy
-import numpy as np
 from bpy.props import BoolProperty, FloatProperty, IntProperty, StringProperty
 
-from .. import core, mesh_edit
+from .. import mesh_io, tool_jobs
 
 
 class _SubmeshTool:
     bl_options = {"REGISTER", "UNDO"}
-    need_faces = False
-    needs_vertex_selection = True  # in Edit Mode, the selection says which submeshes to work on
+    tool = None  # the tool_jobs class this operator runs; its fields are the operator's properties
 
     @classmethod
     def poll(cls, context):
         return context.mode in {"OBJECT", "EDIT_MESH"}
 
     def execute(self, context):
-        objects = mesh_edit.tool_objects(context)
+        in_mode = context.objects_in_mode_unique_data if context.mode == "EDIT_MESH" else context.selected_objects
+        objects = mesh_io.one_object_per_mesh(in_mode)
         if not objects:
             self.report({"ERROR"}, "Select at least one mesh object")
             return {"CANCELLED"}
+        options = {option.name: getattr(self, option.name) for option in dataclasses.fields(self.tool)}
         start = time.perf_counter()
         wm = context.window_manager
         wm.progress_begin(0, 100)
         try:
-            with mesh_edit.object_mode(context) as edit:
-                try:
-                    # Read and check every mesh before changing any.
-                    arrays = [mesh_edit.read_mesh(ob.data, self.need_faces) for ob in objects]
-                    if edit and self.needs_vertex_selection and not any(
-                            mesh_edit.read_vertex_selection(ob.data).any() for ob in objects):
-                        raise mesh_edit.ToolInputError("no vertex is selected")
-                    wm.progress_update(20)
-                    outcome = self.run(context, objects, arrays, edit, wm)
-                except (mesh_edit.ToolInputError, ValueError) as error:
-                    self.report({"ERROR"}, f"Nothing changed: {error}")
-                    return {"CANCELLED"}
-            # Geometry edits that finish inside Edit Mode run once the objects are back there.
-            message = outcome() if callable(outcome) else outcome
+            message = tool_jobs.run_tool(context, self.tool(**options), objects, wm.progress_update)
+        except (tool_jobs.ToolInputError, ValueError) as error:
+            self.report({"ERROR"}, f"Nothing changed: {error}")
+            return {"CANCELLED"}
         finally:
             wm.progress_end()
         self.report({"INFO"}, f"{message} ({time.perf_counter() - start:.2f} s)")
         return {"FINISHED"}
-
-    @staticmethod
-    def chosen_submeshes(ob, arrays, edit):
-        """uint8 per submesh: touched by the vertex selection in Edit Mode, all in Object Mode."""
-        if not edit:
-            return np.ones(arrays.submesh_count, np.uint8)
-        selected = mesh_edit.read_vertex_selection(ob.data)
-        chosen = np.zeros(arrays.submesh_count, np.uint8)
-        chosen[arrays.submesh_of_vertex[selected]] = 1
-        return chosen
-
-
-def _grow_selection(objects, arrays, grow) -> int:
-    """Replace each mesh's visible vertex selection by what grow(selected, arrays) returns as
-    (mask, submeshes selected); hidden vertices stay unselected. Returns the submeshes selected."""
-    total = 0
-    for ob, a in zip(objects, arrays):
-        hidden = mesh_edit.hidden_vertices(ob.data)
-        selected = mesh_edit.read_vertex_selection(ob.data) & ~hidden
-        mask, count = grow(selected, a)
-        mesh_edit.write_selection(ob.data, a, mask.astype(bool) & ~hidden)
-        total += count
-    return total
 
 
 class BOXMARCH_OT_select_linked_submeshes(_SubmeshTool, bpy.types.Operator):
@@ -81,11 +50,7 @@ class BOXMARCH_OT_select_linked_submeshes(_SubmeshTool, bpy.types.Operator):
 
     bl_idname = "boxmarch.select_linked_submeshes"
     bl_label = "Select Linked Submeshes"
-
-    def run(self, context, objects, arrays, edit, wm):
-        total = _grow_selection(objects, arrays, lambda selected, a: core.select_linked_submeshes(
-            selected, a.submesh_of_vertex, a.submesh_count))
-        return f"Selected {total} submesh(es) in {len(objects)} mesh(es)"
+    tool = tool_jobs.SelectLinked
 
 
 class BOXMARCH_OT_select_linked_across(_SubmeshTool, bpy.types.Operator):
@@ -93,14 +58,10 @@ class BOXMARCH_OT_select_linked_across(_SubmeshTool, bpy.types.Operator):
 
     bl_idname = "boxmarch.select_linked_across"
     bl_label = "Select Linked Across Submeshes"
+    tool = tool_jobs.SelectLinkedAcross
 
-    epsilon: FloatProperty(name="Epsilon", default=1e-4, soft_min=0.0, soft_max=1.0, precision=6, subtype="DISTANCE",
+    epsilon: FloatProperty(name="Epsilon", default=tool_jobs.SelectLinkedAcross.epsilon, soft_min=0.0, soft_max=1.0, precision=6, subtype="DISTANCE",
                            description="Vertices of different submeshes this close (true distance) link them")
-
-    def run(self, context, objects, arrays, edit, wm):
-        total = _grow_selection(objects, arrays, lambda selected, a: core.select_linked_across(
-            a.positions, selected, a.submesh_of_vertex, a.submesh_count, self.epsilon))
-        return f"Selected {total} submesh(es) in {len(objects)} mesh(es), epsilon {self.epsilon:g}"
 
 
 class BOXMARCH_OT_dedup_submeshes(_SubmeshTool, bpy.types.Operator):
@@ -108,31 +69,10 @@ class BOXMARCH_OT_dedup_submeshes(_SubmeshTool, bpy.types.Operator):
 
     bl_idname = "boxmarch.dedup_submeshes"
     bl_label = "Delete Duplicate Submeshes"
+    tool = tool_jobs.DeleteDuplicates
 
-    tolerance: FloatProperty(name="Tolerance", default=1e-4, soft_min=0.0, soft_max=1.0, precision=6, subtype="DISTANCE",
+    tolerance: FloatProperty(name="Tolerance", default=tool_jobs.DeleteDuplicates.tolerance, soft_min=0.0, soft_max=1.0, precision=6, subtype="DISTANCE",
                              description="Every vertex must lie this close to a distinct vertex of the kept copy")
-
-    def run(self, context, objects, arrays, edit, wm):
-        plans, total = [], 0
-        for ob, a in zip(objects, arrays):
-            duplicate_of, count = core.find_duplicate_submeshes(
-                a.positions, a.submesh_of_vertex, a.submesh_count, self.chosen_submeshes(ob, a, edit), self.tolerance)
-            plans.append((ob, a, (duplicate_of >= 0)[a.submesh_of_vertex], mesh_edit.read_vertex_selection(ob.data)))
-            total += count
-        wm.progress_update(50)
-        message = f"Deleted {total} duplicate submesh(es) in {len(objects)} mesh(es), tolerance {self.tolerance:g}"
-        if not total:
-            return message
-        if all(mesh_edit.can_rebuild(ob.data) for ob in objects):
-            # Whole submeshes go: the survivors' rows, rebuilt in one go with every attribute
-            # (the selection included) carried over.
-            for ob, a, delete, _selection in plans:
-                if delete.any():
-                    removed = core.remove_vertices(*a.topology, delete, mesh_edit.read_corner_edges(ob.data))
-                    mesh_edit.rebuild_welded(ob.data, a.positions, removed)
-            return message
-        action = mesh_edit.delete_vertices(context, plans, edit)
-        return message if action is None else lambda: (action(), message)[1]
 
 
 class BOXMARCH_OT_merge_by_distance_submeshes(_SubmeshTool, bpy.types.Operator):
@@ -140,54 +80,10 @@ class BOXMARCH_OT_merge_by_distance_submeshes(_SubmeshTool, bpy.types.Operator):
 
     bl_idname = "boxmarch.merge_by_distance_submeshes"
     bl_label = "Merge by Distance per Submesh"
+    tool = tool_jobs.MergeByDistance
 
-    distance: FloatProperty(name="Merge Distance", default=1e-3, soft_min=0.0, soft_max=1.0, precision=6,
+    distance: FloatProperty(name="Merge Distance", default=tool_jobs.MergeByDistance.distance, soft_min=0.0, soft_max=1.0, precision=6,
                             subtype="DISTANCE", description="Vertices of one submesh this close merge")
-
-    def run(self, context, objects, arrays, edit, wm):
-        # The merge computed here and written as a rebuilt mesh (fast, Blender 4.1+), or
-        # Blender's own Merge by Distance on a planned selection where a rebuild could lose
-        # data or Blender's weld would do more (split or dedupe faces).
-        chosen = [self.chosen_submeshes(ob, a, edit) for ob, a in zip(objects, arrays)]
-        welds = []
-        for ob, a, c in zip(objects, arrays, chosen):
-            target, merged_positions, count = core.merge_targets(a.positions, a.submesh_of_vertex, a.submesh_count,
-                                                                 c, self.distance)
-            weld = None
-            if count and mesh_edit.can_rebuild(ob.data):
-                weld = core.weld(*a.topology, target, mesh_edit.read_corner_edges(ob.data))
-            if count and (weld is None or weld["needs_blender"]):
-                welds = None
-                break
-            welds.append((ob, merged_positions, weld, count))
-        wm.progress_update(50)
-        if welds is not None:
-            removed = 0
-            for ob, merged_positions, weld, count in welds:
-                if count:
-                    mesh_edit.rebuild_welded(ob.data, merged_positions, weld)
-                    removed += count
-            return f"Removed {removed} vertices in {len(objects)} mesh(es), distance {self.distance:g}"
-
-        plans, passes = [], 0
-        for ob, a, c in zip(objects, arrays, chosen):
-            pass_of_vertex, count = core.merge_passes(a.positions, a.submesh_of_vertex, a.submesh_count, c,
-                                                      self.distance)
-            plans.append((ob, a, pass_of_vertex, mesh_edit.read_vertex_selection(ob.data)))
-            passes = max(passes, count)
-        if not passes:
-            return "Removed 0 vertices: no submesh has vertices that close"
-        before = sum(len(a.positions) for a in arrays)
-        action = mesh_edit.merge_by_distance(context, plans, self.distance, edit,
-                                             lambda k, n: wm.progress_update(50 + 50 * k // n))
-
-        def finish():
-            if action is not None:
-                action()
-            removed = before - mesh_edit.vertex_total(objects)
-            return (f"Removed {removed} vertices in {len(objects)} mesh(es) with Blender's merge "
-                    f"({passes} pass(es)), distance {self.distance:g}")
-        return finish
 
 
 class BOXMARCH_OT_pack_uv_by_z(_SubmeshTool, bpy.types.Operator):
@@ -195,10 +91,9 @@ class BOXMARCH_OT_pack_uv_by_z(_SubmeshTool, bpy.types.Operator):
 
     bl_idname = "boxmarch.pack_uv_by_z"
     bl_label = "Pack UV Islands by Z"
-    need_faces = True
-    needs_vertex_selection = False  # faces decide, and the core says when none is selected
+    tool = tool_jobs.PackUvByZ
 
-    padding: FloatProperty(name="Padding", default=0.002, min=0.0, max=0.49, precision=4,
+    padding: FloatProperty(name="Padding", default=tool_jobs.PackUvByZ.padding, min=0.0, max=0.49, precision=4,
                            description="UV space between islands and around the square")
     max_per_row: IntProperty(name="Max per Row", default=0, min=0,
                              description="Most islands in one row (0: as many as fit)")
@@ -217,43 +112,6 @@ class BOXMARCH_OT_pack_uv_by_z(_SubmeshTool, bpy.types.Operator):
             layout.prop_search(self, "uv_map", ob.data, "uv_layers")
         else:
             layout.prop(self, "uv_map")
-
-    def run(self, context, objects, arrays, edit, wm):
-        # All meshes pack together into one square, as Blender packs multi-object UVs.
-        names = [mesh_edit.uv_map_name(ob.data, self.uv_map) for ob in objects]
-        parts = {key: [] for key in ("positions", "edges", "face_starts", "face_sizes", "corner_verts",
-                                     "ids", "heights", "uv", "mask")}
-        vertices = corners = submeshes = 0
-        for ob, a, name in zip(objects, arrays, names):
-            parts["positions"].append(a.positions)
-            parts["edges"].append(a.edges + vertices)
-            parts["face_starts"].append(a.face_starts + corners)
-            parts["face_sizes"].append(a.face_sizes)
-            parts["corner_verts"].append(a.corner_verts + vertices)
-            parts["ids"].append(a.submesh_of_vertex + submeshes)
-            parts["heights"].append(mesh_edit.world_heights(ob, a.positions))
-            parts["uv"].append(mesh_edit.read_uv(ob.data, name))
-            parts["mask"].append(mesh_edit.read_face_selection(ob.data) if edit
-                                 else np.ones(len(a.face_starts), bool))
-            vertices += len(a.positions)
-            corners += len(a.corner_verts)
-            submeshes += a.submesh_count
-        joined = {key: np.concatenate(value) for key, value in parts.items()}
-        if not joined["mask"].any():
-            raise mesh_edit.ToolInputError("no face is selected")
-        uv = np.ascontiguousarray(joined["uv"])
-        report = core.pack_uv_by_height(
-            uv, joined["positions"], joined["edges"].astype(np.int32), joined["face_starts"].astype(np.int32),
-            joined["face_sizes"], joined["corner_verts"].astype(np.int32), vertex_height=joined["heights"],
-            submesh_of_vertex=joined["ids"].astype(np.int32), submesh_count=submeshes, face_mask=joined["mask"],
-            padding=self.padding, max_per_row=self.max_per_row, lock_overlapping=self.lock_overlapping)
-        wm.progress_update(80)
-        offset = 0
-        for ob, a, name in zip(objects, arrays, names):
-            mesh_edit.write_uv(ob.data, name, uv[offset:offset + len(a.corner_verts)])
-            offset += len(a.corner_verts)
-        return (f"Packed {report['islands']} UV islands ({report['groups']} units, {report['rows']} rows) "
-                f"by Z at scale {report['scale']:.4g}")
 
 
 def menu_select(self, _context):

@@ -1,4 +1,4 @@
-"""Reads a baked mesh for the preview (the preview's side of mesh_io: foreach_get only)."""
+"""What the preview draws from a baked mesh, read through mesh_io."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -8,8 +8,7 @@ import numpy as np
 from .. import core, mesh_io
 
 
-class NotBakedError(ValueError):
-    """The mesh lacks the baked layers; the message says which."""
+NotBakedError = mesh_io.NotBakedError  # the preview's name for it (draw.py, tests)
 
 
 @dataclass
@@ -27,42 +26,23 @@ class BakedMesh:
 
 def read_baked(mesh) -> BakedMesh:
     """Everything the preview draws from, per vertex. Raises NotBakedError when a layer is missing."""
-    attr = mesh.color_attributes.get(mesh_io.OFFSET_ATTRIBUTE)
-    missing = [name for name in (mesh_io.QUAT_XY_UV, mesh_io.QUAT_ZW_UV) if name not in mesh.uv_layers]
-    if attr is None or missing:
-        raise NotBakedError(f"mesh '{mesh.name}' is not baked (missing {', '.join(([mesh_io.OFFSET_ATTRIBUTE] if attr is None else []) + missing)})")
     positions = mesh_io.read_positions(mesh)
     edges, face_starts, face_sizes, corner_verts = mesh_io.read_topology(mesh)
+    layers = mesh_io.read_baked_layers(mesh, corner_verts)
     n = len(positions)
-    count = n if attr.domain == "POINT" else len(corner_verts)
-    colour = np.empty(count * 4, np.float32)
-    attr.data.foreach_get("color" if attr.data_type == "FLOAT_COLOR" else "color_srgb", colour)
-    colour = colour.reshape(-1, 4)
-    if attr.domain != "POINT":
-        colour = core.vertex_values_from_corners(colour, corner_verts, n)
-    corner_q = np.concatenate([mesh_io._read_uv(mesh, name, len(corner_verts))
-                               for name in (mesh_io.QUAT_XY_UV, mesh_io.QUAT_ZW_UV)], axis=1)
-    quaternions = core.vertex_values_from_corners(corner_q, corner_verts, n)
+    colour, quaternions = layers.shader_offsets(), layers.vertex_quaternions()
     if n and np.any(colour[:, 3] <= 0):
         raise NotBakedError(f"mesh '{mesh.name}' has BoxOffset alpha 0: bake it again")
     submesh_of_vertex, _count = core.find_submeshes(positions, edges, face_starts, face_sizes, corner_verts)
     origins, box_q, box_half = core.boxes_from_bake(positions, colour, quaternions, submesh_of_vertex)
     return BakedMesh(positions=positions, offsets=colour, quaternions=quaternions,
-                     half_extents=box_half[submesh_of_vertex], triangles=_triangles(mesh), edges=edges,
+                     half_extents=box_half[submesh_of_vertex], triangles=mesh_io.read_triangles(mesh), edges=edges,
                      origins=origins, box_quaternions=box_q, box_half_extents=box_half)
-
-
-def _triangles(mesh) -> np.ndarray:
-    """int32 (T, 3) vertex indices of the mesh's triangulation."""
-    mesh.calc_loop_triangles()
-    triangles = np.empty(len(mesh.loop_triangles) * 3, np.int32)
-    mesh.loop_triangles.foreach_get("vertices", triangles)
-    return triangles.reshape(-1, 3)
 
 
 def read_triangles(mesh):
     """(positions float32 (N, 3), triangles int32 (T, 3) vertex indices) of any mesh."""
-    return mesh_io.read_positions(mesh), _triangles(mesh)
+    return mesh_io.read_positions(mesh), mesh_io.read_triangles(mesh)
 
 
 def vector_lines(baked: BakedMesh):

@@ -12,7 +12,7 @@
 
 namespace boxmarch {
 
-// A mesh as Blender stores it: positions per vertex, edges as vertex pairs, faces as runs of
+// A polygon mesh: positions per vertex, edges as vertex pairs, faces as runs of
 // corners (face f owns corners face_starts[f] .. face_starts[f] + face_sizes[f] - 1), each corner
 // naming its vertex.
 struct MeshView {
@@ -40,8 +40,8 @@ void validate_mesh(const MeshView& mesh);
 // Returns n, the number of submeshes. Expects a validated mesh.
 size_t find_submeshes(int32_t* submesh_of_vertex, const MeshView& mesh);
 
-// Recovers face boundaries from corner data alone (Blender 4+ stores no face sizes in attributes,
-// and reading them per face is slow). Reads corner_verts[corner_count], corner_edges (the edge
+// Recovers face boundaries from corner data alone (for hosts that store corners and corner
+// edges but no face sizes, where reading sizes per face is slow). Reads corner_verts[corner_count], corner_edges (the edge
 // from each corner to the next corner of its face) and edges[edge_count * 2]. A corner starts a
 // new face when its predecessor's edge does not join the two, or when it repeats the current
 // face's first vertex (a valid face never repeats a vertex). Writes the start of every face found
@@ -51,13 +51,6 @@ size_t find_submeshes(int32_t* submesh_of_vertex, const MeshView& mesh);
 size_t face_starts_from_corner_edges(int32_t* face_starts, const int32_t* corner_verts,
                                      const int32_t* corner_edges, size_t corner_count,
                                      const int32_t* edges, size_t edge_count, size_t vertex_count);
-
-// Counting sort of items by their submesh. Reads submesh_of_item[item_count] (values in
-// 0..submesh_count-1); writes offsets[submesh_count + 1] and items[item_count] so the items of
-// submesh s are items[offsets[s] .. offsets[s+1]-1], ascending. Throws std::invalid_argument
-// (writing nothing) on a value out of range.
-void group_by_submesh(uint32_t* offsets, uint32_t* items, const int32_t* submesh_of_item,
-                      size_t item_count, size_t submesh_count);
 
 // ---------------------------------------------------------------------------------------------
 // frame.cpp: the 24 axis-aligned turns
@@ -112,9 +105,14 @@ struct BakeReport {
     double max_relative_error = 0.0;
 };
 
-// Per-submesh results, arrays of length submesh_count (caller sizes them after find_submeshes,
-// or passes vertex_count, which is always enough).
-struct BakeSubmeshes {
+// What the bake writes. Per vertex, length vertex_count: fingerprints, and the colour of offset_float
+// (Float encoding) or offset_byte (Byte encoding; the other may be null). Per submesh, length
+// submesh_count (the caller sizes them after find_submeshes, or passes vertex_count, which is
+// always enough): the rest.
+struct BakeOutput {
+    uint32_t* fingerprints = nullptr;  // vertex_count
+    float* offset_float = nullptr;     // vertex_count * 4 (Float encoding)
+    uint8_t* offset_byte = nullptr;    // vertex_count * 4 (Byte encoding)
     float* quaternions = nullptr;    // x, y, z, w per submesh; unit, w >= 0
     double* origins = nullptr;       // object-space origin, 3 per submesh (may be null)
     double* half_extents = nullptr;  // local half-extents, 3 per submesh (may be null)
@@ -127,18 +125,15 @@ struct BakeSubmeshes {
 // Reads: mesh; submesh_of_vertex from find_submeshes with its count; bake_mask[vertex_count]
 // (may be null: bake everything; else a submesh is baked when any of its vertices is nonzero);
 // previous_fingerprints[vertex_count] (may be null: no incremental skip).
-// Writes: fingerprints[vertex_count] (never 0 for a selected submesh; a submesh excluded by
+// Writes into out: fingerprints (never 0 for a selected submesh; a submesh excluded by
 // bake_mask keeps its previous fingerprint, or 0 without one); for baked submeshes only, the
-// colour of each vertex into offset_float[vertex_count * 4] (Float encoding) or
-// offset_byte[vertex_count * 4] (Byte encoding; the other pointer may be null); and the arrays
-// of `out` (every submesh's entry is written: for a submesh not baked, zeros and source
-// Identity). Returns the report. Throws std::invalid_argument, writing nothing, on invalid
-// options, a missing output array, or a numbering with an id out of range or a submesh without
-// vertices.
+// colour of each vertex (offset_float or offset_byte, by the encoding); and every submesh's
+// entry of the per-submesh arrays (for a submesh not baked, zeros and source Identity). Returns
+// the report. Throws std::invalid_argument, writing nothing, on invalid options, a missing
+// output array, or a numbering with an id out of range or a submesh without vertices.
 BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t submesh_count,
                 const uint8_t* bake_mask, const uint32_t* previous_fingerprints,
-                const BakeOptions& options, uint32_t* fingerprints, float* offset_float,
-                uint8_t* offset_byte, const BakeSubmeshes& out);
+                const BakeOptions& options, const BakeOutput& out);
 
 // Writes, for every corner whose submesh has write_submesh[s] != 0 (null: all corners), the pair
 // (q.x, q.y) when half == 0 or (q.z, q.w) when half == 1 of its submesh's quaternion into
@@ -224,7 +219,9 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
 // =============================================================================================
 // Submesh tools (select linked, select across, dedup, merge per submesh, pack UVs by Z).
 // Positions are compared in double from the stored float32 values; "within r" means a true
-// Euclidean distance <= r, whatever the positions (no grid quantisation decides a pair).
+// Euclidean distance <= r, whatever the positions (no grid quantisation decides a pair). Every
+// tool taking submesh_of_vertex checks its ids lie in 0..submesh_count-1 and throws
+// std::invalid_argument (writing nothing) naming the first that does not.
 
 // ---------------------------------------------------------------------------------------------
 // spatial_hash.cpp: fixed-radius neighbour pairs
@@ -284,7 +281,7 @@ size_t find_duplicate_submeshes(int32_t* duplicate_of, const float* positions,
 // merge.cpp: merge by distance inside each submesh
 
 // Plans a merge by distance inside each chosen submesh (chosen[s] != 0) for a merge that works
-// on a vertex selection (Blender's own Merge by Distance): only vertices with a partner of their
+// on a vertex selection (a host's own merge by distance): only vertices with a partner of their
 // own submesh within `distance` can merge, so only they need selecting; and submeshes whose such
 // vertices come within `distance` of each other go to different passes, so a pass never merges
 // across submeshes. A relative margin of 1e-6 on the distance makes the plan safe for a merge
@@ -296,10 +293,10 @@ size_t merge_passes(int32_t* pass_of_vertex, const float* positions,
                     const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count,
                     const uint8_t* chosen, double distance, int threads);
 
-// Merge by Distance inside each chosen submesh as Blender 5.0 does it (Blender visits vertices
-// in its k-d tree's order, so which member of a cluster survives may differ; clusters and
-// positions do not where clusters are unambiguous). Vertices are visited by index; an unassigned one gathers every unassigned vertex of its submesh within
-// `distance` (inclusive) into a cluster; the cluster's target is the lower index of two, else the
+// Merge by distance inside each chosen submesh. Vertices are visited by index; an unassigned one
+// gathers every unassigned vertex of its submesh within `distance` (inclusive) into a cluster
+// (clusters and merged positions match a host's k-d tree merge wherever clusters are unambiguous;
+// which member survives may differ with the visiting order); the cluster's target is the lower index of two, else the
 // member nearest the cluster's centroid (ties: lower index), and moves to the centroid. Reads
 // positions, submesh_of_vertex, chosen[submesh_count]; writes target[vertex_count] (the vertex
 // each merges into, itself for survivors) and merged_positions[vertex_count * 3] (positions,
@@ -309,17 +306,18 @@ size_t merge_targets(int32_t* target, float* merged_positions, const float* posi
                      const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count,
                      const uint8_t* chosen, double distance, int threads);
 
-// weld.cpp: the topology after merging vertices, as Blender's weld leaves it: in every face,
+// weld.cpp: the topology after merging vertices (the common case of a host's weld): in every face,
 // a corner whose vertex merges into the next corner's vertex goes; faces left with fewer than 3
 // corners go; edges are the distinct images of the old edges that do not collapse (first old
 // edge wins); survivors keep their order. Old elements named by *_source arrays carry their
 // attributes over. Output arrays have the input sizes as capacity.
 struct WeldCounts {
     size_t vertices = 0, edges = 0, faces = 0, corners = 0;
-    // True when Blender would do more than this (a face repeating a vertex at non-adjacent
-    // corners is split; two faces become the same; a face edge has no edge): outputs are then
-    // incomplete and the caller must merge another way.
-    bool needs_blender = false;
+    // True when the merge needs more than this weld does: a face would repeat a vertex at
+    // non-adjacent corners (it must be split), two faces would become the same (one must go),
+    // or a face edge would have no edge. The outputs are then incomplete and the caller must
+    // merge another way.
+    bool incomplete = false;
 };
 
 struct WeldOutput {

@@ -1,0 +1,268 @@
+"""The README's main job, headless (``python -m boxmarch demo``): build a world of boxes (duplicates,
+split corners, chains along curves), run dedup, merge, bake (8-bit and float, then an incremental
+re-bake) and pack-uv through the same jobs as the operators, export demo.glb with the GLTF preset
+and decode it back in glTF's frame, render demo.png and save demo.blend. cli.py parses the options
+and prints the table ``run_demo`` returns."""
+from __future__ import annotations
+
+import math
+import os
+import time
+
+import bpy
+import numpy as np
+
+from . import bake_job, core, edit_mode, ensure_registered, files, mesh_io, scenes, tool_jobs
+from .export.every_engine import export_every_engine
+from .export import glb, transforms
+from .export import scene as export_scene
+
+DEMO_IMAGE_SIZE = (640, 360)
+
+
+def _box_world(count, seed):
+    """The box world of the README: ``count`` boxes of varied sizes and rotations, 5% of them
+    translated copies (the copy cache's case), 2% exact duplicates of others (for dedup) and 2%
+    with one corner split into two vertices 1e-5 apart (for merge). Returns (world object,
+    expected duplicates, expected split corners)."""
+    rng = np.random.default_rng(seed)
+    duplicates = count // 50
+    splits = count // 50
+    unique = count - duplicates
+    copies = unique // 20
+    sizes = rng.uniform(0.05, 2.0, (unique, 3))
+    rotations = scenes.random_rotations(unique, rng)
+    sizes[-copies:] = sizes[:copies]
+    rotations[-copies:] = rotations[:copies]
+    centres = rng.uniform(-100, 100, (unique, 3))
+    # Disjoint sets: a box that got both a duplicate and a split corner would leave two nearly
+    # equal boxes that neither dedup nor merge removes.
+    chosen = rng.permutation(unique)
+    twins, split = chosen[:duplicates], chosen[duplicates:duplicates + splits]
+    centres = np.concatenate([centres, centres[twins]])
+    sizes = np.concatenate([sizes, sizes[twins]])
+    rotations = np.concatenate([rotations, rotations[twins]])
+    positions, _edges, face_starts, face_sizes, corner_verts = scenes.box_arrays(centres, sizes, rotations)
+    # Split corner 0 of some boxes: their first face (-x) uses a new vertex 1e-5 away.
+    extra = positions[8 * split] + np.float32(1e-5)
+    corner_verts[24 * split] = len(positions) + np.arange(splits, dtype=np.int32)
+    positions = np.concatenate([positions, extra])
+    world = bpy.data.objects.new("BoxWorld", mesh_io.new_mesh("BoxWorld", positions, face_starts, face_sizes,
+                                                               corner_verts))
+    bpy.context.scene.collection.objects.link(world)
+    return world, duplicates, splits
+
+
+def _chains():
+    """Chains of links laid along three helices around the origin (where the camera looks) by the
+    add-on's Instance on Curve operator, converted to a mesh and joined as one object 'Chains'."""
+    (link_positions, _e, link_starts, link_sizes, link_corners) = scenes.box_arrays(
+        np.zeros((1, 3)), np.array([[0.3, 0.6, 0.1]]), np.eye(3)[None])
+    link = bpy.data.objects.new("Link", mesh_io.new_mesh("Link", link_positions, link_starts, link_sizes,
+                                                         link_corners))
+    bpy.context.scene.collection.objects.link(link)
+    converted = []
+    for i in range(3):
+        t = np.linspace(0.0, 4.0 * np.pi, 64)
+        curve_data = bpy.data.curves.new(f"Chain{i}", "CURVE")
+        curve_data.dimensions = "3D"
+        spline = curve_data.splines.new("POLY")
+        spline.points.add(len(t) - 1)
+        radius = 3.0 + 2.0 * i
+        points = np.stack([radius * np.cos(t + i), radius * np.sin(t + i), 1.5 * t - 9.0, np.ones_like(t)], 1)
+        spline.points.foreach_set("co", points.astype(np.float32).reshape(-1))
+        curve = bpy.data.objects.new(f"Chain{i}", curve_data)
+        bpy.context.scene.collection.objects.link(curve)
+        edit_mode.select_only(bpy.context.view_layer, [curve])
+        bpy.ops.boxmarch.add_instance_on_curve(instance=link.name, spacing=0.7, convert_to_mesh=True)
+        converted.append(bpy.data.objects[f"Chain{i}"])
+    bpy.data.objects.remove(link)
+    edit_mode.select_only(bpy.context.view_layer, converted)
+    bpy.ops.object.join()
+    chains = bpy.context.view_layer.objects.active
+    chains.name = chains.data.name = "Chains"
+    return chains
+
+
+def _bake_all(meshes, encoding, incremental):
+    """Bake every mesh as the bake command does; (seconds, written bakes)."""
+    t = time.perf_counter()
+    prepared = bake_job.bake_meshes(meshes, mesh_io.BakeSettings(encoding=encoding, incremental=incremental))
+    return time.perf_counter() - t, prepared
+
+
+def _glb_decode_error(path, objects, prepared):
+    """Read ``path`` back (boxmarch.export.glb) and decode every vertex in glTF's frame with the
+    shader's formula; worst distance to the baked centre of its submesh put in glTF's frame, over
+    that submesh's largest half-extent."""
+    preset = transforms.PRESETS["GLTF"]
+    gltf, binary = glb.read(path)
+    by_name = {ob.data.name: (ob.data, bake.result) for ob, bake in zip(objects, prepared)}
+    worst = 0.0
+    for mesh_entry in gltf["meshes"]:
+        mesh, result = by_name[mesh_entry["name"]]
+        ours = transforms.target_positions(mesh_io.read_positions(mesh), preset).astype(np.float32)
+        centres = transforms.target_positions(result.origins, preset)
+        half = result.half_extents.max(axis=1)
+        for primitive in mesh_entry["primitives"]:
+            a = {k: glb.accessor_array(gltf, binary, i).astype(np.float64) for k, i in primitive["attributes"].items()}
+            # The GLTF preset's NORMAL_FRAME layout (docs/ENGINES.md): x = tangent, z = normal.
+            x, z = a["TANGENT"][:, :3], a["NORMAL"]
+            y = np.cross(z, x) * a["TANGENT"][:, 3:]
+            f = np.concatenate([a["TEXCOORD_1"], a["TEXCOORD_2"][:, :1]], axis=1)
+            origin = a["POSITION"] + x * f[:, :1] + y * f[:, 1:2] + z * f[:, 2:]
+            # The submesh of each file vertex: the Blender vertex at exactly that position, found
+            # by sorting (positions are a signed permutation of float32 values, so exact).
+            _, group = np.unique(np.concatenate([ours, a["POSITION"].astype(np.float32)]), axis=0, return_inverse=True)
+            group = group.reshape(-1)
+            vertex_of_group = np.full(group.max() + 1, -1)
+            vertex_of_group[group[:len(ours)]] = np.arange(len(ours))
+            vertex = vertex_of_group[group[len(ours):]]
+            if (vertex < 0).any():
+                raise RuntimeError(f"{path} holds a vertex mesh '{mesh.name}' does not have")
+            submesh = result.submesh_of_vertex[vertex]
+            worst = max(worst, float((np.linalg.norm(origin - centres[submesh], axis=1) / half[submesh]).max()))
+    return worst
+
+
+def _camera():
+    data = bpy.data.cameras.new("DemoCamera")
+    data.lens = 30.0
+    camera = bpy.data.objects.new("DemoCamera", data)
+    bpy.context.scene.collection.objects.link(camera)
+    camera.location = (0.0, -24.0, 3.0)
+    camera.rotation_euler = (math.radians(85.0), 0.0, 0.0)  # looks at the chains around the origin
+    bpy.context.scene.camera = camera
+    return camera
+
+
+def _preview_picture(objects, sdfs, path, renderer, progress):
+    """Render the preview picture: the GPU raymarch preview when a GPU context can be made (or
+    ``renderer`` is 'GPU'), else the CPU reference raymarcher (same decode, same SDFs). Returns
+    the method used."""
+    from . import preview  # the GPU module: imported only when a picture is made
+    from .preview import mesh_data
+
+    scene = bpy.context.scene
+    camera = _camera()
+    width, height = DEMO_IMAGE_SIZE
+    for ob, sdf in zip(objects, sdfs):
+        ob.boxmarch.sdf = sdf
+        ob.boxmarch.preview = True
+    rgba = None
+    if renderer != "CPU":
+        try:
+            rgba, _depth = preview.render(scene, camera, width, height)
+            method = "GPU raymarch preview"
+        except (SystemError, RuntimeError) as error:  # no GPU context here
+            if renderer == "GPU":
+                raise
+            progress(f"preview: no GPU ({str(error).splitlines()[0]}), using the CPU reference raymarcher")
+    if rgba is None:
+        view, projection = preview.camera_matrices(scene, camera, width, height)
+        depth = np.ones((height, width), np.float32)
+        rgba = np.zeros((height, width, 4), np.float32)
+        for ob, sdf in zip(objects, sdfs):
+            baked = mesh_data.read_baked(ob.data)  # the boxes the GPU preview draws
+            world = np.array(ob.matrix_world, np.float64)
+            core.render_boxes(baked.origins, baked.box_quaternions, baked.box_half_extents,
+                              projection @ view @ world, view @ world, width, height, sdf=sdf,
+                              depth=depth, rgba=rgba)
+        method = "CPU reference raymarcher"
+    image = bpy.data.images.new("boxmarch_demo", width, height, alpha=True)
+    try:
+        # Over a dark background (the render's background is transparent), rows bottom-up as Blender stores them.
+        alpha = np.clip(rgba[::-1, :, 3:4], 0.0, 1.0)
+        picture = np.empty((height, width, 4), np.float32)
+        picture[..., :3] = np.clip(rgba[::-1, :, :3], 0.0, 1.0) * alpha + np.float32(0.08) * (1.0 - alpha)
+        picture[..., 3] = 1.0
+        image.pixels.foreach_set(picture.reshape(-1))
+        image.file_format = "PNG"
+
+        def save(temp):
+            image.filepath_raw = temp
+            image.save()
+        files.write_atomically(path, save)
+    finally:
+        bpy.data.images.remove(image)
+    return method
+
+
+def run_demo(count: int, seed: int, folder: str, renderer: str, progress) -> tuple[list, dict]:
+    """Run the demo into ``folder`` (made if missing) in a fresh scene; ``progress(text)`` hears
+    each step. Returns (table rows [step, time, what, accuracy], report dict)."""
+    os.makedirs(folder, exist_ok=True)
+    rows = []
+    start = time.perf_counter()
+    progress(f"building {count:,} boxes and the chains")
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    ensure_registered()
+    world, duplicates, splits = _box_world(count, seed)
+    chains = _chains()
+    objects = [world, chains]
+    rows.append(["build scene", f"{time.perf_counter() - start:.3f} s",
+                 f"{len(world.data.vertices):,} vertices; {len(chains.data.vertices) // 8} chain links on 3 curves",
+                 ""])
+
+    for name, tool, expected in (("dedup", tool_jobs.DeleteDuplicates(tolerance=1e-4),
+                                  f"{duplicates} exact duplicates planted"),
+                                 ("merge", tool_jobs.MergeByDistance(distance=1e-3), f"{splits} split corners planted")):
+        progress(name)
+        before = len(world.data.vertices)
+        t = time.perf_counter()
+        tool_jobs.run_tool(bpy.context, tool, [world])
+        rows.append([name, f"{time.perf_counter() - t:.3f} s",
+                     f"{before:,} -> {len(world.data.vertices):,} vertices", expected])
+
+    meshes = [ob.data for ob in objects]
+    for encoding in ("BYTE_COLOR", "FLOAT_COLOR"):
+        progress(f"baking ({encoding})")
+        seconds, prepared = _bake_all(meshes, encoding, incremental=False)
+        rs = [p.result for p in prepared]
+        channels = prepared[0].report["uv_channels"]
+        rows.append([f"bake {encoding}", f"{seconds:.3f} s",
+                     f"{sum(r.baked for r in rs):,} submeshes, {sum(r.cache_hits for r in rs):,} cache hits, "
+                     f"{sum(r.degenerate for r in rs)} degenerate",
+                     f"worst decode error {max(r.max_relative_error for r in rs):.2e} of half-extent "
+                     f"(UV channels {channels[0]}, {channels[1]})"])
+    float_bakes = prepared
+    progress("re-baking unchanged geometry")
+    seconds, prepared = _bake_all(meshes, "FLOAT_COLOR", incremental=True)
+    rows.append(["re-bake (incremental)", f"{seconds:.3f} s",
+                 f"{sum(p.result.unchanged for p in prepared):,} unchanged submeshes skipped", ""])
+
+    progress("packing UVs by height")
+    t = time.perf_counter()
+    tool_jobs.run_tool(bpy.context, tool_jobs.PackUvByZ(uv_map="UVMap"), objects)
+    rows.append(["pack-uv", f"{time.perf_counter() - t:.3f} s", "UVMap islands in rows by Z", ""])
+
+    progress("exporting demo.glb (GLTF preset)")
+    glb_path = os.path.abspath(os.path.join(folder, "demo.glb"))
+    t = time.perf_counter()
+    export_scene.export_objects(bpy.context, objects, "GLTF", glb_path)
+    seconds = time.perf_counter() - t
+    worst = _glb_decode_error(glb_path, objects, float_bakes)
+    rows.append(["export demo.glb", f"{seconds:.3f} s", f"{os.path.getsize(glb_path) / 1e6:.1f} MB",
+                 f"read back: worst decode error {worst:.2e} of half-extent in glTF's frame"])
+
+    progress("exporting for every engine")
+    for engine in export_every_engine(bpy.context, objects, os.path.abspath(folder), "demo"):
+        lost = engine["default_import_error"]
+        written = [os.path.basename(p) for p in (engine["path"], engine["table"]) if p]
+        rows.append([f"export {engine['preset']}", f"{engine['seconds']:.3f} s",
+                     f"{' + '.join(written)}, layout {engine['layout']}",
+                     f"default import loses: {lost:.1e} of half-extent" if lost else "float32 in the engine"])
+
+    png_path = os.path.abspath(os.path.join(folder, "demo.png"))
+    progress("rendering demo.png")
+    t = time.perf_counter()
+    method = _preview_picture(objects, ["ROUNDED_BOX", "LINK"], png_path, renderer, progress)
+    rows.append(["preview demo.png", f"{time.perf_counter() - t:.3f} s",
+                 f"{DEMO_IMAGE_SIZE[0]} x {DEMO_IMAGE_SIZE[1]}, {method}", ""])
+
+    path = files.save_blend_copy(os.path.join(folder, "demo.blend"))
+    rows.append(["total", f"{time.perf_counter() - start:.3f} s", f"wrote {path}", ""])
+    report = {"ok": True, "command": "demo", "count": count, "blend": path, "glb": glb_path, "png": png_path,
+              "preview": method, "glb_max_relative_error": worst, "rows": rows,
+              "blender": bpy.app.version_string}
+    return rows, report

@@ -1,0 +1,24 @@
+"""The one door to Blender mesh data: every read and write of a mesh's geometry, selection, UV
+maps and baked layers goes through this package (Edit Mode switching and Blender's own edit-mode
+operators are beside it, in ``edit_mode``). One exception, on purpose: the export builds its
+temporary, file-shaped mesh copies itself (export/scene.py: which layers a target file holds is
+the export's business), reading the artist's meshes through this package.
+
+Everything moves through ``foreach_get``/``foreach_set`` on NumPy buffers of exactly the right
+type and size; nothing loops over vertices, corners or faces in Python. Layers are always looked
+up by name right before they are used: adding a layer may move the others in memory, so no
+reference to a layer is held across a call that adds one.
+
+    arrays   geometry, topology, selection flags, UV maps; new meshes from arrays
+    baked    the baked layers: compute (prepare_bake), store (PreparedBake.write), read back
+    rebuild  replace a mesh's geometry by arrays the core computed, keeping its attributes
+"""
+from .arrays import (new_mesh, one_object_per_mesh, read_corner_edges, read_face_selection,
+                     read_hidden_vertices, read_point_values, read_positions, read_topology, read_triangles,
+                     read_uv, read_vertex_selection, remove_attributes, write_point_flags, write_selection,
+                     write_uv)
+from .baked import (FINGERPRINT_ATTRIBUTE, LAYERS_DIGEST, MAX_UV_MAPS, NEUTRAL_BYTE, NEUTRAL_FLOAT,
+                    OFFSET_ATTRIBUTE, QUAT_XY_UV, QUAT_ZW_UV, BakedLayers, BakeInputError, BakeSettings,
+                    NotBakedError, PreparedBake, modifier_warnings, prepare_bake, read_baked_layers,
+                    stored_layers_digest)
+from .rebuild import can_rebuild, rebuild_welded

@@ -1,0 +1,41 @@
+"""Running the add-on outside this process: Debian's Blender program (3.4) with a clean
+environment, and ``python -m boxmarch`` with this Python."""
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import boxmarch
+
+SCRIPTS = Path(__file__).resolve().parent.parent / "blender_scripts"
+
+
+def blender_env(tmp_path):
+    env = dict(os.environ)
+    for var in ("HOME", "TMPDIR", "XDG_CACHE_HOME", "XDG_CONFIG_HOME"):
+        env[var] = str(tmp_path)
+    env.pop("PYTHONPATH", None)
+    # Debian's Blender finds its Python home through the first python3 on PATH: it must be the
+    # system one, not the (pyenv or venv) Python running these tests.
+    env["PATH"] = "/usr/bin:/bin:" + env.get("PATH", "")
+    return env
+
+
+def run_blender(args, tmp_path, timeout=240):
+    blender = shutil.which("blender")
+    assert blender, "Debian's blender is missing: run scripts/setup.sh"
+    proc = subprocess.run([blender, *args], env=blender_env(tmp_path), capture_output=True, text=True,
+                          timeout=timeout)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    return proc
+
+
+def run_module(args, cwd, timeout=240):
+    env = dict(os.environ, PYTHONPATH=str(Path(boxmarch.__file__).parent.parent))
+    home = Path(cwd).parent / f"{Path(cwd).name}-home"  # Blender's caches, outside the checked folder
+    home.mkdir(exist_ok=True)
+    for var in ("HOME", "TMPDIR", "XDG_CACHE_HOME"):
+        env[var] = str(home)
+    return subprocess.run([sys.executable, "-m", "boxmarch", *args], cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=timeout)
