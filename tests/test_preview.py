@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from boxmarch import core
+from boxmarch import core, layouts
 from test_blender_app import blender_env, package_parent, run_blender  # noqa: F401  (fixture)
 
 SCRIPT = Path(__file__).parent / "blender_scripts" / "preview_check.py"
@@ -92,6 +92,18 @@ def test_preview_matches_cpu_reference(rendered, sdf):
     assert np.percentile(angle, 99) <= 2.0
     colour = np.abs(rendered[f"{sdf}_SHADED_rgba"][..., :3] - ref.rgba[..., :3])[both].max(-1)
     assert np.percentile(colour, 99) <= 0.02
+
+
+@pytest.mark.parametrize("layout", layouts.LAYOUTS)
+def test_every_layout_matches_cpu_reference(rendered, layout):
+    """The preview drawn from each engine layout's channels (issue 12) lands on the known boxes;
+    with the frame channels replaced by the identity frame it must not."""
+    ref = reference(rendered, "ROUNDED_BOX")
+    assert (ref.depth < 1.0).mean() > 0.1
+    coverage, depth = agreement(rendered[f"LAYOUT_{layout}_depth"], ref)
+    assert coverage >= 0.99 and depth <= 2e-6, (coverage, depth)
+    coverage, depth = agreement(rendered[f"UNTURNED_{layout}_depth"], ref)
+    assert coverage < 0.99 and depth > 1e-3, (coverage, depth)
 
 
 def test_sphere_is_inside_box_and_differs_from_it(rendered):
