@@ -3,6 +3,7 @@ overlay. Shared by the viewport draw handler and the offscreen render (``preview
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import bpy
 import gpu
@@ -74,10 +75,10 @@ class _Drawn:
     """The GPU batches of one object's preview, and the CPU arrays its overlay and poses need."""
 
     march: object                 # GPUBatch of the preview shader
-    outline: object               # GPUBatch of the mesh edges (pos only)
+    outline: object               # GPUBatch of the mesh edges (the same vertex buffers)
     positions: np.ndarray         # float32 (N, 3) as drawn
     offsets: np.ndarray           # float64 (N, 3) f, box-local
-    axes: np.ndarray              # float64 (N, 3, 3) the frame the layout decodes to (unit columns)
+    frame: Callable               # () -> float64 (N, 3, 3) the frame the layout decodes to (unit columns)
     vectors: tuple | None = None  # the overlay's two line batches, made when first shown
 
 
@@ -104,12 +105,12 @@ class _Posed:
     stale: bool = True
 
 
-def _batches(pose_inputs: dict, static, triangles, edges, positions, offsets, axes) -> _Drawn:
+def _batches(pose_inputs: dict, static, triangles, edges, positions, offsets, frame) -> _Drawn:
     moving = _vertex_buffer(pose_inputs)
     march = gpu.types.GPUBatch(type="TRIS", buf=moving, elem=triangles)
     march.vertbuf_add(static)
-    outline = gpu.types.GPUBatch(type="LINES", buf=_vertex_buffer({"pos": pose_inputs["pos"]}), elem=edges)
-    return _Drawn(march=march, outline=outline, positions=positions, offsets=offsets, axes=axes)
+    outline = gpu.types.GPUBatch(type="LINES", buf=moving, elem=edges)
+    return _Drawn(march=march, outline=outline, positions=positions, offsets=offsets, frame=frame)
 
 
 def _normalised(vectors):
@@ -127,7 +128,7 @@ def _mesh(mesh, layout) -> _Mesh:
         edges = gpu.types.GPUIndexBuf(type="LINES", seq=baked.edges)
         offsets = mesh_data.box_data(baked).offsets
         rest = _batches({k: v for k, v in inputs.items() if k in POSE_INPUTS}, static, triangles, edges,
-                        baked.positions, offsets, mesh_data.frame_axes(baked.quaternions))
+                        baked.positions, offsets, lambda: mesh_data.frame_axes(baked.quaternions))
         _meshes[key] = _Mesh(baked=baked, inputs=inputs, static=static, triangles=triangles, edges=edges, rest=rest)
     return _meshes[key]
 
@@ -146,17 +147,19 @@ def _posed_drawing(ob, layout, modifier, depsgraph) -> _Drawn:
     if posed.stale or posed.drawn is None:
         positions = skinning.evaluated_positions(ob, depsgraph, len(mesh.baked.positions))
         inputs = {"pos": positions}
-        axes = mesh.rest.axes
+        frame = mesh.rest.frame
         if "ch_normal" in mesh.inputs:  # the frame rides in what skinning moves
             linear = skinning.skin_linear(posed.weights, skinning.bone_deformations(
                 ob, modifier, posed.weights.bones, depsgraph))
             normal = np.einsum("nij,nj->ni", linear, mesh.inputs["ch_normal"])
-            tangent = mesh.inputs["ch_tangent"].astype(np.float64)
+            tangent = mesh.inputs["ch_tangent"].copy()
             tangent[:, :3] = np.einsum("nij,nj->ni", linear, tangent[:, :3])
             inputs.update(ch_normal=normal, ch_tangent=tangent)
-            axes = _normalised(np.stack([tangent[:, :3], np.cross(normal, tangent[:, :3]) * tangent[:, 3:], normal],
-                                        axis=2))
-        posed.drawn = _batches(inputs, mesh.static, mesh.triangles, mesh.edges, positions, mesh.rest.offsets, axes)
+
+            def frame(normal=normal, tangent=tangent):
+                axis_y = np.cross(normal, tangent[:, :3]) * tangent[:, 3:]
+                return _normalised(np.stack([tangent[:, :3], axis_y, normal], axis=2).astype(np.float64))
+        posed.drawn = _batches(inputs, mesh.static, mesh.triangles, mesh.edges, positions, mesh.rest.offsets, frame)
         posed.stale = False
     return posed.drawn
 
@@ -175,7 +178,7 @@ def _vector_batches(drawn: _Drawn):
     if drawn.vectors is None:
         lines = uniform_shader()
         drawn.vectors = tuple(batch_for_shader(lines, "LINES", {"pos": pairs})
-                              for pairs in mesh_data.vector_lines(drawn.positions, drawn.offsets, drawn.axes))
+                              for pairs in mesh_data.vector_lines(drawn.positions, drawn.offsets, drawn.frame()))
     return drawn.vectors
 
 

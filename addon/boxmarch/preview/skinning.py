@@ -80,14 +80,16 @@ def bone_deformations(ob, modifier, bones, depsgraph) -> np.ndarray:
 
 
 def skin_linear(weights: SkinWeights, deformations) -> np.ndarray:
-    """float64 (N, 3, 3): the linear part of each vertex's blended skinning matrix (identity for
-    a vertex without weights)."""
-    linear = np.asarray(deformations, np.float64)[:, :3, :3]
+    """float32 (N, 3, 3): the linear part of each vertex's blended skinning matrix, in float as an
+    engine's vertex shader blends it (identity for a vertex without weights)."""
+    linear = np.asarray(deformations, np.float32)[:, :3, :3]
     if len(linear) == 0:
-        return np.broadcast_to(np.eye(3), (len(weights.bone), 3, 3)).copy()
-    blended = np.einsum("nk,nkij->nij", weights.weight, linear[weights.bone])
-    at_rest = weights.weight.sum(axis=1) == 0.0
-    blended[at_rest] = np.eye(3)
+        return np.broadcast_to(np.eye(3, dtype=np.float32), (len(weights.bone), 3, 3)).copy()
+    weight = weights.weight.astype(np.float32)
+    blended = linear[weights.bone[:, 0]] * weight[:, 0, None, None]
+    for k in range(1, weight.shape[1]):
+        blended += linear[weights.bone[:, k]] * weight[:, k, None, None]
+    blended[weights.weight.sum(axis=1) == 0.0] = np.eye(3, dtype=np.float32)
     return blended
 
 
