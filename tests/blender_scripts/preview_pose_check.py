@@ -19,7 +19,7 @@ import numpy as np  # noqa: E402
 
 import boxmarch  # noqa: E402
 from boxmarch import mesh_io, preview, scenes  # noqa: E402
-from boxmarch.preview import draw  # noqa: E402
+from boxmarch.preview import draw, mesh_data  # noqa: E402
 
 boxmarch.register()
 bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -121,6 +121,13 @@ bpy.context.view_layer.update()
 render_layouts("POSE_A", ("NORMAL_FRAME",))
 result["mesh_entry_kept"] = draw._meshes.get((mesh.name_full, "NORMAL_FRAME")) is rest_mesh_entry
 result["weights_kept"] = draw._posed[boxes.name_full].weights is rest_weights
+# The decoded-vector overlay of the posed data: each vertex + its skinned frame applied to f, the
+# CPU decode of what the shader receives; drawn once to run the overlay's path.
+drawn = draw._posed[boxes.name_full].drawn
+result["POSE_A_decoded_origins"] = mesh_data.vector_lines(drawn.positions, drawn.offsets, drawn.frame())[1][1::2]
+boxes.boxmarch.show_vectors = True
+render_layouts("VECTORS", ("NORMAL_FRAME",))
+boxes.boxmarch.show_vectors = False
 render_layouts("POSE_A", ("NORMAL_COLOR", "CLASSIC", "UV_FRAME"))
 
 # Pose B by an action, reached by changing frames only (the frame-change handler).
