@@ -52,9 +52,9 @@ def bone_motions(r, pose):
     return np.array(out)
 
 
-def reference(r, pose=None):
+def reference(r, pose=None, still_bones=()):
     """CPU reference render of the boxes, rest or moved rigidly by their bones in ``pose``."""
-    centres, rotations = (r["centres"], r["rotations"]) if pose is None else posed_boxes(r, pose)
+    centres, rotations = (r["centres"], r["rotations"]) if pose is None else posed_boxes(r, pose, still_bones)
     height, width = r["POSE_A_NORMAL_FRAME_depth"].shape
     model, view, projection = r["matrix_world"], r["view"], r["projection"]
     return core.render_boxes(centres, quaternions_of(rotations), r["sizes"] / 2, projection @ view @ model,
@@ -100,9 +100,12 @@ def test_frame_in_uvs_stays_in_rest_pose(rendered, layout):
     assert figures[1] > 1e-4
 
 
-def posed_boxes(r, pose):
-    """(centres, rotations) of the boxes moved rigidly by their bones in ``pose``."""
-    motions = bone_motions(r, pose)[r["bone_of_box"]]
+def posed_boxes(r, pose, still_bones=()):
+    """(centres, rotations) of the boxes moved rigidly by their bones in ``pose`` (boxes of
+    ``still_bones`` left at rest)."""
+    motions = bone_motions(r, pose)
+    motions[list(still_bones)] = np.eye(4)
+    motions = motions[r["bone_of_box"]]
     return (np.einsum("nij,nj->ni", motions[:, :3, :3], r["centres"]) + motions[:, :3, 3],
             motions[:, :3, :3] @ r["rotations"])
 
@@ -129,6 +132,19 @@ def test_scrubbing_an_action_follows_it(rendered):
     ok, figures = matches(rendered["ACTION_11_NORMAL_FRAME_depth"], pose_b)
     assert ok, figures
     assert not matches(rendered["ACTION_1_NORMAL_FRAME_depth"], pose_b)[0]  # the two poses differ
+
+
+def test_renamed_bone_is_followed(rendered):
+    assert str(rendered["RENAMED_skipped"]) == ""
+    ok, figures = matches(rendered["RENAMED_NORMAL_FRAME_depth"], reference(rendered, rendered["pose_b"]))
+    assert ok, figures
+
+
+def test_bone_that_stops_deforming_leaves_its_boxes_at_rest(rendered):
+    depth = rendered["BONE2_OFF_NORMAL_FRAME_depth"]
+    ok, figures = matches(depth, reference(rendered, rendered["pose_b"], still_bones=(2,)))
+    assert ok, figures
+    assert not matches(depth, reference(rendered, rendered["pose_b"]))[0]
 
 
 def test_unfollowable_modifier_is_reported_and_skipped(rendered):

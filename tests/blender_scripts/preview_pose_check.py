@@ -140,6 +140,17 @@ render_layouts("ACTION_1", ("NORMAL_FRAME",))
 scene.frame_set(11)
 render_layouts("ACTION_11", ("NORMAL_FRAME",))
 
+# A bone renamed (Blender renames its vertex group and the action's paths too): weights read again.
+rig.data.bones["bone1"].name = "forearm"
+bpy.context.view_layer.update()
+render_layouts("RENAMED", ("NORMAL_FRAME",))
+
+# The last bone no longer deforms: Blender leaves its vertices at rest, and so must the frames.
+rig.data.bones["bone2"].use_deform = False
+bpy.context.view_layer.update()
+render_layouts("BONE2_OFF", ("NORMAL_FRAME",))
+rig.data.bones["bone2"].use_deform = True
+
 # An Armature modifier the preview cannot follow: that object is left out with the reason.
 modifier.use_bone_envelopes = True
 bpy.context.view_layer.update()

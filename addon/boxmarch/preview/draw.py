@@ -99,7 +99,7 @@ class _Posed:
     """An object following its armature: weights read once, the drawing redone when stale."""
 
     mesh_key: tuple
-    modifier_name: str
+    rig_key: tuple                # skinning.rig_key when the weights were read
     weights: skinning.SkinWeights
     drawn: _Drawn | None = None
     stale: bool = True
@@ -138,11 +138,10 @@ def _posed_drawing(ob, layout, modifier, depsgraph) -> _Drawn:
     layouts the normal and tangent moved by each vertex's skinning matrix (skinning.py)."""
     skinning.check_modifier(modifier)
     mesh = _mesh(ob.data, layout)
-    key = (ob.data.name_full, layout)
+    key, rig_key = (ob.data.name_full, layout), skinning.rig_key(ob, modifier)
     posed = _posed.get(ob.name_full)
-    if posed is None or posed.mesh_key != key or posed.modifier_name != modifier.name:
-        posed = _Posed(mesh_key=key, modifier_name=modifier.name,
-                       weights=skinning.read_weights(ob, modifier.object.data))
+    if posed is None or posed.mesh_key != key or posed.rig_key != rig_key:
+        posed = _Posed(mesh_key=key, rig_key=rig_key, weights=skinning.read_weights(ob, modifier.object.data))
         _posed[ob.name_full] = posed
     if posed.stale or posed.drawn is None:
         positions = skinning.evaluated_positions(ob, depsgraph, len(mesh.baked.positions))

@@ -41,6 +41,14 @@ class SkinWeights:
     weight: np.ndarray      # float64 (N, K), each row summing to 1, or all 0 (the vertex stays at rest)
 
 
+def rig_key(ob, modifier) -> tuple:
+    """What the weights depend on besides the mesh data: the armature object, its deform bones and
+    the object's vertex group names (a bone or group renamed, added or removed reads them again)."""
+    return (modifier.name, modifier.object.name_full,
+            tuple(bone.name for bone in modifier.object.data.bones if bone.use_deform),
+            tuple(group.name for group in ob.vertex_groups))
+
+
 def read_weights(ob, armature) -> SkinWeights:
     """The vertex-group weights of ``ob`` on the deform bones of ``armature`` (bpy.types.Armature)."""
     deform = {bone.name for bone in armature.bones if bone.use_deform}
