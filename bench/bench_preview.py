@@ -12,6 +12,11 @@ baked, previewed with the SPHERE preset; a camera inside the cloud; 960 x 540; M
   camera view (1 % of the pixels) and its frame time is that x (960 x 540) / (96 x 54): every
   pixel of this shader is independent work, so time scales with the pixel count.
 * CPU reference: boxmarch.core.render_boxes of the same frame (C++, all cores), for scale.
+* skinned: the same boxes rigged to a chain of 8 bones along x (each box rigidly weighted to the
+  bone over it), NORMAL_FRAME layout, an Armature modifier: a redraw after a pose change is the
+  preview's CPU update (evaluated positions read, normals and tangents skinned, vertex buffer
+  uploaded) plus the draw; a redraw without one is the draw alone. Blender's own evaluation of the
+  modifier (the depsgraph update a pose change causes) is timed apart, for scale.
 
     python3 bench/bench_preview.py [--boxes N] [--repeats R]
 
@@ -148,7 +153,82 @@ def in_blender(args):
         "cpu_ms": cpu * 1e3, "cpu_steps_per_pixel": float(reference.steps.mean()),
         "cpu_gpu_coverage_agreement": float(((reference.depth < 1.0) == (depth < 1.0)).mean()),
         "renderer": gpu.platform.renderer_get(),
+        **skinned(bpy, ob, view, projection, boxed_frame, args["repeats"]),
     }
+
+
+BONES, BONE_TURN = 8, 0.03  # the bench rig: a chain along x; each pose turns every joint this much (radians)
+
+
+def skinned(bpy, ob, view, projection, boxed_frame, repeats):
+    """Redraw costs of the boxes rigged to a chain and posed (see the docstring)."""
+    import time
+
+    import numpy as np
+    from mathutils import Quaternion
+
+    from boxmarch import mesh_io
+    from boxmarch.preview import draw, skinning
+    from common import best_of
+
+    scene = bpy.context.scene
+    ob.boxmarch.sdf = "SPHERE"
+    ob.boxmarch.layout = "NORMAL_FRAME"
+    draw.draw_object(ob, view, projection, True)  # the unposed buffers, outside the timing
+    unposed = best_of(repeats, boxed_frame)
+
+    rig = bpy.data.objects.new("rig", bpy.data.armatures.new("rig"))
+    scene.collection.objects.link(rig)
+    bpy.context.view_layer.objects.active = rig
+    bpy.ops.object.mode_set(mode="EDIT")
+    parent, length = None, 200.0 / BONES
+    for k in range(BONES):
+        bone = rig.data.edit_bones.new(f"bone{k}")
+        bone.head, bone.tail = (-100.0 + k * length, 0.0, 0.0), (-100.0 + (k + 1) * length, 0.0, 0.0)
+        if parent is not None:
+            bone.parent, bone.use_connect = parent, True
+        parent = bone
+    bpy.ops.object.mode_set(mode="OBJECT")
+    positions = mesh_io.read_positions(ob.data)
+    box_x = positions.reshape(-1, 8, 3)[:, :, 0].mean(axis=1)
+    bone_of_box = np.clip(((box_x + 100.0) // length).astype(int), 0, BONES - 1)
+    bone_of_vertex = np.repeat(bone_of_box, 8)
+    for k in range(BONES):
+        ob.vertex_groups.new(name=f"bone{k}").add(np.flatnonzero(bone_of_vertex == k).tolist(), 1.0, "REPLACE")
+    ob.modifiers.new("Armature", "ARMATURE").object = rig
+    bpy.context.view_layer.update()
+
+    start = time.perf_counter()
+    draw.draw_object(ob, view, projection, True)  # weights read once, first posed buffers
+    first = time.perf_counter() - start
+    turn = [0]
+
+    def pose():
+        turn[0] += 1
+        for k, pose_bone in enumerate(rig.pose.bones):
+            pose_bone.rotation_mode = "QUATERNION"
+            pose_bone.rotation_quaternion = Quaternion((0.0, 0.0, 1.0), BONE_TURN * (1 if turn[0] % 2 else -1))
+        bpy.context.view_layer.update()
+
+    evaluation = best_of(repeats, pose)
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+
+    def update():
+        draw.pose_changed(ob.name_full)
+        draw._drawing(ob, depsgraph)
+
+    pose_update = best_of(repeats, update)
+    modifier = skinning.armature_modifier(ob)
+    weights = draw._posed[ob.name_full].weights
+    frames_only = best_of(repeats, lambda: skinning.skin_linear(weights, skinning.bone_deformations(
+        ob, modifier, weights.bones, depsgraph)))
+    positions_only = best_of(repeats, lambda: skinning.evaluated_positions(ob, depsgraph, len(positions)))
+    posed_draw = best_of(repeats, boxed_frame)
+    assert not draw.errors.get(ob.name), draw.errors.get(ob.name)
+    return {"skinned_vertices": len(positions), "bones": BONES, "unposed_draw_ms": unposed * 1e3,
+            "first_posed_draw_ms": first * 1e3, "blender_pose_evaluation_ms": evaluation * 1e3,
+            "pose_update_ms": pose_update * 1e3, "skin_matrices_ms": frames_only * 1e3,
+            "evaluated_positions_ms": positions_only * 1e3, "posed_draw_ms": posed_draw * 1e3}
 
 
 def report(r):
@@ -175,6 +255,20 @@ def report(r):
           f"its coverage agrees with the boxed preview on {100 * r['naive_tile_agreement']:.2f} % of the tile")
     print(f"boxed: {r['boxed_steps_per_covered_pixel']:.2f} steps per covered pixel; CPU reference and GPU "
           f"coverage agree on {100 * r['cpu_gpu_coverage_agreement']:.3f} % of pixels")
+    print()
+    print(f"Skinned: the same {r['boxes']} boxes ({r['skinned_vertices']} vertices) on a {r['bones']}-bone chain, "
+          f"NORMAL_FRAME layout, SPHERE preset")
+    rows = [
+        ("unposed (no Armature modifier)", "-", f"{r['unposed_draw_ms']:.1f}", f"{r['unposed_draw_ms']:.1f}"),
+        ("posed, pose unchanged (e.g. the view orbits)", "-", f"{r['posed_draw_ms']:.1f}", f"{r['posed_draw_ms']:.1f}"),
+        ("posed, after a pose change", f"{r['pose_update_ms']:.1f}", f"{r['posed_draw_ms']:.1f}",
+         f"{r['pose_update_ms'] + r['posed_draw_ms']:.1f}"),
+    ]
+    print(table(["redraw", "pose update ms (CPU)", "draw ms", "redraw ms"], rows))
+    print(f"pose update = evaluated positions read {r['evaluated_positions_ms']:.1f} ms + skinning matrices "
+          f"{r['skin_matrices_ms']:.1f} ms + normals/tangents and vertex buffer upload; Blender's own Armature "
+          f"modifier evaluation per pose change {r['blender_pose_evaluation_ms']:.1f} ms; first posed draw (weights "
+          f"read once) {r['first_posed_draw_ms']:.0f} ms")
 
 
 def main():

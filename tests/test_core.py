@@ -485,7 +485,6 @@ def test_quaternion_sign_rule_for_half_turns():
 
 def test_every_axis_turn_turns_the_frame_and_keeps_decode_exact():
     arrays, centres, sizes, rotations = far_boxes(41, 30)
-    positions = arrays[0].astype(np.float64)
     base = core.bake(*arrays)
     base_frames = quat_matrix(base.quaternions)
     turns = core.axis_turn_matrices()

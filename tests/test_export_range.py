@@ -69,7 +69,7 @@ def check_boxes(positions, origins, axes, half, index):
 
 @pytest.mark.parametrize("layout", ["NORMAL_FRAME", "UV_FRAME"])
 def test_gltf_decodes_far_and_tiny_boxes(blender, tmp_path, layout):
-    objects = baked_objects(blender, 2)
+    baked_objects(blender, 2)
     path = tmp_path / "far.glb"
     assert blender.ops.boxmarch.export(filepath=str(path), preset="GLTF", layout=layout) == {"FINISHED"}
     numbers = []

@@ -8,45 +8,23 @@ the largest colour channel difference <= 0.02 (measured: docs/PREVIEW.md)."""
 import json
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from boxmarch import core
-from helpers.blender_program import blender_env, run_blender
+from boxmarch import core, layouts
+from helpers.blender_program import blender_env
+from helpers.preview_render import BLENDERS, agreement, quaternions_of, run_check_script
 
 SCRIPT = Path(__file__).parent / "blender_scripts" / "preview_check.py"
 OUTLINE_COLOR = (0.05, 0.05, 0.05)  # preview/draw.py OUTLINE_COLOR (that module needs bpy)
 
 
-def quaternions_of(rotations):
-    """(n, 4) x, y, z, w of proper rotation matrices (n, 3, 3), Shepperd's way with signs from
-    the antisymmetric part: written here independently of the code under test."""
-    m = np.asarray(rotations)
-    w = np.sqrt(np.maximum(0, 1 + m[:, 0, 0] + m[:, 1, 1] + m[:, 2, 2])) / 2
-    x = np.sqrt(np.maximum(0, 1 + m[:, 0, 0] - m[:, 1, 1] - m[:, 2, 2])) / 2
-    y = np.sqrt(np.maximum(0, 1 - m[:, 0, 0] + m[:, 1, 1] - m[:, 2, 2])) / 2
-    z = np.sqrt(np.maximum(0, 1 - m[:, 0, 0] - m[:, 1, 1] + m[:, 2, 2])) / 2
-    x = np.copysign(x, m[:, 2, 1] - m[:, 1, 2])
-    y = np.copysign(y, m[:, 0, 2] - m[:, 2, 0])
-    z = np.copysign(z, m[:, 1, 0] - m[:, 0, 1])
-    return np.stack([x, y, z, w], 1)
-
-
-@pytest.fixture(scope="module", params=["blender-3.4-program", "bpy-5.0-module"])
-def rendered(request, package_parent, tmp_path_factory):  # noqa: F811
+@pytest.fixture(scope="module", params=BLENDERS)
+def rendered(request, package_parent, tmp_path_factory):
     tmp = tmp_path_factory.mktemp("preview")
-    out = tmp / "preview.npz"
-    if request.param == "blender-3.4-program":
-        run_blender(["--background", "--factory-startup", "--python-exit-code", "1", "--python", str(SCRIPT), "--",
-                     str(package_parent), str(out)], tmp, timeout=600)
-    else:
-        proc = subprocess.run([sys.executable, str(SCRIPT), "--", str(package_parent), str(out)],
-                              env=blender_env(tmp), capture_output=True, text=True, timeout=600)
-        assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    return dict(np.load(out))
+    return run_check_script(request.param, SCRIPT, package_parent, tmp / "preview.npz", tmp)
 
 
 def reference(r, sdf, view=None, projection=None, shift=0.0):
@@ -57,12 +35,6 @@ def reference(r, sdf, view=None, projection=None, shift=0.0):
     return core.render_boxes(r["centres"] + shift, quaternions_of(r["rotations"]), r["sizes"] / 2,
                              projection @ view @ model, view @ model, width, height, sdf=sdf,
                              base_color=r["color"][:3])
-
-
-def agreement(depth, ref):
-    """(coverage agreement, 99.9th percentile of |depth difference| where both hit)."""
-    both = (depth < 1.0) & (ref.depth < 1.0)
-    return ((depth < 1.0) == (ref.depth < 1.0)).mean(), np.percentile(np.abs(depth - ref.depth)[both], 99.9)
 
 
 def reference_from_layers(r, sdf):
@@ -92,6 +64,18 @@ def test_preview_matches_cpu_reference(rendered, sdf):
     assert np.percentile(angle, 99) <= 2.0
     colour = np.abs(rendered[f"{sdf}_SHADED_rgba"][..., :3] - ref.rgba[..., :3])[both].max(-1)
     assert np.percentile(colour, 99) <= 0.02
+
+
+@pytest.mark.parametrize("layout", layouts.LAYOUTS)
+def test_every_layout_matches_cpu_reference(rendered, layout):
+    """The preview drawn from each engine layout's channels (issue 12) lands on the known boxes;
+    with the frame channels replaced by the identity frame it must not."""
+    ref = reference(rendered, "ROUNDED_BOX")
+    assert (ref.depth < 1.0).mean() > 0.1
+    coverage, depth = agreement(rendered[f"LAYOUT_{layout}_depth"], ref)
+    assert coverage >= 0.99 and depth <= 2e-6, (coverage, depth)
+    coverage, depth = agreement(rendered[f"UNTURNED_{layout}_depth"], ref)
+    assert coverage < 0.99 and depth > 1e-3, (coverage, depth)
 
 
 def test_sphere_is_inside_box_and_differs_from_it(rendered):

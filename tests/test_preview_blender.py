@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from conftest import mesh_object
-from boxmarch import scenes
+from boxmarch import core, scenes
 
 
 def baked_boxes(blender, encoding="FLOAT_COLOR", domain="POINT"):
@@ -40,7 +40,8 @@ def test_read_baked_recovers_boxes_and_vectors_meet_at_origins(blender, encoding
     # every box's half-extents, as a set per box (the baked frame may order the axes differently)
     assert np.allclose(np.sort(baked.box_half_extents, axis=1), np.sort(sizes / 2, axis=1), atol=tolerance * scale)
     assert np.allclose(baked.origins, centres, atol=tolerance * scale)
-    raw, rotated = mesh_data.vector_lines(baked)
+    raw, rotated = mesh_data.vector_lines(baked.positions, core.decode_offsets(baked.offsets),
+                                          mesh_data.frame_axes(baked.quaternions))
     assert raw.shape == rotated.shape == (2 * len(baked.positions), 3)
     assert np.array_equal(rotated[0::2], baked.positions)
     tips = rotated[1::2].reshape(-1, 8, 3)  # 8 vertices per box, in order

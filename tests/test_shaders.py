@@ -4,9 +4,10 @@ import re
 import subprocess
 from pathlib import Path
 
+import numpy as np
 import pytest
 
-from boxmarch import core
+from boxmarch import core, layouts
 from boxmarch.preview import sources
 from helpers.glsl import blender_declarations, compile_glsl, validator
 
@@ -16,11 +17,24 @@ SHADERS = Path(__file__).resolve().parent.parent / "shaders"
 ENGINE_ONLY = {"get_uv_by_channel", "GetRotationFromChannels", "BoxmarchCubeHalfExtents", "BoxmarchRaymarch"}
 
 
-
-
-def test_vertex_stage_compiles(tmp_path):
-    proc = compile_glsl(tmp_path, "preview", "vert", sources.vertex_source())
+@pytest.mark.parametrize("layout", layouts.LAYOUTS)
+def test_vertex_stage_compiles_for_every_layout(tmp_path, layout):
+    proc = compile_glsl(tmp_path, f"preview_{layout}", "vert", sources.vertex_source(layout), layout)
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_vertex_inputs_are_the_layouts_channels():
+    """The preview reads exactly the per-vertex channels the export writes (and ch_half where the
+    layout has no per-vertex half-extents)."""
+    n = 3
+    data = layouts.BoxData(quaternions=np.tile([0.0, 0.0, 0.0, 1.0], (n, 1)), offsets=np.zeros((n, 3)),
+                           half_extents=np.ones((n, 3)), index=np.zeros(n, np.int64),
+                           classic_rgba=np.ones((n, 4), np.float32), box_half_extents=np.ones((1, 3)))
+    for layout in layouts.LAYOUTS:
+        written = {"ch_" + name.lower(): values.shape[1] for name, values in layouts.channels(layout, data).items()
+                   if name != "TABLE"}
+        read = {name: int(t[-1]) for t, name in sources.VERTEX_INPUTS[layout] if name not in ("pos", "ch_half")}
+        assert read == written, layout
 
 
 @pytest.mark.parametrize("sdf", core.SDF_PRESETS)
@@ -29,10 +43,11 @@ def test_fragment_stage_compiles_for_every_preset(tmp_path, sdf):
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
-def test_stages_link(tmp_path):
+@pytest.mark.parametrize("layout", layouts.LAYOUTS)
+def test_stages_link(tmp_path, layout):
     vert = tmp_path / "link.vert"
     frag = tmp_path / "link.frag"
-    vert.write_text(blender_declarations("vert") + sources.vertex_source())
+    vert.write_text(blender_declarations("vert", layout) + sources.vertex_source(layout))
     frag.write_text(blender_declarations("frag") + sources.fragment_source("TORUS"))
     proc = subprocess.run([validator(), "-l", str(vert), str(frag)], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout + proc.stderr

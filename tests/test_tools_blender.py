@@ -387,7 +387,7 @@ def test_pack_uv_without_uv_map_or_faces_is_refused(blender):
     with pytest.raises(RuntimeError, match="no UV map"):
         blender.ops.boxmarch.pack_uv_by_z()
     blender.ops.object.mode_set(mode="OBJECT")
-    wire = mesh_object(blender, "wire", np.eye(3), [[0, 1], [1, 2]], [], [], [])
+    mesh_object(blender, "wire", np.eye(3), [[0, 1], [1, 2]], [], [], [])
     with pytest.raises(RuntimeError, match="no faces"):
         blender.ops.boxmarch.pack_uv_by_z()
 

@@ -368,7 +368,7 @@ def _cleanup_options(p, command):
 
 
 def _export_options(p, required):
-    from .export.layouts import LAYOUTS
+    from .layouts import LAYOUTS
     from .export.transforms import PRESETS
 
     p.add_argument("--preset", choices=sorted(PRESETS), default="GLTF")

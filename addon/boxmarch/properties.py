@@ -2,7 +2,7 @@
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
-from . import core
+from . import core, layouts
 from .export import transforms
 
 _SDF_DESCRIPTIONS = {
@@ -49,6 +49,12 @@ class BoxmarchObjectSettings(bpy.types.PropertyGroup):
                for p in transforms.PRESETS.values()],
         description="See the SDF as an export preset's engine evaluates it: Unity mirrors every local frame's x, "
                     "so a shape that is not symmetric in local x appears mirrored there (docs/EXPORT.md)")
+    layout: EnumProperty(
+        name="Layout", default="CLASSIC", update=_redraw,
+        items=[(layout.name, layout.label, layout.description) for layout in layouts.LAYOUTS.values()],
+        description="Draw from the channels of this engine layout, decoded as that engine's shader decodes them "
+                    "(docs/ENGINES.md); with an Armature modifier only the Normal + tangent layouts' frames follow "
+                    "the pose, as in every engine")
     show_vectors: BoolProperty(name="Vectors", default=False, update=_redraw,
                                description="Lines from every vertex along the raw offset (blue) and the rotated "
                                            "offset (orange): the orange ones meet at each submesh's origin")

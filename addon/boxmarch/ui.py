@@ -3,7 +3,8 @@ import textwrap
 
 import bpy
 
-from . import mesh_io
+from . import layouts, mesh_io
+from .preview import skinning
 from .operators import tools
 from .operators.bake import BOXMARCH_OT_bake
 from .operators.instance_on_curve import BOXMARCH_OT_add_instance_on_curve
@@ -73,6 +74,9 @@ class BOXMARCH_PT_preview(bpy.types.Panel):
         layout.active = settings.preview
         layout.prop(settings, "sdf")
         layout.prop(settings, "engine")
+        layout.prop(settings, "layout")
+        if not layouts.LAYOUTS[settings.layout].skin_safe and skinning.armature_modifier(ob) is not None:
+            layout.label(text="Frame in UVs: stays in the rest pose when bones move", icon="INFO")
         if settings.sdf == "USER":
             row = layout.row(align=True)
             row.prop_search(settings, "user_text", bpy.data, "texts")

@@ -1,5 +1,6 @@
-// boxmarch viewport preview, fragment stage: one fragment of a rasterised submesh recovers its
-// box-local frame, sphere-traces map() inside the box, writes the hit's depth and shades it.
+// boxmarch viewport preview, fragment stage: one fragment of a rasterised submesh takes its box
+// frame, offset and half-extents from the vertex stage (which decoded the layout's channels),
+// sphere-traces map() inside the box, writes the hit's depth and shades it.
 // Comes after decode.glsl, sdf.glsl, raymarch.glsl and a map() definition.
 // Uniform block `preview` (BoxmarchPreview): object_to_clip; normal_to_view (inverse transpose
 // of the object-to-view rotation part); frame (the baked data's object frame from Blender's object
@@ -21,14 +22,17 @@ vec3 bm_shade(vec3 n_view, vec3 base)
 
 void main()
 {
-  vec4 q = normalize(frag_quat);
-  vec3 f = GetFragToOrigin(frag_offset);
+  // The box frame's axes (the vertex stage decoded them from the layout's channels).
+  vec3 x = normalize(frag_axis_x);
+  vec3 y = normalize(frag_axis_y);
+  vec3 z = normalize(frag_axis_z);
+  vec3 f = frag_offset;
   box_half = frag_half;
   vec3 ro = -f;
   vec3 ray_object = preview.eye.w > 0.5 ? obj_pos - preview.eye.xyz : preview.eye.xyz;
   float eye_distance = length(ray_object);
   mat3 frame = mat3(preview.frame);
-  vec3 rd = normalize(rotate_vector(frame * (ray_object / eye_distance), quat_conjugate(q)));
+  vec3 rd = normalize(bm_to_local(frame * (ray_object / eye_distance), x, y, z));
 
   // A fragment where the ray enters: front-facing, or (whatever the winding) more of the box
   // ahead than behind. A fragment of the far side only marches when the eye is inside the box
@@ -59,11 +63,11 @@ void main()
     discard;
   }
   vec3 local_hit = ro + rd * t;
-  vec3 obj_hit = obj_pos + transpose(frame) * rotate_vector(local_hit + f, q);
+  vec3 obj_hit = obj_pos + transpose(frame) * bm_from_local(local_hit + f, x, y, z);
   vec4 clip = preview.object_to_clip * vec4(obj_hit, 1.0);
   gl_FragDepth = clip.z / clip.w * 0.5 + 0.5;
 
-  vec3 n_object = transpose(frame) * rotate_vector(bm_normal(local_hit, bm_normal_tap(preview.march.x, box_half)), q);
+  vec3 n_object = transpose(frame) * bm_from_local(bm_normal(local_hit, bm_normal_tap(preview.march.x, box_half)), x, y, z);
   if (preview.mode.x == 1) {
     frag_color = vec4(n_object * 0.5 + 0.5, 1.0);
   }

@@ -1,12 +1,39 @@
-// boxmarch viewport preview, vertex stage. Interface (declared by the create-info in
-// addon/boxmarch/preview/shader.py): in pos, offset_color, quat, half_extents; out obj_pos,
-// frag_offset, frag_quat, frag_half; uniform block preview
-// (BoxmarchPreview, see preview.frag.glsl).
+// boxmarch viewport preview, vertex stage: decodes one engine layout's channels
+// (addon/boxmarch/layouts.py) with the shipped decode functions (decode.glsl, before this), as
+// that engine's shader does. sources.py defines BM_LAYOUT_<name> first; the create-info
+// (addon/boxmarch/preview/shader.py) declares the layout's inputs (sources.VERTEX_INPUTS: pos and
+// the channels as ch_color, ch_normal, ch_tangent, ch_uv1 .. ch_uv6, plus ch_half where the layout
+// carries no per-vertex half-extents), the outputs (sources.STAGE_INTERFACE) and the uniform block
+// preview (BoxmarchPreview, see preview.frag.glsl).
 void main()
 {
+#if defined(BM_LAYOUT_CLASSIC) || defined(BM_LAYOUT_UV_FRAME)
+  vec4 q = normalize(GetRotation(ch_uv1, ch_uv2));
+  frag_axis_x = rotate_vector(vec3(1.0, 0.0, 0.0), q);
+  frag_axis_y = rotate_vector(vec3(0.0, 1.0, 0.0), q);
+  frag_axis_z = rotate_vector(vec3(0.0, 0.0, 1.0), q);
+#else
+  // NORMAL_*: the frame in the normal and tangent, as skinning leaves them (normalised per
+  // fragment, as an engine's interpolated normal is).
+  frag_axis_x = ch_tangent.xyz;
+  frag_axis_y = bm_axis_y(ch_normal, ch_tangent);
+  frag_axis_z = ch_normal;
+#endif
+#if defined(BM_LAYOUT_CLASSIC)
+  // CLASSIC carries only the largest half-extent; ch_half is the preview's own, from the bake.
+  frag_offset = GetFragToOrigin(ch_color);
+  frag_half = ch_half;
+#elif defined(BM_LAYOUT_UV_FRAME)
+  frag_offset = bm_offset(ch_uv3, ch_uv4);
+  frag_half = bm_half_extents(ch_uv5, ch_uv6);
+#elif defined(BM_LAYOUT_NORMAL_FRAME)
+  frag_offset = bm_offset(ch_uv1, ch_uv2);
+  frag_half = bm_half_extents(ch_uv3, ch_uv4);
+#else
+  // NORMAL_COLOR: colour = (f, index); ch_half = the box table's texel at that index.
+  frag_offset = bm_offset(ch_color.xy, ch_color.zw);
+  frag_half = ch_half;
+#endif
   obj_pos = pos;
-  frag_offset = offset_color;
-  frag_quat = quat;
-  frag_half = half_extents;
   gl_Position = preview.object_to_clip * vec4(pos, 1.0);
 }

@@ -14,8 +14,8 @@ import mathutils  # noqa: E402
 import numpy as np  # noqa: E402
 
 import boxmarch  # noqa: E402
-from boxmarch import mesh_io, preview, scenes  # noqa: E402
-from boxmarch.preview import draw  # noqa: E402
+from boxmarch import layouts, mesh_io, preview, scenes  # noqa: E402
+from boxmarch.preview import draw, mesh_data  # noqa: E402
 
 boxmarch.register()
 bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -67,6 +67,36 @@ for sdf in ("BOX", "SPHERE", "ROUNDED_BOX", "CAPSULE", "CYLINDER", "TORUS", "LIN
     for output in ("SHADED", "NORMAL"):
         rgba, depth = preview.render(scene, camera, W, H, output=output)
         result[f"{sdf}_{output}_rgba"], result[f"{sdf}_{output}_depth"] = rgba, depth
+
+# Every engine layout, drawn from its own channels and decoded by the shipped decode functions;
+# then, as a negative control, each with its frame channels replaced by the identity frame.
+boxes.boxmarch.sdf = "ROUNDED_BOX"
+for layout in layouts.LAYOUTS:
+    boxes.boxmarch.layout = layout
+    result[f"LAYOUT_{layout}_rgba"], result[f"LAYOUT_{layout}_depth"] = preview.render(scene, camera, W, H)
+layout_inputs = mesh_data.layout_inputs
+
+
+def unturned_inputs(layout, baked):
+    inputs = layout_inputs(layout, baked)
+    n = len(baked.positions)
+    if "ch_normal" in inputs:
+        inputs["ch_normal"] = np.tile(np.float32([0.0, 0.0, 1.0]), (n, 1))
+        inputs["ch_tangent"] = np.tile(np.float32([1.0, 0.0, 0.0, 1.0]), (n, 1))
+    else:
+        inputs["ch_uv1"] = np.zeros((n, 2), np.float32)
+        inputs["ch_uv2"] = np.tile(np.float32([0.0, 1.0]), (n, 1))
+    return inputs
+
+
+mesh_data.layout_inputs = unturned_inputs
+draw.forget()
+for layout in layouts.LAYOUTS:
+    boxes.boxmarch.layout = layout
+    result[f"UNTURNED_{layout}_rgba"], result[f"UNTURNED_{layout}_depth"] = preview.render(scene, camera, W, H)
+mesh_data.layout_inputs = layout_inputs
+draw.forget()
+boxes.boxmarch.layout = "CLASSIC"
 
 # A user SDF: the same sphere written by hand must give the SPHERE preset's image.
 text = bpy.data.texts.new("my_sphere.glsl")

@@ -17,12 +17,12 @@ def validator():
     return path
 
 
-def blender_declarations(stage):
+def blender_declarations(stage, layout="CLASSIC"):
     """What Blender generates from the preview's create-info before our source (GL backend)."""
     lines = ["#version 330 core", sources.UNIFORM_STRUCT,
              f"layout(std140) uniform _{sources.UNIFORM_NAME} {{ {sources.UNIFORM_TYPE} {sources.UNIFORM_NAME}; }};"]
     if stage == "vert":
-        lines += [f"layout(location = {i}) in {GLSL_TYPES[t]} {name};" for i, (t, name) in enumerate(sources.VERTEX_INPUTS)]
+        lines += [f"layout(location = {i}) in {GLSL_TYPES[t]} {name};" for i, (t, name) in enumerate(sources.VERTEX_INPUTS[layout])]
     direction = "out" if stage == "vert" else "in"
     lines += [f"{'flat ' if interp == 'flat' else ''}{direction} {GLSL_TYPES[t]} {name};"
               for interp, t, name in sources.STAGE_INTERFACE]
@@ -31,7 +31,7 @@ def blender_declarations(stage):
     return "\n".join(lines) + "\n"
 
 
-def compile_glsl(tmp_path, name, stage, source):
+def compile_glsl(tmp_path, name, stage, source, layout="CLASSIC"):
     path = tmp_path / f"{name}.{stage}"
-    path.write_text(blender_declarations(stage) + source)
+    path.write_text(blender_declarations(stage, layout) + source)
     return subprocess.run([validator(), str(path)], capture_output=True, text=True)

@@ -10,8 +10,8 @@ import time
 import bpy
 import numpy as np
 
-from .. import core, edit_mode, files, mesh_io
-from . import glb, godot, layouts, transforms
+from .. import core, edit_mode, files, layouts, mesh_io
+from . import glb, godot, transforms
 
 
 class ExportInputError(ValueError):

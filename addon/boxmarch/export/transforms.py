@@ -40,7 +40,7 @@ class Preset:
     rotation: np.ndarray   # A0 (3, 3), det +1
     mirror: np.ndarray     # diagonal of N (3,), +-1, at most one -1
     description: str
-    layouts: tuple = ("CLASSIC",)  # export/layouts.py names this target can carry; the first is the default
+    layouts: tuple = ("CLASSIC",)  # layouts.py names this target can carry; the first is the default
     length_scale: float = 1.0      # the importer's unit conversion of positions (Unreal: metres to cm)
     flip_v_on_import: bool = False  # the importer reads v as 1 - v (Unreal's FBX importer)
     import_settings: str = ""      # what the engine's importer must be told so the data stays float32

@@ -5,13 +5,15 @@ temporary, file-shaped mesh copies itself (export/scene.py: which layers a targe
 the export's business), reading the artist's meshes through this package.
 
 Everything moves through ``foreach_get``/``foreach_set`` on NumPy buffers of exactly the right
-type and size; nothing loops over vertices, corners or faces in Python. Layers are always looked
-up by name right before they are used: adding a layer may move the others in memory, so no
-reference to a layer is held across a call that adds one.
+type and size; nothing loops over vertices, corners or faces in Python (but vertex-group
+weights: weights.py says why). Layers are always looked up by name right before they are used:
+adding a layer may move the others in memory, so no reference to a layer is held across a call
+that adds one.
 
     arrays   geometry, topology, selection flags, UV maps; new meshes from arrays
     baked    the baked layers: compute (prepare_bake), store (PreparedBake.write), read back
     rebuild  replace a mesh's geometry by arrays the core computed, keeping its attributes
+    weights  vertex-group weights (the skin the preview follows)
 """
 from .arrays import (new_mesh, one_object_per_mesh, read_corner_edges, read_face_selection,
                      read_hidden_vertices, read_point_values, read_positions, read_topology, read_triangles,
@@ -22,3 +24,4 @@ from .baked import (FINGERPRINT_ATTRIBUTE, LAYERS_DIGEST, MAX_UV_MAPS, NEUTRAL_B
                     NotBakedError, PreparedBake, modifier_warnings, prepare_bake, read_baked_layers,
                     stored_layers_digest)
 from .rebuild import can_rebuild, rebuild_welded
+from .weights import read_vertex_weights

@@ -8,7 +8,8 @@ import bpy
 from bpy.props import EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper
 
-from ..export import layouts, scene, transforms
+from .. import layouts
+from ..export import scene, transforms
 
 
 class BOXMARCH_OT_export(bpy.types.Operator, ExportHelper):

@@ -50,23 +50,44 @@ def _draw_viewport():
     objects = [ob for ob in context.visible_objects if _previewed(ob)]
     if region_data is None or not objects:
         return
+    depsgraph = context.evaluated_depsgraph_get()
     gpu.state.depth_test_set("LESS_EQUAL")
     gpu.state.depth_mask_set(True)
     for ob in objects:
-        draw.draw_object(ob, region_data.view_matrix, region_data.window_matrix, region_data.is_perspective)
+        try:
+            draw.draw_object(ob, region_data.view_matrix, region_data.window_matrix, region_data.is_perspective,
+                             depsgraph=depsgraph)
+        except ValueError:  # noted in draw.errors (the panel shows it); the others still draw
+            pass
     gpu.state.depth_test_set("NONE")
     gpu.state.depth_mask_set(False)
 
 
 def _geometry_changed(scene, depsgraph):
-    """depsgraph_update_post handler: drop the cached batches of meshes whose geometry changed."""
+    """depsgraph_update_post handler. A mesh datablock's geometry changed (edited, baked again):
+    everything read from it goes. An object's evaluated geometry changed: for an object drawn
+    posed, that is its pose (bones moved, the armature or the object moved), so only its posed
+    positions and frames are recomputed; for any other object its mesh is read again."""
+    import bpy
+
     from . import draw
 
     for update in depsgraph.updates:
-        if update.is_updated_geometry and hasattr(update.id, "data") and update.id.data is not None:
-            draw.forget(update.id.data.name_full)
-        elif update.is_updated_geometry:
+        if not update.is_updated_geometry:
+            continue
+        if isinstance(update.id, bpy.types.Object):
+            if not draw.pose_changed(update.id.name_full) and update.id.data is not None:
+                draw.forget(update.id.data.name_full)
+        elif isinstance(update.id, bpy.types.Mesh):
             draw.forget(update.id.name_full)
+
+
+def _frame_changed(*_args):
+    """frame_change_post handler: an action may have moved the bones (scrubbing, playback), and
+    Blender reports a frame change's updates to no depsgraph_update_post handler."""
+    from . import draw
+
+    draw.pose_changed()
 
 
 def _data_replaced(*_args):
@@ -78,7 +99,8 @@ def _data_replaced(*_args):
 
 
 # (handler list, function): all persistent, so loading a file keeps them.
-_APP_HANDLERS = (("depsgraph_update_post", _geometry_changed), ("load_post", _data_replaced),
+_APP_HANDLERS = (("depsgraph_update_post", _geometry_changed), ("frame_change_post", _frame_changed),
+                 ("load_post", _data_replaced),
                  ("undo_post", _data_replaced), ("redo_post", _data_replaced))
 
 
@@ -217,7 +239,7 @@ def render(scene, camera_object, width, height, *, output="SHADED"):
                 for ob in objects:
                     try:
                         if _previewed(ob):
-                            draw.draw_object(ob, view, projection, perspective, mode)
+                            draw.draw_object(ob, view, projection, perspective, mode, depsgraph)
                         elif mode == 0:
                             draw.draw_solid(ob, depsgraph)
                     except (ValueError, RuntimeError) as error:  # one bad object: the rest still draw

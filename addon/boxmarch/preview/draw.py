@@ -2,25 +2,35 @@
 overlay. Shared by the viewport draw handler and the offscreen render (``preview.render``)."""
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Callable
+
 import bpy
 import gpu
 import numpy as np
 from gpu_extras.batch import batch_for_shader
 
 from ..export import transforms
-from . import mesh_data, shader as preview_shader, sources
+from . import mesh_data, shader as preview_shader, skinning, sources
 
 RAW_VECTOR_COLOR = (0.35, 0.75, 1.0, 1.0)      # light blue, as in the seed's Unity script
 ROTATED_VECTOR_COLOR = (1.0, 0.55, 0.1, 1.0)   # orange: meets at the submesh origins
 OUTLINE_COLOR = (0.05, 0.05, 0.05, 1.0)
 SOLID_COLOR = (0.6, 0.6, 0.6, 1.0)
 
-# Batches per mesh datablock, dropped when its geometry changes, a file loads or undo runs
-# (handlers in __init__).
-_batches: dict = {}
+# What a mesh draws from, per (mesh datablock, layout): dropped when the mesh's data changes, a
+# file loads or undo runs (handlers in __init__).
+_meshes: dict = {}
+# What a posed object draws from, per object: rebuilt from _meshes when its pose changes.
+_posed: dict = {}
 # Why an object is not raymarched, per object name (shown in the panel): not baked, a user SDF
-# that does not compile (its outline is drawn instead), a malformed frame property.
+# that does not compile (its outline is drawn instead), a malformed frame property, an Armature
+# modifier the preview cannot follow.
 errors: dict = {}
+
+# The shader inputs a pose changes: skinning moves positions, normals and tangents; every other
+# channel stays as baked.
+POSE_INPUTS = ("pos", "ch_normal", "ch_tangent")
 
 
 def uniform_shader():
@@ -31,26 +41,144 @@ def uniform_shader():
 
 
 def forget(mesh_name=None):
-    if mesh_name is None:
-        _batches.clear()
-    else:
-        _batches.pop(mesh_name, None)
+    """Drops what was read from a mesh datablock (every mesh when None), and the poses drawn from it."""
+    for key in [k for k in _meshes if mesh_name is None or k[0] == mesh_name]:
+        del _meshes[key]
+    for key in [k for k, posed in _posed.items() if mesh_name is None or posed.mesh_key[0] == mesh_name]:
+        del _posed[key]
 
 
-def _mesh_batches(ob):
-    """(raymarch batch, outline batch, raw vector batch, rotated vector batch) of a baked mesh."""
-    key = ob.data.name_full
-    if key not in _batches:
-        baked = mesh_data.read_baked(ob.data)
-        shader = preview_shader.preview_shader("BOX")
-        march = batch_for_shader(shader, "TRIS", {
-            "pos": baked.positions, "offset_color": baked.offsets, "quat": baked.quaternions,
-            "half_extents": baked.half_extents}, indices=baked.triangles)
+def pose_changed(object_name=None) -> bool:
+    """Marks an object's pose (every posed object's when None) for recomputation at its next draw.
+    Returns whether the object is drawn posed."""
+    names = list(_posed) if object_name is None else [object_name]
+    for name in names:
+        if name in _posed:
+            _posed[name].stale = True
+    return object_name is None or object_name in _posed
+
+
+def _vertex_buffer(inputs: dict):
+    """One GPU vertex buffer holding the float32 (N, k) arrays of ``inputs`` by attribute name."""
+    vertex_format = gpu.types.GPUVertFormat()
+    for name, values in inputs.items():
+        vertex_format.attr_add(id=name, comp_type="F32", len=values.shape[1], fetch_mode="FLOAT")
+    vertex_count = len(next(iter(inputs.values())))
+    buffer = gpu.types.GPUVertBuf(vertex_format, vertex_count)
+    for name, values in inputs.items():
+        buffer.attr_fill(name, np.ascontiguousarray(values, np.float32))
+    return buffer
+
+
+@dataclass
+class _Drawn:
+    """The GPU batches of one object's preview, and the CPU arrays its overlay and poses need."""
+
+    march: object                 # GPUBatch of the preview shader
+    outline: object               # GPUBatch of the mesh edges (the same vertex buffers)
+    positions: np.ndarray         # float32 (N, 3) as drawn
+    offsets: np.ndarray           # float64 (N, 3) f, box-local
+    frame: Callable               # () -> float64 (N, 3, 3) the frame the layout decodes to (unit columns)
+    vectors: tuple | None = None  # the overlay's two line batches, made when first shown
+
+
+@dataclass
+class _Mesh:
+    """A baked mesh in one layout: what a pose does not change."""
+
+    baked: mesh_data.BakedMesh
+    inputs: dict                  # the shader inputs at rest (mesh_data.layout_inputs)
+    static: object                # GPUVertBuf of the inputs not in POSE_INPUTS
+    triangles: object             # GPUIndexBuf
+    edges: object                 # GPUIndexBuf
+    rest: _Drawn
+
+
+@dataclass
+class _Posed:
+    """An object following its armature: weights read once, the drawing redone when stale."""
+
+    mesh_key: tuple
+    rig_key: tuple                # skinning.rig_key when the weights were read
+    weights: skinning.SkinWeights
+    drawn: _Drawn | None = None
+    stale: bool = True
+
+
+def _batches(pose_inputs: dict, static, triangles, edges, positions, offsets, frame) -> _Drawn:
+    moving = _vertex_buffer(pose_inputs)
+    march = gpu.types.GPUBatch(type="TRIS", buf=moving, elem=triangles)
+    march.vertbuf_add(static)
+    outline = gpu.types.GPUBatch(type="LINES", buf=moving, elem=edges)
+    return _Drawn(march=march, outline=outline, positions=positions, offsets=offsets, frame=frame)
+
+
+def _normalised(vectors):
+    return vectors / np.maximum(np.linalg.norm(vectors, axis=-2, keepdims=True), 1e-30)
+
+
+def _mesh(mesh, layout) -> _Mesh:
+    """The cached rest-pose drawing of ``mesh`` in ``layout``. Raises mesh_data.NotBakedError."""
+    key = (mesh.name_full, layout)
+    if key not in _meshes:
+        baked = mesh_data.read_baked(mesh)
+        inputs = mesh_data.layout_inputs(layout, baked)
+        static = _vertex_buffer({k: v for k, v in inputs.items() if k not in POSE_INPUTS})
+        triangles = gpu.types.GPUIndexBuf(type="TRIS", seq=baked.triangles)
+        edges = gpu.types.GPUIndexBuf(type="LINES", seq=baked.edges)
+        offsets = mesh_data.box_data(baked).offsets
+        rest = _batches({k: v for k, v in inputs.items() if k in POSE_INPUTS}, static, triangles, edges,
+                        baked.positions, offsets, lambda: mesh_data.frame_axes(baked.quaternions))
+        _meshes[key] = _Mesh(baked=baked, inputs=inputs, static=static, triangles=triangles, edges=edges, rest=rest)
+    return _meshes[key]
+
+
+def _posed_drawing(ob, layout, modifier, depsgraph) -> _Drawn:
+    """The drawing of ``ob`` in its current pose: the evaluated positions, and for the NORMAL_*
+    layouts the normal and tangent moved by each vertex's skinning matrix (skinning.py)."""
+    skinning.check_modifier(modifier)
+    mesh = _mesh(ob.data, layout)
+    key, rig_key = (ob.data.name_full, layout), skinning.rig_key(ob, modifier)
+    posed = _posed.get(ob.name_full)
+    if posed is None or posed.mesh_key != key or posed.rig_key != rig_key:
+        posed = _Posed(mesh_key=key, rig_key=rig_key, weights=skinning.read_weights(ob, modifier.object.data))
+        _posed[ob.name_full] = posed
+    if posed.stale or posed.drawn is None:
+        positions = skinning.evaluated_positions(ob, depsgraph, len(mesh.baked.positions))
+        inputs = {"pos": positions}
+        frame = mesh.rest.frame
+        if "ch_normal" in mesh.inputs:  # the frame rides in what skinning moves
+            linear = skinning.skin_linear(posed.weights, skinning.bone_deformations(
+                ob, modifier, posed.weights.bones, depsgraph))
+            normal = np.einsum("nij,nj->ni", linear, mesh.inputs["ch_normal"])
+            tangent = mesh.inputs["ch_tangent"].copy()
+            tangent[:, :3] = np.einsum("nij,nj->ni", linear, tangent[:, :3])
+            inputs.update(ch_normal=normal, ch_tangent=tangent)
+
+            def frame(normal=normal, tangent=tangent):
+                axis_y = np.cross(normal, tangent[:, :3]) * tangent[:, 3:]
+                return _normalised(np.stack([tangent[:, :3], axis_y, normal], axis=2).astype(np.float64))
+        posed.drawn = _batches(inputs, mesh.static, mesh.triangles, mesh.edges, positions, mesh.rest.offsets, frame)
+        posed.stale = False
+    return posed.drawn
+
+
+def _drawing(ob, depsgraph) -> _Drawn:
+    """What ``ob`` draws from: posed when it has an Armature modifier, else its mesh at rest."""
+    layout = ob.boxmarch.layout
+    modifier = skinning.armature_modifier(ob)
+    if modifier is None:
+        _posed.pop(ob.name_full, None)
+        return _mesh(ob.data, layout).rest
+    return _posed_drawing(ob, layout, modifier, depsgraph)
+
+
+def _vector_batches(drawn: _Drawn):
+    if drawn.vectors is None:
         lines = uniform_shader()
-        outline = batch_for_shader(lines, "LINES", {"pos": baked.positions}, indices=baked.edges)
-        vectors = [batch_for_shader(lines, "LINES", {"pos": pairs}) for pairs in mesh_data.vector_lines(baked)]
-        _batches[key] = (march, outline, *vectors)
-    return _batches[key]
+        drawn.vectors = tuple(batch_for_shader(lines, "LINES", {"pos": pairs})
+                              for pairs in mesh_data.vector_lines(drawn.positions, drawn.offsets, drawn.frame()))
+    return drawn.vectors
 
 
 # Custom object property: 9 floats, row-major 3x3, the object frame the baked data is expressed
@@ -103,13 +231,13 @@ def _marching_shader(ob):
     mirror = transforms.PRESETS[settings.engine].mirror  # what the engine's local frame does
     if settings.sdf != "USER":
         errors.pop(ob.name, None)
-        return preview_shader.preview_shader(settings.sdf, None, mirror)
+        return preview_shader.preview_shader(settings.sdf, None, mirror, settings.layout)
     text = bpy.data.texts.get(settings.user_text)
     if text is None:
         errors[ob.name] = f"no text block named '{settings.user_text}'" if settings.user_text else "choose a text block"
         return None
     try:
-        shader = preview_shader.preview_shader("USER", text.as_string(), mirror)
+        shader = preview_shader.preview_shader("USER", text.as_string(), mirror, settings.layout)
     except preview_shader.UserSdfError as exc:
         errors[ob.name] = f"{text.name}: {exc}"
         return None
@@ -117,17 +245,22 @@ def _marching_shader(ob):
     return shader
 
 
-def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0):
+def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, depsgraph=None):
     """Draws one previewed object into the bound framebuffer (depth test on). Returns False when
-    it only drew its outline (not baked, or the user SDF did not compile)."""
+    it only drew its outline (not baked, or the user SDF did not compile). ``depsgraph``: the
+    evaluated one a posed object is drawn from (the context's when None). Raises ValueError for an
+    Armature modifier the preview cannot follow (nothing drawn)."""
     matrix_world = np.array(ob.matrix_world, np.float64)
     object_to_view = np.array(view_matrix, np.float64) @ matrix_world
     object_to_clip = np.array(projection_matrix, np.float64) @ object_to_view
     try:
-        march, outline, raw_vectors, rotated_vectors = _mesh_batches(ob)
+        drawn = _drawing(ob, depsgraph if depsgraph is not None else bpy.context.evaluated_depsgraph_get())
     except mesh_data.NotBakedError as exc:
         errors[ob.name] = str(exc)
         return False
+    except ValueError as exc:
+        errors[ob.name] = str(exc)
+        raise
     settings = ob.boxmarch
     shader = _marching_shader(ob)
     try:
@@ -141,7 +274,7 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0):
         ubo = gpu.types.GPUUniformBuf(block.tobytes())
         shader.bind()
         shader.uniform_block(sources.UNIFORM_NAME, ubo)
-        march.draw(shader)
+        drawn.march.draw(shader)
     if output_mode != 0:
         return shader is not None
     lines = uniform_shader()
@@ -150,8 +283,9 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0):
         lines.bind()
         if settings.show_outline or shader is None:
             lines.uniform_float("color", OUTLINE_COLOR)
-            outline.draw(lines)
+            drawn.outline.draw(lines)
         if settings.show_vectors:
+            raw_vectors, rotated_vectors = _vector_batches(drawn)
             lines.uniform_float("color", RAW_VECTOR_COLOR)
             raw_vectors.draw(lines)
             lines.uniform_float("color", ROTATED_VECTOR_COLOR)

@@ -1,11 +1,12 @@
-"""What the preview draws from a baked mesh, read through mesh_io."""
+"""What the preview draws from a baked mesh, read through mesh_io, turned into the channels of an
+engine layout (boxmarch/layouts.py) as the preview shader reads them."""
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
 
-from .. import core, mesh_io
+from .. import core, layouts, mesh_io
 
 
 NotBakedError = mesh_io.NotBakedError  # the preview's name for it (draw.py, tests)
@@ -22,6 +23,7 @@ class BakedMesh:
     origins: np.ndarray          # float32 (S, 3) per submesh, object space
     box_quaternions: np.ndarray  # float32 (S, 4)
     box_half_extents: np.ndarray  # float32 (S, 3)
+    submesh_of_vertex: np.ndarray  # int32 (N,) the box number of each vertex
 
 
 def read_baked(mesh) -> BakedMesh:
@@ -37,7 +39,8 @@ def read_baked(mesh) -> BakedMesh:
     origins, box_q, box_half = core.boxes_from_bake(positions, colour, quaternions, submesh_of_vertex)
     return BakedMesh(positions=positions, offsets=colour, quaternions=quaternions,
                      half_extents=box_half[submesh_of_vertex], triangles=mesh_io.read_triangles(mesh), edges=edges,
-                     origins=origins, box_quaternions=box_q, box_half_extents=box_half)
+                     origins=origins, box_quaternions=box_q, box_half_extents=box_half,
+                     submesh_of_vertex=submesh_of_vertex)
 
 
 def read_triangles(mesh):
@@ -45,12 +48,44 @@ def read_triangles(mesh):
     return mesh_io.read_positions(mesh), mesh_io.read_triangles(mesh)
 
 
-def vector_lines(baked: BakedMesh):
+def box_data(baked: BakedMesh) -> layouts.BoxData:
+    """The bake's per-vertex box data in Blender's object frame, from which every layout's
+    channels are made (as the export makes them in its target's frame)."""
+    return layouts.BoxData(quaternions=baked.quaternions.astype(np.float64),
+                           offsets=core.decode_offsets(baked.offsets).astype(np.float64),
+                           half_extents=baked.half_extents.astype(np.float64),
+                           index=baked.submesh_of_vertex.astype(np.int64), classic_rgba=baked.offsets,
+                           box_half_extents=baked.box_half_extents.astype(np.float64))
+
+
+def layout_inputs(layout: str, baked: BakedMesh) -> dict[str, np.ndarray]:
+    """float32 per-vertex inputs of the preview shader for ``layout`` (sources.VERTEX_INPUTS):
+    the layout's channels as layouts.channels() writes them for export, and ch_half where the
+    layout has no per-vertex half-extents (CLASSIC: the bake's, as the preview always drew them;
+    NORMAL_COLOR: its box table read at each vertex's stored index, as an engine samples it)."""
+    channels = layouts.channels(layout, box_data(baked))
+    table = channels.pop("TABLE", None)
+    inputs = {"pos": baked.positions}
+    inputs.update({"ch_" + name.lower(): values for name, values in channels.items()})
+    if layout == "CLASSIC":
+        inputs["ch_half"] = baked.half_extents.astype(np.float32)
+    elif table is not None:
+        inputs["ch_half"] = table[np.rint(channels["COLOR"][:, 3]).astype(np.int64), :3]
+    return inputs
+
+
+def frame_axes(quaternions) -> np.ndarray:
+    """float64 (N, 3, 3) box frames of unit quaternions (N, 4): columns the local x, y, z axes."""
+    axis_x, axis_z = layouts.frame_axes(quaternions)
+    return np.stack([axis_x, np.cross(axis_z, axis_x), axis_z], axis=2)
+
+
+def vector_lines(positions, offsets, axes):
     """The decoded-vector overlay (the seed's "Decode vertex vectors" script) as line pairs,
-    float32 (2N, 3) each: from every vertex along the raw decoded f, and along f rotated by q,
-    which ends at the vertex's submesh origin."""
-    f = core.decode_offsets(baked.offsets)
-    raw = baked.positions + f
-    rotated = baked.positions + core.rotate_vector(f, baked.quaternions)
-    return tuple(np.stack([baked.positions, tips.astype(np.float32)], axis=1).reshape(-1, 3)
-                 for tips in (raw, rotated))
+    float32 (2N, 3) each: from every vertex along the raw decoded f (box-local, (N, 3)), and along
+    f turned by the vertex's frame ``axes`` ((N, 3, 3), columns the local axes), which ends at the
+    vertex's submesh origin when the frame is right."""
+    positions = np.asarray(positions, np.float64)
+    raw = positions + offsets
+    rotated = positions + np.einsum("nij,nj->ni", axes, offsets)
+    return tuple(np.stack([positions, tips], axis=1).reshape(-1, 3).astype(np.float32) for tips in (raw, rotated))

@@ -1,5 +1,5 @@
 """Builds the preview shader through ``gpu.shader.create_from_info`` (Blender 3.4 to 5.x) and
-keeps one per (SDF preset or user text); user SDF compile errors become a readable message."""
+keeps one per (SDF preset or user text, engine mirror, layout); user SDF compile errors become a readable message."""
 from __future__ import annotations
 
 import os
@@ -28,12 +28,12 @@ _failed: dict = {}
 MAX_USER_SHADERS = 8
 
 
-def _create_info(fragment: str):
+def _create_info(fragment: str, layout: str):
     iface = gpu.types.GPUStageInterfaceInfo("boxmarch_preview_interface")
     for interpolation, type_name, name in sources.STAGE_INTERFACE:
         getattr(iface, interpolation)(type_name, name)
     info = gpu.types.GPUShaderCreateInfo()
-    for slot, (type_name, name) in enumerate(sources.VERTEX_INPUTS):
+    for slot, (type_name, name) in enumerate(sources.VERTEX_INPUTS[layout]):
         info.vertex_in(slot, type_name, name)
     info.vertex_out(iface)
     info.typedef_source(sources.UNIFORM_STRUCT)
@@ -42,7 +42,7 @@ def _create_info(fragment: str):
         info.fragment_out(slot, type_name, name)
     if hasattr(info, "depth_write"):  # Blender 4+: required where gl_FragDepth is not implied (Metal)
         info.depth_write("ANY")
-    info.vertex_source(sources.vertex_source())
+    info.vertex_source(sources.vertex_source(layout))
     info.fragment_source(fragment)
     return info, iface
 
@@ -110,16 +110,17 @@ def describe_compile_error(log: str):
     return (errors[0] if errors else "the shader did not compile (see the system console)"), None
 
 
-def preview_shader(sdf: str = "BOX", user_text: str | None = None, local_mirror=(1.0, 1.0, 1.0)):
+def preview_shader(sdf: str = "BOX", user_text: str | None = None, local_mirror=(1.0, 1.0, 1.0),
+                   layout: str = "CLASSIC"):
     """The compiled preview shader for a preset, or for user text defining ``float map(vec3 p)``,
-    as an engine with ``local_mirror`` sees it. Raises UserSdfError with the line for user text
-    that does not compile."""
-    key = (sdf, user_text, tuple(float(v) for v in local_mirror))
+    as an engine with ``local_mirror`` sees it, reading the channels of engine ``layout``. Raises
+    UserSdfError with the line for user text that does not compile."""
+    key = (sdf, user_text, tuple(float(v) for v in local_mirror), layout)
     if key in _cache:
         return _cache[key]
     if key in _failed:
         raise UserSdfError(*_failed[key])
-    info, iface = _create_info(sources.fragment_source(sdf, user_text, local_mirror))
+    info, iface = _create_info(sources.fragment_source(sdf, user_text, local_mirror), layout)
     shader, error, log = _compile_capturing_log(info)
     del iface  # the create-info refers to it until compiled
     if shader is None:

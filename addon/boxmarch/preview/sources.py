@@ -24,10 +24,24 @@ def read_glsl(name: str) -> str:
 
 
 # The create-info of the preview shader. Types are Blender's create-info type names.
-VERTEX_INPUTS = (("VEC3", "pos"), ("VEC4", "offset_color"), ("VEC4", "quat"), ("VEC3", "half_extents"))
-# (interpolation, type, name): the quaternion and half-extents are constant over a submesh.
-STAGE_INTERFACE = (("smooth", "VEC3", "obj_pos"), ("smooth", "VEC4", "frag_offset"),
-                   ("flat", "VEC4", "frag_quat"), ("flat", "VEC3", "frag_half"))
+# Per engine layout (boxmarch/layouts.py): pos and the layout's per-vertex channels, "ch_" + the
+# channel's name in lower case (COLOR -> ch_color, UV1 -> ch_uv1), as layouts.channels() writes
+# them; ch_half: per-vertex half-extents where the layout has none per vertex (CLASSIC carries only
+# the largest, the preview derives them from the bake as before; NORMAL_COLOR's table read at the
+# vertex's index).
+_UV = {n: ("VEC2", f"ch_uv{n}") for n in range(1, 7)}
+VERTEX_INPUTS = {
+    "CLASSIC": (("VEC3", "pos"), ("VEC4", "ch_color"), _UV[1], _UV[2], ("VEC3", "ch_half")),
+    "UV_FRAME": (("VEC3", "pos"), *(_UV[n] for n in range(1, 7))),
+    "NORMAL_FRAME": (("VEC3", "pos"), ("VEC3", "ch_normal"), ("VEC4", "ch_tangent"), *(_UV[n] for n in range(1, 5))),
+    "NORMAL_COLOR": (("VEC3", "pos"), ("VEC3", "ch_normal"), ("VEC4", "ch_tangent"), ("VEC4", "ch_color"),
+                     ("VEC3", "ch_half")),
+}
+# (interpolation, type, name): the axes are interpolated as an engine interpolates its normal and
+# tangent (constant over a rigid box); the half-extents are constant over a submesh.
+STAGE_INTERFACE = (("smooth", "VEC3", "obj_pos"), ("smooth", "VEC3", "frag_offset"),
+                   ("smooth", "VEC3", "frag_axis_x"), ("smooth", "VEC3", "frag_axis_y"),
+                   ("smooth", "VEC3", "frag_axis_z"), ("flat", "VEC3", "frag_half"))
 # Everything per draw travels in one uniform block (push constants are limited to 128 bytes).
 # std140: three mat4 then vec4s, no padding; preview/draw.py packs it (uniform_block_data).
 UNIFORM_TYPE = "BoxmarchPreview"
@@ -81,5 +95,8 @@ def fragment_source(sdf: str = "BOX", user_text: str | None = None, local_mirror
                       read_glsl("preview.frag.glsl")])
 
 
-def vertex_source() -> str:
-    return read_glsl("preview.vert.glsl")
+def vertex_source(layout: str = "CLASSIC") -> str:
+    """The vertex stage as Blender compiles it: ``layout``'s decode (the shipped decode.glsl)."""
+    if layout not in VERTEX_INPUTS:
+        raise ValueError(f"layout must be one of {tuple(VERTEX_INPUTS)}, got {layout!r}")
+    return "\n".join([f"#define BM_LAYOUT_{layout}", read_glsl("decode.glsl"), read_glsl("preview.vert.glsl")])
