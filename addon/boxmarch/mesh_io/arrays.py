@@ -49,6 +49,18 @@ def _fast_attribute(mesh, name):
     return attr if attr is not None and name.startswith(".") else None
 
 
+def _read_topology_ints(mesh, fast_name, collection, prop, width=1) -> np.ndarray:
+    """int32 values of ``prop`` over ``collection`` (``width`` per element), from the internal
+    attribute ``fast_name`` where this Blender has it."""
+    values = np.empty(len(collection) * width, np.int32)
+    attr = _fast_attribute(mesh, fast_name)
+    if attr is not None:
+        attr.data.foreach_get("value", values)
+    else:
+        collection.foreach_get(prop, values)
+    return values
+
+
 def read_positions(mesh) -> np.ndarray:
     """float32 (N, 3) object-space vertex positions."""
     positions = np.empty(len(mesh.vertices) * 3, np.float32)
@@ -62,19 +74,8 @@ def read_positions(mesh) -> np.ndarray:
 
 def read_topology(mesh):
     """(edges (E, 2), face_starts (F,), face_sizes (F,), corner_verts (C,)), all int32."""
-    edges = np.empty(len(mesh.edges) * 2, np.int32)
-    attr = _fast_attribute(mesh, ".edge_verts")
-    if attr is not None:
-        attr.data.foreach_get("value", edges)
-    else:
-        mesh.edges.foreach_get("vertices", edges)
-    corner_verts = np.empty(len(mesh.loops), np.int32)
-    attr = _fast_attribute(mesh, ".corner_vert")
-    if attr is not None:
-        attr.data.foreach_get("value", corner_verts)
-    else:
-        mesh.loops.foreach_get("vertex_index", corner_verts)
-    edges = edges.reshape(-1, 2)
+    edges = _read_topology_ints(mesh, ".edge_verts", mesh.edges, "vertices", 2).reshape(-1, 2)
+    corner_verts = _read_topology_ints(mesh, ".corner_vert", mesh.loops, "vertex_index")
     faces = None
     if _fast_attribute(mesh, ".corner_edge") is not None:
         faces = core.face_offsets_from_corner_edges(corner_verts, read_corner_edges(mesh), edges,
@@ -98,13 +99,7 @@ def read_triangles(mesh) -> np.ndarray:
 
 def read_corner_edges(mesh) -> np.ndarray:
     """Each corner's edge (to the next corner of its face), int32."""
-    values = np.empty(len(mesh.loops), np.int32)
-    attr = _fast_attribute(mesh, ".corner_edge")
-    if attr is not None:
-        attr.data.foreach_get("value", values)
-    else:
-        mesh.loops.foreach_get("edge_index", values)
-    return values
+    return _read_topology_ints(mesh, ".corner_edge", mesh.loops, "edge_index")
 
 
 # ---------------------------------------------------------------------------------------------
