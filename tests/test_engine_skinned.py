@@ -19,9 +19,9 @@ from engines import coverage_mismatch, threejs
 from gltf_reader import node_globals, read_glb, read_skin
 
 W, H = 400, 300
-# Both cameras look at the posed chain (it bends away from +y towards +z and -x).
-SIDE = {"position": [9.0, 4.0, 8.0], "target": [-0.6, 2.6, 0.8], "fov": 42, "near": 1.0, "far": 40}
-TOP = {"position": [-2.0, 12.0, 5.0], "target": [-0.6, 2.6, 0.8], "fov": 45, "near": 1.0, "far": 40}
+# Both cameras look at the middle of the posed chain (glTF frame), about 9 units away.
+SIDE = {"position": [8.9, 4.35, -2.2], "target": [0.9, 1.85, 1.8], "fov": 42, "near": 1.0, "far": 40}
+TOP = {"position": [-1.1, 10.85, 3.3], "target": [0.9, 1.85, 1.8], "fov": 42, "near": 1.0, "far": 40}
 INNER = 0.6
 BOX_MAP = "return sd_box(p, 0.6 * box_half);"
 # The negative control: the frame as the vertex carries it at rest (attributes normal, tangent),
