@@ -11,7 +11,7 @@ import bpy
 import numpy as np
 
 from .. import core, edit_mode, files, layouts, mesh_io
-from . import glb, godot, transforms
+from . import fbx, glb, godot, transforms
 
 
 class ExportInputError(ValueError):
@@ -27,10 +27,18 @@ def baked_layers(mesh) -> mesh_io.BakedLayers:
         raise ExportInputError(f"{error}: run Bake Box Frames first") from None
 
 
-# UV map names of the layouts' channels UV1..UV6 in FBX files (glTF files number them).
+# UV map names of the layouts' channels UV1..UV6 in FBX files (glTF files number them): the
+# UV_FRAME and CLASSIC names; NORMAL_FRAME's UV1..UV4 hold what UV_FRAME's UV3..UV6 hold.
 CHANNEL_UV_NAMES = {"UV1": mesh_io.QUAT_XY_UV, "UV2": mesh_io.QUAT_ZW_UV, "UV3": "BoxOffsetXY",
                     "UV4": "BoxOffsetZIndex", "UV5": "BoxHalfXY", "UV6": "BoxHalfZ"}
 _BOXMARCH_UV_NAMES = set(CHANNEL_UV_NAMES.values())
+
+
+def uv_name(layout: str, channel: str) -> str:
+    """The FBX UV map name of a layout's channel "UVn"."""
+    if layouts.LAYOUTS[layout].skin_safe:
+        channel = f"UV{int(channel[2:]) + 2}"
+    return CHANNEL_UV_NAMES[channel]
 
 
 def box_data(mesh, preset, index_base: int = 0):
@@ -112,7 +120,7 @@ def _target_copy(mesh, preset, layout, index_base, skin=None):
     else:
         colour = channels.get("COLOR")
         for channel in sorted(c for c in channels if c.startswith("UV")):
-            name = CHANNEL_UV_NAMES[channel]
+            name = uv_name(layout, channel)
             copy.uv_layers.new(name=name)
             # mesh_io.write_uv writes through the attribute API, which un-shares the copy's
             # arrays from the original's first (Blender 5 implicit sharing).
@@ -143,7 +151,8 @@ def _operator_kwargs(operator, wanted: dict) -> dict:
 def _run_exporter(preset, layout, path):
     if preset.extension == ".fbx":
         op = bpy.ops.export_scene.fbx
-        op(**_operator_kwargs(op, dict(
+        op(**_operator_kwargs(op, dict(  # tangent layers for export/fbx.py to overwrite with the frame
+            use_tspace=layouts.LAYOUTS[layout].skin_safe,
             filepath=path, use_selection=True, use_mesh_modifiers=False, axis_forward="-Z", axis_up="Y",
             bake_space_transform=True, apply_unit_scale=True, apply_scale_options="FBX_SCALE_ALL",
             colors_type="LINEAR", prioritize_active_color=True, add_leaf_bones=False, bake_anim=False)))
@@ -168,8 +177,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     preset = transforms.PRESETS.get(preset_name)
     if preset is None:
         raise ExportInputError(f"preset must be one of {sorted(transforms.PRESETS)}, got {preset_name!r}")
-    layout = layout or preset.layouts[0]
-    if layout not in preset.layouts:
+    if layout is not None and layout not in preset.layouts:
         raise ExportInputError(f"{preset.label} carries the layouts {', '.join(preset.layouts)}, not {layout}")
     objects = list({ob.name_full: ob for ob in objects}.values())  # each object once
     if not objects:
@@ -182,7 +190,18 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     meshes = [ob.data for ob in mesh_io.one_object_per_mesh(objects)]
     for mesh in meshes:
         baked_layers(mesh)  # refuses unbaked meshes before anything is changed
-    skins = _skins(context, objects, preset, layout)
+    skins = _skins(context, objects, preset)
+    if layout is None:  # the preset's own; for a skinned export its first that skinning carries
+        safe = [name for name in preset.layouts if layouts.LAYOUTS[name].skin_safe]
+        layout = safe[0] if skins and safe else preset.layouts[0]
+    if skins and not layouts.LAYOUTS[layout].skin_safe:
+        name, skin = next(iter(skins.items()))
+        safe = [name for name in preset.layouts if layouts.LAYOUTS[name].skin_safe]
+        raise ExportInputError(
+            f"object '{name}' is skinned by '{skin.armature.name}': the {layout} layout keeps the box frame in UV "
+            "maps, which no engine's skinning moves, so posed boxes would not decode; "
+            + (f"export with the {' or '.join(safe)} layout (frame in NORMAL + TANGENT)" if safe else
+               f"{preset.label} has no layout with the frame in NORMAL + TANGENT: export with the GLTF or UNITY preset"))
     start = time.perf_counter()
     folder = os.path.dirname(os.path.abspath(filepath))
     if not os.path.isdir(folder):
@@ -241,10 +260,10 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             "transform_error": max((s["transform_error"] for s in stats), default=0.0)}
 
 
-def _skins(context, objects, preset, layout) -> dict:
+def _skins(context, objects, preset) -> dict:
     """{object name: mesh_io.Skin} of the skinned ``objects``. Raises ExportInputError (nothing
-    written) where a skin cannot be exported: an Armature modifier engines cannot carry, an
-    armature outside the view layer, or a layout whose frame skinning would leave at rest."""
+    written) where a skin cannot be exported: an Armature modifier engines cannot carry or an
+    armature outside the view layer."""
     skins = {}
     for ob in objects:
         try:
@@ -256,15 +275,21 @@ def _skins(context, objects, preset, layout) -> dict:
         if skin.armature.name not in context.view_layer.objects:
             raise ExportInputError(f"object '{ob.name}' is skinned by '{skin.armature.name}', which is not in the "
                                    "view layer: the exporter cannot write its bones")
-        if not layouts.LAYOUTS[layout].skin_safe:
-            safe = [name for name in preset.layouts if layouts.LAYOUTS[name].skin_safe]
-            raise ExportInputError(
-                f"object '{ob.name}' is skinned by '{skin.armature.name}': the {layout} layout keeps the box frame in "
-                "UV maps, which no engine's skinning moves, so posed boxes would not decode; "
-                + (f"export with the {' or '.join(safe)} layout (frame in NORMAL + TANGENT)" if safe else
-                   f"{preset.label} has no layout with the frame in NORMAL + TANGENT: export with the GLTF preset"))
         skins[ob.name] = skin
     return skins
+
+
+def _fbx_frame(channels, mesh, preset) -> dict:
+    """The NORMAL_FRAME frame per polygon corner of ``mesh`` in the FBX file's axes: the channels
+    are in the engine's frame, which the importer reaches by the preset's mirror (Unity negates
+    x of positions, normals, tangents and binormals), so the file holds the mirror of each."""
+    corner_verts = mesh_io.read_topology(mesh)[3]
+    mirror = preset.mirror
+    z = channels["NORMAL"].astype(np.float64)
+    x, handedness = channels["TANGENT"][:, :3].astype(np.float64), channels["TANGENT"][:, 3:].astype(np.float64)
+    y = np.cross(z, x) * handedness
+    return {"NORMAL": (z * mirror)[corner_verts], "TANGENT": (x * mirror)[corner_verts],
+            "BINORMAL": (y * mirror)[corner_verts]}
 
 
 def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
@@ -303,6 +328,9 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
             gltf, binary = glb.read(temp)
             gltf, binary = glb.replace_vertex_channels(gltf, binary, file_channels)
             glb.write(temp, gltf, binary)
+        elif layouts.LAYOUTS[layout].skin_safe:
+            fbx.replace_frame(temp, {name: _fbx_frame(channels, originals[name], preset)
+                                     for name, channels in file_channels.items()})
     finally:
         for rig in armatures:
             rig.data.pose_position = pose_positions[rig.name]
