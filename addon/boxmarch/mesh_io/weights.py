@@ -43,9 +43,10 @@ def read_vertex_weights(ob, group_names) -> tuple[np.ndarray, np.ndarray]:
 
 
 def read_skin(ob) -> Skin | None:
-    """The skin of ``ob``'s enabled Armature modifier, or None without one. Raises SkinError
-    where engines cannot carry it: several Armature modifiers, none with an armature object,
-    bone envelopes or no vertex groups (an engine skin holds vertex weights only)."""
+    """The skin of ``ob``'s enabled Armature modifier; None without one, or when it has no
+    armature or no deform bone weights any vertex (the modifier then moves nothing: the mesh is
+    what Blender shows). Raises SkinError where engines cannot carry it: several Armature
+    modifiers, bone envelopes or no vertex groups (an engine skin holds vertex weights only)."""
     modifiers = [m for m in getattr(ob, "modifiers", ()) if m.type == "ARMATURE" and (m.show_viewport or m.show_render)]
     if not modifiers:
         return None
@@ -53,16 +54,20 @@ def read_skin(ob) -> Skin | None:
         raise SkinError(f"{len(modifiers)} Armature modifiers ({', '.join(m.name for m in modifiers)}): an engine "
                         "skin follows one armature")
     modifier = modifiers[0]
-    if modifier.object is None or modifier.object.type != "ARMATURE":
-        raise SkinError(f"the Armature modifier '{modifier.name}' has no armature object")
+    if modifier.object is None:
+        return None
     if modifier.use_bone_envelopes or not modifier.use_vertex_groups:
         raise SkinError(f"the Armature modifier '{modifier.name}' deforms by bone envelopes: engine skins carry "
                         "vertex-group weights only (turn Envelopes off, Vertex Groups on)")
     deform = [bone.name for bone in modifier.object.data.bones if bone.use_deform]
+    if not deform:
+        return None
     slots, raw = read_vertex_weights(ob, deform)
     dense = np.zeros((len(slots), len(deform)))
     np.add.at(dense, (np.repeat(np.arange(len(slots)), slots.shape[1]), slots.ravel()), raw.ravel())
     used = dense.sum(axis=0) > 0
+    if not used.any():
+        return None
     dense = dense[:, used]
     total = dense.sum(axis=1, keepdims=True)
     return Skin(armature=modifier.object, modifier=modifier.name, bones=[b for b, u in zip(deform, used) if u],
