@@ -69,6 +69,38 @@ def nonrigid_table():
     return table(["weight spread s"] + [f"weights {name}" for name in MEAN_WEIGHTS], nonrigid_rows())
 
 
+def accuracy_section():
+    """The Skinning section of docs/ACCURACY.md (bench_accuracy.py writes the page with it)."""
+    return f"""
+## Skinning: boxes whose vertices carry different bone weights
+
+A box decodes exactly when skinning moves it rigidly: every vertex on one bone (or on the same
+weights of the same bones, and then only if the blend of those bones' matrices is a rotation).
+Measured on the rig of the skinning tests (3 bones, 36 boxes each weighted 1.0 to its bone, 40
+degrees at each joint): 1.1e-06 of the half-extent after the glTF round trip skinned in NumPy,
+within 1 px in three.js r111 (docs/ENGINES.md, Skinning).
+
+When a box's vertices carry different weights, each vertex's skinned frame differs, and the
+decoded origins leave the box: the shape tears and shifts. `bench/bench_skinning.py` measures a
+1 x 0.6 x 0.2 box straddling a joint, long axis along the bone, the joint turned 40 degrees; the
+vertices at one end carry weight w - s/2 on the turning bone, at the other end w + s/2 (s: the
+weight spread). Error: worst over the vertices of |decoded origin - the box centre moved by the
+box's mean weights| / largest half-extent, decoding as the shipped shaders do (skinned axes
+normalised, y = cross(z, x)).
+
+{nonrigid_table()}
+
+![Decode error against the weight spread inside a box](accuracy_skinning.png)
+
+(`scripts/skinning_accuracy_plot.py` draws the plot.) Even at s = 0 a box blended half and half
+between two bones is off by 7 % of its half-extent: linear blend skinning's matrix
+(1 - w) A + w B is no rotation, so the skinned axes are skewed and shortened. With one end fully
+on the bone (the second column) the error grows about linearly, 0.3 % of the half-extent per
+0.01 of spread at first. Weight each box to one bone (the export report counts the boxes that are
+not, `non_rigid_boxes`, and warns).
+"""
+
+
 def tightest_tolerance(covered, polygons, limit=64):
     """Smallest tolerance in px at which ``covered`` matches ``polygons`` (limit + 1: none)."""
     from engines import coverage_errors
