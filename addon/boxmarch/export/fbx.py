@@ -10,13 +10,15 @@ from __future__ import annotations
 import numpy as np
 from io_scene_fbx import data_types, encode_bin, parse_fbx
 
-_ADDERS = {data_types.BOOL: "add_bool", data_types.CHAR: "add_char", data_types.INT8: "add_int8",
-           data_types.INT16: "add_int16", data_types.INT32: "add_int32", data_types.INT64: "add_int64",
-           data_types.FLOAT32: "add_float32", data_types.FLOAT64: "add_float64", data_types.BYTES: "add_bytes",
-           data_types.STRING: "add_string", data_types.INT32_ARRAY: "add_int32_array",
-           data_types.INT64_ARRAY: "add_int64_array", data_types.FLOAT32_ARRAY: "add_float32_array",
-           data_types.FLOAT64_ARRAY: "add_float64_array", data_types.BOOL_ARRAY: "add_bool_array",
-           data_types.BYTE_ARRAY: "add_byte_array"}
+# Property type code -> FBXElem method writing it (Blender 3.4's FBX add-on has no CHAR type).
+_ADDERS = {getattr(data_types, kind): "add_" + method for kind, method in (
+    ("BOOL", "bool"), ("CHAR", "char"), ("INT8", "int8"), ("INT16", "int16"), ("INT32", "int32"), ("INT64", "int64"),
+    ("FLOAT32", "float32"), ("FLOAT64", "float64"), ("BYTES", "bytes"), ("STRING", "string"),
+    ("INT32_ARRAY", "int32_array"), ("INT64_ARRAY", "int64_array"), ("FLOAT32_ARRAY", "float32_array"),
+    ("FLOAT64_ARRAY", "float64_array"), ("BOOL_ARRAY", "bool_array"), ("BYTE_ARRAY", "byte_array"))
+    if hasattr(data_types, kind) and hasattr(encode_bin.FBXElem, "add_" + method)}
+_ARRAYS = {getattr(data_types, kind) for kind in ("INT32_ARRAY", "INT64_ARRAY", "FLOAT32_ARRAY", "FLOAT64_ARRAY",
+                                                 "BOOL_ARRAY", "BYTE_ARRAY") if hasattr(data_types, kind)}
 # The frame vectors by layer element: (element, data, index or None).
 _FRAME_LAYERS = {"NORMAL": (b"LayerElementNormal", b"Normals", b"NormalsIndex"),
                  "TANGENT": (b"LayerElementTangent", b"Tangents", None),
@@ -30,8 +32,7 @@ def _writable(parsed, replace=None):
     props = replace(parsed) if replace else None
     values, kinds = props if props is not None else (parsed.props, parsed.props_type)
     for value, kind in zip(values, kinds):
-        if kind in (data_types.INT32_ARRAY, data_types.INT64_ARRAY, data_types.FLOAT32_ARRAY,
-                    data_types.FLOAT64_ARRAY, data_types.BOOL_ARRAY, data_types.BYTE_ARRAY):
+        if kind in _ARRAYS:
             value = np.ascontiguousarray(value)
         getattr(out, _ADDERS[kind])(value)
     out.elems = [_writable(child, replace) for child in parsed.elems]
