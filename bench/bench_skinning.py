@@ -6,8 +6,10 @@ each joint), exported with the GLTF preset:
 * three.js r111 (headless Chromium, SwiftShader): the tightest tolerance in px at which the
   shipped material's boxes at 0.6 of each half-extent cover the posed silhouettes of the test's
   forward kinematics (the tests require 1 px), and the same for the rest-frame negative control;
-* the .glb skinned in NumPy with the glTF formula: worst decoded origin error / largest
-  half-extent, axis error (1 - cos), half-extent error, against the posed boxes.
+* the .glb skinned in NumPy with the glTF formula, and the UNITY preset's FBX through the modelled
+  Unity import and skinning (engine_scene.unity_skinned_decode): worst decoded origin error /
+  largest half-extent, axis error (1 - cos), half-extent error, against the posed boxes, with
+  the skinned frame and with the frame left at rest.
 
 Non-rigid boxes (NumPy, the shader's decode): a 1 x 0.6 x 0.2 box straddling a joint, its long
 axis along the bone; the joint turns 40 degrees. Its vertices at one end carry weight w - s/2 on
@@ -20,6 +22,7 @@ largest half-extent (the shader normalises the skinned axes; y = cross(z, x)).
 """
 import argparse
 import os
+import pathlib
 import sys
 import tempfile
 import time
@@ -117,8 +120,9 @@ def engine_rows():
 
     import boxmarch
     from boxmarch.export import scene as export_scene
-    from engine_scene import (TO_Y_UP, box_of_vertex, decode_normal_frame, frame_and_size_errors, posed_rig_boxes,
-                              rig_boxes, skinned_scene)
+    from engine_scene import (TO_Y_UP, UNITY, box_of_vertex, decode_normal_frame, frame_and_size_errors,
+                              posed_rig_boxes, rig_boxes, skinned_scene, unity_skinned_decode)
+    from fbx_reader import read_fbx_geometry, read_fbx_skin
     import test_engine_skinned as skinned_test
 
     boxmarch.register()
@@ -126,7 +130,7 @@ def engine_rows():
     ob, _rig = skinned_scene(bpy)
     rows = []
     with tempfile.TemporaryDirectory() as folder:
-        path = __import__("pathlib").Path(folder) / "skinned.glb"
+        path = pathlib.Path(folder) / "skinned.glb"
         start = time.perf_counter()
         export_scene.export_objects(bpy.context, [ob], "GLTF", str(path))
         export_s = time.perf_counter() - start
@@ -140,6 +144,15 @@ def engine_rows():
             decoded = decode_normal_frame(positions, n, t, offset, half)
             errors = frame_and_size_errors(*decoded, box, posed_centres, sizes, posed_rotations, TO_Y_UP)
             rows.append([f"glTF skinned in NumPy, {name}", *(f"{e:.1e}" for e in errors), "-", f"{export_s:.2f}"])
+        fbx_path = os.path.join(folder, "skinned.fbx")
+        start = time.perf_counter()
+        export_scene.export_objects(bpy.context, [ob], "UNITY", fbx_path)
+        export_s = time.perf_counter() - start
+        raw, skin = read_fbx_geometry(fbx_path), read_fbx_skin(fbx_path)
+        fbx_box = box_of_vertex(raw["position"] @ UNITY["from_file"].T, centres, sizes, rotations, UNITY["to_engine"])
+        for name, decoded in zip(("skinned frame", "rest frame"), unity_skinned_decode(raw, skin)):
+            errors = frame_and_size_errors(*decoded, fbx_box, posed_centres, sizes, posed_rotations, UNITY["to_engine"])
+            rows.append([f"Unity FBX (modelled import), {name}", *(f"{e:.1e}" for e in errors), "-", f"{export_s:.2f}"])
         for name, tamper in (("shipped material", None), ("rest frame (negative control)", skinned_test.REST_FRAME)):
             for camera_name, camera in (("side", skinned_test.SIDE), ("top", skinned_test.TOP)):
                 start = time.perf_counter()

@@ -11,9 +11,9 @@ read as (u, 1 - v), UVs stored as half floats unless Use Full Precision UVs is o
 import numpy as np
 import pytest
 
-from engine_scene import (TO_Y_UP, UNITY, UNREAL, UV_NAMES, baked_scene, bone_motions, box_of_vertex, decode_normal_frame,
-                          decode_uv_frame, frame_and_size_errors, imported, posed_rig_boxes, rig_boxes, rig_heads,
-                          skinned_scene)
+from engine_scene import (TO_Y_UP, UNITY, UNREAL, UV_NAMES, baked_scene, box_of_vertex, decode_uv_frame,
+                          frame_and_size_errors, imported, posed_rig_boxes, rig_boxes, rig_heads, skinned_scene,
+                          unity_skinned_decode)
 from fbx_reader import read_fbx_geometry, read_fbx_skin
 
 @pytest.fixture
@@ -79,14 +79,10 @@ def test_unity_skinned_fbx_decodes_the_posed_boxes_after_the_documented_import(b
     assert report["skinned"] == {"Skinned": {"armature": "Skinned-rig", "bones": ["bone0", "bone1", "bone2"]}}
     raw, skin = read_fbx_geometry(path), read_fbx_skin(path)
     assert raw["uv_maps"] == ["UVMap", "BoxOffsetXY", "BoxOffsetZIndex", "BoxHalfXY", "BoxHalfZ"]
-    mirror = UNITY["from_file"]
     centres, sizes, rotations, bone_of_box = rig_boxes()
-    points = raw["control_points"] @ mirror.T
-    box_of_point = box_of_vertex(points, centres, sizes, rotations, UNITY["to_engine"])
     assert sorted(skin) == ["bone0", "bone1", "bone2"]
-    to_file = np.eye(4)
-    to_file[:3, :3] = TO_Y_UP  # Blender world -> the file's axes (metres, Y-up, right-handed)
-    matrices = np.zeros((len(points), 4, 4))
+    box_of_point = box_of_vertex(raw["control_points"] @ UNITY["from_file"].T, centres, sizes, rotations,
+                                 UNITY["to_engine"])
     for k, head in enumerate(rig_heads()):
         cluster = skin[f"bone{k}"]
         # rigid: exactly the 8 corners of each of the bone's boxes, weight 1
@@ -96,27 +92,13 @@ def test_unity_skinned_fbx_decodes_the_posed_boxes_after_the_documented_import(b
         assert np.allclose(link[:3, 3], TO_Y_UP @ head) and np.allclose(link[:3, 1], TO_Y_UP @ [0.0, 0.0, 1.0])
         # FBX stores Transform relative to the bone: TransformLink x Transform = the mesh at bind
         assert np.allclose(link @ cluster["transform"], np.eye(4), atol=1e-6)
-        bind_pose = np.linalg.inv(link) @ (link @ cluster["transform"])
-        posed_bone = to_file @ bone_motions()[k] @ np.linalg.inv(to_file) @ link
-        unity_mirror = np.diag([*mirror.diagonal(), 1.0])
-        matrices[cluster["indexes"]] += (cluster["weights"][:, None, None]
-                                         * (unity_mirror @ posed_bone @ bind_pose @ unity_mirror))
-    corner_matrix = matrices[raw["vertex"]]
-    normal, tangent, binormal = (raw[k] @ mirror.T for k in ("normal", "tangent", "binormal"))
-    handedness = np.sign(np.einsum("ni,ni->n", np.cross(normal, tangent), binormal))[:, None]
-    positions = np.einsum("nij,nj->ni", corner_matrix[:, :3, :3], raw["position"] @ mirror.T) + corner_matrix[:, :3, 3]
-    skinned_normal = np.einsum("nij,nj->ni", corner_matrix[:, :3, :3], normal)
-    skinned_tangent = np.concatenate([np.einsum("nij,nj->ni", corner_matrix[:, :3, :3], tangent), handedness], 1)
-    offset = np.concatenate([raw["BoxOffsetXY"], raw["BoxOffsetZIndex"][:, :1]], 1)
-    half = np.concatenate([raw["BoxHalfXY"], raw["BoxHalfZ"][:, :1]], 1)
-    box = box_of_point[raw["vertex"]]
     posed_centres, posed_rotations = posed_rig_boxes()
-    decoded = decode_normal_frame(positions, skinned_normal, skinned_tangent, offset, half)
-    errors = frame_and_size_errors(*decoded, box, posed_centres, sizes, posed_rotations, UNITY["to_engine"])
+    skinned, rest_frame = unity_skinned_decode(raw, skin)
+    box = box_of_point[raw["vertex"]]
+    errors = frame_and_size_errors(*skinned, box, posed_centres, sizes, posed_rotations, UNITY["to_engine"])
     assert errors[0] < 1e-5 and errors[1] < 1e-6 and errors[2] < 1e-5, errors
     # Negative control: the frame left at rest (as UV maps would carry it) misses the posed boxes.
-    rest = decode_normal_frame(positions, normal, np.concatenate([tangent, handedness], 1), offset, half)
-    assert frame_and_size_errors(*rest, box, posed_centres, sizes, posed_rotations, UNITY["to_engine"])[0] > 0.1
+    assert frame_and_size_errors(*rest_frame, box, posed_centres, sizes, posed_rotations, UNITY["to_engine"])[0] > 0.1
 
 
 def test_unreal_refuses_a_skinned_export_and_writes_nothing(blender, tmp_path):
