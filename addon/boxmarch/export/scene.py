@@ -191,12 +191,11 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     for mesh in meshes:
         baked_layers(mesh)  # refuses unbaked meshes before anything is changed
     skins = _skins(context, objects, preset)
+    safe = [candidate for candidate in preset.layouts if layouts.LAYOUTS[candidate].skin_safe]
     if layout is None:  # the preset's own; for a skinned export its first that skinning carries
-        safe = [name for name in preset.layouts if layouts.LAYOUTS[name].skin_safe]
         layout = safe[0] if skins and safe else preset.layouts[0]
     if skins and not layouts.LAYOUTS[layout].skin_safe:
         name, skin = next(iter(skins.items()))
-        safe = [name for name in preset.layouts if layouts.LAYOUTS[name].skin_safe]
         raise ExportInputError(
             f"object '{name}' is skinned by '{skin.armature.name}': the {layout} layout keeps the box frame in UV "
             "maps, which no engine's skinning moves, so posed boxes would not decode; "
