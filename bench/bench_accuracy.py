@@ -42,6 +42,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 from boxmarch import core, scenes  # noqa: E402
 from common import best_of, reset_peak_rss, rss_bytes, table  # noqa: E402
+import bench_skinning  # noqa: E402
 
 DOCS = pathlib.Path(__file__).resolve().parents[1] / "docs"
 SIZES = [0.01, 0.1, 1.0, 10.0, 100.0, 1000.0]
@@ -635,6 +636,7 @@ Fitted log-log slopes over 10,000..{counts[-1]:,} boxes (1.0 is linear):
 
 {table(["operation", "CPU time", "wall time", "memory"], [[t, f"{slopes[t]['cpu']:.2f}", f"{slopes[t]['wall']:.2f}", f"{slopes[t]['memory']:.2f}"] for t in TOOLS])}
 """
+    page += bench_skinning.accuracy_section()  # its plot: scripts/skinning_accuracy_plot.py
     (out / "ACCURACY.md").write_text(page)
     print(page)
 

@@ -7,7 +7,7 @@ boxes, as in any engine.
 
 Usage: blender --background --factory-startup --python scripts/preview_pose_picture.py -- PACKAGE_PARENT OUT.png
 """
-import math
+import os
 import sys
 
 argv = sys.argv[sys.argv.index("--") + 1:]
@@ -19,61 +19,20 @@ import mathutils  # noqa: E402
 import numpy as np  # noqa: E402
 
 import boxmarch  # noqa: E402
-from boxmarch import mesh_io, preview, scenes  # noqa: E402
+from boxmarch import mesh_io, preview  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import chain_arm  # noqa: E402
 
 boxmarch.register()
 bpy.ops.wm.read_factory_settings(use_empty=True)
 scene = bpy.context.scene
 W, H = 640, 540
-RADIUS, ARM, TURNS = 0.6, 9.0, 20      # a helix of this radius and this many turns around an arm this long (3 bones)
-LINK = np.array([0.46, 0.23, 0.06])    # link length, width, wire thickness
 
-# The helix around the arm's axis (z), links spaced at 0.78 of their length along it, each turned
-# 90 degrees about its own axis from the last (a chain).
-climb = ARM / (2 * math.pi * TURNS)
-step = 0.78 * LINK[0] / math.hypot(RADIUS, climb)
-t = step * np.arange(int(2 * math.pi * TURNS / step)) + 0.2
-t = t[climb * t < ARM - 0.2]
-centres = np.column_stack([RADIUS * np.cos(t), RADIUS * np.sin(t), climb * t])
-tangent = np.column_stack([-RADIUS * np.sin(t), RADIUS * np.cos(t), np.full(len(t), climb)])
-tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
-radial = np.column_stack([np.cos(t), np.sin(t), np.zeros(len(t))])
-across = np.where((np.arange(len(t)) % 2)[:, None] == 0, radial, np.cross(tangent, radial))
-rotations = np.stack([tangent, np.cross(across, tangent), across], axis=2)  # columns: local x, y, z
-positions, _edges, face_starts, face_sizes, corner_verts = scenes.box_arrays(centres, np.tile(LINK, (len(t), 1)),
-                                                                             rotations)
-chain = bpy.data.objects.new("chain", mesh_io.new_mesh("chain", positions, face_starts, face_sizes, corner_verts))
-scene.collection.objects.link(chain)
-chain.color = (0.85, 0.65, 0.3, 1.0)
-
-rig = bpy.data.objects.new("arm", bpy.data.armatures.new("arm"))
-scene.collection.objects.link(rig)
-bpy.context.view_layer.objects.active = rig
-bpy.ops.object.mode_set(mode="EDIT")
-parent = None
-for k in range(3):
-    bone = rig.data.edit_bones.new(f"bone{k}")
-    bone.head, bone.tail = (0.0, 0.0, ARM / 3 * k), (0.0, 0.0, ARM / 3 * (k + 1))
-    if parent is not None:
-        bone.parent, bone.use_connect = parent, True
-    parent = bone
-bpy.ops.object.mode_set(mode="OBJECT")
-bone_of_link = np.minimum((centres[:, 2] // (ARM / 3)).astype(int), 2)
-for k in range(3):
-    chain.vertex_groups.new(name=f"bone{k}").add(
-        np.flatnonzero(np.repeat(bone_of_link, 8) == k).tolist(), 1.0, "REPLACE")
-chain.modifiers.new("Armature", "ARMATURE").object = rig
-for ob in scene.objects:
-    ob.select_set(ob == chain)
-bpy.context.view_layer.objects.active = chain
-assert bpy.ops.boxmarch.bake(sort_axes_by_extent=True) == {"FINISHED"}
+chain, rig, links = chain_arm.build(bpy, scene)
 chain.boxmarch.sdf = "LINK"
 chain.boxmarch.preview = True
-
-for k in range(3):
-    pose_bone = rig.pose.bones[f"bone{k}"]
-    pose_bone.rotation_mode = "XYZ"
-    pose_bone.rotation_euler = (math.radians(40.0), 0.0, 0.0)
+chain_arm.pose(rig)
 
 bpy.context.view_layer.update()
 posed = mesh_io.read_positions(chain.evaluated_get(bpy.context.evaluated_depsgraph_get()).data)
@@ -101,4 +60,4 @@ image.pixels.foreach_set(pixels.ravel())
 image.filepath_raw = out_path
 image.file_format = "PNG"
 image.save()
-print("preview_pose_picture: wrote", out_path, f"({len(t)} links)")
+print("preview_pose_picture: wrote", out_path, f"({links} links)")

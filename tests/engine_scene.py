@@ -170,3 +170,126 @@ def table_texels(tres_text):
     """float32 (texels, 4) of the RGBAFloat image in a Godot .tres (what Godot loads)."""
     data = re.search(r"PoolByteArray\(([^)]*)\)", tres_text).group(1)
     return np.frombuffer(bytes(int(b) for b in data.split(",")), "<f4").reshape(-1, 4).astype(np.float64)
+
+
+# A skinned rig for the skinning tests: three bones up Blender's z axis (heads at 0, 2, 4), 12
+# boxes of distinct sizes and rest rotations rigidly weighted to each, and a pose of 40 degree
+# turns about world axes at each joint. Everything the tests compare with is computed here from
+# these numbers (forward kinematics), not from what boxmarch or an engine computes.
+RIG_BONES, RIG_BONE_LENGTH, RIG_BOXES_PER_BONE = 3, 2.0, 12
+RIG_TURN_AXES = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])  # Blender world axes
+RIG_TURN_ANGLE = np.radians(40.0)
+
+
+def rig_boxes():
+    """(centres, sizes, rotations, bone_of_box) of the rig's boxes at rest, Blender's frame."""
+    rng = np.random.default_rng(13)
+    count = RIG_BONES * RIG_BOXES_PER_BONE
+    bone_of_box = np.repeat(np.arange(RIG_BONES), RIG_BOXES_PER_BONE)
+    centres = np.column_stack([rng.uniform(-0.6, 0.6, count), rng.uniform(-0.6, 0.6, count),
+                               RIG_BONE_LENGTH * bone_of_box + rng.uniform(0.3, RIG_BONE_LENGTH - 0.3, count)])
+    sizes = rng.uniform(0.15, 0.6, (count, 3))
+    return centres, sizes, scenes.random_rotations(count, rng), bone_of_box
+
+
+def rig_heads():
+    """(bones, 3) bone heads at rest, Blender world frame."""
+    return np.array([[0.0, 0.0, RIG_BONE_LENGTH * k] for k in range(RIG_BONES)])
+
+
+def axis_turn(axis, angle):
+    """3 x 3 rotation by ``angle`` about the unit vector ``axis`` (Rodrigues)."""
+    a = np.asarray(axis, np.float64) / np.linalg.norm(axis)
+    k = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * k @ k
+
+
+def bone_motions(axes=RIG_TURN_AXES, angle=RIG_TURN_ANGLE):
+    """(bones, 4, 4) world motion of each bone from rest to the pose: joint k turns ``angle``
+    about world axis ``axes[k]`` (as it points at rest) through its head, carrying the bones
+    after it (forward kinematics of the chain)."""
+    motion, out = np.eye(4), []
+    for head, axis in zip(rig_heads(), axes):
+        turn = np.eye(4)
+        turn[:3, :3] = axis_turn(axis, angle)
+        turn[:3, 3] = head - turn[:3, :3] @ head
+        motion = motion @ turn
+        out.append(motion)
+    return np.array(out)
+
+
+def posed_rig_boxes(axes=RIG_TURN_AXES, angle=RIG_TURN_ANGLE):
+    """(centres, rotations) of the rig's boxes carried rigidly by their bones into the pose."""
+    centres, _sizes, rotations, bone_of_box = rig_boxes()
+    motion = bone_motions(axes, angle)[bone_of_box]
+    return (np.einsum("nij,nj->ni", motion[:, :3, :3], centres) + motion[:, :3, 3],
+            np.einsum("nij,njk->nik", motion[:, :3, :3], rotations))
+
+
+def skinned_scene(bpy, name="Skinned"):
+    """The rig in Blender: a baked mesh object of :func:`rig_boxes` (each box's vertices weighted
+    1.0 to its bone's vertex group) with an Armature modifier on a 3-bone armature
+    ``NAME-rig`` (bones ``bone0``..``bone2``, heads :func:`rig_heads`, both objects at the
+    world origin). Returns (mesh object, armature object)."""
+    from boxmarch import mesh_io
+
+    centres, sizes, rotations, bone_of_box = rig_boxes()
+    arrays = scenes.box_arrays(centres, sizes, rotations)
+    ob = bpy.data.objects.new(name, mesh_io.new_mesh(name, arrays[0], arrays[2], arrays[3], arrays[4]))
+    rig = bpy.data.objects.new(name + "-rig", bpy.data.armatures.new(name + "-rig"))
+    bpy.context.scene.collection.objects.link(ob)
+    bpy.context.scene.collection.objects.link(rig)
+    bpy.context.view_layer.objects.active = rig
+    bpy.ops.object.mode_set(mode="EDIT")
+    parent = None
+    for k, head in enumerate(rig_heads()):
+        bone = rig.data.edit_bones.new(f"bone{k}")
+        bone.head, bone.tail = head.tolist(), (head + [0.0, 0.0, RIG_BONE_LENGTH]).tolist()
+        if parent is not None:
+            bone.parent, bone.use_connect = parent, True
+        parent = bone
+    bpy.ops.object.mode_set(mode="OBJECT")
+    for k in range(RIG_BONES):
+        ob.vertex_groups.new(name=f"bone{k}").add(np.flatnonzero(np.repeat(bone_of_box, 8) == k).tolist(), 1.0,
+                                                 "REPLACE")
+    ob.modifiers.new("Armature", "ARMATURE").object = rig
+    for other in bpy.context.selected_objects:
+        other.select_set(False)
+    ob.select_set(True)
+    bpy.context.view_layer.objects.active = ob
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+    return ob, rig
+
+
+def unity_skinned_decode(raw, skin):
+    """The NORMAL_FRAME decode of a skinned FBX (tests/fbx_reader.py's geometry ``raw`` and
+    ``skin``) as Unity holds it posed by :func:`bone_motions`, under the import rules
+    docs/ENGINES.md (Skinning) cites: x negated for positions, normals, tangents and binormals;
+    UVs as written; tangent.w from the side of the binormal; each bone's bind pose the inverse of
+    its TransformLink times the mesh's bind transform (FBX stores Transform relative to the bone,
+    so the mesh's is TransformLink x Transform); skinned vertex = sum of weight x posed bone x
+    bind pose, normals and tangents by the same 3 x 3 parts. The posed bone: its TransformLink
+    moved by the test's forward kinematics (in the file's axes). Returns the decode (origins,
+    axes, half-extents) per polygon corner with the skinned frame, and with the frame left at
+    rest (the negative control)."""
+    mirror = np.diag([*UNITY["from_file"].diagonal(), 1.0])
+    to_file = np.eye(4)
+    to_file[:3, :3] = TO_Y_UP  # Blender world -> the file's axes (metres, Y-up, right-handed)
+    matrices = np.zeros((len(raw["control_points"]), 4, 4))
+    for k, motion in enumerate(bone_motions()):
+        cluster = skin[f"bone{k}"]
+        link = cluster["transform_link"]
+        bind_pose = np.linalg.inv(link) @ (link @ cluster["transform"])
+        posed_bone = to_file @ motion @ np.linalg.inv(to_file) @ link
+        np.add.at(matrices, cluster["indexes"], cluster["weights"][:, None, None] * (mirror @ posed_bone @ bind_pose @ mirror))
+    m = matrices[raw["vertex"]]
+    normal, tangent, binormal = (raw[k] @ mirror[:3, :3].T for k in ("normal", "tangent", "binormal"))
+    handedness = np.sign(np.einsum("ni,ni->n", np.cross(normal, tangent), binormal))[:, None]
+    positions = np.einsum("nij,nj->ni", m[:, :3, :3], raw["position"] @ mirror[:3, :3].T) + m[:, :3, 3]
+    offset = np.concatenate([raw["BoxOffsetXY"], raw["BoxOffsetZIndex"][:, :1]], 1)
+    half = np.concatenate([raw["BoxHalfXY"], raw["BoxHalfZ"][:, :1]], 1)
+    skinned = decode_normal_frame(positions, np.einsum("nij,nj->ni", m[:, :3, :3], normal),
+                                  np.concatenate([np.einsum("nij,nj->ni", m[:, :3, :3], tangent), handedness], 1),
+                                  offset, half)
+    rest = decode_normal_frame(positions, normal, np.concatenate([tangent, handedness], 1), offset, half)
+    return skinned, rest

@@ -4,19 +4,42 @@ the exporter wrote is seen as an engine's importer sees it. Needs ``bpy`` import
 import numpy as np
 
 
+def child(elem, name):
+    return next(c for c in elem.elems if c.id == name)
+
+
+def _corner_vectors(layer, data_name, index_name, corner_vertex):
+    """(corners, 3) vectors of a normal, tangent or binormal layer element (ByPolygonVertex or
+    ByVertice, Direct or IndexToDirect)."""
+    mapping = child(layer, b"MappingInformationType").props[0]
+    assert mapping in (b"ByPolygonVertex", b"ByVertice"), mapping
+    vectors = np.array(child(layer, data_name).props[0]).reshape(-1, 3)
+    if child(layer, b"ReferenceInformationType").props[0] == b"IndexToDirect":
+        vectors = vectors[np.array(child(layer, index_name).props[0])]
+    return vectors[corner_vertex] if mapping == b"ByVertice" else vectors
+
+
 def read_fbx_geometry(path):
     """Per polygon corner of the file's first Geometry: "vertex" (index), "position" (float64),
     each UV map and colour layer by name (float64 (corners, 2 or 4)), "uv_maps" and "colours"
-    (layer names in file order), and "settings" (GlobalSettings properties)."""
+    (layer names in file order), "normal" and the first "tangent" and "binormal" layers where
+    the file has them (float64 (corners, 3)), "control_points" (the Vertices, (n, 3)), and
+    "settings" (GlobalSettings properties)."""
     from io_scene_fbx import parse_fbx
 
     root, _version = parse_fbx.parse(str(path))
-    child = lambda elem, name: next(c for c in elem.elems if c.id == name)
     geometry = child(child(root, b"Objects"), b"Geometry")
     corner_vertex = np.array(child(geometry, b"PolygonVertexIndex").props[0])
     corner_vertex = np.where(corner_vertex < 0, ~corner_vertex, corner_vertex)
-    out = {"vertex": corner_vertex, "uv_maps": [], "colours": [],
-           "position": np.array(child(geometry, b"Vertices").props[0]).reshape(-1, 3)[corner_vertex]}
+    control_points = np.array(child(geometry, b"Vertices").props[0]).reshape(-1, 3)
+    out = {"vertex": corner_vertex, "uv_maps": [], "colours": [], "control_points": control_points,
+           "position": control_points[corner_vertex]}
+    for name, element, data_name, index_name in (("normal", b"LayerElementNormal", b"Normals", b"NormalsIndex"),
+                                                 ("tangent", b"LayerElementTangent", b"Tangents", None),
+                                                 ("binormal", b"LayerElementBinormal", b"Binormals", None)):
+        layer = next((e for e in geometry.elems if e.id == element and e.props[0] == 0), None)
+        if layer is not None:
+            out[name] = _corner_vectors(layer, data_name, index_name, corner_vertex)
     for layer in geometry.elems:
         if layer.id not in (b"LayerElementUV", b"LayerElementColor"):
             continue
@@ -30,3 +53,28 @@ def read_fbx_geometry(path):
     settings = child(child(root, b"GlobalSettings"), b"Properties70")
     out["settings"] = {p.props[0].decode(): p.props[-1] for p in settings.elems}
     return out
+
+
+def _matrix(elem):
+    """An FBX matrix (16 doubles, column-major as FBX stores them) as a 4 x 4 array."""
+    return np.array(elem.props[0], np.float64).reshape(4, 4).T
+
+
+def read_fbx_skin(path):
+    """The file's skin: {bone name: {"indexes" (control points), "weights", "transform",
+    "transform_link" (4 x 4)}} from every Deformer of class Cluster, each named by the bone
+    Model connected to it (Connections, OO)."""
+    from io_scene_fbx import parse_fbx
+
+    root, _version = parse_fbx.parse(str(path))
+    objects = child(root, b"Objects")
+    names = {elem.props[0]: elem.props[1].split(b"\x00\x01")[0].decode() for elem in objects.elems
+             if len(elem.props) > 1}
+    clusters = {elem.props[0]: elem for elem in objects.elems if elem.id == b"Deformer" and elem.props[2] == b"Cluster"}
+    bone_of_cluster = {c.props[2]: names[c.props[1]] for c in child(root, b"Connections").elems
+                       if c.props[0] == b"OO" and c.props[2] in clusters and c.props[1] in names}
+    return {bone_of_cluster[uid]: {"indexes": np.array(child(elem, b"Indexes").props[0]),
+                                   "weights": np.array(child(elem, b"Weights").props[0]),
+                                   "transform": _matrix(child(elem, b"Transform")),
+                                   "transform_link": _matrix(child(elem, b"TransformLink"))}
+            for uid, elem in clusters.items()}

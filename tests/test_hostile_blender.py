@@ -71,6 +71,65 @@ def test_modifiers_are_warned_about_in_bake_and_export(blender, tmp_path):
     assert any("the export uses the base mesh" in w for w in report["warnings"])
 
 
+def test_a_posed_rig_is_baked_at_rest_and_the_bake_says_so(blender, capfd):
+    """The bake reads the mesh data, the rest geometry, whatever the pose: the baked offsets
+    decode onto the rig's rest boxes (engine_scene.rig_boxes), not the posed ones."""
+    import mathutils
+
+    from engine_scene import rig_boxes, skinned_scene
+
+    bpy = blender
+    ob, rig = skinned_scene(bpy)
+    rig.pose.bones["bone1"].rotation_quaternion = mathutils.Quaternion((1.0, 0.0, 0.0), 0.7)
+    bpy.context.view_layer.update()
+    posed = mesh_io.read_positions(ob.evaluated_get(bpy.context.evaluated_depsgraph_get()).data)
+    assert np.abs(posed - mesh_io.read_positions(ob.data)).max() > 0.5  # the pose moves the shown mesh
+    capfd.readouterr()
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+    assert "Armature modifier (Armature): the bake uses the rest geometry" in capfd.readouterr().out
+    layers = mesh_io.read_baked_layers(ob.data)
+    positions = mesh_io.read_positions(ob.data).astype(np.float64)
+    origins = positions + core.rotate_vector(core.decode_offsets(layers.shader_offsets()), layers.vertex_quaternions())
+    centres, sizes, _rotations, _bones = rig_boxes()
+    rest_centre = np.repeat(centres, 8, axis=0)  # scenes.box_arrays: 8 vertices per box, in order
+    assert (np.linalg.norm(origins - rest_centre, axis=1) / np.repeat(sizes.max(axis=1) / 2, 8)).max() < 1e-5
+
+
+def scene_state(bpy):
+    return ([(ob.name, ob.select_get(), ob.data.name if ob.data else None) for ob in bpy.context.scene.objects],
+            sorted(m.name for m in bpy.data.meshes), bpy.context.view_layer.objects.active.name)
+
+
+@pytest.mark.parametrize("preset, layout, change, message", [
+    ("GLTF", "UV_FRAME", None, "the UV_FRAME layout keeps the box frame in UV maps.*export with the NORMAL_FRAME"),
+    ("GLTF", "CLASSIC", None, "the CLASSIC layout keeps the box frame in UV maps"),
+    ("UNITY", "UV_FRAME", None, "export with the NORMAL_FRAME layout"),
+    ("GLTF", None, "envelopes", "deforms by bone envelopes: engine skins carry vertex-group weights only"),
+    ("GLTF", None, "two modifiers", "2 Armature modifiers .*: an engine skin follows one armature"),
+    ("GLTF", None, "rig outside the view layer", "which is not in the view layer"),
+], ids=["gltf-uv-frame", "gltf-classic", "unity-uv-frame", "envelopes", "two-modifiers", "rig-unlinked"])
+def test_skinned_exports_that_cannot_work_are_refused_and_write_nothing(blender, tmp_path, preset, layout, change,
+                                                                         message):
+    from boxmarch.export import scene
+
+    from engine_scene import skinned_scene
+
+    bpy = blender
+    ob, rig = skinned_scene(bpy)
+    if change == "envelopes":
+        ob.modifiers["Armature"].use_bone_envelopes = True
+    elif change == "two modifiers":
+        ob.modifiers.new("Armature.001", "ARMATURE").object = rig
+    elif change == "rig outside the view layer":
+        bpy.context.scene.collection.objects.unlink(rig)
+    before = scene_state(bpy)
+    path = tmp_path / f"skinned{'.fbx' if preset == 'UNITY' else '.glb'}"
+    with pytest.raises(scene.ExportInputError, match=message):
+        scene.export_objects(bpy.context, [ob], preset, str(path), layout)
+    assert list(tmp_path.iterdir()) == []
+    assert scene_state(bpy) == before and rig.data.pose_position == "POSE"
+
+
 def test_export_of_the_same_object_twice_exports_it_once(blender, tmp_path):
     bpy = blender
     ob = boxes(bpy, "Baked")

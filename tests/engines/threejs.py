@@ -201,3 +201,22 @@ def render(glb_bytes, material_js, setup_js, width, height, camera):
                               [0, -height / 2, 0, height / 2],
                               [0, 0, 0, 1.0]])
     return Shot(pixels, view, ndc_to_pixels @ projection @ view)
+
+
+def pose_bones_js(turns, angle):
+    """JavaScript for :func:`render`'s ``setup_js``: turns each bone named in ``turns`` (name ->
+    world axis (3,) as the axis points with the skeleton at rest) by ``angle`` radians about its
+    own head, on top of its rest rotation, so it carries the bones below it. The axis is moved
+    into the bone's local frame with the bones' rest world rotations, read before any turn."""
+    return ("gltf.scene.updateMatrixWorld(true);\n"
+            f"var bmTurns = {json.dumps({k: [float(x) for x in v] for k, v in turns.items()})}, bmRest = {{}};\n"
+            "Object.keys(bmTurns).forEach(function (name) {\n"
+            "  var bone = gltf.scene.getObjectByName(name);\n"
+            "  if (!bone || !bone.isBone) throw new Error('no bone named ' + name);\n"
+            "  bmRest[name] = bone.getWorldQuaternion(new THREE.Quaternion());\n"
+            "});\n"
+            "Object.keys(bmTurns).forEach(function (name) {\n"
+            "  var axis = new THREE.Vector3().fromArray(bmTurns[name]).normalize().applyQuaternion(bmRest[name].clone().inverse());\n"
+            f"  gltf.scene.getObjectByName(name).quaternion.multiply(new THREE.Quaternion().setFromAxisAngle(axis, {float(angle)!r}));\n"
+            "});\n"
+            "gltf.scene.updateMatrixWorld(true);\n")

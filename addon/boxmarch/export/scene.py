@@ -11,7 +11,7 @@ import bpy
 import numpy as np
 
 from .. import core, edit_mode, files, layouts, mesh_io
-from . import glb, godot, transforms
+from . import fbx, glb, godot, transforms
 
 
 class ExportInputError(ValueError):
@@ -27,10 +27,18 @@ def baked_layers(mesh) -> mesh_io.BakedLayers:
         raise ExportInputError(f"{error}: run Bake Box Frames first") from None
 
 
-# UV map names of the layouts' channels UV1..UV6 in FBX files (glTF files number them).
+# UV map names of the layouts' channels UV1..UV6 in FBX files (glTF files number them): the
+# UV_FRAME and CLASSIC names; NORMAL_FRAME's UV1..UV4 hold what UV_FRAME's UV3..UV6 hold.
 CHANNEL_UV_NAMES = {"UV1": mesh_io.QUAT_XY_UV, "UV2": mesh_io.QUAT_ZW_UV, "UV3": "BoxOffsetXY",
                     "UV4": "BoxOffsetZIndex", "UV5": "BoxHalfXY", "UV6": "BoxHalfZ"}
 _BOXMARCH_UV_NAMES = set(CHANNEL_UV_NAMES.values())
+
+
+def uv_name(layout: str, channel: str) -> str:
+    """The FBX UV map name of a layout's channel "UVn"."""
+    if layouts.LAYOUTS[layout].skin_safe:
+        channel = f"UV{int(channel[2:]) + 2}"
+    return CHANNEL_UV_NAMES[channel]
 
 
 def box_data(mesh, preset, index_base: int = 0):
@@ -73,12 +81,35 @@ def _keep_artist_uv0(copy) -> None:
         copy.uv_layers.new(name="UVMap")
 
 
-def _target_copy(mesh, preset, layout, index_base):
+def box_weight_spread(weights, box, boxes) -> np.ndarray:
+    """(boxes,) the largest difference, over a box's vertices, of their weights on one bone:
+    0 where the box is carried rigidly (docs/ACCURACY.md measures what a spread costs)."""
+    high = np.full((boxes, weights.shape[1]), -np.inf)
+    low = np.full((boxes, weights.shape[1]), np.inf)
+    np.maximum.at(high, box, weights)
+    np.minimum.at(low, box, weights)
+    spread = np.where(np.isfinite(high), high - low, 0.0)
+    return spread.max(axis=1) if weights.shape[1] else np.zeros(boxes)
+
+
+# Weight differences inside a box below this are float noise of the artist's weights, not a blend.
+RIGID_WEIGHT_SPREAD = 1e-6
+
+
+def _target_copy(mesh, preset, layout, index_base, skin=None):
     """A copy of ``mesh`` holding what the exporter must write, and the channels the file must
     hold per Blender vertex. glTF targets: the copy's only colour is each vertex's index (the
     channels are written into the .glb afterwards, glb.replace_vertex_channels); FBX targets: the
-    channels as the copy's colour and UV maps (Blender's FBX exporter writes them unchanged)."""
+    channels as the copy's colour and UV maps (Blender's FBX exporter writes them unchanged).
+    The copy keeps the mesh's vertex groups (mesh.copy()); ``skin`` (mesh_io.Skin of the object
+    exported with it) adds the skin's figures to the stats."""
     data, corner_verts, stats = box_data(mesh, preset, index_base)
+    if skin is not None:
+        spread = box_weight_spread(skin.weights, data.index - index_base, stats["boxes"])
+        stats["skin"] = {"armature": skin.armature.name, "bones": list(skin.bones),
+                         "non_rigid_boxes": int((spread > RIGID_WEIGHT_SPREAD).sum()),
+                         "worst_weight_spread": float(spread.max()) if len(spread) else 0.0,
+                         "unweighted_vertices": skin.unweighted}
     channels = layouts.channels(layout, data)
     copy = mesh.copy()
     for name in [a.name for a in copy.color_attributes]:
@@ -89,7 +120,7 @@ def _target_copy(mesh, preset, layout, index_base):
     else:
         colour = channels.get("COLOR")
         for channel in sorted(c for c in channels if c.startswith("UV")):
-            name = CHANNEL_UV_NAMES[channel]
+            name = uv_name(layout, channel)
             copy.uv_layers.new(name=name)
             # mesh_io.write_uv writes through the attribute API, which un-shares the copy's
             # arrays from the original's first (Blender 5 implicit sharing).
@@ -120,7 +151,8 @@ def _operator_kwargs(operator, wanted: dict) -> dict:
 def _run_exporter(preset, layout, path):
     if preset.extension == ".fbx":
         op = bpy.ops.export_scene.fbx
-        op(**_operator_kwargs(op, dict(
+        op(**_operator_kwargs(op, dict(  # tangent layers for export/fbx.py to overwrite with the frame
+            use_tspace=layouts.LAYOUTS[layout].skin_safe,
             filepath=path, use_selection=True, use_mesh_modifiers=False, axis_forward="-Z", axis_up="Y",
             bake_space_transform=True, apply_unit_scale=True, apply_scale_options="FBX_SCALE_ALL",
             colors_type="LINEAR", prioritize_active_color=True, add_leaf_bones=False, bake_anim=False)))
@@ -145,8 +177,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     preset = transforms.PRESETS.get(preset_name)
     if preset is None:
         raise ExportInputError(f"preset must be one of {sorted(transforms.PRESETS)}, got {preset_name!r}")
-    layout = layout or preset.layouts[0]
-    if layout not in preset.layouts:
+    if layout is not None and layout not in preset.layouts:
         raise ExportInputError(f"{preset.label} carries the layouts {', '.join(preset.layouts)}, not {layout}")
     objects = list({ob.name_full: ob for ob in objects}.values())  # each object once
     if not objects:
@@ -159,6 +190,17 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     meshes = [ob.data for ob in mesh_io.one_object_per_mesh(objects)]
     for mesh in meshes:
         baked_layers(mesh)  # refuses unbaked meshes before anything is changed
+    skins = _skins(context, objects, preset)
+    safe = [candidate for candidate in preset.layouts if layouts.LAYOUTS[candidate].skin_safe]
+    if layout is None:  # the preset's own; for a skinned export its first that skinning carries
+        layout = safe[0] if skins and safe else preset.layouts[0]
+    if skins and not layouts.LAYOUTS[layout].skin_safe:
+        name, skin = next(iter(skins.items()))
+        raise ExportInputError(
+            f"object '{name}' is skinned by '{skin.armature.name}': the {layout} layout keeps the box frame in UV "
+            "maps, which no engine's skinning moves, so posed boxes would not decode; "
+            + (f"export with the {' or '.join(safe)} layout (frame in NORMAL + TANGENT)" if safe else
+               f"{preset.label} has no layout with the frame in NORMAL + TANGENT: export with the GLTF or UNITY preset"))
     start = time.perf_counter()
     folder = os.path.dirname(os.path.abspath(filepath))
     if not os.path.isdir(folder):
@@ -176,7 +218,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             stats = [{"mesh": mesh.name, "vertices": len(mesh.vertices), "transform_error": 0.0} for mesh in meshes]
             bpy.data.libraries.write(temp, set(objects), fake_user=True, compress=False)
         else:
-            stats, table = _export_with_copies(context, objects, meshes, preset, layout, temp)
+            stats, table = _export_with_copies(context, objects, meshes, preset, layout, temp, skins)
             if table is not None:
                 with open(partial(table_path(filepath)), "w") as f:
                     f.write(godot.image_texture_tres(table))
@@ -194,11 +236,22 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
         for temp in outputs:
             if os.path.exists(temp):
                 os.remove(temp)
+    for m in stats:
+        skin = m.get("skin")
+        if skin and skin["non_rigid_boxes"]:
+            warnings.append(f"{m['mesh']}: {skin['non_rigid_boxes']} of {m['boxes']} boxes have vertices with different "
+                            f"bone weights (up to {skin['worst_weight_spread']:.2g} apart): posed, their decoded origins "
+                            "leave the boxes (docs/ACCURACY.md); weight each box to its bones alike")
+        if skin and skin["unweighted_vertices"]:
+            warnings.append(f"{m['mesh']}: {skin['unweighted_vertices']} vertices carry no weight of "
+                            f"'{skin['armature']}': Blender leaves them at rest, engines may not")
     default_errors = [m["default_import_error"] for m in stats if "default_import_error" in m]
     if default_errors:
         warnings.append(f"with {preset.label}'s default import settings ({preset.default_import_loss}) the decode error is "
                         f"{max(default_errors):.1e} of the half-extent, not float32's: {preset.import_settings}")
     return {"preset": preset.name, "layout": layout, "path": os.path.abspath(filepath),
+            "skinned": {name: {"armature": skin.armature.name, "bones": list(skin.bones)}
+                        for name, skin in skins.items()},
             "default_import_error": max(default_errors) if default_errors else None,
             "table": os.path.abspath(table_path(filepath)) if layout == "NORMAL_COLOR" else None,
             "objects": [ob.name for ob in objects], "meshes": stats, "seconds": time.perf_counter() - start,
@@ -206,17 +259,56 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             "transform_error": max((s["transform_error"] for s in stats), default=0.0)}
 
 
-def _export_with_copies(context, objects, meshes, preset, layout, temp):
-    """Exports temporary copies of ``meshes`` in place of the originals; returns (stats, the
-    box table of the file or None)."""
+def _skins(context, objects, preset) -> dict:
+    """{object name: mesh_io.Skin} of the skinned ``objects``. Raises ExportInputError (nothing
+    written) where a skin cannot be exported: an Armature modifier engines cannot carry or an
+    armature outside the view layer."""
+    skins = {}
+    for ob in objects:
+        try:
+            skin = mesh_io.read_skin(ob)
+        except mesh_io.SkinError as error:
+            raise ExportInputError(f"object '{ob.name}': {error}") from None
+        if skin is None or preset.name == "BLENDER":  # a .blend keeps the modifier and the rig as they are
+            continue
+        if skin.armature.name not in context.view_layer.objects:
+            raise ExportInputError(f"object '{ob.name}' is skinned by '{skin.armature.name}', which is not in the "
+                                   "view layer: the exporter cannot write its bones")
+        skins[ob.name] = skin
+    return skins
+
+
+def _fbx_frame(channels, mesh, preset) -> dict:
+    """The NORMAL_FRAME frame per polygon corner of ``mesh`` in the FBX file's axes: the channels
+    are in the engine's frame, which the importer reaches by the preset's mirror (Unity negates
+    x of positions, normals, tangents and binormals), so the file holds the mirror of each."""
+    corner_verts = mesh_io.read_topology(mesh)[3]
+    mirror = preset.mirror
+    z = channels["NORMAL"].astype(np.float64)
+    x, handedness = channels["TANGENT"][:, :3].astype(np.float64), channels["TANGENT"][:, 3:].astype(np.float64)
+    y = np.cross(z, x) * handedness
+    return {"NORMAL": (z * mirror)[corner_verts], "TANGENT": (x * mirror)[corner_verts],
+            "BINORMAL": (y * mirror)[corner_verts]}
+
+
+def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
+    """Exports temporary copies of ``meshes`` in place of the originals, with the armatures of
+    ``skins`` at their rest position (the file's skin binds the rest geometry); returns (stats,
+    the box table of the file or None)."""
     copies, originals, file_channels, stats, tables = {}, {}, {}, [], []
     selection = [ob for ob in context.view_layer.objects if ob.select_get()]
     active = context.view_layer.objects.active
     users = {}
+    skin_of_mesh = {ob.data.as_pointer(): skins.get(ob.name) for ob in mesh_io.one_object_per_mesh(objects)}
+    armatures = list({skin.armature.name: skin.armature for skin in skins.values()}.values())
+    pose_positions = {rig.name: rig.data.pose_position for rig in armatures}
     try:
+        for rig in armatures:
+            rig.data.pose_position = "REST"
         for mesh in meshes:
             index_base = sum(len(t) for t in tables)  # box numbers run on across the file's meshes
-            copy, channels, mesh_stats = _target_copy(mesh, preset, layout, index_base)
+            copy, channels, mesh_stats = _target_copy(mesh, preset, layout, index_base,
+                                                      skin_of_mesh.get(mesh.as_pointer()))
             if "TABLE" in channels:
                 tables.append(channels.pop("TABLE"))
             name = mesh.name
@@ -227,7 +319,7 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp):
         for ob in objects:
             users[ob.name] = ob.data
             ob.data = copies[ob.data.as_pointer()]
-        edit_mode.select_only(context.view_layer, objects)
+        edit_mode.select_only(context.view_layer, objects + armatures)  # a selected armature exports its skin
         _run_exporter(preset, layout, temp)
         if not os.path.exists(temp):
             raise RuntimeError(f"the {preset.label} exporter wrote nothing")
@@ -235,7 +327,12 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp):
             gltf, binary = glb.read(temp)
             gltf, binary = glb.replace_vertex_channels(gltf, binary, file_channels)
             glb.write(temp, gltf, binary)
+        elif layouts.LAYOUTS[layout].skin_safe:
+            fbx.replace_frame(temp, {name: _fbx_frame(channels, originals[name], preset)
+                                     for name, channels in file_channels.items()})
     finally:
+        for rig in armatures:
+            rig.data.pose_position = pose_positions[rig.name]
         for ob in objects:
             if ob.name in users:
                 ob.data = users[ob.name]

@@ -72,10 +72,12 @@ PRESETS = {
                         "shader's box_table"),
     "UNITY": Preset(
         "UNITY", "Unity (FBX)", ".fbx", Z_UP_TO_Y_UP, np.array([-1.0, 1.0, 1.0]),
-        "FBX for Unity's importer: left-handed Y-up object frame, box data in float UV channels",
-        layouts=("UV_FRAME", "CLASSIC"),
+        "FBX for Unity's importer: left-handed Y-up object frame, box data in float UV channels "
+        "(skinned meshes: frame in NORMAL + TANGENT)",
+        layouts=("UV_FRAME", "CLASSIC", "NORMAL_FRAME"),
         import_settings="Model import: Read/Write on (or Player > Vertex Compression: untick Tex Coord 2-7), "
-                        "Mesh Compression Off; UV_FRAME needs no vertex colour",
+                        "Mesh Compression Off; UV_FRAME needs no vertex colour; NORMAL_FRAME (skinned meshes): Normals "
+                        "Import, Tangents Import (their frame is the box's)",
         half_float_uvs=(2, 3, 4, 5, 6), default_import_loss="vertex compression: half-float UV2-UV6"),
     "UNREAL": Preset(
         "UNREAL", "Unreal (FBX)", ".fbx", np.eye(3), np.array([1.0, -1.0, 1.0]),

@@ -13,7 +13,7 @@ that adds one.
     arrays   geometry, topology, selection flags, UV maps; new meshes from arrays
     baked    the baked layers: compute (prepare_bake), store (PreparedBake.write), read back
     rebuild  replace a mesh's geometry by arrays the core computed, keeping its attributes
-    weights  vertex-group weights (the skin the preview follows)
+    weights  vertex-group weights and the skin of an Armature modifier (preview, export)
 """
 from .arrays import (new_mesh, one_object_per_mesh, read_corner_edges, read_face_selection,
                      read_hidden_vertices, read_point_values, read_positions, read_topology, read_triangles,
@@ -24,4 +24,4 @@ from .baked import (FINGERPRINT_ATTRIBUTE, LAYERS_DIGEST, MAX_UV_MAPS, NEUTRAL_B
                     NotBakedError, PreparedBake, modifier_warnings, prepare_bake, read_baked_layers,
                     stored_layers_digest)
 from .rebuild import can_rebuild, rebuild_welded
-from .weights import read_vertex_weights
+from .weights import Skin, SkinError, read_skin, read_vertex_weights

@@ -1,0 +1,69 @@
+"""The chain-on-an-arm scene of the posed pictures (scripts/preview_pose_picture.py for the
+viewport preview, scripts/threejs_pose_picture.py for three.js): a chain of links wound in a
+helix around a 3-bone arm up z, baked at rest, every link rigidly weighted to the bone under it."""
+import math
+
+import numpy as np
+
+RADIUS, ARM, TURNS = 0.6, 9.0, 20      # a helix of this radius and this many turns around an arm this long (3 bones)
+LINK = np.array([0.46, 0.23, 0.06])    # link length, width, wire thickness
+BONE_TURN = math.radians(40.0)         # the pose: each joint bent this much about x
+
+
+def chain_geometry():
+    """(centres, rotations) of the links: along the helix, spaced at 0.78 of their length, each
+    turned 90 degrees about its own axis from the last (a chain); rotation columns: local x
+    (along the link), y, z."""
+    climb = ARM / (2 * math.pi * TURNS)
+    step = 0.78 * LINK[0] / math.hypot(RADIUS, climb)
+    t = step * np.arange(int(2 * math.pi * TURNS / step)) + 0.2
+    t = t[climb * t < ARM - 0.2]
+    centres = np.column_stack([RADIUS * np.cos(t), RADIUS * np.sin(t), climb * t])
+    tangent = np.column_stack([-RADIUS * np.sin(t), RADIUS * np.cos(t), np.full(len(t), climb)])
+    tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
+    radial = np.column_stack([np.cos(t), np.sin(t), np.zeros(len(t))])
+    across = np.where((np.arange(len(t)) % 2)[:, None] == 0, radial, np.cross(tangent, radial))
+    return centres, np.stack([tangent, np.cross(across, tangent), across], axis=2)
+
+
+def build(bpy, scene):
+    """The baked chain object (Armature modifier on the arm) and the arm, both at the origin.
+    Returns (chain object, arm object, link count)."""
+    from boxmarch import mesh_io, scenes
+
+    centres, rotations = chain_geometry()
+    positions, _edges, face_starts, face_sizes, corner_verts = scenes.box_arrays(
+        centres, np.tile(LINK, (len(centres), 1)), rotations)
+    chain = bpy.data.objects.new("chain", mesh_io.new_mesh("chain", positions, face_starts, face_sizes, corner_verts))
+    scene.collection.objects.link(chain)
+    chain.color = (0.85, 0.65, 0.3, 1.0)
+    rig = bpy.data.objects.new("arm", bpy.data.armatures.new("arm"))
+    scene.collection.objects.link(rig)
+    bpy.context.view_layer.objects.active = rig
+    bpy.ops.object.mode_set(mode="EDIT")
+    parent = None
+    for k in range(3):
+        bone = rig.data.edit_bones.new(f"bone{k}")
+        bone.head, bone.tail = (0.0, 0.0, ARM / 3 * k), (0.0, 0.0, ARM / 3 * (k + 1))
+        if parent is not None:
+            bone.parent, bone.use_connect = parent, True
+        parent = bone
+    bpy.ops.object.mode_set(mode="OBJECT")
+    bone_of_link = np.minimum((centres[:, 2] // (ARM / 3)).astype(int), 2)
+    for k in range(3):
+        chain.vertex_groups.new(name=f"bone{k}").add(
+            np.flatnonzero(np.repeat(bone_of_link, 8) == k).tolist(), 1.0, "REPLACE")
+    chain.modifiers.new("Armature", "ARMATURE").object = rig
+    for ob in scene.objects:
+        ob.select_set(ob == chain)
+    bpy.context.view_layer.objects.active = chain
+    assert bpy.ops.boxmarch.bake(sort_axes_by_extent=True) == {"FINISHED"}
+    return chain, rig, len(centres)
+
+
+def pose(rig):
+    """Bend each joint by BONE_TURN about x (the bones' local x is world x: they run up z)."""
+    for k in range(3):
+        pose_bone = rig.pose.bones[f"bone{k}"]
+        pose_bone.rotation_mode = "XYZ"
+        pose_bone.rotation_euler = (BONE_TURN, 0.0, 0.0)

@@ -1,0 +1,178 @@
+"""Skinned export (issue 13): a 3-bone rig carrying 36 boxes of distinct sizes and rest rotations,
+each rigidly weighted to its bone (tests/engine_scene.py), baked at rest and exported with the
+GLTF preset (NORMAL_FRAME: the frame rides in NORMAL + TANGENT, which skinning turns). The .glb
+goes unmodified into three.js r111's GLTFLoader as a SkinnedMesh; the page turns each joint 40
+degrees and the shipped ShaderMaterial (skinning: true) raymarches a box at 0.6 of each box's
+half-extents. The pixels must cover the posed boxes' silhouettes within 1 px, the posed boxes
+coming from the test's own forward kinematics of the rest boxes (engine_scene.posed_rig_boxes).
+Negative control: the same render with the rest-pose frame (what a frame in UV maps delivers,
+CLASSIC or UV_FRAME: no skinning turns it) must fail the check. Then the same file read back
+without three.js, skinned with the glTF specification's formula in NumPy, decodes each vertex's
+posed box centre within 1e-5 of its half-extent."""
+import numpy as np
+import pytest
+
+from boxmarch.preview import sources
+from engine_scene import (RIG_TURN_ANGLE, RIG_TURN_AXES, TO_Y_UP, axis_turn, box_of_vertex, decode_normal_frame,
+                          frame_and_size_errors, posed_rig_boxes, rig_boxes, silhouettes, skinned_scene)
+from engines import coverage_mismatch, threejs
+from gltf_reader import node_globals, read_glb, read_skin
+
+W, H = 400, 300
+# Both cameras look at the middle of the posed chain (glTF frame), about 9 units away.
+SIDE = {"position": [8.9, 4.35, -2.2], "target": [0.9, 1.85, 1.8], "fov": 42, "near": 1.0, "far": 40}
+TOP = {"position": [-1.1, 10.85, 3.3], "target": [0.9, 1.85, 1.8], "fov": 42, "near": 1.0, "far": 40}
+INNER = 0.6
+BOX_MAP = "return sd_box(p, 0.6 * box_half);"
+# The negative control: the frame as the vertex carries it at rest (attributes normal, tangent),
+# not the skinned one: what a layout with the frame in UV maps gives the shader.
+REST_FRAME = ("vObjPos = transformed;", "objectNormal = normal; axisX = tangent.xyz; vObjPos = transformed;")
+
+
+@pytest.fixture
+def exported(blender, tmp_path):
+    from boxmarch.export import scene
+
+    ob, rig = skinned_scene(blender)
+    # Posed in Blender: the file must hold the rest geometry and bind pose all the same.
+    rig.pose.bones["bone1"].rotation_quaternion = (0.8, 0.6, 0.0, 0.0)
+    pose = tuple(rig.pose.bones["bone1"].rotation_quaternion)
+    path = tmp_path / "skinned.glb"
+    report = scene.export_objects(blender.context, [ob], "GLTF", str(path))
+    assert rig.data.pose_position == "POSE" and tuple(rig.pose.bones["bone1"].rotation_quaternion) == pose
+    return path, report
+
+
+def bone_turns():
+    """The pose for the page: each bone's world axis in glTF's frame."""
+    return {f"bone{k}": TO_Y_UP @ axis for k, axis in enumerate(RIG_TURN_AXES)}
+
+
+def setup_js(frame_tamper=None):
+    tamper = ""
+    if frame_tamper:
+        old, new = frame_tamper
+        tamper = (f"if (m.vertexShader.indexOf({old!r}) < 0) throw new Error('no {old} in the vertex shader');"
+                  f"m.vertexShader = m.vertexShader.replace({old!r}, {new!r});")
+    return (threejs.pose_bones_js(bone_turns(), RIG_TURN_ANGLE)
+            + "var skinned = 0; gltf.scene.traverse(function (o) { if (!o.isSkinnedMesh) return; skinned++;"
+            + " o.frustumCulled = false;"  # its bounding sphere is the rest pose's
+            + f" var m = createBoxmarchMaterial(THREE, {{map: {BOX_MAP!r}, color: new THREE.Color(1, 1, 1),"
+            + " maxSteps: 256, skinning: true});" + tamper + " useBoxmarchMaterial(THREE, o, m); });"
+            + " if (skinned !== 1) throw new Error(skinned + ' skinned meshes');")
+
+
+def posed_silhouettes(shot):
+    centres, sizes, _rotations, _bones = rig_boxes()
+    posed_centres, posed_rotations = posed_rig_boxes()
+    return silhouettes(shot, posed_centres, INNER * sizes, posed_rotations, TO_Y_UP)
+
+
+def render(path, camera, frame_tamper=None):
+    material = (sources.shader_dir() / "threejs" / "boxmarch.js").read_text()
+    return threejs.render(path.read_bytes(), material, setup_js(frame_tamper), W, H, camera)
+
+
+def covered(shot):
+    return shot.pixels[..., 3] > 0
+
+
+def test_skinned_export_holds_the_skin_at_rest_and_says_so(exported):
+    path, report = exported
+    assert report["layout"] == "NORMAL_FRAME"
+    assert report["skinned"] == {"Skinned": {"armature": "Skinned-rig", "bones": ["bone0", "bone1", "bone2"]}}
+    assert report["meshes"][0]["skin"]["non_rigid_boxes"] == 0
+    assert any("the export uses the rest geometry" in w for w in report["warnings"])
+    (mesh,) = read_glb(path)
+    (primitive,) = mesh["primitives"]
+    centres, sizes, rotations, bone_of_box = rig_boxes()
+    box = box_of_vertex(primitive["POSITION"], centres, sizes, rotations, TO_Y_UP)  # the rest geometry
+    skin = read_skin(path)
+    joint_names = [skin["node_names"][j] for j in skin["joints"]]
+    joints, weights = primitive["JOINTS_0"].astype(int), primitive["WEIGHTS_0"]
+    # every vertex wholly on its box's bone
+    strongest = np.array(joint_names)[joints[np.arange(len(joints)), weights.argmax(axis=1)]]
+    assert list(strongest) == [f"bone{k}" for k in bone_of_box[box]]
+    assert np.allclose(weights.max(axis=1), 1.0) and np.allclose(weights.sum(axis=1), 1.0)
+
+
+@pytest.mark.parametrize("camera", [SIDE, TOP], ids=["side", "top"])
+def test_threejs_raymarches_each_box_where_the_posed_bone_carries_it(exported, camera):
+    reason = threejs.available()
+    if reason:
+        pytest.skip(reason)
+    shot = render(exported[0], camera)
+    expected = posed_silhouettes(shot)
+    for polygon in expected:  # every box in the picture, none clipped by its edge
+        assert polygon.min() > 0 and polygon[:, 0].max() < W and polygon[:, 1].max() < H
+    mismatch = coverage_mismatch(covered(shot), expected)
+    assert mismatch is None, mismatch
+    assert covered(shot).sum() > 1500
+
+
+def test_threejs_rest_frame_fails_the_posed_check(exported):
+    reason = threejs.available()
+    if reason:
+        pytest.skip(reason)
+    shot = render(exported[0], SIDE, REST_FRAME)
+    assert covered(shot).sum() > 1500  # it drew, in the wrong places
+    assert coverage_mismatch(covered(shot), posed_silhouettes(shot)) is not None
+
+
+def gltf_pose_skinning(path):
+    """(positions, normals, tangents) of the file's skinned mesh under the pose, computed with
+    the glTF 2.0 specification's skinning (section 3.7.3): joint matrix = the joint node's global
+    transform x its inverse bind matrix, blended by WEIGHTS_0 over JOINTS_0; normals and
+    tangents by the same matrices' 3 x 3 part (rigid joints here). The pose turns each bone's
+    local rotation as pose_bones_js does in the page."""
+    skin = read_skin(path)
+    turns = {name: axis / np.linalg.norm(axis) for name, axis in bone_turns().items()}
+    local = skin["local"].copy()
+    for node, name in enumerate(skin["node_names"]):
+        if name in turns:
+            rest_rotation = skin["global"][node][:3, :3]
+            rest_rotation = rest_rotation / np.linalg.norm(rest_rotation, axis=0)  # without the scale
+            turn = np.eye(4)
+            turn[:3, :3] = axis_turn(rest_rotation.T @ turns[name], RIG_TURN_ANGLE)  # axis in the bone's frame
+            local[node] = local[node] @ turn
+    posed_global = node_globals(local, skin["parent"])
+    joint_matrices = np.array([posed_global[j] @ ibm for j, ibm in zip(skin["joints"], skin["inverse_bind"])])
+    (mesh,) = read_glb(path)
+    (p,) = mesh["primitives"]
+    blend = np.einsum("nk,nkij->nij", p["WEIGHTS_0"], joint_matrices[p["JOINTS_0"].astype(int)])
+    positions = np.einsum("nij,nj->ni", blend[:, :3, :3], p["POSITION"]) + blend[:, :3, 3]
+    normals = np.einsum("nij,nj->ni", blend[:, :3, :3], p["NORMAL"])
+    tangents = np.concatenate([np.einsum("nij,nj->ni", blend[:, :3, :3], p["TANGENT"][:, :3]), p["TANGENT"][:, 3:]], 1)
+    return p, positions, normals, tangents
+
+
+def test_gltf_round_trip_decodes_the_posed_boxes(exported):
+    path, _report = exported
+    p, positions, normals, tangents = gltf_pose_skinning(path)
+    centres, sizes, rotations, _bones = rig_boxes()
+    box = box_of_vertex(p["POSITION"], centres, sizes, rotations, TO_Y_UP)
+    offset = np.concatenate([p["TEXCOORD_1"], p["TEXCOORD_2"][:, :1]], axis=1)
+    half = np.concatenate([p["TEXCOORD_3"], p["TEXCOORD_4"][:, :1]], axis=1)
+    origins, axes, half = decode_normal_frame(positions, normals, tangents, offset, half)
+    posed_centres, posed_rotations = posed_rig_boxes()
+    errors = frame_and_size_errors(origins, axes, half, box, posed_centres, sizes, posed_rotations, TO_Y_UP)
+    assert errors[0] < 1e-5 and errors[1] < 1e-6 and errors[2] < 1e-5, errors
+    # Negative control: the rest frame (no skinning of NORMAL / TANGENT) misses the posed centres.
+    rest_origins, _axes, _half = decode_normal_frame(positions, p["NORMAL"], p["TANGENT"], offset, half)
+    rest_errors = frame_and_size_errors(rest_origins, axes, half, box, posed_centres, sizes, posed_rotations, TO_Y_UP)
+    assert rest_errors[0] > 0.1, rest_errors
+
+
+def test_report_counts_boxes_whose_vertices_blend_bones_differently(blender, tmp_path):
+    """Box 0's vertices 0-3 keep 0.7 on bone0 and take 0.3 of bone1: that box is no longer carried
+    rigidly (docs/ACCURACY.md measures what it costs), and the report says so."""
+    from boxmarch.export import scene
+
+    ob, _rig = skinned_scene(blender)
+    ob.vertex_groups["bone0"].add([0, 1, 2, 3], 0.7, "REPLACE")
+    ob.vertex_groups["bone1"].add([0, 1, 2, 3], 0.3, "REPLACE")
+    report = scene.export_objects(blender.context, [ob], "GLTF", str(tmp_path / "blended.glb"))
+    skin = report["meshes"][0]["skin"]
+    assert skin["non_rigid_boxes"] == 1 and abs(skin["worst_weight_spread"] - 0.3) < 1e-6
+    assert any("1 of 36 boxes have vertices with different bone weights (up to 0.3 apart)" in w
+               for w in report["warnings"])
