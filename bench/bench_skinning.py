@@ -6,6 +6,9 @@ each joint), exported with the GLTF preset:
 * three.js r111 (headless Chromium, SwiftShader): the tightest tolerance in px at which the
   shipped material's boxes at 0.6 of each half-extent cover the posed silhouettes of the test's
   forward kinematics (the tests require 1 px), and the same for the rest-frame negative control;
+* Godot 3.2 (godot3 under xvfb-run, llvmpipe): the GODOT3 preset's export imported with
+  compression off, posed by Skeleton.set_bone_pose, the shipped shader: the same figure, and its
+  rest-frame negative control;
 * the .glb skinned in NumPy with the glTF formula, and the UNITY preset's FBX through the modelled
   Unity import and skinning (engine_scene.unity_skinned_decode): worst decoded origin error /
   largest half-extent, axis error (1 - cos), half-extent error, against the posed boxes, with
@@ -124,6 +127,7 @@ def engine_rows():
                               posed_rig_boxes, rig_boxes, skinned_scene, unity_skinned_decode)
     from fbx_reader import read_fbx_geometry, read_fbx_skin
     import test_engine_skinned as skinned_test
+    from engines import godot3
 
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -160,6 +164,17 @@ def engine_rows():
                 seconds = time.perf_counter() - start
                 tol = tightest_tolerance(skinned_test.covered(shot), skinned_test.posed_silhouettes(shot))
                 rows.append([f"three.js r111, {name}, {camera_name}", "-", "-", "-", tol, f"{seconds:.1f}"])
+        start = time.perf_counter()
+        os.makedirs(os.path.join(folder, "godot3"))
+        project = skinned_test.godot3_import_skinned(bpy.context, ob, os.path.join(folder, "godot3"))
+        import_s = time.perf_counter() - start
+        for name, frame in (("shipped shader", None), ("rest frame (negative control)", godot3.REST_FRAME)):
+            start = time.perf_counter()
+            shot, covered = skinned_test.godot3_posed_shot(project, frame)
+            seconds = time.perf_counter() - start
+            tol = tightest_tolerance(covered, skinned_test.posed_silhouettes(shot))
+            rows.append([f"Godot 3.2 (GODOT3, Compress off), {name}, side", "-", "-", "-", tol,
+                         f"{seconds:.1f} (+{import_s:.1f} import)"])
     return table(["check", "origin", "axis", "half", "render px", "s"], rows)
 
 

@@ -7,14 +7,12 @@ cover each box's projected silhouette within 1 px; a frame replaced by the ident
 import numpy as np
 import pytest
 
-from boxmarch.preview import sources
 from engine_scene import (TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame, frame_and_size_errors,
                           rounded_box_mismatch, silhouettes, table_texels)
 from engines import coverage_mismatch, godot3
 
 W, H = 320, 240
 WIDE = {"position": [2.0, 9.0, 14.0], "target": [0.5, -0.5, 0.0], "fov": 50, "near": 0.5, "far": 100}
-SHIPPED_MAP = "return sd_round_box(p, h, 0.1 * min3(h));"
 INNER = 0.6
 
 
@@ -50,14 +48,8 @@ def test_godot3_keeps_every_channel_and_decodes_to_the_boxes(imported):
         assert len(set(index[box == b])) == 1
 
 
-def shader(frame_replacement=None):
-    code = (sources.shader_dir() / "godot3" / "boxmarch.shader").read_text()
-    assert SHIPPED_MAP in code
-    code = code.replace(SHIPPED_MAP, "return sd_box(p, 0.6 * h);")
-    if frame_replacement:
-        code = code.replace("  v_axis_z = NORMAL;\n  v_axis_x = TANGENT;\n  v_axis_y = BINORMAL;", frame_replacement)
-        assert frame_replacement in code
-    return code
+def shader(frame_code=None):
+    return godot3.shipped_shader("return sd_box(p, 0.6 * h);", frame_code)
 
 
 def test_godot3_renders_each_box_at_its_own_size_and_the_negative_control_fails(imported):
@@ -69,10 +61,8 @@ def test_godot3_renders_each_box_at_its_own_size_and_the_negative_control_fails(
     mismatch = coverage_mismatch(covered, expected)
     assert mismatch is None, mismatch
     assert covered.sum() > 500
-    identity = "  v_axis_z = vec3(0.0, 0.0, 1.0);\n  v_axis_x = vec3(1.0, 0.0, 0.0);\n  v_axis_y = vec3(0.0, 1.0, 0.0);"
-    wrong = godot3.render(project, shader(identity), width=W, height=H, camera=WIDE, uniforms=uniforms)
+    wrong = godot3.render(project, shader(godot3.IDENTITY_FRAME), width=W, height=H, camera=WIDE, uniforms=uniforms)
     assert coverage_mismatch(wrong.pixels[..., :3].max(axis=2) > 20, expected) is not None
-
 
 
 def test_godot3_shipped_shader_raymarches_a_rounded_box_of_each_box_own_size(imported):
@@ -81,7 +71,7 @@ def test_godot3_shipped_shader_raymarches_a_rounded_box_of_each_box_own_size(imp
     with every box given the first box's half-extents (a table of one size) the check fails."""
     project, table, centres, sizes, rotations = imported
     uniforms = {"box_table": "res://model.boxes.tres", "max_steps": 256}
-    code = (sources.shader_dir() / "godot3" / "boxmarch.shader").read_text()
+    code = godot3.shipped_shader()
     shot = godot3.render(project, code, width=W, height=H, camera=WIDE, uniforms=uniforms)
     covered = shot.pixels[..., :3].max(axis=2) > 20
     mismatch = rounded_box_mismatch(covered, shot, centres, sizes, rotations, TO_Y_UP)

@@ -9,13 +9,15 @@ Negative control: the same render with the rest-pose frame (what a frame in UV m
 CLASSIC or UV_FRAME: no skinning turns it) must fail the check. Then the same file read back
 without three.js, skinned with the glTF specification's formula in NumPy, decodes each vertex's
 posed box centre within 1e-5 of its half-extent."""
+import pathlib
+
 import numpy as np
 import pytest
 
 from boxmarch.preview import sources
 from engine_scene import (RIG_TURN_ANGLE, RIG_TURN_AXES, TO_Y_UP, axis_turn, box_of_vertex, decode_normal_frame,
                           frame_and_size_errors, posed_rig_boxes, rig_boxes, silhouettes, skinned_scene)
-from engines import coverage_mismatch, threejs
+from engines import coverage_mismatch, godot3, threejs
 from gltf_reader import node_globals, read_glb, read_skin
 
 W, H = 400, 300
@@ -176,3 +178,52 @@ def test_report_counts_boxes_whose_vertices_blend_bones_differently(blender, tmp
     assert skin["non_rigid_boxes"] == 1 and abs(skin["worst_weight_spread"] - 0.3) < 1e-6
     assert any("1 of 36 boxes have vertices with different bone weights (up to 0.3 apart)" in w
                for w in report["warnings"])
+
+
+def godot3_import_skinned(context, ob, folder):
+    """The rig's mesh object ``ob`` (skinned_scene) exported with the GODOT3 preset into the
+    existing ``folder`` and imported unmodified by Godot 3.2 (compression off, as the report
+    asks): the project's path."""
+    from boxmarch.export import scene
+
+    path = pathlib.Path(folder) / "skinned.glb"
+    report = scene.export_objects(context, [ob], "GODOT3", str(path))
+    assert report["layout"] == "NORMAL_COLOR" and report["skinned"][ob.name]["bones"] == ["bone0", "bone1", "bone2"]
+    project = pathlib.Path(folder) / "project"
+    godot3.import_gltf(path.read_bytes(), str(project), compress=False,
+                       extra_files={"model.boxes.tres": (pathlib.Path(folder) / "skinned.boxes.tres").read_bytes()})
+    return str(project)
+
+
+def godot3_posed_shot(project, frame_code=None):
+    """Godot 3 draws the imported rig posed (each joint turned 40 degrees by Skeleton.set_bone_pose)
+    with the shipped shader raymarching a box at 0.6 of each half-extent (its frame lines replaced
+    by ``frame_code`` if given), from SIDE. Returns (shot, covered mask)."""
+    # Godot 3.2's glTF importer renames the joints bone0.. to bone_0.. (a digit after a letter
+    # gets an underscore), and the Skeleton's bones carry those names.
+    turns = {name.replace("bone", "bone_"): axis for name, axis in bone_turns().items()}
+    code = godot3.shipped_shader("return sd_box(p, 0.6 * h);", frame_code)
+    shot = godot3.render(project, code, width=W, height=H, camera=SIDE,
+                         uniforms={"box_table": "res://model.boxes.tres", "max_steps": 256},
+                         bone_turns=turns, turn_angle=RIG_TURN_ANGLE)
+    return shot, shot.pixels[..., :3].max(axis=2) > 20
+
+
+def test_godot3_raymarches_each_box_where_the_posed_bone_carries_it(blender, tmp_path):
+    """The same rig through the GODOT3 preset (NORMAL_COLOR: frame in NORMAL + TANGENT, offsets
+    in the colour, half-extents in the box table) in Godot 3.2, whose skinning folds the blended
+    bone matrix into the vertex stage's WORLD_MATRIX: the shipped shader carries its frame
+    through it. The pixels must cover the posed boxes' silhouettes within 1 px; the shader with
+    its frame taken as the vertex carries it at rest (no skinning) must fail."""
+    reason = godot3.available()
+    if reason:
+        pytest.skip(reason)
+    ob, _rig = skinned_scene(blender)
+    project = godot3_import_skinned(blender.context, ob, tmp_path)
+    shot, covered_px = godot3_posed_shot(project)
+    mismatch = coverage_mismatch(covered_px, posed_silhouettes(shot))
+    assert mismatch is None, mismatch
+    assert covered_px.sum() > 1500
+    rest_shot, rest_covered = godot3_posed_shot(project, godot3.REST_FRAME)
+    assert rest_covered.sum() > 1500  # it drew, in the wrong places
+    assert coverage_mismatch(rest_covered, posed_silhouettes(rest_shot)) is not None

@@ -15,7 +15,11 @@ uniform vec4 base_color : hint_color = vec4(0.8, 0.8, 0.8, 1.0);
 uniform float march_epsilon = 0.0001;
 uniform int max_steps = 96;
 
-varying vec3 v_obj_pos;
+// Position and frame in world space: Godot 3 skins by folding the blended bone matrix into the
+// vertex stage's WORLD_MATRIX (NORMAL, TANGENT, VERTEX stay at rest there), so the posed frame
+// exists only after WORLD_MATRIX; the fragment stage takes them back into the object's space
+// with its own (unskinned) WORLD_MATRIX. Unskinned, the round trip changes nothing.
+varying vec3 v_world_pos;
 varying vec3 v_axis_x;
 varying vec3 v_axis_y;
 varying vec3 v_axis_z;
@@ -66,25 +70,26 @@ vec3 sdf_normal(vec3 p, vec3 h, float index, float e)
 
 void vertex()
 {
-  v_obj_pos = VERTEX;
-  v_axis_z = NORMAL;
-  v_axis_x = TANGENT;
-  v_axis_y = BINORMAL;  // Godot's cross(NORMAL, TANGENT) * tangent.w: bm_axis_y
+  v_world_pos = (WORLD_MATRIX * vec4(VERTEX, 1.0)).xyz;
+  v_axis_z = mat3(WORLD_MATRIX) * NORMAL;
+  v_axis_x = mat3(WORLD_MATRIX) * TANGENT;
+  v_axis_y = mat3(WORLD_MATRIX) * BINORMAL;  // Godot's cross(NORMAL, TANGENT) * tangent.w: bm_axis_y
   v_offset = COLOR.rgb;
   v_index = COLOR.a;
 }
 
 void fragment()
 {
-  vec3 z = normalize(v_axis_z);
-  vec3 x = normalize(v_axis_x);
-  vec3 y = normalize(v_axis_y);
+  mat4 object_from_world = inverse(WORLD_MATRIX);
+  vec3 v_obj_pos = (object_from_world * vec4(v_world_pos, 1.0)).xyz;
+  vec3 z = normalize(mat3(object_from_world) * v_axis_z);
+  vec3 x = normalize(mat3(object_from_world) * v_axis_x);
+  vec3 y = normalize(mat3(object_from_world) * v_axis_y);
   vec3 f = v_offset;
   float index = bm_box_index(v_index);
   int i = int(index);
   ivec2 size = textureSize(box_table, 0);
   vec3 h = texelFetch(box_table, ivec2(i % size.x, i / size.x), 0).xyz;
-  mat4 object_from_world = inverse(WORLD_MATRIX);
   bool perspective = PROJECTION_MATRIX[3][3] < 0.5;
   vec3 ray = perspective ? v_obj_pos - (object_from_world * vec4(CAMERA_MATRIX[3].xyz, 1.0)).xyz
                          : (object_from_world * vec4(-CAMERA_MATRIX[2].xyz, 0.0)).xyz;

@@ -92,6 +92,29 @@ _SHOT = _COMMON + """
 var params
 var camera
 var frames = 0
+var posed = -1
+func skeletons(node, out):
+    if node is Skeleton:
+        out.append(node)
+    for child in node.get_children():
+        skeletons(child, out)
+    return out
+# Turns each named bone by angle about its own head, about a world axis as it points with the
+# skeleton at rest (moved into the bone's frame with the rest global rotations, read first).
+func pose_bones(scene, turns, angle):
+    var count = 0
+    for sk in skeletons(scene, []):
+        var rest = {}
+        for name in turns:
+            var i = sk.find_bone(name)
+            if i >= 0:
+                rest[name] = (sk.global_transform * sk.get_bone_global_pose(i)).basis.orthonormalized()
+        for name in rest:
+            var a = turns[name]
+            var axis = rest[name].inverse().xform(Vector3(a[0], a[1], a[2])).normalized()
+            sk.set_bone_pose(sk.find_bone(name), Transform(Basis(axis, angle), Vector3()))
+            count += 1
+    return count
 
 func uniform_value(v):
     if typeof(v) == TYPE_STRING:
@@ -120,6 +143,8 @@ func _init():
     for mi in mesh_instances(scene, []):
         for s in range(mi.mesh.get_surface_count()):
             mi.set_surface_material(s, material)
+    if params.has("bone_turns"):
+        posed = pose_bones(scene, params.bone_turns, params.turn_angle)
     var c = params.camera
     camera = Camera.new()
     root.add_child(camera)
@@ -136,6 +161,9 @@ func _idle(_delta):
     if frames > 60:  # _init failed: a script error does not stop Godot
         quit()
     if frames < 4:
+        return
+    if params.has("bone_turns") and posed != params.bone_turns.size():
+        quit()  # a bone to turn is missing: no result
         return
     var image = root.get_texture().get_data()
     image.flip_y()
@@ -158,6 +186,31 @@ func _idle(_delta):
 
 # Camera-space points (x, y, -depth) where the camera's world -> pixel matrix is sampled.
 _PROBES = [[x * d * 0.1, y * d * 0.1, -d] for d in (1.0, 3.0, 7.0) for x in (-1, 1) for y in (-1, 0.5)]
+
+
+# The shipped shader's map() body and frame lines, which tests replace.
+SHIPPED_MAP = "return sd_round_box(p, h, 0.1 * min3(h));"
+SHIPPED_FRAME = ("  v_axis_z = mat3(WORLD_MATRIX) * NORMAL;\n  v_axis_x = mat3(WORLD_MATRIX) * TANGENT;\n"
+                 "  v_axis_y = mat3(WORLD_MATRIX) * BINORMAL;")
+# Negative controls for a mesh whose object sits at the world origin (the varyings are world
+# space): the identity frame, and the frame as the vertex carries it at rest (what a frame in
+# UV maps gives the shader: no skinning turns it).
+IDENTITY_FRAME = "  v_axis_z = vec3(0.0, 0.0, 1.0);\n  v_axis_x = vec3(1.0, 0.0, 0.0);\n  v_axis_y = vec3(0.0, 1.0, 0.0);"
+REST_FRAME = "  v_axis_z = NORMAL;\n  v_axis_x = TANGENT;\n  v_axis_y = BINORMAL;"
+
+
+def shipped_shader(map_code=None, frame_code=None):
+    """shaders/godot3/boxmarch.shader, with its map() body replaced by ``map_code`` and its
+    frame lines by ``frame_code`` where given (each must be found)."""
+    from boxmarch.preview import sources
+
+    code = (sources.shader_dir() / "godot3" / "boxmarch.shader").read_text()
+    for old, new in ((SHIPPED_MAP, map_code), (SHIPPED_FRAME, frame_code)):
+        if new is not None:
+            if old not in code:
+                raise AssertionError(f"the shipped Godot shader has no {old!r}")
+            code = code.replace(old, new)
+    return code
 
 
 def available():
@@ -277,7 +330,7 @@ def _fit_to_pixels(world, pixels):
     return m / np.linalg.norm(m[2, :3]) if np.linalg.norm(m[2, :3]) > 1e-9 else m / m[2, 3]
 
 
-def render(project_dir, shader_code, *, width, height, camera, uniforms=None):
+def render(project_dir, shader_code, *, width, height, camera, uniforms=None, bone_turns=None, turn_angle=0.0):
     """Draws the imported ``res://model.glb`` once with ``godot3`` (GLES3 on llvmpipe under
     xvfb-run) and returns a :class:`Shot`.
 
@@ -286,12 +339,18 @@ def render(project_dir, shader_code, *, width, height, camera, uniforms=None):
     converted to sRGB). ``uniforms``: name -> float, [x, y] / [x, y, z] / [x, y, z, w] lists, or a
     ``res://`` path of a resource (an imported texture). ``camera`` is the dict threejs.render
     takes: perspective with vertical ``fov`` degrees, or ``ortho`` half-height; ``near``/``far``
-    optional. The background is opaque black (0, 0, 0, 255). ``Shot.view`` inverts
+    optional. ``bone_turns`` (bone name -> world axis (3,) as it points with the skeleton at
+    rest) turns each named bone of the imported Skeleton by ``turn_angle`` radians about its own
+    head, on top of its rest pose (``Skeleton.set_bone_pose``); a name no bone has fails the
+    render. The background is opaque black (0, 0, 0, 255). ``Shot.view`` inverts
     ``Camera.get_camera_transform()``; ``Shot.to_pixels`` is fitted to
     ``Camera.unproject_position`` of probe points (the fit must reproduce them within 1e-3 px).
     """
     params = {"shader": shader_code, "uniforms": uniforms or {}, "camera": camera,
               "probes": _PROBES}
+    if bone_turns:
+        params.update(bone_turns={k: [float(x) for x in v] for k, v in bone_turns.items()},
+                      turn_angle=float(turn_angle))
     cmd = ["xvfb-run", "-a", "-s", f"-screen 0 {max(width, 640)}x{max(height, 480)}x24",
            GODOT, "--resolution", f"{width}x{height}"]
     data = _run_script(cmd, project_dir, _SHOT, params)
