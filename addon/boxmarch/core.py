@@ -150,7 +150,7 @@ def axis_turn_label(index: int) -> str:
 
 
 def rotate_vector(v, q):
-    """The shader's rotate_vector, vectorised in float64: v + 2 cross(q.xyz, cross(q.xyz, v) +
+    """The shaders' bm_rotate_vector, vectorised in float64: v + 2 cross(q.xyz, cross(q.xyz, v) +
     q.w v). v (..., 3), q (..., 4) broadcast."""
     v = np.asarray(v, np.float64)
     q = np.asarray(q, np.float64)
@@ -159,8 +159,9 @@ def rotate_vector(v, q):
 
 
 def decode_offsets(rgba) -> np.ndarray:
-    """The blog post's GetFragToOrigin in float64: f = (rgb * 2 - 1) / a. Accepts float RGBA, or uint8
-    RGBA (divided by 255 first, as a GPU reads normalised bytes)."""
+    """The blog post's GetFragToOrigin (the shaders' bm_offset_from_color) in float64:
+    f = (rgb * 2 - 1) / a. Accepts float RGBA, or uint8 RGBA (divided by 255 first, as a GPU reads
+    normalised bytes)."""
     rgba = np.asarray(rgba)
     c = rgba.astype(np.float64) / 255.0 if rgba.dtype == np.uint8 else rgba.astype(np.float64)
     return (c[..., :3] * 2.0 - 1.0) / c[..., 3:4]

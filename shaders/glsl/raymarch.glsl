@@ -1,6 +1,7 @@
 // boxmarch raymarcher: sphere tracing inside one box, box-local coordinates.
 // Needs decode.glsl and sdf.glsl before it and a `float map(vec3 p)` after it.
-// Mirrored by shaders/hlsl/boxmarch.hlsl and cpp/src/raymarch.cpp.
+// shaders/generate.py translates it into HLSL, and bm_box_span and bm_normal_tap into GLM for the
+// CPU reference (cpp/src/raymarch.cpp writes bm_march and bm_normal around its preset switch).
 
 float map(vec3 p);
 

@@ -23,29 +23,35 @@ varying vec3 v_offset;
 varying float v_index;
 
 // boxmarch decode: recover a fragment's box-local frame from the baked vertex data
-// (docs/FORMAT.md). Mirrored by shaders/hlsl/boxmarch.hlsl.
+// (docs/FORMAT.md). shaders/generate.py translates it into every engine's language.
+// Names: snake_case with a bm_ prefix for the decode and the march (sdf.glsl keeps the sd_ and
+// op_ families that users' map() texts call). The blog post's shader has its own GetFragToOrigin,
+// GetRotation and rotate_vector; bm_offset_from_color, bm_quaternion and bm_rotate_vector compute
+// the same, so that shader reads the CLASSIC layout unchanged (docs/FORMAT.md names the pairs).
 
 // f = vector from the fragment to its submesh's origin, in box-local coordinates.
 // color = the BoxOffset colour attribute (rgb = 0.5 + 0.5 * s * f, a = s).
-vec3 GetFragToOrigin(vec4 color)
+vec3 bm_offset_from_color(vec4 color)
 {
   return (color.rgb * 2.0 - 1.0) / color.a;
 }
 
 // q = the submesh's frame as a quaternion (x, y, z, w) mapping box-local to object space,
 // from the two UV maps BoxQuatXY and BoxQuatZW.
-vec4 GetRotation(vec2 quat_xy, vec2 quat_zw)
+vec4 bm_quaternion(vec2 quat_xy, vec2 quat_zw)
 {
   return vec4(quat_xy, quat_zw);
 }
 
-// q v q* for a unit quaternion q; rotate_vector(v, quat_conjugate(q)) is the inverse rotation.
-vec3 rotate_vector(vec3 v, vec4 q)
+// q v q* for a unit quaternion q; bm_rotate_vector(v, bm_quat_conjugate(q)) is the inverse
+// rotation.
+vec3 bm_rotate_vector(vec3 v, vec4 q)
 {
   return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v);
 }
 
-vec4 quat_conjugate(vec4 q)
+// The inverse rotation of a unit quaternion.
+vec4 bm_quat_conjugate(vec4 q)
 {
   return vec4(-q.xyz, q.w);
 }
@@ -96,14 +102,17 @@ vec3 bm_half_extents(vec2 half_xy, vec2 half_z)
 float min3(vec3 v) { return min(v.x, min(v.y, v.z)); }
 float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
 // ---- primitives, centred at the origin
+// Exact.
 float sd_sphere(vec3 p, float r) { return length(p) - r; }
+// Exact. Half-extents b.
 float sd_box(vec3 p, vec3 b)
 {
   vec3 q = abs(p) - b;
   return length(max(q, vec3(0.0))) + min(max3(q), 0.0);
 }
+// Exact for r <= min3(b): the box b with its edges rounded by r (outer size b).
 float sd_round_box(vec3 p, vec3 b, float r) { return sd_box(p, b - vec3(r)) - r; }
-// Segment a-b with radius r.
+// Exact. Segment a-b with radius r.
 float sd_capsule(vec3 p, vec3 a, vec3 b, float r)
 {
   vec3 pa = p - a;
@@ -111,63 +120,82 @@ float sd_capsule(vec3 p, vec3 a, vec3 b, float r)
   float h = clamp(dot(pa, ba) / max(dot(ba, ba), 1e-20), 0.0, 1.0);
   return length(pa - ba * h) - r;
 }
-// Axis z.
+// Exact. Capped, axis z.
 float sd_cylinder(vec3 p, float r, float half_height)
 {
   vec2 d = abs(vec2(length(p.xy), p.z)) - vec2(r, half_height);
   return min(max(d.x, d.y), 0.0) + length(max(d, vec2(0.0)));
 }
-// Around axis z.
+// Exact. Around axis z.
 float sd_torus(vec3 p, float major, float minor)
 {
   vec2 q = vec2(length(p.xy) - major, p.z);
   return length(q) - minor;
 }
-// Chain link: a ring of radius `ring` in the xy plane stretched by half_length along y.
+// Exact. Chain link: a ring of radius `ring` in the xy plane stretched by half_length along y.
 float sd_link(vec3 p, float half_length, float ring, float thickness)
 {
   vec3 q = vec3(p.x, max(abs(p.y) - half_length, 0.0), p.z);
   return length(vec2(length(q.xy) - ring, q.z)) - thickness;
 }
-// Plane with unit normal n, offset along n.
+// Exact for a unit normal n. Plane with normal n, offset along n.
 float sd_plane(vec3 p, vec3 n, float offset) { return dot(p, n) + offset; }
 // ---- combinations of two distances
+// Exact outside both shapes, a bound inside.
 float op_union(float a, float b) { return min(a, b); }
-float op_subtract(float a, float b) { return max(a, -b); }  // a minus b
+// A bound outside the result, exact inside. a minus b.
+float op_subtract(float a, float b) { return max(a, -b); }
+// A bound outside the result, exact inside.
 float op_intersect(float a, float b) { return max(a, b); }
 // Smooth versions: k is the blend radius (box-local units).
+// A bound; equals op_union where |a - b| >= k.
 float op_smooth_union(float a, float b, float k)
 {
   float h = clamp(0.5 + 0.5 * (b - a) / k, 0.0, 1.0);
   return mix(b, a, h) - k * h * (1.0 - h);
 }
+// A bound; equals op_intersect where |a - b| >= k.
 float op_smooth_intersect(float a, float b, float k) { return -op_smooth_union(-a, -b, k); }
+// A bound; equals op_subtract where |a + b| >= k.
 float op_smooth_subtract(float a, float b, float k) { return op_smooth_intersect(a, -b, k); }
 // ---- modifiers
+// The shape grown by r: exact outside, a bound inside.
 float op_round(float d, float r) { return d - r; }
+// A shell of half-thickness `thickness` around the surface: exact outside the shell, a bound
+// inside it.
 float op_onion(float d, float thickness) { return abs(d) - thickness; }
 // Finite repetition: copies every `spacing`, `limit` copies each side of the centre per axis.
+// Moves p (returns no distance): a shape evaluated at the result stays exact when it is
+// mirror-symmetric in each axis and fits its cell (half of `spacing` each side); otherwise it can
+// overestimate (neither exact nor a bound: march with relaxation below 1).
 // floor(x + 0.5), not round(): GLSL ES 1.00 (WebGL 1) has no round().
 vec3 op_repeat_limited(vec3 p, vec3 spacing, vec3 limit)
 {
   return p - spacing * clamp(floor(p / spacing + 0.5), -limit, limit);
 }
 // ---- presets of the preview's SDF menu, sized by the box
+// Exact.
 float sdf_preset_box(vec3 p, vec3 h) { return sd_box(p, h); }
+// Exact.
 float sdf_preset_sphere(vec3 p, vec3 h) { return sd_sphere(p, min3(h)); }
+// Exact.
 float sdf_preset_rounded_box(vec3 p, vec3 h) { return sd_round_box(p, h, 0.25 * min3(h)); }
+// Exact.
 float sdf_preset_capsule(vec3 p, vec3 h)
 {
   float r = min(h.y, h.z);
   float a = max(h.x - r, 0.0);
   return sd_capsule(p, vec3(-a, 0.0, 0.0), vec3(a, 0.0, 0.0), r);
 }
+// Exact.
 float sdf_preset_cylinder(vec3 p, vec3 h) { return sd_cylinder(p, min(h.x, h.y), h.z); }
+// Exact.
 float sdf_preset_torus(vec3 p, vec3 h)
 {
   float minor = min(h.z, 0.5 * min(h.x, h.y));
   return sd_torus(p, min(h.x, h.y) - minor, minor);
 }
+// Exact.
 float sdf_preset_link(vec3 p, vec3 h)
 {
   float thickness = min(h.z, 0.25 * min(h.x, h.y));
@@ -197,8 +225,9 @@ float map(vec3 p, vec3 h, float index)
   return sd_round_box(p, h, 0.1 * min3(h));
 }
 
-// bm_march of shaders/glsl/raymarch.glsl with h passed on: t of the hit, or -1.
-float march(vec3 ro, vec3 rd, vec3 h, float index, float t_end)
+// bm_march of shaders/glsl/raymarch.glsl with the box (h, index) passed on to map(): t of the
+// hit, or -1.
+float bm_march_box(vec3 ro, vec3 rd, vec3 h, float index, float t_end)
 {
   float t = 0.0;
   for (int i = 0; i < 512; i++) {
@@ -217,8 +246,8 @@ float march(vec3 ro, vec3 rd, vec3 h, float index, float t_end)
   return -1.0;
 }
 
-// bm_normal of shaders/glsl/raymarch.glsl with h passed on.
-vec3 sdf_normal(vec3 p, vec3 h, float index, float e)
+// bm_normal of shaders/glsl/raymarch.glsl with the box (h, index) passed on to map().
+vec3 bm_normal_box(vec3 p, vec3 h, float index, float e)
 {
   vec3 a = vec3(1.0, -1.0, -1.0);
   vec3 b = vec3(-1.0, -1.0, 1.0);
@@ -265,7 +294,7 @@ void fragment()
     ro -= rd * eye_distance;
     t_end = eye_distance;
   }
-  float t = march(ro, rd, h, index, t_end);
+  float t = bm_march_box(ro, rd, h, index, t_end);
   if (t < 0.0) {
     discard;
   }
@@ -274,6 +303,6 @@ void fragment()
   vec4 clip = PROJECTION_MATRIX * INV_CAMERA_MATRIX * WORLD_MATRIX * vec4(obj_hit, 1.0);
   DEPTH = 0.5 + 0.5 * clip.z / clip.w;
   vec3 n = normalize((INV_CAMERA_MATRIX * WORLD_MATRIX * vec4(bm_from_local(
-      sdf_normal(local_hit, h, index, bm_normal_tap(march_epsilon, h)), x, y, z), 0.0)).xyz);
+      bm_normal_box(local_hit, h, index, bm_normal_tap(march_epsilon, h)), x, y, z), 0.0)).xyz);
   ALBEDO = base_color.rgb * (0.35 + 0.65 * max(n.z, 0.0));
 }

@@ -32,8 +32,9 @@ float map(vec3 p, vec3 h, float index)
   return sd_round_box(p, h, 0.1 * min3(h));
 }
 
-// bm_march of shaders/glsl/raymarch.glsl with h passed on: t of the hit, or -1.
-float march(vec3 ro, vec3 rd, vec3 h, float index, float t_end)
+// bm_march of shaders/glsl/raymarch.glsl with the box (h, index) passed on to map(): t of the
+// hit, or -1.
+float bm_march_box(vec3 ro, vec3 rd, vec3 h, float index, float t_end)
 {
   float t = 0.0;
   for (int i = 0; i < 512; i++) {
@@ -52,8 +53,8 @@ float march(vec3 ro, vec3 rd, vec3 h, float index, float t_end)
   return -1.0;
 }
 
-// bm_normal of shaders/glsl/raymarch.glsl with h passed on.
-vec3 sdf_normal(vec3 p, vec3 h, float index, float e)
+// bm_normal of shaders/glsl/raymarch.glsl with the box (h, index) passed on to map().
+vec3 bm_normal_box(vec3 p, vec3 h, float index, float e)
 {
   vec3 a = vec3(1.0, -1.0, -1.0);
   vec3 b = vec3(-1.0, -1.0, 1.0);
@@ -100,7 +101,7 @@ void fragment()
     ro -= rd * eye_distance;
     t_end = eye_distance;
   }
-  float t = march(ro, rd, h, index, t_end);
+  float t = bm_march_box(ro, rd, h, index, t_end);
   if (t < 0.0) {
     discard;
   }
@@ -109,6 +110,6 @@ void fragment()
   vec4 clip = PROJECTION_MATRIX * INV_CAMERA_MATRIX * WORLD_MATRIX * vec4(obj_hit, 1.0);
   DEPTH = 0.5 + 0.5 * clip.z / clip.w;
   vec3 n = normalize((INV_CAMERA_MATRIX * WORLD_MATRIX * vec4(bm_from_local(
-      sdf_normal(local_hit, h, index, bm_normal_tap(march_epsilon, h)), x, y, z), 0.0)).xyz);
+      bm_normal_box(local_hit, h, index, bm_normal_tap(march_epsilon, h)), x, y, z), 0.0)).xyz);
   ALBEDO = base_color.rgb * (0.35 + 0.65 * max(n.z, 0.0));
 }
