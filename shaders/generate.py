@@ -125,28 +125,30 @@ def to_glm(source: str, defined: set[str]) -> str:
     _check_calls(source, SAME_BUILTINS | KEYWORDS | defined | {"mix", "vec2", "vec3", "vec4"}, "GLM")
     if re.search(r"\b(?:out|inout)\b", _code(source)):
         raise UntranslatableError("no GLM translation for out parameters")
-    text = re.sub(r"^(?=\w+\s+\w+\s*\()", "inline ", source, flags=re.M)
-    text = re.sub(r"\b(" + "|".join(sorted(SAME_BUILTINS | {"mix"})) + r")\(", r"glm::\1(", text)
-    # float literals: GLSL's 0.5 is a float, C++'s a double (and glm::min(float, double) has no match)
-    text = re.sub(r"(?<![\w.])(\d+\.\d*(?:e[-+]?\d+)?|\d+e[-+]?\d+)(?![\w.])", r"\1f", text)
 
     def swizzle(match):  # GLM without GLM_FORCE_SWIZZLE has no p.xy
         name, components = match.groups()
         return f"vec{len(components)}({', '.join(f'{name}.{c}' for c in components)})"
-    return re.sub(r"\b([A-Za-z_]\w*)\.([xyzw]{2,4})\b", swizzle, text)
 
-
-def _hlsl_file(glsl_name: str, guard: str, defined: set[str]) -> str:
-    return (f"// {GENERATED_BY} from shaders/glsl/{glsl_name}: edit that, not this file.\n"
-            f"#ifndef {guard}\n#define {guard}\n\n{to_hlsl(glsl(glsl_name), defined)}\n#endif\n")
+    def code(line):  # the part of a line before its comment, which stays as written
+        line = re.sub(r"^(?=\w+\s+\w+\s*\()", "inline ", line)
+        line = re.sub(r"\b(" + "|".join(sorted(SAME_BUILTINS | {"mix"})) + r")\(", r"glm::\1(", line)
+        # float literals: GLSL's 0.5 is a float, C++'s a double (glm::min(float, double) has no match)
+        line = re.sub(r"(?<![\w.])(\d+\.\d*(?:e[-+]?\d+)?|\d+e[-+]?\d+)(?![\w.])", r"\1f", line)
+        return re.sub(r"\b([A-Za-z_]\w*)\.([xyzw]{2,4})\b", swizzle, line)
+    return "".join(code(line[:line.find("//")]) + line[line.find("//"):] if "//" in line else code(line)
+                   for line in source.splitlines(keepends=True))
 
 
 def library_names() -> set[str]:
-    return {name for source in ("decode.glsl", "sdf.glsl", "raymarch.glsl") for name in top_level_functions(glsl(source))}
+    """The functions of the library an engine shader includes."""
+    return {name for source in ("decode.glsl", "sdf.glsl", "raymarch.glsl")
+            for name in top_level_functions(glsl(source))}
 
 
-def hlsl(glsl_name: str, guard: str):
-    return lambda: _hlsl_file(glsl_name, guard, library_names())
+def hlsl_file(glsl_name: str, guard: str) -> str:
+    return (f"// {GENERATED_BY} from shaders/glsl/{glsl_name}: edit that, not this file.\n"
+            f"#ifndef {guard}\n#define {guard}\n\n{to_hlsl(glsl(glsl_name), library_names())}\n#endif\n")
 
 
 def glm_library() -> str:
@@ -156,9 +158,9 @@ def glm_library() -> str:
                  "bm_shade": top_level_functions(glsl("preview.frag.glsl"))["bm_shade"]}
     body = to_glm("\n".join(functions.values()), set(functions))
     usings = "".join(f"using glm::{v};\n" for v in ("vec2", "vec3", "vec4") if re.search(rf"\b{v}\b", body))
-    return (f"// {GENERATED_BY} from shaders/glsl/sdf.glsl, raymarch.glsl (bm_box_span, bm_normal_tap)\n"
-            f"// and preview.frag.glsl (bm_shade): edit those, not this file. The shaders' functions that\n"
-            f"// do not call map(), in GLM, so the CPU reference evaluates what the GPU does.\n"
+    return (f"// {GENERATED_BY} from shaders/glsl/sdf.glsl, raymarch.glsl (bm_box_span,\n"
+            f"// bm_normal_tap) and preview.frag.glsl (bm_shade): edit those, not this file. The shaders'\n"
+            f"// functions that do not call map(), in GLM, so the CPU reference evaluates what the GPU does.\n"
             f"#pragma once\n\n#include <glm/glm.hpp>\n\nnamespace boxmarch::shader {{\n\n{usings}\n{body}\n"
             f"}}  // namespace boxmarch::shader\n")
 
@@ -183,9 +185,9 @@ def godot3() -> str:
 
 # Paths relative to the repository root.
 OUTPUTS = {
-    "shaders/hlsl/boxmarch_decode.hlsl": hlsl("decode.glsl", "BOXMARCH_DECODE_INCLUDED"),
-    "shaders/hlsl/boxmarch_sdf.hlsl": hlsl("sdf.glsl", "BOXMARCH_SDF_INCLUDED"),
-    "shaders/hlsl/boxmarch_march.hlsl": hlsl("raymarch.glsl", "BOXMARCH_MARCH_INCLUDED"),
+    "shaders/hlsl/boxmarch_decode.hlsl": lambda: hlsl_file("decode.glsl", "BOXMARCH_DECODE_INCLUDED"),
+    "shaders/hlsl/boxmarch_sdf.hlsl": lambda: hlsl_file("sdf.glsl", "BOXMARCH_SDF_INCLUDED"),
+    "shaders/hlsl/boxmarch_march.hlsl": lambda: hlsl_file("raymarch.glsl", "BOXMARCH_MARCH_INCLUDED"),
     "cpp/src/shader_library.h": glm_library,
     "shaders/threejs/boxmarch.js": lambda: threejs(module=False),
     "shaders/threejs/boxmarch.module.js": lambda: threejs(module=True),
