@@ -8,9 +8,9 @@ the SDF library and the march.
   (``to_glm``; the functions that call map() stay in raymarch.cpp, around its preset switch);
 * threejs/boxmarch.js and boxmarch.module.js: threejs/template.js with decode.glsl, sdf.glsl and
   raymarch.glsl embedded as strings (GLSL ES 3.00 takes them as they are);
-* godot3/boxmarch.shader: godot3/template.shader with decode.glsl and every function of sdf.glsl,
-  plus bm_box_span and bm_normal_tap of raymarch.glsl (Godot 3 has no global variables, so
-  box_half and the functions that read it through map() stay behind).
+* godot3/boxmarch.shader: godot3/template.shader with decode.glsl, every function of sdf.glsl and
+  of raymarch.glsl; Godot 3 has no global variables, so bm_march and bm_normal take the box
+  (h, index) and pass it on to map() (``passing_the_box``).
 
 The translators rewrite only what differs between the languages, and refuse a source that calls
 anything else they do not know (a GLSL built-in such as mod(), whose HLSL fmod() truncates where
@@ -175,12 +175,25 @@ def threejs(module: bool) -> str:
     return text + f"\nif (typeof module !== 'undefined') {{\n  module.exports = {{ {exports} }};\n}}\n"
 
 
+def passing_the_box(function: str) -> str:
+    """A function that calls map(p), taking the box (vec3 h, float index) and passing it on as
+    map(p, h, index): Godot 3 has no global variables to hold box_half."""
+    calls = [m.end() - 1 for m in re.finditer(r"\bmap\(", function)]
+    parameters = function.index("(", re.search(r"^\w+\s+\w+\s*\(", function, re.M).start())
+    for open_index, extra in sorted([(parameters, ", vec3 h, float index")] + [(c, ", h, index") for c in calls],
+                                    reverse=True):
+        close = _close_paren(function, open_index)
+        function = function[:close] + extra + function[close:]
+    return function
+
+
 def godot3() -> str:
     text = (SHADERS / "godot3" / "template.shader").read_text()
     raymarch = top_level_functions(glsl("raymarch.glsl"))
     text = text.replace("/*@DECODE@*/", glsl("decode.glsl"))
     text = text.replace("/*@SDF@*/", "".join(top_level_functions(glsl("sdf.glsl")).values()))
-    return text.replace("/*@SPAN@*/", raymarch["bm_box_span"] + raymarch["bm_normal_tap"])
+    text = text.replace("/*@SPAN@*/", raymarch["bm_box_span"] + raymarch["bm_normal_tap"])
+    return text.replace("/*@MARCH@*/", passing_the_box(raymarch["bm_march"]) + passing_the_box(raymarch["bm_normal"]))
 
 
 # Paths relative to the repository root.

@@ -16,15 +16,15 @@ vec2 bm_box_span(vec3 ro, vec3 rd, vec3 h)
 }
 
 // Sphere-traces map() from ro along unit rd until a distance falls below epsilon (true), the ray
-// passes t_end or max_steps evaluations (at most 512) are spent (false). t: distance travelled;
+// passes t_end or step_limit evaluations (at most 512) are spent (false). t: distance travelled;
 // steps: map() evaluations. The loop's bound is a constant, as GLSL ES 1.00 (WebGL 1) requires.
-bool bm_march(vec3 ro, vec3 rd, float t_end, int max_steps, float epsilon, float relaxation,
+bool bm_march(vec3 ro, vec3 rd, float t_end, int step_limit, float epsilon, float relaxation,
               out float t, out int steps)
 {
   t = 0.0;
-  steps = max_steps;
+  steps = step_limit;
   for (int i = 0; i < 512; ++i) {
-    if (i >= max_steps) {
+    if (i >= step_limit) {
       break;
     }
     float d = map(ro + rd * t);
