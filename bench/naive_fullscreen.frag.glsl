@@ -10,7 +10,7 @@ float scene_map(vec3 p)
     vec3 c = texelFetch(boxes, ivec2(0, b), 0).xyz;
     vec4 q = texelFetch(boxes, ivec2(1, b), 0);
     vec3 h = texelFetch(boxes, ivec2(2, b), 0).xyz;
-    d = min(d, sdf_preset_sphere(rotate_vector(p - c, quat_conjugate(q)), h));
+    d = min(d, sdf_preset_sphere(bm_rotate_vector(p - c, bm_quat_conjugate(q)), h));
   }
   return d;
 }

@@ -1,5 +1,5 @@
 """Compile checks of every shader with glslangValidator (no GPU needed), and the GLSL, HLSL and
-C++ mirrors kept in step by comparing their function lists."""
+C++ forms (generated from the GLSL, tests/test_engine_shaders.py) offering the same functions."""
 import re
 import subprocess
 from pathlib import Path
@@ -13,8 +13,8 @@ from helpers.glsl import blender_declarations, compile_glsl, validator
 
 SHADERS = Path(__file__).resolve().parent.parent / "shaders"
 # Engine-side helpers without a GLSL twin (Blender reads UV maps by name, and the preview's main()
-# is the GLSL form of BoxmarchRaymarch).
-ENGINE_ONLY = {"get_uv_by_channel", "GetRotationFromChannels", "BoxmarchCubeHalfExtents", "BoxmarchRaymarch"}
+# is the GLSL form of bm_raymarch).
+ENGINE_ONLY = {"bm_uv_by_channel", "bm_quaternion_from_channels", "bm_cube_half_extents", "bm_raymarch"}
 
 
 @pytest.mark.parametrize("layout", layouts.LAYOUTS)
@@ -107,21 +107,25 @@ def functions(paths, to_glsl=False):
 
 def test_glsl_and_hlsl_have_the_same_functions():
     glsl = functions([SHADERS / "glsl" / n for n in ("decode.glsl", "sdf.glsl", "raymarch.glsl")])
-    hlsl = functions([SHADERS / "hlsl" / n for n in ("boxmarch_decode.hlsl", "boxmarch.hlsl", "boxmarch_raymarch.hlsl")],
+    hlsl = functions([SHADERS / "hlsl" / n for n in ("boxmarch_decode.hlsl", "boxmarch.hlsl", "boxmarch_sdf.hlsl",
+                                                     "boxmarch_march.hlsl", "boxmarch_raymarch.hlsl")],
                      to_glsl=True)
     assert len(glsl) > 30
     assert {k: v for k, v in hlsl.items() if k not in ENGINE_ONLY} == glsl
     assert ENGINE_ONLY <= set(hlsl)
 
 
-def test_cpp_mirror_has_the_sdf_library():
+def test_cpp_reference_has_the_sdf_library_and_every_preset():
     glsl = functions([SHADERS / "glsl" / "sdf.glsl"])
-    cpp = (Path(__file__).resolve().parent.parent / "cpp" / "src" / "sdf.h").read_text()
+    cpp_src = SHADERS.parent / "cpp" / "src"
+    library = (cpp_src / "shader_library.h").read_text()
     for name in glsl:
-        cpp_name = name.replace("sdf_preset_", "preset_")
-        assert re.search(rf"\b{cpp_name}\(", cpp), f"{name} has no C++ mirror in cpp/src/sdf.h"
-    presets = [n.replace("sdf_preset_", "").upper() for n in glsl if n.startswith("sdf_preset_")]
-    assert presets == list(core.SDF_PRESETS)
+        assert re.search(rf"\b{name}\(", library), f"{name} is not in cpp/src/shader_library.h"
+    presets = [n for n in glsl if n.startswith("sdf_preset_")]
+    assert [n.replace("sdf_preset_", "").upper() for n in presets] == list(core.SDF_PRESETS)
+    switch = (cpp_src / "raymarch.cpp").read_text()
+    for name in presets:
+        assert re.search(rf"return shader::{name}\(p, h\);", switch), f"raymarch.cpp's switch does not call {name}"
 
 
 def test_benchmark_baseline_shader_compiles(tmp_path):

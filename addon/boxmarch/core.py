@@ -11,7 +11,8 @@ Mesh arrays (the layout Blender uses):
   ``face_starts[f] .. face_starts[f] + face_sizes[f] - 1``
 * ``corner_verts``: int32 (C,) the vertex of each corner
 
-The baked data and its decode are documented in docs/FORMAT.md.
+The baked data and its decode are documented in docs/FORMAT.md. The submesh tools' functions live
+in core_tools.py and are part of this API (imported here).
 """
 from __future__ import annotations
 
@@ -19,10 +20,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-try:
-    from . import _core
-except ImportError:  # installed as a Blender 4.2+ extension: the module comes from its platform wheel
-    from boxmarch_native import _core
+from .core_tools import (  # noqa: F401 (re-exported: the submesh tools are part of this API)
+    find_close_pairs, find_duplicate_submeshes, merge_passes, merge_targets, pack_uv_by_height, remove_vertices,
+    select_linked_across, select_linked_submeshes, weld)
+from .native import _core, checked_int
 
 ORIGIN_MODES = ("BOUNDS", "MEAN")
 ENCODINGS = ("FLOAT_COLOR", "BYTE_COLOR")
@@ -85,8 +86,8 @@ def bake(positions, edges, face_starts, face_sizes, corner_verts, *, mask=None,
     r = _core.bake(positions, edges, face_starts, face_sizes, corner_verts, mask=mask,
                    previous_fingerprints=previous_fingerprints, offsets=offsets,
                    angle_epsilon=float(angle_epsilon), origin=origin,
-                   sort_axes_by_extent=bool(sort_axes_by_extent), axis_turn=_int(axis_turn, "axis_turn", 0, 23),
-                   encoding=encoding, use_cache=bool(use_cache), threads=_int(threads, "threads", -2**31))
+                   sort_axes_by_extent=bool(sort_axes_by_extent), axis_turn=checked_int(axis_turn, "axis_turn", 0, 23),
+                   encoding=encoding, use_cache=bool(use_cache), threads=checked_int(threads, "threads", -2**31))
     return BakeResult(**r)
 
 
@@ -99,7 +100,7 @@ def find_submeshes(positions, edges, face_starts, face_sizes, corner_verts):
 def face_offsets_from_corner_edges(corner_verts, corner_edges, edges, vertex_count, face_count):
     """(face_starts, face_sizes) recovered from corner data, or None when they do not give exactly
     ``face_count`` faces of 3 or more corners (then read the face arrays themselves)."""
-    starts, count = _core.face_starts_from_corner_edges(corner_verts, corner_edges, edges, _int(vertex_count, "vertex_count"))
+    starts, count = _core.face_starts_from_corner_edges(corner_verts, corner_edges, edges, checked_int(vertex_count, "vertex_count"))
     if count != face_count:
         return None
     sizes = np.diff(starts, append=np.int32(len(corner_verts))).astype(np.int32)
@@ -127,21 +128,9 @@ def axis_turn_matrices() -> np.ndarray:
     return _core.axis_turn_matrices()
 
 
-def _int(value, name, lo=0, hi=2**31 - 1) -> int:
-    """value as an int in [lo, hi], else a one-line ValueError (the bindings' own TypeError for
-    an integer past 32 bits lists every overload)."""
-    try:
-        number = int(value)
-    except (TypeError, ValueError, OverflowError):
-        raise ValueError(f"{name} must be an integer, got {value!r}") from None
-    if not lo <= number <= hi:
-        raise ValueError(f"{name} must be in {lo}..{hi}, got {value!r}")
-    return number
-
-
 def axis_turn_label(index: int) -> str:
     """Short human label of turn ``index``, e.g. 'x=+Y y=-Z z=-X' (new axes in old ones)."""
-    m = axis_turn_matrices()[_int(index, "axis turn", 0, 23)]
+    m = axis_turn_matrices()[checked_int(index, "axis turn", 0, 23)]
     parts = []
     for col, name in enumerate("xyz"):
         row = int(np.flatnonzero(m[:, col])[0])
@@ -150,7 +139,7 @@ def axis_turn_label(index: int) -> str:
 
 
 def rotate_vector(v, q):
-    """The shader's rotate_vector, vectorised in float64: v + 2 cross(q.xyz, cross(q.xyz, v) +
+    """The shaders' bm_rotate_vector, vectorised in float64: v + 2 cross(q.xyz, cross(q.xyz, v) +
     q.w v). v (..., 3), q (..., 4) broadcast."""
     v = np.asarray(v, np.float64)
     q = np.asarray(q, np.float64)
@@ -159,8 +148,9 @@ def rotate_vector(v, q):
 
 
 def decode_offsets(rgba) -> np.ndarray:
-    """The blog post's GetFragToOrigin in float64: f = (rgb * 2 - 1) / a. Accepts float RGBA, or uint8
-    RGBA (divided by 255 first, as a GPU reads normalised bytes)."""
+    """The blog post's GetFragToOrigin (the shaders' bm_offset_from_color) in float64:
+    f = (rgb * 2 - 1) / a. Accepts float RGBA, or uint8 RGBA (divided by 255 first, as a GPU reads
+    normalised bytes)."""
     rgba = np.asarray(rgba)
     c = rgba.astype(np.float64) / 255.0 if rgba.dtype == np.uint8 else rgba.astype(np.float64)
     return (c[..., :3] * 2.0 - 1.0) / c[..., 3:4]
@@ -238,8 +228,8 @@ def raymarch(origins, directions, half_extents, *, sdf="BOX", max_steps=64, epsi
     directions, half_extents = _rows3(directions, n, "directions"), _rows3(half_extents, n, "half_extents")
     _check_finite(origins=origins, directions=directions, half_extents=half_extents)
     r = _core.raymarch(origins, directions, half_extents,
-                       sdf=_preset_index(sdf), max_steps=_int(max_steps, "max_steps", -2**31), epsilon=float(epsilon),
-                       relaxation=float(relaxation), max_distance=float(max_distance), threads=_int(threads, "threads", -2**31))
+                       sdf=_preset_index(sdf), max_steps=checked_int(max_steps, "max_steps", -2**31), epsilon=float(epsilon),
+                       relaxation=float(relaxation), max_distance=float(max_distance), threads=checked_int(threads, "threads", -2**31))
     return MarchResult(hit=r["hit"].astype(bool), positions=r["positions"], normals=r["normals"], steps=r["steps"])
 
 
@@ -316,9 +306,9 @@ def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_v
     _core.render_boxes(origins, quaternions, half_extents,
                        np.ascontiguousarray(object_to_clip, np.float32), np.ascontiguousarray(object_to_view, np.float32),
                        np.ascontiguousarray(base_color, np.float32), rgba.reshape(-1, 4), depth,
-                       normals.reshape(-1, 3), steps.reshape(-1), sdf=_preset_index(sdf), max_steps=_int(max_steps, "max_steps", -2**31),
+                       normals.reshape(-1, 3), steps.reshape(-1), sdf=_preset_index(sdf), max_steps=checked_int(max_steps, "max_steps", -2**31),
                        epsilon=float(epsilon), relaxation=float(relaxation), max_distance=float(max_distance),
-                       threads=_int(threads, "threads", -2**31))
+                       threads=checked_int(threads, "threads", -2**31))
     return RenderResult(rgba=rgba, depth=depth, normals=normals, steps=steps)
 
 
@@ -337,126 +327,3 @@ def render_baked_mesh(positions, offsets, corner_verts, corner_quaternions, subm
     q = vertex_values_from_corners(np.asarray(corner_quaternions, np.float32), corner_verts, n)
     boxes = boxes_from_bake(positions, offsets, q, submesh_of_vertex)
     return render_boxes(*boxes, object_to_clip, object_to_view, width, height, **options)
-# Submesh tools (docs/TOOLS.md). Submesh ids come from find_submeshes; masks are any array of
-# booleans or 0/1 values, one per vertex (or per submesh / face where named so).
-
-def _mask(values, name, length) -> np.ndarray:
-    mask = np.ascontiguousarray(np.asarray(values) != 0, dtype=np.uint8)
-    if mask.shape != (length,):
-        raise ValueError(f"{name} must have shape ({length},), got {np.shape(values)}")
-    return mask
-
-
-def find_close_pairs(positions, radius, groups=None, method="HASH", threads=0) -> np.ndarray:
-    """uint32 (P, 2): every pair i < j of points with Euclidean distance <= ``radius``, sorted.
-    ``groups`` (int32 per point, optional): only pairs from different groups; negative groups
-    leave the point out. ``method``: 'HASH' (hash grid, threaded) or 'KDTREE' (nanoflann radius
-    searches, the reference)."""
-    return _core.find_close_pairs(positions, float(radius), groups=groups, method=method, threads=_int(threads, "threads", -2**31))
-
-
-def select_linked_submeshes(selected, submesh_of_vertex, submesh_count):
-    """(uint8 mask per vertex, submeshes selected): every submesh with a selected vertex, whole."""
-    ids = np.asarray(submesh_of_vertex)
-    return _core.select_linked_submeshes(_mask(selected, "selected", len(ids)), ids, _int(submesh_count, "submesh_count"))
-
-
-def select_linked_across(positions, selected, submesh_of_vertex, submesh_count, epsilon=1e-4, threads=0):
-    """(uint8 mask per vertex, submeshes selected): flood fill from the selection through edges
-    and through vertices of other submeshes within ``epsilon`` (true distance, inclusive)."""
-    ids = np.asarray(submesh_of_vertex)
-    return _core.select_linked_across(positions, _mask(selected, "selected", len(ids)), ids,
-                                      _int(submesh_count, "submesh_count"), float(epsilon), _int(threads, "threads", -2**31))
-
-
-def find_duplicate_submeshes(positions, submesh_of_vertex, submesh_count, candidates=None,
-                             tolerance=1e-4, threads=0):
-    """(duplicate_of int32 per submesh, count). A candidate submesh (``candidates``: mask per
-    submesh, None: all) duplicates an earlier kept candidate when both have the same vertex
-    count and its vertices pair one-to-one with that one's within ``tolerance``; duplicate_of
-    names the kept submesh, -1 where the submesh is kept or not a candidate."""
-    if candidates is not None:
-        candidates = _mask(candidates, "candidates", _int(submesh_count, "submesh_count"))
-    return _core.find_duplicate_submeshes(positions, submesh_of_vertex, _int(submesh_count, "submesh_count"), candidates,
-                                          float(tolerance), _int(threads, "threads", -2**31))
-
-
-def merge_passes(positions, submesh_of_vertex, submesh_count, chosen=None, distance=1e-3, threads=0):
-    """(pass_of_vertex int32, passes): a plan for merging by distance inside each chosen
-    submesh (mask per submesh, None: all) with a selection-based merge: pass k selects the
-    vertices marked k and merges them; -1 marks vertices with no partner in their submesh."""
-    count = _int(submesh_count, "submesh_count")
-    chosen = np.ones(count, np.uint8) if chosen is None else _mask(chosen, "chosen", count)
-    return _core.merge_passes(positions, submesh_of_vertex, count, chosen, float(distance), _int(threads, "threads", -2**31))
-
-
-def pack_uv_by_height(corner_uv, positions, edges, face_starts, face_sizes, corner_verts, *,
-                      vertex_height, submesh_of_vertex, submesh_count, face_mask=None,
-                      padding=0.002, max_per_row=0, lock_overlapping=False) -> dict:
-    """Pack the UV islands of the masked faces (None: all) into the unit square in rows, sorted
-    by the height of their submesh (``vertex_height`` per vertex, e.g. world Z; highest on top),
-    at one uniform scale with ``padding`` around every island; ``max_per_row`` 0 means no limit.
-    ``corner_uv`` (float32 (C, 2)) is written in place for the masked faces only. Returns
-    {'islands', 'groups', 'rows', 'scale'}. Raises ValueError (nothing written) on bad input."""
-    if face_mask is not None:
-        face_mask = _mask(face_mask, "face_mask", len(face_starts))
-    max_per_row = _int(max_per_row, "max_per_row")
-    return _core.pack_uv_by_height(corner_uv, positions, edges, face_starts, face_sizes, corner_verts,
-                                   face_mask=face_mask,
-                                   vertex_height=np.ascontiguousarray(vertex_height, np.float32),
-                                   submesh_of_vertex=submesh_of_vertex, submesh_count=_int(submesh_count, "submesh_count"),
-                                   padding=float(padding), max_per_row=int(max_per_row),
-                                   lock_overlapping=bool(lock_overlapping))
-
-
-def merge_targets(positions, submesh_of_vertex, submesh_count, chosen=None, distance=1e-3, threads=0):
-    """Blender's Merge by Distance inside each chosen submesh (mask per submesh, None: all):
-    (target int32 per vertex, merged positions float32 (N, 3), vertices merged away). A vertex
-    merges into target[v] (itself for survivors); targets sit at their cluster's centroid."""
-    count = _int(submesh_count, "submesh_count")
-    chosen = np.ones(count, np.uint8) if chosen is None else _mask(chosen, "chosen", count)
-    return _core.merge_targets(positions, submesh_of_vertex, count, chosen, float(distance), _int(threads, "threads", -2**31))
-
-
-def weld(positions, edges, face_starts, face_sizes, corner_verts, target, corner_edges=None) -> dict:
-    """The mesh after merging every vertex v into target[v], as Blender's weld leaves it: faces
-    lose corners that merge into the next one and go below 3 corners; edges are the distinct
-    images of the old ones; survivors keep their order. Returns new 'edges', 'face_starts',
-    'corner_verts', 'corner_edges' and, per new element, the old element it comes from
-    ('vertex_source', 'edge_source', 'face_source', 'corner_source'); 'incomplete' is True
-    when Blender's weld would also split or dedupe faces (then merge with Blender itself).
-    ``corner_edges`` (int32 per corner, the edge to the next corner, as Blender stores it) makes
-    the new corner edges a lookup instead of a search."""
-    return _core.weld_topology(positions, edges, face_starts, face_sizes, corner_verts,
-                               np.ascontiguousarray(target, np.int32), corner_edges)
-
-
-def remove_vertices(positions, edges, face_starts, face_sizes, corner_verts, remove, corner_edges) -> dict:
-    """The mesh without the vertices marked in ``remove`` and every edge and face touching them,
-    survivors in their order: the same dict as :func:`weld` (with 'incomplete' False)."""
-    keep = ~_mask(remove, "remove", len(positions)).astype(bool)
-    for name, values, limit in (("edges", edges, len(positions)), ("corner_verts", corner_verts, len(positions)),
-                                ("corner_edges", corner_edges, len(np.asarray(edges).reshape(-1, 2)))):
-        values = np.asarray(values)
-        bad = np.flatnonzero((values < 0) | (values >= limit))
-        if len(bad):
-            raise ValueError(f"{name}[{int(bad[0])}] = {int(values.reshape(-1)[bad[0]])} is outside 0..{limit - 1}")
-    new_index = np.cumsum(keep, dtype=np.int64) - 1
-    edges = np.asarray(edges).reshape(-1, 2)
-    keep_edge = keep[edges[:, 0]] & keep[edges[:, 1]]
-    new_edge = np.cumsum(keep_edge, dtype=np.int64) - 1
-    corner_verts = np.asarray(corner_verts)
-    corner_keep_face = np.logical_and.reduceat(keep[corner_verts], face_starts) if len(face_starts) else np.zeros(0, bool)
-    keep_corner = np.repeat(corner_keep_face, face_sizes)
-    sizes = np.asarray(face_sizes)[corner_keep_face]
-    return {
-        "vertex_source": np.flatnonzero(keep).astype(np.int32),
-        "edge_source": np.flatnonzero(keep_edge).astype(np.int32),
-        "edges": new_index[edges[keep_edge]].astype(np.int32),
-        "face_source": np.flatnonzero(corner_keep_face).astype(np.int32),
-        "face_starts": (np.cumsum(sizes) - sizes).astype(np.int32),
-        "corner_source": np.flatnonzero(keep_corner).astype(np.int32),
-        "corner_verts": new_index[corner_verts[keep_corner]].astype(np.int32),
-        "corner_edges": new_edge[np.asarray(corner_edges)[keep_corner]].astype(np.int32),
-        "incomplete": False,
-    }

@@ -232,7 +232,7 @@ inline glm::dvec3 decode_byte(const uint8_t* rgba) {
     return (glm::dvec3(rgba[0], rgba[1], rgba[2]) * (2.0 / 255.0) - 1.0) * (255.0 / double(rgba[3]));
 }
 
-// The shader's rotate_vector: v + 2 cross(q.xyz, cross(q.xyz, v) + q.w v), with q as stored.
+// The shaders' bm_rotate_vector: v + 2 cross(q.xyz, cross(q.xyz, v) + q.w v), with q as stored.
 inline glm::dvec3 rotate_vector(const glm::dvec3& v, const float* q) {
     const glm::dvec3 u(q[0], q[1], q[2]);
     return v + 2.0 * glm::cross(u, glm::cross(u, v) + double(q[3]) * v);

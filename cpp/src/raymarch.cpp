@@ -1,9 +1,11 @@
-// The CPU reference raymarcher. It mirrors shaders/glsl/raymarch.glsl and preview.frag.glsl
-// statement for statement (same slab test, same loop, same normal taps, same light), in float
-// like the GPU, so the viewport preview can be tested against it pixel by pixel.
+// The CPU reference raymarcher, in float like the GPU, so the viewport preview can be tested
+// against it pixel by pixel. The SDF library, the slab test, the normal tap and the light are
+// shaders/glsl's own, translated by shaders/generate.py (shader_library.h); the march and the
+// normal, which call map() in GLSL, are written here around the preset switch, statement for
+// statement as raymarch.glsl has them.
 #include "boxmarch/boxmarch.h"
 #include "internal.h"
-#include "sdf.h"
+#include "shader_library.h"
 
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -34,14 +36,18 @@ void check_options(const MarchOptions& o) {
         throw std::invalid_argument("unknown SDF preset " + std::to_string(int(o.sdf)));
 }
 
-// raymarch.glsl: bm_box_span. Entry and exit distances of the ray with the box |p| <= h.
-vec2 box_span(vec3 ro, vec3 rd, vec3 h) {
-    vec3 s = glm::sign(rd);
-    s = vec3(s.x == 0.0f ? 1.0f : s.x, s.y == 0.0f ? 1.0f : s.y, s.z == 0.0f ? 1.0f : s.z);
-    vec3 inv = 1.0f / glm::max(glm::abs(rd), vec3(1e-12f));
-    vec3 t_near = (-h - s * ro) * inv;
-    vec3 t_far = (h - s * ro) * inv;
-    return vec2(sdf::max3(t_near), sdf::min3(t_far));
+// The map() of a preset: sdf.glsl's sdf_preset_* for the box's half-extents h.
+float sdf_preset(SdfPreset kind, vec3 p, vec3 h) {
+    switch (kind) {
+        case SdfPreset::Box: return shader::sdf_preset_box(p, h);
+        case SdfPreset::Sphere: return shader::sdf_preset_sphere(p, h);
+        case SdfPreset::RoundedBox: return shader::sdf_preset_rounded_box(p, h);
+        case SdfPreset::Capsule: return shader::sdf_preset_capsule(p, h);
+        case SdfPreset::Cylinder: return shader::sdf_preset_cylinder(p, h);
+        case SdfPreset::Torus: return shader::sdf_preset_torus(p, h);
+        case SdfPreset::Link: return shader::sdf_preset_link(p, h);
+    }
+    return shader::sdf_preset_box(p, h);
 }
 
 struct March {
@@ -50,11 +56,11 @@ struct March {
     int steps;
 };
 
-// raymarch.glsl: bm_march.
-March march(SdfPreset kind, vec3 ro, vec3 rd, vec3 h, float t_end, const MarchOptions& o) {
+// raymarch.glsl: bm_march, without its 512-step bound (a GLSL ES 1.00 constant loop limit).
+March bm_march(SdfPreset kind, vec3 ro, vec3 rd, vec3 h, float t_end, const MarchOptions& o) {
     float t = 0.0f;
     for (int i = 0; i < o.max_steps; ++i) {
-        float d = sdf::preset(kind, ro + rd * t, h);
+        float d = sdf_preset(kind, ro + rd * t, h);
         if (d < o.epsilon) return {true, t, i + 1};
         t += o.relaxation * d;
         if (t > t_end) return {false, t, i + 1};
@@ -62,25 +68,13 @@ March march(SdfPreset kind, vec3 ro, vec3 rd, vec3 h, float t_end, const MarchOp
     return {false, t, o.max_steps};
 }
 
-// raymarch.glsl: bm_normal_tap. Taps closer than a thousandth of the box lose the gradient in
-// float rounding, so small epsilons do not shrink them further.
-float normal_tap(float epsilon, vec3 h) { return std::max(epsilon, 1e-3f * sdf::max3(h)); }
-
 // raymarch.glsl: bm_normal (four tetrahedral taps).
-vec3 normal_at(SdfPreset kind, vec3 p, vec3 h, float e) {
+vec3 bm_normal(SdfPreset kind, vec3 p, vec3 h, float e) {
     const vec3 a(1.0f, -1.0f, -1.0f), b(-1.0f, -1.0f, 1.0f), c(-1.0f, 1.0f, -1.0f), d(1.0f, 1.0f, 1.0f);
-    vec3 n = a * sdf::preset(kind, p + a * e, h) + b * sdf::preset(kind, p + b * e, h) +
-             c * sdf::preset(kind, p + c * e, h) + d * sdf::preset(kind, p + d * e, h);
+    vec3 n = a * sdf_preset(kind, p + a * e, h) + b * sdf_preset(kind, p + b * e, h) +
+             c * sdf_preset(kind, p + c * e, h) + d * sdf_preset(kind, p + d * e, h);
     float len = glm::length(n);
     return len > 0.0f ? n / len : vec3(0.0f);
-}
-
-// preview.frag.glsl: bm_shade (Lambert + hemisphere ambient, light fixed in view space).
-vec3 shade(vec3 n_view, vec3 base) {
-    const vec3 light = glm::normalize(vec3(0.35f, 0.45f, 0.82f));
-    float lambert = std::max(glm::dot(n_view, light), 0.0f);
-    vec3 ambient = glm::mix(vec3(0.20f, 0.19f, 0.18f), vec3(0.42f, 0.45f, 0.50f), 0.5f + 0.5f * n_view.y);
-    return base * (ambient + 0.8f * lambert);
 }
 
 template <class Fn>
@@ -94,7 +88,7 @@ void parallel_for(size_t count, int threads, Fn fn) {
 float sdf_distance(SdfPreset kind, const float* p, const float* h) {
     if (int(kind) < 0 || int(kind) >= kSdfPresetCount)
         throw std::invalid_argument("unknown SDF preset " + std::to_string(int(kind)));
-    return sdf::preset(kind, glm::make_vec3(p), glm::make_vec3(h));
+    return sdf_preset(kind, glm::make_vec3(p), glm::make_vec3(h));
 }
 
 void raymarch(const float* origins, const float* directions, const float* half_extents, size_t ray_count,
@@ -107,16 +101,16 @@ void raymarch(const float* origins, const float* directions, const float* half_e
             vec3 h = glm::make_vec3(half_extents + 3 * i);
             float len = glm::length(rd);
             rd = len > 0.0f ? rd / len : vec3(0.0f, 0.0f, 1.0f);
-            vec2 span = box_span(ro, rd, h);
+            vec2 span = shader::bm_box_span(ro, rd, h);
             float t0 = std::max(span.x, 0.0f);
             March m{false, 0.0f, 0};
             vec3 start = ro + rd * t0;
-            if (span.y >= t0) m = march(o.sdf, start, rd, h, std::min(span.y - t0, o.max_distance), o);
+            if (span.y >= t0) m = bm_march(o.sdf, start, rd, h, std::min(span.y - t0, o.max_distance), o);
             vec3 p = start + rd * m.t;
             if (hit) hit[i] = m.hit ? 1 : 0;
             if (positions) for (int k = 0; k < 3; ++k) positions[3 * i + k] = p[k];
             if (normals) {
-                vec3 n = m.hit ? normal_at(o.sdf, p, h, normal_tap(o.epsilon, h)) : vec3(0.0f);
+                vec3 n = m.hit ? bm_normal(o.sdf, p, h, shader::bm_normal_tap(o.epsilon, h)) : vec3(0.0f);
                 for (int k = 0; k < 3; ++k) normals[3 * i + k] = n[k];
             }
             if (steps) steps[i] = m.steps;
@@ -187,11 +181,11 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                     glm::dvec3 near3 = glm::dvec3(near) / near.w, far3 = glm::dvec3(far) / far.w;
                     vec3 ro = iq * vec3(near3 - glm::dvec3(c));
                     vec3 rd = iq * vec3(glm::normalize(far3 - near3));
-                    vec2 span = box_span(ro, rd, h);
+                    vec2 span = shader::bm_box_span(ro, rd, h);
                     float t0 = std::max(span.x, 0.0f);
                     if (span.y < t0) continue;
                     vec3 start = ro + rd * t0;
-                    March m = march(o.sdf, start, rd, h, std::min(span.y - t0, o.max_distance), o);
+                    March m = bm_march(o.sdf, start, rd, h, std::min(span.y - t0, o.max_distance), o);
                     const size_t pix = size_t(y) * size_t(W) + size_t(x);
                     if (images.steps) images.steps[pix] += m.steps;
                     if (!m.hit) continue;
@@ -200,8 +194,8 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                     vec4 clip = to_clip * vec4(object_hit, 1.0f);
                     float depth = clip.z / clip.w * 0.5f + 0.5f;
                     if (!(depth >= 0.0f && depth < images.depth[pix])) continue;
-                    vec3 n_object = q * normal_at(o.sdf, local_hit, h, normal_tap(o.epsilon, h));
-                    vec3 color = shade(glm::normalize(normal_matrix * n_object), base);
+                    vec3 n_object = q * bm_normal(o.sdf, local_hit, h, shader::bm_normal_tap(o.epsilon, h));
+                    vec3 color = shader::bm_shade(glm::normalize(normal_matrix * n_object), base);
                     images.depth[pix] = depth;
                     for (int k = 0; k < 3; ++k) images.rgba[4 * pix + k] = color[k];
                     images.rgba[4 * pix + 3] = 1.0f;

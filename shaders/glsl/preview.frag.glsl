@@ -8,7 +8,8 @@
 // orthographic views the object-space view direction with w = 0); march (epsilon, relaxation,
 // max_distance, max_steps); base_color; mode.x (0 shaded, 1 object-space normal as colour,
 // 2 steps of every fragment in red with alpha 1, for Blender's ADDITIVE blend: src * alpha + dst).
-// Mirrored by cpp/src/raymarch.cpp (render_boxes).
+// Mirrored by cpp/src/raymarch.cpp (render_boxes); bm_shade is translated into it by
+// shaders/generate.py.
 
 // Lambert from a light fixed in view space plus a sky/ground hemisphere, like the viewport's
 // studio look.

@@ -8,10 +8,10 @@
 void main()
 {
 #if defined(BM_LAYOUT_CLASSIC) || defined(BM_LAYOUT_UV_FRAME)
-  vec4 q = normalize(GetRotation(ch_uv1, ch_uv2));
-  frag_axis_x = rotate_vector(vec3(1.0, 0.0, 0.0), q);
-  frag_axis_y = rotate_vector(vec3(0.0, 1.0, 0.0), q);
-  frag_axis_z = rotate_vector(vec3(0.0, 0.0, 1.0), q);
+  vec4 q = normalize(bm_quaternion(ch_uv1, ch_uv2));
+  frag_axis_x = bm_rotate_vector(vec3(1.0, 0.0, 0.0), q);
+  frag_axis_y = bm_rotate_vector(vec3(0.0, 1.0, 0.0), q);
+  frag_axis_z = bm_rotate_vector(vec3(0.0, 0.0, 1.0), q);
 #else
   // NORMAL_*: the frame in the normal and tangent, as skinning leaves them (normalised per
   // fragment, as an engine's interpolated normal is).
@@ -21,7 +21,7 @@ void main()
 #endif
 #if defined(BM_LAYOUT_CLASSIC)
   // CLASSIC carries only the largest half-extent; ch_half is the preview's own, from the bake.
-  frag_offset = GetFragToOrigin(ch_color);
+  frag_offset = bm_offset_from_color(ch_color);
   frag_half = ch_half;
 #elif defined(BM_LAYOUT_UV_FRAME)
   frag_offset = bm_offset(ch_uv3, ch_uv4);

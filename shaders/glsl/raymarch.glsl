@@ -1,6 +1,7 @@
 // boxmarch raymarcher: sphere tracing inside one box, box-local coordinates.
 // Needs decode.glsl and sdf.glsl before it and a `float map(vec3 p)` after it.
-// Mirrored by shaders/hlsl/boxmarch.hlsl and cpp/src/raymarch.cpp.
+// shaders/generate.py translates it into HLSL, and bm_box_span and bm_normal_tap into GLM for the
+// CPU reference (cpp/src/raymarch.cpp writes bm_march and bm_normal around its preset switch).
 
 float map(vec3 p);
 
@@ -15,15 +16,15 @@ vec2 bm_box_span(vec3 ro, vec3 rd, vec3 h)
 }
 
 // Sphere-traces map() from ro along unit rd until a distance falls below epsilon (true), the ray
-// passes t_end or max_steps evaluations (at most 512) are spent (false). t: distance travelled;
+// passes t_end or step_limit evaluations (at most 512) are spent (false). t: distance travelled;
 // steps: map() evaluations. The loop's bound is a constant, as GLSL ES 1.00 (WebGL 1) requires.
-bool bm_march(vec3 ro, vec3 rd, float t_end, int max_steps, float epsilon, float relaxation,
+bool bm_march(vec3 ro, vec3 rd, float t_end, int step_limit, float epsilon, float relaxation,
               out float t, out int steps)
 {
   t = 0.0;
-  steps = max_steps;
+  steps = step_limit;
   for (int i = 0; i < 512; ++i) {
-    if (i >= max_steps) {
+    if (i >= step_limit) {
       break;
     }
     float d = map(ro + rd * t);

@@ -1,7 +1,10 @@
 // boxmarch SDF library. Units are box-local: p is measured from the submesh's origin along its
 // baked axes, and `box_half` holds the box's half-extents (a 1 x 0.6 x 0.2 box has
 // box_half = (0.5, 0.3, 0.1)), so shapes can be sized without typing numbers.
-// Mirrored by shaders/hlsl/boxmarch.hlsl (HLSL) and cpp/src/sdf.h (the CPU reference).
+// shaders/generate.py translates it into HLSL and into GLM for the CPU reference (cpp/src).
+// Each distance function states what it returns, as hg_sdf does: exact (the signed Euclidean
+// distance to its surface), or a bound (never more than the exact distance in magnitude: sphere
+// tracing stays safe but may take more steps). Exactness of an op_ assumes exact inputs.
 
 // Half-extents of the box being marched; set by the raymarcher before map() is called.
 vec3 box_half = vec3(0.0);
@@ -10,17 +13,20 @@ float min3(vec3 v) { return min(v.x, min(v.y, v.z)); }
 float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
 
 // ---- primitives, centred at the origin
+// Exact.
 float sd_sphere(vec3 p, float r) { return length(p) - r; }
 
+// Exact. Half-extents b.
 float sd_box(vec3 p, vec3 b)
 {
   vec3 q = abs(p) - b;
   return length(max(q, vec3(0.0))) + min(max3(q), 0.0);
 }
 
+// Exact for r <= min3(b): the box b with its edges rounded by r (outer size b).
 float sd_round_box(vec3 p, vec3 b, float r) { return sd_box(p, b - vec3(r)) - r; }
 
-// Segment a-b with radius r.
+// Exact. Segment a-b with radius r.
 float sd_capsule(vec3 p, vec3 a, vec3 b, float r)
 {
   vec3 pa = p - a;
@@ -29,49 +35,61 @@ float sd_capsule(vec3 p, vec3 a, vec3 b, float r)
   return length(pa - ba * h) - r;
 }
 
-// Axis z.
+// Exact. Capped, axis z.
 float sd_cylinder(vec3 p, float r, float half_height)
 {
   vec2 d = abs(vec2(length(p.xy), p.z)) - vec2(r, half_height);
   return min(max(d.x, d.y), 0.0) + length(max(d, vec2(0.0)));
 }
 
-// Around axis z.
+// Exact. Around axis z.
 float sd_torus(vec3 p, float major, float minor)
 {
   vec2 q = vec2(length(p.xy) - major, p.z);
   return length(q) - minor;
 }
 
-// Chain link: a ring of radius `ring` in the xy plane stretched by half_length along y.
+// Exact. Chain link: a ring of radius `ring` in the xy plane stretched by half_length along y.
 float sd_link(vec3 p, float half_length, float ring, float thickness)
 {
   vec3 q = vec3(p.x, max(abs(p.y) - half_length, 0.0), p.z);
   return length(vec2(length(q.xy) - ring, q.z)) - thickness;
 }
 
-// Plane with unit normal n, offset along n.
+// Exact for a unit normal n. Plane with normal n, offset along n.
 float sd_plane(vec3 p, vec3 n, float offset) { return dot(p, n) + offset; }
 
 // ---- combinations of two distances
+// Exact outside both shapes, a bound inside.
 float op_union(float a, float b) { return min(a, b); }
-float op_subtract(float a, float b) { return max(a, -b); }  // a minus b
+// A bound outside the result, exact inside. a minus b.
+float op_subtract(float a, float b) { return max(a, -b); }
+// A bound outside the result, exact inside.
 float op_intersect(float a, float b) { return max(a, b); }
 
 // Smooth versions: k is the blend radius (box-local units).
+// A bound; equals op_union where |a - b| >= k.
 float op_smooth_union(float a, float b, float k)
 {
   float h = clamp(0.5 + 0.5 * (b - a) / k, 0.0, 1.0);
   return mix(b, a, h) - k * h * (1.0 - h);
 }
+// A bound; equals op_intersect where |a - b| >= k.
 float op_smooth_intersect(float a, float b, float k) { return -op_smooth_union(-a, -b, k); }
+// A bound; equals op_subtract where |a + b| >= k.
 float op_smooth_subtract(float a, float b, float k) { return op_smooth_intersect(a, -b, k); }
 
 // ---- modifiers
+// The shape grown by r: exact outside, a bound inside.
 float op_round(float d, float r) { return d - r; }
+// A shell of half-thickness `thickness` around the surface: exact outside the shell, a bound
+// inside it.
 float op_onion(float d, float thickness) { return abs(d) - thickness; }
 
 // Finite repetition: copies every `spacing`, `limit` copies each side of the centre per axis.
+// Moves p (returns no distance): a shape evaluated at the result stays exact when it is
+// mirror-symmetric in each axis and fits its cell (half of `spacing` each side); otherwise it can
+// overestimate (neither exact nor a bound: march with relaxation below 1).
 // floor(x + 0.5), not round(): GLSL ES 1.00 (WebGL 1) has no round().
 vec3 op_repeat_limited(vec3 p, vec3 spacing, vec3 limit)
 {
@@ -79,21 +97,28 @@ vec3 op_repeat_limited(vec3 p, vec3 spacing, vec3 limit)
 }
 
 // ---- presets of the preview's SDF menu, sized by the box
+// Exact.
 float sdf_preset_box(vec3 p, vec3 h) { return sd_box(p, h); }
+// Exact.
 float sdf_preset_sphere(vec3 p, vec3 h) { return sd_sphere(p, min3(h)); }
+// Exact.
 float sdf_preset_rounded_box(vec3 p, vec3 h) { return sd_round_box(p, h, 0.25 * min3(h)); }
+// Exact.
 float sdf_preset_capsule(vec3 p, vec3 h)
 {
   float r = min(h.y, h.z);
   float a = max(h.x - r, 0.0);
   return sd_capsule(p, vec3(-a, 0.0, 0.0), vec3(a, 0.0, 0.0), r);
 }
+// Exact.
 float sdf_preset_cylinder(vec3 p, vec3 h) { return sd_cylinder(p, min(h.x, h.y), h.z); }
+// Exact.
 float sdf_preset_torus(vec3 p, vec3 h)
 {
   float minor = min(h.z, 0.5 * min(h.x, h.y));
   return sd_torus(p, min(h.x, h.y) - minor, minor);
 }
+// Exact.
 float sdf_preset_link(vec3 p, vec3 h)
 {
   float thickness = min(h.z, 0.25 * min(h.x, h.y));

@@ -1,6 +1,6 @@
 // Unity (built-in pipeline; URP works the same with an unlit pass) material raymarching inside
-// every submesh of a mesh baked by boxmarch. Put boxmarch.hlsl, boxmarch_raymarch.hlsl and
-// boxmarch_example.hlsl next to this file. See docs/UNITY.md.
+// every submesh of a mesh baked by boxmarch. Put every .hlsl file of shaders/hlsl next to this
+// file. See docs/UNITY.md.
 Shader "Boxmarch/Example"
 {
   Properties

@@ -3,29 +3,35 @@
 #define BOXMARCH_DECODE_INCLUDED
 
 // boxmarch decode: recover a fragment's box-local frame from the baked vertex data
-// (docs/FORMAT.md). Mirrored by shaders/hlsl/boxmarch.hlsl.
+// (docs/FORMAT.md). shaders/generate.py translates it into every engine's language.
+// Names: snake_case with a bm_ prefix for the decode and the march (sdf.glsl keeps the sd_ and
+// op_ families that users' map() texts call). The blog post's shader has its own GetFragToOrigin,
+// GetRotation and rotate_vector; bm_offset_from_color, bm_quaternion and bm_rotate_vector compute
+// the same, so that shader reads the CLASSIC layout unchanged (docs/FORMAT.md names the pairs).
 
 // f = vector from the fragment to its submesh's origin, in box-local coordinates.
 // color = the BoxOffset colour attribute (rgb = 0.5 + 0.5 * s * f, a = s).
-float3 GetFragToOrigin(float4 color)
+float3 bm_offset_from_color(float4 color)
 {
   return (color.rgb * 2.0 - 1.0) / color.a;
 }
 
 // q = the submesh's frame as a quaternion (x, y, z, w) mapping box-local to object space,
 // from the two UV maps BoxQuatXY and BoxQuatZW.
-float4 GetRotation(float2 quat_xy, float2 quat_zw)
+float4 bm_quaternion(float2 quat_xy, float2 quat_zw)
 {
   return float4(quat_xy, quat_zw);
 }
 
-// q v q* for a unit quaternion q; rotate_vector(v, quat_conjugate(q)) is the inverse rotation.
-float3 rotate_vector(float3 v, float4 q)
+// q v q* for a unit quaternion q; bm_rotate_vector(v, bm_quat_conjugate(q)) is the inverse
+// rotation.
+float3 bm_rotate_vector(float3 v, float4 q)
 {
   return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v);
 }
 
-float4 quat_conjugate(float4 q)
+// The inverse rotation of a unit quaternion.
+float4 bm_quat_conjugate(float4 q)
 {
   return float4(-q.xyz, q.w);
 }

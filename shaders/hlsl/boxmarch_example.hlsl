@@ -38,7 +38,7 @@ struct appdata {
 
 struct v2f {
   float4 pos : SV_POSITION;
-  float3 objPos : TEXCOORD0;
+  float3 obj_pos : TEXCOORD0;
   float4 color : TEXCOORD1;
   nointerpolation float4 quat : TEXCOORD2;
 };
@@ -47,26 +47,26 @@ v2f vert(appdata v)
 {
   v2f o;
   o.pos = mul(unity_MatrixVP, mul(unity_ObjectToWorld, float4(v.vertex.xyz, 1.0)));
-  o.objPos = v.vertex.xyz;
+  o.obj_pos = v.vertex.xyz;
   o.color = v.color;
-  o.quat = GetRotationFromChannels(v.uv0, v.uv1, v.uv2, v.uv3, _UVChannels.xy);
+  o.quat = bm_quaternion_from_channels(v.uv0, v.uv1, v.uv2, v.uv3, _UVChannels.xy);
   return o;
 }
 
-float4 frag(v2f i, bool frontFacing : SV_IsFrontFace, out float depth : SV_Depth) : SV_Target
+float4 frag(v2f i, bool front_facing : SV_IsFrontFace, out float depth : SV_Depth) : SV_Target
 {
-  float3 objCamera = mul(unity_WorldToObject, float4(_WorldSpaceCameraPos, 1.0)).xyz;
-  float3 halfExtents = _HalfExtents.w > 0.5 ? _HalfExtents.xyz : BoxmarchCubeHalfExtents(i.color);
-  BoxmarchHit h = BoxmarchRaymarch(i.objPos, objCamera, i.color, i.quat, halfExtents, frontFacing, _MaxSteps,
-                                   _Epsilon, _Relaxation, _MaxDistance);
+  float3 obj_camera = mul(unity_WorldToObject, float4(_WorldSpaceCameraPos, 1.0)).xyz;
+  float3 half_extents = _HalfExtents.w > 0.5 ? _HalfExtents.xyz : bm_cube_half_extents(i.color);
+  bm_hit h = bm_raymarch(i.obj_pos, obj_camera, i.color, i.quat, half_extents, front_facing, _MaxSteps,
+                         _Epsilon, _Relaxation, _MaxDistance);
   clip(h.hit ? 1.0 : -1.0);
-  float4 clipPos = mul(unity_MatrixVP, mul(unity_ObjectToWorld, float4(h.objPos, 1.0)));
-  depth = clipPos.z / clipPos.w;
+  float4 clip_pos = mul(unity_MatrixVP, mul(unity_ObjectToWorld, float4(h.obj_pos, 1.0)));
+  depth = clip_pos.z / clip_pos.w;
 #if defined(UNITY_CG_INCLUDED) && !defined(UNITY_REVERSED_Z)
   depth = depth * 0.5 + 0.5;  // OpenGL-style clip space: z / w in [-1, 1]
 #endif
-  float3 worldNormal = normalize(mul(h.objNormal, (float3x3)unity_WorldToObject));
-  float lambert = max(dot(worldNormal, normalize(_WorldSpaceLightPos0.xyz)), 0.0);
-  float3 ambient = lerp(float3(0.20, 0.19, 0.18), float3(0.42, 0.45, 0.50), 0.5 + 0.5 * worldNormal.y);
+  float3 world_normal = normalize(mul(h.obj_normal, (float3x3)unity_WorldToObject));
+  float lambert = max(dot(world_normal, normalize(_WorldSpaceLightPos0.xyz)), 0.0);
+  float3 ambient = lerp(float3(0.20, 0.19, 0.18), float3(0.42, 0.45, 0.50), 0.5 + 0.5 * world_normal.y);
   return float4(_Color.rgb * (ambient + 0.8 * lambert), 1.0);
 }

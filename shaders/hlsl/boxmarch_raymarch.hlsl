@@ -1,6 +1,7 @@
 // boxmarch_raymarch.hlsl: the box-local sphere tracer. Include boxmarch.hlsl, define
-// `float map(float3 p)` (box-local, may use box_half), then include this file.
-// Mirrors shaders/glsl/raymarch.glsl (and the fragment logic of preview.frag.glsl).
+// `float map(float3 p)` (box-local, may use box_half), then include this file. The march is
+// generated from shaders/glsl/raymarch.glsl (boxmarch_march.hlsl); bm_raymarch is the fragment
+// logic of shaders/glsl/preview.frag.glsl in engine terms.
 #ifndef BOXMARCH_RAYMARCH_INCLUDED
 #define BOXMARCH_RAYMARCH_INCLUDED
 
@@ -10,109 +11,61 @@
 #define BOXMARCH_FRAME float3x3(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
 #endif
 
-// Entry (x) and exit (y) distances of the ray ro + t rd with the box |p| <= h.
-float2 bm_box_span(float3 ro, float3 rd, float3 h)
-{
-  float3 s = float3(rd.x < 0.0 ? -1.0 : 1.0, rd.y < 0.0 ? -1.0 : 1.0, rd.z < 0.0 ? -1.0 : 1.0);
-  float3 inv = 1.0 / max(abs(rd), float3(1e-12, 1e-12, 1e-12));
-  float3 t_near = (-h - s * ro) * inv;
-  float3 t_far = (h - s * ro) * inv;
-  return float2(max3(t_near), min3(t_far));
-}
-
-// Sphere-traces map() from ro along unit rd until a distance falls below epsilon (true), the ray
-// passes t_end or max_steps evaluations are spent (false).
-bool bm_march(float3 ro, float3 rd, float t_end, int max_steps, float epsilon, float relaxation,
-              out float t, out int steps)
-{
-  t = 0.0;
-  steps = max_steps;
-  [loop]
-  for (int i = 0; i < max_steps; ++i) {
-    float d = map(ro + rd * t);
-    if (d < epsilon) {
-      steps = i + 1;
-      return true;
-    }
-    t += relaxation * d;
-    if (t > t_end) {
-      steps = i + 1;
-      return false;
-    }
-  }
-  return false;
-}
-
-float bm_normal_tap(float epsilon, float3 h)
-{
-  return max(epsilon, 1e-3 * max3(h));
-}
-
-// Unit SDF gradient from four tetrahedral taps at distance e.
-float3 bm_normal(float3 p, float e)
-{
-  const float3 a = float3(1.0, -1.0, -1.0);
-  const float3 b = float3(-1.0, -1.0, 1.0);
-  const float3 c = float3(-1.0, 1.0, -1.0);
-  const float3 d = float3(1.0, 1.0, 1.0);
-  float3 n = a * map(p + a * e) + b * map(p + b * e) + c * map(p + c * e) + d * map(p + d * e);
-  float len = length(n);
-  return len > 0.0 ? n / len : float3(0.0, 0.0, 0.0);
-}
+#include "boxmarch_march.hlsl"
 
 // The largest half-extent, from the offset scale alone (s = 1 / largest |f| over the submesh;
 // for BOUNDS origins that is the box's largest half-extent): a cube that holds the box, for when
 // the real half-extents are not available to the engine shader.
-float3 BoxmarchCubeHalfExtents(float4 color)
+float3 bm_cube_half_extents(float4 color)
 {
   float h = 1.0 / color.a;
   return float3(h, h, h);
 }
 
-struct BoxmarchHit {
+struct bm_hit {
   bool hit;
-  float3 objPos;     // engine object space
-  float3 objNormal;  // engine object space, unit
+  float3 obj_pos;     // engine object space
+  float3 obj_normal;  // engine object space, unit
   int steps;
 };
 
-// The whole per-fragment raymarch (as the Blender preview does it): objPos = the fragment's
-// interpolated object-space position, objCamera = the camera in object space, color/quat = the
-// decoded vertex data, halfExtents = the box's half-extents (or BoxmarchCubeHalfExtents),
-// frontFacing = SV_IsFrontFace.
-BoxmarchHit BoxmarchRaymarch(float3 objPos, float3 objCamera, float4 color, float4 quat, float3 halfExtents,
-                             bool frontFacing, int maxSteps, float epsilon, float relaxation, float maxDistance)
+// The whole per-fragment raymarch (as the Blender preview does it): obj_pos = the fragment's
+// interpolated object-space position, obj_camera = the camera in object space, color/quat = the
+// decoded vertex data, half_extents = the box's half-extents (or bm_cube_half_extents),
+// front_facing = SV_IsFrontFace; max_steps up to 512 (bm_march's bound).
+bm_hit bm_raymarch(float3 obj_pos, float3 obj_camera, float4 color, float4 quat, float3 half_extents,
+                   bool front_facing, int max_steps, float epsilon, float relaxation, float max_distance)
 {
-  BoxmarchHit o;
+  bm_hit o;
   o.hit = false;
-  o.objPos = objPos;
-  o.objNormal = float3(0.0, 0.0, 1.0);
+  o.obj_pos = obj_pos;
+  o.obj_normal = float3(0.0, 0.0, 1.0);
   o.steps = 0;
   float4 q = normalize(quat);
-  float3 f = GetFragToOrigin(color);
-  box_half = halfExtents;
+  float3 f = bm_offset_from_color(color);
+  box_half = half_extents;
   float3 ro = -f;
-  float3 rayObject = objPos - objCamera;
-  float eyeDistance = length(rayObject);
+  float3 ray_object = obj_pos - obj_camera;
+  float eye_distance = length(ray_object);
   // engine object space -> Blender object space -> box-local
-  float3 rd = normalize(rotate_vector(mul(transpose(BOXMARCH_FRAME), rayObject / eyeDistance), quat_conjugate(q)));
+  float3 rd = normalize(bm_rotate_vector(mul(transpose(BOXMARCH_FRAME), ray_object / eye_distance), bm_quat_conjugate(q)));
   float2 span = bm_box_span(ro, rd, box_half);
-  float tEnd = span.y;
+  float t_end = span.y;
   // entry: front-facing, or (whatever the winding) more box ahead than behind; the far side
   // only marches when the camera is inside the box
-  if (!frontFacing && span.x + span.y < 0.0) {
-    if (eyeDistance > -span.x) return o;
-    ro -= rd * eyeDistance;
-    tEnd = eyeDistance;
+  if (!front_facing && span.x + span.y < 0.0) {
+    if (eye_distance > -span.x) return o;
+    ro -= rd * eye_distance;
+    t_end = eye_distance;
   }
   float t;
   int steps;
-  o.hit = bm_march(ro, rd, min(tEnd, maxDistance), maxSteps, epsilon, relaxation, t, steps);
+  o.hit = bm_march(ro, rd, min(t_end, max_distance), max_steps, epsilon, relaxation, t, steps);
   o.steps = steps;
   if (!o.hit) return o;
-  float3 localHit = ro + rd * t;
-  o.objPos = objPos + mul(BOXMARCH_FRAME, rotate_vector(localHit + f, q));
-  o.objNormal = mul(BOXMARCH_FRAME, rotate_vector(bm_normal(localHit, bm_normal_tap(epsilon, box_half)), q));
+  float3 local_hit = ro + rd * t;
+  o.obj_pos = obj_pos + mul(BOXMARCH_FRAME, bm_rotate_vector(local_hit + f, q));
+  o.obj_normal = mul(BOXMARCH_FRAME, bm_rotate_vector(bm_normal(local_hit, bm_normal_tap(epsilon, box_half)), q));
   return o;
 }
 
