@@ -14,7 +14,8 @@ from helpers.glsl import blender_declarations, compile_glsl, validator
 SHADERS = Path(__file__).resolve().parent.parent / "shaders"
 # Engine-side helpers without a GLSL twin (Blender reads UV maps by name, and the preview's main()
 # is the GLSL form of bm_raymarch).
-ENGINE_ONLY = {"bm_uv_by_channel", "bm_quaternion_from_channels", "bm_cube_half_extents", "bm_raymarch"}
+ENGINE_ONLY = {"bm_uv_by_channel", "bm_quaternion_from_channels", "bm_cube_half_extents", "bm_raymarch",
+               "bm_raymarch_in_frame"}
 
 
 @pytest.mark.parametrize("layout", layouts.LAYOUTS)
@@ -69,11 +70,30 @@ def test_user_text_uses_library_and_errors_report_user_lines(tmp_path):
     assert re.search(r"\b0:4\b.*lenght", proc.stdout), proc.stdout  # line 4 of the user's text
 
 
+# The example's layouts: the keywords BoxmarchExample.shader's KeywordEnum _Layout defines.
+HLSL_LAYOUT_KEYWORDS = {"CLASSIC": [], "UV_FRAME": ["-D_LAYOUT_UV_FRAME"], "NORMAL_FRAME": ["-D_LAYOUT_NORMAL_FRAME"]}
+
+
+@pytest.mark.parametrize("layout", sorted(HLSL_LAYOUT_KEYWORDS))
 @pytest.mark.parametrize("entry", ["vert", "frag"])
-def test_hlsl_example_compiles(tmp_path, entry):
-    proc = subprocess.run([validator(), "-D", "-V", "-e", entry, "-S", entry, str(SHADERS / "hlsl" / "boxmarch_example.hlsl"),
-                           "-o", str(tmp_path / f"{entry}.spv")], capture_output=True, text=True)
+def test_hlsl_example_compiles(tmp_path, entry, layout):
+    proc = subprocess.run([validator(), "-D", "-V", *HLSL_LAYOUT_KEYWORDS[layout], "-e", entry, "-S", entry,
+                           str(SHADERS / "hlsl" / "boxmarch_example.hlsl"), "-o", str(tmp_path / f"{entry}.spv")],
+                          capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_hlsl_example_keywords_are_the_unity_shader_layouts():
+    """Each keyword the example tests is one BoxmarchExample.shader declares, and the layouts are
+    the UNITY preset's (a layout added to the preset needs a branch in the example)."""
+    from boxmarch.export import transforms
+
+    wrapper = (SHADERS / "hlsl" / "BoxmarchExample.shader").read_text()
+    example = (SHADERS / "hlsl" / "boxmarch_example.hlsl").read_text()
+    assert set(HLSL_LAYOUT_KEYWORDS) == set(transforms.PRESETS["UNITY"].layouts)
+    for layout in HLSL_LAYOUT_KEYWORDS:
+        assert f"_LAYOUT_{layout}" in wrapper
+        assert layout == "CLASSIC" or f"defined(_LAYOUT_{layout})" in example
 
 
 def test_hlsl_with_a_frame_change_compiles(tmp_path):

@@ -29,26 +29,25 @@ struct bm_hit {
   int steps;
 };
 
-// The whole per-fragment raymarch (as the Blender preview does it): obj_pos = the fragment's
-// interpolated object-space position, obj_camera = the camera in object space, color/quat = the
-// decoded vertex data, half_extents = the box's half-extents (or bm_cube_half_extents),
-// front_facing = SV_IsFrontFace; max_steps up to 512 (bm_march's bound).
-bm_hit bm_raymarch(float3 obj_pos, float3 obj_camera, float4 color, float4 quat, float3 half_extents,
-                   bool front_facing, int max_steps, float epsilon, float relaxation, float max_distance)
+// The whole per-fragment raymarch (as the Blender preview does it), in any layout:
+// obj_pos = the fragment's interpolated object-space position, obj_camera = the camera in object
+// space, f = the decoded box-local vector to the box origin, x, y, z = the box's unit axes in
+// engine object space, half_extents = the box's half-extents, front_facing = SV_IsFrontFace;
+// max_steps up to 512 (bm_march's bound).
+bm_hit bm_raymarch_in_frame(float3 obj_pos, float3 obj_camera, float3 f, float3 x, float3 y, float3 z,
+                            float3 half_extents, bool front_facing, int max_steps, float epsilon,
+                            float relaxation, float max_distance)
 {
   bm_hit o;
   o.hit = false;
   o.obj_pos = obj_pos;
   o.obj_normal = float3(0.0, 0.0, 1.0);
   o.steps = 0;
-  float4 q = normalize(quat);
-  float3 f = bm_offset_from_color(color);
   box_half = half_extents;
   float3 ro = -f;
   float3 ray_object = obj_pos - obj_camera;
   float eye_distance = length(ray_object);
-  // engine object space -> Blender object space -> box-local
-  float3 rd = normalize(bm_rotate_vector(mul(transpose(BOXMARCH_FRAME), ray_object / eye_distance), bm_quat_conjugate(q)));
+  float3 rd = normalize(bm_to_local(ray_object / eye_distance, x, y, z));
   float2 span = bm_box_span(ro, rd, box_half);
   float t_end = span.y;
   // entry: front-facing, or (whatever the winding) more box ahead than behind; the far side
@@ -64,9 +63,22 @@ bm_hit bm_raymarch(float3 obj_pos, float3 obj_camera, float4 color, float4 quat,
   o.steps = steps;
   if (!o.hit) return o;
   float3 local_hit = ro + rd * t;
-  o.obj_pos = obj_pos + mul(BOXMARCH_FRAME, bm_rotate_vector(local_hit + f, q));
-  o.obj_normal = mul(BOXMARCH_FRAME, bm_rotate_vector(bm_normal(local_hit, bm_normal_tap(epsilon, box_half)), q));
+  o.obj_pos = obj_pos + bm_from_local(local_hit + f, x, y, z);
+  o.obj_normal = bm_from_local(bm_normal(local_hit, bm_normal_tap(epsilon, box_half)), x, y, z);
   return o;
+}
+
+// bm_raymarch_in_frame for the CLASSIC layout: color = the BoxOffset colour, quat = the
+// decoded quaternion (Blender's object frame, turned into the engine's by BOXMARCH_FRAME).
+bm_hit bm_raymarch(float3 obj_pos, float3 obj_camera, float4 color, float4 quat, float3 half_extents,
+                   bool front_facing, int max_steps, float epsilon, float relaxation, float max_distance)
+{
+  float4 q = normalize(quat);
+  return bm_raymarch_in_frame(obj_pos, obj_camera, bm_offset_from_color(color),
+                              mul(BOXMARCH_FRAME, bm_rotate_vector(float3(1.0, 0.0, 0.0), q)),
+                              mul(BOXMARCH_FRAME, bm_rotate_vector(float3(0.0, 1.0, 0.0), q)),
+                              mul(BOXMARCH_FRAME, bm_rotate_vector(float3(0.0, 0.0, 1.0), q)),
+                              half_extents, front_facing, max_steps, epsilon, relaxation, max_distance);
 }
 
 #endif  // BOXMARCH_RAYMARCH_INCLUDED
