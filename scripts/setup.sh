@@ -9,7 +9,8 @@ APT_PACKAGES=(blender python3-numpy libglm-dev libnanoflann-dev glslang-tools xv
               libxi6 libxxf86vm1 libxfixes3 libxrender1 libgl1 libxkbcommon0 libsm6
               libgl1-mesa-dri libegl1 libegl-mesa0  # Mesa llvmpipe: the preview's GPU tests without a GPU
               cmake clang-14 libclang-rt-14-dev  # sanitizer build and libFuzzer target
-              chromium libjs-three godot3 godot3-server fonts-liberation)  # tests/engines: three.js r111 in headless Chromium, Godot 3 (under the xvfb above)
+              chromium libjs-three godot3 godot3-server fonts-liberation  # tests/engines: three.js r111 in headless Chromium, Godot 3 (under the xvfb above)
+              spirv-cross)  # tests/engines/hlsl_webgl.py: the Unity HLSL, compiled to SPIR-V, drawn by WebGL 2
 missing=()
 for pkg in "${APT_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")

@@ -261,17 +261,16 @@ def skinned_scene(bpy, name="Skinned"):
     return ob, rig
 
 
-def unity_skinned_decode(raw, skin):
-    """The NORMAL_FRAME decode of a skinned FBX (tests/fbx_reader.py's geometry ``raw`` and
-    ``skin``) as Unity holds it posed by :func:`bone_motions`, under the import rules
-    docs/ENGINES.md (Skinning) cites: x negated for positions, normals, tangents and binormals;
-    UVs as written; tangent.w from the side of the binormal; each bone's bind pose the inverse of
-    its TransformLink times the mesh's bind transform (FBX stores Transform relative to the bone,
-    so the mesh's is TransformLink x Transform); skinned vertex = sum of weight x posed bone x
-    bind pose, normals and tangents by the same 3 x 3 parts. The posed bone: its TransformLink
-    moved by the test's forward kinematics (in the file's axes). Returns the decode (origins,
-    axes, half-extents) per polygon corner with the skinned frame, and with the frame left at
-    rest (the negative control)."""
+def unity_skinned_vertices(raw, skin):
+    """What Unity's skinning hands a vertex program for a skinned FBX (tests/fbx_reader.py's
+    geometry ``raw`` and ``skin``) posed by :func:`bone_motions`, per polygon corner, under the
+    import rules docs/ENGINES.md (Skinning) cites: x negated for positions, normals, tangents and
+    binormals; UVs as written; tangent.w from the side of the binormal; each bone's bind pose the
+    inverse of its TransformLink times the mesh's bind transform (FBX stores Transform relative
+    to the bone, so the mesh's is TransformLink x Transform); skinned vertex = sum of weight x
+    posed bone x bind pose, normals and tangents by the same 3 x 3 parts. The posed bone: its
+    TransformLink moved by the test's forward kinematics (in the file's axes). Returns
+    (positions, normals, tangents (w = handedness), rest normals, rest tangents)."""
     mirror = np.diag([*UNITY["from_file"].diagonal(), 1.0])
     to_file = np.eye(4)
     to_file[:3, :3] = TO_Y_UP  # Blender world -> the file's axes (metres, Y-up, right-handed)
@@ -286,10 +285,17 @@ def unity_skinned_decode(raw, skin):
     normal, tangent, binormal = (raw[k] @ mirror[:3, :3].T for k in ("normal", "tangent", "binormal"))
     handedness = np.sign(np.einsum("ni,ni->n", np.cross(normal, tangent), binormal))[:, None]
     positions = np.einsum("nij,nj->ni", m[:, :3, :3], raw["position"] @ mirror[:3, :3].T) + m[:, :3, 3]
+    return (positions, np.einsum("nij,nj->ni", m[:, :3, :3], normal),
+            np.concatenate([np.einsum("nij,nj->ni", m[:, :3, :3], tangent), handedness], 1),
+            normal, np.concatenate([tangent, handedness], 1))
+
+
+def unity_skinned_decode(raw, skin):
+    """The NORMAL_FRAME decode (origins, axes, half-extents per polygon corner) of what
+    :func:`unity_skinned_vertices` hands the vertex program: with the skinned frame, and with
+    the frame left at rest (the negative control)."""
+    positions, normals, tangents, rest_normals, rest_tangents = unity_skinned_vertices(raw, skin)
     offset = np.concatenate([raw["BoxOffsetXY"], raw["BoxOffsetZIndex"][:, :1]], 1)
     half = np.concatenate([raw["BoxHalfXY"], raw["BoxHalfZ"][:, :1]], 1)
-    skinned = decode_normal_frame(positions, np.einsum("nij,nj->ni", m[:, :3, :3], normal),
-                                  np.concatenate([np.einsum("nij,nj->ni", m[:, :3, :3], tangent), handedness], 1),
-                                  offset, half)
-    rest = decode_normal_frame(positions, normal, np.concatenate([tangent, handedness], 1), offset, half)
-    return skinned, rest
+    return (decode_normal_frame(positions, normals, tangents, offset, half),
+            decode_normal_frame(positions, rest_normals, rest_tangents, offset, half))

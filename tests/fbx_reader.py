@@ -22,7 +22,8 @@ def _corner_vectors(layer, data_name, index_name, corner_vertex):
 def read_fbx_geometry(path):
     """Per polygon corner of the file's first Geometry: "vertex" (index), "position" (float64),
     each UV map and colour layer by name (float64 (corners, 2 or 4)), "uv_maps" and "colours"
-    (layer names in file order), "normal" and the first "tangent" and "binormal" layers where
+    (layer names in file order), "triangles" (int64 (T, 3) corner indices, each polygon as a
+    fan), "normal" and the first "tangent" and "binormal" layers where
     the file has them (float64 (corners, 3)), "control_points" (the Vertices, (n, 3)), and
     "settings" (GlobalSettings properties)."""
     from io_scene_fbx import parse_fbx
@@ -30,10 +31,13 @@ def read_fbx_geometry(path):
     root, _version = parse_fbx.parse(str(path))
     geometry = child(child(root, b"Objects"), b"Geometry")
     corner_vertex = np.array(child(geometry, b"PolygonVertexIndex").props[0])
+    ends = np.flatnonzero(corner_vertex < 0)  # a polygon's last corner is stored as ~vertex
     corner_vertex = np.where(corner_vertex < 0, ~corner_vertex, corner_vertex)
+    starts = np.r_[0, ends[:-1] + 1]
+    triangles = np.array([(s, s + k, s + k + 1) for s, e in zip(starts, ends) for k in range(1, e - s)], np.int64)
     control_points = np.array(child(geometry, b"Vertices").props[0]).reshape(-1, 3)
     out = {"vertex": corner_vertex, "uv_maps": [], "colours": [], "control_points": control_points,
-           "position": control_points[corner_vertex]}
+           "position": control_points[corner_vertex], "triangles": triangles.reshape(-1, 3)}
     for name, element, data_name, index_name in (("normal", b"LayerElementNormal", b"Normals", b"NormalsIndex"),
                                                  ("tangent", b"LayerElementTangent", b"Tangents", None),
                                                  ("binormal", b"LayerElementBinormal", b"Binormals", None)):

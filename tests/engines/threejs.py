@@ -50,6 +50,10 @@ function __finish(result) {
 (function () {
   var bytes = Uint8Array.from(atob('__GLB__'), function (c) { return c.charCodeAt(0); });
   var job = __JOB__;
+  if (!bytes.length) {  // a page without a model: the job gets null
+    try { __finish(job(null)); } catch (e) { __errors.push(String(e && e.stack || e)); __finish(null); }
+    return;
+  }
   try {
     new THREE.GLTFLoader().parse(bytes.buffer, '', function (gltf) {
       try { __finish(job(gltf)); } catch (e) { __errors.push(String(e && e.stack || e)); __finish(null); }
@@ -118,8 +122,9 @@ def available():
     return None
 
 
-def _run(glb_bytes, job_js, material_js=""):
-    """Runs ``job_js`` (a JS function of the loaded gltf) in Chromium; returns its JSON result."""
+def run_page(glb_bytes, job_js, material_js=""):
+    """Runs ``job_js`` (a JS function of the loaded gltf; of null when ``glb_bytes`` is empty) in
+    headless Chromium with three.js loaded; returns its JSON result."""
     with open(THREE_JS) as f:
         three = f.read()
     with open(GLTF_LOADER_JS) as f:
@@ -166,7 +171,7 @@ def load_attributes(glb_bytes):
     normal, TANGENT -> tangent, POSITION -> position, anything else lower-cased (texcoord_2).
     """
     meshes = []
-    for m in _run(glb_bytes, _LOAD_JOB):
+    for m in run_page(glb_bytes, _LOAD_JOB):
         attrs = m["attributes"]
         meshes.append({
             "name": m["name"],
@@ -192,7 +197,7 @@ def render(glb_bytes, material_js, setup_js, width, height, camera):
     """
     job = (_RENDER_JOB.replace("__W__", str(int(width))).replace("__H__", str(int(height)))
            .replace("__CAMERA__", json.dumps(camera)).replace("__SETUP__", setup_js))
-    out = _run(glb_bytes, job, material_js)
+    out = run_page(glb_bytes, job, material_js)
     pixels = np.frombuffer(base64.b64decode(out["pixels"]), dtype=np.uint8)
     pixels = pixels.reshape(height, width, 4)[::-1].copy()  # readPixels starts at the bottom row
     view = _f64(out["view"]).reshape(4, 4, order="F")
