@@ -28,24 +28,14 @@ from boxmarch.export import scene as export_scene  # noqa: E402
 from common import table  # noqa: E402
 from engine_scene import (TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame,  # noqa: E402
                           decode_uv_frame, frame_and_size_errors, imported, silhouettes, table_texels, UNITY, UNREAL)
-from engines import coverage_errors, godot3, threejs  # noqa: E402
+from engines import godot3, threejs, tightest_tolerance  # noqa: E402
 from fbx_reader import read_fbx_geometry  # noqa: E402
 import test_engine_godot3 as godot_test  # noqa: E402
 import test_engine_threejs as three_test  # noqa: E402
 
 IDENTITY_JS = ("var n = g.getAttribute('normal').array, t = g.getAttribute('tangent').array;"
                "for (var i = 0; i < n.length / 3; i++) { n.set([0, 0, 1], 3 * i); t.set([1, 0, 0, 1], 4 * i); }")
-IDENTITY_GODOT = ("  v_axis_z = vec3(0.0, 0.0, 1.0);\n  v_axis_x = vec3(1.0, 0.0, 0.0);\n"
-                  "  v_axis_y = vec3(0.0, 1.0, 0.0);")
 
-
-def tightest_tolerance(covered, polygons, limit=64):
-    """Smallest tolerance in px at which ``covered`` matches ``polygons`` (limit + 1: none)."""
-    for tol in range(limit + 1):
-        stray, missing = coverage_errors(covered, polygons, tol)
-        if not stray.any() and not missing.any():
-            return tol
-    return limit + 1
 
 
 def fmt(x):
@@ -106,7 +96,7 @@ def godot_rows(ob, scene, folder):
         if not compress:
             uniforms = {"box_table": "res://model.boxes.tres", "max_steps": 256}
             tols = []
-            for replacement in (None, IDENTITY_GODOT):
+            for replacement in (None, godot3.IDENTITY_FRAME):
                 shot = godot3.render(project, godot_test.shader(replacement), width=godot_test.W,
                                      height=godot_test.H, camera=godot_test.WIDE, uniforms=uniforms)
                 expected = silhouettes(shot, centres, godot_test.INNER * sizes, rotations, TO_Y_UP)

@@ -107,16 +107,6 @@ not, `non_rigid_boxes`, and warns).
 """
 
 
-def tightest_tolerance(covered, polygons, limit=64):
-    """Smallest tolerance in px at which ``covered`` matches ``polygons`` (limit + 1: none)."""
-    from engines import coverage_errors
-
-    for tol in range(limit + 1):
-        stray, missing = coverage_errors(covered, polygons, tol)
-        if not stray.any() and not missing.any():
-            return tol
-    return limit + 1
-
 
 def engine_rows():
     import bpy
@@ -127,7 +117,7 @@ def engine_rows():
                               posed_rig_boxes, rig_boxes, skinned_scene, unity_skinned_decode)
     from fbx_reader import read_fbx_geometry, read_fbx_skin
     import test_engine_skinned as skinned_test
-    from engines import godot3
+    from engines import godot3, tightest_tolerance
 
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)

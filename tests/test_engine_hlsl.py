@@ -48,30 +48,19 @@ def to_pixels(vp):
     return np.array([[W / 2, 0, 0, W / 2], [0, -H / 2, 0, H / 2], [0, 0, 0, 1.0]]) @ vp
 
 
-def programs(tmp_path_factory, layout):
-    """The example material's two stages for ``layout``, in GLSL ES, its map() a box at INNER."""
+@pytest.fixture(scope="module")
+def example(tmp_path_factory):
+    """layout -> the example material's two stages in GLSL ES, its map() a box at INNER."""
+    reason = hlsl_webgl.available()
+    if reason:
+        pytest.skip(reason)
     hlsl = sources.shader_dir() / "hlsl"
     text = (hlsl / "boxmarch_example.hlsl").read_text()
     assert SHIPPED_MAP in text
     path = tmp_path_factory.mktemp("hlsl") / "example.hlsl"
     path.write_text(text.replace(SHIPPED_MAP, f"return sd_box(p, {INNER} * box_half);"))
-    return {stage: hlsl_webgl.to_glsl_es(path, stage, stage, [f"_LAYOUT_{layout}"], [hlsl]) for stage in ("vert", "frag")}
-
-
-@pytest.fixture(scope="module")
-def uv_frame(tmp_path_factory):
-    reason = hlsl_webgl.available()
-    if reason:
-        pytest.skip(reason)
-    return programs(tmp_path_factory, "UV_FRAME")
-
-
-@pytest.fixture(scope="module")
-def normal_frame(tmp_path_factory):
-    reason = hlsl_webgl.available()
-    if reason:
-        pytest.skip(reason)
-    return programs(tmp_path_factory, "NORMAL_FRAME")
+    return {layout: {stage: hlsl_webgl.to_glsl_es(path, stage, stage, [f"_LAYOUT_{layout}"], [hlsl])
+                     for stage in ("vert", "frag")} for layout in ("UV_FRAME", "NORMAL_FRAME")}
 
 
 @pytest.fixture
@@ -105,9 +94,9 @@ def silhouettes(shot, centres, sizes, rotations):
             for c, s, r in zip(centres, sizes, rotations)]
 
 
-def test_unity_material_raymarches_each_box_where_unity_holds_it(uv_frame, unity_mesh):
+def test_unity_material_raymarches_each_box_where_unity_holds_it(example, unity_mesh):
     attributes, count, centres, sizes, rotations = unity_mesh
-    shot = draw(uv_frame, attributes, count, STATIC_CAMERA)
+    shot = draw(example["UV_FRAME"], attributes, count, STATIC_CAMERA)
     covered = shot.pixels[..., 3] > 0
     expected = silhouettes(shot, centres, sizes, rotations)
     for polygon in expected:  # every box in the picture
@@ -117,18 +106,18 @@ def test_unity_material_raymarches_each_box_where_unity_holds_it(uv_frame, unity
     assert covered.sum() > 500
 
 
-def test_unity_material_without_the_frame_fails(uv_frame, unity_mesh):
+def test_unity_material_without_the_frame_fails(example, unity_mesh):
     attributes, count, centres, sizes, rotations = unity_mesh
     dropped = dict(attributes)
     dropped["v_uv1"] = np.zeros_like(attributes["v_uv1"])                           # q.xy = 0
     dropped["v_uv2"] = np.tile([0.0, 1.0], (len(attributes["v_uv2"]), 1))           # q.zw = (0, 1)
-    shot = draw(uv_frame, dropped, count, STATIC_CAMERA)
+    shot = draw(example["UV_FRAME"], dropped, count, STATIC_CAMERA)
     covered = shot.pixels[..., 3] > 0
     assert covered.sum() > 500  # it drew, in the wrong places
     assert coverage_mismatch(covered, silhouettes(shot, centres, sizes, rotations)) is not None
 
 
-def test_unity_material_follows_the_skinned_rig(blender, tmp_path, normal_frame):
+def test_unity_material_follows_the_skinned_rig(blender, tmp_path, example):
     """The rig exported with the UNITY preset (NORMAL_FRAME, a Skin deformer), posed by Unity's
     skinning as modelled (engine_scene.unity_skinned_vertices), drawn by the material reading the
     skinned normal and tangent."""
@@ -146,7 +135,7 @@ def test_unity_material_follows_the_skinned_rig(blender, tmp_path, normal_frame)
     _centres, sizes, _rotations, _bones = rig_boxes()
     posed_centres, posed_rotations = posed_rig_boxes()
     for frame, (n, t) in (("skinned", (normals, tangents)), ("rest", (rest_normals, rest_tangents))):
-        shot = draw(normal_frame, {**attributes, "v_normal": n[corners], "v_tangent": t[corners]}, len(corners),
+        shot = draw(example["NORMAL_FRAME"], {**attributes, "v_normal": n[corners], "v_tangent": t[corners]}, len(corners),
                     RIG_CAMERA)
         covered = shot.pixels[..., 3] > 0
         assert covered.sum() > 500, frame

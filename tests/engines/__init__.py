@@ -81,3 +81,13 @@ def coverage_mismatch(covered, polygons, tol: int = 1) -> Optional[str]:
             msg.append(f"{len(ys)} px {name} the expected shapes, rows {ys.min()}..{ys.max()}, "
                        f"columns {xs.min()}..{xs.max()}")
     return "; ".join(msg)
+
+
+def tightest_tolerance(covered, polygons, limit: int = 64) -> int:
+    """Smallest tolerance in px at which ``covered`` matches ``polygons`` (limit + 1: none):
+    what the benchmarks print beside each render check."""
+    for tol in range(limit + 1):
+        stray, missing = coverage_errors(covered, polygons, tol)
+        if not stray.any() and not missing.any():
+            return tol
+    return limit + 1

@@ -27,15 +27,15 @@ ARRAYS = {"vertex": 3, "normal": 3, "tangent": 4, "color": 4, "uv": 2, "uv2": 2,
 
 _PROJECT = 'config_version=4\n\n[application]\n\nconfig/name="boxmarch-engine-test"\n'
 
-# Shared by both scripts: the MeshInstances under a node, node -> root transforms, and
+# Shared by both scripts: the nodes of a class under a node, node -> root transforms, and
 # transforms written as 12 doubles.
 _COMMON = """extends SceneTree
 
-func mesh_instances(node, out):
-    if node is MeshInstance:
+func nodes_of_class(node, name, out):
+    if node.is_class(name):
         out.append(node)
     for child in node.get_children():
-        mesh_instances(child, out)
+        nodes_of_class(child, name, out)
     return out
 
 func global_xform(node, top):
@@ -77,7 +77,7 @@ func _init():
     var scene = load("res://model.glb").instance()
     var f = File.new()
     f.open(OS.get_environment("BOXMARCH_OUT"), File.WRITE)
-    for mi in mesh_instances(scene, []):
+    for mi in nodes_of_class(scene, "MeshInstance", []):
         for s in range(mi.mesh.get_surface_count()):
             var arrays = mi.mesh.surface_get_arrays(s)
             f.store_pascal_string(mi.name)
@@ -93,17 +93,11 @@ var params
 var camera
 var frames = 0
 var posed = -1
-func skeletons(node, out):
-    if node is Skeleton:
-        out.append(node)
-    for child in node.get_children():
-        skeletons(child, out)
-    return out
 # Turns each named bone by angle about its own head, about a world axis as it points with the
 # skeleton at rest (moved into the bone's frame with the rest global rotations, read first).
 func pose_bones(scene, turns, angle):
     var count = 0
-    for sk in skeletons(scene, []):
+    for sk in nodes_of_class(scene, "Skeleton", []):
         var rest = {}
         for name in turns:
             var i = sk.find_bone(name)
@@ -140,7 +134,7 @@ func _init():
         material.set_shader_param(name, uniform_value(params.uniforms[name]))
     var scene = load("res://model.glb").instance()
     root.add_child(scene)
-    for mi in mesh_instances(scene, []):
+    for mi in nodes_of_class(scene, "MeshInstance", []):
         for s in range(mi.mesh.get_surface_count()):
             mi.set_surface_material(s, material)
     if params.has("bone_turns"):
