@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 
-RADIUS, ARM, TURNS = 0.6, 9.0, 20      # a helix of this radius and this many turns around an arm this long (3 bones)
+RADIUS, ARM, TURNS = 0.6, 9.0, 25      # a helix of this radius and this many turns around an arm this long (3 bones)
 LINK = np.array([0.46, 0.23, 0.06])    # link length, width, wire thickness
 BONE_TURN = math.radians(40.0)         # the pose: each joint bent this much about x
 

@@ -1,5 +1,5 @@
 """Writes docs/preview_pose.png: the raymarch preview following a posed armature (offscreen, Mesa
-llvmpipe). A chain of about 250 links wound around a 3-bone arm, baked at rest, every link rigidly
+llvmpipe). A chain of 258 links wound around a 3-bone arm, baked at rest, every link rigidly
 weighted to the bone under it, the arm bent 40 degrees at each joint. Left: the NORMAL_FRAME layout
 (the frame rides in the normal and tangent, which skinning turns): every link stays in its box.
 Right: CLASSIC (the frame rides in UV maps, which no skinning turns): the links slide out of their
