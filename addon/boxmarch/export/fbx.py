@@ -76,8 +76,7 @@ def replace_frame(path, frames_by_mesh: dict) -> None:
                     patches[id(_child(layer, index_name))] = ([np.arange(corners, dtype=np.int32)],
                                                              [data_types.INT32_ARRAY])
                 # per-vector weights, where the exporter wrote them, stay one per vector
-                for weights_name in (data_name + b"W",):
-                    weights = _child(layer, weights_name)
-                    if weights is not None:
-                        patches[id(weights)] = ([np.ones(corners)], [data_types.FLOAT64_ARRAY])
+                weights = _child(layer, data_name + b"W")
+                if weights is not None:
+                    patches[id(weights)] = ([np.ones(corners)], [data_types.FLOAT64_ARRAY])
     encode_bin.write(path, _writable(root, lambda elem: patches.get(id(elem))), version)

@@ -97,8 +97,8 @@ RIGID_WEIGHT_SPREAD = 1e-6
 
 
 def _target_copy(mesh, preset, layout, index_base, skin=None):
-    """A copy of ``mesh`` holding what the exporter must write, and the channels the file must
-    hold per Blender vertex. glTF targets: the copy's only colour is each vertex's index (the
+    """(copy, channels, corner_verts, stats): a copy of ``mesh`` holding what the exporter must
+    write, the channels the file must hold per Blender vertex, and each corner's vertex. glTF targets: the copy's only colour is each vertex's index (the
     channels are written into the .glb afterwards, glb.replace_vertex_channels); FBX targets: the
     channels as the copy's colour and UV maps (Blender's FBX exporter writes them unchanged).
     The copy keeps the mesh's vertex groups (mesh.copy()); ``skin`` (mesh_io.Skin of the object
@@ -139,7 +139,7 @@ def _target_copy(mesh, preset, layout, index_base, skin=None):
     if preset.godot3_compression:
         stats["default_import_error"] = layouts.import_error(layout, channels, layouts.with_godot3_compression(channels),
                                                              data.half_extents)
-    return copy, channels, stats
+    return copy, channels, corner_verts, stats
 
 
 def _operator_kwargs(operator, wanted: dict) -> dict:
@@ -278,11 +278,11 @@ def _skins(context, objects, preset) -> dict:
     return skins
 
 
-def _fbx_frame(channels, mesh, preset) -> dict:
-    """The NORMAL_FRAME frame per polygon corner of ``mesh`` in the FBX file's axes: the channels
-    are in the engine's frame, which the importer reaches by the preset's mirror (Unity negates
-    x of positions, normals, tangents and binormals), so the file holds the mirror of each."""
-    corner_verts = mesh_io.read_topology(mesh)[3]
+def _fbx_frame(channels, corner_verts, preset) -> dict:
+    """The NORMAL_FRAME frame per polygon corner (``corner_verts``: each corner's vertex) in the
+    FBX file's axes: the channels are in the engine's frame, which the importer reaches by the
+    preset's mirror (Unity negates x of positions, normals, tangents and binormals), so the file
+    holds the mirror of each."""
     mirror = preset.mirror
     z = channels["NORMAL"].astype(np.float64)
     x, handedness = channels["TANGENT"][:, :3].astype(np.float64), channels["TANGENT"][:, 3:].astype(np.float64)
@@ -295,7 +295,7 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
     """Exports temporary copies of ``meshes`` in place of the originals, with the armatures of
     ``skins`` at their rest position (the file's skin binds the rest geometry); returns (stats,
     the box table of the file or None)."""
-    copies, originals, file_channels, stats, tables = {}, {}, {}, [], []
+    copies, originals, file_channels, file_corners, stats, tables = {}, {}, {}, {}, [], []
     selection = [ob for ob in context.view_layer.objects if ob.select_get()]
     active = context.view_layer.objects.active
     users = {}
@@ -307,14 +307,15 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
             rig.data.pose_position = "REST"
         for mesh in meshes:
             index_base = sum(len(t) for t in tables)  # box numbers run on across the file's meshes
-            copy, channels, mesh_stats = _target_copy(mesh, preset, layout, index_base,
-                                                      skin_of_mesh.get(mesh.as_pointer()))
+            copy, channels, corner_verts, mesh_stats = _target_copy(mesh, preset, layout, index_base,
+                                                                    skin_of_mesh.get(mesh.as_pointer()))
             if "TABLE" in channels:
                 tables.append(channels.pop("TABLE"))
             name = mesh.name
             mesh.name = name + ".boxmarch-original"
             copy.name = name  # the file names the mesh as the artist did
-            copies[mesh.as_pointer()], originals[name], file_channels[name] = copy, mesh, channels
+            copies[mesh.as_pointer()], originals[name] = copy, mesh
+            file_channels[name], file_corners[name] = channels, corner_verts
             stats.append(mesh_stats)
         for ob in objects:
             users[ob.name] = ob.data
@@ -328,7 +329,7 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
             gltf, binary = glb.replace_vertex_channels(gltf, binary, file_channels)
             glb.write(temp, gltf, binary)
         elif layouts.LAYOUTS[layout].skin_safe:
-            fbx.replace_frame(temp, {name: _fbx_frame(channels, originals[name], preset)
+            fbx.replace_frame(temp, {name: _fbx_frame(channels, file_corners[name], preset)
                                      for name, channels in file_channels.items()})
     finally:
         for rig in armatures:

@@ -24,4 +24,4 @@ from .baked import (FINGERPRINT_ATTRIBUTE, LAYERS_DIGEST, MAX_UV_MAPS, NEUTRAL_B
                     NotBakedError, PreparedBake, modifier_warnings, prepare_bake, read_baked_layers,
                     stored_layers_digest)
 from .rebuild import can_rebuild, rebuild_welded
-from .weights import Skin, SkinError, read_skin, read_vertex_weights
+from .weights import Skin, SkinError, check_skin_modifier, read_skin, read_vertex_weights

@@ -42,6 +42,15 @@ def read_vertex_weights(ob, group_names) -> tuple[np.ndarray, np.ndarray]:
     return slots, weights
 
 
+def check_skin_modifier(modifier) -> None:
+    """Raises SkinError where an engine skin cannot carry how the Armature modifier ``modifier``
+    deforms: bone envelopes, or no vertex groups (an engine skin holds vertex weights only). The
+    preview and the export refuse the same modifiers."""
+    if modifier.use_bone_envelopes or not modifier.use_vertex_groups:
+        raise SkinError(f"the Armature modifier '{modifier.name}' deforms by bone envelopes: engine skins carry "
+                        "vertex-group weights only (switch Bone Envelopes off and Vertex Groups on)")
+
+
 def read_skin(ob) -> Skin | None:
     """The skin of ``ob``'s enabled Armature modifier; None without one, or when it has no
     armature or no deform bone weights any vertex (the modifier then moves nothing: the mesh is
@@ -56,9 +65,7 @@ def read_skin(ob) -> Skin | None:
     modifier = modifiers[0]
     if modifier.object is None:
         return None
-    if modifier.use_bone_envelopes or not modifier.use_vertex_groups:
-        raise SkinError(f"the Armature modifier '{modifier.name}' deforms by bone envelopes: engine skins carry "
-                        "vertex-group weights only (turn Envelopes off, Vertex Groups on)")
+    check_skin_modifier(modifier)
     deform = [bone.name for bone in modifier.object.data.bones if bone.use_deform]
     if not deform:
         return None

@@ -10,6 +10,7 @@ import gpu
 import numpy as np
 from gpu_extras.batch import batch_for_shader
 
+from .. import mesh_io
 from ..export import transforms
 from . import mesh_data, shader as preview_shader, skinning, sources
 
@@ -136,7 +137,7 @@ def _mesh(mesh, layout) -> _Mesh:
 def _posed_drawing(ob, layout, modifier, depsgraph) -> _Drawn:
     """The drawing of ``ob`` in its current pose: the evaluated positions, and for the NORMAL_*
     layouts the normal and tangent moved by each vertex's skinning matrix (skinning.py)."""
-    skinning.check_modifier(modifier)
+    mesh_io.check_skin_modifier(modifier)
     mesh = _mesh(ob.data, layout)
     key, rig_key = (ob.data.name_full, layout), skinning.rig_key(ob, modifier)
     posed = _posed.get(ob.name_full)

@@ -61,13 +61,6 @@ def read_weights(ob, armature) -> SkinWeights:
     return SkinWeights(bones=bones, bone=bone, weight=weight)
 
 
-def check_modifier(modifier) -> None:
-    """Raises ValueError for Armature modifier settings the preview cannot follow as an engine would."""
-    if modifier.use_bone_envelopes or not modifier.use_vertex_groups:
-        raise ValueError(f"Armature modifier '{modifier.name}': the preview follows vertex-group weights only "
-                         "(engines have no bone envelopes): switch Bone Envelopes off and Vertex Groups on")
-
-
 def bone_deformations(ob, modifier, bones, depsgraph) -> np.ndarray:
     """float64 (B, 4, 4): S_b of each of ``bones`` in ``ob``'s object space, in the evaluated pose."""
     armature = modifier.object.evaluated_get(depsgraph)
