@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from boxmarch.preview import sources
-from engine_scene import (UNITY, baked_scene, box_corners, convex_hull, imported, posed_rig_boxes, rig_boxes,
-                          skinned_scene, unity_skinned_vertices)
-from engines import Shot, coverage_mismatch, hlsl_webgl
+from engine_scene import (UNITY, baked_scene, imported, posed_rig_boxes, rig_boxes, silhouettes, skinned_scene,
+                          unity_skinned_vertices)
+from engines import Shot, coverage_mismatch, hlsl_webgl, ndc_to_pixels
 from fbx_reader import read_fbx_geometry, read_fbx_skin
 
 W, H = 320, 240
@@ -28,8 +28,9 @@ SHIPPED_MAP = ("return op_smooth_union(sdf_preset_sphere(p, box_half), sdf_prese
 INNER = 0.6
 
 
-def look_at_vp(eye, target, fov_deg=50.0, near=0.5, far=100.0):
-    """4 x 4 view-projection (GL clip space) of a camera at ``eye`` looking at ``target``, y up."""
+def look_at(eye, target, fov_deg=50.0, near=0.5, far=100.0):
+    """(view, projection), 4 x 4 each (GL clip space), of a camera at ``eye`` looking at
+    ``target``, y up, for a W x H image."""
     forward = (target - eye) / np.linalg.norm(target - eye)
     right = np.cross(forward, [0.0, 1.0, 0.0])
     right /= np.linalg.norm(right)
@@ -40,12 +41,7 @@ def look_at_vp(eye, target, fov_deg=50.0, near=0.5, far=100.0):
     f = 1.0 / np.tan(np.radians(fov_deg) / 2)
     projection = np.array([[f * H / W, 0, 0, 0], [0, f, 0, 0],
                            [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)], [0, 0, -1, 0]])
-    return projection @ view
-
-
-def to_pixels(vp):
-    """3 x 4 world -> homogeneous pixel matrix (x right, y down, origin top-left) of ``vp``."""
-    return np.array([[W / 2, 0, 0, W / 2], [0, -H / 2, 0, H / 2], [0, 0, 0, 1.0]]) @ vp
+    return view, projection
 
 
 @pytest.fixture(scope="module")
@@ -78,7 +74,8 @@ def unity_mesh(blender, tmp_path):
 
 def draw(programs, attributes, count, camera):
     eye, target = camera
-    vp = look_at_vp(eye, target)
+    view, projection = look_at(eye, target)
+    vp = projection @ view
     # Matrices column by column: HLSL's default (column_major) constant buffer packing.
     uniforms = {"unity_ObjectToWorld": np.eye(4).ravel().tolist(), "unity_WorldToObject": np.eye(4).ravel().tolist(),
                 "unity_MatrixVP": vp.T.ravel().tolist(), "_WorldSpaceCameraPos": list(eye),
@@ -86,19 +83,19 @@ def draw(programs, attributes, count, camera):
                 "_UVChannels": [1.0, 2.0, 0.0, 0.0], "_HalfExtents": [0.0, 0.0, 0.0, 0.0], "_MaxSteps": 256,
                 "_Epsilon": 1e-4, "_Relaxation": 1.0, "_MaxDistance": 1000.0}
     pixels = hlsl_webgl.render(programs["vert"], programs["frag"], attributes, uniforms, count, W, H)
-    return Shot(pixels, np.eye(4), to_pixels(vp))
+    return Shot(pixels, view, ndc_to_pixels(W, H) @ vp)
 
 
-def silhouettes(shot, centres, sizes, rotations):
-    return [convex_hull(shot.project(box_corners(c, INNER * s, r) @ UNITY["to_engine"].T))
-            for c, s, r in zip(centres, sizes, rotations)]
+def unity_silhouettes(shot, centres, sizes, rotations):
+    """The silhouettes of the raymarched boxes (INNER of each box, Blender's frame in) in Unity's frame."""
+    return silhouettes(shot, centres, INNER * sizes, rotations, UNITY["to_engine"])
 
 
 def test_unity_material_raymarches_each_box_where_unity_holds_it(example, unity_mesh):
     attributes, count, centres, sizes, rotations = unity_mesh
     shot = draw(example["UV_FRAME"], attributes, count, STATIC_CAMERA)
     covered = shot.pixels[..., 3] > 0
-    expected = silhouettes(shot, centres, sizes, rotations)
+    expected = unity_silhouettes(shot, centres, sizes, rotations)
     for polygon in expected:  # every box in the picture
         assert polygon.min() > 0 and polygon[:, 0].max() < W and polygon[:, 1].max() < H
     mismatch = coverage_mismatch(covered, expected)
@@ -114,7 +111,7 @@ def test_unity_material_without_the_frame_fails(example, unity_mesh):
     shot = draw(example["UV_FRAME"], dropped, count, STATIC_CAMERA)
     covered = shot.pixels[..., 3] > 0
     assert covered.sum() > 500  # it drew, in the wrong places
-    assert coverage_mismatch(covered, silhouettes(shot, centres, sizes, rotations)) is not None
+    assert coverage_mismatch(covered, unity_silhouettes(shot, centres, sizes, rotations)) is not None
 
 
 def test_unity_material_follows_the_skinned_rig(blender, tmp_path, example):
@@ -139,7 +136,7 @@ def test_unity_material_follows_the_skinned_rig(blender, tmp_path, example):
                     RIG_CAMERA)
         covered = shot.pixels[..., 3] > 0
         assert covered.sum() > 500, frame
-        expected = silhouettes(shot, posed_centres, sizes, posed_rotations)
+        expected = unity_silhouettes(shot, posed_centres, sizes, posed_rotations)
         mismatch = coverage_mismatch(covered, expected)
         if frame == "skinned":
             for polygon in expected:

@@ -31,6 +31,12 @@ class Shot(NamedTuple):
         return h[:, :2] / h[:, 2:3]
 
 
+def ndc_to_pixels(width, height) -> np.ndarray:
+    """3 x 4 map from GL clip coordinates to homogeneous pixel coordinates (x right, y down,
+    (0, 0) the top-left corner): ``Shot.to_pixels`` = this @ projection @ view."""
+    return np.array([[width / 2, 0, 0, width / 2], [0, -height / 2, 0, height / 2], [0, 0, 0, 1.0]])
+
+
 def polygon_mask(shape, polygon) -> np.ndarray:
     """Boolean (H, W) mask of the pixels whose centres lie inside a convex 2D ``polygon``
     (pixel coordinates as :meth:`Shot.project` returns them, either winding)."""

@@ -55,14 +55,12 @@ _JOB = """function () {
   var data = new ArrayBuffer(size), f32 = new Float32Array(data), i32 = new Int32Array(data);
   var members = gl.getActiveUniformBlockParameter(p, block, gl.UNIFORM_BLOCK_ACTIVE_UNIFORM_INDICES);
   var offsets = gl.getActiveUniforms(p, members, gl.UNIFORM_OFFSET);
-  var filled = [];
   Array.prototype.forEach.call(members, function (index, k) {
     var info = gl.getActiveUniform(p, index), name = info.name.split('.').pop();
     if (!(name in d.uniforms)) throw new Error('no value for ' + info.name);
     var values = [].concat(d.uniforms[name]), at = offsets[k] / 4;
     var ints = info.type === gl.INT;
     values.forEach(function (v, j) { if (ints) i32[at + j] = v; else f32[at + j] = v; });
-    filled.push(name);
   });
   gl.bindBuffer(gl.UNIFORM_BUFFER, gl.createBuffer());
   gl.bufferData(gl.UNIFORM_BUFFER, data, gl.STATIC_DRAW);
@@ -76,7 +74,7 @@ _JOB = """function () {
   gl.readPixels(0, 0, d.width, d.height, gl.RGBA, gl.UNSIGNED_BYTE, px);
   var err = gl.getError();
   if (err) throw new Error('WebGL error ' + err);
-  return {pixels: __b64(px), filled: filled};
+  return {pixels: __b64(px)};
 }"""
 
 

@@ -19,7 +19,7 @@ import tempfile
 
 import numpy as np
 
-from . import Shot
+from . import Shot, ndc_to_pixels
 
 THREE_JS = "/usr/share/javascript/three/build/three.min.js"
 GLTF_LOADER_JS = "/usr/share/javascript/three/examples/js/loaders/GLTFLoader.js"
@@ -202,10 +202,7 @@ def render(glb_bytes, material_js, setup_js, width, height, camera):
     pixels = pixels.reshape(height, width, 4)[::-1].copy()  # readPixels starts at the bottom row
     view = _f64(out["view"]).reshape(4, 4, order="F")
     projection = _f64(out["projection"]).reshape(4, 4, order="F")
-    ndc_to_pixels = np.array([[width / 2, 0, 0, width / 2],
-                              [0, -height / 2, 0, height / 2],
-                              [0, 0, 0, 1.0]])
-    return Shot(pixels, view, ndc_to_pixels @ projection @ view)
+    return Shot(pixels, view, ndc_to_pixels(width, height) @ projection @ view)
 
 
 def pose_bones_js(turns, angle):
