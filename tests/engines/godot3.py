@@ -98,15 +98,16 @@ var posed = -1
 func pose_bones(scene, turns, angle):
     var count = 0
     for sk in nodes_of_class(scene, "Skeleton", []):
-        var rest = {}
+        var rest = {}  # bone index -> its rest rotation in world space
+        var axes = {}  # bone index -> its turn's world axis
         for name in turns:
             var i = sk.find_bone(name)
             if i >= 0:
-                rest[name] = (sk.global_transform * sk.get_bone_global_pose(i)).basis.orthonormalized()
-        for name in rest:
-            var a = turns[name]
-            var axis = rest[name].inverse().xform(Vector3(a[0], a[1], a[2])).normalized()
-            sk.set_bone_pose(sk.find_bone(name), Transform(Basis(axis, angle), Vector3()))
+                rest[i] = (sk.global_transform * sk.get_bone_global_pose(i)).basis.orthonormalized()
+                axes[i] = Vector3(turns[name][0], turns[name][1], turns[name][2])
+        for i in rest:
+            var axis = rest[i].inverse().xform(axes[i]).normalized()
+            sk.set_bone_pose(i, Transform(Basis(axis, angle), Vector3()))
             count += 1
     return count
 
