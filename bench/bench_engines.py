@@ -10,6 +10,13 @@ tests require <= 1), for the shipped shader and for its identity-frame negative 
 Unity and Unreal do not run here: their rows decode the exported FBX numbers through the
 documented importer rules (tests/test_engine_fbx_models.py).
 
+Second table: the FBX exports read by ufbx (Godot 4.3+'s loader) and Assimp, the libraries
+engines load FBX with (tests/test_engine_fbx_libraries.py), each followed by the engine's
+documented import rules and the documented decode: the static mixed scene (UNITY, UNREAL), the
+skinned rig (UNITY) at rest and posed by ufbx's skinning. *control*: the origin error with the
+frame dropped (identity quaternion or identity normal / tangent; rest frame under the pose),
+which the tests require above 0.1.
+
     python bench/bench_engines.py
 """
 import os
@@ -28,8 +35,9 @@ from boxmarch.export import scene as export_scene  # noqa: E402
 from common import table  # noqa: E402
 from engine_scene import (TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame,  # noqa: E402
                           decode_uv_frame, frame_and_size_errors, imported, silhouettes, table_texels, UNITY, UNREAL)
-from engines import godot3, threejs, tightest_tolerance  # noqa: E402
+from engines import fbx_libraries, godot3, threejs, tightest_tolerance  # noqa: E402
 from fbx_reader import read_fbx_geometry  # noqa: E402
+import test_engine_fbx_libraries as library_test  # noqa: E402
 import test_engine_godot3 as godot_test  # noqa: E402
 import test_engine_threejs as three_test  # noqa: E402
 
@@ -130,6 +138,38 @@ def fbx_rows(ob, scene, folder):
     return rows
 
 
+def library_rows(folder):
+    """Rows of the FBX libraries' table (ufbx and Assimp where installed)."""
+    import pathlib
+
+    files = library_test.export_files(bpy, pathlib.Path(folder))
+    names = {}
+    if fbx_libraries.ufbx_available() is None:
+        version = str(fbx_libraries.read_with_ufbx(files["UNITY"], folder)["ufbx_version"])
+        names["ufbx"] = f"ufbx {version} (PyPI ufbx 0.0.5)"
+    if fbx_libraries.assimp_available() is None:
+        names["assimp"] = f"Assimp {fbx_libraries.assimp_version()}"
+    rows = []
+    for library, name in names.items():
+        for preset, engine in library_test.ENGINES.items():
+            start = time.perf_counter()
+            raw = library_test.library_read(library, files[preset], folder)
+            errors = library_test.static_errors(raw, engine, files["scene"])[0]
+            control = library_test.static_errors(raw, engine, files["scene"], frame=False)[0][0]
+            rows.append([name, preset, "UV_FRAME, static", *map(fmt, errors), fmt(control),
+                         f"{time.perf_counter() - start:.2f}"])
+        start = time.perf_counter()
+        raw = library_test.library_read(library, files["skinned"], folder)
+        rows.append([name, "UNITY", "NORMAL_FRAME, skinned at rest", *map(fmt, library_test.rest_errors(raw)),
+                     fmt(library_test.rest_errors(raw, frame=False)[0]), f"{time.perf_counter() - start:.2f}"])
+        if library == "ufbx":
+            start = time.perf_counter()
+            errors, rest_frame = library_test.posed_errors(files["skinned"], files["posed"], folder, files["motions"])
+            rows.append([name, "UNITY", "NORMAL_FRAME, posed by ufbx", *map(fmt, errors), fmt(rest_frame[0]),
+                         f"{time.perf_counter() - start:.2f}"])
+    return rows
+
+
 def main():
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -142,8 +182,12 @@ def main():
         if godot3.available() is None:
             rows += godot_rows(ob, scene, folder)
         rows += fbx_rows(ob, scene, folder)
+        libraries = library_rows(folder)
     print(table(["engine", "preset", "layout", "channels", "origin err", "axis err", "half err",
                  "render px", "identity px", "s"], rows))
+    print()
+    print(table(["library", "preset", "layout, scene", "origin err", "axis err", "half err", "control", "s"],
+                libraries))
 
 
 if __name__ == "__main__":
