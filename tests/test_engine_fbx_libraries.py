@@ -11,7 +11,7 @@ the rest frame under a pose) must fail.
 import numpy as np
 import pytest
 
-from engine_scene import (TO_Y_UP, UNITY, UNREAL, UV_NAMES, baked_scene, bone_motions, box_of_vertex,
+from engine_scene import (TO_Y_UP, UNITY, UNREAL, baked_scene, bone_motions, box_of_vertex,
                           decode_normal_frame, decode_uv_frame, frame_and_size_errors, imported, posed_rig_boxes,
                           rig_boxes, skinned_scene)
 from engines import fbx_libraries

@@ -5,6 +5,7 @@ its data; Debian's pyassimp crashes on load and Assimp's JSON export rounds to 6
 return what the library delivers, in the file's own axes and units: neither library is asked to
 convert anything. Blender-free except :func:`write_posed_copy`.
 """
+import importlib.util
 import os
 import shutil
 import struct
@@ -17,12 +18,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def ufbx_available():
-    """None when ufbx imports, else the reason."""
-    try:
-        import ufbx  # noqa: F401  (only checked here: the reading runs in a child process)
-    except ImportError as error:
-        return f"ufbx is not installed ({error})"
-    return None
+    """None when ufbx is installed, else the reason (looked up, not imported: the reading runs in
+    a child process)."""
+    return None if importlib.util.find_spec("ufbx") else "ufbx is not installed (pip install ufbx)"
 
 
 def assimp_available():
@@ -94,7 +92,6 @@ class _Reader:
 
 
 NODE, MESH, BONE, SCENE = 0x123C, 0x1237, 0x123A, 0x1239
-_METADATA = {0: "?", 1: "i", 2: "Q", 3: "f", 4: "d", 6: "fff"}  # AI_BOOL (1 byte), INT32, UINT64, FLOAT, DOUBLE, AIVECTOR3D
 
 
 def _node(r, parent, nodes):
