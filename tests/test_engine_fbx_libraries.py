@@ -123,6 +123,9 @@ def static_errors(raw, engine, scene, frame=True):
 @pytest.mark.parametrize("library", LIBRARIES)
 @pytest.mark.parametrize("preset", sorted(ENGINES))
 def test_library_reads_the_static_export_and_it_decodes(files, preset, library):
+    """The mixed scene's UNITY and UNREAL exports (UV_FRAME): the library's positions and UV maps
+    are the project's reader's numbers, and after the engine's documented import every corner
+    decodes its box (origin, axes, half-extents, index); the identity quaternion does not."""
     raw = library_read(library, files[preset], files["folder"])
     ours = read_fbx_geometry(files[preset])
     for name in ["position"] + ours["uv_maps"]:  # the same numbers as the project's reader
@@ -165,9 +168,10 @@ def rig_box_of_corner(raw):
 
 
 def bone_weights(library, path, folder):
-    """{bone: (control point or corner indices, weights)} as ``library`` delivers the skin, and
-    per bone the product of its bind matrix and its rest world matrix (the identity when the
-    library's bind pose and hierarchy agree)."""
+    """({bone: (indices, weights, bind matrix x rest world matrix)}, corner -> control point or
+    None) as ``library`` delivers the skin: ufbx weighs the file's control points (the second
+    item maps corners to them), Assimp its per-corner vertices; the matrix product is the
+    identity when the library's bind pose and node hierarchy agree."""
     if library == "ufbx":
         data = fbx_libraries.read_with_ufbx(path, folder)
         return {str(b): (data["vertices:" + b], data["weights:" + b],
@@ -210,7 +214,6 @@ def test_library_reads_the_skinned_export_at_rest(files, library):
     assert sorted(skin) == ["bone0", "bone1", "bone2"]
     for k in range(3):
         indexes, weights, bind_times_rest = skin[f"bone{k}"]
-        # Assimp weighs its per-corner vertices; ufbx the file's control points
         mine = np.flatnonzero(bone_of_corner == k)
         if corner_vertex is not None:
             mine = np.unique(corner_vertex[mine])

@@ -7,7 +7,7 @@ Written per polygon corner of the first mesh, in the file's own axes and units (
 asked of ufbx; ``axes`` and ``unit_meters`` say what the file declares): ``vertex``, ``position``,
 ``normal``, ``tangent``, ``bitangent`` (where the file has them), ``uv:NAME`` per UV set and
 ``uv_names``; every node's world matrix and parent (``world:NAME``, ``parent:NAME``); for a
-skinned mesh the clusters (``cluster_names``, ``cluster_bones``, ``vertices:BONE``,
+skinned mesh the clusters (``cluster_bones``: each cluster's bone, ``vertices:BONE``,
 ``weights:BONE``, ``geometry_to_bone:BONE``) and ufbx's skinning at the bones' transforms in the
 file (``skinned_*``, :func:`read_skinning`).
 
@@ -72,16 +72,15 @@ def read_mesh(mesh, out):
 
 def read_skin(skin, out):
     clusters = hold(skin.clusters)
-    names, bones = [], []
+    bones = []
     for k in range(len(clusters)):
         cluster = hold(clusters[k])
         bone = hold(cluster.bone_node).name
-        names.append(cluster.name)
         bones.append(bone)
         out["vertices:" + bone] = np.asarray(hold(cluster.vertices), np.int64)
         out["weights:" + bone] = np.asarray(hold(cluster.weights), np.float64)
         out["geometry_to_bone:" + bone] = matrix(cluster.geometry_to_bone)
-    out["cluster_names"], out["cluster_bones"] = np.array(names), np.array(bones)
+    out["cluster_bones"] = np.array(bones)
 
 
 def read_skinning(mesh, skin, out):
