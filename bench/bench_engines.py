@@ -33,45 +33,40 @@ from fbx_reader import read_fbx_geometry  # noqa: E402
 import test_engine_godot3 as godot_test  # noqa: E402
 import test_engine_threejs as three_test  # noqa: E402
 
-IDENTITY_JS = ("var n = g.getAttribute('normal').array, t = g.getAttribute('tangent').array;"
-               "for (var i = 0; i < n.length / 3; i++) { n.set([0, 0, 1], 3 * i); t.set([1, 0, 0, 1], 4 * i); }")
-
-
 
 def fmt(x):
     return f"{x:.1e}"
 
 
-def threejs_rows(ob, scene, folder):
+def threejs_rows(ob, scene, folder, release):
     centres, sizes, rotations = scene
     rows = []
+    t = threejs.RELEASES[release].texcoords
     for layout in ("NORMAL_FRAME", "UV_FRAME"):
         path = os.path.join(folder, f"{layout}.glb")
         report = export_scene.export_objects(bpy.context, [ob], "GLTF", path, layout)
         glb = open(path, "rb").read()
         start = time.perf_counter()
-        (mesh,) = threejs.load_attributes(glb)
+        jobs = [threejs.load_job()]
+        if layout == "NORMAL_FRAME":  # the shipped material reads the NORMAL_FRAME layout
+            jobs += [threejs.render_job(three_test.setup_js(three_test.BOX_MAP, tamper), three_test.W, three_test.H,
+                                        three_test.WIDE) for tamper in ("", three_test.IDENTITY_FRAME)]
+        (mesh,), *shots = threejs.run_jobs(glb, jobs, threejs.shipped_material(release), release)
         a = mesh["attributes"]
         box = box_of_vertex(a["position"], centres, sizes, rotations, TO_Y_UP)
         if layout == "NORMAL_FRAME":
-            offset = np.concatenate([a["uv2"], a["texcoord_2"][:, :1]], axis=1)
-            half = np.concatenate([a["texcoord_3"], a["texcoord_4"][:, :1]], axis=1)
+            offset = np.concatenate([a[t[1]], a[t[2]][:, :1]], axis=1)
+            half = np.concatenate([a[t[3]], a[t[4]][:, :1]], axis=1)
             decoded = decode_normal_frame(a["position"], a["normal"], a["tangent"], offset, half)
-        else:  # UV1..UV6 = uv2, texcoord_2 .. texcoord_6
-            uvs = [a["uv2"]] + [a[f"texcoord_{n}"] for n in range(2, 7)]
-            decoded = decode_uv_frame(a["position"], uvs)[:3]
+        else:
+            decoded = decode_uv_frame(a["position"], [a[name] for name in t[1:7]])[:3]
         errors = frame_and_size_errors(*decoded, box, centres, sizes, rotations, TO_Y_UP)
-        render = negative = "-"
-        if layout == "NORMAL_FRAME":  # the shipped material reads the NORMAL_FRAME layout
-            expected = None
-            for name, tamper in (("shipped", ""), ("identity", IDENTITY_JS)):
-                shot = threejs.render(glb, three_test.material_js(), three_test.setup_js(three_test.BOX_MAP, tamper),
-                                      three_test.W, three_test.H, three_test.WIDE)
-                expected = silhouettes(shot, centres, three_test.INNER * sizes, rotations, TO_Y_UP)
-                tol = tightest_tolerance(three_test.covered(shot), expected)
-                render, negative = (tol, negative) if name == "shipped" else (render, tol)
-        rows.append(["three.js r111", "GLTF", layout, ", ".join(report["meshes"][0]["channels"]),
-                     *map(fmt, errors), render, negative, f"{time.perf_counter() - start:.1f}"])
+        tols = [tightest_tolerance(three_test.covered(shot),
+                                   silhouettes(shot, centres, three_test.INNER * sizes, rotations, TO_Y_UP))
+                for shot in shots] or ["-", "-"]
+        engine = f"three.js r{threejs.RELEASES[release].revision} ({threejs.RELEASES[release].context})"
+        rows.append([engine, "GLTF", layout, ", ".join(report["meshes"][0]["channels"]),
+                     *map(fmt, errors), *tols, f"{time.perf_counter() - start:.1f}"])
     return rows
 
 
@@ -137,8 +132,9 @@ def main():
     scene = (centres, sizes, rotations)
     rows = []
     with tempfile.TemporaryDirectory() as folder:
-        if threejs.available() is None:
-            rows += threejs_rows(ob, scene, folder)
+        for release in threejs.RELEASES:
+            if threejs.available(release) is None:
+                rows += threejs_rows(ob, scene, folder, release)
         if godot3.available() is None:
             rows += godot_rows(ob, scene, folder)
         rows += fbx_rows(ob, scene, folder)

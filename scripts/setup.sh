@@ -23,6 +23,8 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 echo "[setup] pip install (bpy, build and test tools)" >&2
-"$PYTHON" -m pip install -q --disable-pip-version-check bpy "scikit-build-core>=0.10" "pybind11>=2.12" pytest hypothesis matplotlib
+# nicegui: its elements/scene/dist/index.js is three.js r180 with GLTFLoader as an ES module (tests/engines/threejs.py)
+"$PYTHON" -m pip install -q --disable-pip-version-check bpy "scikit-build-core>=0.10" "pybind11>=2.12" pytest hypothesis matplotlib \
+  nicegui==3.18.0
 echo "[setup] building boxmarch" >&2
 "$PYTHON" -m pip install -q --disable-pip-version-check --no-build-isolation .

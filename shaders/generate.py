@@ -169,7 +169,8 @@ def threejs(module: bool) -> str:
     text = (SHADERS / "threejs" / "template.js").read_text()
     text = text.replace("/*@DECODE@*/''", json.dumps(glsl("decode.glsl")))
     text = text.replace("/*@LIBRARY@*/''", json.dumps(glsl("sdf.glsl") + "\n" + glsl("raymarch.glsl")))
-    exports = "createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, boxmarchTexcoordName"
+    exports = ("loadBoxmarch, checkBoxmarchSidecar, createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, "
+               "boxmarchTexcoordName")
     if module:
         return text + f"\nexport {{ {exports} }};\n"
     return text + f"\nif (typeof module !== 'undefined') {{\n  module.exports = {{ {exports} }};\n}}\n"
