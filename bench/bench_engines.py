@@ -6,7 +6,8 @@ Decode columns: worst origin error / largest half-extent, axis error (1 - cos), 
 error / half-extent, decoding what the engine holds with docs/ENGINES.md's formulas against the
 generating boxes. Render columns (real engines only): the tightest tolerance in pixels at which
 the raymarched boxes at 0.6 of each box's half-extents cover their projected silhouettes (the
-tests require <= 1), for the shipped shader and for its identity-frame negative control.
+tests require <= 1), for the shipped shader and for its negative controls: the frame replaced by the
+identity, and (three.js) the offset channels zeroed.
 Unity and Unreal do not run here: their rows decode the exported FBX numbers through the
 documented importer rules (tests/test_engine_fbx_models.py).
 
@@ -50,7 +51,8 @@ def threejs_rows(ob, scene, folder, release):
         jobs = [threejs.load_job()]
         if layout == "NORMAL_FRAME":  # the shipped material reads the NORMAL_FRAME layout
             jobs += [threejs.render_job(three_test.setup_js(three_test.BOX_MAP, tamper), three_test.W, three_test.H,
-                                        three_test.WIDE) for tamper in ("", three_test.IDENTITY_FRAME)]
+                                        three_test.WIDE)
+                     for tamper in ("", three_test.IDENTITY_FRAME, three_test.offset_zeroed(release))]
         (mesh,), *shots = threejs.run_jobs(glb, jobs, threejs.shipped_material(release), release)
         a = mesh["attributes"]
         box = box_of_vertex(a["position"], centres, sizes, rotations, TO_Y_UP)
@@ -63,7 +65,7 @@ def threejs_rows(ob, scene, folder, release):
         errors = frame_and_size_errors(*decoded, box, centres, sizes, rotations, TO_Y_UP)
         tols = [tightest_tolerance(three_test.covered(shot),
                                    silhouettes(shot, centres, three_test.INNER * sizes, rotations, TO_Y_UP))
-                for shot in shots] or ["-", "-"]
+                for shot in shots] or ["-", "-", "-"]
         engine = f"three.js r{threejs.RELEASES[release].revision} ({threejs.RELEASES[release].context})"
         rows.append([engine, "GLTF", layout, ", ".join(report["meshes"][0]["channels"]),
                      *map(fmt, errors), *tols, f"{time.perf_counter() - start:.1f}"])
@@ -99,7 +101,7 @@ def godot_rows(ob, scene, folder):
             render, negative = tols
         label = "compress on (default)" if compress else "compress off"
         rows.append([f"Godot 3.2, {label}", "GODOT3", "NORMAL_COLOR", ", ".join(report["meshes"][0]["channels"]),
-                     *map(fmt, errors), render, negative, f"{time.perf_counter() - start:.1f}"])
+                     *map(fmt, errors), render, negative, "-", f"{time.perf_counter() - start:.1f}"])
     return rows
 
 
@@ -120,7 +122,7 @@ def fbx_rows(ob, scene, folder):
             errors = frame_and_size_errors(origins, axes, half, box, centres * scale, sizes * scale, rotations,
                                            engine["to_engine"] / scale)
             rows.append([f"{preset.title()} (model), {label}", preset, "UV_FRAME",
-                         ", ".join(report["meshes"][0]["channels"]), *map(fmt, errors), "-", "-",
+                         ", ".join(report["meshes"][0]["channels"]), *map(fmt, errors), "-", "-", "-",
                          f"{time.perf_counter() - start:.1f}"])
     return rows
 
@@ -139,7 +141,7 @@ def main():
             rows += godot_rows(ob, scene, folder)
         rows += fbx_rows(ob, scene, folder)
     print(table(["engine", "preset", "layout", "channels", "origin err", "axis err", "half err",
-                 "render px", "identity px", "s"], rows))
+                 "render px", "identity px", "offset zeroed px", "s"], rows))
 
 
 if __name__ == "__main__":
