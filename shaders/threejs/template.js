@@ -5,9 +5,9 @@
 // r111 with its WebGL 1 context (Debian's build, classic scripts: boxmarch.js) and r180 with its
 // WebGL 2 context (ES module: boxmarch.module.js), static and skinned meshes, in headless
 // Chromium (tests/test_engine_threejs.py, tests/test_engine_skinned.py). A SkinnedMesh needs
-// `skinning: true` on r111 (r111-r128 compile the skinning chunks only for such a material); r129
-// and later skin every SkinnedMesh and have no such flag (the option is then ignored). Skinning
-// moves the normal and the tangent, which carry the frame.
+// `skinning: true` on r111 (three.js before r129 compiles the skinning chunks only for such a
+// material); r129 and later skin every SkinnedMesh and have no such flag (the option is then
+// ignored). Skinning moves the normal and the tangent, which carry the frame.
 //
 //   loadBoxmarch(THREE, GLTFLoader, 'model.glb', { map: 'return sd_round_box(p, box_half, 0.1 * min3(box_half));' })
 //     .then((loaded) => scene.add(loaded.scene));
