@@ -6,7 +6,8 @@ Decode columns: worst origin error / largest half-extent, axis error (1 - cos), 
 error / half-extent, decoding what the engine holds with docs/ENGINES.md's formulas against the
 generating boxes. Render columns (real engines only): the tightest tolerance in pixels at which
 the raymarched boxes at 0.6 of each box's half-extents cover their projected silhouettes (the
-tests require <= 1), for the shipped shader and for its identity-frame negative control.
+tests require <= 1), for the shipped shader and for its negative controls: the frame replaced by the
+identity, and (three.js) the offset channels zeroed.
 Unity and Unreal do not run here: their rows decode the exported FBX numbers through the
 documented importer rules (tests/test_engine_fbx_models.py).
 
@@ -41,45 +42,41 @@ import test_engine_fbx_libraries as library_test  # noqa: E402
 import test_engine_godot3 as godot_test  # noqa: E402
 import test_engine_threejs as three_test  # noqa: E402
 
-IDENTITY_JS = ("var n = g.getAttribute('normal').array, t = g.getAttribute('tangent').array;"
-               "for (var i = 0; i < n.length / 3; i++) { n.set([0, 0, 1], 3 * i); t.set([1, 0, 0, 1], 4 * i); }")
-
-
 
 def fmt(x):
     return f"{x:.1e}"
 
 
-def threejs_rows(ob, scene, folder):
+def threejs_rows(ob, scene, folder, release):
     centres, sizes, rotations = scene
     rows = []
+    t = threejs.RELEASES[release].texcoords
     for layout in ("NORMAL_FRAME", "UV_FRAME"):
         path = os.path.join(folder, f"{layout}.glb")
         report = export_scene.export_objects(bpy.context, [ob], "GLTF", path, layout)
         glb = open(path, "rb").read()
         start = time.perf_counter()
-        (mesh,) = threejs.load_attributes(glb)
+        jobs = [threejs.load_job()]
+        if layout == "NORMAL_FRAME":  # the shipped material reads the NORMAL_FRAME layout
+            jobs += [threejs.render_job(three_test.setup_js(three_test.BOX_MAP, tamper), three_test.W, three_test.H,
+                                        three_test.WIDE)
+                     for tamper in ("", three_test.IDENTITY_FRAME, three_test.offset_zeroed(release))]
+        (mesh,), *shots = threejs.run_jobs(glb, jobs, threejs.shipped_material(release), release)
         a = mesh["attributes"]
         box = box_of_vertex(a["position"], centres, sizes, rotations, TO_Y_UP)
         if layout == "NORMAL_FRAME":
-            offset = np.concatenate([a["uv2"], a["texcoord_2"][:, :1]], axis=1)
-            half = np.concatenate([a["texcoord_3"], a["texcoord_4"][:, :1]], axis=1)
+            offset = np.concatenate([a[t[1]], a[t[2]][:, :1]], axis=1)
+            half = np.concatenate([a[t[3]], a[t[4]][:, :1]], axis=1)
             decoded = decode_normal_frame(a["position"], a["normal"], a["tangent"], offset, half)
-        else:  # UV1..UV6 = uv2, texcoord_2 .. texcoord_6
-            uvs = [a["uv2"]] + [a[f"texcoord_{n}"] for n in range(2, 7)]
-            decoded = decode_uv_frame(a["position"], uvs)[:3]
+        else:
+            decoded = decode_uv_frame(a["position"], [a[name] for name in t[1:7]])[:3]
         errors = frame_and_size_errors(*decoded, box, centres, sizes, rotations, TO_Y_UP)
-        render = negative = "-"
-        if layout == "NORMAL_FRAME":  # the shipped material reads the NORMAL_FRAME layout
-            expected = None
-            for name, tamper in (("shipped", ""), ("identity", IDENTITY_JS)):
-                shot = threejs.render(glb, three_test.material_js(), three_test.setup_js(three_test.BOX_MAP, tamper),
-                                      three_test.W, three_test.H, three_test.WIDE)
-                expected = silhouettes(shot, centres, three_test.INNER * sizes, rotations, TO_Y_UP)
-                tol = tightest_tolerance(three_test.covered(shot), expected)
-                render, negative = (tol, negative) if name == "shipped" else (render, tol)
-        rows.append(["three.js r111", "GLTF", layout, ", ".join(report["meshes"][0]["channels"]),
-                     *map(fmt, errors), render, negative, f"{time.perf_counter() - start:.1f}"])
+        tols = [tightest_tolerance(three_test.covered(shot),
+                                   silhouettes(shot, centres, three_test.INNER * sizes, rotations, TO_Y_UP))
+                for shot in shots] or ["-", "-", "-"]
+        engine = f"three.js r{threejs.RELEASES[release].revision} ({threejs.RELEASES[release].context})"
+        rows.append([engine, "GLTF", layout, ", ".join(report["meshes"][0]["channels"]),
+                     *map(fmt, errors), *tols, f"{time.perf_counter() - start:.1f}"])
     return rows
 
 
@@ -112,7 +109,7 @@ def godot_rows(ob, scene, folder):
             render, negative = tols
         label = "compress on (default)" if compress else "compress off"
         rows.append([f"Godot 3.2, {label}", "GODOT3", "NORMAL_COLOR", ", ".join(report["meshes"][0]["channels"]),
-                     *map(fmt, errors), render, negative, f"{time.perf_counter() - start:.1f}"])
+                     *map(fmt, errors), render, negative, "-", f"{time.perf_counter() - start:.1f}"])
     return rows
 
 
@@ -133,7 +130,7 @@ def fbx_rows(ob, scene, folder):
             errors = frame_and_size_errors(origins, axes, half, box, centres * scale, sizes * scale, rotations,
                                            engine["to_engine"] / scale)
             rows.append([f"{preset.title()} (model), {label}", preset, "UV_FRAME",
-                         ", ".join(report["meshes"][0]["channels"]), *map(fmt, errors), "-", "-",
+                         ", ".join(report["meshes"][0]["channels"]), *map(fmt, errors), "-", "-", "-",
                          f"{time.perf_counter() - start:.1f}"])
     return rows
 
@@ -177,14 +174,15 @@ def main():
     scene = (centres, sizes, rotations)
     rows = []
     with tempfile.TemporaryDirectory() as folder:
-        if threejs.available() is None:
-            rows += threejs_rows(ob, scene, folder)
+        for release in threejs.RELEASES:
+            if threejs.available(release) is None:
+                rows += threejs_rows(ob, scene, folder, release)
         if godot3.available() is None:
             rows += godot_rows(ob, scene, folder)
         rows += fbx_rows(ob, scene, folder)
         libraries = library_rows(folder)
     print(table(["engine", "preset", "layout", "channels", "origin err", "axis err", "half err",
-                 "render px", "identity px", "s"], rows))
+                 "render px", "identity px", "offset zeroed px", "s"], rows))
     print()
     print(table(["library", "preset", "layout, scene", "origin err", "axis err", "half err", "control", "s"],
                 libraries))

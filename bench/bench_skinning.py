@@ -3,9 +3,9 @@ a box whose vertices carry different bone weights costs.
 
 Rigid rig (tests/engine_scene.py: 3 bones, 36 boxes each weighted 1.0 to its bone, 40 degrees at
 each joint), exported with the GLTF preset:
-* three.js r111 (headless Chromium, SwiftShader): the tightest tolerance in px at which the
-  shipped material's boxes at 0.6 of each half-extent cover the posed silhouettes of the test's
-  forward kinematics (the tests require 1 px), and the same for the rest-frame negative control;
+* three.js r111 (WebGL 1) and r180 (WebGL 2), headless Chromium, SwiftShader: the tightest
+  tolerance in px at which the shipped material's boxes at 0.6 of each half-extent cover the
+  posed silhouettes of the test's forward kinematics (the tests require 1 px), and the same for the rest-frame negative control;
 * Godot 3.2 (godot3 under xvfb-run, llvmpipe): the GODOT3 preset's export imported with
   compression off, posed by Skeleton.set_bone_pose, the shipped shader: the same figure, and its
   rest-frame negative control;
@@ -84,7 +84,7 @@ A box decodes exactly when skinning moves it rigidly: every vertex on one bone (
 weights of the same bones, and then only if the blend of those bones' matrices is a rotation).
 Measured on the rig of the skinning tests (3 bones, 36 boxes each weighted 1.0 to its bone, 40
 degrees at each joint): 1.1e-06 of the half-extent after the glTF round trip skinned in NumPy,
-within 1 px in three.js r111 (docs/ENGINES.md, Skinning).
+within 1 px in three.js r111 and r180 (docs/ENGINES.md, Skinning).
 
 When a box's vertices carry different weights, each vertex's skinned frame differs, and the
 decoded origins leave the box: the shape tears and shifts. `bench/bench_skinning.py` measures a
@@ -117,7 +117,7 @@ def engine_rows():
                               posed_rig_boxes, rig_boxes, skinned_scene, unity_skinned_decode)
     from fbx_reader import read_fbx_geometry, read_fbx_skin
     import test_engine_skinned as skinned_test
-    from engines import godot3, tightest_tolerance
+    from engines import godot3, threejs, tightest_tolerance
 
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -147,13 +147,21 @@ def engine_rows():
         for name, decoded in zip(("skinned frame", "rest frame"), unity_skinned_decode(raw, skin)):
             errors = frame_and_size_errors(*decoded, fbx_box, posed_centres, sizes, posed_rotations, UNITY["to_engine"])
             rows.append([f"Unity FBX (modelled import), {name}", *(f"{e:.1e}" for e in errors), "-", f"{export_s:.2f}"])
-        for name, tamper in (("shipped material", None), ("rest frame (negative control)", skinned_test.REST_FRAME)):
-            for camera_name, camera in (("side", skinned_test.SIDE), ("top", skinned_test.TOP)):
-                start = time.perf_counter()
-                shot = skinned_test.render(path, camera, tamper)
-                seconds = time.perf_counter() - start
+        views = [(f"{name}, {camera_name}", tamper, camera)
+                 for name, tamper in (("shipped material", None), ("rest frame (negative control)", skinned_test.REST_FRAME))
+                 for camera_name, camera in (("side", skinned_test.SIDE), ("top", skinned_test.TOP))]
+        for release, spec in threejs.RELEASES.items():
+            if threejs.available(release):
+                continue
+            start = time.perf_counter()
+            jobs = [threejs.render_job(skinned_test.setup_js(tamper), skinned_test.W, skinned_test.H, camera)
+                    for _name, tamper, camera in views]
+            shots = threejs.run_jobs(path.read_bytes(), jobs, threejs.shipped_material(release), release)
+            seconds = (time.perf_counter() - start) / len(views)
+            for (name, _tamper, _camera), shot in zip(views, shots):
                 tol = tightest_tolerance(skinned_test.covered(shot), skinned_test.posed_silhouettes(shot))
-                rows.append([f"three.js r111, {name}, {camera_name}", "-", "-", "-", tol, f"{seconds:.1f}"])
+                rows.append([f"three.js r{spec.revision} ({spec.context}), {name}", "-", "-", "-", tol,
+                             f"{seconds:.1f} (one page)"])
         start = time.perf_counter()
         os.makedirs(os.path.join(folder, "godot3"))
         project = skinned_test.godot3_import_skinned(bpy.context, ob, os.path.join(folder, "godot3"))

@@ -23,8 +23,10 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
 
-echo "[setup] pip install (bpy, build and test tools, ufbx)" >&2
-"$PYTHON" -m pip install -q --disable-pip-version-check bpy "scikit-build-core>=0.10" "pybind11>=2.12" pytest hypothesis matplotlib \
-  ufbx  # tests/engines/ufbx_dump.py: Godot 4.3+'s FBX loader reads the FBX exports
+PIP_PACKAGES=(bpy "scikit-build-core>=0.10" "pybind11>=2.12" pytest hypothesis matplotlib
+              ufbx  # tests/engines/ufbx_dump.py: Godot 4.3+'s FBX loader reads the FBX exports
+              nicegui==3.18.0)  # its elements/scene/dist/index.js is three.js r180 with GLTFLoader (tests/engines/threejs.py)
+echo "[setup] pip install ${PIP_PACKAGES[*]}" >&2
+"$PYTHON" -m pip install -q --disable-pip-version-check "${PIP_PACKAGES[@]}"
 echo "[setup] building boxmarch" >&2
 "$PYTHON" -m pip install -q --disable-pip-version-check --no-build-isolation .

@@ -7,7 +7,8 @@ the SDF library and the march.
   raymarch.glsl and bm_shade of preview.frag.glsl translated into GLM for the CPU reference
   (``to_glm``; the functions that call map() stay in raymarch.cpp, around its preset switch);
 * threejs/boxmarch.js and boxmarch.module.js: threejs/template.js with decode.glsl, sdf.glsl and
-  raymarch.glsl embedded as strings (GLSL ES 3.00 takes them as they are);
+  raymarch.glsl embedded as strings (three.js compiles them as they are, GLSL ES 1.00 on WebGL 1
+  and 3.00 on WebGL 2);
 * godot3/boxmarch.shader: godot3/template.shader with decode.glsl, every function of sdf.glsl and
   of raymarch.glsl; Godot 3 has no global variables, so bm_march and bm_normal take the box
   (h, index) and pass it on to map() (``passing_the_box``).
@@ -169,7 +170,8 @@ def threejs(module: bool) -> str:
     text = (SHADERS / "threejs" / "template.js").read_text()
     text = text.replace("/*@DECODE@*/''", json.dumps(glsl("decode.glsl")))
     text = text.replace("/*@LIBRARY@*/''", json.dumps(glsl("sdf.glsl") + "\n" + glsl("raymarch.glsl")))
-    exports = "createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, boxmarchTexcoordName"
+    exports = ("loadBoxmarch, checkBoxmarchSidecar, createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, "
+               "boxmarchTexcoordName")
     if module:
         return text + f"\nexport {{ {exports} }};\n"
     return text + f"\nif (typeof module !== 'undefined') {{\n  module.exports = {{ {exports} }};\n}}\n"

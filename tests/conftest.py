@@ -26,7 +26,11 @@ def bpy_module():
 @pytest.fixture
 def blender(bpy_module):
     """bpy with an empty scene and the add-on registered."""
-    bpy = bpy_module
+    return empty_scene(bpy_module)
+
+
+def empty_scene(bpy):
+    """``bpy`` after emptying the scene, with the add-on registered (for module-scoped fixtures)."""
     if bpy.context.object is not None and bpy.context.object.mode != "OBJECT":
         bpy.ops.object.mode_set(mode="OBJECT")
     bpy.ops.wm.read_factory_settings(use_empty=True)

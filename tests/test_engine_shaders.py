@@ -9,7 +9,8 @@ from pathlib import Path
 import pytest
 
 SHADERS = Path(__file__).resolve().parent.parent / "shaders"
-EXPORTS = ["boxmarchTexcoordName", "createBoxmarchMaterial", "prepareBoxmarchGeometry", "useBoxmarchMaterial"]
+EXPORTS = ["boxmarchTexcoordName", "checkBoxmarchSidecar", "createBoxmarchMaterial", "loadBoxmarch", "prepareBoxmarchGeometry",
+           "useBoxmarchMaterial"]
 
 
 def test_generated_engine_shaders_are_up_to_date():

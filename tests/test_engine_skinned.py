@@ -1,20 +1,21 @@
 """Skinned export (issue 13): a 3-bone rig carrying 36 boxes of distinct sizes and rest rotations,
 each rigidly weighted to its bone (tests/engine_scene.py), baked at rest and exported with the
 GLTF preset (NORMAL_FRAME: the frame rides in NORMAL + TANGENT, which skinning turns). The .glb
-goes unmodified into three.js r111's GLTFLoader as a SkinnedMesh; the page turns each joint 40
-degrees and the shipped ShaderMaterial (skinning: true) raymarches a box at 0.6 of each box's
-half-extents. The pixels must cover the posed boxes' silhouettes within 1 px, the posed boxes
-coming from the test's own forward kinematics of the rest boxes (engine_scene.posed_rig_boxes).
-Negative control: the same render with the rest-pose frame (what a frame in UV maps delivers,
-CLASSIC or UV_FRAME: no skinning turns it) must fail the check. Then the same file read back
-without three.js, skinned with the glTF specification's formula in NumPy, decodes each vertex's
-posed box centre within 1e-5 of its half-extent."""
+goes unmodified into three.js's GLTFLoader as a SkinnedMesh, in r111 (WebGL 1) and r180 (WebGL 2);
+the page turns each joint 40 degrees and the shipped ShaderMaterial (``skinning: true``, which r111
+needs and r180 ignores) raymarches a box at 0.6 of each box's half-extents. The pixels must cover
+the posed boxes' silhouettes within 1 px, the posed boxes coming from the test's own forward
+kinematics of the rest boxes (engine_scene.posed_rig_boxes); so must the same file drawn by the
+one-call loader (loadBoxmarch). Negative control: the same render with the rest-pose frame (what
+a frame in UV maps delivers, CLASSIC or UV_FRAME: no skinning turns it) must fail the check. Then
+the same file read back without three.js, skinned with the glTF specification's formula in NumPy,
+decodes each vertex's posed box centre within 1e-5 of its half-extent."""
 import pathlib
 
 import numpy as np
 import pytest
 
-from boxmarch.preview import sources
+from conftest import empty_scene
 from engine_scene import (RIG_TURN_ANGLE, RIG_TURN_AXES, TO_Y_UP, axis_turn, box_of_vertex, decode_normal_frame,
                           frame_and_size_errors, posed_rig_boxes, rig_boxes, silhouettes, skinned_scene)
 from engines import coverage_mismatch, godot3, threejs
@@ -31,16 +32,16 @@ BOX_MAP = "return sd_box(p, 0.6 * box_half);"
 REST_FRAME = ("vObjPos = transformed;", "objectNormal = normal; axisX = tangent.xyz; vObjPos = transformed;")
 
 
-@pytest.fixture
-def exported(blender, tmp_path):
+@pytest.fixture(scope="module")
+def exported(bpy_module, tmp_path_factory):
     from boxmarch.export import scene
 
-    ob, rig = skinned_scene(blender)
+    ob, rig = skinned_scene(empty_scene(bpy_module))
     # Posed in Blender: the file must hold the rest geometry and bind pose all the same.
     rig.pose.bones["bone1"].rotation_quaternion = (0.8, 0.6, 0.0, 0.0)
     pose = tuple(rig.pose.bones["bone1"].rotation_quaternion)
-    path = tmp_path / "skinned.glb"
-    report = scene.export_objects(blender.context, [ob], "GLTF", str(path))
+    path = tmp_path_factory.mktemp("skinned") / "skinned.glb"
+    report = scene.export_objects(bpy_module.context, [ob], "GLTF", str(path))
     assert rig.data.pose_position == "POSE" and tuple(rig.pose.bones["bone1"].rotation_quaternion) == pose
     return path, report
 
@@ -64,19 +65,39 @@ def setup_js(frame_tamper=None):
             + " if (skinned !== 1) throw new Error(skinned + ' skinned meshes');")
 
 
+# The file as loadBoxmarch loads it from skinned.glb (and skinned.boxmarch.json), in place of the
+# page's own parse, then posed: no skinning flag given, the loader sets the material per mesh.
+LOADER_SETUP = ("scene.remove(gltf.scene);"
+                f" gltf = await loadBoxmarch(THREE, GLTFLoader, 'skinned.glb', {{map: {BOX_MAP!r},"
+                " color: new THREE.Color(1, 1, 1), maxSteps: 256}); scene.add(gltf.scene);"
+                " if (gltf.meshes.length !== 1 || !gltf.meshes[0].isSkinnedMesh) throw new Error('not one SkinnedMesh');"
+                " gltf.meshes[0].frustumCulled = false;\n" + threejs.pose_bones_js(bone_turns(), RIG_TURN_ANGLE))
+
+
 def posed_silhouettes(shot):
     centres, sizes, _rotations, _bones = rig_boxes()
     posed_centres, posed_rotations = posed_rig_boxes()
     return silhouettes(shot, posed_centres, INNER * sizes, posed_rotations, TO_Y_UP)
 
 
-def render(path, camera, frame_tamper=None):
-    material = (sources.shader_dir() / "threejs" / "boxmarch.js").read_text()
-    return threejs.render(path.read_bytes(), material, setup_js(frame_tamper), W, H, camera)
-
-
 def covered(shot):
     return shot.pixels[..., 3] > 0
+
+
+@pytest.fixture(scope="module", params=sorted(threejs.RELEASES))
+def shots(request, exported):
+    """One page per release: {"side", "top", "rest-frame" (SIDE), "loader" (SIDE)} -> Shot."""
+    release = request.param
+    reason = threejs.available(release)
+    if reason:
+        pytest.skip(reason)
+    glb = exported[0].read_bytes()
+    jobs = {"side": setup_js(), "top": setup_js(), "rest-frame": setup_js(REST_FRAME), "loader": LOADER_SETUP}
+    cameras = {"side": SIDE, "top": TOP, "rest-frame": SIDE, "loader": SIDE}
+    files = {"skinned.glb": glb, "skinned.boxmarch.json": threejs.sidecar_json(skinned=True, box_count=36)}
+    results = threejs.run_jobs(glb, [threejs.render_job(js, W, H, cameras[k]) for k, js in jobs.items()],
+                               threejs.shipped_material(release), release, files)
+    return dict(zip(jobs, results))
 
 
 def test_skinned_export_holds_the_skin_at_rest_and_says_so(exported):
@@ -98,12 +119,10 @@ def test_skinned_export_holds_the_skin_at_rest_and_says_so(exported):
     assert np.allclose(weights.max(axis=1), 1.0) and np.allclose(weights.sum(axis=1), 1.0)
 
 
-@pytest.mark.parametrize("camera", [SIDE, TOP], ids=["side", "top"])
-def test_threejs_raymarches_each_box_where_the_posed_bone_carries_it(exported, camera):
-    reason = threejs.available()
-    if reason:
-        pytest.skip(reason)
-    shot = render(exported[0], camera)
+@pytest.mark.slow
+@pytest.mark.parametrize("view", ["side", "top", "loader"])
+def test_threejs_raymarches_each_box_where_the_posed_bone_carries_it(shots, view):
+    shot = shots[view]
     expected = posed_silhouettes(shot)
     for polygon in expected:  # every box in the picture, none clipped by its edge
         assert polygon.min() > 0 and polygon[:, 0].max() < W and polygon[:, 1].max() < H
@@ -112,11 +131,9 @@ def test_threejs_raymarches_each_box_where_the_posed_bone_carries_it(exported, c
     assert covered(shot).sum() > 1500
 
 
-def test_threejs_rest_frame_fails_the_posed_check(exported):
-    reason = threejs.available()
-    if reason:
-        pytest.skip(reason)
-    shot = render(exported[0], SIDE, REST_FRAME)
+@pytest.mark.slow
+def test_threejs_rest_frame_fails_the_posed_check(shots):
+    shot = shots["rest-frame"]
     assert covered(shot).sum() > 1500  # it drew, in the wrong places
     assert coverage_mismatch(covered(shot), posed_silhouettes(shot)) is not None
 
@@ -209,6 +226,7 @@ def godot3_posed_shot(project, frame_code=None):
     return shot, shot.pixels[..., :3].max(axis=2) > 20
 
 
+@pytest.mark.slow
 def test_godot3_raymarches_each_box_where_the_posed_bone_carries_it(blender, tmp_path):
     """The same rig through the GODOT3 preset (NORMAL_COLOR: frame in NORMAL + TANGENT, offsets
     in the colour, half-extents in the box table) in Godot 3.2, whose skinning folds the blended

@@ -1,15 +1,18 @@
-"""Proof in a real engine: the GLTF preset's .glb loaded unmodified by Debian's three.js (r111
-GLTFLoader) in headless Chromium. The test decodes what three.js put in its buffers with the
-documented formula (docs/ENGINES.md) and checks it against the generating box geometry; then the
-shipped ShaderMaterial (shaders/threejs/boxmarch.js) raymarches every box and the pixels must cover
-each box's projected silhouette within 1 px. Negative controls (a channel zeroed, the frame
-replaced by the identity) must fail the same checks."""
+"""Proof in real engines: the GLTF preset's .glb loaded unmodified by three.js r111 (Debian's,
+WebGL 1) and r180 (NiceGUI's ES module build, WebGL 2) GLTFLoaders in headless Chromium. The test
+decodes what three.js put in its buffers with the documented formula (docs/ENGINES.md) and checks
+it against the generating box geometry; then the shipped ShaderMaterial (shaders/threejs/,
+unmodified, the release's file) raymarches every box and the pixels must cover each box's
+projected silhouette within 1 px. Negative controls (a channel zeroed, the frame replaced by the
+identity) must fail the same checks. The one-call loader (loadBoxmarch) draws the same file from
+its URL and sidecar, and refuses a sidecar it does not read. One Chromium page per release runs
+every render of this file (module-scoped ``page``)."""
 import json
 
 import numpy as np
 import pytest
 
-from boxmarch.preview import sources
+from conftest import empty_scene
 from engine_scene import (TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame, frame_and_size_errors,
                           rounded_box_mismatch, silhouettes)
 from engines import coverage_mismatch, threejs
@@ -18,27 +21,21 @@ W, H = 320, 240
 WIDE = {"position": [2.0, 9.0, 14.0], "target": [0.5, -0.5, 0.0], "fov": 50, "near": 0.5, "far": 100}
 # The far plane leaves only the three 0.02 x 0.02 x 0.1 boxes (numbers 3-5) in this view.
 CLOSE = {"position": [0.12, 0.2, 0.3], "target": [0.0, 0.0, 0.0], "fov": 30, "near": 0.01, "far": 0.6}
-IN_VIEW = {id(WIDE): slice(None), id(CLOSE): slice(3, 6)}
+CAMERAS = {"all-boxes": (WIDE, slice(None)), "close-up-on-0.02-boxes": (CLOSE, slice(3, 6))}
 # A box at 0.6 of each box's half-extents about its decoded origin: unlike the full box, which
 # the rasterised mesh already outlines, it lands right only if origin, axes and extents do.
 BOX_MAP = "return sd_box(p, 0.6 * box_half);"
 INNER = 0.6
 ROUNDED_MAP = "return sd_round_box(p, box_half, 0.1 * min3(box_half));"
+IDENTITY_FRAME = ("var n = g.getAttribute('normal').array, t = g.getAttribute('tangent').array;"
+                  "for (var i = 0; i < n.length / 3; i++) { n.set([0, 0, 1], 3 * i); t.set([1, 0, 0, 1], 4 * i); }")
+pytestmark = pytest.mark.slow
 
 
-@pytest.fixture
-def exported(blender, tmp_path):
-    reason = threejs.available()
-    if reason:
-        pytest.skip(reason)
-    ob, centres, sizes, rotations = baked_scene(blender)
-    path = tmp_path / "mixed.glb"
-    assert blender.ops.boxmarch.export(filepath=str(path), preset="GLTF") == {"FINISHED"}
-    return path.read_bytes(), centres, sizes, rotations
-
-
-def material_js():
-    return (sources.shader_dir() / "threejs" / "boxmarch.js").read_text()
+def offset_zeroed(release):
+    """Negative control: the offset channels (TEXCOORD_1 and _2 under the release's names) zeroed."""
+    names = threejs.RELEASES[release].texcoords
+    return f"g.getAttribute('{names[1]}').array.fill(0); g.getAttribute('{names[2]}').array.fill(0);"
 
 
 def setup_js(sdf_body, tamper=""):
@@ -48,68 +45,135 @@ def setup_js(sdf_body, tamper=""):
             f"color: new THREE.Color(1, 1, 1), maxSteps: 256}})); }});")
 
 
+def loader_setup_js(name, sdf_body):
+    """Draws ``name``.glb as ``loadBoxmarch`` loads it (in place of the page's own parse)."""
+    return (f"scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, '{name}.glb', "
+            f"{{map: {json.dumps(sdf_body)}, color: new THREE.Color(1, 1, 1), maxSteps: 256}});"
+            " scene.add(loaded.scene); if (!loaded.meshes.length) throw new Error('loadBoxmarch: no meshes');")
+
+
+def refusal_job(js):
+    """A job whose result is the message of the error ``js`` (a Promise or a statement) raises, or 'no error'."""
+    return ("async function (gltf) { try { await (async function () { " + js + " })(); return 'no error'; }"
+            " catch (e) { return String(e && e.message || e); } }")
+
+
 def covered(shot):
     return shot.pixels[..., 3] > 0
 
 
-def test_threejs_receives_every_channel_and_decodes_to_the_boxes(exported):
-    glb, centres, sizes, rotations = exported
-    (mesh,) = threejs.load_attributes(glb)
+@pytest.fixture(scope="module")
+def exported(bpy_module, tmp_path_factory):
+    """The mixed scene exported with the GLTF preset (NORMAL_FRAME) and with layout CLASSIC."""
+    blender = empty_scene(bpy_module)
+    _ob, centres, sizes, rotations = baked_scene(blender)
+    files = {}
+    for layout in ("NORMAL_FRAME", "CLASSIC"):
+        path = tmp_path_factory.mktemp("threejs") / f"{layout}.glb"
+        assert blender.ops.boxmarch.export(filepath=str(path), preset="GLTF", layout=layout) == {"FINISHED"}
+        files[layout] = path.read_bytes()
+    return files, centres, sizes, rotations
+
+
+@pytest.fixture(scope="module", params=sorted(threejs.RELEASES))
+def page(request, exported):
+    """One page per release: {"release", "meshes", (map, camera name) -> Shot, tamper name -> Shot,
+    "loader" -> Shot, refusal name -> message}, and the scene's boxes."""
+    release = request.param
+    reason = threejs.available(release)
+    if reason:
+        pytest.skip(reason)
+    files, centres, sizes, rotations = exported
+    glb = files["NORMAL_FRAME"]
+    boxes = len(centres)
+    served = {"mixed.glb": glb, "mixed.boxmarch.json": threejs.sidecar_json(box_count=boxes),
+              "classic-layout.glb": files["CLASSIC"],
+              "classic.boxmarch.json": threejs.sidecar_json("CLASSIC", box_count=boxes),
+              "future.boxmarch.json": threejs.sidecar_json(format_version=2, box_count=boxes)}
+    jobs = {"meshes": threejs.load_job()}
+    for sdf in (BOX_MAP, ROUNDED_MAP):
+        for name, (camera, _view) in CAMERAS.items():
+            jobs[sdf, name] = threejs.render_job(setup_js(sdf), W, H, camera)
+    for name, tamper in (("offset-zeroed", offset_zeroed(release)), ("identity-frame", IDENTITY_FRAME)):
+        jobs[name] = threejs.render_job(setup_js(BOX_MAP, tamper), W, H, WIDE)
+    jobs["loader"] = threejs.render_job(loader_setup_js("mixed", BOX_MAP), W, H, WIDE)
+    # classic.glb and future.glb are not served: a refusal that fetched the .glb would say 404 instead
+    for name in ("classic", "future", "missing"):
+        jobs[f"refuse-{name}"] = refusal_job(f"await loadBoxmarch(THREE, GLTFLoader, '{name}.glb', {{}});")
+    jobs["material-on-classic"] = refusal_job(
+        "var g = await new Promise(function (ok, no) { new GLTFLoader().load('classic-layout.glb', ok, undefined, no); });"
+        " g.scene.traverse(function (o) { if (o.isMesh) useBoxmarchMaterial(THREE, o, createBoxmarchMaterial(THREE)); });")
+    results = threejs.run_jobs(glb, list(jobs.values()), threejs.shipped_material(release), release, served)
+    return dict(zip(jobs, results), release=release), centres, sizes, rotations
+
+
+def test_threejs_receives_every_channel_and_decodes_to_the_boxes(page):
+    out, centres, sizes, rotations = page
+    (mesh,) = out["meshes"]
     a = mesh["attributes"]
-    assert {"position", "normal", "tangent", "uv", "uv2", "texcoord_2", "texcoord_3", "texcoord_4"} <= set(a)
+    t = threejs.RELEASES[out["release"]].texcoords  # TEXCOORD_n as this release names them
+    assert set(a) == {"position", "normal", "tangent", *t[:5]}  # NORMAL_FRAME writes TEXCOORD_0 .. 4
     assert not any(mesh["normalized"].values())
     box = box_of_vertex(a["position"], centres, sizes, rotations, TO_Y_UP)
-    offset = np.concatenate([a["uv2"], a["texcoord_2"][:, :1]], axis=1)
-    half = np.concatenate([a["texcoord_3"], a["texcoord_4"][:, :1]], axis=1)
+    offset = np.concatenate([a[t[1]], a[t[2]][:, :1]], axis=1)
+    half = np.concatenate([a[t[3]], a[t[4]][:, :1]], axis=1)
     origins, axes, half = decode_normal_frame(a["position"], a["normal"], a["tangent"], offset, half)
     origin_error, axis_error, half_error = frame_and_size_errors(origins, axes, half, box, centres, sizes,
                                                                  rotations, TO_Y_UP)
     assert origin_error < 1e-5 and axis_error < 1e-6 and half_error < 1e-5, (origin_error, axis_error, half_error)
-    index = a["texcoord_2"][:, 1]
+    index = a[t[2]][:, 1]
     assert np.array_equal(index, np.rint(index))
     for b in range(len(centres)):  # one number per box, a different one for every box
         assert len(set(index[box == b])) == 1
     assert len(set(index)) == len(centres) and set(index) == set(range(len(centres)))
 
 
-@pytest.mark.parametrize("camera", [WIDE, CLOSE], ids=["all-boxes", "close-up-on-0.02-boxes"])
-def test_threejs_raymarches_each_box_at_its_own_size(exported, camera):
-    glb, centres, sizes, rotations = exported
-    shot = threejs.render(glb, material_js(), setup_js(BOX_MAP), W, H, camera)
-    view = IN_VIEW[id(camera)]
+@pytest.mark.parametrize("camera", sorted(CAMERAS))
+def test_threejs_raymarches_each_box_where_the_decode_puts_it(page, camera):
+    out, centres, sizes, rotations = page
+    shot = out[BOX_MAP, camera]
+    view = CAMERAS[camera][1]
     expected = silhouettes(shot, centres[view], INNER * sizes[view], rotations[view], TO_Y_UP)
     mismatch = coverage_mismatch(covered(shot), expected)
     assert mismatch is None, mismatch
     assert covered(shot).sum() > 500
 
 
-def test_threejs_rounded_boxes_lie_between_the_box_and_its_core(exported):
+def test_threejs_rounded_boxes_lie_between_the_box_and_its_core(page):
     """Rounded boxes of radius r = 0.1 x the smallest half-extent: every covered pixel within 1 px
     of the box, every pixel of the box shrunk by r (the core) covered."""
-    glb, centres, sizes, rotations = exported
-    for camera in (WIDE, CLOSE):
-        shot = threejs.render(glb, material_js(), setup_js(ROUNDED_MAP), W, H, camera)
-        view = IN_VIEW[id(camera)]
+    out, centres, sizes, rotations = page
+    for camera, (_camera, view) in CAMERAS.items():
+        shot = out[ROUNDED_MAP, camera]
         mismatch = rounded_box_mismatch(covered(shot), shot, centres[view], sizes[view], rotations[view], TO_Y_UP)
-        assert mismatch is None, mismatch
+        assert mismatch is None, (camera, mismatch)
 
 
-@pytest.mark.parametrize("tamper", [
-    "g.getAttribute('uv2').array.fill(0); g.getAttribute('texcoord_2').array.fill(0);",  # offset channel dropped
-    "var n = g.getAttribute('normal').array, t = g.getAttribute('tangent').array;"        # frame not rotated
-    "for (var i = 0; i < n.length / 3; i++) { n.set([0, 0, 1], 3 * i); t.set([1, 0, 0, 1], 4 * i); }",
-], ids=["offset-zeroed", "identity-frame"])
-def test_threejs_negative_controls_fail(exported, tamper):
-    glb, centres, sizes, rotations = exported
-    shot = threejs.render(glb, material_js(), setup_js(BOX_MAP, tamper), W, H, WIDE)
+@pytest.mark.parametrize("tamper", ["offset-zeroed", "identity-frame"])
+def test_threejs_negative_controls_fail(page, tamper):
+    out, centres, sizes, rotations = page
+    shot = out[tamper]
+    assert covered(shot).sum() > 500  # it drew, in the wrong places
     assert coverage_mismatch(covered(shot), silhouettes(shot, centres, INNER * sizes, rotations, TO_Y_UP)) is not None
 
 
-def test_material_refuses_a_classic_export(blender, tmp_path):
-    if threejs.available():
-        pytest.skip(threejs.available())
-    baked_scene(blender)
-    path = tmp_path / "classic.glb"
-    assert blender.ops.boxmarch.export(filepath=str(path), preset="GLTF", layout="CLASSIC") == {"FINISHED"}
-    with pytest.raises(RuntimeError, match="no TEXCOORD_3"):
-        threejs.render(path.read_bytes(), material_js(), setup_js(BOX_MAP), 8, 8, WIDE)
+def test_load_boxmarch_draws_the_export_from_its_url(page):
+    """loadBoxmarch(THREE, GLTFLoader, 'mixed.glb', ...) reads mixed.boxmarch.json, loads the file
+    and sets the material: the same 1 px check as the material set by hand."""
+    out, centres, sizes, rotations = page
+    shot = out["loader"]
+    mismatch = coverage_mismatch(covered(shot), silhouettes(shot, centres, INNER * sizes, rotations, TO_Y_UP))
+    assert mismatch is None, mismatch
+    assert covered(shot).sum() > 500
+
+
+def test_load_boxmarch_refuses_a_sidecar_it_does_not_read(page):
+    out = page[0]
+    assert out["refuse-classic"] == ('boxmarch: classic.boxmarch.json has layout "CLASSIC"; this material reads '
+                                     'NORMAL_FRAME (export with the GLTF preset and its default layout)')
+    assert out["refuse-future"] == "boxmarch: future.boxmarch.json has format_version 2; this material reads format_version 1"
+    assert out["refuse-missing"].startswith("boxmarch: no missing.boxmarch.json (HTTP 404)")
+
+
+def test_material_refuses_a_classic_export(page):
+    assert "no TEXCOORD_3" in page[0]["material-on-classic"]

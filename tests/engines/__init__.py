@@ -1,6 +1,7 @@
 """Harnesses that load files into real engines and report what the engine received and drew.
 
-``threejs`` runs three.js r111 (Debian's libjs-three) in headless Chromium on SwiftShader;
+``threejs`` runs three.js r111 (Debian's libjs-three, WebGL 1) and r180 (NiceGUI's ES module
+build, WebGL 2) in headless Chromium on SwiftShader;
 ``godot3`` runs Debian's Godot 3.2 (headless import, rendering under xvfb on llvmpipe). Neither
 imports Blender. Both ``render`` functions return a :class:`Shot`, and :func:`coverage_mismatch`
 checks drawn pixels against polygons projected with the engine's own camera.

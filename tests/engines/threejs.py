@@ -1,14 +1,20 @@
-"""three.js r111 (Debian's libjs-three) in headless Chromium on SwiftShader's WebGL 1.
+"""three.js in headless Chromium on SwiftShader: r111 (Debian's libjs-three, WebGL 1) and r180
+(the ES module build PyPI's NiceGUI ships, WebGL 2), one harness for both (``release``).
 
-Each call writes one self-contained page (three.min.js, the classic GLTFLoader.js and the .glb as
-base64 inlined, so no file-access flags are needed), runs ``chromium --headless --dump-dom`` on it
-with a fresh profile, and reads the results the page wrote into ``<pre id="out">``: JSON whose
-arrays travel as base64 Float64Array/Uint8Array bytes, so every float arrives bit-exactly. Errors
-thrown by the page (and ``console.error``, where three.js reports shader compile errors) become a
-``RuntimeError`` with the message.
+Each call serves one page and its files (three.js, its GLTFLoader, the material under test, the
+.glb and any extra files) from a loopback HTTP server on 127.0.0.1 that lives only as long as the
+call (ES modules do not load from file://), runs ``chromium --headless --dump-dom`` on it with a
+fresh profile, and reads the results the page wrote into ``<pre id="out">``: JSON whose arrays
+travel as base64 Float64Array/Uint8Array bytes, so every float arrives bit-exactly. One page runs
+a list of jobs, each on its own fresh parse of the .glb, so a test pays one Chromium start for
+several renders. Errors thrown by the page (and ``console.error``, where three.js reports shader
+compile errors) become a ``RuntimeError`` with the message; the page also checks that
+``THREE.REVISION`` is the release asked for.
 """
 import base64
 import html
+import http.server
+import importlib.util
 import json
 import os
 import re
@@ -16,15 +22,39 @@ import shutil
 import signal
 import subprocess
 import tempfile
+import threading
+from typing import Callable, NamedTuple
 
 import numpy as np
 
 from . import Shot, ndc_to_pixels
 
-THREE_JS = "/usr/share/javascript/three/build/three.min.js"
-GLTF_LOADER_JS = "/usr/share/javascript/three/examples/js/loaders/GLTFLoader.js"
 CHROMIUM = "chromium"
 TIMEOUT_S = 60
+NICEGUI_THREE = os.path.join("elements", "scene", "dist", "index.js")  # inside the nicegui package
+
+
+class Release(NamedTuple):
+    """One three.js release the harness runs."""
+
+    revision: str      # THREE.REVISION
+    context: str       # the WebGL context its WebGLRenderer creates
+    material: str      # the shipped file of shaders/threejs/ this release loads
+    texcoords: tuple   # its GLTFLoader's attribute names for TEXCOORD_0 .. TEXCOORD_6
+    installed_by: str
+
+
+RELEASES = {
+    # r111 GLTFLoader: TEXCOORD_1 -> uv2, the others lower-cased.
+    "r111": Release("111", "WebGL 1", "boxmarch.js", ("uv", "uv2", *(f"texcoord_{n}" for n in range(2, 7))),
+                    "apt-get install chromium libjs-three"),
+    # r151 renamed TEXCOORD_1..3 to uv1..uv3; TEXCOORD_4 and up stay lower-cased.
+    "r180": Release("180", "WebGL 2", "boxmarch.module.js", ("uv", "uv1", "uv2", "uv3", *(f"texcoord_{n}" for n in range(4, 7))),
+                    "apt-get install chromium; pip install nicegui==3.18.0"),
+}
+
+_R111_FILES = {"three.min.js": "/usr/share/javascript/three/build/three.min.js",
+               "GLTFLoader.js": "/usr/share/javascript/three/examples/js/loaders/GLTFLoader.js"}
 
 _PAGE = """<!DOCTYPE html><html><body><pre id="out"></pre>
 <script>
@@ -38,29 +68,42 @@ function __b64(bytes) {
   return btoa(s);
 }
 function __f64(values) { return __b64(new Uint8Array(new Float64Array(values).buffer)); }
-function __finish(result) {
+function __finish(results) {
   document.querySelectorAll('script').forEach(function (s) { s.remove(); });
-  document.getElementById('out').textContent = JSON.stringify(__errors.length ? {errors: __errors} : result);
+  document.getElementById('out').textContent = JSON.stringify(__errors.length ? {errors: __errors} : results);
 }
-</script>
-<script>__THREE__</script>
-<script>__LOADER__</script>
-<script>__MATERIAL__</script>
-<script>
-(function () {
-  var bytes = Uint8Array.from(atob('__GLB__'), function (c) { return c.charCodeAt(0); });
-  var job = __JOB__;
-  if (!bytes.length) {  // a page without a model: the job gets null
-    try { __finish(job(null)); } catch (e) { __errors.push(String(e && e.stack || e)); __finish(null); }
-    return;
-  }
+// Each job gets its own parse of model.glb (null for a page without a model); a job may return a Promise.
+async function __run() {
+  var results = [];
   try {
-    new THREE.GLTFLoader().parse(bytes.buffer, '', function (gltf) {
-      try { __finish(job(gltf)); } catch (e) { __errors.push(String(e && e.stack || e)); __finish(null); }
-    }, function (e) { __errors.push('GLTFLoader: ' + String(e && e.message || e)); __finish(null); });
-  } catch (e) { __errors.push(String(e && e.stack || e)); __finish(null); }
-})();
-</script></body></html>"""
+    if (THREE.REVISION !== '__REVISION__') throw new Error('three.js r' + THREE.REVISION + ' loaded, not r__REVISION__');
+    var bytes = __HAS_MODEL__ ? await (await fetch('model.glb')).arrayBuffer() : null;
+    for (var i = 0; i < __jobs.length; i++) {
+      var gltf = bytes && await new Promise(function (resolve, reject) {
+        new GLTFLoader().parse(bytes, '', resolve, function (e) { reject(new Error('GLTFLoader: ' + String(e && e.message || e))); });
+      });
+      results.push(await __jobs[i](gltf));
+    }
+  } catch (e) { __errors.push(String(e && e.stack || e)); }
+  __finish(results);
+}
+var __jobs = [__JOBS__];
+</script>
+__LOADERS__
+</body></html>"""
+
+# r111: classic scripts (THREE and THREE.GLTFLoader globals); r180: the ES module, whose exports
+# the page makes globals so the jobs' JavaScript is the same for both.
+_LOADERS = {
+    "r111": """<script src="three.min.js"></script><script src="GLTFLoader.js"></script>
+<script src="material.js"></script><script>var GLTFLoader = THREE.GLTFLoader; __run();</script>""",
+    "r180": """<script type="module">
+import { THREE, GLTFLoader } from './three.module.js';
+import * as material from './material.js';
+window.THREE = THREE; window.GLTFLoader = GLTFLoader; Object.assign(window, material);
+__run();
+</script>""",
+}
 
 _LOAD_JOB = """function (gltf) {
   gltf.scene.updateMatrixWorld(true);
@@ -81,7 +124,7 @@ _LOAD_JOB = """function (gltf) {
   return meshes;
 }"""
 
-_RENDER_JOB = """function (gltf) {
+_RENDER_JOB = """async function (gltf) {
   var W = __W__, H = __H__, cam = __CAMERA__;
   var canvas = document.createElement('canvas');
   var renderer = new THREE.WebGLRenderer({canvas: canvas, antialias: false, alpha: true, preserveDrawingBuffer: true});
@@ -101,77 +144,137 @@ _RENDER_JOB = """function (gltf) {
   camera.updateMatrixWorld(true);
   var scene = new THREE.Scene();
   scene.add(gltf.scene);
-  (function (THREE, scene, gltf, camera) {
+  await (async function (THREE, scene, gltf, camera) {
     __SETUP__
   })(THREE, scene, gltf, camera);
   renderer.render(scene, camera);
   var gl = renderer.getContext(), px = new Uint8Array(W * H * 4);
   gl.readPixels(0, 0, W, H, gl.RGBA, gl.UNSIGNED_BYTE, px);
+  renderer.dispose();
+  renderer.forceContextLoss();  // one page renders many times: give each context back
   return {pixels: __b64(px), view: __f64(camera.matrixWorldInverse.elements),
           projection: __f64(camera.projectionMatrix.elements)};
 }"""
 
 
-def available():
-    """None when Chromium and the three.js files are installed, else the reason they are not."""
+def shipped_material(release="r111"):
+    """The text of the shipped material file the release loads (shaders/threejs/), as it is."""
+    from boxmarch.preview import sources
+
+    return (sources.shader_dir() / "threejs" / RELEASES[release].material).read_text()
+
+
+def _nicegui_three():
+    spec = importlib.util.find_spec("nicegui")  # finds the package without importing it
+    if spec is None or not spec.submodule_search_locations:
+        return None
+    return os.path.join(spec.submodule_search_locations[0], NICEGUI_THREE)
+
+
+def _release_files(release):
+    """Served name -> path of the release's three.js files (a path may not exist)."""
+    if release == "r111":
+        return dict(_R111_FILES)
+    return {"three.module.js": _nicegui_three() or "(the nicegui package)/" + NICEGUI_THREE}
+
+
+def available(release="r111"):
+    """None when Chromium and the release's three.js files are installed, else the reason they are not."""
     if shutil.which(CHROMIUM) is None:
         return "chromium is not installed (apt-get install chromium)"
-    for path in (THREE_JS, GLTF_LOADER_JS):
+    for path in _release_files(release).values():
         if not os.path.isfile(path):
-            return f"{path} is missing (apt-get install libjs-three)"
+            return f"{path} is missing ({RELEASES[release].installed_by})"
     return None
 
 
-def run_page(glb_bytes, job_js, material_js=""):
-    """Runs ``job_js`` (a JS function of the loaded gltf; of null when ``glb_bytes`` is empty) in
-    headless Chromium with three.js loaded; returns its JSON result."""
-    with open(THREE_JS) as f:
-        three = f.read()
-    with open(GLTF_LOADER_JS) as f:
-        loader = f.read()
-    parts = {"__THREE__": three, "__LOADER__": loader, "__MATERIAL__": material_js,
-             "__GLB__": base64.b64encode(glb_bytes).decode(), "__JOB__": job_js}
-    page = re.sub("|".join(parts), lambda m: parts[m.group(0)], _PAGE)
-    with tempfile.TemporaryDirectory(prefix="boxmarch-three-") as tmp:
-        path = os.path.join(tmp, "page.html")
-        with open(path, "w") as f:
-            f.write(page)
-        cmd = [CHROMIUM, "--headless", "--no-sandbox", "--use-angle=swiftshader",
-               "--enable-unsafe-swiftshader", "--virtual-time-budget=10000",
-               f"--user-data-dir={os.path.join(tmp, 'profile')}", "--dump-dom", "file://" + path]
-        # own session: on timeout every Chromium process (GPU, renderer) is killed with it
-        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                start_new_session=True)
-        try:
-            stdout, stderr = proc.communicate(timeout=TIMEOUT_S)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            raise RuntimeError(f"chromium timed out after {TIMEOUT_S} s:\n{proc.communicate()[1][-4000:]}") from None
+class Job(NamedTuple):
+    """A JavaScript function of the loaded gltf (its result JSON, or a Promise of it) and what
+    turns that result into the Python value :func:`run_jobs` returns."""
+
+    js: str
+    parse: Callable = lambda result: result
+
+
+class _Files(http.server.BaseHTTPRequestHandler):
+    files = {}  # served path -> bytes, set per server
+
+    def do_GET(self):
+        body = self.files.get(self.path.split("?")[0].lstrip("/"))
+        if body is None:
+            self.send_error(404)
+            return
+        kind = {".js": "text/javascript", ".html": "text/html", ".json": "application/json"}
+        self.send_response(200)
+        self.send_header("Content-Type", kind.get(os.path.splitext(self.path)[1], "application/octet-stream"))
+        self.send_header("Content-Length", str(len(body)))
+        self.end_headers()
+        self.wfile.write(body)
+
+    def log_message(self, *args):
+        pass
+
+
+def _serve(files):
+    """A loopback HTTP server of ``files`` on a free port, in a daemon thread; the caller shuts it down."""
+    handler = type("Files", (_Files,), {"files": files})
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    server.daemon_threads = True
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    return server
+
+
+def run_jobs(glb_bytes, jobs, material_js="", release="r111", files=None):
+    """Runs each :class:`Job` (or plain JS function text) in headless Chromium with three.js
+    ``release`` loaded, in order, each on a fresh parse of ``glb_bytes`` (null when it is empty);
+    returns their parsed results. ``material_js``: served as material.js, a classic script for
+    r111 (its functions become globals) or an ES module for r180 (its exports become globals).
+    ``files``: extra served files, name -> bytes (``glb_bytes`` is served as model.glb)."""
+    jobs = [j if isinstance(j, Job) else Job(j) for j in jobs]
+    served = {name: open(path, "rb").read() for name, path in _release_files(release).items()}
+    served.update({"material.js": material_js.encode(), "model.glb": bytes(glb_bytes)})
+    served.update(files or {})
+    parts = {"__REVISION__": RELEASES[release].revision, "__HAS_MODEL__": "true" if glb_bytes else "false",
+             "__JOBS__": ",\n".join(j.js for j in jobs), "__LOADERS__": _LOADERS[release]}
+    served["page.html"] = re.sub("|".join(parts), lambda m: parts[m.group(0)], _PAGE).encode()
+    server = _serve(served)
+    try:
+        with tempfile.TemporaryDirectory(prefix="boxmarch-three-") as tmp:
+            cmd = [CHROMIUM, "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+                   "--no-proxy-server", "--virtual-time-budget=30000", f"--user-data-dir={os.path.join(tmp, 'profile')}",
+                   "--dump-dom", f"http://127.0.0.1:{server.server_address[1]}/page.html"]
+            # own session: on timeout every Chromium process (GPU, renderer) is killed with it
+            proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                    start_new_session=True)
+            try:
+                stdout, stderr = proc.communicate(timeout=TIMEOUT_S)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                raise RuntimeError(f"chromium timed out after {TIMEOUT_S} s:\n{proc.communicate()[1][-4000:]}") from None
+    finally:
+        server.shutdown()
+        server.server_close()
     found = re.search(r'<pre id="out">(.*?)</pre>', stdout, re.S)
     if proc.returncode != 0 or not found or not found.group(1):
         raise RuntimeError(f"chromium (exit {proc.returncode}) wrote no result:\n{stderr[-4000:]}")
-    result = json.loads(html.unescape(found.group(1)))
-    if isinstance(result, dict) and "errors" in result:
-        raise RuntimeError("three.js page failed:\n" + "\n".join(result["errors"]))
-    return result
+    results = json.loads(html.unescape(found.group(1)))
+    if isinstance(results, dict) and "errors" in results:
+        raise RuntimeError(f"three.js r{RELEASES[release].revision} page failed:\n" + "\n".join(results["errors"]))
+    return [job.parse(result) for job, result in zip(jobs, results)]
+
+
+def run_page(glb_bytes, job_js, material_js="", release="r111"):
+    """The result of one job (:func:`run_jobs`)."""
+    return run_jobs(glb_bytes, [job_js], material_js, release)[0]
 
 
 def _f64(b64):
     return np.frombuffer(base64.b64decode(b64), dtype=np.float64)
 
 
-def load_attributes(glb_bytes):
-    """What three.js r111's GLTFLoader actually put on the GPU side of every mesh.
-
-    Returns one dict per Mesh/SkinnedMesh in traversal (load) order: ``{"name": str,
-    "attributes": {three_name: (count, itemSize) float64 array of the raw BufferAttribute values
-    (normalized integer attributes stay raw integers, as r111's getX..getW return them)},
-    "normalized": {three_name: bool}, "index": (n,) float64 array or None, "matrixWorld": 4x4}``.
-    three_name is r111's: TEXCOORD_0 -> uv, TEXCOORD_1 -> uv2, COLOR_0 -> color, NORMAL ->
-    normal, TANGENT -> tangent, POSITION -> position, anything else lower-cased (texcoord_2).
-    """
+def _meshes(result):
     meshes = []
-    for m in run_page(glb_bytes, _LOAD_JOB):
+    for m in result:
         attrs = m["attributes"]
         meshes.append({
             "name": m["name"],
@@ -183,26 +286,59 @@ def load_attributes(glb_bytes):
     return meshes
 
 
-def render(glb_bytes, material_js, setup_js, width, height, camera):
-    """Renders the .glb once with three.js r111 (WebGL 1, SwiftShader) and returns a :class:`Shot`.
+def load_job():
+    """:class:`Job` of what the release's GLTFLoader actually put on the GPU side of every mesh.
 
-    ``material_js``: classic-script JavaScript placed after three.js loads (function definitions,
-    e.g. ``createBoxmarchMaterial``). ``setup_js``: a statement list run with ``THREE``, ``scene``,
-    ``gltf`` and ``camera`` in scope, typically replacing mesh materials. ``camera``:
-    ``{"position", "target", "up" (default +Y), "fov" (vertical degrees)}`` for a
+    Its result: one dict per Mesh/SkinnedMesh in traversal (load) order: ``{"name": str,
+    "attributes": {three_name: (count, itemSize) float64 array of the raw BufferAttribute values
+    (normalized integer attributes stay raw integers, as getX..getW return them)},
+    "normalized": {three_name: bool}, "index": (n,) float64 array or None, "matrixWorld": 4x4}``.
+    three_name is the release's: POSITION -> position, NORMAL -> normal, TANGENT -> tangent,
+    COLOR_0 -> color, TEXCOORD_n -> ``RELEASES[release].texcoords[n]``.
+    """
+    return Job(_LOAD_JOB, _meshes)
+
+
+def load_attributes(glb_bytes, release="r111"):
+    """:func:`load_job`'s result for ``glb_bytes`` (one page)."""
+    return run_jobs(glb_bytes, [load_job()], release=release)[0]
+
+
+def render_job(setup_js, width, height, camera):
+    """:class:`Job` rendering the loaded .glb once (WebGL 1 for r111, WebGL 2 for r180; SwiftShader);
+    its result is a :class:`Shot`.
+
+    ``setup_js``: the body of an async function of ``THREE``, ``scene``, ``gltf`` and ``camera``
+    (``await`` allowed; ``GLTFLoader`` and the material file's functions are globals), typically
+    replacing mesh materials; ``gltf.scene`` is already in ``scene``.
+    ``camera``: ``{"position", "target", "up" (default +Y), "fov" (vertical degrees)}`` for a
     PerspectiveCamera or ``{"ortho": half_height, ...}`` for an OrthographicCamera with the
     image's aspect; optional ``near`` (0.1) and ``far`` (1000). The clear colour is (0, 0, 0, 0).
     ``Shot.view`` is ``camera.matrixWorldInverse`` and ``Shot.to_pixels`` comes from
     ``camera.projectionMatrix``, both as three.js computed them.
     """
-    job = (_RENDER_JOB.replace("__W__", str(int(width))).replace("__H__", str(int(height)))
-           .replace("__CAMERA__", json.dumps(camera)).replace("__SETUP__", setup_js))
-    out = run_page(glb_bytes, job, material_js)
-    pixels = np.frombuffer(base64.b64decode(out["pixels"]), dtype=np.uint8)
-    pixels = pixels.reshape(height, width, 4)[::-1].copy()  # readPixels starts at the bottom row
-    view = _f64(out["view"]).reshape(4, 4, order="F")
-    projection = _f64(out["projection"]).reshape(4, 4, order="F")
-    return Shot(pixels, view, ndc_to_pixels(width, height) @ projection @ view)
+    js = (_RENDER_JOB.replace("__W__", str(int(width))).replace("__H__", str(int(height)))
+          .replace("__CAMERA__", json.dumps(camera)).replace("__SETUP__", setup_js))
+
+    def shot(out):
+        pixels = np.frombuffer(base64.b64decode(out["pixels"]), dtype=np.uint8)
+        pixels = pixels.reshape(height, width, 4)[::-1].copy()  # readPixels starts at the bottom row
+        view = _f64(out["view"]).reshape(4, 4, order="F")
+        projection = _f64(out["projection"]).reshape(4, 4, order="F")
+        return Shot(pixels, view, ndc_to_pixels(width, height) @ projection @ view)
+
+    return Job(js, shot)
+
+
+def render(glb_bytes, material_js, setup_js, width, height, camera, release="r111"):
+    """One :func:`render_job` in its own page: a :class:`Shot`."""
+    return run_jobs(glb_bytes, [render_job(setup_js, width, height, camera)], material_js, release)[0]
+
+
+def sidecar_json(layout="NORMAL_FRAME", skinned=False, box_count=0, format_version=1, preset="GLTF"):
+    """The bytes of an export's sidecar ``NAME.boxmarch.json`` with the keys ``loadBoxmarch`` reads."""
+    return json.dumps({"format_version": format_version, "preset": preset, "layout": layout,
+                       "skinned": skinned, "box_count": box_count}).encode()
 
 
 def pose_bones_js(turns, angle):
@@ -218,7 +354,8 @@ def pose_bones_js(turns, angle):
             "  bmRest[name] = bone.getWorldQuaternion(new THREE.Quaternion());\n"
             "});\n"
             "Object.keys(bmTurns).forEach(function (name) {\n"
-            "  var axis = new THREE.Vector3().fromArray(bmTurns[name]).normalize().applyQuaternion(bmRest[name].clone().inverse());\n"
+            "  var back = bmRest[name].clone(); back = back.invert ? back.invert() : back.inverse();  // r123 renamed it\n"
+            "  var axis = new THREE.Vector3().fromArray(bmTurns[name]).normalize().applyQuaternion(back);\n"
             f"  gltf.scene.getObjectByName(name).quaternion.multiply(new THREE.Quaternion().setFromAxisAngle(axis, {float(angle)!r}));\n"
             "});\n"
             "gltf.scene.updateMatrixWorld(true);\n")
