@@ -290,7 +290,7 @@ def _newest_change(project_dir):
                default=0.0)
 
 
-def import_project(project_dir, models, quiet_s=2.0):
+def import_project(project_dir, models, quiet_s=1.0):
     """Runs Godot's editor headless on ``project_dir`` until every one of ``models`` (paths
     relative to the project) has its ``.import/NAME-*.md5`` and no file of the project changed
     for ``quiet_s`` seconds, then stops it (``--quit`` can leave before the first scan when the
