@@ -10,7 +10,8 @@ APT_PACKAGES=(blender python3-numpy libglm-dev libnanoflann-dev glslang-tools xv
               libgl1-mesa-dri libegl1 libegl-mesa0  # Mesa llvmpipe: the preview's GPU tests without a GPU
               cmake clang-14 libclang-rt-14-dev  # sanitizer build and libFuzzer target
               chromium libjs-three godot3 godot3-server fonts-liberation  # tests/engines: three.js r111 in headless Chromium, Godot 3 (under the xvfb above)
-              spirv-cross)  # tests/engines/hlsl_webgl.py: the Unity HLSL, compiled to SPIR-V, drawn by WebGL 2
+              spirv-cross  # tests/engines/hlsl_webgl.py: the Unity HLSL, compiled to SPIR-V, drawn by WebGL 2
+              mono-mcs)  # tests/test_engine_import_settings.py: the Unity postprocessor compiled against a stub of Unity's API
 missing=()
 for pkg in "${APT_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
@@ -23,6 +24,6 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 echo "[setup] pip install (bpy, build and test tools)" >&2
-"$PYTHON" -m pip install -q --disable-pip-version-check bpy "scikit-build-core>=0.10" "pybind11>=2.12" pytest hypothesis matplotlib
+"$PYTHON" -m pip install -q --disable-pip-version-check bpy "scikit-build-core>=0.10" "pybind11>=2.12" pytest hypothesis matplotlib jsonschema
 echo "[setup] building boxmarch" >&2
 "$PYTHON" -m pip install -q --disable-pip-version-check --no-build-isolation .
