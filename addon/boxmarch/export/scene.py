@@ -273,7 +273,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
 def _write_sidecar(path, preset, layout, filepath, stats, skins) -> None:
     """Writes the sidecar (export/sidecar.py) of an export to ``path``."""
     text = json.dumps(sidecar.describe(preset, layout, filepath, stats, _skin_summary(skins),
-                                       file_channel_names(preset, layout)), indent=2)
+                                       file_channel_names(preset, layout)), indent=2, allow_nan=False)
     with open(path, "w") as f:
         f.write(text + "\n")
 
