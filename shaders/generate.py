@@ -11,7 +11,9 @@ the SDF library and the march.
   and 3.00 on WebGL 2);
 * godot3/boxmarch.shader: godot3/template.shader with decode.glsl, every function of sdf.glsl and
   of raymarch.glsl; Godot 3 has no global variables, so bm_march and bm_normal take the box
-  (h, index) and pass it on to map() (``passing_the_box``).
+  (h, index) and pass it on to map() (``passing_the_box``);
+* the engine packages' copies: engines/unity/com.boxmarch.boxmarch/Runtime/Shaders (every file a
+  Unity material needs from shaders/hlsl) and engines/godot3/addons/boxmarch/boxmarch.shader.
 
 The translators rewrite only what differs between the languages, and refuse a source that calls
 anything else they do not know (a GLSL built-in such as mod(), whose HLSL fmod() truncates where
@@ -208,6 +210,23 @@ OUTPUTS = {
     "shaders/threejs/boxmarch.module.js": lambda: threejs(module=True),
     "shaders/godot3/boxmarch.shader": godot3,
 }
+
+
+# The engine packages (engines/) ship copies of the engine shaders, one folder a user copies.
+UNITY_SHADERS = "engines/unity/com.boxmarch.boxmarch/Runtime/Shaders"
+UNITY_COPIES = ("boxmarch.hlsl", "boxmarch_decode.hlsl", "boxmarch_sdf.hlsl", "boxmarch_march.hlsl",
+                "boxmarch_raymarch.hlsl", "boxmarch_example.hlsl", "BoxmarchExample.shader")
+
+
+def copied(source: str) -> str:
+    """The text of ``source`` (a path relative to the repository) as an engine package ships it:
+    under a line naming the file to edit instead; a generated source as generate.py makes it."""
+    text = OUTPUTS[source]() if source in OUTPUTS else (REPO / source).read_text()
+    return f"// COPIED by shaders/generate.py from {source}: edit that file, not this copy\n" + text
+
+
+OUTPUTS.update({f"{UNITY_SHADERS}/{name}": (lambda name=name: copied(f"shaders/hlsl/{name}")) for name in UNITY_COPIES})
+OUTPUTS["engines/godot3/addons/boxmarch/boxmarch.shader"] = lambda: copied("shaders/godot3/boxmarch.shader")
 
 
 def main(argv) -> int:

@@ -6,6 +6,7 @@ import re
 import numpy as np
 
 from boxmarch import scenes
+from engines import import_helpers
 
 # Blender object space -> glTF / Godot (x, z, -y).
 TO_Y_UP = np.array([[1, 0, 0], [0, 0, 1], [0, -1, 0]], float)
@@ -143,17 +144,51 @@ def rounded_box_mismatch(covered, shot, centres, sizes, rotations, to_engine, ra
     return coverage_mismatch(covered | ~inside, [np.array([[0, 0], [width, 0], [width, height], [0, height]])])
 
 
-# The Unity and Unreal FBX importers, modelled from their documentation (docs/ENGINES.md).
-UNITY = {"to_engine": np.diag([-1.0, 1.0, 1.0]) @ TO_Y_UP, "from_file": np.diag([-1.0, 1.0, 1.0]), "scale": 1.0,
-         "flip_v": False}
-UNREAL = {"to_engine": np.diag([1.0, -1.0, 1.0]) * 100.0, "from_file": np.diag([1.0, -1.0, 1.0]) @ TO_Y_UP.T * 100.0,
-          "scale": 100.0, "flip_v": True}
+class NotModelled(ValueError):
+    """An import setting whose effect the modelled importer does not reproduce."""
+
+
+def unity_import(settings):
+    """Unity's FBX import, modelled from its documentation (docs/ENGINES.md), under the
+    ModelImporter ``settings`` ({property: C# value}, as the shipped postprocessor sets them):
+    x negated (right- to left-handed), UVs read as written, TexCoord2-7 stored as half floats
+    by the Player's vertex compression unless Read/Write is on; the file's normals and tangents
+    kept when both are imported. Settings whose effect is not modelled raise NotModelled."""
+    if settings.get("meshCompression") != "ModelImporterMeshCompression.Off":
+        raise NotModelled(f"Unity's Mesh Compression {settings.get('meshCompression')} is not modelled")
+    return {"to_engine": np.diag([-1.0, 1.0, 1.0]) @ TO_Y_UP, "from_file": np.diag([-1.0, 1.0, 1.0]), "scale": 1.0,
+            "flip_v": False, "half_float_channels": () if settings.get("isReadable") == "true" else (2, 3, 4, 5, 6),
+            "file_frame": (settings.get("importNormals"), settings.get("importTangents"))
+            == ("ModelImporterNormals.Import", "ModelImporterTangents.Import")}
+
+
+def unreal_import(import_data, build):
+    """Unreal's FBX import, modelled from its documentation and source (docs/ENGINES.md), under
+    the FbxStaticMeshImportData ``import_data`` and MeshBuildSettings ``build`` the shipped
+    script sets: the file's axes converted back to Z-up, then y negated, metres to centimetres
+    (Convert Scene, Convert Scene Unit), every UV read as (u, 1 - v), UVs stored as half floats
+    unless Use Full Precision UVs. Settings whose effect is not modelled raise NotModelled."""
+    if not (import_data.get("convert_scene") and import_data.get("convert_scene_unit")):
+        raise NotModelled("Unreal's import without Convert Scene and Convert Scene Unit is not modelled")
+    if import_data.get("generate_lightmap_u_vs", True) or build.get("generate_lightmap_u_vs", True):
+        raise NotModelled("Unreal's lightmap UV generation (it writes into a UV channel) is not modelled")
+    return {"to_engine": np.diag([1.0, -1.0, 1.0]) * 100.0, "from_file": np.diag([1.0, -1.0, 1.0]) @ TO_Y_UP.T * 100.0,
+            "scale": 100.0, "flip_v": True,
+            "half_float_channels": () if build.get("use_full_precision_u_vs") else (1, 2, 3, 4, 5, 6)}
+
+
+# The imports the shipped helpers set up (engines/unity, engines/unreal, read as source).
+UNITY = unity_import(import_helpers.unity_settings())
+UNREAL = unreal_import(import_helpers.unreal_constants()["IMPORT_DATA"], import_helpers.unreal_constants()["BUILD_SETTINGS"])
 UV_NAMES = ["BoxQuatXY", "BoxQuatZW", "BoxOffsetXY", "BoxOffsetZIndex", "BoxHalfXY", "BoxHalfZ"]
 
 
-def imported(raw, engine, half_float_channels=()):
+def imported(raw, engine, half_float_channels=None):
     """(positions, UV1..UV6) as the engine stores them: positions through the importer's axes,
-    each UV map flipped if the importer flips v, then rounded to half floats where compressed."""
+    each UV map flipped if the importer flips v, then rounded to half floats in
+    ``half_float_channels`` (None: those of the engine's settings)."""
+    if half_float_channels is None:
+        half_float_channels = engine["half_float_channels"]
     positions = raw["position"] @ engine["from_file"].T
     uvs = []
     for channel, name in enumerate(UV_NAMES, start=1):
@@ -271,6 +306,8 @@ def unity_skinned_vertices(raw, skin):
     posed bone x bind pose, normals and tangents by the same 3 x 3 parts. The posed bone: its
     TransformLink moved by the test's forward kinematics (in the file's axes). Returns
     (positions, normals, tangents (w = handedness), rest normals, rest tangents)."""
+    if not UNITY["file_frame"]:
+        raise NotModelled("Unity's Calculate normals or tangents (they would replace the box frame) are not modelled")
     mirror = np.diag([*UNITY["from_file"].diagonal(), 1.0])
     to_file = np.eye(4)
     to_file[:3, :3] = TO_Y_UP  # Blender world -> the file's axes (metres, Y-up, right-handed)

@@ -111,7 +111,8 @@ def test_module_demo_prints_table_and_writes_checked_files(tmp_path, renderer):
     assert [m["name"] for m in meshes] == ["BoxWorld", "Chains"]
     assert sorted(os.listdir(tmp_path / "out")) == sorted([
         "demo.blend", "demo.glb", "demo.png", "demo_gltf.glb", "demo_godot3.glb", "demo_godot3.boxes.tres",
-        "demo_unity.fbx", "demo_unreal.fbx"])
+        "demo_unity.fbx", "demo_unreal.fbx", "demo_godot3.glb.import"]
+        + [f"demo{suffix}.boxmarch.json" for suffix in ("", "_gltf", "_godot3", "_unity", "_unreal")])
     for preset, layout in (("GLTF", "NORMAL_FRAME"), ("GODOT3", "NORMAL_COLOR"), ("UNITY", "UV_FRAME"),
                            ("UNREAL", "UV_FRAME")):
         assert re.search(rf"export {preset} .*layout {layout}", proc.stdout), proc.stdout
@@ -167,6 +168,7 @@ def test_module_cleanup_pipeline_dedups_merges_bakes_and_packs(messy_blend_34, t
     (["bake", "in.blend", "--out", "x.txt"], "must name a .blend"),
     (["export", "in.blend", "--preset", "GLTF"], "--to"),
     (["export", "in.blend", "--preset", "GLTF", "--to", "x.glb"], "not baked"),
+    (["export", "in.blend", "--preset", "GODOT3", "--to", "in.blend.glb"], "is a folder"),
     (["pipeline", "in.blend", "--steps", "bake,polish"], "--steps"),
     (["demo", "--count", "0"], "at least 100"),
     (["frobnicate"], "invalid choice"),
@@ -174,12 +176,25 @@ def test_module_cleanup_pipeline_dedups_merges_bakes_and_packs(messy_blend_34, t
 def test_module_bad_input_exits_2_with_one_line_and_writes_nothing(boxes_blend_34, tmp_path, args, reason):
     shutil.copy(boxes_blend_34, tmp_path / "in.blend")
     (tmp_path / "notes.txt").write_text("not a blend file")
+    (tmp_path / "in.blend.glb.import").mkdir()  # where a GODOT3 export to in.blend.glb writes its import settings
     files_before = sorted(os.listdir(tmp_path))
     proc = run_module(args, tmp_path)
     assert proc.returncode == 2, proc.stdout[-2000:] + proc.stderr[-2000:]
     last = proc.stderr.strip().splitlines()[-1]
     assert last.startswith("boxmarch: error:") and reason in last, proc.stderr
     assert sorted(os.listdir(tmp_path)) == files_before
+
+
+def test_module_export_refuses_a_report_over_its_sidecar(boxes_blend_34, tmp_path):
+    """The sidecar written beside --to is an output: --json naming it is refused before anything
+    is exported (the failure report still goes to --json, as for every error)."""
+    shutil.copy(boxes_blend_34, tmp_path / "in.blend")
+    proc = run_module(["pipeline", "in.blend", "--steps", "bake,export", "--preset", "GLTF", "--to", "x.glb",
+                       "--json", "x.boxmarch.json"], tmp_path)
+    assert proc.returncode == 2
+    assert "--json and --to (its x.boxmarch.json) name the same file" in proc.stderr.strip().splitlines()[-1]
+    assert not (tmp_path / "x.glb").exists()
+    assert json.loads((tmp_path / "x.boxmarch.json").read_text())["ok"] is False
 
 
 def test_module_failure_report_is_json_when_asked(boxes_blend_34, tmp_path):

@@ -7,6 +7,9 @@ Unity: x negated (right- to left-handed), UVs read as written, TexCoord2-7 store
 under the default vertex compression (Read/Write on keeps float32).
 Unreal: the file's axes converted back to Z-up, then y negated, metres to centimetres, every UV
 read as (u, 1 - v), UVs stored as half floats unless Use Full Precision UVs is on.
+The imports modelled without named settings are those the shipped helpers set (engines/unity's
+postprocessor, engines/unreal's script: tests/engine_scene.py reads them from their source);
+the default-settings tests name the channels stored as halves.
 """
 import numpy as np
 import pytest

@@ -9,7 +9,7 @@ import pytest
 
 from engine_scene import (TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame, frame_and_size_errors,
                           rounded_box_mismatch, silhouettes, table_texels)
-from engines import coverage_mismatch, godot3
+from engines import coverage_mismatch, godot3, import_helpers
 
 W, H = 320, 240
 WIDE = {"position": [2.0, 9.0, 14.0], "target": [0.5, -0.5, 0.0], "fov": 50, "near": 0.5, "far": 100}
@@ -31,9 +31,9 @@ def imported(blender, tmp_path):
     return str(project), table, centres, sizes, rotations
 
 
-def test_godot3_keeps_every_channel_and_decodes_to_the_boxes(imported):
-    project, table, centres, sizes, rotations = imported
-    (surface,) = godot3.dump_arrays(project)
+def assert_decodes_to_the_boxes(surface, table, centres, sizes, rotations):
+    """The NORMAL_COLOR decode (docs/ENGINES.md) of what Godot stored lands on the generating
+    boxes: origin and half-extents within 1e-5, axes within 1e-6, one index per box."""
     box = box_of_vertex(surface["vertex"], centres, sizes, rotations, TO_Y_UP)
     colour = surface["color"]
     index = colour[:, 3]
@@ -46,6 +46,23 @@ def test_godot3_keeps_every_channel_and_decodes_to_the_boxes(imported):
     assert sorted(set(index)) == list(range(len(centres)))
     for b in range(len(centres)):
         assert len(set(index[box == b])) == 1
+    return errors
+
+
+def origin_error(surface, centres, sizes, rotations):
+    """Worst distance, over the box's largest half-extent, from a vertex's decoded origin to its
+    generating box's centre (no use of the box table: it holds for any stored colour)."""
+    box = box_of_vertex(surface["vertex"], centres, sizes, rotations, TO_Y_UP)
+    origins, _axes, _half = decode_normal_frame(surface["vertex"], surface["normal"], surface["tangent"],
+                                                surface["color"][:, :3], np.ones((len(box), 3)))
+    centre = centres[box] @ TO_Y_UP.T
+    return float((np.linalg.norm(origins - centre, axis=1) / (sizes[box].max(axis=1) / 2)).max())
+
+
+def test_godot3_keeps_every_channel_and_decodes_to_the_boxes(imported):
+    project, table, centres, sizes, rotations = imported
+    (surface,) = godot3.dump_arrays(project)
+    assert_decodes_to_the_boxes(surface, table, centres, sizes, rotations)
 
 
 def shader(frame_code=None):
@@ -96,14 +113,74 @@ def test_godot3_default_compression_error_is_what_the_report_states(blender, tmp
     project = tmp_path / "project"
     godot3.import_gltf((tmp_path / "mixed.glb").read_bytes(), str(project), compress=True)
     (surface,) = godot3.dump_arrays(str(project))
-    box = box_of_vertex(surface["vertex"], centres, sizes, rotations, TO_Y_UP)
-    origins, _axes, _half = decode_normal_frame(surface["vertex"], surface["normal"], surface["tangent"],
-                                                surface["color"][:, :3], np.ones((len(box), 3)))
-    centre = centres[box] @ TO_Y_UP.T
-    error = (np.linalg.norm(origins - centre, axis=1) / (sizes[box].max(axis=1) / 2)).max()
+    error = origin_error(surface, centres, sizes, rotations)
     stated = report["default_import_error"]
     # Measured against the generating boxes, Godot's error is the report's figure (worst over
     # vertices against the float32 decode, from the measured quantization) within 1 %; far from
     # float precision (negative offsets clamp to 0: a box corner misses by sqrt(3) half-extents).
     assert error > 0.1
     assert stated is not None and abs(error - stated) <= 0.01 * stated, (error, stated)
+
+
+def copied_project(project, folders, plugin=False):
+    """A fresh Godot project holding the files of ``folders`` ({folder in the project: local
+    folder}) as they are, with the boxmarch plug-in (engines/godot3/addons) enabled if asked."""
+    files = {f"{name}/{p.name}": p.read_bytes() for name, folder in folders.items() for p in folder.iterdir()}
+    if plugin:
+        files.update({f"addons/boxmarch/{p.name}": p.read_bytes() for p in import_helpers.GODOT3_ADDON.iterdir()})
+    godot3.write_project(str(project), files, ["boxmarch"] if plugin else ())
+    return str(project)
+
+
+@pytest.mark.slow
+def test_godot3_export_folder_copied_alone_imports_float_exact(blender, tmp_path):
+    """The GODOT3 export's folder copied as it is into a fresh project: Godot honours the
+    NAME.glb.import written beside the .glb (compression off) and the decode is float-exact. The
+    same folder without that file gets Godot's default import, which misses by over 0.1."""
+    reason = godot3.available()
+    if reason:
+        pytest.skip(reason)
+    from boxmarch.export import scene as export_scene
+
+    ob, centres, sizes, rotations = baked_scene(blender)
+    export = tmp_path / "export"
+    export.mkdir()
+    export_scene.export_objects(blender.context, [ob], "GODOT3", str(export / "mixed.glb"))
+    assert sorted(p.name for p in export.iterdir()) == ["mixed.boxes.tres", "mixed.boxmarch.json", "mixed.glb",
+                                                        "mixed.glb.import"]
+    project = copied_project(tmp_path / "project", {"models": export})
+    godot3.import_project(project, ["models/mixed.glb"])
+    (surface,) = godot3.dump_arrays(project, "res://models/mixed.glb")
+    assert_decodes_to_the_boxes(surface, (export / "mixed.boxes.tres").read_text(), centres, sizes, rotations)
+    (export / "mixed.glb.import").unlink()
+    default = copied_project(tmp_path / "default", {"models": export})
+    godot3.import_project(default, ["models/mixed.glb"])
+    (surface,) = godot3.dump_arrays(default, "res://models/mixed.glb")
+    assert origin_error(surface, centres, sizes, rotations) > 0.1
+
+
+@pytest.mark.slow
+def test_godot3_plugin_imports_boxmarch_glbs_float_exact_and_refuses_other_layouts(blender, tmp_path):
+    """engines/godot3/addons/boxmarch enabled in a fresh project holding a GODOT3 export without
+    its .import file (Godot's first import compresses it; the plug-in sets compression off and
+    has it imported again) and a GLTF export (NORMAL_FRAME: its UV3-4 do not survive Godot 3's
+    importer), both with their sidecars: the first decodes float-exact, the second is reported
+    by name and layout and left as Godot imported it."""
+    reason = godot3.available()
+    if reason:
+        pytest.skip(reason)
+    from boxmarch.export import scene as export_scene
+
+    ob, centres, sizes, rotations = baked_scene(blender)
+    godot, gltf = tmp_path / "godot", tmp_path / "gltf"
+    godot.mkdir(), gltf.mkdir()
+    export_scene.export_objects(blender.context, [ob], "GODOT3", str(godot / "mixed.glb"))
+    (godot / "mixed.glb.import").unlink()
+    export_scene.export_objects(blender.context, [ob], "GLTF", str(gltf / "other.glb"))
+    project = copied_project(tmp_path / "project", {"models": godot, "other": gltf}, plugin=True)
+    log = godot3.import_project(project, ["models/mixed.glb", "other/other.glb"], quiet_s=2.0)  # the re-import too
+    (surface,) = godot3.dump_arrays(project, "res://models/mixed.glb")
+    assert_decodes_to_the_boxes(surface, (godot / "mixed.boxes.tres").read_text(), centres, sizes, rotations)
+    assert "boxmarch: re-importing res://models/mixed.glb with mesh compression off" in log
+    assert "boxmarch: res://other/other.glb: layout NORMAL_FRAME (preset GLTF) is not read by Godot 3" in log, log
+    assert "meshes/compress=true" in (tmp_path / "project" / "other" / "other.glb.import").read_text()

@@ -27,8 +27,10 @@ def test_generated_files_carry_the_shared_decode_verbatim():
 
 
 def copy_of_the_generated_tree(tmp_path):
-    """shaders/ (generator, sources, outputs) and the generated C++ at their relative paths."""
+    """shaders/ (generator, sources, outputs), the generated C++ and the engine packages' copies
+    (engines/) at their relative paths."""
     shutil.copytree(SHADERS, tmp_path / "shaders")
+    shutil.copytree(SHADERS.parent / "engines", tmp_path / "engines")
     (tmp_path / "cpp" / "src").mkdir(parents=True)
     shutil.copy(SHADERS.parent / "cpp" / "src" / "shader_library.h", tmp_path / "cpp" / "src")
     return tmp_path
@@ -42,7 +44,11 @@ def run_generator(root, *args):
     ("shaders/hlsl/boxmarch_sdf.hlsl", "return length(p) - r;", "return length(p) - 0.9 * r;"),
     ("shaders/hlsl/boxmarch_march.hlsl", "t += relaxation * d;", "t += d;"),
     ("cpp/src/shader_library.h", "return glm::length(p) - r;", "return glm::length(p) - 0.9f * r;"),
-    ("shaders/godot3/boxmarch.shader", "return length(p) - r;", "return length(p) - 0.9 * r;")])
+    ("shaders/godot3/boxmarch.shader", "return length(p) - r;", "return length(p) - 0.9 * r;"),
+    ("engines/unity/com.boxmarch.boxmarch/Runtime/Shaders/boxmarch_sdf.hlsl", "return length(p) - r;",
+     "return length(p) - 0.9 * r;"),
+    ("engines/unity/com.boxmarch.boxmarch/Runtime/Shaders/BoxmarchExample.shader", "Cull Off", "Cull Back"),
+    ("engines/godot3/addons/boxmarch/boxmarch.shader", "return length(p) - r;", "return length(p) - 0.9 * r;")])
 def test_a_drifted_generated_body_is_caught(tmp_path, relative, body, drifted):
     root = copy_of_the_generated_tree(tmp_path)
     assert run_generator(root, "--check").returncode == 0

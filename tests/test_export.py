@@ -193,7 +193,7 @@ def test_export_leaves_the_scene_as_it_was(blender, tmp_path):
     assert ob.data.name == "Boxes" and other.data.name == "Other"
     assert np.array_equal(np.array([d.uv[:] for d in ob.data.uv_layers["BoxQuatZW"].data]), uv_before)
     assert ob.select_get() and not other.select_get()
-    assert sorted(os.listdir(tmp_path)) == ["a.fbx", "a.glb"]  # no partial files left
+    assert sorted(os.listdir(tmp_path)) == ["a.boxmarch.json", "a.fbx", "a.glb"]  # no partial files left
 
 
 def test_export_refuses_unbaked_mesh_and_writes_nothing(blender, tmp_path):

@@ -59,7 +59,8 @@ def _write_json(path: str, report: dict) -> None:
 def _check_outputs(bpy, args, steps) -> None:
     """Every check on the output paths, run before anything is written (docs/CLI.md): each
     folder exists and is writable, no output is a folder, the input .blend or another output,
-    --out names a .blend and --to carries the preset's extension."""
+    --out names a .blend and --to carries the preset's extension. The files an export writes
+    beside --to (sidecar, box table, Godot import settings) are outputs too."""
     outputs = []
     if getattr(args, "out", None):
         if not args.out.lower().endswith(".blend"):
@@ -73,6 +74,9 @@ def _check_outputs(bpy, args, steps) -> None:
             raise InputError(f"--preset {args.preset} writes a {extension} file: --to must end in {extension}, "
                              f"got '{args.to}'")
         outputs.append(("--to", args.to))
+        from .export.sidecar import possibly_written_beside
+
+        outputs += [(f"--to (its {os.path.basename(path)})", path) for path in possibly_written_beside(args.to, args.preset)]
     if getattr(args, "json", None):
         outputs.append(("--json", args.json))
     inputs = {os.path.abspath(p) for p in (getattr(args, "blend", None), bpy.data.filepath if bpy else None) if p}

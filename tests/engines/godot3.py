@@ -13,6 +13,7 @@ import signal
 import struct
 import subprocess
 import tempfile
+import time
 
 import numpy as np
 
@@ -74,8 +75,11 @@ func store_array(f, a):
         f.store_double(x)
 
 func _init():
-    var scene = load("res://model.glb").instance()
     var f = File.new()
+    f.open(OS.get_environment("BOXMARCH_PARAMS"), File.READ)
+    var params = parse_json(f.get_as_text())
+    f.close()
+    var scene = load(params.model).instance()
     f.open(OS.get_environment("BOXMARCH_OUT"), File.WRITE)
     for mi in nodes_of_class(scene, "MeshInstance", []):
         for s in range(mi.mesh.get_surface_count()):
@@ -216,11 +220,16 @@ def available():
     return None
 
 
+def _home_env(home):
+    """The environment of a Godot run whose HOME and XDG folders are under ``home``."""
+    return dict(os.environ, HOME=home, XDG_CONFIG_HOME=os.path.join(home, "config"),
+                XDG_DATA_HOME=os.path.join(home, "data"), XDG_CACHE_HOME=os.path.join(home, "cache"))
+
+
 def _godot(cmd, project_dir, extra_env=()):
     """Runs a Godot command with a throw-away HOME; returns its combined output."""
     with tempfile.TemporaryDirectory(prefix="boxmarch-godot-home-") as home:
-        env = dict(os.environ, HOME=home, XDG_CONFIG_HOME=os.path.join(home, "config"),
-                   XDG_DATA_HOME=os.path.join(home, "data"), XDG_CACHE_HOME=os.path.join(home, "cache"))
+        env = _home_env(home)
         env.update(extra_env)
         # own session: on timeout the whole group (xvfb-run, Xvfb, godot) is killed
         proc = subprocess.Popen(cmd + ["--audio-driver", "Dummy", "--path", str(project_dir)],
@@ -252,29 +261,78 @@ def _run_script(cmd, project_dir, script, params=None):
             return f.read()
 
 
-def import_gltf(glb_bytes, project_dir, *, compress, extra_files=None):
-    """Writes a Godot 3 project holding ``model.glb`` (and ``extra_files``: relative path ->
-    bytes) into ``project_dir`` and imports it headless with ``meshes/compress`` set to
-    ``compress``. The settings go into ``model.glb.import`` and the cached import (``.import/``)
-    is deleted first: Godot honours an .import file present at import time, but editing it
-    alone does not trigger a re-import. Returns None; raises ``RuntimeError`` with Godot's output when
-    the imported scene is missing afterwards."""
-    os.makedirs(project_dir, exist_ok=True)
-    files = {"project.godot": _PROJECT.encode(), "model.glb": glb_bytes,
-             "model.glb.import": ('[remap]\n\nimporter="scene"\ntype="PackedScene"\n\n[params]\n\n'
-                                  f"meshes/compress={'true' if compress else 'false'}\n").encode()}
-    files.update(extra_files or {})
+def write_project(project_dir, files, plugins=()):
+    """Writes a Godot 3 project into ``project_dir``: project.godot (with the editor plug-ins
+    named by their folder under res://addons/ enabled, as Godot 3.2 names them) and ``files``
+    (relative path -> bytes)."""
+    text = _PROJECT
+    if plugins:
+        text += "\n[editor_plugins]\n\nenabled=PoolStringArray( " + ", ".join(f'"{p}"' for p in plugins) + " )\n"
+    files = {"project.godot": text.encode(), **files}
     for name, data in files.items():
         path = os.path.join(project_dir, name)
         os.makedirs(os.path.dirname(path), exist_ok=True)
         with open(path, "wb") as f:
             f.write(data)
+
+
+def _imported(project_dir, model):
+    """The md5 file of ``model`` (res:// relative path) in .import/, or None."""
+    folder = os.path.join(project_dir, ".import")
+    name = os.path.basename(model)
+    hits = [n for n in os.listdir(folder) if n.startswith(name + "-") and n.endswith(".md5")] if os.path.isdir(folder) else []
+    return os.path.join(folder, hits[0]) if hits else None
+
+
+def _newest_change(project_dir):
+    """The latest modification time of any file under ``project_dir``."""
+    return max((os.path.getmtime(os.path.join(root, n)) for root, _dirs, names in os.walk(project_dir) for n in names),
+               default=0.0)
+
+
+def import_project(project_dir, models, quiet_s=1.0):
+    """Runs Godot's editor headless on ``project_dir`` until every one of ``models`` (paths
+    relative to the project) has its ``.import/NAME-*.md5`` and no file of the project changed
+    for ``quiet_s`` seconds, then stops it (``--quit`` can leave before the first scan when the
+    machine is loaded, and an editor plug-in may re-import after the first import). Returns
+    Godot's output; raises RuntimeError with it when a model is not imported within TIMEOUT_S."""
+    with tempfile.TemporaryDirectory(prefix="boxmarch-godot-home-") as home:
+        env = _home_env(home)
+        log_path = os.path.join(home, "log.txt")
+        with open(log_path, "w") as log:
+            proc = subprocess.Popen([GODOT_SERVER, "-e", "--audio-driver", "Dummy", "--path", str(project_dir)],
+                                    env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        start, done = time.monotonic(), False
+        try:
+            while time.monotonic() - start < TIMEOUT_S and proc.poll() is None:
+                time.sleep(0.25)
+                if all(_imported(project_dir, m) for m in models) and time.time() - _newest_change(project_dir) > quiet_s:
+                    done = True
+                    break
+        finally:
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+            with open(log_path) as f:
+                output = f.read()
+    if not done:
+        missing = [m for m in models if not _imported(project_dir, m)]
+        raise RuntimeError(f"Godot did not import {missing or models} within {TIMEOUT_S} s:\n{output[-6000:]}")
+    return output
+
+
+def import_gltf(glb_bytes, project_dir, *, compress, extra_files=None):
+    """Writes a Godot 3 project holding ``model.glb`` (and ``extra_files``: relative path ->
+    bytes) into ``project_dir`` and imports it headless (import_project) with ``meshes/compress``
+    set to ``compress``. The settings go into ``model.glb.import`` and the cached import
+    (``.import/``) is deleted first: Godot honours an .import file present at import time, but
+    editing it alone does not trigger a re-import. Returns Godot's output."""
     shutil.rmtree(os.path.join(project_dir, ".import"), ignore_errors=True)
-    log = _godot([GODOT_SERVER, "-e", "--quit"], project_dir)
-    imported = os.path.join(project_dir, ".import")
-    if not os.path.isdir(imported) or not any(n.startswith("model.glb-") and n.endswith(".scn")
-                                              for n in os.listdir(imported)):
-        raise RuntimeError(f"Godot did not import model.glb:\n{log[-6000:]}")
+    files = {"model.glb": glb_bytes,
+             "model.glb.import": ('[remap]\n\nimporter="scene"\ntype="PackedScene"\n\n[params]\n\n'
+                                  f"meshes/compress={'true' if compress else 'false'}\n").encode()}
+    write_project(project_dir, {**files, **(extra_files or {})})
+    return import_project(project_dir, ["model.glb"])
 
 
 def _read_xform(data, at):
@@ -285,14 +343,14 @@ def _read_xform(data, at):
     return m, at + 96
 
 
-def dump_arrays(project_dir):
+def dump_arrays(project_dir, model="res://model.glb"):
     """What Godot's importer stored: one dict per surface of every MeshInstance of the imported
-    ``res://model.glb`` (tree order): ``{"name": node name, "surface": index, "transform": 4x4
+    ``model`` (tree order): ``{"name": node name, "surface": index, "transform": 4x4
     node -> scene-root matrix, "vertex", "normal", "tangent", "color", "uv", "uv2", "bones",
     "weights", "index": float64 arrays or None}``. Per-vertex arrays are (count, width): vertex
     and normal 3, uv and uv2 2, tangent, color, bones and weights 4; index is (n,). Values are the
     float32 Godot holds, widened exactly."""
-    data = _run_script([GODOT_SERVER, "--quit"], project_dir, _DUMP)
+    data = _run_script([GODOT_SERVER, "--quit"], project_dir, _DUMP, {"model": model})
     surfaces, at, surface_of = [], 0, {}
     while at < len(data):
         (n,) = struct.unpack_from("<I", data, at)

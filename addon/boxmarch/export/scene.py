@@ -4,6 +4,7 @@ exporter on them, and swaps the artist's meshes back. The file appears only when
 (written under a temporary name in the same folder, then renamed)."""
 from __future__ import annotations
 
+import json
 import os
 import time
 
@@ -11,7 +12,7 @@ import bpy
 import numpy as np
 
 from .. import core, edit_mode, files, layouts, mesh_io
-from . import fbx, glb, godot, transforms
+from . import fbx, glb, godot, import_settings, sidecar, transforms
 
 
 class ExportInputError(ValueError):
@@ -165,9 +166,14 @@ def _run_exporter(preset, layout, path):
             export_active_vertex_color_when_no_material=True, export_animations=False)))
 
 
-def table_path(filepath: str) -> str:
-    """Where the NORMAL_COLOR layout's box table goes: beside the file, ``NAME.boxes.tres``."""
-    return os.path.splitext(filepath)[0] + ".boxes.tres"
+def file_channel_names(preset, layout) -> dict:
+    """The name each channel of ``layout`` has in the file ``preset`` writes: glTF attributes,
+    FBX UV maps and layers, the .blend's own attribute and UV map names."""
+    used = sorted({c.split(".")[0] for q in sidecar.QUANTITIES[layout].values() for c in q["channels"]} - {"TABLE"})
+    if preset.extension == ".glb":
+        return {c: f"TEXCOORD_{c[2:]}" if c.startswith("UV") else "COLOR_0" if c == "COLOR" else c for c in used}
+    fbx_layers = {"COLOR": mesh_io.OFFSET_ATTRIBUTE, "NORMAL": "LayerElementNormal", "TANGENT": "LayerElementTangent"}
+    return {c: uv_name(layout, c) if c.startswith("UV") else fbx_layers[c] for c in used}
 
 
 def export_objects(context, objects, preset_name: str, filepath: str, layout: str | None = None) -> dict:
@@ -206,21 +212,22 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     if not os.path.isdir(folder):
         raise ExportInputError(f"folder '{folder}' does not exist")
     partial = files.partial_path
-    outputs = {partial(filepath): filepath}
-    if layout == "NORMAL_COLOR":
-        outputs[partial(table_path(filepath))] = table_path(filepath)
+    outputs = {partial(path): path for path in [filepath] + sidecar.written_beside(filepath, preset.name, layout)}
+    for path in outputs.values():
+        if os.path.isdir(path):
+            raise ExportInputError(f"'{path}' is a folder: the export writes a file there")
     warnings = mesh_io.modifier_warnings(objects, "export")
     if preset.extension == ".fbx" and context.scene.unit_settings.scale_length != 1.0:
         warnings.append(f"unit scale is not 1: {preset.label} will scale positions by it and the offsets will not match")
     try:
         temp = partial(filepath)
         if preset.name == "BLENDER":
-            stats = [{"mesh": mesh.name, "vertices": len(mesh.vertices), "transform_error": 0.0} for mesh in meshes]
+            stats = [box_data(mesh, preset)[2] for mesh in meshes]  # the .blend holds the layers as they are
             bpy.data.libraries.write(temp, set(objects), fake_user=True, compress=False)
         else:
             stats, table = _export_with_copies(context, objects, meshes, preset, layout, temp, skins)
             if table is not None:
-                with open(partial(table_path(filepath)), "w") as f:
+                with open(partial(sidecar.table_path(filepath)), "w") as f:
                     f.write(godot.image_texture_tres(table))
             if preset.name == "UNITY" and layout == "CLASSIC":
                 floats = [m for m in stats if m["colour"] == "FLOAT_COLOR"]
@@ -230,6 +237,10 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
                         f"{max(m['max_alpha'] for m in floats):.3g}); Unity usually stores vertex colours as "
                         "8-bit Color32, which clips alpha above 1 and rounds the rest: bake with 8-bit colour "
                         "for Unity (docs/EXPORT.md)")
+        if preset.name == "GODOT3":
+            with open(partial(import_settings.godot3_import_path(filepath)), "w") as f:
+                f.write(import_settings.godot3_import_text())
+        _write_sidecar(partial(sidecar.sidecar_path(filepath)), preset, layout, filepath, stats, skins)
         for temp, final in outputs.items():
             os.replace(temp, final)
     finally:
@@ -250,13 +261,25 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
         warnings.append(f"with {preset.label}'s default import settings ({preset.default_import_loss}) the decode error is "
                         f"{max(default_errors):.1e} of the half-extent, not float32's: {preset.import_settings}")
     return {"preset": preset.name, "layout": layout, "path": os.path.abspath(filepath),
-            "skinned": {name: {"armature": skin.armature.name, "bones": list(skin.bones)}
-                        for name, skin in skins.items()},
+            "skinned": _skin_summary(skins),
             "default_import_error": max(default_errors) if default_errors else None,
-            "table": os.path.abspath(table_path(filepath)) if layout == "NORMAL_COLOR" else None,
+            "table": os.path.abspath(sidecar.table_path(filepath)) if layout == "NORMAL_COLOR" else None,
+            "sidecar": os.path.abspath(sidecar.sidecar_path(filepath)),
             "objects": [ob.name for ob in objects], "meshes": stats, "seconds": time.perf_counter() - start,
             "warnings": warnings, "import_settings": preset.import_settings,
             "transform_error": max((s["transform_error"] for s in stats), default=0.0)}
+
+
+def _write_sidecar(path, preset, layout, filepath, stats, skins) -> None:
+    """Writes the sidecar (export/sidecar.py) of an export to ``path``."""
+    text = json.dumps(sidecar.describe(preset, layout, filepath, stats, _skin_summary(skins),
+                                       file_channel_names(preset, layout)), indent=2, allow_nan=False)
+    with open(path, "w") as f:
+        f.write(text + "\n")
+
+
+def _skin_summary(skins) -> dict:
+    return {name: {"armature": skin.armature.name, "bones": list(skin.bones)} for name, skin in skins.items()}
 
 
 def _skins(context, objects, preset) -> dict:

@@ -68,8 +68,9 @@ PRESETS = {
         layouts=("NORMAL_COLOR",), godot3_compression=True,
         default_import_loss="mesh compression: 8-bit colour clamped to [0, 1], 8-bit normal and tangent",
         import_settings="Import dock of the .glb: Meshes > Compress off (else colour is 8-bit and normals, "
-                        "tangents and UV2 are packed); keep the .boxes.tres beside it and assign it to the "
-                        "shader's box_table"),
+                        "tangents and UV2 are packed): the NAME.glb.import written beside it sets this when copied "
+                        "with it, or the boxmarch plug-in (engines/godot3) does; keep the .boxes.tres beside it and "
+                        "assign it to the shader's box_table"),
     "UNITY": Preset(
         "UNITY", "Unity (FBX)", ".fbx", Z_UP_TO_Y_UP, np.array([-1.0, 1.0, 1.0]),
         "FBX for Unity's importer: left-handed Y-up object frame, box data in float UV channels "

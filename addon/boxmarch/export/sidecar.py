@@ -1,0 +1,121 @@
+"""The files an export writes beside its model, and the sidecar ``NAME.boxmarch.json`` that tells
+an engine-side helper (Godot plug-in, Unity postprocessor, three.js loader, Unreal script) what the
+model holds: layout, channel of every quantity, axes and units, box count, skinning, the import
+settings the engine needs and the decode error the export measured. Blender-free.
+
+``sidecar.schema.json`` beside this module is the JSON Schema of the sidecar (docs/FORMAT.md);
+the keys ``format_version``, ``preset``, ``layout``, ``skinned`` and ``box_count`` are the ones
+every helper reads first, and keep their names and types across format versions.
+"""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from . import import_settings, transforms
+from .godot import TABLE_WIDTH as GODOT3_TABLE_WIDTH
+
+FORMAT_VERSION = 1
+SIDECAR_SUFFIX = ".boxmarch.json"
+SCHEMA_PATH = os.path.join(os.path.dirname(os.path.abspath(__file__)), "sidecar.schema.json")
+
+# Where each layout keeps each quantity, by channel ("UVn" = the n-th UV map after the artist's
+# UV0, "COLOR", "NORMAL", "TANGENT", "TABLE" = the box table texel of the vertex's index);
+# layouts.py writes them and docs/ENGINES.md states the decode.
+QUANTITIES = {
+    "CLASSIC": {
+        "frame": {"encoding": "quaternion_xyzw", "channels": ["UV1.x", "UV1.y", "UV2.x", "UV2.y"]},
+        "offset": {"encoding": "classic_colour", "channels": ["COLOR.r", "COLOR.g", "COLOR.b", "COLOR.a"]}},
+    "UV_FRAME": {
+        "frame": {"encoding": "quaternion_xyzw", "channels": ["UV1.x", "UV1.y", "UV2.x", "UV2.y"]},
+        "offset": {"encoding": "float", "channels": ["UV3.x", "UV3.y", "UV4.x"]},
+        "index": {"encoding": "float", "channels": ["UV4.y"]},
+        "half_extents": {"encoding": "float", "channels": ["UV5.x", "UV5.y", "UV6.x"]}},
+    "NORMAL_FRAME": {
+        "frame": {"encoding": "normal_tangent", "channels": ["NORMAL", "TANGENT"]},
+        "offset": {"encoding": "float", "channels": ["UV1.x", "UV1.y", "UV2.x"]},
+        "index": {"encoding": "float", "channels": ["UV2.y"]},
+        "half_extents": {"encoding": "float", "channels": ["UV3.x", "UV3.y", "UV4.x"]}},
+    "NORMAL_COLOR": {
+        "frame": {"encoding": "normal_tangent", "channels": ["NORMAL", "TANGENT"]},
+        "offset": {"encoding": "float", "channels": ["COLOR.r", "COLOR.g", "COLOR.b"]},
+        "index": {"encoding": "float", "channels": ["COLOR.a"]},
+        "half_extents": {"encoding": "box_table", "channels": ["TABLE.r", "TABLE.g", "TABLE.b"]}},
+}
+
+# Blender's object space, the glTF / FBX files (both written right-handed Y-up in metres) and the
+# engines' object frames, in which the box data of each preset are expressed (export/transforms.py).
+_BLENDER = {"up": "+Z", "handedness": "right", "units": "metre"}
+_Y_UP = {"up": "+Y", "handedness": "right", "units": "metre"}
+DATA_FRAMES = {"GLTF": _Y_UP, "GODOT3": _Y_UP, "BLENDER": _BLENDER,
+               "UNITY": {"up": "+Y", "handedness": "left", "units": "metre"},
+               "UNREAL": {"up": "+Z", "handedness": "left", "units": "centimetre"}}
+
+
+def sidecar_path(filepath: str) -> str:
+    """``NAME.boxmarch.json`` beside ``filepath`` (NAME: its stem)."""
+    return os.path.splitext(filepath)[0] + SIDECAR_SUFFIX
+
+
+def table_path(filepath: str) -> str:
+    """Where the NORMAL_COLOR layout's box table goes: beside the file, ``NAME.boxes.tres``."""
+    return os.path.splitext(filepath)[0] + ".boxes.tres"
+
+
+def written_beside(filepath: str, preset_name: str, layout: str) -> list[str]:
+    """Every file an export of ``preset_name`` in ``layout`` writes besides ``filepath``: the
+    sidecar, the box table of NORMAL_COLOR, Godot 3's import settings (``NAME.glb.import``)."""
+    paths = [sidecar_path(filepath)]
+    if layout == "NORMAL_COLOR":
+        paths.append(table_path(filepath))
+    if preset_name == "GODOT3":
+        paths.append(import_settings.godot3_import_path(filepath))
+    return paths
+
+
+def possibly_written_beside(filepath: str, preset_name: str) -> list[str]:
+    """The files an export with ``preset_name`` may write beside ``filepath``, whatever layout the
+    export picks (the command line checks them before the objects are read)."""
+    paths = {}
+    for layout in transforms.PRESETS[preset_name].layouts:
+        paths.update(dict.fromkeys(written_beside(filepath, preset_name, layout)))
+    return list(paths)
+
+
+def data_from_file(preset) -> np.ndarray:
+    """(3, 3) matrix taking positions as the file holds them to the frame the box data are
+    expressed in (the engine's object frame after its importer), units included."""
+    file_from_blender = np.eye(3) if preset.extension == ".blend" else transforms.Z_UP_TO_Y_UP
+    return preset.axes @ file_from_blender.T * preset.length_scale
+
+
+def describe(preset, layout: str, filepath: str, stats: list, skins: dict, file_channel_names: dict) -> dict:
+    """The sidecar of an export of ``stats`` (per mesh, export.scene.box_data's) to ``filepath``
+    with ``preset`` (transforms.Preset) in ``layout``; ``skins``: {object: {"armature", "bones"}}
+    of the skinned objects; ``file_channel_names``: the name each channel has in the file ("UV1"
+    -> "TEXCOORD_1" or an FBX UV map name)."""
+    quantities = {name: dict(q) for name, q in QUANTITIES[layout].items()}
+    if layout == "NORMAL_COLOR":
+        quantities["half_extents"].update(file=os.path.basename(table_path(filepath)),
+                                          texels_per_row=GODOT3_TABLE_WIDTH)
+    default_errors = [m["default_import_error"] for m in stats if "default_import_error" in m]
+    return {
+        "format_version": FORMAT_VERSION,
+        "preset": preset.name,
+        "layout": layout,
+        "skinned": bool(skins),
+        "box_count": int(sum(m["boxes"] for m in stats)),
+        "file": os.path.basename(filepath),
+        "vertex_count": int(sum(m["vertices"] for m in stats)),
+        "meshes": [{"name": m["mesh"], "vertices": int(m["vertices"]), "boxes": int(m["boxes"])} for m in stats],
+        "skins": skins,
+        "quantities": quantities,
+        "file_channels": file_channel_names,
+        "axes": {"file": _BLENDER if preset.extension == ".blend" else _Y_UP, "data": DATA_FRAMES[preset.name],
+                 "data_from_file": data_from_file(preset).tolist(), "length_scale": preset.length_scale,
+                 "v_flipped_in_file": preset.flip_v_on_import},
+        "import_settings": import_settings.for_preset(preset.name, preset.import_settings),
+        "decode_error": {"export": max((float(m["transform_error"]) for m in stats), default=0.0),
+                         "default_import": max(default_errors) if default_errors else None},
+    }

@@ -1,0 +1,105 @@
+// COPIED by shaders/generate.py from shaders/hlsl/boxmarch_example.hlsl: edit that file, not this copy
+// boxmarch_example.hlsl: a minimal complete raymarching material for a baked mesh (vertex and
+// fragment programs). Unity: BoxmarchExample.shader includes it (UnityCG provides the matrices);
+// elsewhere the same names are declared below. Compile check (add -D_LAYOUT_UV_FRAME or
+// -D_LAYOUT_NORMAL_FRAME for those layouts):
+//   glslangValidator -D -V -e frag -S frag boxmarch_example.hlsl
+#include "boxmarch.hlsl"
+
+#ifndef UNITY_CG_INCLUDED
+float4x4 unity_ObjectToWorld;
+float4x4 unity_WorldToObject;
+float4x4 unity_MatrixVP;
+float3 _WorldSpaceCameraPos;
+float4 _WorldSpaceLightPos0;
+#endif
+
+float4 _Color;
+float4 _UVChannels;   // xy: UV channels of BoxQuatXY and BoxQuatZW (the bake reports them)
+float4 _HalfExtents;  // xyz: box half-extents for the SDF; w = 0: use the cube from the offset scale
+int _MaxSteps;
+float _Epsilon;
+float _Relaxation;
+float _MaxDistance;
+
+float map(float3 p)
+{
+  return op_smooth_union(sdf_preset_sphere(p, box_half), sdf_preset_torus(p, box_half), 0.05 * max3(box_half));
+}
+
+#include "boxmarch_raymarch.hlsl"
+
+// The layout the mesh was exported with (docs/ENGINES.md): CLASSIC by default; Unity's
+// KeywordEnum _Layout in BoxmarchExample.shader defines _LAYOUT_UV_FRAME or _LAYOUT_NORMAL_FRAME.
+// UV_FRAME: TEXCOORD1-2 = quaternion, TEXCOORD3 + 4.x = f, 4.y = box index, TEXCOORD5 + 6.x = h.
+// NORMAL_FRAME (skin-safe: Unity's skinning turns the normal and tangent): NORMAL = local z,
+// TANGENT = (local x, w), TEXCOORD1 + 2.x = f, 2.y = box index, TEXCOORD3 + 4.x = h.
+struct appdata {
+  float4 vertex : POSITION;
+  float4 color : COLOR;
+  float2 uv0 : TEXCOORD0;
+  float2 uv1 : TEXCOORD1;
+  float2 uv2 : TEXCOORD2;
+  float2 uv3 : TEXCOORD3;
+  float2 uv4 : TEXCOORD4;
+  float2 uv5 : TEXCOORD5;
+  float2 uv6 : TEXCOORD6;
+  float3 normal : NORMAL;
+  float4 tangent : TANGENT;
+};
+
+struct v2f {
+  float4 pos : SV_POSITION;
+  float3 obj_pos : TEXCOORD0;
+  float3 offset : TEXCOORD1;                     // f, box-local
+  nointerpolation float3 axis_x : TEXCOORD2;     // the box's axes, engine object space
+  nointerpolation float3 axis_y : TEXCOORD3;
+  nointerpolation float3 axis_z : TEXCOORD4;
+  nointerpolation float3 half_extents : TEXCOORD5;
+};
+
+v2f vert(appdata v)
+{
+  v2f o;
+  o.pos = mul(unity_MatrixVP, mul(unity_ObjectToWorld, float4(v.vertex.xyz, 1.0)));
+  o.obj_pos = v.vertex.xyz;
+#if defined(_LAYOUT_NORMAL_FRAME)
+  o.offset = bm_offset(v.uv1, v.uv2);
+  o.axis_x = v.tangent.xyz;
+  o.axis_y = bm_axis_y(v.normal, v.tangent);
+  o.axis_z = v.normal;
+  o.half_extents = bm_half_extents(v.uv3, v.uv4);
+#else
+#if defined(_LAYOUT_UV_FRAME)
+  float4 q = normalize(bm_quaternion(v.uv1, v.uv2));
+  o.offset = bm_offset(v.uv3, v.uv4);
+  o.half_extents = bm_half_extents(v.uv5, v.uv6);
+#else
+  float4 q = normalize(bm_quaternion_from_channels(v.uv0, v.uv1, v.uv2, v.uv3, _UVChannels.xy));
+  o.offset = bm_offset_from_color(v.color);
+  o.half_extents = _HalfExtents.w > 0.5 ? _HalfExtents.xyz : bm_cube_half_extents(v.color);
+#endif
+  o.axis_x = mul(BOXMARCH_FRAME, bm_rotate_vector(float3(1.0, 0.0, 0.0), q));
+  o.axis_y = mul(BOXMARCH_FRAME, bm_rotate_vector(float3(0.0, 1.0, 0.0), q));
+  o.axis_z = mul(BOXMARCH_FRAME, bm_rotate_vector(float3(0.0, 0.0, 1.0), q));
+#endif
+  return o;
+}
+
+float4 frag(v2f i, bool front_facing : SV_IsFrontFace, out float depth : SV_Depth) : SV_Target
+{
+  float3 obj_camera = mul(unity_WorldToObject, float4(_WorldSpaceCameraPos, 1.0)).xyz;
+  bm_hit h = bm_raymarch_in_frame(i.obj_pos, obj_camera, i.offset, normalize(i.axis_x), normalize(i.axis_y),
+                                  normalize(i.axis_z), i.half_extents, front_facing, _MaxSteps, _Epsilon,
+                                  _Relaxation, _MaxDistance);
+  clip(h.hit ? 1.0 : -1.0);
+  float4 clip_pos = mul(unity_MatrixVP, mul(unity_ObjectToWorld, float4(h.obj_pos, 1.0)));
+  depth = clip_pos.z / clip_pos.w;
+#if defined(UNITY_CG_INCLUDED) && !defined(UNITY_REVERSED_Z)
+  depth = depth * 0.5 + 0.5;  // OpenGL-style clip space: z / w in [-1, 1]
+#endif
+  float3 world_normal = normalize(mul(h.obj_normal, (float3x3)unity_WorldToObject));
+  float lambert = max(dot(world_normal, normalize(_WorldSpaceLightPos0.xyz)), 0.0);
+  float3 ambient = lerp(float3(0.20, 0.19, 0.18), float3(0.42, 0.45, 0.50), 0.5 + 0.5 * world_normal.y);
+  return float4(_Color.rgb * (ambient + 0.8 * lambert), 1.0);
+}

@@ -1,0 +1,85 @@
+// COPIED by shaders/generate.py from shaders/hlsl/boxmarch_raymarch.hlsl: edit that file, not this copy
+// boxmarch_raymarch.hlsl: the box-local sphere tracer. Include boxmarch.hlsl, define
+// `float map(float3 p)` (box-local, may use box_half), then include this file. The march is
+// generated from shaders/glsl/raymarch.glsl (boxmarch_march.hlsl); bm_raymarch is the fragment
+// logic of shaders/glsl/preview.frag.glsl in engine terms.
+#ifndef BOXMARCH_RAYMARCH_INCLUDED
+#define BOXMARCH_RAYMARCH_INCLUDED
+
+// Optional change of object frame, engine object space from Blender object space (an orthonormal
+// 3x3, e.g. the axis conversion of an FBX import); identity by default.
+#ifndef BOXMARCH_FRAME
+#define BOXMARCH_FRAME float3x3(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+#endif
+
+#include "boxmarch_march.hlsl"
+
+// The largest half-extent, from the offset scale alone (s = 1 / largest |f| over the submesh;
+// for BOUNDS origins that is the box's largest half-extent): a cube that holds the box, for when
+// the real half-extents are not available to the engine shader.
+float3 bm_cube_half_extents(float4 color)
+{
+  float h = 1.0 / color.a;
+  return float3(h, h, h);
+}
+
+struct bm_hit {
+  bool hit;
+  float3 obj_pos;     // engine object space
+  float3 obj_normal;  // engine object space, unit
+  int steps;
+};
+
+// The whole per-fragment raymarch (as the Blender preview does it), in any layout:
+// obj_pos = the fragment's interpolated object-space position, obj_camera = the camera in object
+// space, f = the decoded box-local vector to the box origin, x, y, z = the box's unit axes in
+// engine object space, half_extents = the box's half-extents, front_facing = SV_IsFrontFace;
+// max_steps up to 512 (bm_march's bound).
+bm_hit bm_raymarch_in_frame(float3 obj_pos, float3 obj_camera, float3 f, float3 x, float3 y, float3 z,
+                            float3 half_extents, bool front_facing, int max_steps, float epsilon,
+                            float relaxation, float max_distance)
+{
+  bm_hit o;
+  o.hit = false;
+  o.obj_pos = obj_pos;
+  o.obj_normal = float3(0.0, 0.0, 1.0);
+  o.steps = 0;
+  box_half = half_extents;
+  float3 ro = -f;
+  float3 ray_object = obj_pos - obj_camera;
+  float eye_distance = length(ray_object);
+  float3 rd = normalize(bm_to_local(ray_object / eye_distance, x, y, z));
+  float2 span = bm_box_span(ro, rd, box_half);
+  float t_end = span.y;
+  // entry: front-facing, or (whatever the winding) more box ahead than behind; the far side
+  // only marches when the camera is inside the box
+  if (!front_facing && span.x + span.y < 0.0) {
+    if (eye_distance > -span.x) return o;
+    ro -= rd * eye_distance;
+    t_end = eye_distance;
+  }
+  float t;
+  int steps;
+  o.hit = bm_march(ro, rd, min(t_end, max_distance), max_steps, epsilon, relaxation, t, steps);
+  o.steps = steps;
+  if (!o.hit) return o;
+  float3 local_hit = ro + rd * t;
+  o.obj_pos = obj_pos + bm_from_local(local_hit + f, x, y, z);
+  o.obj_normal = bm_from_local(bm_normal(local_hit, bm_normal_tap(epsilon, box_half)), x, y, z);
+  return o;
+}
+
+// bm_raymarch_in_frame for the CLASSIC layout: color = the BoxOffset colour, quat = the
+// decoded quaternion (Blender's object frame, turned into the engine's by BOXMARCH_FRAME).
+bm_hit bm_raymarch(float3 obj_pos, float3 obj_camera, float4 color, float4 quat, float3 half_extents,
+                   bool front_facing, int max_steps, float epsilon, float relaxation, float max_distance)
+{
+  float4 q = normalize(quat);
+  return bm_raymarch_in_frame(obj_pos, obj_camera, bm_offset_from_color(color),
+                              mul(BOXMARCH_FRAME, bm_rotate_vector(float3(1.0, 0.0, 0.0), q)),
+                              mul(BOXMARCH_FRAME, bm_rotate_vector(float3(0.0, 1.0, 0.0), q)),
+                              mul(BOXMARCH_FRAME, bm_rotate_vector(float3(0.0, 0.0, 1.0), q)),
+                              half_extents, front_facing, max_steps, epsilon, relaxation, max_distance);
+}
+
+#endif  // BOXMARCH_RAYMARCH_INCLUDED

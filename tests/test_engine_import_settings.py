@@ -1,0 +1,129 @@
+"""The engine-side helpers in engines/ against the one table of import settings
+(addon/boxmarch/export/import_settings.py, which the sidecar records) and the sidecar's values.
+
+Unity: the AssetPostprocessor is compiled with mono's mcs against a stub of the Unity API it calls
+(tests/engines/unity_stub), never run in Unity; a misspelled Unity member must fail the compile.
+Unreal: the import script is parsed (python ast), never run in Unreal; the Custom node code is
+compiled as HLSL by glslangValidator. The modelled imports of tests/engine_scene.py are built from
+the settings read here, so the decode tests of the models test what the helpers set."""
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from engine_scene import UNITY, UNREAL, NotModelled, unity_import, unreal_import
+from engines import import_helpers
+
+
+def test_unity_postprocessor_sets_the_table_and_reads_the_sidecar_values():
+    from boxmarch.export import import_settings, sidecar, transforms
+
+    assert import_helpers.unity_settings() == import_settings.UNITY
+    constants = import_helpers.unity_constants()
+    assert constants == {"FormatVersion": sidecar.FORMAT_VERSION, "Preset": "UNITY",
+                         "SidecarSuffix": sidecar.SIDECAR_SUFFIX, "LayoutsRead": constants["LayoutsRead"]}
+    assert sorted(constants["LayoutsRead"]) == sorted(transforms.PRESETS["UNITY"].layouts)
+
+
+def test_unity_postprocessor_compiles_against_the_stub_and_a_misspelled_member_does_not(tmp_path):
+    reason = import_helpers.mcs_missing()
+    if reason:
+        pytest.skip(reason)
+    source = import_helpers.UNITY_POSTPROCESSOR.read_text()
+    built = import_helpers.compile_unity(source, tmp_path)
+    assert built.returncode == 0, built.stdout + built.stderr
+    assert (tmp_path / "boxmarch.dll").stat().st_size > 0
+    for right, wrong in (("importer.isReadable", "importer.isReadible"), ("ModelImporterNormals.Import",
+                                                                         "ModelImporterNormals.Imported")):
+        assert right in source
+        failed = import_helpers.compile_unity(source.replace(right, wrong), tmp_path)
+        assert failed.returncode != 0 and "error CS" in failed.stdout + failed.stderr, failed.stdout
+
+
+def test_unity_package_ships_the_hlsl_as_generated():
+    """The UPM package's Runtime/Shaders are shaders/generate.py's copies of shaders/hlsl (its
+    --check, run by tests/test_engine_shaders.py, fails on any drift); here: every file a
+    material includes is in the package."""
+    shaders = import_helpers.UNITY_PACKAGE / "Runtime" / "Shaders"
+    names = {p.name for p in shaders.iterdir()}
+    for path in shaders.iterdir():
+        for line in path.read_text().splitlines():
+            if line.strip().startswith("#include") and "Unity" not in line:
+                assert line.split('"')[1] in names, (path.name, line)
+    assert (import_helpers.UNITY_PACKAGE / "package.json").is_file()
+
+
+def test_unreal_script_parses_and_sets_the_table():
+    from boxmarch.export import import_settings, sidecar, transforms
+
+    constants = import_helpers.unreal_constants()  # ast.parse of the whole script
+    assert constants["IMPORT_DATA"] == import_settings.UNREAL_IMPORT
+    assert constants["BUILD_SETTINGS"] == import_settings.UNREAL_BUILD
+    assert constants["FORMAT_VERSION"] == sidecar.FORMAT_VERSION and constants["PRESET"] == "UNREAL"
+    assert constants["SIDECAR_SUFFIX"] == sidecar.SIDECAR_SUFFIX
+    assert constants["LAYOUTS_READ"] == transforms.PRESETS["UNREAL"].layouts
+
+
+def test_unreal_script_refuses_sidecars_it_does_not_read():
+    """The script's sidecar check is plain Python: run here without Unreal."""
+    namespace = {"__name__": "boxmarch_import"}
+    exec(compile(import_helpers.UNREAL_SCRIPT.read_text(), str(import_helpers.UNREAL_SCRIPT), "exec"), namespace)
+    refusal = namespace["sidecar_refusal"]
+    good = {"format_version": 1, "preset": "UNREAL", "layout": "UV_FRAME", "skinned": False, "box_count": 3}
+    assert refusal(good) is None
+    assert "UNREAL preset" in refusal(dict(good, preset="UNITY"))
+    assert "NORMAL_FRAME" in refusal(dict(good, layout="NORMAL_FRAME"))
+    assert "format version 2" in refusal(dict(good, format_version=2))
+
+
+def test_unreal_material_function_compiles_as_hlsl(tmp_path):
+    if shutil.which("glslangValidator") is None:
+        pytest.skip("glslangValidator is not installed (apt-get install glslang-tools)")
+    body = import_helpers.UNREAL_MATERIAL.read_text()
+    inputs = ", ".join(f"float2 {n}" for n in ("QuatXY", "QuatZW", "OffsetXY", "OffsetZIndex", "HalfXY", "HalfZ"))
+    # The function Unreal wraps a Custom node in: its inputs as parameters, additional outputs as out.
+    wrapper = (f"float3 boxmarch_uv_frame({inputs}, out float3 HalfExtents, out float BoxIndex)\n{{\n{body}\n}}\n"
+               "float4 main(float2 a : TEXCOORD1, float2 b : TEXCOORD2, float2 c : TEXCOORD3, float2 d : TEXCOORD4,"
+               " float2 e : TEXCOORD5, float2 g : TEXCOORD6) : SV_Target\n{\n  float3 h; float i;\n"
+               "  return float4(boxmarch_uv_frame(a, b, c, d, e, g, h, i) + h, i);\n}\n")
+    for name, text, ok in (("good.hlsl", wrapper, True), ("bad.hlsl", wrapper.replace("q.w", "q.v"), False)):
+        (tmp_path / name).write_text(text)
+        proc = subprocess.run(["glslangValidator", "-D", "-V", "-e", "main", "-S", "frag", str(tmp_path / name),
+                               "-o", str(tmp_path / "out.spv")], capture_output=True, text=True, timeout=60)
+        assert (proc.returncode == 0) == ok, proc.stdout + proc.stderr
+
+
+def test_godot3_plugin_and_import_file_set_the_table():
+    from boxmarch.export import import_settings, sidecar, transforms
+
+    constants = import_helpers.godot3_constants()
+    assert constants["PARAMS"] == import_settings.GODOT3
+    assert constants["FORMAT_VERSION"] == sidecar.FORMAT_VERSION and constants["PRESET"] == "GODOT3"
+    assert constants["SIDECAR_SUFFIX"] == sidecar.SIDECAR_SUFFIX
+    assert tuple(constants["LAYOUTS_READ"]) == transforms.PRESETS["GODOT3"].layouts
+    assert "meshes/compress=false\n" in import_settings.godot3_import_text()
+
+
+def same_model(a, b):
+    return a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
+
+
+def test_modelled_imports_follow_the_helpers_settings():
+    """The models used by the decode tests are those of the helpers' settings; changing one
+    setting changes the model (or is refused as not modelled)."""
+    from boxmarch.export import import_settings
+
+    assert same_model(UNITY, unity_import(import_settings.UNITY)) and UNITY["half_float_channels"] == ()
+    assert UNITY["file_frame"] is True
+    assert unity_import(dict(import_settings.UNITY, isReadable="false"))["half_float_channels"] == (2, 3, 4, 5, 6)
+    assert unity_import(dict(import_settings.UNITY, importTangents="ModelImporterTangents.CalculateMikk"))[
+        "file_frame"] is False
+    with pytest.raises(NotModelled):
+        unity_import(dict(import_settings.UNITY, meshCompression="ModelImporterMeshCompression.Low"))
+    assert same_model(UNREAL, unreal_import(import_settings.UNREAL_IMPORT, import_settings.UNREAL_BUILD))
+    assert UNREAL["half_float_channels"] == ()
+    no_full_precision = dict(import_settings.UNREAL_BUILD, use_full_precision_u_vs=False)
+    assert unreal_import(import_settings.UNREAL_IMPORT, no_full_precision)["half_float_channels"] == (1, 2, 3, 4, 5, 6)
+    with pytest.raises(NotModelled):
+        unreal_import(dict(import_settings.UNREAL_IMPORT, convert_scene_unit=False), import_settings.UNREAL_BUILD)
