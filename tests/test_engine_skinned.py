@@ -94,7 +94,7 @@ def shots(request, exported):
     glb = exported[0].read_bytes()
     jobs = {"side": setup_js(), "top": setup_js(), "rest-frame": setup_js(REST_FRAME), "loader": LOADER_SETUP}
     cameras = {"side": SIDE, "top": TOP, "rest-frame": SIDE, "loader": SIDE}
-    files = {"skinned.glb": glb, "skinned.boxmarch.json": threejs.sidecar_json(skinned=True, box_count=36)}
+    files = {"skinned.glb": glb, "skinned.boxmarch.json": exported[0].with_suffix(".boxmarch.json").read_bytes()}
     results = threejs.run_jobs(glb, [threejs.render_job(js, W, H, cameras[k]) for k, js in jobs.items()],
                                threejs.shipped_material(release), release, files)
     return dict(zip(jobs, results))

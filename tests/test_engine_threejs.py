@@ -72,6 +72,7 @@ def exported(bpy_module, tmp_path_factory):
         path = tmp_path_factory.mktemp("threejs") / f"{layout}.glb"
         assert blender.ops.boxmarch.export(filepath=str(path), preset="GLTF", layout=layout) == {"FINISHED"}
         files[layout] = path.read_bytes()
+        files[layout, "sidecar"] = path.with_suffix(".boxmarch.json").read_bytes()  # as the export wrote it
     return files, centres, sizes, rotations
 
 
@@ -86,9 +87,9 @@ def page(request, exported):
     files, centres, sizes, rotations = exported
     glb = files["NORMAL_FRAME"]
     boxes = len(centres)
-    served = {"mixed.glb": glb, "mixed.boxmarch.json": threejs.sidecar_json(box_count=boxes),
+    served = {"mixed.glb": glb, "mixed.boxmarch.json": files["NORMAL_FRAME", "sidecar"],
               "classic-layout.glb": files["CLASSIC"],
-              "classic.boxmarch.json": threejs.sidecar_json("CLASSIC", box_count=boxes),
+              "classic.boxmarch.json": files["CLASSIC", "sidecar"],
               "future.boxmarch.json": threejs.sidecar_json(format_version=2, box_count=boxes)}
     jobs = {"meshes": threejs.load_job()}
     for sdf in (BOX_MAP, ROUNDED_MAP):
