@@ -11,7 +11,7 @@ import bpy
 import numpy as np
 
 from .. import core, edit_mode, files, layouts, mesh_io
-from . import fbx, glb, godot, transforms
+from . import fbx, glb, godot, outputs_of, table_path, transforms
 
 
 class ExportInputError(ValueError):
@@ -165,11 +165,6 @@ def _run_exporter(preset, layout, path):
             export_active_vertex_color_when_no_material=True, export_animations=False)))
 
 
-def table_path(filepath: str) -> str:
-    """Where the NORMAL_COLOR layout's box table goes: beside the file, ``NAME.boxes.tres``."""
-    return os.path.splitext(filepath)[0] + ".boxes.tres"
-
-
 def export_objects(context, objects, preset_name: str, filepath: str, layout: str | None = None) -> dict:
     """Export ``objects`` (baked meshes) with a preset (and one of its layouts; None = its
     default) to ``filepath``. Returns a report dict. Raises ExportInputError (nothing written)
@@ -182,14 +177,15 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     objects = list({ob.name_full: ob for ob in objects}.values())  # each object once
     if not objects:
         raise ExportInputError("no objects to export")
-    if bpy.data.filepath and os.path.abspath(filepath) == os.path.abspath(bpy.data.filepath):
-        raise ExportInputError(f"'{filepath}' is the open .blend file: export to another path")
     for ob in objects:
         if ob.type != "MESH":
             raise ExportInputError(f"object '{ob.name}' is a {ob.type}, not a mesh")
     meshes = [ob.data for ob in mesh_io.one_object_per_mesh(objects)]
     for mesh in meshes:
         baked_layers(mesh)  # refuses unbaked meshes before anything is changed
+        if not mesh.polygons and preset.name != "BLENDER":
+            raise ExportInputError(f"mesh '{mesh.name}' has no faces (its baked layers are left from faces since "
+                                   "deleted): an engine draws the boxes from faces, so the file would hold nothing")
     skins = _skins(context, objects, preset)
     safe = [candidate for candidate in preset.layouts if layouts.LAYOUTS[candidate].skin_safe]
     if layout is None:  # the preset's own; for a skinned export its first that skinning carries
@@ -205,37 +201,34 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     folder = os.path.dirname(os.path.abspath(filepath))
     if not os.path.isdir(folder):
         raise ExportInputError(f"folder '{folder}' does not exist")
-    partial = files.partial_path
-    outputs = {partial(filepath): filepath}
-    if layout == "NORMAL_COLOR":
-        outputs[partial(table_path(filepath))] = table_path(filepath)
+    outputs = outputs_of(os.path.abspath(filepath), preset.name, layout)
+    for path in outputs:
+        if bpy.data.filepath and path == os.path.abspath(bpy.data.filepath):
+            raise ExportInputError(f"'{path}' is the open .blend file: export to another path")
     warnings = mesh_io.modifier_warnings(objects, "export")
     if preset.extension == ".fbx" and context.scene.unit_settings.scale_length != 1.0:
         warnings.append(f"unit scale is not 1: {preset.label} will scale positions by it and the offsets will not match")
-    try:
-        temp = partial(filepath)
+
+    def write(temps):
+        temp = temps[outputs[0]]
         if preset.name == "BLENDER":
-            stats = [{"mesh": mesh.name, "vertices": len(mesh.vertices), "transform_error": 0.0} for mesh in meshes]
             bpy.data.libraries.write(temp, set(objects), fake_user=True, compress=False)
-        else:
-            stats, table = _export_with_copies(context, objects, meshes, preset, layout, temp, skins)
-            if table is not None:
-                with open(partial(table_path(filepath)), "w") as f:
-                    f.write(godot.image_texture_tres(table))
-            if preset.name == "UNITY" and layout == "CLASSIC":
-                floats = [m for m in stats if m["colour"] == "FLOAT_COLOR"]
-                if floats:
-                    warnings.append(
-                        f"{', '.join(m['mesh'] for m in floats)}: float offsets (alpha up to "
-                        f"{max(m['max_alpha'] for m in floats):.3g}); Unity usually stores vertex colours as "
-                        "8-bit Color32, which clips alpha above 1 and rounds the rest: bake with 8-bit colour "
-                        "for Unity (docs/EXPORT.md)")
-        for temp, final in outputs.items():
-            os.replace(temp, final)
-    finally:
-        for temp in outputs:
-            if os.path.exists(temp):
-                os.remove(temp)
+            return [{"mesh": mesh.name, "vertices": len(mesh.vertices), "transform_error": 0.0} for mesh in meshes]
+        stats, table = _export_with_copies(context, objects, meshes, preset, layout, temp, skins)
+        if table is not None:
+            with open(temps[table_path(outputs[0])], "w") as f:
+                f.write(godot.image_texture_tres(table))
+        return stats
+
+    stats = files.write_together(outputs, write)
+    if preset.name == "UNITY" and layout == "CLASSIC":
+        floats = [m for m in stats if m["colour"] == "FLOAT_COLOR"]
+        if floats:
+            warnings.append(
+                f"{', '.join(m['mesh'] for m in floats)}: float offsets (alpha up to "
+                f"{max(m['max_alpha'] for m in floats):.3g}); Unity usually stores vertex colours as "
+                "8-bit Color32, which clips alpha above 1 and rounds the rest: bake with 8-bit colour "
+                "for Unity (docs/EXPORT.md)")
     for m in stats:
         skin = m.get("skin")
         if skin and skin["non_rigid_boxes"]:
@@ -253,7 +246,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             "skinned": {name: {"armature": skin.armature.name, "bones": list(skin.bones)}
                         for name, skin in skins.items()},
             "default_import_error": max(default_errors) if default_errors else None,
-            "table": os.path.abspath(table_path(filepath)) if layout == "NORMAL_COLOR" else None,
+            "table": os.path.abspath(table_path(filepath)) if layout == "NORMAL_COLOR" else None, "files": outputs,
             "objects": [ob.name for ob in objects], "meshes": stats, "seconds": time.perf_counter() - start,
             "warnings": warnings, "import_settings": preset.import_settings,
             "transform_error": max((s["transform_error"] for s in stats), default=0.0)}
