@@ -339,7 +339,9 @@ def _interrupts_recorded(interrupts: list):
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous)
+        # None: the Blender program's own C handler, which Python cannot put back; the default
+        # (end the process) is what a background Blender does on SIGINT.
+        signal.signal(signal.SIGINT, signal.SIG_DFL if previous is None else previous)
 
 
 def run(argv=None) -> int:

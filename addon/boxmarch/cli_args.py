@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import os
 
-from . import core
+from . import core, files
 
 
 class InputError(Exception):
@@ -146,6 +146,10 @@ def check_outputs(outputs, inputs, made_folders=()) -> None:
     seen = {}
     for option, path in outputs:
         full = os.path.abspath(path)
+        name_bytes = len(os.path.basename(full).encode())
+        if name_bytes > files.NAME_MAX:
+            raise InputError(f"{option}: the name '{os.path.basename(full)}' is {name_bytes} bytes, longer than the "
+                             f"{files.NAME_MAX} bytes a file name may have")
         _writable_folder(option, os.path.dirname(full), made_folders)
         if os.path.isdir(full):
             raise InputError(f"{option}: '{path}' is a folder")

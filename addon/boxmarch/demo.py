@@ -162,8 +162,9 @@ def _preview_picture(objects, sdfs, path, renderer, progress):
             with blender_output.captured(2) as context_lines:
                 rgba, _depth = preview.render(scene, camera, width, height)
             method = "GPU raymarch preview"
-            # Making the GPU context, Blender's EGL set-up prints "EGL Error (0x3009): EGL_BAD_MATCH"
-            # for the configurations Mesa refuses before the one it takes: the render worked.
+            # Blender's own first GPU context prints three "EGL Error (0x3009): EGL_BAD_MATCH" lines
+            # here (bpy 5.0.1 on Mesa llvmpipe; a plain Workbench render prints the same) and then
+            # works: the render came back, so they are not passed on.
             context_lines = [line for line in context_lines if not line.startswith("EGL Error")]
         except (SystemError, RuntimeError) as error:  # no GPU context here
             if renderer == "GPU":
