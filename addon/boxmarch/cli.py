@@ -8,9 +8,9 @@ Two forms run the same commands:
 Commands: bake, dedup, merge, pack-uv, export, pipeline (chains them), demo. They work on the
 objects named with --objects, or on every mesh object of the file. --out writes the result as a
 new .blend, --json a machine-readable report; both appear only complete (written under a
-temporary name, then renamed). Progress goes to stderr, the result table to stdout. Exit codes: 0
-success, 2 bad arguments or input (one line saying why), 1 internal error. docs/CLI.md has the
-reference.
+temporary name, then renamed). Progress goes to stderr, the result table to stdout (Blender's
+own prints are held back). Exit codes: 0 success, 2 bad arguments or input (one line saying why),
+130 interrupted, 1 internal error. docs/CLI.md has the reference.
 
 This module only parses, checks and reports: every step runs the same job function as the
 add-on's operator (bake_job.bake_meshes, tool_jobs.run_tool, export.scene.export_objects).
