@@ -14,7 +14,7 @@ def _flush_c_streams() -> None:
     """Flush the C library's stdio buffers (Blender's printf output)."""
     try:
         ctypes.CDLL(None).fflush(None)
-    except (OSError, AttributeError):  # no C library to reach (Windows): Python's own flush suffices
+    except (OSError, AttributeError, TypeError):  # no C library to reach (Windows): Python's own flush suffices
         pass
 
 
