@@ -1,6 +1,7 @@
 """What Blender prints while the command line works, held back: its exporters and its save print
 progress naming the temporary files (files.partial_path), and the operators' reports print to
-stdout in background mode, between the lines of the command line's result table."""
+stdout in background mode, between the lines of the command line's result table. And the one
+line worth showing of an error an operator raised."""
 from __future__ import annotations
 
 import contextlib
@@ -58,3 +59,12 @@ def stdout_held_back(pass_on):
         for line in lines:
             if is_problem(line):
                 pass_on(line.strip())
+
+
+def one_line(error: BaseException) -> str:
+    """The error's type and the last line of its text: an operator that failed in Python
+    (Blender's exporters) raises RuntimeError holding the whole traceback, ending with the error
+    and a 'Location:' line."""
+    lines = [line.strip() for line in str(error).splitlines() if line.strip()]
+    last = next((line for line in reversed(lines) if not line.startswith("Location:")), "")
+    return f"{type(error).__name__}: {last}"[:400]

@@ -314,15 +314,6 @@ def _blender_stdout_held_back():
     return blender_output.stdout_held_back(lambda line: _progress(f"Blender: {line}"))
 
 
-def _one_line(error: BaseException) -> str:
-    """The error's type and the last line of its text: an operator that failed in Python
-    (Blender's exporters) raises RuntimeError holding the whole traceback, ending with the error
-    and a 'Location:' line."""
-    lines = [line.strip() for line in str(error).splitlines() if line.strip()]
-    last = next((line for line in reversed(lines) if not line.startswith("Location:")), "")
-    return f"{type(error).__name__}: {last}"[:400]
-
-
 @contextlib.contextmanager
 def _interrupts_recorded(interrupts: list):
     """While the body runs, a SIGINT is recorded in ``interrupts`` (and raises KeyboardInterrupt
@@ -369,7 +360,9 @@ def run(argv=None) -> int:
         elif isinstance(error, InputError):
             code, message = 2, f"boxmarch: error: {error}"
         else:  # internal error: one line, exit 1
-            code, message = 1, f"boxmarch: internal error: {_one_line(error)}"
+            from .blender_output import one_line
+
+            code, message = 1, f"boxmarch: internal error: {one_line(error)}"
     print(message, file=sys.stderr)
     report_path = getattr(args, "failure_report", None)  # only a --json the output checks accepted
     if report_path:
