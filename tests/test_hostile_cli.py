@@ -35,6 +35,7 @@ def test_a_refused_json_is_not_written_even_with_the_error(baked_blend, tmp_path
     assert sorted(os.listdir(tmp_path)) == ["X.blend", "X.glb", "world.blend"]
 
 
+@pytest.mark.slow
 def test_every_file_an_export_writes_is_an_output(baked_blend, tmp_path):
     table = tmp_path / "g.boxes.tres"
     table.write_text("an earlier box table")
