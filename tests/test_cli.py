@@ -98,22 +98,27 @@ def test_module_demo_prints_table_and_writes_checked_files(tmp_path, renderer):
     proc = run_module(["demo", "--count", "300", "--out", "out", "--json", "demo.json", "--preview", renderer], tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     for step in ("build scene", "dedup", "merge", "bake BYTE_COLOR", "bake FLOAT_COLOR", "re-bake (incremental)",
-                 "pack-uv", "export demo.glb", "preview demo.png", "total"):
+                 "pack-uv", "export demo.glb (GLTF)", "preview demo.png", "total"):
         assert f"| {step} " in proc.stdout, step
     assert "[boxmarch]" in proc.stderr  # progress goes to stderr
+    # stdout is the table alone: Blender's exporter and save lines (naming temporary files) are held back
+    assert proc.stdout.startswith("boxmarch demo:") and "boxmarch-partial" not in proc.stdout + proc.stderr
+    assert "Meshes > Compress off" in next(line for line in proc.stdout.splitlines() if "| export GODOT3" in line)
     # 300 boxes + 6 split-corner vertices: 6 planted duplicates (48 vertices) and the 6 splits go away
     assert "2,406 -> 2,358 vertices" in proc.stdout and "2,358 -> 2,352 vertices" in proc.stdout
     report = json.loads((tmp_path / "demo.json").read_text())
     assert report["ok"] and report["count"] == 300 and report["glb_max_relative_error"] < 1e-5
     if renderer == "CPU":
         assert report["preview"] == "CPU reference raymarcher"
+    else:  # no EGL complaints of Blender's while making the GPU context that then worked
+        assert report["preview"] != "GPU raymarch preview" or "EGL Error" not in proc.stderr, proc.stderr
     meshes = read_glb(tmp_path / "out" / "demo.glb")
     assert [m["name"] for m in meshes] == ["BoxWorld", "Chains"]
     assert sorted(os.listdir(tmp_path / "out")) == sorted([
-        "demo.blend", "demo.glb", "demo.png", "demo_gltf.glb", "demo_godot3.glb", "demo_godot3.boxes.tres",
-        "demo_unity.fbx", "demo_unreal.fbx", "demo_godot3.glb.import"]
-        + [f"demo{suffix}.boxmarch.json" for suffix in ("", "_gltf", "_godot3", "_unity", "_unreal")])
-    for preset, layout in (("GLTF", "NORMAL_FRAME"), ("GODOT3", "NORMAL_COLOR"), ("UNITY", "UV_FRAME"),
+        "demo.blend", "demo.glb", "demo.png", "demo_godot3.glb", "demo_godot3.boxes.tres",
+        "demo_unity.fbx", "demo_unreal.fbx", "demo_godot3.glb.import"]  # demo.glb is the GLTF preset's file
+        + [f"demo{suffix}.boxmarch.json" for suffix in ("", "_godot3", "_unity", "_unreal")])
+    for preset, layout in (("demo.glb \\(GLTF\\)", "NORMAL_FRAME"), ("GODOT3", "NORMAL_COLOR"), ("UNITY", "UV_FRAME"),
                            ("UNREAL", "UV_FRAME")):
         assert re.search(rf"export {preset} .*layout {layout}", proc.stdout), proc.stdout
     png = (tmp_path / "out" / "demo.png").read_bytes()
@@ -170,7 +175,7 @@ def test_module_cleanup_pipeline_dedups_merges_bakes_and_packs(messy_blend_34, t
     (["export", "in.blend", "--preset", "GLTF", "--to", "x.glb"], "not baked"),
     (["export", "in.blend", "--preset", "GODOT3", "--to", "in.blend.glb"], "is a folder"),
     (["pipeline", "in.blend", "--steps", "bake,polish"], "--steps"),
-    (["demo", "--count", "0"], "at least 100"),
+    (["demo", "--count", "0"], "--count must be in 100.."),
     (["frobnicate"], "invalid choice"),
 ])
 def test_module_bad_input_exits_2_with_one_line_and_writes_nothing(boxes_blend_34, tmp_path, args, reason):

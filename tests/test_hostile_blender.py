@@ -292,3 +292,60 @@ def test_cli_read_only_out_folder_is_refused_first(baked_blend, tmp_path, monkey
     err = capsys.readouterr().err
     assert code == 2 and "locked" in err, err
     assert not os.listdir(tmp_path / "out")
+
+
+# ---------------------------------------------------------------------------------------------
+# round 2 (issue 21): the bake's own layers are never a tool's target; nothing to export
+
+
+def test_pack_uv_refuses_the_baked_quaternion_maps_active_or_named(blender):
+    bpy = blender
+    ob = boxes(bpy)
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+    stored = mesh_io.read_uv(ob.data, mesh_io.QUAT_XY_UV).copy()
+    ob.data.uv_layers.active = ob.data.uv_layers[mesh_io.QUAT_XY_UV]  # clicked in the UV Maps list
+    with pytest.raises(RuntimeError, match=r"'BoxQuatXY' \(the active one\) holds the baked box frame.*'UVMap'"):
+        bpy.ops.boxmarch.pack_uv_by_z()
+    with pytest.raises(RuntimeError, match="'BoxQuatZW' holds the baked box frame"):
+        bpy.ops.boxmarch.pack_uv_by_z(uv_map=mesh_io.QUAT_ZW_UV)
+    assert np.array_equal(mesh_io.read_uv(ob.data, mesh_io.QUAT_XY_UV), stored)
+    ob.data.uv_layers.active = ob.data.uv_layers["UVMap"]
+    assert bpy.ops.boxmarch.pack_uv_by_z() == {"FINISHED"}  # the texture map packs; the frame stays
+    assert worst_decode_error(bpy, ob) < 1e-5
+
+
+def test_the_bake_refuses_an_unbaked_mesh_with_layers_named_as_its_own(blender):
+    bpy = blender
+    ob = boxes(bpy)
+    for uv in list(ob.data.uv_layers):
+        ob.data.uv_layers.remove(uv)
+    ob.data.uv_layers.new(name=mesh_io.QUAT_XY_UV)  # the artist's only UV map, named so
+    artist = np.random.default_rng(1).random((len(ob.data.loops), 2)).astype(np.float32)
+    mesh_io.write_uv(ob.data, mesh_io.QUAT_XY_UV, artist)
+    with pytest.raises(RuntimeError, match="holds no bake, yet has a UV map 'BoxQuatXY'.*rename"):
+        bpy.ops.boxmarch.bake()
+    assert [uv.name for uv in ob.data.uv_layers] == [mesh_io.QUAT_XY_UV]
+    assert np.array_equal(mesh_io.read_uv(ob.data, mesh_io.QUAT_XY_UV), artist)
+    assert ob.data.color_attributes.get(mesh_io.OFFSET_ATTRIBUTE) is None
+    ob.data.uv_layers[mesh_io.QUAT_XY_UV].name = "UVMap"  # as the message says
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+    assert np.array_equal(mesh_io.read_uv(ob.data, "UVMap"), artist) and worst_decode_error(bpy, ob) < 1e-5
+
+
+def test_a_baked_mesh_whose_faces_were_deleted_is_not_exported(blender, tmp_path):
+    import bmesh
+
+    from boxmarch.export import scene
+
+    bpy = blender
+    ob = boxes(bpy)
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+    bm = bmesh.new()
+    bm.from_mesh(ob.data)
+    bmesh.ops.delete(bm, geom=list(bm.faces), context="FACES_ONLY")  # the vertices and the layers stay
+    bm.to_mesh(ob.data)
+    bm.free()
+    for preset, name in (("GLTF", "f.glb"), ("UNITY", "f.fbx")):
+        with pytest.raises(scene.ExportInputError, match="mesh 'Boxes' has no faces"):
+            scene.export_objects(bpy.context, [ob], preset, str(tmp_path / name))
+    assert list(tmp_path.iterdir()) == []

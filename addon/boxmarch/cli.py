@@ -8,23 +8,26 @@ Two forms run the same commands:
 Commands: bake, dedup, merge, pack-uv, export, pipeline (chains them), demo. They work on the
 objects named with --objects, or on every mesh object of the file. --out writes the result as a
 new .blend, --json a machine-readable report; both appear only complete (written under a
-temporary name, then renamed). Progress goes to stderr, the result table to stdout. Exit codes: 0
-success, 2 bad arguments or input (one line saying why), 1 internal error. docs/CLI.md has the
-reference.
+temporary name, then renamed). Progress goes to stderr, the result table to stdout (Blender's
+own prints are held back). Exit codes: 0 success, 2 bad arguments or input (one line saying why),
+130 interrupted, 1 internal error. docs/CLI.md has the reference.
 
 This module only parses, checks and reports: every step runs the same job function as the
 add-on's operator (bake_job.bake_meshes, tool_jobs.run_tool, export.scene.export_objects).
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
+import signal
 import sys
+import threading
 import time
 
 from . import ensure_registered
-from .cli_args import InputError, build_parser
+from .cli_args import InputError, build_parser, check_outputs, run_outputs
 
 PIPELINE_STEPS = ("dedup", "merge", "bake", "pack-uv", "export")
 # The tool each cleanup command runs (a tool_jobs class name), its operator (whose properties
@@ -56,45 +59,11 @@ def _write_json(path: str, report: dict) -> None:
     files.write_atomically(path, write)
 
 
-def _check_outputs(bpy, args, steps) -> None:
-    """Every check on the output paths, run before anything is written (docs/CLI.md): each
-    folder exists and is writable, no output is a folder, the input .blend or another output,
-    --out names a .blend and --to carries the preset's extension. The files an export writes
-    beside --to (sidecar, box table, Godot import settings) are outputs too."""
-    outputs = []
-    if getattr(args, "out", None):
-        if not args.out.lower().endswith(".blend"):
-            raise InputError(f"--out must name a .blend file, got '{args.out}'")
-        outputs.append(("--out", args.out))
-    if "export" in steps and getattr(args, "to", None):
-        from .export.transforms import PRESETS
-
-        extension = PRESETS[args.preset].extension
-        if not args.to.lower().endswith(extension):
-            raise InputError(f"--preset {args.preset} writes a {extension} file: --to must end in {extension}, "
-                             f"got '{args.to}'")
-        outputs.append(("--to", args.to))
-        from .export.sidecar import possibly_written_beside
-
-        outputs += [(f"--to (its {os.path.basename(path)})", path) for path in possibly_written_beside(args.to, args.preset)]
-    if getattr(args, "json", None):
-        outputs.append(("--json", args.json))
-    inputs = {os.path.abspath(p) for p in (getattr(args, "blend", None), bpy.data.filepath if bpy else None) if p}
-    seen = {}
-    for option, path in outputs:
-        full = os.path.abspath(path)
-        folder = os.path.dirname(full)
-        if not os.path.isdir(folder):
-            raise InputError(f"{option}: folder '{folder}' does not exist")
-        if os.path.isdir(full):
-            raise InputError(f"{option}: '{path}' is a folder")
-        if not os.access(folder, os.W_OK | os.X_OK) or (os.path.exists(full) and not os.access(full, os.W_OK)):
-            raise InputError(f"{option}: cannot write '{full}' (permission denied)")
-        if any(os.path.exists(full) and os.path.exists(i) and os.path.samefile(full, i) or full == i for i in inputs):
-            raise InputError(f"{option} '{path}' is the input file, which is never written: choose another path")
-        if full in seen:
-            raise InputError(f"{option} and {seen[full]} name the same file '{path}'")
-        seen[full] = option
+def _accept_outputs(args, outputs, inputs, made_folders=()) -> None:
+    """Check every output (cli_args.check_outputs); once they pass, a failure report may go to
+    --json (a refused --json is never written, not even with the error)."""
+    check_outputs(outputs, inputs, made_folders)
+    args.failure_report = getattr(args, "json", None)
 
 
 def _check_cleanup_options(bpy, args, steps) -> None:
@@ -264,19 +233,21 @@ def _run_steps(args, steps) -> int:
     from . import files
 
     start = time.perf_counter()
-    _check_outputs(None, args, steps)  # before opening: nothing is loaded for a bad path
-    _open(bpy, args)
-    _check_outputs(bpy, args, steps)  # the file Blender itself opened is an input too
-    _check_cleanup_options(bpy, args, steps)
-    hidden = [ob.name for ob in bpy.context.view_layer.objects if ob.hide_get()]
-    names = [ob.name for ob in _objects(bpy, args)]
-    reports = []
-    for step in steps:
-        objects = [bpy.data.objects[name] for name in names]  # re-fetch: jobs may rebuild data
-        reports.append(_run_step(step, objects, args))
-    for name in hidden:
-        bpy.data.objects[name].hide_set(True)
-    out = files.save_blend_copy(args.out) if args.out else None
+    # Before opening, so that nothing is loaded for a bad path; the file Blender itself opened
+    # (the Blender form) is an input too.
+    _accept_outputs(args, run_outputs(args, steps), [getattr(args, "blend", None), bpy.data.filepath])
+    with _blender_stdout_held_back():
+        _open(bpy, args)
+        _check_cleanup_options(bpy, args, steps)
+        hidden = [ob.name for ob in bpy.context.view_layer.objects if ob.hide_get()]
+        names = [ob.name for ob in _objects(bpy, args)]
+        reports = []
+        for step in steps:
+            objects = [bpy.data.objects[name] for name in names]  # re-fetch: jobs may rebuild data
+            reports.append(_run_step(step, objects, args))
+        for name in hidden:
+            bpy.data.objects[name].hide_set(True)
+        out = files.save_blend_copy(args.out) if args.out else None
     total = time.perf_counter() - start
     rows = [[r["step"], f"{r['seconds']:.3f} s", r["summary"]] for r in reports]
     rows.append(["total", f"{total:.3f} s", f"wrote {out}" if out else "no --out: the .blend was not saved"])
@@ -316,9 +287,18 @@ def cmd_demo(args) -> int:
 
     from . import demo
 
-    if args.count < 100:
-        raise InputError("--count must be at least 100")
-    rows, report = demo.run_demo(args.count, args.seed, args.out, args.preview, _progress)
+    if not 100 <= args.count <= demo.MAX_COUNT:
+        raise InputError(f"--count must be in 100..{demo.MAX_COUNT:,}, got {args.count:,}")
+    if args.seed < 0:
+        raise InputError(f"--seed must be 0 or more, got {args.seed}")
+    folder = os.path.abspath(args.out)
+    if os.path.exists(folder) and not os.path.isdir(folder):
+        raise InputError(f"--out '{args.out}' is a file: the demo writes its files into a folder")
+    # The demo starts a new scene: a file Blender opened (the Blender form) is an input it must not replace.
+    _accept_outputs(args, [("--out", path) for path in demo.demo_outputs(folder)] +
+                    ([("--json", args.json)] if args.json else []), [bpy.data.filepath], made_folders=[folder])
+    with _blender_stdout_held_back():
+        rows, report = demo.run_demo(args.count, args.seed, folder, args.preview, _progress)
     print(f"boxmarch demo: {args.count:,} boxes, Blender {bpy.app.version_string}")
     print(_table(["step", "time", "what", "accuracy"], rows))
     if args.json:
@@ -326,30 +306,77 @@ def cmd_demo(args) -> int:
     return 0
 
 
-def run(argv=None) -> int:
-    """Run one command; returns the exit code (0, 2 bad input, 1 internal error)."""
-    if argv is None:
-        argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
-    args = None
+def _blender_stdout_held_back():
+    """Blender's own prints (its exporters and its save name the temporary files; operator
+    reports) stay off stdout, which holds the result table; warnings and errors go to stderr."""
+    from . import blender_output
+
+    return blender_output.stdout_held_back(lambda line: _progress(f"Blender: {line}"))
+
+
+@contextlib.contextmanager
+def _interrupts_recorded(interrupts: list):
+    """While the body runs, a SIGINT is recorded in ``interrupts`` (and raises KeyboardInterrupt
+    as Python's own handler does): Blender's operators turn an exception inside them into a
+    RuntimeError, which must still end the run as interrupted."""
+    def on_interrupt(signum, _frame):
+        interrupts.append(signum)
+        raise KeyboardInterrupt
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, on_interrupt)
     try:
-        try:
-            runners = {"bake": cmd_bake, "dedup": cmd_cleanup, "merge": cmd_cleanup, "pack-uv": cmd_cleanup,
-                       "export": cmd_export, "pipeline": cmd_pipeline, "demo": cmd_demo}
-            args = build_parser(__doc__.splitlines()[0], runners).parse_args(argv)
-        except SystemExit as exit_:  # --help
-            return 0 if not exit_.code else 2
-        return args.run(args)
-    except InputError as error:
-        code, message = 2, f"boxmarch: error: {error}"
-    except Exception as error:  # internal error: one line, exit 1
-        code, message = 1, f"boxmarch: internal error: {error!r}"
+        yield
+    finally:
+        # None: the Blender program's own C handler, which Python cannot put back; the default
+        # (end the process) is what a background Blender does on SIGINT.
+        signal.signal(signal.SIGINT, signal.SIG_DFL if previous is None else previous)
+
+
+def run(argv=None) -> int:
+    """Run one command; returns the exit code (0; 2 bad input; 130 interrupted; 1 internal
+    error). ``argv`` None: the process's arguments; inside the Blender program those after
+    its first ``--`` (Blender's own come before it)."""
+    if argv is None:
+        argv = sys.argv[1:]
+        if _in_blender_program():
+            argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    args, interrupts = None, []
+    try:
+        with _interrupts_recorded(interrupts):
+            try:
+                runners = {"bake": cmd_bake, "dedup": cmd_cleanup, "merge": cmd_cleanup, "pack-uv": cmd_cleanup,
+                           "export": cmd_export, "pipeline": cmd_pipeline, "demo": cmd_demo}
+                args = build_parser(__doc__.splitlines()[0], runners).parse_args(argv)
+            except SystemExit as exit_:  # --help
+                return 0 if not exit_.code else 2
+            return args.run(args)
+    except (Exception, KeyboardInterrupt) as error:
+        if interrupts or isinstance(error, KeyboardInterrupt):
+            code, message = 130, ("boxmarch: interrupted: stopped, each output is either complete or not written "
+                                  "(no partial file is left)")
+        elif isinstance(error, InputError):
+            code, message = 2, f"boxmarch: error: {error}"
+        else:  # internal error: one line, exit 1
+            from .blender_output import one_line
+
+            code, message = 1, f"boxmarch: internal error: {one_line(error)}"
     print(message, file=sys.stderr)
-    if args is not None and getattr(args, "json", None):
+    report_path = getattr(args, "failure_report", None)  # only a --json the output checks accepted
+    if report_path:
         try:
-            _write_json(args.json, {"ok": False, "command": args.command, "exit_code": code, "error": message})
+            _write_json(report_path, {"ok": False, "command": args.command, "exit_code": code, "error": message})
         except Exception:
             pass  # the error line above is the report
     return code
+
+
+def _in_blender_program() -> bool:
+    """Running inside the Blender program (the bpy module has no binary path)."""
+    bpy = sys.modules.get("bpy")
+    return bpy is not None and bool(bpy.app.binary_path)
 
 
 def main(argv=None):
@@ -357,10 +384,9 @@ def main(argv=None):
     code = run(argv)
     sys.stdout.flush()
     sys.stderr.flush()
-    bpy = sys.modules.get("bpy")
-    if bpy is not None and bpy.app.binary_path:
-        # Inside the Blender program (the bpy module has no binary path) a SystemExit raised by
-        # --python-expr is swallowed and Blender exits 0, so end the process with the code here.
+    if _in_blender_program():
+        # There a SystemExit raised by --python-expr is swallowed and Blender exits 0, so end
+        # the process with the code here.
         os._exit(code)
     sys.exit(code)
 

@@ -2,8 +2,9 @@
 from __future__ import annotations
 
 import argparse
+import os
 
-from . import core
+from . import core, files
 
 
 class InputError(Exception):
@@ -93,3 +94,71 @@ def build_parser(description: str, runners: dict):
     p.add_argument("--json", metavar="REPORT.json")
     p.set_defaults(run=runners["demo"])
     return parser
+
+
+# ---------------------------------------------------------------------------------------------
+# Output paths: every check runs before anything is written
+
+
+def run_outputs(args, steps) -> list:
+    """[(option, path)] of every file a bake/cleanup/export/pipeline run writes: --out, each file
+    the export writes (export.outputs_of: the box table beside a GODOT3 file too), --json.
+    Refuses an --out that is not a .blend and a --to without the preset's extension."""
+    outputs = []
+    if getattr(args, "out", None):
+        if not args.out.lower().endswith(".blend"):
+            raise InputError(f"--out must name a .blend file, got '{args.out}'")
+        outputs.append(("--out", args.out))
+    if "export" in steps and getattr(args, "to", None):
+        from .export import PRESETS, outputs_of
+
+        extension = PRESETS[args.preset].extension
+        if not args.to.lower().endswith(extension):
+            raise InputError(f"--preset {args.preset} writes a {extension} file: --to must end in {extension}, "
+                             f"got '{args.to}'")
+        outputs += [("--to" if path == args.to else "the export beside --to", path)
+                    for path in outputs_of(args.to, args.preset, args.layout)]
+    if getattr(args, "json", None):
+        outputs.append(("--json", args.json))
+    return outputs
+
+
+def _writable_folder(option, folder, made_folders) -> None:
+    """``folder`` exists and can be written, or is one the command makes (its nearest existing
+    parent then must be a writable folder)."""
+    if folder in made_folders:
+        while not os.path.exists(folder):
+            folder = os.path.dirname(folder)
+        if not os.path.isdir(folder):
+            raise InputError(f"{option}: '{folder}' is a file, not a folder")
+    elif not os.path.isdir(folder):
+        raise InputError(f"{option}: folder '{folder}' does not exist")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise InputError(f"{option}: cannot write into '{folder}' (permission denied)")
+
+
+def check_outputs(outputs, inputs, made_folders=()) -> None:
+    """Every check on the output paths ``outputs`` [(option, path)], run before anything is
+    written (docs/CLI.md): each folder exists (or is in ``made_folders``) and is writable, no
+    output is a folder, one of ``inputs`` (files never written) or another output."""
+    inputs = [os.path.abspath(p) for p in inputs if p]
+    made_folders = {os.path.abspath(f) for f in made_folders}
+    seen = {}
+    for option, path in outputs:
+        full = os.path.abspath(path)
+        name_bytes = len(os.path.basename(full).encode())
+        if name_bytes > files.NAME_MAX:
+            raise InputError(f"{option}: the name '{os.path.basename(full)}' is {name_bytes} bytes, longer than the "
+                             f"{files.NAME_MAX} bytes a file name may have")
+        _writable_folder(option, os.path.dirname(full), made_folders)
+        if os.path.isdir(full):
+            raise InputError(f"{option}: '{path}' is a folder")
+        if os.path.exists(full) and not os.access(full, os.W_OK):
+            raise InputError(f"{option}: cannot write '{full}' (permission denied)")
+        if any(full == i or os.path.exists(full) and os.path.exists(i) and os.path.samefile(full, i) for i in inputs):
+            raise InputError(f"{option} '{path}' is the input file, which is never written: choose another path")
+        if full in seen:
+            other_option, other_path = seen[full]
+            raise InputError(f"{option} '{path}' and {other_option} '{other_path}' name the same file: "
+                             "each output needs its own path")
+        seen[full] = (option, path)

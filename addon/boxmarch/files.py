@@ -3,30 +3,55 @@ renamed over the target (one rename on one filesystem, so a reader never sees ha
 from __future__ import annotations
 
 import os
+import secrets
+
+NAME_MAX = 255  # bytes of one file name (Linux and macOS file systems)
+# Room left in a temporary name for what a writer adds to it (Blender saves a .blend as NAME@ first).
+WRITER_SUFFIX_ROOM = 8
+_LONGEST_KEPT_EXTENSION = 16  # the exporters need .glb/.fbx/.blend; a longer one is dropped
 
 
 def partial_path(path: str) -> str:
-    """The temporary name ``path`` is written under: hidden, beside it, same extension."""
+    """A temporary name to write ``path`` under: hidden, beside it, with its extension, unique to
+    this call (runs writing the same file at once each write their own), and short enough for
+    NAME_MAX with room for a writer's own suffix: a long name is cut (at a character boundary)."""
     folder, name = os.path.split(os.path.abspath(path))
     root, ext = os.path.splitext(name)
-    return os.path.join(folder, f".{root}.boxmarch-partial{ext}")
+    if len(ext.encode()) > _LONGEST_KEPT_EXTENSION:
+        ext = ""
+    tag = f".{os.getpid()}-{secrets.token_hex(4)}.boxmarch-partial{ext}"
+    room = NAME_MAX - WRITER_SUFFIX_ROOM - 1 - len(tag.encode())
+    root = root.encode()[:room].decode(errors="ignore")
+    return os.path.join(folder, f".{root}{tag}")
+
+
+def write_together(paths, write) -> list:
+    """Call write({path: temporary path}) for the absolute ``paths``, then rename each temporary
+    file onto its path. On failure (an interrupt included) every temporary file is removed and
+    each path is left as it was. Returns what write returned. Each folder must exist
+    (FileNotFoundError names it otherwise). Runs writing the same paths at once each write their
+    own temporary files: the last rename wins."""
+    paths = [os.path.abspath(p) for p in paths]
+    for folder in dict.fromkeys(os.path.dirname(p) for p in paths):
+        if not os.path.isdir(folder):
+            raise FileNotFoundError(f"folder '{folder}' does not exist")
+    temps = {p: partial_path(p) for p in paths}
+    try:
+        result = write(temps)
+        for final, temp in temps.items():
+            os.replace(temp, final)
+    finally:
+        for temp in temps.values():
+            if os.path.exists(temp):
+                os.remove(temp)
+    return result
 
 
 def write_atomically(path: str, write) -> str:
-    """Call write(temporary path), then rename it onto ``path``; on failure remove the temporary
-    file and leave ``path`` as it was. Returns the absolute path written. The folder must exist
-    (FileNotFoundError names it otherwise)."""
+    """Call write(temporary path), then rename it onto ``path`` (write_together of one file).
+    Returns the absolute path written."""
     path = os.path.abspath(path)
-    folder = os.path.dirname(path)
-    if not os.path.isdir(folder):
-        raise FileNotFoundError(f"folder '{folder}' does not exist")
-    temp = partial_path(path)
-    try:
-        write(temp)
-        os.replace(temp, path)
-    finally:
-        if os.path.exists(temp):
-            os.remove(temp)
+    write_together([path], lambda temps: write(temps[path]))
     return path
 
 

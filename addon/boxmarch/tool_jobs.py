@@ -220,14 +220,20 @@ class MergeByDistance:
 
 
 def uv_map_name(mesh, requested: str) -> str:
-    """The UV map to pack: ``requested`` by name, or the active one when empty."""
+    """The UV map to pack: ``requested`` by name, or the active one when empty. The maps the bake
+    writes (mesh_io.BAKED_UV_MAPS) are refused: they hold the box frame, not texture space."""
     if len(mesh.uv_layers) == 0:
         raise ToolInputError(f"mesh '{mesh.name}' has no UV map")
-    if not requested:
-        return mesh.uv_layers.active.name if mesh.uv_layers.active else mesh.uv_layers[0].name
-    if requested not in mesh.uv_layers:
+    if requested and requested not in mesh.uv_layers:
         raise ToolInputError(f"mesh '{mesh.name}' has no UV map named '{requested}'")
-    return requested
+    name = requested or (mesh.uv_layers.active.name if mesh.uv_layers.active else mesh.uv_layers[0].name)
+    if name in mesh_io.BAKED_UV_MAPS:
+        others = [uv.name for uv in mesh.uv_layers if uv.name not in mesh_io.BAKED_UV_MAPS]
+        raise ToolInputError(
+            f"mesh '{mesh.name}': the UV map '{name}'{'' if requested else ' (the active one)'} holds the baked box "
+            "frame, which packing would overwrite; "
+            + (f"pack the texture UV map ('{others[0]}')" if others else "make a texture UV map to pack"))
+    return name
 
 
 def world_heights(ob, positions) -> np.ndarray:

@@ -31,11 +31,17 @@ def run_blender(args, tmp_path, timeout=240):
     return proc
 
 
-def run_module(args, cwd, timeout=240):
+def module_environment(cwd):
+    """The environment of a ``python -m boxmarch`` run in ``cwd``: this boxmarch on the path,
+    Blender's caches in a folder beside ``cwd`` (outside the checked folder)."""
     env = dict(os.environ, PYTHONPATH=str(Path(boxmarch.__file__).parent.parent))
-    home = Path(cwd).parent / f"{Path(cwd).name}-home"  # Blender's caches, outside the checked folder
+    home = Path(cwd).parent / f"{Path(cwd).name}-home"
     home.mkdir(exist_ok=True)
     for var in ("HOME", "TMPDIR", "XDG_CACHE_HOME"):
         env[var] = str(home)
-    return subprocess.run([sys.executable, "-m", "boxmarch", *args], cwd=cwd, env=env,
+    return env
+
+
+def run_module(args, cwd, timeout=240):
+    return subprocess.run([sys.executable, "-m", "boxmarch", *args], cwd=cwd, env=module_environment(cwd),
                           capture_output=True, text=True, timeout=timeout)

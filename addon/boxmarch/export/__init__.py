@@ -1,3 +1,18 @@
 """Engine export presets. ``transforms`` and ``glb`` are Blender-free (format-facing);
 ``scene`` drives Blender's exporters. docs/EXPORT.md derives and measures every transform."""
-from .transforms import PRESETS  # noqa: F401
+from __future__ import annotations
+
+from . import sidecar
+from .transforms import PRESETS
+
+
+def outputs_of(filepath: str, preset_name: str, layout: str | None = None) -> list:
+    """Every file an export to ``filepath`` writes, the exported file first (then the sidecar, the
+    box table, Godot 3's import settings: sidecar.written_beside): the one list the
+    export writes (scene.export_objects) and the command line checks before anything is written.
+    ``layout`` None: any layout the preset may choose (a skinned export picks its own)."""
+    candidates = [layout] if layout else PRESETS[preset_name].layouts
+    paths = dict.fromkeys([filepath])
+    for each in candidates:
+        paths.update(dict.fromkeys(sidecar.written_beside(filepath, preset_name, each)))
+    return list(paths)

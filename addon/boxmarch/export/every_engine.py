@@ -3,19 +3,26 @@ from __future__ import annotations
 
 import os
 
-from . import scene, transforms
+from . import outputs_of, scene, transforms
 
 ENGINE_PRESETS = ("GLTF", "GODOT3", "UNITY", "UNREAL")
 
 
-def export_every_engine(context, objects, folder: str, stem: str) -> list:
-    """Exports ``objects`` with every engine preset's default layout to
-    ``folder/STEM_<preset>.<ext>`` (GODOT3 also writes its box table beside it). Returns the
-    export reports in ENGINE_PRESETS order; raises scene.ExportInputError before writing
+def engine_path(folder: str, stem: str, preset_name: str) -> str:
+    """Where ``export_every_engine`` writes a preset's file: ``folder/STEM.glb`` for GLTF (the
+    glTF file itself), ``folder/STEM_<preset>.<ext>`` for the others."""
+    preset = transforms.PRESETS[preset_name]
+    suffix = "" if preset_name == "GLTF" else f"_{preset_name.lower()}"
+    return os.path.join(folder, f"{stem}{suffix}{preset.extension}")
+
+
+def engine_outputs(folder: str, stem: str, presets=ENGINE_PRESETS) -> list:
+    """Every file ``export_every_engine`` writes (the GODOT3 box table beside its .glb too)."""
+    return [path for name in presets for path in outputs_of(engine_path(folder, stem, name), name)]
+
+
+def export_every_engine(context, objects, folder: str, stem: str, presets=ENGINE_PRESETS) -> list:
+    """Exports ``objects`` with each of ``presets``' default layout to ``engine_path``. Returns
+    the export reports in ``presets`` order; raises scene.ExportInputError before writing
     anything for objects no preset can export."""
-    reports = []
-    for name in ENGINE_PRESETS:
-        preset = transforms.PRESETS[name]
-        path = os.path.join(folder, f"{stem}_{name.lower()}{preset.extension}")
-        reports.append(scene.export_objects(context, objects, name, path))
-    return reports
+    return [scene.export_objects(context, objects, name, engine_path(folder, stem, name)) for name in presets]

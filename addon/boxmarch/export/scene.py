@@ -12,7 +12,7 @@ import bpy
 import numpy as np
 
 from .. import core, edit_mode, files, layouts, mesh_io
-from . import fbx, glb, godot, import_settings, sidecar, transforms
+from . import fbx, glb, godot, import_settings, outputs_of, sidecar, transforms
 
 
 class ExportInputError(ValueError):
@@ -188,14 +188,15 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     objects = list({ob.name_full: ob for ob in objects}.values())  # each object once
     if not objects:
         raise ExportInputError("no objects to export")
-    if bpy.data.filepath and os.path.abspath(filepath) == os.path.abspath(bpy.data.filepath):
-        raise ExportInputError(f"'{filepath}' is the open .blend file: export to another path")
     for ob in objects:
         if ob.type != "MESH":
             raise ExportInputError(f"object '{ob.name}' is a {ob.type}, not a mesh")
     meshes = [ob.data for ob in mesh_io.one_object_per_mesh(objects)]
     for mesh in meshes:
         baked_layers(mesh)  # refuses unbaked meshes before anything is changed
+        if not mesh.polygons and preset.name != "BLENDER":
+            raise ExportInputError(f"mesh '{mesh.name}' has no faces (its baked layers are left from faces since "
+                                   "deleted): an engine draws the boxes from faces, so the file would hold nothing")
     skins = _skins(context, objects, preset)
     safe = [candidate for candidate in preset.layouts if layouts.LAYOUTS[candidate].skin_safe]
     if layout is None:  # the preset's own; for a skinned export its first that skinning carries
@@ -211,42 +212,41 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     folder = os.path.dirname(os.path.abspath(filepath))
     if not os.path.isdir(folder):
         raise ExportInputError(f"folder '{folder}' does not exist")
-    partial = files.partial_path
-    outputs = {partial(path): path for path in [filepath] + sidecar.written_beside(filepath, preset.name, layout)}
-    for path in outputs.values():
+    outputs = outputs_of(os.path.abspath(filepath), preset.name, layout)
+    for path in outputs:
+        if bpy.data.filepath and path == os.path.abspath(bpy.data.filepath):
+            raise ExportInputError(f"'{path}' is the open .blend file: export to another path")
         if os.path.isdir(path):
             raise ExportInputError(f"'{path}' is a folder: the export writes a file there")
     warnings = mesh_io.modifier_warnings(objects, "export")
     if preset.extension == ".fbx" and context.scene.unit_settings.scale_length != 1.0:
         warnings.append(f"unit scale is not 1: {preset.label} will scale positions by it and the offsets will not match")
-    try:
-        temp = partial(filepath)
+
+    def write(temps):
+        temp = temps[outputs[0]]
         if preset.name == "BLENDER":
             stats = [box_data(mesh, preset)[2] for mesh in meshes]  # the .blend holds the layers as they are
             bpy.data.libraries.write(temp, set(objects), fake_user=True, compress=False)
         else:
             stats, table = _export_with_copies(context, objects, meshes, preset, layout, temp, skins)
             if table is not None:
-                with open(partial(sidecar.table_path(filepath)), "w") as f:
+                with open(temps[sidecar.table_path(outputs[0])], "w") as f:
                     f.write(godot.image_texture_tres(table))
-            if preset.name == "UNITY" and layout == "CLASSIC":
-                floats = [m for m in stats if m["colour"] == "FLOAT_COLOR"]
-                if floats:
-                    warnings.append(
-                        f"{', '.join(m['mesh'] for m in floats)}: float offsets (alpha up to "
-                        f"{max(m['max_alpha'] for m in floats):.3g}); Unity usually stores vertex colours as "
-                        "8-bit Color32, which clips alpha above 1 and rounds the rest: bake with 8-bit colour "
-                        "for Unity (docs/EXPORT.md)")
         if preset.name == "GODOT3":
-            with open(partial(import_settings.godot3_import_path(filepath)), "w") as f:
+            with open(temps[import_settings.godot3_import_path(outputs[0])], "w") as f:
                 f.write(import_settings.godot3_import_text())
-        _write_sidecar(partial(sidecar.sidecar_path(filepath)), preset, layout, filepath, stats, skins)
-        for temp, final in outputs.items():
-            os.replace(temp, final)
-    finally:
-        for temp in outputs:
-            if os.path.exists(temp):
-                os.remove(temp)
+        _write_sidecar(temps[sidecar.sidecar_path(outputs[0])], preset, layout, filepath, stats, skins)
+        return stats
+
+    stats = files.write_together(outputs, write)
+    if preset.name == "UNITY" and layout == "CLASSIC":
+        floats = [m for m in stats if m["colour"] == "FLOAT_COLOR"]
+        if floats:
+            warnings.append(
+                f"{', '.join(m['mesh'] for m in floats)}: float offsets (alpha up to "
+                f"{max(m['max_alpha'] for m in floats):.3g}); Unity usually stores vertex colours as "
+                "8-bit Color32, which clips alpha above 1 and rounds the rest: bake with 8-bit colour "
+                "for Unity (docs/EXPORT.md)")
     for m in stats:
         skin = m.get("skin")
         if skin and skin["non_rigid_boxes"]:
@@ -264,7 +264,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             "skinned": _skin_summary(skins),
             "default_import_error": max(default_errors) if default_errors else None,
             "table": os.path.abspath(sidecar.table_path(filepath)) if layout == "NORMAL_COLOR" else None,
-            "sidecar": os.path.abspath(sidecar.sidecar_path(filepath)),
+            "sidecar": os.path.abspath(sidecar.sidecar_path(filepath)), "files": outputs,
             "objects": [ob.name for ob in objects], "meshes": stats, "seconds": time.perf_counter() - start,
             "warnings": warnings, "import_settings": preset.import_settings,
             "transform_error": max((s["transform_error"] for s in stats), default=0.0)}

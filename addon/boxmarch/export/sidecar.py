@@ -74,15 +74,6 @@ def written_beside(filepath: str, preset_name: str, layout: str) -> list[str]:
     return paths
 
 
-def possibly_written_beside(filepath: str, preset_name: str) -> list[str]:
-    """The files an export with ``preset_name`` may write beside ``filepath``, whatever layout the
-    export picks (the command line checks them before the objects are read)."""
-    paths = {}
-    for layout in transforms.PRESETS[preset_name].layouts:
-        paths.update(dict.fromkeys(written_beside(filepath, preset_name, layout)))
-    return list(paths)
-
-
 def data_from_file(preset) -> np.ndarray:
     """(3, 3) matrix taking positions as the file holds them to the frame the box data are
     expressed in (the engine's object frame after its importer), units included."""

@@ -19,9 +19,9 @@ from .arrays import (new_mesh, one_object_per_mesh, read_corner_edges, read_face
                      read_hidden_vertices, read_point_values, read_positions, read_topology, read_triangles,
                      read_uv, read_vertex_selection, remove_attributes, write_point_flags, write_selection,
                      write_uv)
-from .baked import (FINGERPRINT_ATTRIBUTE, LAYERS_DIGEST, MAX_UV_MAPS, NEUTRAL_BYTE, NEUTRAL_FLOAT,
+from .baked import (BAKED_UV_MAPS, FINGERPRINT_ATTRIBUTE, LAYERS_DIGEST, MAX_UV_MAPS, NEUTRAL_BYTE, NEUTRAL_FLOAT,
                     OFFSET_ATTRIBUTE, QUAT_XY_UV, QUAT_ZW_UV, BakedLayers, BakeInputError, BakeSettings,
                     NotBakedError, PreparedBake, modifier_warnings, prepare_bake, read_baked_layers,
-                    stored_layers_digest)
+                    stored_layers_digest, stray_bake_layers)
 from .rebuild import can_rebuild, rebuild_welded
 from .weights import Skin, SkinError, check_skin_modifier, read_skin, read_vertex_weights

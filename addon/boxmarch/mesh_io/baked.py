@@ -14,6 +14,7 @@ from .arrays import read_positions, read_topology, read_uv, read_vertex_selectio
 OFFSET_ATTRIBUTE = "BoxOffset"
 QUAT_XY_UV = "BoxQuatXY"
 QUAT_ZW_UV = "BoxQuatZW"
+BAKED_UV_MAPS = (QUAT_XY_UV, QUAT_ZW_UV)  # the UV maps the bake writes: never a tool's target
 FINGERPRINT_ATTRIBUTE = ".boxmarch_fingerprint"
 LAYERS_DIGEST = "_boxmarch_layers"  # mesh custom property: checksum of the stored layers
 MAX_UV_MAPS = 8
@@ -109,6 +110,17 @@ def _offsets_per_vertex(attr, corner_verts, vertex_count) -> np.ndarray:
     per_vertex[:] = NEUTRAL_BYTE if corners.dtype == np.uint8 else NEUTRAL_FLOAT
     per_vertex[corner_verts] = corners
     return per_vertex
+
+
+def stray_bake_layers(mesh) -> list:
+    """Descriptions of the layers named as the bake's (BoxOffset colour, BoxQuatXY, BoxQuatZW) on
+    a mesh that holds no bake: not all three, and no checksum of a bake. They are the artist's
+    (a UV map named BoxQuatXY), which a bake would overwrite."""
+    present = ([f"a colour attribute '{OFFSET_ATTRIBUTE}'"] if mesh.color_attributes.get(OFFSET_ATTRIBUTE) else []) + [
+        f"a UV map '{name}'" for name in BAKED_UV_MAPS if name in mesh.uv_layers]
+    if len(present) == 1 + len(BAKED_UV_MAPS) or mesh.get(LAYERS_DIGEST) is not None:
+        return []
+    return present
 
 
 def read_baked_layers(mesh, corner_verts=None) -> BakedLayers:
@@ -240,6 +252,11 @@ def prepare_bake(mesh, settings: BakeSettings, selected_only: bool = False) -> P
     if other is not None and mesh.color_attributes.get(OFFSET_ATTRIBUTE) is None:
         raise BakeInputError(f"mesh '{mesh.name}' has an attribute '{OFFSET_ATTRIBUTE}' that is not a colour "
                              f"({other.data_type} on {other.domain}): rename or remove it, the bake would replace it")
+    stray = stray_bake_layers(mesh)
+    if stray:
+        raise BakeInputError(f"mesh '{mesh.name}' holds no bake, yet has {' and '.join(stray)} (the names of the "
+                             "layers the bake writes): the bake would overwrite them; rename them (e.g. an own UV "
+                             "map 'BoxQuatXY' to 'UVMap') or remove them")
     existing_uv = [uv.name for uv in mesh.uv_layers]
     needed = max(len(existing_uv), 1) + sum(n not in existing_uv for n in (QUAT_XY_UV, QUAT_ZW_UV))
     if needed > MAX_UV_MAPS:

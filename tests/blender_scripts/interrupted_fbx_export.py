@@ -1,0 +1,23 @@
+"""Run the command line (``python interrupted_fbx_export.py ARGS``, in a Python with bpy) with a
+SIGINT arriving while Blender's FBX exporter writes, as a Ctrl-C in the middle of an export
+would: the exporter's save sends the signal to this process, then goes on."""
+import importlib
+import os
+import signal
+import sys
+
+import bpy  # noqa: F401  (Blender's add-ons, the FBX exporter among them, load with it)
+
+import boxmarch.cli
+
+fbx_writer = importlib.import_module("io_scene_fbx.export_fbx_bin")
+real_save = fbx_writer.save
+
+
+def save_interrupted(*args, **kwargs):
+    os.kill(os.getpid(), signal.SIGINT)
+    return real_save(*args, **kwargs)
+
+
+fbx_writer.save = save_interrupted
+boxmarch.cli.main(sys.argv[1:])
