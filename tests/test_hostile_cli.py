@@ -32,7 +32,7 @@ def test_a_refused_json_is_not_written_even_with_the_error(baked_blend, tmp_path
         r = run_module(["export", str(baked_blend), "--to", "other.glb", option, name, "--json", name], tmp_path)
         assert r.returncode == 2 and "name the same file" in last_line(r), r.stderr
         assert earlier.read_bytes() == b"an earlier result"
-    assert sorted(os.listdir(tmp_path)) == ["X.blend", "X.glb", "world.blend"]
+    assert sorted(os.listdir(tmp_path)) == ["X.blend", "X.glb", "world.blend"]  # no other.glb, no sidecar
 
 
 @pytest.mark.slow
@@ -46,7 +46,8 @@ def test_every_file_an_export_writes_is_an_output(baked_blend, tmp_path):
     r = run_module(["export", str(baked_blend), "--preset", "GODOT3", "--to", "g.glb", "--json", "r.json"], tmp_path)
     assert r.returncode == 0, r.stderr
     files_written = json.loads((tmp_path / "r.json").read_text())["steps"][0]["files"]
-    assert files_written == [str(tmp_path / "g.glb"), str(tmp_path / "g.boxes.tres")]
+    assert files_written == [str(tmp_path / name) for name in ("g.glb", "g.boxmarch.json", "g.boxes.tres",
+                                                                "g.glb.import")]
     assert table.read_text().startswith("[gd_resource")
     # The demo's own files are its outputs too: a --json among them is refused before it starts.
     r = run_module(["demo", "--count", "100", "--out", "d", "--json", "d/demo_godot3.boxes.tres"], tmp_path)
@@ -72,7 +73,8 @@ def test_a_second_run_writing_the_same_outputs_meanwhile_both_succeed(baked_blen
                         "--preset", "GODOT3", "--to", "same.glb", "--out", "same.blend", "--json", "same.json"],
                        cwd=tmp_path, env=module_environment(tmp_path), capture_output=True, text=True, timeout=240)
     assert r.returncode == 0 and "second run: exit 0" in r.stderr, r.stderr
-    assert sorted(os.listdir(tmp_path)) == ["same.blend", "same.boxes.tres", "same.glb", "same.json", "world.blend"]
+    assert sorted(os.listdir(tmp_path)) == ["same.blend", "same.boxes.tres", "same.boxmarch.json", "same.glb",
+                                            "same.glb.import", "same.json", "world.blend"]
     assert json.loads((tmp_path / "same.json").read_text())["ok"]
     assert [m["name"] for m in read_glb(tmp_path / "same.glb")] == ["Baked"]
 
@@ -88,12 +90,24 @@ def test_partial_names_stay_within_name_max():
     assert files.partial_path("/f/x.glb") != files.partial_path("/f/x.glb")
 
 
-@pytest.mark.parametrize("to, out", [("a" * 251 + ".glb", "b" * 249 + ".blend"), ("é" * 125 + ".glb", None)],
-                         ids=["255-byte-names", "254-byte-utf8-name"])
-def test_output_names_up_to_255_bytes_are_written(baked_blend, tmp_path, to, out):
+# The longest --to whose sidecar NAME.boxmarch.json still fits in 255 bytes: 255 - len(".boxmarch.json").
+LONGEST_STEM = 255 - len(".boxmarch.json")
+
+
+@pytest.mark.parametrize("stem, out", [("a" * LONGEST_STEM, "b" * 249 + ".blend"), ("é" * (LONGEST_STEM // 2), None)],
+                         ids=["241-byte-stem-255-byte-blend", "240-byte-utf8-stem"])
+def test_output_names_up_to_255_bytes_are_written(baked_blend, tmp_path, stem, out):
+    to = stem + ".glb"
     r = run_module(["export", str(baked_blend), "--to", to] + (["--out", out] if out else []), tmp_path)
     assert r.returncode == 0, r.stderr
-    assert sorted(os.listdir(tmp_path)) == sorted(["world.blend", to] + ([out] if out else []))
+    assert sorted(os.listdir(tmp_path)) == sorted(["world.blend", to, stem + ".boxmarch.json"] + ([out] if out else []))
+
+
+def test_a_to_whose_sidecar_name_passes_255_bytes_is_refused(baked_blend, tmp_path):
+    to = "a" * (LONGEST_STEM + 1) + ".glb"  # 246 bytes itself, its sidecar 256
+    r = run_module(["export", str(baked_blend), "--to", to], tmp_path)
+    assert r.returncode == 2 and ".boxmarch.json' is 256 bytes, longer than the 255" in last_line(r), r.stderr
+    assert os.listdir(tmp_path) == ["world.blend"]
 
 
 def test_a_name_longer_than_255_bytes_is_refused(baked_blend, tmp_path):
