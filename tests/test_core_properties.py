@@ -14,6 +14,7 @@ import pytest
 from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
+from boxmarch import _core as bindings  # the pybind11 module: its own argument checks
 from boxmarch import core, scenes
 from helpers.core_reference import (U32, assert_frames_valid, bounds_centre, decode_rgba, decoded_origins,
                                     half_extents_in, house, mesh_from_polys, newell, quat_matrix, reference_frame,
@@ -357,12 +358,12 @@ def test_negative_counts_and_indices_are_refused(call):
     if call == "vertex_count":
         corner_edges = np.zeros(24, np.int32)
         with pytest.raises(TypeError):  # a negative count is not a size_t
-            core._core.face_starts_from_corner_edges(box[4], corner_edges, box[1], -1)
+            bindings.face_starts_from_corner_edges(box[4], corner_edges, box[1], -1)
     else:
         uv = np.zeros((24, 2), np.float32)
         r = core.bake(*box)
         with pytest.raises(ValueError, match="half"):
-            core._core.expand_corner_quaternions(uv, -1, box[4], r.submesh_of_vertex, r.quaternions)
+            bindings.expand_corner_quaternions(uv, -1, box[4], r.submesh_of_vertex, r.quaternions)
         assert np.all(uv == 0)
 
 
