@@ -11,7 +11,8 @@ APT_PACKAGES=(blender python3-numpy libglm-dev libnanoflann-dev glslang-tools xv
               cmake clang-14 libclang-rt-14-dev  # sanitizer build and libFuzzer target
               chromium libjs-three godot3 godot3-server fonts-liberation  # tests/engines: three.js r111 in headless Chromium, Godot 3 (under the xvfb above)
               spirv-cross  # tests/engines/hlsl_webgl.py: the Unity HLSL, compiled to SPIR-V, drawn by WebGL 2
-              assimp-utils)  # tests/engines/fbx_libraries.py: Assimp reads the FBX exports
+              assimp-utils  # tests/engines/fbx_libraries.py: Assimp reads the FBX exports
+              clang-format-14)  # tests/test_house.py: the cpp/ style check
 missing=()
 for pkg in "${APT_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
@@ -25,6 +26,7 @@ fi
 
 echo "[setup] pip install (bpy, build and test tools, ufbx)" >&2
 "$PYTHON" -m pip install -q --disable-pip-version-check bpy "scikit-build-core>=0.10" "pybind11>=2.12" pytest hypothesis matplotlib \
+  ruff import-linter \
   ufbx  # tests/engines/ufbx_dump.py: Godot 4.3+'s FBX loader reads the FBX exports
 echo "[setup] building boxmarch" >&2
 "$PYTHON" -m pip install -q --disable-pip-version-check --no-build-isolation .

@@ -105,7 +105,7 @@ void mark_second(std::vector<Candidate>& c, const Candidate& first, double cos_e
         x.eligible = x.usable && d * d < cos2 * x.size2;
         if (slack)
             x.margin = x.usable ? std::abs(std::abs(d) / std::sqrt(x.size2) - cos_epsilon) -
-                                      (x.angle_slack + first.angle_slack)
+                                          (x.angle_slack + first.angle_slack)
                                 : 1.0;
     }
 }
@@ -158,9 +158,7 @@ void measure_edges(const SubmeshView& s, double d2, std::vector<Candidate>& edge
     for (Candidate& e : edges) e.usable = e.size2 > 1e-18 * longest2;
 }
 
-glm::dvec3 orthogonal_part(const glm::dvec3& d, const glm::dvec3& axis) {
-    return d - glm::dot(d, axis) * axis;
-}
+glm::dvec3 orthogonal_part(const glm::dvec3& d, const glm::dvec3& axis) { return d - glm::dot(d, axis) * axis; }
 
 // The world axis least aligned with `axis` (lowest index on a tie), made orthogonal to it.
 glm::dvec3 world_second_axis(const glm::dvec3& axis) {
@@ -228,7 +226,8 @@ glm::dmat3 frame_from_choice(const FrameChoice& choice, const SubmeshView& s, co
     // vertices, so the frame is bit for bit the one a cached choice rebuilds.
     auto direction = [&](DirectionKind kind, uint32_t index) {
         if (measured) return unit((kind == DirectionKind::Face ? measured->faces : measured->edges)[index].vector);
-        return unit(kind == DirectionKind::Face ? face_vector(s, s.faces[index], nullptr) : edge_vector(s, s.edges[index]));
+        return unit(kind == DirectionKind::Face ? face_vector(s, s.faces[index], nullptr)
+                                                : edge_vector(s, s.edges[index]));
     };
     if (choice.first_kind == DirectionKind::None) return glm::dmat3(1.0);
     const glm::dvec3 x = direction(choice.first_kind, choice.first);
