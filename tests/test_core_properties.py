@@ -314,6 +314,7 @@ def test_collinear_coincident_one_face_and_one_edge_submeshes(encoding):
         np.testing.assert_allclose(decode_rgba(r.offsets[v]), expected, rtol=1e-12)
 
 
+@pytest.mark.slow
 def test_a_submesh_of_one_million_vertices():
     # A 1 x 2 x 3 box (8 corners, 6 faces) whose first corner is chained through 999,992 interior
     # points by edges: one submesh; the interior cannot change the frame or the bounds.
@@ -501,6 +502,7 @@ def valid_by_hand(positions, edges, face_starts, face_sizes, corner_verts):
                 np.all((corner_verts >= 0) & (corner_verts < n)))
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(mesh=arbitrary_meshes(), encoding=st.sampled_from(core.ENCODINGS), data=st.data())
 def test_arbitrary_arrays_are_rejected_or_baked_validly(mesh, encoding, data):

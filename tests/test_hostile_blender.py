@@ -239,6 +239,7 @@ def digest(path):
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
+@pytest.mark.slow
 def test_cli_never_writes_the_input_or_a_partial_set_of_outputs(baked_blend, tmp_path):
     before = digest(baked_blend)
     r = run_module(["export", str(baked_blend), "--preset", "BLENDER", "--to", str(baked_blend)], tmp_path)
@@ -260,6 +261,7 @@ def test_cli_never_writes_the_input_or_a_partial_set_of_outputs(baked_blend, tmp
     assert digest(baked_blend) == before
 
 
+@pytest.mark.slow
 def test_cli_messages_and_clamped_values(baked_blend, tmp_path):
     r = run_module([], tmp_path)
     assert r.returncode == 2 and "boxmarch: error: boxmarch:" not in r.stderr, r.stderr

@@ -20,6 +20,8 @@ from helpers.preview_render import BLENDERS, agreement, quaternions_of, run_chec
 SCRIPT = Path(__file__).parent / "blender_scripts" / "preview_check.py"
 OUTLINE_COLOR = (0.05, 0.05, 0.05)  # preview/draw.py OUTLINE_COLOR (that module needs bpy)
 
+pytestmark = pytest.mark.slow  # each Blender renders the scenes in a subprocess (15-30 s)
+
 
 @pytest.fixture(scope="module", params=BLENDERS)
 def rendered(request, package_parent, tmp_path_factory):
@@ -148,7 +150,6 @@ def test_camera_inside_a_box(rendered):
     assert np.percentile(error, 99.9) <= 2e-3
 
 
-@pytest.mark.slow
 def test_draw_handler_in_a_real_viewport(package_parent, tmp_path):  # noqa: F811
     """Blender 3.4's window under Xvfb: the POST_VIEW handler draws the raymarched shapes."""
     if shutil.which("xvfb-run") is None:

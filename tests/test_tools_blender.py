@@ -480,6 +480,7 @@ def test_instance_on_curve_refuses_bad_input(blender):
         blender.ops.boxmarch.add_instance_on_curve(instance="Missing")
 
 
+@pytest.mark.slow
 def test_tools_and_undo_in_blender_34_window(tmp_path):
     """Debian's Blender 3.4 with a window under Xvfb (the bpy module has no window, so undo needs
     the program): every tool runs there, changes the mesh, and one undo restores it."""

@@ -4,12 +4,10 @@ import subprocess
 import sys
 
 import numpy as np
-import pytest
 
 from helpers.blender_program import blender_env, run_blender
 
-# Fixture params: the Blender 3.4 program runs belong to the slow tier.
-BLENDERS = [pytest.param("blender-3.4-program", marks=pytest.mark.slow), "bpy-5.0-module"]
+BLENDERS = ["blender-3.4-program", "bpy-5.0-module"]
 
 
 def run_check_script(blender, script, package_parent, out, tmp):
