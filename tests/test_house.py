@@ -1,6 +1,8 @@
-"""The house rules CI enforces (CONTRIBUTING.md): ruff's lint over the Python trees, and the
-cpp/ style of .clang-format over the files already written in it. scripts/setup.sh installs
-both tools; a missing tool fails here rather than skipping the check."""
+"""The house rules CI enforces (CONTRIBUTING.md): ruff's lint over the Python trees, the layer
+contracts of docs/ARCHITECTURE.md (import-linter, configured in pyproject.toml) over the add-on,
+and the cpp/ style of .clang-format over the files already written in it. scripts/setup.sh
+installs the three tools; a missing tool fails here rather than skipping the check."""
+import os
 import shutil
 import subprocess
 import sys
@@ -34,6 +36,34 @@ def test_ruff_catches_an_unused_import(tmp_path):
     proc = run([sys.executable, "-m", "ruff", "check", "--no-cache", "--config", str(ROOT / "pyproject.toml"),
                 str(planted)])
     assert proc.returncode == 1 and "F401" in proc.stdout, proc.stdout + proc.stderr
+
+
+def lint_imports(package_parent):
+    """import-linter over the boxmarch package found in ``package_parent``."""
+    command = [sys.executable, "-c", "from importlinter.cli import lint_imports_command; lint_imports_command()",
+               "--no-cache", str(ROOT / "pyproject.toml")]
+    return subprocess.run(command, cwd=package_parent, env=dict(os.environ, PYTHONPATH=str(package_parent)),
+                          capture_output=True, text=True, timeout=300)
+
+
+def test_imports_keep_the_layer_contracts():
+    proc = lint_imports(ROOT / "addon")
+    assert proc.returncode == 0, proc.stdout[-5000:] + proc.stderr[-2000:]
+    assert "2 kept, 0 broken" in proc.stdout, proc.stdout[-2000:]
+
+
+@pytest.mark.parametrize("module, planted, contract", [
+    ("core.py", "from . import mesh_io", "Layers"),      # the core reaching up to the Blender door
+    ("layouts.py", "import bpy", "never import Blender"),  # a format-facing module importing Blender
+])
+def test_lint_imports_catches_a_planted_import(tmp_path, module, planted, contract):
+    """Negative control: a copy of the package with one forbidden import breaks its contract."""
+    shutil.copytree(ROOT / "addon" / "boxmarch", tmp_path / "boxmarch", ignore=shutil.ignore_patterns("*.so"))
+    with open(tmp_path / "boxmarch" / module, "a") as f:
+        f.write(f"\n{planted}  # planted\n")
+    proc = lint_imports(tmp_path)
+    broken = [line for line in proc.stdout.splitlines() if " BROKEN" in line]
+    assert proc.returncode == 1 and any(contract in line for line in broken), proc.stdout[-3000:] + proc.stderr[-2000:]
 
 
 def clang_format():
