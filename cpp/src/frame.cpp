@@ -1,5 +1,7 @@
 // Frame derivation: which faces (or edges) orient a submesh, the frame they span, its quaternion,
-// and the 24 axis-aligned turns an artist can apply on top.
+// and the 24 axis-aligned turns an artist can apply on top. Face vectors are Newell's (M. E. Newell's
+// polygon normal, as in Sutherland, Sproull and Schumacker 1974); the quaternion comes from glm::quat_cast,
+// Shepperd's method (Shepperd 1978: start from the largest of w, x, y, z).
 #include "internal.h"
 
 #include <glm/gtc/quaternion.hpp>

@@ -1,4 +1,5 @@
-// Fixed-radius neighbour pairs by nanoflann radius searches: the reference for the hash grid.
+// Fixed-radius neighbour pairs by nanoflann radius searches (nanoflann: k-d trees after FLANN, Muja and
+// Lowe): the reference for the hash grid.
 #include "boxmarch/boxmarch.h"
 #include "internal.h"
 #include "spatial_hash.h"
