@@ -185,6 +185,7 @@ def test_instance_on_curve_refuses_a_spacing_that_would_create_millions(blender)
     assert not curve.modifiers
 
 
+@pytest.mark.slow
 def test_preview_render_draws_the_others_when_one_object_is_bad(blender):
     bpy = blender
     from boxmarch import preview
