@@ -614,7 +614,8 @@ which guards SDFs that overestimate (smooth unions, repetition) but costs steps:
 The median error tracks epsilon (about 0.75 epsilon: the march stops once the distance falls
 below it); the maximum is set by grazing rays, which pass within epsilon of the surface up to
 sqrt(2 epsilon r) before the true hit (0.045 r at epsilon 1e-3), and raising max_steps beyond what
-those rays need changes nothing. The default settings march {"20,000" if quick else "200,000"} rays in {ray_time * 1e3:.0f} ms on this machine.
+those rays need changes nothing.
+The default settings march {"20,000" if quick else "200,000"} rays in {ray_time * 1e3:.0f} ms on this machine.
 
 ## Scaling
 
@@ -634,7 +635,8 @@ times). Peak extra memory is the rise of the process's peak resident set during 
 
 Fitted log-log slopes over 10,000..{counts[-1]:,} boxes (1.0 is linear):
 
-{table(["operation", "CPU time", "wall time", "memory"], [[t, f"{slopes[t]['cpu']:.2f}", f"{slopes[t]['wall']:.2f}", f"{slopes[t]['memory']:.2f}"] for t in TOOLS])}
+{table(["operation", "CPU time", "wall time", "memory"],
+        [[t, *(f"{slopes[t][key]:.2f}" for key in ("cpu", "wall", "memory"))] for t in TOOLS])}
 """
     page += bench_skinning.accuracy_section()  # its plot: scripts/skinning_accuracy_plot.py
     (out / "ACCURACY.md").write_text(page)

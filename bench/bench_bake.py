@@ -108,7 +108,7 @@ def main(counts):
         rebake = best_of(repeats, lambda: bpy.ops.boxmarch.bake(incremental=False))
         skip = best_of(repeats, lambda: bpy.ops.boxmarch.bake(incremental=True))
         arrays = (mesh_io.read_positions(mesh), *mesh_io.read_topology(mesh))
-        core_time = best_of(repeats, lambda: core.bake(*arrays))
+        core_time = best_of(repeats, lambda: core.bake(*arrays))  # noqa: F821 (called before the del below)
         truth = core.bake(*arrays)
         del arrays
         float_error = decode_error(mesh, truth.origins, truth.half_extents, raw_bytes=False)
@@ -142,7 +142,8 @@ def main(counts):
     print(f"Blender {bpy.app.version_string}, boxes of 0.05-2 units within 100 units of the origin; times in ms (best of runs)")
     print(table(["boxes", "bake (first)", "re-bake", "re-bake, unchanged", "transfer", "bake / transfer",
                  "re-bake / transfer", "transfer as operator", "re-bake / operator transfer",
-                 "floor operator", "floor / transfer", "re-bake / floor", "core only", "peak extra MiB", "attributes MiB", "peak / attributes",
+                 "floor operator", "floor / transfer", "re-bake / floor", "core only", "peak extra MiB", "attributes MiB",
+                 "peak / attributes",
                  "decode error float", "decode error 8-bit", "origin vs generated centre"], rows))
     print("decode error: |decoded origin - baked origin| / largest half-extent, decoding the stored attributes "
           "in float64; origin vs generated centre: the float64 centre the boxes were generated around, which "

@@ -205,7 +205,7 @@ def skinned(bpy, ob, view, projection, boxed_frame, repeats):
 
     def pose():
         turn[0] += 1
-        for k, pose_bone in enumerate(rig.pose.bones):
+        for pose_bone in rig.pose.bones:
             pose_bone.rotation_mode = "QUATERNION"
             pose_bone.rotation_quaternion = Quaternion((0.0, 0.0, 1.0), BONE_TURN * (1 if turn[0] % 2 else -1))
         bpy.context.view_layer.update()

@@ -12,7 +12,8 @@ APT_PACKAGES=(blender python3-numpy libglm-dev libnanoflann-dev glslang-tools xv
               chromium libjs-three godot3 godot3-server fonts-liberation  # tests/engines: three.js r111 in headless Chromium, Godot 3 (under the xvfb above)
               spirv-cross  # tests/engines/hlsl_webgl.py: the Unity HLSL, compiled to SPIR-V, drawn by WebGL 2
               assimp-utils  # tests/engines/fbx_libraries.py: Assimp reads the FBX exports
-              mono-mcs)  # tests/test_engine_import_settings.py: the Unity postprocessor compiled against a stub of Unity's API
+              mono-mcs  # tests/test_engine_import_settings.py: the Unity postprocessor compiled against a stub of Unity's API
+              clang-format-14)  # tests/test_house.py: the cpp/ style check
 missing=()
 for pkg in "${APT_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
@@ -25,6 +26,7 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 PIP_PACKAGES=(bpy "scikit-build-core>=0.10" "pybind11>=2.12" pytest hypothesis matplotlib
+              ruff import-linter  # tests/test_house.py: lint and the layer contract
               jsonschema  # tests/test_sidecar.py: every export's sidecar against its schema
               ufbx  # tests/engines/ufbx_dump.py: Godot 4.3+'s FBX loader reads the FBX exports
               nicegui==3.18.0)  # its elements/scene/dist/index.js is three.js r180 with GLTFLoader (tests/engines/threejs.py)

@@ -17,7 +17,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "tests"))
 from engines import threejs  # noqa: E402
 
-# The demo's Blender camera (cli._demo_camera: at (0, -24, 3), turned 85 degrees about x, 30 mm
+# The demo's Blender camera (demo._camera: at (0, -24, 3), turned 85 degrees about x, 30 mm
 # lens on a 36 mm sensor fitted to the 640 px width) in glTF's Y-up axes (x, z, -y).
 WIDTH, HEIGHT = 640, 360
 TILT = math.radians(85.0)

@@ -63,3 +63,32 @@ def package_parent(tmp_path_factory):
     parent = tmp_path_factory.mktemp("blender_path")
     (parent / "boxmarch").symlink_to(Path(boxmarch.__file__).parent, target_is_directory=True)
     return parent
+
+
+def random_boxes_object(bpy, name="Boxes", count=4, offset=0.0, select=True):
+    """A mesh object of ``count`` random boxes (scenes.random_boxes, seed 3), moved by ``offset``."""
+    import numpy as np
+
+    from boxmarch import scenes
+
+    (arrays, *_), = [scenes.random_boxes(count, seed=3, spread=5.0, size_range=(0.5, 1.5))]
+    return mesh_object(bpy, name, arrays[0] + np.float32(offset), *arrays[1:], select=select)
+
+
+@pytest.fixture
+def baked_blend(blender, tmp_path):
+    """``world.blend`` in tmp_path: four random boxes, baked; the session's scene is left empty."""
+    bpy = blender
+    random_boxes_object(bpy, "Baked")
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+    path = tmp_path / "world.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    return path
+
+
+def digest(path):
+    """SHA-256 of a file's bytes: a file a refused command must leave as it was."""
+    import hashlib
+
+    return hashlib.sha256(path.read_bytes()).hexdigest()

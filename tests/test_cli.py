@@ -17,6 +17,8 @@ from fbx_reader import read_fbx_geometry
 from gltf_reader import read_glb
 from helpers.blender_program import SCRIPTS, blender_env, run_module
 
+pytestmark = pytest.mark.slow  # python -m boxmarch and Blender 3.4 program subprocesses
+
 TO_GLTF = np.array([[1, 0, 0], [0, 0, 1], [0, -1, 0]], float)
 COUNT, SEED = 60, 11
 

@@ -248,7 +248,7 @@ def test_cache_gives_the_same_bake_as_no_cache_and_each_copy_is_right():
     assert_frames_valid(cached)
     p64 = arrays[0].astype(np.float64)
     decoded = decoded_origins(cached, arrays[0])
-    for s, (points, faces, rotation, scale, offset, kind) in enumerate(meta):
+    for s, (points, faces, rotation, scale, offset, _kind) in enumerate(meta):
         v = vertices_of(cached, s)
         frame = quat_matrix(cached.quaternions[s])
         # The copy's frame is the prototype's frame (from the spec rule) carried along; its
@@ -349,7 +349,7 @@ def test_mirrored_copies_decode_and_follow_their_own_geometry():
     assert_frames_valid(cached)
     p64 = arrays[0].astype(np.float64)
     decoded = decoded_origins(cached, arrays[0])
-    for s, (points, faces) in enumerate(polys):
+    for s, (_points, faces) in enumerate(polys):
         v = vertices_of(cached, s)
         frame = quat_matrix(cached.quaternions[s])
         if len(faces) > 1:

@@ -14,6 +14,7 @@ import pytest
 from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
+from boxmarch import _core as bindings  # the pybind11 module: its own argument checks
 from boxmarch import core, scenes
 from helpers.core_reference import (U32, assert_frames_valid, bounds_centre, decode_rgba, decoded_origins,
                                     half_extents_in, house, mesh_from_polys, newell, quat_matrix, reference_frame,
@@ -313,6 +314,7 @@ def test_collinear_coincident_one_face_and_one_edge_submeshes(encoding):
         np.testing.assert_allclose(decode_rgba(r.offsets[v]), expected, rtol=1e-12)
 
 
+@pytest.mark.slow
 def test_a_submesh_of_one_million_vertices():
     # A 1 x 2 x 3 box (8 corners, 6 faces) whose first corner is chained through 999,992 interior
     # points by edges: one submesh; the interior cannot change the frame or the bounds.
@@ -357,12 +359,12 @@ def test_negative_counts_and_indices_are_refused(call):
     if call == "vertex_count":
         corner_edges = np.zeros(24, np.int32)
         with pytest.raises(TypeError):  # a negative count is not a size_t
-            core._core.face_starts_from_corner_edges(box[4], corner_edges, box[1], -1)
+            bindings.face_starts_from_corner_edges(box[4], corner_edges, box[1], -1)
     else:
         uv = np.zeros((24, 2), np.float32)
         r = core.bake(*box)
         with pytest.raises(ValueError, match="half"):
-            core._core.expand_corner_quaternions(uv, -1, box[4], r.submesh_of_vertex, r.quaternions)
+            bindings.expand_corner_quaternions(uv, -1, box[4], r.submesh_of_vertex, r.quaternions)
         assert np.all(uv == 0)
 
 
@@ -500,6 +502,7 @@ def valid_by_hand(positions, edges, face_starts, face_sizes, corner_verts):
                 np.all((corner_verts >= 0) & (corner_verts < n)))
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(mesh=arbitrary_meshes(), encoding=st.sampled_from(core.ENCODINGS), data=st.data())
 def test_arbitrary_arrays_are_rejected_or_baked_validly(mesh, encoding, data):

@@ -19,6 +19,9 @@ from engine_scene import (TO_Y_UP, UNITY, UNREAL, UV_NAMES, baked_scene, box_of_
                           unity_skinned_decode)
 from fbx_reader import read_fbx_geometry, read_fbx_skin
 
+pytestmark = pytest.mark.slow  # Blender's FBX exporter and importer round trips
+
+
 @pytest.fixture
 def scene(blender):
     return baked_scene(blender)

@@ -11,6 +11,8 @@ from engine_scene import (TO_Y_UP, baked_scene, box_of_vertex, decode_normal_fra
                           rounded_box_mismatch, silhouettes, table_texels)
 from engines import coverage_mismatch, godot3, import_helpers
 
+pytestmark = pytest.mark.slow  # Godot 3 imports and renders
+
 W, H = 320, 240
 WIDE = {"position": [2.0, 9.0, 14.0], "target": [0.5, -0.5, 0.0], "fov": 50, "near": 0.5, "far": 100}
 INNER = 0.6

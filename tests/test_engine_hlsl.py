@@ -19,6 +19,8 @@ from engine_scene import (UNITY, baked_scene, imported, posed_rig_boxes, rig_box
 from engines import Shot, coverage_mismatch, hlsl_webgl, ndc_to_pixels
 from fbx_reader import read_fbx_geometry, read_fbx_skin
 
+pytestmark = pytest.mark.slow  # Chromium renders and Blender exports
+
 W, H = 320, 240
 # Cameras in Unity's frame: the static boxes, and the posed rig seen from its side.
 STATIC_CAMERA = (np.array([-9.0, 8.0, -12.0]), np.array([-0.5, -0.5, 0.0]))

@@ -21,6 +21,8 @@ from engine_scene import (RIG_TURN_ANGLE, RIG_TURN_AXES, TO_Y_UP, axis_turn, box
 from engines import coverage_mismatch, godot3, threejs
 from gltf_reader import node_globals, read_glb, read_skin
 
+pytestmark = pytest.mark.slow  # Chromium and Godot 3 renders of skinned exports
+
 W, H = 400, 300
 # Both cameras look at the middle of the posed chain (glTF frame), about 9 units away.
 SIDE = {"position": [8.9, 4.35, -2.2], "target": [0.9, 1.85, 1.8], "fov": 42, "near": 1.0, "far": 40}

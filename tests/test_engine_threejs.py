@@ -17,6 +17,8 @@ from engine_scene import (TO_Y_UP, baked_scene, box_of_vertex, decode_normal_fra
                           rounded_box_mismatch, silhouettes)
 from engines import coverage_mismatch, threejs
 
+pytestmark = pytest.mark.slow  # Chromium renders
+
 W, H = 320, 240
 WIDE = {"position": [2.0, 9.0, 14.0], "target": [0.5, -0.5, 0.0], "fov": 50, "near": 0.5, "far": 100}
 # The far plane leaves only the three 0.02 x 0.02 x 0.1 boxes (numbers 3-5) in this view.

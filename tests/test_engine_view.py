@@ -2,6 +2,7 @@
 UNITY the preview evaluates the SDF with local x mirrored, as Unity's left-handed object frames
 do, so an artist sees in Blender what the engine will show."""
 import numpy as np
+import pytest
 
 from boxmarch import scenes
 from boxmarch.preview import sources
@@ -20,6 +21,7 @@ def test_mirrored_sources_compile(tmp_path):
     assert sources.fragment_source("BOX", None, (1.0, 1.0, 1.0)) == sources.fragment_source("BOX")
 
 
+@pytest.mark.slow
 def test_unity_engine_view_mirrors_an_asymmetric_sdf(blender):
     bpy = blender
     from boxmarch import preview

@@ -8,6 +8,8 @@ import pytest
 
 from engines import coverage_mismatch, godot3, threejs
 
+pytestmark = pytest.mark.slow  # Chromium and Godot 3 runs
+
 W, H = 160, 120
 CAMERA = {"position": [0.0, 0.0, 5.0], "target": [0.0, 0.0, 0.0], "up": [0, 1, 0], "fov": 40.0}
 ORTHO = {"position": [0.0, 0.0, 5.0], "target": [0.0, 0.0, 0.0], "ortho": 1.5}

@@ -1,20 +1,17 @@
 """Hostile inputs through the add-on and the command line (issue 14; docs/CHECKS.md lists them):
 no crash, no data loss, nothing silently wrong, one clear message."""
-import hashlib
 import os
 
 import numpy as np
 import pytest
 
 from boxmarch import core, mesh_io, scenes
-from conftest import mesh_object
+from conftest import digest, random_boxes_object
 from helpers.blender_program import run_module
 
 
 def boxes(bpy, name="Boxes", count=4, offset=0.0, select=True):
-    (arrays, *_), = [scenes.random_boxes(count, seed=3, spread=5.0, size_range=(0.5, 1.5))]
-    positions = arrays[0] + np.float32(offset)
-    return mesh_object(bpy, name, positions, *arrays[1:], select=select)
+    return random_boxes_object(bpy, name, count, offset, select)
 
 
 def worst_decode_error(bpy, ob):
@@ -185,6 +182,7 @@ def test_instance_on_curve_refuses_a_spacing_that_would_create_millions(blender)
     assert not curve.modifiers
 
 
+@pytest.mark.slow
 def test_preview_render_draws_the_others_when_one_object_is_bad(blender):
     bpy = blender
     from boxmarch import preview
@@ -224,21 +222,7 @@ def test_integer_arguments_out_of_range_give_one_line(blender):
 # command line: every check before the first byte is written
 
 
-@pytest.fixture
-def baked_blend(blender, tmp_path):
-    bpy = blender
-    boxes(bpy, "Baked")
-    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
-    path = tmp_path / "world.blend"
-    bpy.ops.wm.save_as_mainfile(filepath=str(path))
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    return path
-
-
-def digest(path):
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
+@pytest.mark.slow
 def test_cli_never_writes_the_input_or_a_partial_set_of_outputs(baked_blend, tmp_path):
     before = digest(baked_blend)
     r = run_module(["export", str(baked_blend), "--preset", "BLENDER", "--to", str(baked_blend)], tmp_path)
@@ -260,6 +244,7 @@ def test_cli_never_writes_the_input_or_a_partial_set_of_outputs(baked_blend, tmp
     assert digest(baked_blend) == before
 
 
+@pytest.mark.slow
 def test_cli_messages_and_clamped_values(baked_blend, tmp_path):
     r = run_module([], tmp_path)
     assert r.returncode == 2 and "boxmarch: error: boxmarch:" not in r.stderr, r.stderr

@@ -14,7 +14,7 @@ import pytest
 from boxmarch import files
 from gltf_reader import read_glb
 from helpers.blender_program import SCRIPTS, module_environment, run_module
-from test_hostile_blender import baked_blend, digest  # noqa: F401  (baked_blend is a fixture)
+from conftest import digest
 
 
 def last_line(proc):

@@ -25,6 +25,7 @@ def run_limited(*args):
     return subprocess.run(["bash", "-c", cmd], env=env, capture_output=True, text=True, timeout=120)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("args, allowed", [
     (("pairs",), {"MemoryError"}),           # 1.8e9 pairs: the worker threads' lists cannot grow
     (("merge", "2000000"), {"ok"}),          # 2,000,000 coincident vertices: linear memory
@@ -84,6 +85,7 @@ def test_merge_targets_match_the_star_rule_on_dense_and_sparse_clusters(seed):
     assert np.array_equal(target, reference_merge(pos, sub, 2e-3))
 
 
+@pytest.mark.slow
 def test_merge_of_a_million_coincident_vertices_is_linear():
     n = 1_000_000
     pos = np.zeros((n, 3), np.float32)
@@ -95,6 +97,7 @@ def test_merge_of_a_million_coincident_vertices_is_linear():
     assert passes == 1 and (pass_of_vertex == 0).all()
 
 
+@pytest.mark.slow  # the brute-force reference: 3,000 x 3,000 float64 distances and a matrix product
 @pytest.mark.parametrize("epsilon", [0.0, 1e-4, 0.05, 100.0])
 def test_select_across_matches_pairs_at_any_epsilon(epsilon):
     rng = np.random.default_rng(7)

@@ -13,6 +13,8 @@ import pytest
 
 from helpers.blender_program import SCRIPTS, blender_env
 
+pytestmark = pytest.mark.slow  # builds the zips and installs them into both Blenders
+
 REPO = Path(__file__).resolve().parent.parent
 
 

@@ -15,6 +15,11 @@ import pathlib
 import subprocess
 import sys
 
+import pytest
+
+# Their own tier (-m native), minutes each: also slow, so the everyday tier skips them.
+pytestmark = [pytest.mark.slow, pytest.mark.native]
+
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 

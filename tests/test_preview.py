@@ -20,6 +20,8 @@ from helpers.preview_render import BLENDERS, agreement, quaternions_of, run_chec
 SCRIPT = Path(__file__).parent / "blender_scripts" / "preview_check.py"
 OUTLINE_COLOR = (0.05, 0.05, 0.05)  # preview/draw.py OUTLINE_COLOR (that module needs bpy)
 
+pytestmark = pytest.mark.slow  # each Blender renders the scenes in a subprocess (15-30 s)
+
 
 @pytest.fixture(scope="module", params=BLENDERS)
 def rendered(request, package_parent, tmp_path_factory):

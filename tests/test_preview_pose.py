@@ -14,6 +14,8 @@ from helpers.preview_render import BLENDERS, agreement, quaternions_of, run_chec
 
 SCRIPT = Path(__file__).parent / "blender_scripts" / "preview_pose_check.py"
 
+pytestmark = pytest.mark.slow  # each Blender renders the rig in a subprocess (15-30 s)
+
 
 @pytest.fixture(scope="module", params=BLENDERS)
 def rendered(request, package_parent, tmp_path_factory):

@@ -5,6 +5,7 @@ import pytest
 
 from boxmarch import mesh_io, scenes
 from conftest import mesh_object
+from helpers.menus import drawn_operators
 
 
 def faces_object(bpy, name, positions, starts, sizes, corners):
@@ -480,6 +481,7 @@ def test_instance_on_curve_refuses_bad_input(blender):
         blender.ops.boxmarch.add_instance_on_curve(instance="Missing")
 
 
+@pytest.mark.slow
 def test_tools_and_undo_in_blender_34_window(tmp_path):
     """Debian's Blender 3.4 with a window under Xvfb (the bpy module has no window, so undo needs
     the program): every tool runs there, changes the mesh, and one undo restores it."""
@@ -523,7 +525,14 @@ def test_tools_are_in_the_menus_and_the_panel(blender):
     from boxmarch.operators import instance_on_curve, tools
 
     for menu_name, draw in tools.menus + instance_on_curve.menus:
-        assert draw in getattr(blender.types, menu_name).draw._draw_funcs, menu_name
+        menu = getattr(blender.types, menu_name)
+        ours = drawn_operators(draw)
+        assert ours and set(ours) <= set(drawn_operators(menu.draw)), menu_name
+        menu.remove(draw)  # negative control: without the add-on's item the menu lacks its operators
+        try:
+            assert not set(ours) & set(drawn_operators(menu.draw)), menu_name
+        finally:
+            menu.append(draw)
     assert hasattr(blender.types, "BOXMARCH_PT_submesh_tools")
     for idname in ("select_linked_submeshes", "select_linked_across", "dedup_submeshes",
                    "merge_by_distance_submeshes", "pack_uv_by_z", "add_instance_on_curve"):

@@ -306,7 +306,8 @@ def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_v
     _core.render_boxes(origins, quaternions, half_extents,
                        np.ascontiguousarray(object_to_clip, np.float32), np.ascontiguousarray(object_to_view, np.float32),
                        np.ascontiguousarray(base_color, np.float32), rgba.reshape(-1, 4), depth,
-                       normals.reshape(-1, 3), steps.reshape(-1), sdf=_preset_index(sdf), max_steps=checked_int(max_steps, "max_steps", -2**31),
+                       normals.reshape(-1, 3), steps.reshape(-1), sdf=_preset_index(sdf),
+                       max_steps=checked_int(max_steps, "max_steps", -2**31),
                        epsilon=float(epsilon), relaxation=float(relaxation), max_distance=float(max_distance),
                        threads=checked_int(threads, "threads", -2**31))
     return RenderResult(rgba=rgba, depth=depth, normals=normals, steps=steps)

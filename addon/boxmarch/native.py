@@ -8,7 +8,7 @@ import numpy as np
 try:
     from . import _core
 except ImportError:  # installed as a Blender 4.2+ extension: the module comes from its platform wheel
-    from boxmarch_native import _core
+    from boxmarch_native import _core  # noqa: F401 (used through this module's name)
 
 
 def checked_int(value, name, lo=0, hi=2**31 - 1) -> int:

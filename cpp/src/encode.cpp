@@ -43,8 +43,7 @@ float encode_byte(const glm::dvec3* offsets, const uint32_t* vertices, uint32_t 
         double worst = 0.0;
         for (uint32_t i = 0; i < count && worst < best_error; ++i) {
             glm::dvec3 decoded;
-            for (int k = 0; k < 3; ++k)
-                decoded[k] = (byte_of(0.5 + 0.5 * a * offsets[i][k]) / 255.0 * 2.0 - 1.0) / a;
+            for (int k = 0; k < 3; ++k) decoded[k] = (byte_of(0.5 + 0.5 * a * offsets[i][k]) / 255.0 * 2.0 - 1.0) / a;
             worst = std::max(worst, glm::length(decoded - offsets[i]));
         }
         if (worst < best_error) {

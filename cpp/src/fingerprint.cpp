@@ -59,7 +59,7 @@ bool anchor_frame(const SubmeshView& s, const glm::dvec3& centre, uint32_t i0, u
 }
 
 constexpr size_t kMaxStoredVertices = size_t(1) << 20;  // bounds the cache's memory (~40 MB)
-constexpr size_t kMaxPerBucket = 4;                       // bounds the work of one lookup
+constexpr size_t kMaxPerBucket = 4;                     // bounds the work of one lookup
 
 }  // namespace
 
@@ -92,7 +92,6 @@ struct CopyCache::Impl {
     std::vector<uint32_t> scratch;  // the topology of the submesh being looked up
     std::vector<double> positions;
     std::unordered_map<uint64_t, std::vector<uint32_t>> buckets;
-
 };
 
 // Counts plus similarity-invariant distance ratios, coarsely quantised: copies land in one
@@ -122,8 +121,7 @@ bool CopyCache::lookup(const SubmeshView& s, const Spread& spread, uint64_t key,
     impl_->scratch.clear();
     for (uint32_t id : bucket->second) {
         const Impl::Prototype& p = impl_->prototypes[id];
-        if (p.vertex_count != s.vertex_count || p.face_count != s.face_count || p.edge_count != s.edge_count)
-            continue;
+        if (p.vertex_count != s.vertex_count || p.face_count != s.face_count || p.edge_count != s.edge_count) continue;
         std::vector<uint32_t>& words = impl_->scratch;
         if (words.empty()) append_topology(s, words);  // once per lookup, only when needed
         if (words.size() != p.topology_size ||
@@ -165,7 +163,10 @@ void CopyCache::insert(const SubmeshView& s, const Spread& spread, uint64_t key,
     double best = 0.0;
     for (uint32_t i = 0; i < s.vertex_count; ++i) {
         const double off = glm::length(glm::cross(x, s.position(s.vertices[i]) - centre));
-        if (off > best) { best = off; a1 = i; }
+        if (off > best) {
+            best = off;
+            a1 = i;
+        }
     }
     Impl::Prototype p;
     // Thin anchors turn noise into rotation error; the fit test still rejects any bad map, so a

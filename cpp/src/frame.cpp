@@ -1,5 +1,7 @@
 // Frame derivation: which faces (or edges) orient a submesh, the frame they span, its quaternion,
-// and the 24 axis-aligned turns an artist can apply on top.
+// and the 24 axis-aligned turns an artist can apply on top. Face vectors are Newell's (M. E. Newell's
+// polygon normal, as in Sutherland, Sproull and Schumacker 1974); the quaternion comes from glm::quat_cast,
+// Shepperd's method (Shepperd 1978: start from the largest of w, x, y, z).
 #include "internal.h"
 
 #include <glm/gtc/quaternion.hpp>
@@ -105,7 +107,7 @@ void mark_second(std::vector<Candidate>& c, const Candidate& first, double cos_e
         x.eligible = x.usable && d * d < cos2 * x.size2;
         if (slack)
             x.margin = x.usable ? std::abs(std::abs(d) / std::sqrt(x.size2) - cos_epsilon) -
-                                      (x.angle_slack + first.angle_slack)
+                                          (x.angle_slack + first.angle_slack)
                                 : 1.0;
     }
 }
@@ -158,9 +160,7 @@ void measure_edges(const SubmeshView& s, double d2, std::vector<Candidate>& edge
     for (Candidate& e : edges) e.usable = e.size2 > 1e-18 * longest2;
 }
 
-glm::dvec3 orthogonal_part(const glm::dvec3& d, const glm::dvec3& axis) {
-    return d - glm::dot(d, axis) * axis;
-}
+glm::dvec3 orthogonal_part(const glm::dvec3& d, const glm::dvec3& axis) { return d - glm::dot(d, axis) * axis; }
 
 // The world axis least aligned with `axis` (lowest index on a tie), made orthogonal to it.
 glm::dvec3 world_second_axis(const glm::dvec3& axis) {
@@ -228,7 +228,8 @@ glm::dmat3 frame_from_choice(const FrameChoice& choice, const SubmeshView& s, co
     // vertices, so the frame is bit for bit the one a cached choice rebuilds.
     auto direction = [&](DirectionKind kind, uint32_t index) {
         if (measured) return unit((kind == DirectionKind::Face ? measured->faces : measured->edges)[index].vector);
-        return unit(kind == DirectionKind::Face ? face_vector(s, s.faces[index], nullptr) : edge_vector(s, s.edges[index]));
+        return unit(kind == DirectionKind::Face ? face_vector(s, s.faces[index], nullptr)
+                                                : edge_vector(s, s.edges[index]));
     };
     if (choice.first_kind == DirectionKind::None) return glm::dmat3(1.0);
     const glm::dvec3 x = direction(choice.first_kind, choice.first);

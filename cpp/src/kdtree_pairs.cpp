@@ -1,4 +1,5 @@
-// Fixed-radius neighbour pairs by nanoflann radius searches: the reference for the hash grid.
+// Fixed-radius neighbour pairs by nanoflann radius searches (nanoflann: k-d trees after FLANN, Muja and
+// Lowe): the reference for the hash grid.
 #include "boxmarch/boxmarch.h"
 #include "internal.h"
 #include "spatial_hash.h"
@@ -17,16 +18,18 @@ struct PointCloud {
     size_t kdtree_get_point_count() const { return count; }
     double kdtree_get_pt(size_t i, size_t d) const { return double(positions[3 * i + d]); }
     template <class Box>
-    bool kdtree_get_bbox(Box&) const { return false; }
+    bool kdtree_get_bbox(Box&) const {
+        return false;
+    }
 };
 
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, PointCloud, double>,
-                                                 PointCloud, 3, uint32_t>;
+using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, PointCloud, double>, PointCloud,
+                                                 3, uint32_t>;
 
 }  // namespace
 
-size_t find_close_pairs_kdtree(uint32_t* pairs, size_t capacity, const float* positions,
-                               size_t count, double radius, const int32_t* group_of_point) {
+size_t find_close_pairs_kdtree(uint32_t* pairs, size_t capacity, const float* positions, size_t count, double radius,
+                               const int32_t* group_of_point) {
     check_radius(radius, "radius");
     check_finite_positions(positions, count);
     PointCloud cloud{positions, count};

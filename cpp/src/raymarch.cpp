@@ -2,7 +2,8 @@
 // against it pixel by pixel. The SDF library, the slab test, the normal tap and the light are
 // shaders/glsl's own, translated by shaders/generate.py (shader_library.h); the march and the
 // normal, which call map() in GLSL, are written here around the preset switch, statement for
-// statement as raymarch.glsl has them.
+// statement as raymarch.glsl has them. The march is sphere tracing (Hart 1996, steps of the
+// distance bound, here scaled by `relaxation`); the box entry is the slab test (Kay and Kajiya 1986).
 #include "boxmarch/boxmarch.h"
 #include "internal.h"
 #include "shader_library.h"
@@ -15,7 +16,6 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <vector>
 
 namespace boxmarch {

@@ -125,8 +125,8 @@ void query_range(const Grid<T>& g, size_t first, size_t last, double radius, con
 }  // namespace
 
 template <class T>
-std::vector<PointPair> close_pairs(const T* positions, size_t count, double radius,
-                                   const int32_t* group_of_point, int threads) {
+std::vector<PointPair> close_pairs(const T* positions, size_t count, double radius, const int32_t* group_of_point,
+                                   int threads) {
     const std::vector<uint32_t> included = included_points(count, group_of_point);
     if (included.size() < 2) return {};
     Grid<T> g;
@@ -183,8 +183,8 @@ size_t write_sorted_pairs(uint32_t* pairs, size_t capacity, std::vector<PointPai
     return found.size();
 }
 
-size_t find_close_pairs(uint32_t* pairs, size_t capacity, const float* positions, size_t count,
-                        double radius, const int32_t* group_of_point, int threads) {
+size_t find_close_pairs(uint32_t* pairs, size_t capacity, const float* positions, size_t count, double radius,
+                        const int32_t* group_of_point, int threads) {
     check_radius(radius, "radius");
     check_finite_positions(positions, count);
     std::vector<PointPair> found = close_pairs(positions, count, radius, group_of_point, threads);

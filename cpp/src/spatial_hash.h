@@ -21,7 +21,7 @@ struct Grid {
     double origin[3] = {0, 0, 0};
     double cell = 1.0;
     uint64_t mask = 0;
-    double crowding = 0.0;               // mean number of points sharing a point's bucket
+    double crowding = 0.0;  // mean number of points sharing a point's bucket
     const int32_t* key = nullptr;
     std::vector<uint32_t> bucket_start;  // mask + 2 entries
     std::vector<uint32_t> bucket_end;    // live end of each bucket (callers that remove items)
@@ -99,8 +99,8 @@ inline double distance2(const Grid<T>& g, const double p[3], uint32_t slot) {
 // finite radius >= 0 and finite positions (callers check). The pairs are materialised: only for
 // callers that return them (find_close_pairs); the tools use the searches below.
 template <class T>
-std::vector<PointPair> close_pairs(const T* positions, size_t count, double radius,
-                                   const int32_t* group_of_point, int threads);
+std::vector<PointPair> close_pairs(const T* positions, size_t count, double radius, const int32_t* group_of_point,
+                                   int threads);
 
 // Writes has_partner[i] = 1 for every point i (group_of_point[i] >= 0) with another point of the
 // same group within radius, else 0. Stops at the first partner: linear memory and, on coincident

@@ -1,4 +1,5 @@
-// Connected components of a mesh through its edges and face corners (union-find).
+// Connected components of a mesh through its edges and face corners (union-find: a disjoint-set
+// forest with path halving, Tarjan and van Leeuwen 1984).
 #include "boxmarch/boxmarch.h"
 #include "internal.h"
 

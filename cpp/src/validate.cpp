@@ -29,8 +29,7 @@ void validate_mesh(const MeshView& mesh) {
     const size_t bad_end = first_out_of_range(mesh.edges, mesh.edge_count * 2, n);
     if (bad_end < mesh.edge_count * 2)
         throw std::invalid_argument("edge " + std::to_string(bad_end / 2) + " names vertex " +
-                                    std::to_string(mesh.edges[bad_end]) + ", outside 0.." +
-                                    std::to_string(n) + "-1");
+                                    std::to_string(mesh.edges[bad_end]) + ", outside 0.." + std::to_string(n) + "-1");
     // Sizes and starts in one branch-free sweep; the loop that names the culprit runs only on failure.
     // With start >= 0 and size >= 3, start + size cannot wrap in 32 unsigned bits.
     const uint32_t corner_limit = uint32_t(std::min<size_t>(mesh.corner_count, UINT32_MAX));

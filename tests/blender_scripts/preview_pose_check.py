@@ -112,18 +112,18 @@ def set_pose(axes):
 
 
 render_layouts("REST", ("NORMAL_FRAME",))
-rest_mesh_entry = draw._meshes[(mesh.name_full, "NORMAL_FRAME")]
-rest_weights = draw._posed[boxes.name_full].weights
+rest_mesh_entry = draw.cached_mesh(mesh.name_full, "NORMAL_FRAME")
+rest_weights = draw.posed_state(boxes.name_full).weights
 
 # Pose A by hand: the depsgraph handler marks the pose stale; what the pose does not change is kept.
 set_pose(POSE_A)
 bpy.context.view_layer.update()
 render_layouts("POSE_A", ("NORMAL_FRAME",))
-result["mesh_entry_kept"] = draw._meshes.get((mesh.name_full, "NORMAL_FRAME")) is rest_mesh_entry
-result["weights_kept"] = draw._posed[boxes.name_full].weights is rest_weights
+result["mesh_entry_kept"] = draw.cached_mesh(mesh.name_full, "NORMAL_FRAME") is rest_mesh_entry
+result["weights_kept"] = draw.posed_state(boxes.name_full).weights is rest_weights
 # The decoded-vector overlay of the posed data: each vertex + its skinned frame applied to f, the
 # CPU decode of what the shader receives; drawn once to run the overlay's path.
-drawn = draw._posed[boxes.name_full].drawn
+drawn = draw.posed_state(boxes.name_full).drawn
 result["POSE_A_decoded_origins"] = mesh_data.vector_lines(drawn.positions, drawn.offsets, drawn.frame())[1][1::2]
 boxes.boxmarch.show_vectors = True
 render_layouts("VECTORS", ("NORMAL_FRAME",))

@@ -1,6 +1,9 @@
 # Run by tests/test_hostile_core.py under an address-space limit (ulimit -v): each case prints
 # "<case> ok" or "<case> MemoryError"; anything else (an abort) fails the test.
-import sys, numpy as np
+import sys
+
+import numpy as np
+
 from boxmarch import core
 case = sys.argv[1]
 def outcome(fn):
@@ -20,7 +23,8 @@ if case == "across":
     n = int(sys.argv[2])
     pos = np.random.default_rng(0).random((n, 3), dtype=np.float32)
     sub = (np.arange(n) // 8).astype(np.int32)
-    sel = np.zeros(n, np.uint8); sel[0] = 1
+    sel = np.zeros(n, np.uint8)
+    sel[0] = 1
     outcome(lambda: core.select_linked_across(pos, sel, sub, n // 8, epsilon=10.0, threads=4))
 def boxes(n):
     corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], np.float32)
@@ -39,5 +43,6 @@ if case == "render":
     o = np.random.default_rng(1).random((n, 3)).astype(np.float32) * 10
     q = np.tile(np.array([0, 0, 0, 1], np.float32), (n, 1))
     h = np.full((n, 3), 0.1, np.float32)
-    m = np.eye(4); m[2, 3] = -30
+    m = np.eye(4)
+    m[2, 3] = -30
     outcome(lambda: core.render_boxes(o, q, h, m, m, 64, 64, threads=4))

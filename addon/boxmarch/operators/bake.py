@@ -28,6 +28,10 @@ def _build_axis_turn_items():
 _ORIGIN_LABELS = {"BOUNDS": ("Bounds Centre", "Centre of the submesh's bounding box in its own frame"),
                   "MEAN": ("Vertex Mean", "Average of the submesh's vertex positions")}
 _ORIGIN_ITEMS = [(mode, *_ORIGIN_LABELS[mode]) for mode in core.ORIGIN_MODES]
+# UI words of core.ENCODINGS.
+_ENCODING_LABELS = {"FLOAT_COLOR": ("Float", "32-bit float colour: exact decode"),
+                    "BYTE_COLOR": ("8-bit", "Byte colour: smaller, decode limited by quantisation")}
+_ENCODING_ITEMS = [(encoding, *_ENCODING_LABELS[encoding]) for encoding in core.ENCODINGS]
 
 
 class BOXMARCH_OT_bake(bpy.types.Operator):
@@ -44,9 +48,8 @@ class BOXMARCH_OT_bake(bpy.types.Operator):
         name="Origin", default=core.ORIGIN_MODES[0],
         items=_ORIGIN_ITEMS)
     encoding: EnumProperty(
-        name="Colour", default="FLOAT_COLOR",
-        items=[("FLOAT_COLOR", "Float", "32-bit float colour: exact decode"),
-               ("BYTE_COLOR", "8-bit", "Byte colour: smaller, decode limited by quantisation")])
+        name="Colour", default=core.ENCODINGS[0],
+        items=_ENCODING_ITEMS)
     domain: EnumProperty(
         name="Domain", default="POINT",
         items=[("POINT", "Vertex", "One colour per vertex"), ("CORNER", "Face Corner", "One colour per face corner")])

@@ -27,7 +27,7 @@ class BOXMARCH_OT_export(bpy.types.Operator, ExportHelper):
     layout: EnumProperty(
         name="Layout", default="DEFAULT",
         items=[("DEFAULT", "Preset's Own", "The layout the engine's importer carries best (docs/ENGINES.md)")]
-        + [(l.name, l.label, l.description) for l in layouts.LAYOUTS.values()],
+        + [(layout.name, layout.label, layout.description) for layout in layouts.LAYOUTS.values()],
         description="Which vertex channels carry the box data")
 
     @classmethod

@@ -60,7 +60,8 @@ class BOXMARCH_OT_select_linked_across(_SubmeshTool, bpy.types.Operator):
     bl_label = "Select Linked Across Submeshes"
     tool = tool_jobs.SelectLinkedAcross
 
-    epsilon: FloatProperty(name="Epsilon", default=tool_jobs.SelectLinkedAcross.epsilon, soft_min=0.0, soft_max=1.0, precision=6, subtype="DISTANCE",
+    epsilon: FloatProperty(name="Epsilon", default=tool_jobs.SelectLinkedAcross.epsilon, soft_min=0.0, soft_max=1.0,
+                           precision=6, subtype="DISTANCE",
                            description="Vertices of different submeshes this close (true distance) link them")
 
 
@@ -71,7 +72,8 @@ class BOXMARCH_OT_dedup_submeshes(_SubmeshTool, bpy.types.Operator):
     bl_label = "Delete Duplicate Submeshes"
     tool = tool_jobs.DeleteDuplicates
 
-    tolerance: FloatProperty(name="Tolerance", default=tool_jobs.DeleteDuplicates.tolerance, soft_min=0.0, soft_max=1.0, precision=6, subtype="DISTANCE",
+    tolerance: FloatProperty(name="Tolerance", default=tool_jobs.DeleteDuplicates.tolerance, soft_min=0.0,
+                             soft_max=1.0, precision=6, subtype="DISTANCE",
                              description="Every vertex must lie this close to a distinct vertex of the kept copy")
 
 

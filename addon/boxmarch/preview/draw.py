@@ -59,6 +59,18 @@ def pose_changed(object_name=None) -> bool:
     return object_name is None or object_name in _posed
 
 
+def cached_mesh(mesh_name, layout):
+    """What the preview keeps of a mesh datablock in one layout, or None: the same object until
+    the mesh's data changes (so a caller can see that a pose change kept it)."""
+    return _meshes.get((mesh_name, layout))
+
+
+def posed_state(object_name):
+    """An object's posed drawing (``weights``: the skin weights read once; ``drawn``: the last
+    drawing, with ``positions``, ``offsets`` and ``frame()``), or None when it is not drawn posed."""
+    return _posed.get(object_name)
+
+
 def _vertex_buffer(inputs: dict):
     """One GPU vertex buffer holding the float32 (N, k) arrays of ``inputs`` by attribute name."""
     vertex_format = gpu.types.GPUVertFormat()
