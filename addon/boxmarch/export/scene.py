@@ -67,8 +67,28 @@ def box_data(mesh, preset, index_base: int = 0):
     stats = {"mesh": mesh.name, "vertices": len(positions), "corners": len(corner_verts), "boxes": int(count),
              "colour": mesh.color_attributes[mesh_io.OFFSET_ATTRIBUTE].data_type,
              "max_alpha": float(data.classic_rgba[:, 3].max()) if len(positions) else 0.0,
-             "transform_error": error}
+             "transform_error": error, "stale_boxes": stale_boxes(blender_origin, box_half, submesh_of_vertex, count, layers.encoding)}
     return data, corner_verts, stats
+
+
+# A box is stale when its vertices' decoded origins disagree by more than this fraction of its
+# largest half-extent: a bake decodes them to one point within float32 rounding, or within the
+# 8-bit colour's quantisation bound (docs/FORMAT.md); an edit after the bake that moves some of
+# them does not.
+STALE_SPREAD = {"FLOAT_COLOR": 1e-3, "BYTE_COLOR": 0.05}
+
+
+def stale_boxes(decoded_origins, box_half, submesh_of_vertex, count, encoding) -> int:
+    """How many boxes changed shape since the bake: the stored offsets and frames of their
+    vertices no longer decode to one origin (moving or turning a whole box keeps it decoding)."""
+    if not count:
+        return 0
+    high = np.full((count, 3), -np.inf)
+    low = np.full((count, 3), np.inf)
+    np.maximum.at(high, submesh_of_vertex, decoded_origins)
+    np.minimum.at(low, submesh_of_vertex, decoded_origins)
+    reach = np.maximum(np.asarray(box_half, np.float64).max(axis=1), 1e-30)
+    return int(((high - low).max(axis=1) > STALE_SPREAD[encoding] * reach).sum())
 
 
 def _keep_artist_uv0(copy) -> None:
@@ -245,6 +265,12 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
         if skin and skin["unweighted_vertices"]:
             warnings.append(f"{m['mesh']}: {skin['unweighted_vertices']} vertices carry no weight of "
                             f"'{skin['armature']}': Blender leaves them at rest, engines may not")
+    owners = {ob.data.name: ob.name for ob in objects}
+    for m in stats:
+        if m.get("stale_boxes"):
+            warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': {m['stale_boxes']} of {m['boxes']} boxes changed shape since the bake, "
+                            "so the file's offsets and frames are stale and decode off: run Bake Box Frames again, "
+                            "then export")
     default_errors = [m["default_import_error"] for m in stats if "default_import_error" in m]
     if default_errors:
         warnings.append(f"with {preset.label}'s default import settings ({preset.default_import_loss}) the decode error is "
@@ -256,7 +282,8 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             "table": os.path.abspath(table_path(filepath)) if layout == "NORMAL_COLOR" else None,
             "objects": [ob.name for ob in objects], "meshes": stats, "seconds": time.perf_counter() - start,
             "warnings": warnings, "import_settings": preset.import_settings,
-            "transform_error": max((s["transform_error"] for s in stats), default=0.0)}
+            "transform_error": max((s["transform_error"] for s in stats), default=0.0),
+            "stale_boxes": sum(s.get("stale_boxes", 0) for s in stats)}
 
 
 def _skins(context, objects, preset) -> dict:

@@ -1,0 +1,105 @@
+"""Hostile inputs, round 2 (issue 21; docs/CHECKS.md lists them): data the rebuild tools must not
+lose, shape keys the bake cannot see, geometry edited after the bake. Each case gets a clear
+message or warning, and a refusal changes nothing."""
+import numpy as np
+import pytest
+
+from boxmarch import core, mesh_io, scenes
+from conftest import mesh_object
+from gltf_reader import read_glb
+
+
+def baked_boxes(bpy, name="Boxes", count=6, encoding="FLOAT_COLOR"):
+    """A baked object of ``count`` random boxes (8 vertices each, in order)."""
+    arrays, *_ = scenes.random_boxes(count, seed=11, spread=6.0, size_range=(0.5, 1.5))
+    ob = mesh_object(bpy, name, *arrays)
+    assert bpy.ops.boxmarch.bake(encoding=encoding) == {"FINISHED"}
+    return ob
+
+
+def set_positions(mesh, positions):
+    mesh.vertices.foreach_set("co", np.ascontiguousarray(positions, np.float32).reshape(-1))
+    mesh.update()
+
+
+# --- 7: shape keys the bake and the export read past ---------------------------------------------
+
+def shape_keyed(bpy):
+    ob = baked_boxes(bpy)
+    ob.shape_key_add(name="Basis")
+    key = ob.shape_key_add(name="Taller", from_mix=False)
+    key.data.foreach_set("co", (mesh_io.read_positions(ob.data) * [1, 1, 2]).reshape(-1))
+    key.value = 0.0
+    return ob, key
+
+
+def test_a_shown_shape_key_is_warned_about_in_bake_and_export(blender, tmp_path, capfd):
+    from boxmarch.export import scene
+
+    ob, key = shape_keyed(blender)
+    assert mesh_io.modifier_warnings([ob]) == []  # a key at value 0 changes nothing shown
+    key.value = 0.7
+    (warning,) = mesh_io.modifier_warnings([ob])
+    assert "object 'Boxes' shows shape key 'Taller': the bake uses the mesh without them" in warning
+    assert blender.ops.boxmarch.bake() == {"FINISHED"}
+    assert "shows shape key 'Taller'" in capfd.readouterr().out  # the operator's WARNING report
+    report = scene.export_objects(blender.context, [ob], "GLTF", str(tmp_path / "keyed.glb"))
+    assert any("object 'Boxes' shows shape key 'Taller': the export uses" in w for w in report["warnings"])
+    # Muted, it is not shown; pinned (Shape Key Lock) with the active key, it is, whatever its value.
+    key.mute = True
+    assert mesh_io.modifier_warnings([ob]) == []
+    key.mute, key.value = False, 0.0
+    ob.show_only_shape_key, ob.active_shape_key_index = True, 1
+    assert "shows shape key 'Taller'" in mesh_io.modifier_warnings([ob])[0]
+    ob.active_shape_key_index = 0  # the reference pinned: the mesh data itself
+    assert mesh_io.modifier_warnings([ob]) == []
+
+
+# --- 5: export after the geometry changed since the bake ---------------------------------------
+
+def test_export_after_an_edit_warns_and_counts_the_stale_boxes(blender, tmp_path):
+    """Box 0 stretched by 2 units along x after the bake: its stored offsets now decode up to 2
+    units away from the vertices' common origin. The export still writes the file (as Blender's
+    exporters do with stale data) but names the object and the stale box count in a warning and
+    in the report; moving a whole box keeps it decoding and is not counted."""
+    from boxmarch.export import scene
+
+    ob = baked_boxes(blender)
+    positions = mesh_io.read_positions(ob.data).astype(np.float64)
+    fresh = scene.export_objects(blender.context, [ob], "GLTF", str(tmp_path / "fresh.glb"))
+    assert fresh["stale_boxes"] == 0 and not any("since the bake" in w for w in fresh["warnings"])
+
+    moved = positions.copy()
+    moved[8:16] += [3.0, -1.0, 0.5]  # box 1 moved whole: still decodes
+    box0 = moved[:8]
+    far = box0[:, 0] > box0[:, 0].mean()
+    box0[far, 0] += 2.0  # box 0 stretched
+    set_positions(ob.data, moved)
+    report = scene.export_objects(blender.context, [ob], "GLTF", str(tmp_path / "stale.glb"))
+    assert report["stale_boxes"] == 1 and report["meshes"][0]["stale_boxes"] == 1
+    assert any("object 'Boxes': 1 of 6 boxes changed shape since the bake" in w and "Bake Box Frames again" in w
+               for w in report["warnings"])
+    # What the warning is about: the file's box 0 decodes off by the stretch.
+    (mesh,) = read_glb(tmp_path / "stale.glb")
+    p = mesh["primitives"][0]
+    origins = p["POSITION"] + p["NORMAL"] * 0  # positions only
+    offset = np.concatenate([p["TEXCOORD_1"], p["TEXCOORD_2"][:, :1]], 1)
+    z, x = p["NORMAL"], p["TANGENT"][:, :3]
+    y = np.cross(z, x) * p["TANGENT"][:, 3:4]
+    origins = origins + x * offset[:, :1] + y * offset[:, 1:2] + z * offset[:, 2:3]
+    index = np.rint(p["TEXCOORD_2"][:, 1]).astype(int)
+    spread = np.ptp(origins[index == 0], axis=0).max()
+    assert spread > 1.9, spread
+    assert np.ptp(origins[index == 1], axis=0).max() < 1e-5
+
+    assert blender.ops.boxmarch.bake() == {"FINISHED"}
+    again = scene.export_objects(blender.context, [ob], "GLTF", str(tmp_path / "again.glb"))
+    assert again["stale_boxes"] == 0
+
+
+def test_an_8_bit_bake_is_not_taken_for_stale(blender, tmp_path):
+    from boxmarch.export import scene
+
+    ob = baked_boxes(blender, count=40, encoding="BYTE_COLOR")
+    report = scene.export_objects(blender.context, [ob], "UNITY", str(tmp_path / "byte.fbx"), layout="CLASSIC")
+    assert report["stale_boxes"] == 0
