@@ -7,6 +7,7 @@ import pytest
 from boxmarch import core, mesh_io, scenes
 from conftest import mesh_object
 from gltf_reader import read_glb
+from test_tools_blender import faces_object, split_boxes
 
 
 def baked_boxes(bpy, name="Boxes", count=6, encoding="FLOAT_COLOR"):
@@ -103,3 +104,87 @@ def test_an_8_bit_bake_is_not_taken_for_stale(blender, tmp_path):
     ob = baked_boxes(blender, count=40, encoding="BYTE_COLOR")
     report = scene.export_objects(blender.context, [ob], "UNITY", str(tmp_path / "byte.fbx"), layout="CLASSIC")
     assert report["stale_boxes"] == 0
+
+
+# --- 2: the rebuilding tools keep what a mesh holds outside its generic attributes --------------
+
+def skin_radii(mesh):
+    radii = np.empty(len(mesh.vertices) * 2, np.float32)
+    mesh.skin_vertices[0].data.foreach_get("radius", radii)
+    return radii.reshape(-1, 2)
+
+
+def run_on_all(bpy, ob, operator, **options):
+    bpy.ops.object.mode_set(mode="OBJECT")
+    for other in bpy.context.scene.objects:
+        other.select_set(other == ob)
+    bpy.context.view_layer.objects.active = ob
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="SELECT")
+    assert getattr(bpy.ops.boxmarch, operator)(**options) == {"FINISHED"}
+    bpy.ops.object.mode_set(mode="OBJECT")
+
+
+@pytest.mark.parametrize("operator, options", [("dedup_submeshes", {"tolerance": 1e-4}),
+                                               ("merge_by_distance_submeshes", {"distance": 1e-3})])
+def test_skin_radii_survive_the_rebuilding_tools(blender, operator, options):
+    """A Skin modifier's radii live in the mesh's skin layer, not in a generic attribute: the tools
+    keep them (Blender's own delete and merge carry every layer), each vertex that stays with its
+    own radii (merged: those of one of the vertices merged into it)."""
+    if operator == "dedup_submeshes":  # 5 boxes, each with a copy 1e-5 away
+        arrays, *_ = scenes.random_boxes(5, seed=2, spread=8.0)
+        n = len(arrays[0])
+        arrays = (np.concatenate([arrays[0], arrays[0] + np.float32(1e-5)]),
+                  np.concatenate([arrays[1], arrays[1] + n]), np.concatenate([arrays[2], arrays[2] + len(arrays[4])]),
+                  np.concatenate([arrays[3], arrays[3]]), np.concatenate([arrays[4], arrays[4] + n]))
+        ob = mesh_object(blender, "Skinned", *arrays)
+        kept_vertices = n
+    else:  # 4 boxes of 12 vertices, 4 of them doubles 1e-4 from a corner: 8 each after the merge
+        positions, starts, sizes, corners = split_boxes(np.arange(4)[:, None] * np.array([2.0, 0, 0]), 1e-4)
+        ob = faces_object(blender, "Skinned", positions, starts, sizes, corners)
+        kept_vertices = 32
+    before = mesh_io.read_positions(ob.data)
+    ob.modifiers.new("Skin", "SKIN")
+    radii = np.random.default_rng(4).uniform(0.1, 0.9, (len(before), 2)).astype(np.float32)
+    ob.data.skin_vertices[0].data.foreach_set("radius", radii.reshape(-1))
+    run_on_all(blender, ob, operator, **options)
+    mesh = ob.data
+    assert len(mesh.vertices) == kept_vertices
+    assert len(mesh.skin_vertices) == 1, "the skin layer was dropped"
+    after, kept = mesh_io.read_positions(mesh), skin_radii(mesh)
+    for position, radius in zip(after, kept):
+        near = np.linalg.norm(before - position, axis=1) <= 2e-3
+        assert (radii[near] == radius).all(axis=1).any(), (position, radius)
+
+
+def corner_normal_table(bpy, ob):
+    """Sorted (corner position, corner normal) rows, rounded to 1e-3."""
+    mesh = ob.data
+    positions = mesh_io.read_positions(mesh)
+    normals = np.empty(len(mesh.loops) * 3, np.float32)
+    mesh.corner_normals.foreach_get("vector", normals)
+    rows = np.concatenate([positions[mesh_io.read_topology(mesh)[3]], normals.reshape(-1, 3)], axis=1)
+    return sorted(map(tuple, np.round(rows, 3).tolist()))
+
+
+def test_merge_keeps_custom_normals_as_blenders_merge_does(blender):
+    """Custom normals are stored relative to each vertex's fan of corners, which a weld changes:
+    the merge leaves them as Blender's own Merge by Distance does (a rebuild copying the stored
+    values would turn them)."""
+    tables = []
+    for tool in (True, False):
+        blender.ops.wm.read_factory_settings(use_empty=True)
+        positions, starts, sizes, corners = split_boxes(np.arange(2)[:, None] * np.array([2.0, 0, 0]), 1e-4)
+        ob = faces_object(blender, "Normals", positions, starts, sizes, corners)
+        normals = np.random.default_rng(1).normal(size=(len(positions), 3))
+        ob.data.normals_split_custom_set_from_vertices((normals / np.linalg.norm(normals, axis=1)[:, None]).tolist())
+        if tool:
+            run_on_all(blender, ob, "merge_by_distance_submeshes", distance=1e-3)
+        else:
+            blender.ops.object.mode_set(mode="EDIT")
+            blender.ops.mesh.select_all(action="SELECT")
+            blender.ops.mesh.remove_doubles(threshold=1e-3)
+            blender.ops.object.mode_set(mode="OBJECT")
+        assert len(ob.data.vertices) == 16 and ob.data.has_custom_normals
+        tables.append(corner_normal_table(blender, ob))
+    assert tables[0] == tables[1]
