@@ -41,10 +41,16 @@ def uv_name(layout: str, channel: str) -> str:
     return CHANNEL_UV_NAMES[channel]
 
 
-def box_data(mesh, preset, index_base: int = 0):
-    """(layouts.BoxData in the target's frame, corner_verts, stats) of a baked mesh: the stored
-    offsets and quaternion, each vertex's box half-extents (largest |f| per local axis over its
-    submesh) and box number (``index_base`` + submesh id)."""
+def box_data(mesh, preset, index_base: int = 0, space=None):
+    """(layouts.BoxData in the target's frame, corner_verts, stats, origins) of a baked mesh: the
+    stored offsets and quaternion, each vertex's box half-extents (largest |f| per local axis over
+    its submesh) and box number (``index_base`` + submesh id). ``space`` (4 x 4, Blender axes;
+    None: the object's own) maps object coordinates to those the file writes positions in: a
+    skinned glTF holds world positions, so its frames, offsets and half-extents are given in
+    world space (transforms.frames_in_space; CLASSIC colours only in the object's own).
+    ``origins`` (vertices, 3): where each vertex's box origin lies in the file's space, target
+    axes (what the file must decode to); stats["sheared_boxes"] counts the boxes ``space``
+    shears, whose data is not meaningful (the caller refuses them)."""
     layers = baked_layers(mesh)
     offsets, corner_verts, q = layers.shader_offsets(), layers.corner_verts, layers.vertex_quaternions()
     positions = mesh_io.read_positions(mesh).astype(np.float64)
@@ -52,23 +58,42 @@ def box_data(mesh, preset, index_base: int = 0):
     submesh_of_vertex, count = core.find_submeshes(positions.astype(np.float32), edges, face_starts, face_sizes,
                                                    corner_verts)
     _, _, box_half = core.boxes_from_bake(positions, offsets, q, submesh_of_vertex)
-    target_q = transforms.target_quaternions(q, preset)
     f = core.decode_offsets(offsets)
+    blender_origin = positions + core.rotate_vector(f, q)
+    stale = stale_boxes(blender_origin, box_half, submesh_of_vertex, count, layers.encoding)
+    sheared = 0
+    if space is not None:
+        space = np.asarray(space, np.float64)
+        q, f, box_half, sheared = transforms.frames_in_space(q, f, box_half, submesh_of_vertex, space[:3, :3])
+        positions = positions @ space[:3, :3].T + space[:3, 3]
+        blender_origin = blender_origin @ space[:3, :3].T + space[:3, 3]
+    target_q = transforms.target_quaternions(q, preset)
     target_f = transforms.target_local(f, preset)
-    target_half = box_half.astype(np.float64) * preset.length_scale
+    target_half = np.asarray(box_half, np.float64) * preset.length_scale
     data = layouts.BoxData(quaternions=target_q, offsets=target_f, half_extents=target_half[submesh_of_vertex],
                            index=index_base + submesh_of_vertex.astype(np.int64),
-                           classic_rgba=transforms.target_offsets(offsets, preset), box_half_extents=target_half)
+                           classic_rgba=transforms.target_offsets(offsets, preset) if space is None else None,
+                           box_half_extents=target_half)
     # Self-check: the decode in the target frame must land where the target frame puts Blender's.
-    blender_origin = positions + core.rotate_vector(f, q)
+    origins = transforms.target_positions(blender_origin, preset)
     target_origin = transforms.target_positions(positions, preset) + core.rotate_vector(target_f, target_q)
-    reach = max(float(np.abs(f).max()) if len(f) else 0.0, 1e-30) * preset.length_scale
-    error = float(np.abs(target_origin - transforms.target_positions(blender_origin, preset)).max() / reach)
+    error = float(np.abs(target_origin - origins).max() / offset_reach(target_f)) if len(f) else 0.0
     stats = {"mesh": mesh.name, "vertices": len(positions), "corners": len(corner_verts), "boxes": int(count),
-             "colour": mesh.color_attributes[mesh_io.OFFSET_ATTRIBUTE].data_type,
-             "max_alpha": float(data.classic_rgba[:, 3].max()) if len(positions) else 0.0,
-             "transform_error": error, "stale_boxes": stale_boxes(blender_origin, box_half, submesh_of_vertex, count, layers.encoding)}
-    return data, corner_verts, stats
+             "colour": layers.encoding, "max_alpha": float(offsets[:, 3].max()) / preset.length_scale if len(positions) else 0.0,
+             "space": "object" if space is None else "world", "transform_error": error, "stale_boxes": stale,
+             "sheared_boxes": sheared}
+    return data, corner_verts, stats, origins
+
+
+def offset_reach(target_f) -> float:
+    """The largest |f| component: the scale the report's decode errors are measured against."""
+    return max(float(np.abs(target_f).max()) if len(target_f) else 0.0, 1e-30)
+
+
+# The worst decode error of a file, over the largest offset, that float32 rounding of positions
+# and channels explains; anything above means the box data is in another space than the positions.
+FILE_DECODE_TOLERANCE = 1e-4
+FLOAT32_POSITION_ERROR = 2.0 ** -22  # two roundings of a float32 position, relative to its size
 
 
 # A box is stale when its vertices' decoded origins disagree by more than this fraction of its
@@ -116,14 +141,23 @@ def box_weight_spread(weights, box, boxes) -> np.ndarray:
 RIGID_WEIGHT_SPREAD = 1e-6
 
 
-def _target_copy(mesh, preset, layout, index_base, skin=None):
-    """(copy, channels, corner_verts, stats): a copy of ``mesh`` holding what the exporter must
-    write, the channels the file must hold per Blender vertex, and each corner's vertex. glTF targets: the copy's only colour is each vertex's index (the
-    channels are written into the .glb afterwards, glb.replace_vertex_channels); FBX targets: the
-    channels as the copy's colour and UV maps (Blender's FBX exporter writes them unchanged).
-    The copy keeps the mesh's vertex groups (mesh.copy()); ``skin`` (mesh_io.Skin of the object
-    exported with it) adds the skin's figures to the stats."""
-    data, corner_verts, stats = box_data(mesh, preset, index_base)
+def _target_copy(mesh, preset, layout, index_base, skin=None, space=None, owner=""):
+    """(copy, channels, corner_verts, stats, origins): a copy of ``mesh`` holding what the exporter
+    must write, the channels the file must hold per Blender vertex, each corner's vertex, and
+    where each vertex's box origin must decode (box_data). glTF targets: the copy's only colour
+    is each vertex's index (the channels are written into the .glb afterwards,
+    glb.replace_vertex_channels); FBX targets: the channels as the copy's colour and UV maps
+    (Blender's FBX exporter writes them unchanged). The copy keeps the mesh's vertex groups
+    (mesh.copy()); ``skin`` (mesh_io.Skin of the object exported with it) adds the skin's figures
+    to the stats; ``space`` is box_data's, of the object named ``owner``. Raises ExportInputError
+    where ``space`` shears boxes."""
+    data, corner_verts, stats, origins = box_data(mesh, preset, index_base, space)
+    if stats["sheared_boxes"]:
+        raise ExportInputError(
+            f"object '{owner}': its world transform scales {stats['sheared_boxes']} of its {stats['boxes']} boxes "
+            "unevenly across their axes (a non-uniform scale on a box it turns); a skinned glTF holds world "
+            "positions, where those boxes are not boxes and no frame decodes them: apply the scale "
+            "(Object > Apply > Scale), bake again, then export")
     if skin is not None:
         spread = box_weight_spread(skin.weights, data.index - index_base, stats["boxes"])
         stats["skin"] = {"armature": skin.armature.name, "bones": list(skin.bones),
@@ -159,7 +193,7 @@ def _target_copy(mesh, preset, layout, index_base, skin=None):
     if preset.godot3_compression:
         stats["default_import_error"] = layouts.import_error(layout, channels, layouts.with_godot3_compression(channels),
                                                              data.half_extents)
-    return copy, channels, corner_verts, stats
+    return copy, channels, corner_verts, stats, origins
 
 
 def _operator_kwargs(operator, wanted: dict) -> dict:
@@ -267,6 +301,11 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
                             f"'{skin['armature']}': Blender leaves them at rest, engines may not")
     owners = {ob.data.name: ob.name for ob in objects}
     for m in stats:
+        if m["transform_error"] > m.get("float32_error_bound", FILE_DECODE_TOLERANCE):
+            warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': the file's boxes decode up to "
+                            f"{m['transform_error']:.2g} of the largest offset away from Blender's: the exporter "
+                            "wrote positions in a space this export does not know; do not use the file")
+    for m in stats:
         if m.get("stale_boxes"):
             warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': {m['stale_boxes']} of {m['boxes']} boxes changed shape since the bake, "
                             "so the file's offsets and frames are stale and decode off: run Bake Box Frames again, "
@@ -318,6 +357,36 @@ def _fbx_frame(channels, corner_verts, preset) -> dict:
             "BINORMAL": (y * mirror)[corner_verts]}
 
 
+def written_space(ob, skin, preset):
+    """The space (4 x 4, Blender axes) the preset's file holds ``ob``'s positions in, for
+    box_data: None for the object's own (its glTF node or FBX model carries its transform), the
+    world for a skinned glTF (Blender's glTF exporter writes a skinned mesh's vertices in world
+    space, the joints' inverse bind matrices holding the armature's world transform, so the skin
+    at rest is the identity; the export measures it in the file, _file_decode_error)."""
+    if skin is None or preset.extension != ".glb":
+        return None
+    return np.array(ob.matrix_world, np.float64)
+
+
+def _file_decode_error(gltf, binary, name, layout, channels, origins) -> tuple[float, float]:
+    """(worst decode error, what float32 positions explain), both over the largest offset, of the
+    .glb's mesh ``name``: its POSITION as the exporter wrote it, plus the layout's offset decoded
+    from ``channels`` (what glb.replace_vertex_channels writes, per Blender vertex), against
+    ``origins`` (box_data: where each Blender vertex's box origin lies in the space the file
+    should hold). Small boxes far from the origin lose to float32 positions alone about 1e-7 of
+    the distance; the second figure adds that to FILE_DECODE_TOLERANCE."""
+    worst = reach = position_reach = 0.0
+    for attrs, index in glb.vertex_indices(gltf, binary, name):
+        positions = glb.accessor_array(gltf, binary, attrs["POSITION"]).astype(np.float64)
+        to_origin = layouts.to_origin(layout, {k: v[index] for k, v in channels.items()})
+        if len(index):
+            worst = max(worst, float(np.abs(positions + to_origin - origins[index]).max()))
+            reach = max(reach, float(np.abs(to_origin).max()))
+            position_reach = max(position_reach, float(np.abs(positions).max()))
+    reach = max(reach, 1e-30)
+    return worst / reach, FILE_DECODE_TOLERANCE + FLOAT32_POSITION_ERROR * position_reach / reach
+
+
 def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
     """Exports temporary copies of ``meshes`` in place of the originals, with the armatures of
     ``skins`` at their rest position (the file's skin binds the rest geometry); returns (stats,
@@ -326,16 +395,20 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
     selection = [ob for ob in context.view_layer.objects if ob.select_get()]
     active = context.view_layer.objects.active
     users = {}
-    skin_of_mesh = {ob.data.as_pointer(): skins.get(ob.name) for ob in mesh_io.one_object_per_mesh(objects)}
+    owner_of_mesh = {ob.data.as_pointer(): ob for ob in mesh_io.one_object_per_mesh(objects)}
     armatures = list({skin.armature.name: skin.armature for skin in skins.values()}.values())
     pose_positions = {rig.name: rig.data.pose_position for rig in armatures}
+    truths = {}
     try:
         for rig in armatures:
             rig.data.pose_position = "REST"
+        context.view_layer.update()  # world matrices at rest: an object parented to a bone moves with it
         for mesh in meshes:
             index_base = sum(len(t) for t in tables)  # box numbers run on across the file's meshes
-            copy, channels, corner_verts, mesh_stats = _target_copy(mesh, preset, layout, index_base,
-                                                                    skin_of_mesh.get(mesh.as_pointer()))
+            ob = owner_of_mesh[mesh.as_pointer()]
+            skin = skins.get(ob.name)
+            copy, channels, corner_verts, mesh_stats, origins = _target_copy(
+                mesh, preset, layout, index_base, skin, written_space(ob, skin, preset), ob.name)
             if "TABLE" in channels:
                 tables.append(channels.pop("TABLE"))
             name = mesh.name
@@ -343,6 +416,7 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
             copy.name = name  # the file names the mesh as the artist did
             copies[mesh.as_pointer()], originals[name] = copy, mesh
             file_channels[name], file_corners[name] = channels, corner_verts
+            truths[name] = (origins, mesh_stats)
             stats.append(mesh_stats)
         for ob in objects:
             users[ob.name] = ob.data
@@ -353,6 +427,9 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
             raise RuntimeError(f"the {preset.label} exporter wrote nothing")
         if preset.extension == ".glb":
             gltf, binary = glb.read(temp)
+            for name, (origins, mesh_stats) in truths.items():
+                mesh_stats["transform_error"], mesh_stats["float32_error_bound"] = _file_decode_error(
+                    gltf, binary, name, layout, file_channels[name], origins)
             gltf, binary = glb.replace_vertex_channels(gltf, binary, file_channels)
             glb.write(temp, gltf, binary)
         elif layouts.LAYOUTS[layout].skin_safe:
