@@ -258,3 +258,66 @@ def test_frames_in_space_keeps_boxes_an_axis_scale_does_not_shear():
 
     assert sheared == 0 and np.allclose(h2, 2 * half)
     assert np.allclose(core.rotate_vector(f2, q), core.rotate_vector(f, turn) @ mirror.T)
+
+
+RENDER_W, RENDER_H = 400, 300
+
+
+def engine_camera(centres_engine):
+    """A camera 4.6 units from the middle of the boxes (engine frame), from the side."""
+    target = centres_engine.mean(axis=0)
+    return {"position": (target + [4.0, 1.25, -2.0]).tolist(), "target": target.tolist(), "fov": 50,
+            "near": 0.5, "far": 40}
+
+
+@pytest.mark.slow
+def test_engines_draw_a_turned_and_scaled_rig_where_its_boxes_are(blender, tmp_path):
+    """The rig with its armature at scale 0.5, turned and moved (the mesh its child), exported
+    with GLTF and GODOT3 and drawn at rest by three.js r111 and Godot 3.2 with the shipped
+    shaders raymarching a box at 0.6 of each half-extent: the pixels cover the world boxes'
+    silhouettes within 1 px. Negative control: the box data left in the mesh's own space (the
+    mesh's half-extents, twice the world's) fails in both."""
+    from boxmarch.export import scene
+    from boxmarch.preview import sources
+    from engine_scene import silhouettes
+    from engines import coverage_mismatch, godot3, threejs
+    from test_engine_skinned import godot3_import_skinned, setup_js
+
+    ob, rig = skinned_scene(blender)
+    rig.scale, rig.rotation_euler, rig.location = (0.5,) * 3, (0.3, 0.2, 0.8), (0.5, -0.5, 0.2)
+    ob.parent = rig
+    blender.context.view_layer.update()
+    centres, sizes, rotations = world_boxes(np.array(ob.matrix_world), *rig_boxes()[:3])
+    camera = engine_camera(centres @ TO_Y_UP.T)
+    material = (sources.shader_dir() / "threejs" / "boxmarch.js").read_text()
+    reasons = [reason for reason in (threejs.available(), godot3.available()) if reason]
+    if reasons:
+        pytest.skip("; ".join(reasons))
+
+    def draws(folder):
+        folder.mkdir()
+        scene.export_objects(blender.context, [ob], "GLTF", str(folder / "rig.glb"))
+        shot = threejs.render((folder / "rig.glb").read_bytes(), material, setup_js(angle=0.0), RENDER_W, RENDER_H,
+                              camera)
+        covered = shot.pixels[..., 3] > 0
+        results = [(covered, silhouettes(shot, centres, 0.6 * sizes, rotations, TO_Y_UP))]
+        project = godot3_import_skinned(blender.context, ob, folder)
+        shot = godot3.render(project, godot3.shipped_shader("return sd_box(p, 0.6 * h);"), width=RENDER_W,
+                             height=RENDER_H, camera=camera,
+                             uniforms={"box_table": "res://model.boxes.tres", "max_steps": 256})
+        covered = shot.pixels[..., :3].max(axis=2) > 20
+        results.append((covered, silhouettes(shot, centres, 0.6 * sizes, rotations, TO_Y_UP)))
+        return results
+
+    for covered, expected in draws(tmp_path / "world"):
+        assert covered.sum() > 1500
+        mismatch = coverage_mismatch(covered, expected)
+        assert mismatch is None, mismatch
+    original = scene.written_space
+    scene.written_space = lambda *_: None
+    try:
+        for covered, expected in draws(tmp_path / "object"):
+            assert covered.sum() > 1500  # it drew, in the wrong places
+            assert coverage_mismatch(covered, expected) is not None
+    finally:
+        scene.written_space = original
