@@ -321,3 +321,21 @@ def test_engines_draw_a_turned_and_scaled_rig_where_its_boxes_are(blender, tmp_p
             assert coverage_mismatch(covered, expected) is not None
     finally:
         scene.written_space = original
+
+
+def test_skinned_objects_sharing_a_mesh_in_different_places_are_refused(blender, tmp_path):
+    """Two skinned objects on one mesh, one moved: a skinned glTF holds each in world space, so
+    one set of box data cannot serve both; refused, nothing written. Unmoved, they export."""
+    from boxmarch.export import scene
+
+    ob, _rig = skinned_scene(blender)
+    twin = ob.copy()  # a linked duplicate: same mesh, same modifier
+    blender.context.scene.collection.objects.link(twin)
+    blender.context.view_layer.update()
+    report = scene.export_objects(blender.context, [ob, twin], "GLTF", str(tmp_path / "same.glb"))
+    assert report["transform_error"] < 1e-5
+    twin.location = (3.0, 0.0, 0.0)
+    blender.context.view_layer.update()
+    with pytest.raises(scene.ExportInputError, match="share the mesh 'Skinned' .* Make Single User"):
+        scene.export_objects(blender.context, [ob, twin], "GLTF", str(tmp_path / "moved.glb"))
+    assert not (tmp_path / "moved.glb").exists()

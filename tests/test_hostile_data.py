@@ -46,6 +46,9 @@ def test_a_shown_shape_key_is_warned_about_in_bake_and_export(blender, tmp_path,
     assert "shows shape key 'Taller'" in capfd.readouterr().out  # the operator's WARNING report
     report = scene.export_objects(blender.context, [ob], "GLTF", str(tmp_path / "keyed.glb"))
     assert any("object 'Boxes' shows shape key 'Taller': the export uses" in w for w in report["warnings"])
+    assert blender.ops.boxmarch.preview_toggle() == {"FINISHED"}
+    assert "shows shape key 'Taller': the preview uses" in capfd.readouterr().out
+    assert blender.ops.boxmarch.preview_toggle() == {"FINISHED"}  # off again
     # Muted, it is not shown; pinned (Shape Key Lock) with the active key, it is, whatever its value.
     key.mute = True
     assert mesh_io.modifier_warnings([ob]) == []

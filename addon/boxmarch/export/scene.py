@@ -245,6 +245,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     for mesh in meshes:
         baked_layers(mesh)  # refuses unbaked meshes before anything is changed
     skins = _skins(context, objects, preset)
+    _refuse_shared_world_meshes(objects, skins, preset)
     safe = [candidate for candidate in preset.layouts if layouts.LAYOUTS[candidate].skin_safe]
     if layout is None:  # the preset's own; for a skinned export its first that skinning carries
         layout = safe[0] if skins and safe else preset.layouts[0]
@@ -344,6 +345,21 @@ def _skins(context, objects, preset) -> dict:
     return skins
 
 
+def _refuse_shared_world_meshes(objects, skins, preset) -> None:
+    """Raises ExportInputError where objects written in world space (written_space) share a mesh
+    but not a world transform: the file's copies of it would need different box data."""
+    first = {}
+    for ob in objects:
+        space = written_space(ob, skins.get(ob.name), preset)
+        other = first.setdefault(ob.data.name_full, (ob, space))
+        if other[0] is not ob and (space is not None or other[1] is not None) and not (
+                space is not None and other[1] is not None and np.allclose(space, other[1])):
+            raise ExportInputError(
+                f"objects '{other[0].name}' and '{ob.name}' share the mesh '{ob.data.name}' and a skinned glTF holds "
+                "each in world space, where their boxes differ: make the mesh single-user "
+                "(Object > Relations > Make Single User > Object & Data), bake, then export")
+
+
 def _fbx_frame(channels, corner_verts, preset) -> dict:
     """The NORMAL_FRAME frame per polygon corner (``corner_verts``: each corner's vertex) in the
     FBX file's axes: the channels are in the engine's frame, which the importer reaches by the
@@ -376,7 +392,9 @@ def _file_decode_error(gltf, binary, name, layout, channels, origins) -> tuple[f
     should hold). Small boxes far from the origin lose to float32 positions alone about 1e-7 of
     the distance; the second figure adds that to FILE_DECODE_TOLERANCE."""
     worst = reach = position_reach = 0.0
-    for attrs, index in glb.vertex_indices(gltf, binary, name):
+    primitives = [p for mesh in gltf.get("meshes", []) if mesh.get("name") == name
+                  for p in glb.vertex_indices(gltf, binary, mesh)]
+    for attrs, index in primitives:
         positions = glb.accessor_array(gltf, binary, attrs["POSITION"]).astype(np.float64)
         to_origin = layouts.to_origin(layout, {k: v[index] for k, v in channels.items()})
         if len(index):

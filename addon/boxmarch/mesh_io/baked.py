@@ -48,13 +48,21 @@ def modifier_warnings(objects, action: str = "bake") -> list:
             warnings.append(f"object '{ob.name}' has an Armature modifier ({', '.join(armature)}): "
                             f"the {action} uses the rest geometry; posed boxes decode only where the pose "
                             "moves whole submeshes rigidly")
-        keys = shown_shape_keys(ob)
+        keys = shape_key_warning(ob, action)
         if keys:
-            warnings.append(f"object '{ob.name}' shows shape key{'s' if len(keys) > 1 else ''} "
-                            f"{', '.join(repr(k) for k in keys)}: the {action} uses the mesh without them, so the "
-                            "shape shown does not decode (set their values to 0, or apply them: "
-                            "Object > Convert > Mesh, then bake)")
+            warnings.append(keys)
     return warnings
+
+
+def shape_key_warning(ob, action: str) -> str | None:
+    """The warning for an object whose shape keys move the shape the viewport shows (the bake,
+    the export and the preview read the mesh data without them), or None."""
+    keys = shown_shape_keys(ob)
+    if not keys:
+        return None
+    return (f"object '{ob.name}' shows shape key{'s' if len(keys) > 1 else ''} {', '.join(repr(k) for k in keys)}: "
+            f"the {action} uses the mesh without them, so the shape shown does not decode (set their values to 0, "
+            "or apply them: Object > Convert > Mesh, then bake)")
 
 
 def shown_shape_keys(ob) -> list:
