@@ -11,20 +11,13 @@ import pathlib
 import numpy as np
 import pytest
 
-from engine_scene import (TO_Y_UP, UNITY, baked_scene, box_of_vertex, decode_normal_frame, decode_uv_frame,
-                          frame_and_size_errors, imported, rig_boxes, skinned_scene, table_texels)
+from engine_scene import (TO_Y_UP, TRANSFORM_CASES, UNITY, baked_scene, box_of_vertex, decode_normal_frame,
+                          decode_uv_frame, frame_and_size_errors, imported, rig_boxes, skinned_scene, table_texels,
+                          transformed_rig, world_boxes)
 from fbx_reader import read_fbx_geometry
 from gltf_reader import node_globals, read_glb, read_skin
 
 TOLERANCES = (1e-5, 1e-6, 1e-5)  # origin / half-extent, axis, half-extent (float32 data)
-
-
-def world_boxes(matrix, centres, sizes, rotations):
-    """The boxes carried by a similarity ``matrix`` (4 x 4, Blender's matrix_world): centres
-    moved, axes turned, sizes scaled by its one scale."""
-    linear = matrix[:3, :3]
-    scale = abs(np.linalg.det(linear)) ** (1 / 3)
-    return centres @ linear.T + matrix[:3, 3], sizes * scale, np.einsum("ij,njk->nik", linear / scale, rotations)
 
 
 def rest_skinning(path):
@@ -43,30 +36,7 @@ def rest_skinning(path):
     return p, positions, unit(turn(p["NORMAL"])), tangents
 
 
-def transformed_rig(blender, case):
-    """The skinned rig (engine_scene.skinned_scene) with the transforms of ``case``."""
-    ob, rig = skinned_scene(blender)
-    if case == "mixamo":  # armature at 0.01, turned and moved; the mesh its child at identity
-        rig.scale = (0.01,) * 3
-        rig.rotation_euler = (0.3, 0.2, 0.1)
-        rig.location = (0.01, 0.02, 0.03)  # near the origin: float32 world positions stay exact to 1e-5
-        ob.parent = rig
-    elif case == "mesh turned and scaled":
-        ob.rotation_euler = (0.0, 0.5, 0.2)
-        ob.scale = (2.0,) * 3
-        ob.location = (0.5, -1.0, 0.0)
-    elif case == "both, mirrored":  # armature turned, mesh scaled by -1.5 (a mirror) under it
-        rig.rotation_euler = (0.0, 0.0, 1.0)
-        ob.parent = rig
-        ob.scale = (-1.5, 1.5, 1.5)
-    blender.context.view_layer.update()
-    return ob, rig
-
-
-CASES = ["mixamo", "mesh turned and scaled", "both, mirrored"]
-
-
-@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("case", TRANSFORM_CASES)
 def test_skinned_gltf_decodes_the_world_boxes(blender, tmp_path, case):
     from boxmarch.export import scene
 
@@ -339,3 +309,28 @@ def test_skinned_objects_sharing_a_mesh_in_different_places_are_refused(blender,
     with pytest.raises(scene.ExportInputError, match="share the mesh 'Skinned' .* Make Single User"):
         scene.export_objects(blender.context, [ob, twin], "GLTF", str(tmp_path / "moved.glb"))
     assert not (tmp_path / "moved.glb").exists()
+
+
+@pytest.mark.slow
+def test_skinned_gltf_from_blender_34_decodes_the_world_boxes(package_parent, tmp_path):
+    """Debian's Blender 3.4 (its own glTF exporter): the same transformed rigs, exported in the
+    program, decode the world boxes read back here."""
+    import json
+
+    from helpers.blender_program import SCRIPTS, run_blender
+
+    run_blender(["--background", "--factory-startup", "--python-exit-code", "1", "--python",
+                 str(SCRIPTS / "export_space_check.py"), "--", str(package_parent),
+                 str(pathlib.Path(__file__).parent), str(tmp_path)], tmp_path)
+    result = json.loads((tmp_path / "result.json").read_text())
+    assert result["version"][:2] == [3, 4]
+    for case in TRANSFORM_CASES:
+        figures = result["cases"][case]
+        assert figures["space"] == "world" and figures["transform_error"] < 1e-5, (case, figures)
+        truth = world_boxes(np.array(figures["matrix_world"]), *rig_boxes()[:3])
+        p, positions, normals, tangents = rest_skinning(tmp_path / f"{case}.glb")
+        offset = np.concatenate([p["TEXCOORD_1"], p["TEXCOORD_2"][:, :1]], axis=1)
+        half = np.concatenate([p["TEXCOORD_3"], p["TEXCOORD_4"][:, :1]], axis=1)
+        errors = frame_and_size_errors(*decode_normal_frame(positions, normals, tangents, offset, half),
+                                       box_of_vertex(positions, *truth, TO_Y_UP), *truth, TO_Y_UP)
+        assert all(e < t for e, t in zip(errors, TOLERANCES)), (case, errors)
