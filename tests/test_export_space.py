@@ -37,8 +37,8 @@ def rest_skinning(path):
 
 
 @pytest.mark.parametrize("case", TRANSFORM_CASES)
-def test_skinned_gltf_decodes_the_world_boxes(blender, tmp_path, case):
-    from boxmarch.export import scene
+def test_skinned_gltf_decodes_the_world_boxes(blender, tmp_path, monkeypatch, case):
+    from boxmarch.export import boxes, scene
 
     ob, _rig = transformed_rig(blender, case)
     matrix = np.array(ob.matrix_world)
@@ -55,12 +55,8 @@ def test_skinned_gltf_decodes_the_world_boxes(blender, tmp_path, case):
     assert all(e < t for e, t in zip(errors, TOLERANCES)), errors
     # Negative control: the box data in the mesh's own space (what a file holding object-space
     # box data beside world positions gives) misses the world boxes, and the report says so.
-    original = scene.written_space
-    scene.written_space = lambda *_: None
-    try:
-        wrong = scene.export_objects(blender.context, [ob], "GLTF", str(tmp_path / "wrong.glb"))
-    finally:
-        scene.written_space = original
+    monkeypatch.setattr(boxes, "written_space", lambda *_: None)
+    wrong = scene.export_objects(blender.context, [ob], "GLTF", str(tmp_path / "wrong.glb"))
     p, positions, normals, tangents = rest_skinning(tmp_path / "wrong.glb")
     offset = np.concatenate([p["TEXCOORD_1"], p["TEXCOORD_2"][:, :1]], axis=1)
     half = np.concatenate([p["TEXCOORD_3"], p["TEXCOORD_4"][:, :1]], axis=1)
@@ -241,13 +237,13 @@ def engine_camera(centres_engine):
 
 
 @pytest.mark.slow
-def test_engines_draw_a_turned_and_scaled_rig_where_its_boxes_are(blender, tmp_path):
+def test_engines_draw_a_turned_and_scaled_rig_where_its_boxes_are(blender, tmp_path, monkeypatch):
     """The rig with its armature at scale 0.5, turned and moved (the mesh its child), exported
     with GLTF and GODOT3 and drawn at rest by three.js r111 and Godot 3.2 with the shipped
     shaders raymarching a box at 0.6 of each half-extent: the pixels cover the world boxes'
     silhouettes within 1 px. Negative control: the box data left in the mesh's own space (the
     mesh's half-extents, twice the world's) fails in both."""
-    from boxmarch.export import scene
+    from boxmarch.export import boxes, scene
     from boxmarch.preview import sources
     from engine_scene import silhouettes
     from engines import coverage_mismatch, godot3, threejs
@@ -283,14 +279,10 @@ def test_engines_draw_a_turned_and_scaled_rig_where_its_boxes_are(blender, tmp_p
         assert covered.sum() > 1500
         mismatch = coverage_mismatch(covered, expected)
         assert mismatch is None, mismatch
-    original = scene.written_space
-    scene.written_space = lambda *_: None
-    try:
-        for covered, expected in draws(tmp_path / "object"):
-            assert covered.sum() > 1500  # it drew, in the wrong places
-            assert coverage_mismatch(covered, expected) is not None
-    finally:
-        scene.written_space = original
+    monkeypatch.setattr(boxes, "written_space", lambda *_: None)
+    for covered, expected in draws(tmp_path / "object"):
+        assert covered.sum() > 1500  # it drew, in the wrong places
+        assert coverage_mismatch(covered, expected) is not None
 
 
 def test_skinned_objects_sharing_a_mesh_in_different_places_are_refused(blender, tmp_path):
