@@ -24,7 +24,7 @@ def rebuild_blocker(mesh, welding: bool) -> str | None:
     everything. Blender before 4.1 keeps data outside generic attributes; so does any version
     for shape keys, vertex groups (deform weights), the Skin modifier's radii and a Multires
     modifier's displacements. Custom normals are stored relative to each vertex's corner fan,
-    which a weld changes, and before 5.0 outside the attributes."""
+    which a weld changes, and before 5.0 outside the attributes, as Freestyle marks were."""
     users = [ob for ob in bpy.data.objects if ob.data == mesh]
     if bpy.app.version < (4, 1, 0):
         return "Blender before 4.1"
@@ -38,9 +38,24 @@ def rebuild_blocker(mesh, welding: bool) -> str | None:
         return "multires displacements"
     if mesh.has_custom_normals and (welding or "custom_normal" not in mesh.attributes):
         return "custom normals"
+    if _freestyle_marks_outside_attributes(mesh):
+        return "Freestyle marks"
     unknown = sorted({a.data_type for a in mesh.attributes
                       if a.name not in _TOPOLOGY_ATTRIBUTES and a.data_type not in _ATTRIBUTE_LAYOUT})
     return f"{', '.join(unknown)} attributes" if unknown else None
+
+
+def _freestyle_marks_outside_attributes(mesh) -> bool:
+    """True where the mesh has Freestyle edge or face marks in the layers Blender kept before 5.0
+    (MeshEdge / MeshPolygon ``use_freestyle_mark``; 5.0 stores them as the generic attributes
+    ``freestyle_edge`` / ``freestyle_face``, which the rebuild carries)."""
+    for collection, rna in ((mesh.edges, bpy.types.MeshEdge), (mesh.polygons, bpy.types.MeshPolygon)):
+        if "use_freestyle_mark" in rna.bl_rna.properties and len(collection):
+            marks = np.zeros(len(collection), bool)
+            collection.foreach_get("use_freestyle_mark", marks)
+            if marks.any():
+                return True
+    return False
 
 
 def _set_topology(mesh, attribute, prop, collection, rna_prop, values):
