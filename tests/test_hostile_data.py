@@ -39,6 +39,11 @@ def test_a_shown_shape_key_is_warned_about_in_bake_and_export(blender, tmp_path,
 
     ob, key = shape_keyed(blender)
     assert mesh_io.modifier_warnings([ob]) == []  # a key at value 0 changes nothing shown
+    # ... but the file carries it: a morph in the engine moves vertices, not the boxes.
+    report = scene.export_objects(blender.context, [ob], "GLTF", str(tmp_path / "morph.glb"))
+    assert [w for w in report["warnings"] if "shape key" in w] == [
+        "object 'Boxes' has shape keys ('Taller'): the file carries them as morph targets, which move vertices but "
+        "not the baked boxes: a morph that moves a box's vertices unevenly makes it decode off"]
     key.value = 0.7
     (warning,) = mesh_io.modifier_warnings([ob])
     assert "object 'Boxes' shows shape key 'Taller': the bake uses the mesh without them" in warning

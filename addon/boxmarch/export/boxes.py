@@ -158,3 +158,20 @@ def refuse_shared_world_meshes(objects, skins, preset) -> None:
                 f"objects '{other[0].name}' and '{ob.name}' share the mesh '{ob.data.name}' and a skinned glTF holds "
                 "each in world space, where their boxes differ: make the mesh single-user "
                 "(Object > Relations > Make Single User > Object & Data), bake, then export")
+
+
+def morph_warnings(objects, preset) -> list:
+    """One line per object whose shape keys the file carries (glTF morph targets, FBX blend
+    shapes): the morphs move positions only, so a morph that moves a box's vertices unevenly
+    leaves its baked data behind."""
+    if preset.name == "BLENDER":
+        return []
+    out = []
+    for ob in objects:
+        keys = getattr(ob.data, "shape_keys", None)
+        if keys is not None and len(keys.key_blocks) > 1:
+            names = ", ".join(repr(k.name) for k in keys.key_blocks if k != keys.reference_key)
+            out.append(f"object '{ob.name}' has shape keys ({names}): the file carries them as "
+                       f"{'morph targets' if preset.extension == '.glb' else 'blend shapes'}, which move vertices "
+                       "but not the baked boxes: a morph that moves a box's vertices unevenly makes it decode off")
+    return out

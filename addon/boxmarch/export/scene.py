@@ -162,7 +162,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     outputs = {partial(filepath): filepath}
     if layout == "NORMAL_COLOR":
         outputs[partial(table_path(filepath))] = table_path(filepath)
-    warnings = mesh_io.modifier_warnings(objects, "export")
+    warnings = mesh_io.modifier_warnings(objects, "export") + boxes.morph_warnings(objects, preset)
     if preset.extension == ".fbx" and context.scene.unit_settings.scale_length != 1.0:
         warnings.append(f"unit scale is not 1: {preset.label} will scale positions by it and the offsets will not match")
     try:
