@@ -4,8 +4,9 @@ message or warning, and a refusal changes nothing."""
 import numpy as np
 import pytest
 
-from boxmarch import core, mesh_io, scenes
+from boxmarch import mesh_io, scenes
 from conftest import mesh_object
+from engine_scene import decode_normal_frame
 from gltf_reader import read_glb
 from test_tools_blender import faces_object, split_boxes
 
@@ -91,11 +92,8 @@ def test_export_after_an_edit_warns_and_counts_the_stale_boxes(blender, tmp_path
     # What the warning is about: the file's box 0 decodes off by the stretch.
     (mesh,) = read_glb(tmp_path / "stale.glb")
     p = mesh["primitives"][0]
-    origins = p["POSITION"] + p["NORMAL"] * 0  # positions only
     offset = np.concatenate([p["TEXCOORD_1"], p["TEXCOORD_2"][:, :1]], 1)
-    z, x = p["NORMAL"], p["TANGENT"][:, :3]
-    y = np.cross(z, x) * p["TANGENT"][:, 3:4]
-    origins = origins + x * offset[:, :1] + y * offset[:, 1:2] + z * offset[:, 2:3]
+    origins, _axes, _half = decode_normal_frame(p["POSITION"], p["NORMAL"], p["TANGENT"], offset, None)
     index = np.rint(p["TEXCOORD_2"][:, 1]).astype(int)
     spread = np.ptp(origins[index == 0], axis=0).max()
     assert spread > 1.9, spread
