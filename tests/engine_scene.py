@@ -296,6 +296,38 @@ def skinned_scene(bpy, name="Skinned"):
     return ob, rig
 
 
+def world_boxes(matrix, centres, sizes, rotations):
+    """The boxes carried by a similarity ``matrix`` (4 x 4, Blender's matrix_world): centres
+    moved, axes turned, sizes scaled by its one scale."""
+    linear = matrix[:3, :3]
+    scale = abs(np.linalg.det(linear)) ** (1 / 3)
+    return centres @ linear.T + matrix[:3, 3], sizes * scale, np.einsum("ij,njk->nik", linear / scale, rotations)
+
+
+TRANSFORM_CASES = ["mixamo", "mesh turned and scaled", "both, mirrored"]
+
+
+def transformed_rig(bpy, case):
+    """The rig of :func:`skinned_scene`, baked, then moved by the transforms of ``case`` (one of
+    TRANSFORM_CASES). Returns (mesh object, armature object)."""
+    ob, rig = skinned_scene(bpy)
+    if case == "mixamo":  # armature at 0.01, turned and moved; the mesh its child at identity
+        rig.scale = (0.01,) * 3
+        rig.rotation_euler = (0.3, 0.2, 0.1)
+        rig.location = (0.01, 0.02, 0.03)  # near the origin: float32 world positions stay exact to 1e-5
+        ob.parent = rig
+    elif case == "mesh turned and scaled":
+        ob.rotation_euler = (0.0, 0.5, 0.2)
+        ob.scale = (2.0,) * 3
+        ob.location = (0.5, -1.0, 0.0)
+    elif case == "both, mirrored":  # armature turned, mesh scaled by -1.5 (a mirror) under it
+        rig.rotation_euler = (0.0, 0.0, 1.0)
+        ob.parent = rig
+        ob.scale = (-1.5, 1.5, 1.5)
+    bpy.context.view_layer.update()
+    return ob, rig
+
+
 def unity_skinned_vertices(raw, skin):
     """What Unity's skinning hands a vertex program for a skinned FBX (tests/fbx_reader.py's
     geometry ``raw`` and ``skin``) posed by :func:`bone_motions`, per polygon corner, under the

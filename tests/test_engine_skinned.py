@@ -53,13 +53,13 @@ def bone_turns():
     return {f"bone{k}": TO_Y_UP @ axis for k, axis in enumerate(RIG_TURN_AXES)}
 
 
-def setup_js(frame_tamper=None):
+def setup_js(frame_tamper=None, angle=RIG_TURN_ANGLE):
     tamper = ""
     if frame_tamper:
         old, new = frame_tamper
         tamper = (f"if (m.vertexShader.indexOf({old!r}) < 0) throw new Error('no {old} in the vertex shader');"
                   f"m.vertexShader = m.vertexShader.replace({old!r}, {new!r});")
-    return (threejs.pose_bones_js(bone_turns(), RIG_TURN_ANGLE)
+    return (threejs.pose_bones_js(bone_turns(), angle)
             + "var skinned = 0; gltf.scene.traverse(function (o) { if (!o.isSkinnedMesh) return; skinned++;"
             + " o.frustumCulled = false;"  # its bounding sphere is the rest pose's
             + f" var m = createBoxmarchMaterial(THREE, {{map: {BOX_MAP!r}, color: new THREE.Color(1, 1, 1),"

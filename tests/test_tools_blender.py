@@ -484,7 +484,8 @@ def test_instance_on_curve_refuses_bad_input(blender):
 @pytest.mark.slow
 def test_tools_and_undo_in_blender_34_window(tmp_path):
     """Debian's Blender 3.4 with a window under Xvfb (the bpy module has no window, so undo needs
-    the program): every tool runs there, changes the mesh, and one undo restores it."""
+    the program): every tool runs there, changes the mesh, and one undo restores it; the mesh's
+    Skin modifier keeps its radii layer through every tool."""
     import json
     import shutil
     import subprocess
@@ -515,6 +516,8 @@ def test_tools_and_undo_in_blender_34_window(tmp_path):
     assert tools["select_linked_across"]["after"]["selected"] == 16    # box 0 and its copy 1e-6 away
     assert tools["dedup_submeshes"]["after"]["vertices"] == tools["dedup_submeshes"]["before"]["vertices"] - 8
     assert tools["merge_by_distance_submeshes"]["after"]["vertices"] == 40
+    for name, state in tools.items():  # the Skin modifier's radii layer stays
+        assert state["before"]["skin_layers"] == state["after"]["skin_layers"] == 1, name
     assert tools["pack_uv_by_z"]["after"]["uv_sum"] != tools["pack_uv_by_z"]["before"]["uv_sum"]
     curve = result["instance_on_curve"]
     assert curve["result"] == ["FINISHED"] and curve["evaluated_vertices"] == 72

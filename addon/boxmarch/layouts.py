@@ -105,17 +105,21 @@ def channels(layout: str, data: BoxData) -> dict[str, np.ndarray]:
 
 def to_origin(layout: str, channels: dict) -> np.ndarray:
     """(n, 3) float64 object-space vectors from each vertex to its box origin, decoded from
-    ``channels`` as docs/ENGINES.md states for ``layout`` (UV_FRAME, NORMAL_FRAME, NORMAL_COLOR)."""
-    c = {k: np.asarray(v, np.float64) for k, v in channels.items()}
-    if layout == "UV_FRAME":
-        q, f = np.concatenate([c["UV1"], c["UV2"]], 1), np.concatenate([c["UV3"], c["UV4"][:, :1]], 1)
+    ``channels`` as docs/ENGINES.md (docs/FORMAT.md for CLASSIC) states for ``layout``."""
+    c = {k: np.asarray(v, np.float64) for k, v in channels.items() if k != "TABLE"}
+    if layout in ("UV_FRAME", "CLASSIC"):
+        q = np.concatenate([c["UV1"], c["UV2"]], 1)
+        if layout == "UV_FRAME":
+            f = np.concatenate([c["UV3"], c["UV4"][:, :1]], 1)
+        else:
+            f = (c["COLOR"][:, :3] * 2.0 - 1.0) / c["COLOR"][:, 3:]
         u = q[:, :3]
         return f + 2.0 * np.cross(u, np.cross(u, f) + q[:, 3:] * f)
     if layout in ("NORMAL_FRAME", "NORMAL_COLOR"):
         x, z = c["TANGENT"][:, :3], c["NORMAL"]
         f = np.concatenate([c["UV1"], c["UV2"][:, :1]], 1) if layout == "NORMAL_FRAME" else c["COLOR"][:, :3]
         return x * f[:, :1] + np.cross(z, x) * c["TANGENT"][:, 3:] * f[:, 1:2] + z * f[:, 2:]
-    raise ValueError(f"no decode of {layout} here")
+    raise ValueError(f"layout must be one of {sorted(LAYOUTS)}, got {layout!r}")
 
 
 def with_half_float_uvs(channels: dict, half_float_uvs, flip_v: bool) -> dict:

@@ -155,7 +155,7 @@ class DeleteDuplicates:
         summary = f"Deleted {total} duplicate submesh(es) in {len(meshes)} mesh(es), tolerance {self.tolerance:g}"
         if not total:
             return ToolOutcome(summary)
-        if all(mesh_io.can_rebuild(m.ob.data) for m in meshes):
+        if not any(mesh_io.rebuild_blocker(m.ob.data, welding=False) for m in meshes):
             # Whole submeshes go: the survivors' rows, rebuilt in one go with every attribute
             # (the selection included) carried over.
             for m, delete in zip(meshes, deletes):
@@ -211,7 +211,7 @@ class MergeByDistance:
             target, merged_positions, count = core.merge_targets(m.positions, m.submesh_of_vertex,
                                                                  m.submesh_count, c, self.distance)
             weld = None
-            if count and mesh_io.can_rebuild(m.ob.data):
+            if count and mesh_io.rebuild_blocker(m.ob.data, welding=True) is None:
                 weld = core.weld(*m.topology, target, mesh_io.read_corner_edges(m.ob.data))
             if count and (weld is None or weld["incomplete"]):
                 return None

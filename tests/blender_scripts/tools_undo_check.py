@@ -21,7 +21,8 @@ boxmarch.register()
 
 def build_mesh():
     """Three boxes, a copy of box 0 moved by 1e-6, and a box whose +x face has its own copies
-    of two corners (merge removes 2 vertices); every face its own UV island."""
+    of two corners (merge removes 2 vertices); every face its own UV island; a Skin modifier, whose
+    radii live outside the generic attributes."""
     boxes = scenes.box_arrays(np.array([[0.0, 0, 0], [3, 0, 0], [6, 0, 1], [1e-6, 0, 0], [9, 0, 2]]), 1.0, np.eye(3))
     positions, _edges, starts, sizes, corners = boxes
     positions = np.concatenate([positions, positions[[36, 38]] + 1e-5])
@@ -34,6 +35,7 @@ def build_mesh():
     mesh.uv_layers["UVMap"].data.foreach_set("uv", uv)  # 3.4: no .uv collection yet
     ob = bpy.data.objects.new("Boxes", mesh)
     bpy.context.scene.collection.objects.link(ob)
+    ob.modifiers.new("Skin", "SKIN")
     ob.select_set(True)
     bpy.context.view_layer.objects.active = ob
     return ob
@@ -48,7 +50,7 @@ def snapshot():
     uv_layer = bm.loops.layers.uv["UVMap"]
     uv_sum = sum(loop[uv_layer].uv[0] + loop[uv_layer].uv[1] for face in bm.faces for loop in face.loops)
     return {"vertices": len(bm.verts), "faces": len(bm.faces), "selected": sum(v.select for v in bm.verts),
-            "uv_sum": round(float(uv_sum), 4)}
+            "uv_sum": round(float(uv_sum), 4), "skin_layers": len(bm.verts.layers.skin)}
 
 
 def window_context():

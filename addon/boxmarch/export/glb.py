@@ -81,6 +81,23 @@ def index_colours(count: int) -> np.ndarray:
     return out
 
 
+def vertex_indices(gltf, binary, mesh) -> list:
+    """(attributes dict, Blender vertex of each file vertex) per primitive of ``mesh`` (a dict of
+    gltf["meshes"]), from the :func:`index_colours` its COLOR_0 holds. Raises ValueError when a
+    primitive has no COLOR_0."""
+    out = []
+    for primitive in mesh["primitives"]:
+        attrs = primitive["attributes"]
+        if "COLOR_0" not in attrs:
+            raise ValueError(f"mesh '{mesh.get('name')}' was exported without COLOR_0")
+        code = accessor_array(gltf, binary, attrs["COLOR_0"])
+        if code.dtype.kind == "f":  # 3.4 writes float colours, later versions unsigned shorts
+            code = np.rint(code.astype(np.float64) * INDEX_COLOUR_SCALE)
+        code = code.astype(np.int64)
+        out.append((attrs, code[:, 0] + (code[:, 1] << 16)))
+    return out
+
+
 def replace_vertex_channels(gltf, binary, channels_by_mesh: dict):
     """Rewrite the meshes named in ``channels_by_mesh`` (mesh name -> {layout channel: float32
     (Blender vertices, k)}, boxmarch/layouts.py) whose COLOR_0 holds :func:`index_colours`: each
@@ -95,15 +112,8 @@ def replace_vertex_channels(gltf, binary, channels_by_mesh: dict):
         if channels is None:
             continue
         vertex_count = len(next(iter(channels.values())))
-        for primitive in mesh["primitives"]:
-            attrs = primitive["attributes"]
-            if "COLOR_0" not in attrs:
-                raise ValueError(f"mesh '{mesh['name']}' was exported without COLOR_0")
-            code = accessor_array(gltf, bytes(binary), attrs.pop("COLOR_0"))
-            if code.dtype.kind == "f":  # 3.4 writes float colours, later versions unsigned shorts
-                code = np.rint(code.astype(np.float64) * INDEX_COLOUR_SCALE)
-            code = code.astype(np.int64)
-            index = code[:, 0] + (code[:, 1] << 16)
+        for attrs, index in vertex_indices(gltf, bytes(binary), mesh):
+            attrs.pop("COLOR_0")
             if index.size and index.max() >= vertex_count:
                 raise ValueError(f"mesh '{mesh['name']}': COLOR_0 holds vertex {index.max()}, "
                                  f"the mesh has {vertex_count}")

@@ -11,21 +11,9 @@ import time
 import bpy
 import numpy as np
 
-from .. import core, edit_mode, files, layouts, mesh_io
-from . import fbx, glb, godot, import_settings, outputs_of, sidecar, transforms
-
-
-class ExportInputError(ValueError):
-    """The selection cannot be exported as it is; the message says why. Nothing was written."""
-
-
-def baked_layers(mesh) -> mesh_io.BakedLayers:
-    """The stored layers of a baked mesh (mesh_io.read_baked_layers). Raises ExportInputError
-    when it is not baked."""
-    try:
-        return mesh_io.read_baked_layers(mesh)
-    except mesh_io.NotBakedError as error:
-        raise ExportInputError(f"{error}: run Bake Box Frames first") from None
+from .. import edit_mode, files, layouts, mesh_io
+from . import boxes, fbx, glb, godot, import_settings, outputs_of, sidecar, transforms
+from .boxes import ExportInputError, baked_layers
 
 
 # UV map names of the layouts' channels UV1..UV6 in FBX files (glTF files number them): the
@@ -42,36 +30,6 @@ def uv_name(layout: str, channel: str) -> str:
     return CHANNEL_UV_NAMES[channel]
 
 
-def box_data(mesh, preset, index_base: int = 0):
-    """(layouts.BoxData in the target's frame, corner_verts, stats) of a baked mesh: the stored
-    offsets and quaternion, each vertex's box half-extents (largest |f| per local axis over its
-    submesh) and box number (``index_base`` + submesh id)."""
-    layers = baked_layers(mesh)
-    offsets, corner_verts, q = layers.shader_offsets(), layers.corner_verts, layers.vertex_quaternions()
-    positions = mesh_io.read_positions(mesh).astype(np.float64)
-    edges, face_starts, face_sizes, _ = mesh_io.read_topology(mesh)
-    submesh_of_vertex, count = core.find_submeshes(positions.astype(np.float32), edges, face_starts, face_sizes,
-                                                   corner_verts)
-    _, _, box_half = core.boxes_from_bake(positions, offsets, q, submesh_of_vertex)
-    target_q = transforms.target_quaternions(q, preset)
-    f = core.decode_offsets(offsets)
-    target_f = transforms.target_local(f, preset)
-    target_half = box_half.astype(np.float64) * preset.length_scale
-    data = layouts.BoxData(quaternions=target_q, offsets=target_f, half_extents=target_half[submesh_of_vertex],
-                           index=index_base + submesh_of_vertex.astype(np.int64),
-                           classic_rgba=transforms.target_offsets(offsets, preset), box_half_extents=target_half)
-    # Self-check: the decode in the target frame must land where the target frame puts Blender's.
-    blender_origin = positions + core.rotate_vector(f, q)
-    target_origin = transforms.target_positions(positions, preset) + core.rotate_vector(target_f, target_q)
-    reach = max(float(np.abs(f).max()) if len(f) else 0.0, 1e-30) * preset.length_scale
-    error = float(np.abs(target_origin - transforms.target_positions(blender_origin, preset)).max() / reach)
-    stats = {"mesh": mesh.name, "vertices": len(positions), "corners": len(corner_verts), "boxes": int(count),
-             "colour": mesh.color_attributes[mesh_io.OFFSET_ATTRIBUTE].data_type,
-             "max_alpha": float(data.classic_rgba[:, 3].max()) if len(positions) else 0.0,
-             "transform_error": error}
-    return data, corner_verts, stats
-
-
 def _keep_artist_uv0(copy) -> None:
     """Remove every UV map but the artist's first (made empty if there is none): the layout's
     channels follow it as UV1, UV2, ..."""
@@ -82,33 +40,27 @@ def _keep_artist_uv0(copy) -> None:
         copy.uv_layers.new(name="UVMap")
 
 
-def box_weight_spread(weights, box, boxes) -> np.ndarray:
-    """(boxes,) the largest difference, over a box's vertices, of their weights on one bone:
-    0 where the box is carried rigidly (docs/ACCURACY.md measures what a spread costs)."""
-    high = np.full((boxes, weights.shape[1]), -np.inf)
-    low = np.full((boxes, weights.shape[1]), np.inf)
-    np.maximum.at(high, box, weights)
-    np.minimum.at(low, box, weights)
-    spread = np.where(np.isfinite(high), high - low, 0.0)
-    return spread.max(axis=1) if weights.shape[1] else np.zeros(boxes)
-
-
-# Weight differences inside a box below this are float noise of the artist's weights, not a blend.
-RIGID_WEIGHT_SPREAD = 1e-6
-
-
-def _target_copy(mesh, preset, layout, index_base, skin=None):
-    """(copy, channels, corner_verts, stats): a copy of ``mesh`` holding what the exporter must
-    write, the channels the file must hold per Blender vertex, and each corner's vertex. glTF targets: the copy's only colour is each vertex's index (the
-    channels are written into the .glb afterwards, glb.replace_vertex_channels); FBX targets: the
-    channels as the copy's colour and UV maps (Blender's FBX exporter writes them unchanged).
-    The copy keeps the mesh's vertex groups (mesh.copy()); ``skin`` (mesh_io.Skin of the object
-    exported with it) adds the skin's figures to the stats."""
-    data, corner_verts, stats = box_data(mesh, preset, index_base)
+def _target_copy(mesh, preset, layout, index_base, skin=None, space=None, owner=""):
+    """(copy, channels, corner_verts, stats, origins): a copy of ``mesh`` holding what the exporter
+    must write, the channels the file must hold per Blender vertex, each corner's vertex, and
+    where each vertex's box origin must decode (box_data). glTF targets: the copy's only colour
+    is each vertex's index (the channels are written into the .glb afterwards,
+    glb.replace_vertex_channels); FBX targets: the channels as the copy's colour and UV maps
+    (Blender's FBX exporter writes them unchanged). The copy keeps the mesh's vertex groups
+    (mesh.copy()); ``skin`` (mesh_io.Skin of the object exported with it) adds the skin's figures
+    to the stats; ``space`` is box_data's, of the object named ``owner``. Raises ExportInputError
+    where ``space`` shears boxes."""
+    data, corner_verts, stats, origins = boxes.box_data(mesh, preset, index_base, space)
+    if stats["sheared_boxes"]:
+        raise ExportInputError(
+            f"object '{owner}': its world transform scales {stats['sheared_boxes']} of its {stats['boxes']} boxes "
+            "unevenly across their axes (a non-uniform scale on a box it turns); a skinned glTF holds world "
+            "positions, where those boxes are not boxes and no frame decodes them: apply the scale "
+            "(Object > Apply > Scale), bake again, then export")
     if skin is not None:
-        spread = box_weight_spread(skin.weights, data.index - index_base, stats["boxes"])
+        spread = boxes.box_weight_spread(skin.weights, data.index - index_base, stats["boxes"])
         stats["skin"] = {"armature": skin.armature.name, "bones": list(skin.bones),
-                         "non_rigid_boxes": int((spread > RIGID_WEIGHT_SPREAD).sum()),
+                         "non_rigid_boxes": int((spread > boxes.RIGID_WEIGHT_SPREAD).sum()),
                          "worst_weight_spread": float(spread.max()) if len(spread) else 0.0,
                          "unweighted_vertices": skin.unweighted}
     channels = layouts.channels(layout, data)
@@ -140,7 +92,7 @@ def _target_copy(mesh, preset, layout, index_base, skin=None):
     if preset.godot3_compression:
         stats["default_import_error"] = layouts.import_error(layout, channels, layouts.with_godot3_compression(channels),
                                                              data.half_extents)
-    return copy, channels, corner_verts, stats
+    return copy, channels, corner_verts, stats, origins
 
 
 def _operator_kwargs(operator, wanted: dict) -> dict:
@@ -198,6 +150,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             raise ExportInputError(f"mesh '{mesh.name}' has no faces (its baked layers are left from faces since "
                                    "deleted): an engine draws the boxes from faces, so the file would hold nothing")
     skins = _skins(context, objects, preset)
+    boxes.refuse_shared_world_meshes(objects, skins, preset)
     safe = [candidate for candidate in preset.layouts if layouts.LAYOUTS[candidate].skin_safe]
     if layout is None:  # the preset's own; for a skinned export its first that skinning carries
         layout = safe[0] if skins and safe else preset.layouts[0]
@@ -218,14 +171,14 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             raise ExportInputError(f"'{path}' is the open .blend file: export to another path")
         if os.path.isdir(path):
             raise ExportInputError(f"'{path}' is a folder: the export writes a file there")
-    warnings = mesh_io.modifier_warnings(objects, "export")
+    warnings = mesh_io.modifier_warnings(objects, "export") + boxes.morph_warnings(objects, preset)
     if preset.extension == ".fbx" and context.scene.unit_settings.scale_length != 1.0:
         warnings.append(f"unit scale is not 1: {preset.label} will scale positions by it and the offsets will not match")
 
     def write(temps):
         temp = temps[outputs[0]]
         if preset.name == "BLENDER":
-            stats = [box_data(mesh, preset)[2] for mesh in meshes]  # the .blend holds the layers as they are
+            stats = [boxes.box_data(mesh, preset)[2] for mesh in meshes]  # the .blend holds the layers as they are
             bpy.data.libraries.write(temp, set(objects), fake_user=True, compress=False)
         else:
             stats, table = _export_with_copies(context, objects, meshes, preset, layout, temp, skins)
@@ -256,6 +209,17 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
         if skin and skin["unweighted_vertices"]:
             warnings.append(f"{m['mesh']}: {skin['unweighted_vertices']} vertices carry no weight of "
                             f"'{skin['armature']}': Blender leaves them at rest, engines may not")
+    owners = {ob.data.name: ob.name for ob in objects}
+    for m in stats:
+        if m["transform_error"] > m.get("float32_error_bound", boxes.FILE_DECODE_TOLERANCE):
+            warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': the file's boxes decode up to "
+                            f"{m['transform_error']:.2g} of the largest offset away from Blender's: the exporter "
+                            "wrote positions in a space this export does not know; do not use the file")
+    for m in stats:
+        if m.get("stale_boxes"):
+            warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': {m['stale_boxes']} of {m['boxes']} boxes changed shape since the bake, "
+                            "so the file's offsets and frames are stale and decode off: run Bake Box Frames again, "
+                            "then export")
     default_errors = [m["default_import_error"] for m in stats if "default_import_error" in m]
     if default_errors:
         warnings.append(f"with {preset.label}'s default import settings ({preset.default_import_loss}) the decode error is "
@@ -267,7 +231,8 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             "sidecar": os.path.abspath(sidecar.sidecar_path(filepath)), "files": outputs,
             "objects": [ob.name for ob in objects], "meshes": stats, "seconds": time.perf_counter() - start,
             "warnings": warnings, "import_settings": preset.import_settings,
-            "transform_error": max((s["transform_error"] for s in stats), default=0.0)}
+            "transform_error": max((s["transform_error"] for s in stats), default=0.0),
+            "stale_boxes": sum(s.get("stale_boxes", 0) for s in stats)}
 
 
 def _write_sidecar(path, preset, layout, filepath, stats, skins) -> None:
@@ -322,16 +287,20 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
     selection = [ob for ob in context.view_layer.objects if ob.select_get()]
     active = context.view_layer.objects.active
     users = {}
-    skin_of_mesh = {ob.data.as_pointer(): skins.get(ob.name) for ob in mesh_io.one_object_per_mesh(objects)}
+    owner_of_mesh = {ob.data.as_pointer(): ob for ob in mesh_io.one_object_per_mesh(objects)}
     armatures = list({skin.armature.name: skin.armature for skin in skins.values()}.values())
     pose_positions = {rig.name: rig.data.pose_position for rig in armatures}
+    truths = {}
     try:
         for rig in armatures:
             rig.data.pose_position = "REST"
+        context.view_layer.update()  # world matrices at rest: an object parented to a bone moves with it
         for mesh in meshes:
             index_base = sum(len(t) for t in tables)  # box numbers run on across the file's meshes
-            copy, channels, corner_verts, mesh_stats = _target_copy(mesh, preset, layout, index_base,
-                                                                    skin_of_mesh.get(mesh.as_pointer()))
+            ob = owner_of_mesh[mesh.as_pointer()]
+            skin = skins.get(ob.name)
+            copy, channels, corner_verts, mesh_stats, origins = _target_copy(
+                mesh, preset, layout, index_base, skin, boxes.written_space(ob, skin, preset), ob.name)
             if "TABLE" in channels:
                 tables.append(channels.pop("TABLE"))
             name = mesh.name
@@ -339,6 +308,7 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
             copy.name = name  # the file names the mesh as the artist did
             copies[mesh.as_pointer()], originals[name] = copy, mesh
             file_channels[name], file_corners[name] = channels, corner_verts
+            truths[name] = (origins, mesh_stats)
             stats.append(mesh_stats)
         for ob in objects:
             users[ob.name] = ob.data
@@ -349,6 +319,9 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
             raise RuntimeError(f"the {preset.label} exporter wrote nothing")
         if preset.extension == ".glb":
             gltf, binary = glb.read(temp)
+            for name, (origins, mesh_stats) in truths.items():
+                mesh_stats["transform_error"], mesh_stats["float32_error_bound"] = boxes.file_decode_error(
+                    gltf, binary, name, layout, file_channels[name], origins)
             gltf, binary = glb.replace_vertex_channels(gltf, binary, file_channels)
             glb.write(temp, gltf, binary)
         elif layouts.LAYOUTS[layout].skin_safe:

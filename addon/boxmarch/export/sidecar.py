@@ -82,7 +82,7 @@ def data_from_file(preset) -> np.ndarray:
 
 
 def describe(preset, layout: str, filepath: str, stats: list, skins: dict, file_channel_names: dict) -> dict:
-    """The sidecar of an export of ``stats`` (per mesh, export.scene.box_data's) to ``filepath``
+    """The sidecar of an export of ``stats`` (per mesh, export.boxes.box_data's) to ``filepath``
     with ``preset`` (transforms.Preset) in ``layout``; ``skins``: {object: {"armature", "bones"}}
     of the skinned objects; ``file_channel_names``: the name each channel has in the file ("UV1"
     -> "TEXCOORD_1" or an FBX UV map name)."""

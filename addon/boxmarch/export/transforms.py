@@ -22,6 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..layouts import frame_axes
+
 
 # Blender's Z-up right-handed object space to the Y-up right-handed space of glTF and of FBX
 # written with axis_forward='-Z', axis_up='Y': (x, y, z) -> (x, z, -y).
@@ -173,3 +175,35 @@ def target_positions(positions, preset: Preset) -> np.ndarray:
 def target_local(vectors, preset: Preset) -> np.ndarray:
     """(n, 3) float64 box-local vectors (offsets f) in the target's local convention: f' = N f L."""
     return np.asarray(vectors, np.float64) * preset.mirror * preset.length_scale
+
+
+# Boxes whose axes, carried by a linear map, leave a cosine above this between two of them are
+# sheared: no box frame decodes them.
+SHEAR_COSINE = 1e-5
+
+
+def frames_in_space(q, f, box_half, box_of_vertex, linear):
+    """The box data of a mesh whose positions are written as ``linear`` p (+ a translation): the
+    space a skinned glTF file holds (world) differs from the object's. A box's local axis
+    R(q) e_i becomes c_i = linear R(q) e_i: the frame is the c_i / |c_i| (the third negated where
+    ``linear`` mirrors, so the frame stays a rotation), offsets and half-extents scale by |c_i|
+    (with that sign on the offset), and origin' = linear origin exactly. ``q`` (n, 4) and ``f``
+    (n, 3) per vertex, ``box_half`` (boxes, 3), ``box_of_vertex`` (n,) ids, ``linear`` (3, 3).
+    Returns (q' (n, 4) in the baked sign convention, f' (n, 3), half-extents' (boxes, 3), the
+    number of boxes the map shears: a non-uniform scale across a box's axes makes it a
+    parallelepiped, which no frame decodes; their values are not meaningful)."""
+    linear = np.asarray(linear, np.float64)
+    axis_x, axis_z = frame_axes(q)
+    columns = linear @ np.stack([axis_x, np.cross(axis_z, axis_x), axis_z], axis=2)  # column i = c_i
+    lengths = np.linalg.norm(columns, axis=1)  # (n, 3)
+    unit = columns / np.maximum(lengths, 1e-300)[:, None, :]
+    cosines = np.abs(np.einsum("nki,nkj->nij", unit, unit)) - np.eye(3)
+    sheared_vertex = cosines.max(axis=(1, 2)) > SHEAR_COSINE if len(unit) else np.zeros(0, bool)
+    sign = np.array([1.0, 1.0, -1.0 if np.linalg.det(linear) < 0 else 1.0])
+    unit = unit * sign
+    box_lengths = np.zeros((len(box_half), 3))
+    box_lengths[box_of_vertex] = lengths
+    sheared = np.zeros(len(box_half), bool)
+    sheared[box_of_vertex[sheared_vertex]] = True
+    return (matrix_quaternions(unit), np.asarray(f, np.float64) * lengths * sign,
+            np.asarray(box_half, np.float64) * box_lengths, int(sheared.sum()))

@@ -22,6 +22,6 @@ from .arrays import (new_mesh, one_object_per_mesh, read_corner_edges, read_face
 from .baked import (BAKED_UV_MAPS, FINGERPRINT_ATTRIBUTE, LAYERS_DIGEST, MAX_UV_MAPS, NEUTRAL_BYTE, NEUTRAL_FLOAT,
                     OFFSET_ATTRIBUTE, QUAT_XY_UV, QUAT_ZW_UV, BakedLayers, BakeInputError, BakeSettings,
                     NotBakedError, PreparedBake, modifier_warnings, prepare_bake, read_baked_layers,
-                    stored_layers_digest, stray_bake_layers)
-from .rebuild import can_rebuild, rebuild_welded
+                    shape_key_warning, stored_layers_digest, stray_bake_layers)
+from .rebuild import rebuild_blocker, rebuild_welded
 from .weights import Skin, SkinError, check_skin_modifier, read_skin, read_vertex_weights

@@ -33,8 +33,9 @@ class NotBakedError(ValueError):
 
 
 def modifier_warnings(objects, action: str = "bake") -> list:
-    """One line per object whose enabled modifiers change what the viewport shows: the bake and
-    the export read the mesh data (the base mesh), so the shown mesh would not decode."""
+    """One line per object whose enabled modifiers or shape keys change what the viewport shows:
+    the bake and the export read the mesh data (the base mesh), so the shown mesh would not
+    decode."""
     warnings = []
     for ob in objects:
         mods = [m for m in getattr(ob, "modifiers", ()) if m.show_viewport or m.show_render]
@@ -48,7 +49,38 @@ def modifier_warnings(objects, action: str = "bake") -> list:
             warnings.append(f"object '{ob.name}' has an Armature modifier ({', '.join(armature)}): "
                             f"the {action} uses the rest geometry; posed boxes decode only where the pose "
                             "moves whole submeshes rigidly")
+        keys = shape_key_warning(ob, action)
+        if keys:
+            warnings.append(keys)
     return warnings
+
+
+def shape_key_warning(ob, action: str) -> str | None:
+    """The warning for an object whose shape keys move the shape the viewport shows (the bake,
+    the export and the preview read the mesh data without them), or None."""
+    keys = shown_shape_keys(ob)
+    if not keys:
+        return None
+    return (f"object '{ob.name}' shows shape key{'s' if len(keys) > 1 else ''} {', '.join(repr(k) for k in keys)}: "
+            f"the {action} uses the mesh without them, so the shape shown does not decode (set their values to 0, "
+            "or apply them: Object > Convert > Mesh, then bake)")
+
+
+def shown_shape_keys(ob) -> list:
+    """Names of the shape keys that move the shape the viewport shows away from the mesh data:
+    the pinned key (Shape Key Lock) when it is not the reference, else every unmuted key other
+    than the reference with a nonzero value."""
+    data = getattr(ob, "data", None)
+    shape_keys = getattr(data, "shape_keys", None)
+    if shape_keys is None or len(shape_keys.key_blocks) < 2:
+        return []
+    reference = shape_keys.reference_key
+    if ob.show_only_shape_key:
+        key = ob.active_shape_key
+        return [key.name] if key is not None and key != reference else []
+    if not shape_keys.use_relative:  # absolute keys: the evaluation time picks the shape
+        return [k.name for k in shape_keys.key_blocks if k != reference] if shape_keys.eval_time > 0 else []
+    return [k.name for k in shape_keys.key_blocks if k != reference and not k.mute and k.value != 0.0]
 
 
 def _read_offset_colour(attr, count) -> np.ndarray:

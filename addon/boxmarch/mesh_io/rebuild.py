@@ -18,15 +18,44 @@ _ATTRIBUTE_LAYOUT = {
 _TOPOLOGY_ATTRIBUTES = {"position", ".edge_verts", ".corner_vert", ".corner_edge"}
 
 
-def can_rebuild(mesh) -> bool:
-    """True when rebuilding the mesh from arrays keeps everything it holds: Blender 4.1+ (all
-    data in generic attributes), no shape keys, no object using it with vertex groups, and only
-    attribute types the rebuild knows."""
-    if bpy.app.version < (4, 1, 0) or mesh.shape_keys is not None:
-        return False
-    if any(ob.data == mesh and len(ob.vertex_groups) for ob in bpy.data.objects):
-        return False
-    return all(a.data_type in _ATTRIBUTE_LAYOUT for a in mesh.attributes if a.name not in _TOPOLOGY_ATTRIBUTES)
+def rebuild_blocker(mesh, welding: bool) -> str | None:
+    """Why rebuilding the mesh from arrays would lose or change something it holds (then the tools
+    run Blender's own delete or merge, which carry every layer), or None when the rebuild keeps
+    everything. Blender before 4.1 keeps data outside generic attributes; so does any version
+    for shape keys, vertex groups (deform weights), the Skin modifier's radii and a Multires
+    modifier's displacements. Custom normals are stored relative to each vertex's corner fan,
+    which a weld changes, and before 5.0 outside the attributes, as Freestyle marks were."""
+    users = [ob for ob in bpy.data.objects if ob.data == mesh]
+    if bpy.app.version < (4, 1, 0):
+        return "Blender before 4.1"
+    if mesh.shape_keys is not None:
+        return "shape keys"
+    if any(len(ob.vertex_groups) for ob in users):
+        return "vertex groups"
+    if len(mesh.skin_vertices):
+        return "skin radii"
+    if any(m.type == "MULTIRES" for ob in users for m in ob.modifiers):
+        return "multires displacements"
+    if mesh.has_custom_normals and (welding or "custom_normal" not in mesh.attributes):
+        return "custom normals"
+    if _freestyle_marks_outside_attributes(mesh):
+        return "Freestyle marks"
+    unknown = sorted({a.data_type for a in mesh.attributes
+                      if a.name not in _TOPOLOGY_ATTRIBUTES and a.data_type not in _ATTRIBUTE_LAYOUT})
+    return f"{', '.join(unknown)} attributes" if unknown else None
+
+
+def _freestyle_marks_outside_attributes(mesh) -> bool:
+    """True where the mesh has Freestyle edge or face marks in the layers Blender kept before 5.0
+    (MeshEdge / MeshPolygon ``use_freestyle_mark``; 5.0 stores them as the generic attributes
+    ``freestyle_edge`` / ``freestyle_face``, which the rebuild carries)."""
+    for collection, rna in ((mesh.edges, bpy.types.MeshEdge), (mesh.polygons, bpy.types.MeshPolygon)):
+        if "use_freestyle_mark" in rna.bl_rna.properties and len(collection):
+            marks = np.zeros(len(collection), bool)
+            collection.foreach_get("use_freestyle_mark", marks)
+            if marks.any():
+                return True
+    return False
 
 
 def _set_topology(mesh, attribute, prop, collection, rna_prop, values):
@@ -40,7 +69,8 @@ def _set_topology(mesh, attribute, prop, collection, rna_prop, values):
 
 def rebuild_welded(mesh, merged_positions, weld) -> None:
     """Replace the mesh's geometry by the welded topology (core.weld), carrying every attribute
-    over from the old element each new one comes from. Object Mode; expects can_rebuild."""
+    over from the old element each new one comes from. Object Mode; expects rebuild_blocker
+    to be None."""
     captured = []
     for attr in mesh.attributes:
         if attr.name in _TOPOLOGY_ATTRIBUTES:

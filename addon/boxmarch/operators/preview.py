@@ -24,7 +24,11 @@ class BOXMARCH_OT_preview_toggle(bpy.types.Operator):
         text = f"Raymarch preview {'on' if enable else 'off'} for {len(meshes)} object(s)"
         if enable and unbaked:
             text += f"; {unbaked} not baked yet (drawn as outlines until baked)"
-        self.report({"WARNING"} if enable and unbaked else {"INFO"}, text)
+        keyed = [warning for warning in (mesh_io.shape_key_warning(ob, "preview") for ob in meshes) if warning] \
+            if enable else []
+        if keyed:
+            text += ". WARNING: " + " ".join(keyed)
+        self.report({"WARNING"} if enable and (unbaked or keyed) else {"INFO"}, text)
         return {"FINISHED"}
 
 

@@ -1,0 +1,177 @@
+"""The box data of a baked mesh as a file must hold it: read through mesh_io, put in the space the
+file writes the positions in (docs/EXPORT.md, Object transforms) and in the target's frame
+(transforms.py), with the checks the export reports: stale boxes, sheared boxes, skin weight
+spreads, the decode measured on the written file. export/scene.py runs the exporters with it."""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import core, layouts, mesh_io
+from . import glb, transforms
+
+
+class ExportInputError(ValueError):
+    """The selection cannot be exported as it is; the message says why. Nothing was written."""
+
+
+def baked_layers(mesh) -> mesh_io.BakedLayers:
+    """The stored layers of a baked mesh (mesh_io.read_baked_layers). Raises ExportInputError
+    when it is not baked."""
+    try:
+        return mesh_io.read_baked_layers(mesh)
+    except mesh_io.NotBakedError as error:
+        raise ExportInputError(f"{error}: run Bake Box Frames first") from None
+
+
+def box_data(mesh, preset, index_base: int = 0, space=None):
+    """(layouts.BoxData in the target's frame, corner_verts, stats, origins) of a baked mesh: the
+    stored offsets and quaternion, each vertex's box half-extents (largest |f| per local axis over
+    its submesh) and box number (``index_base`` + submesh id). ``space`` (4 x 4, Blender axes;
+    None: the object's own) maps object coordinates to those the file writes positions in: a
+    skinned glTF holds world positions, so its frames, offsets and half-extents are given in
+    world space (transforms.frames_in_space; CLASSIC colours only in the object's own).
+    ``origins`` (vertices, 3): where each vertex's box origin lies in the file's space, target
+    axes (what the file must decode to); stats["sheared_boxes"] counts the boxes ``space``
+    shears, whose data is not meaningful (the caller refuses them)."""
+    layers = baked_layers(mesh)
+    offsets, corner_verts, q = layers.shader_offsets(), layers.corner_verts, layers.vertex_quaternions()
+    positions = mesh_io.read_positions(mesh).astype(np.float64)
+    edges, face_starts, face_sizes, _ = mesh_io.read_topology(mesh)
+    submesh_of_vertex, count = core.find_submeshes(positions.astype(np.float32), edges, face_starts, face_sizes,
+                                                   corner_verts)
+    _, _, box_half = core.boxes_from_bake(positions, offsets, q, submesh_of_vertex)
+    f = core.decode_offsets(offsets)
+    blender_origin = positions + core.rotate_vector(f, q)
+    stale = stale_boxes(blender_origin, box_half, submesh_of_vertex, count, layers.encoding)
+    sheared = 0
+    if space is not None:
+        space = np.asarray(space, np.float64)
+        q, f, box_half, sheared = transforms.frames_in_space(q, f, box_half, submesh_of_vertex, space[:3, :3])
+        positions = positions @ space[:3, :3].T + space[:3, 3]
+        blender_origin = blender_origin @ space[:3, :3].T + space[:3, 3]
+    target_q = transforms.target_quaternions(q, preset)
+    target_f = transforms.target_local(f, preset)
+    target_half = np.asarray(box_half, np.float64) * preset.length_scale
+    data = layouts.BoxData(quaternions=target_q, offsets=target_f, half_extents=target_half[submesh_of_vertex],
+                           index=index_base + submesh_of_vertex.astype(np.int64),
+                           classic_rgba=transforms.target_offsets(offsets, preset) if space is None else None,
+                           box_half_extents=target_half)
+    # Self-check: the decode in the target frame must land where the target frame puts Blender's.
+    origins = transforms.target_positions(blender_origin, preset)
+    target_origin = transforms.target_positions(positions, preset) + core.rotate_vector(target_f, target_q)
+    error = float(np.abs(target_origin - origins).max() / offset_reach(target_f)) if len(f) else 0.0
+    stats = {"mesh": mesh.name, "vertices": len(positions), "corners": len(corner_verts), "boxes": int(count),
+             "colour": layers.encoding, "max_alpha": float(offsets[:, 3].max()) / preset.length_scale if len(positions) else 0.0,
+             "space": "object" if space is None else "world", "transform_error": error, "stale_boxes": stale,
+             "sheared_boxes": sheared}
+    return data, corner_verts, stats, origins
+
+
+def offset_reach(target_f) -> float:
+    """The largest |f| component: the scale the report's decode errors are measured against."""
+    return max(float(np.abs(target_f).max()) if len(target_f) else 0.0, 1e-30)
+
+
+# The worst decode error of a file, over the largest offset, that float32 rounding of positions
+# and channels explains; anything above means the box data is in another space than the positions.
+FILE_DECODE_TOLERANCE = 1e-4
+FLOAT32_POSITION_ERROR = 2.0 ** -22  # two roundings of a float32 position, relative to its size
+
+
+# A box is stale when its vertices' decoded origins disagree by more than this fraction of its
+# largest half-extent: a bake decodes them to one point within float32 rounding, or within the
+# 8-bit colour's quantisation bound (docs/FORMAT.md); an edit after the bake that moves some of
+# them does not.
+STALE_SPREAD = {"FLOAT_COLOR": 1e-3, "BYTE_COLOR": 0.05}
+
+
+def stale_boxes(decoded_origins, box_half, submesh_of_vertex, count, encoding) -> int:
+    """How many boxes changed shape since the bake: the stored offsets and frames of their
+    vertices no longer decode to one origin (moving or turning a whole box keeps it decoding)."""
+    if not count:
+        return 0
+    high = np.full((count, 3), -np.inf)
+    low = np.full((count, 3), np.inf)
+    np.maximum.at(high, submesh_of_vertex, decoded_origins)
+    np.minimum.at(low, submesh_of_vertex, decoded_origins)
+    reach = np.maximum(np.asarray(box_half, np.float64).max(axis=1), 1e-30)
+    return int(((high - low).max(axis=1) > STALE_SPREAD[encoding] * reach).sum())
+
+
+def box_weight_spread(weights, box, boxes) -> np.ndarray:
+    """(boxes,) the largest difference, over a box's vertices, of their weights on one bone:
+    0 where the box is carried rigidly (docs/ACCURACY.md measures what a spread costs)."""
+    high = np.full((boxes, weights.shape[1]), -np.inf)
+    low = np.full((boxes, weights.shape[1]), np.inf)
+    np.maximum.at(high, box, weights)
+    np.minimum.at(low, box, weights)
+    spread = np.where(np.isfinite(high), high - low, 0.0)
+    return spread.max(axis=1) if weights.shape[1] else np.zeros(boxes)
+
+
+# Weight differences inside a box below this are float noise of the artist's weights, not a blend.
+RIGID_WEIGHT_SPREAD = 1e-6
+
+
+def written_space(ob, skin, preset):
+    """The space (4 x 4, Blender axes) the preset's file holds ``ob``'s positions in, for
+    box_data: None for the object's own (its glTF node or FBX model carries its transform), the
+    world for a skinned glTF (Blender's glTF exporter writes a skinned mesh's vertices in world
+    space, the joints' inverse bind matrices holding the armature's world transform, so the skin
+    at rest is the identity; the export measures it in the file, _file_decode_error)."""
+    if skin is None or preset.extension != ".glb":
+        return None
+    return np.array(ob.matrix_world, np.float64)
+
+
+def file_decode_error(gltf, binary, name, layout, channels, origins) -> tuple[float, float]:
+    """(worst decode error, what float32 positions explain), both over the largest offset, of the
+    .glb's mesh ``name``: its POSITION as the exporter wrote it, plus the layout's offset decoded
+    from ``channels`` (what glb.replace_vertex_channels writes, per Blender vertex), against
+    ``origins`` (box_data: where each Blender vertex's box origin lies in the space the file
+    should hold). Small boxes far from the origin lose to float32 positions alone about 1e-7 of
+    the distance; the second figure adds that to FILE_DECODE_TOLERANCE."""
+    worst = reach = position_reach = 0.0
+    primitives = [p for mesh in gltf.get("meshes", []) if mesh.get("name") == name
+                  for p in glb.vertex_indices(gltf, binary, mesh)]
+    for attrs, index in primitives:
+        positions = glb.accessor_array(gltf, binary, attrs["POSITION"]).astype(np.float64)
+        to_origin = layouts.to_origin(layout, {k: v[index] for k, v in channels.items()})
+        if len(index):
+            worst = max(worst, float(np.abs(positions + to_origin - origins[index]).max()))
+            reach = max(reach, float(np.abs(to_origin).max()))
+            position_reach = max(position_reach, float(np.abs(positions).max()))
+    reach = max(reach, 1e-30)
+    return worst / reach, FILE_DECODE_TOLERANCE + FLOAT32_POSITION_ERROR * position_reach / reach
+
+
+def refuse_shared_world_meshes(objects, skins, preset) -> None:
+    """Raises ExportInputError where objects written in world space (written_space) share a mesh
+    but not a world transform: the file's copies of it would need different box data."""
+    first = {}
+    for ob in objects:
+        space = written_space(ob, skins.get(ob.name), preset)
+        other = first.setdefault(ob.data.name_full, (ob, space))
+        if other[0] is not ob and (space is not None or other[1] is not None) and not (
+                space is not None and other[1] is not None and np.allclose(space, other[1])):
+            raise ExportInputError(
+                f"objects '{other[0].name}' and '{ob.name}' share the mesh '{ob.data.name}' and a skinned glTF holds "
+                "each in world space, where their boxes differ: make the mesh single-user "
+                "(Object > Relations > Make Single User > Object & Data), bake, then export")
+
+
+def morph_warnings(objects, preset) -> list:
+    """One line per object whose shape keys the file carries (glTF morph targets, FBX blend
+    shapes): the morphs move positions only, so a morph that moves a box's vertices unevenly
+    leaves its baked data behind."""
+    if preset.name == "BLENDER":
+        return []
+    out = []
+    for ob in objects:
+        keys = getattr(ob.data, "shape_keys", None)
+        if keys is not None and len(keys.key_blocks) > 1:
+            names = ", ".join(repr(k.name) for k in keys.key_blocks if k != keys.reference_key)
+            out.append(f"object '{ob.name}' has shape keys ({names}): the file carries them as "
+                       f"{'morph targets' if preset.extension == '.glb' else 'blend shapes'}, which move vertices "
+                       "but not the baked boxes: a morph that moves a box's vertices unevenly makes it decode off")
+    return out
