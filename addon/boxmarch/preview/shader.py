@@ -40,8 +40,10 @@ def _create_info(fragment: str, layout: str):
     info.uniform_buf(0, sources.UNIFORM_TYPE, sources.UNIFORM_NAME)
     for slot, type_name, name in sources.FRAGMENT_OUTPUTS:
         info.fragment_out(slot, type_name, name)
-    if hasattr(info, "depth_write"):  # Blender 4+: required where gl_FragDepth is not implied (Metal)
-        info.depth_write("ANY")
+    if hasattr(info, "depth_write"):
+        # Blender 4+: the marched depth is never nearer than the face's (preview.frag.glsl clamps
+        # it), so declaring it keeps early depth testing; 3.4 has no declaration.
+        info.depth_write("GREATER")
     info.vertex_source(sources.vertex_source(layout))
     info.fragment_source(fragment)
     return info, iface
