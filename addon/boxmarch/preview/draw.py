@@ -94,6 +94,21 @@ class _Drawn:
         return self.marches[octant]
 
 
+class _OctantTriangles:
+    """The triangle index buffer of each view octant (mesh_data.octant_triangles), made when first
+    drawn. Held apart from _Mesh so the drawings that share it make no reference cycle: GPU
+    buffers must be freed while Blender's GPU context lives, not by the collector at exit."""
+
+    def __init__(self, baked: mesh_data.BakedMesh):
+        self.baked = baked
+        self.buffers = {}
+
+    def __call__(self, octant: int):
+        if octant not in self.buffers:
+            self.buffers[octant] = gpu.types.GPUIndexBuf(type="TRIS", seq=mesh_data.octant_triangles(self.baked, octant))
+        return self.buffers[octant]
+
+
 @dataclass
 class _Mesh:
     """A baked mesh in one layout: what a pose does not change."""
@@ -102,14 +117,8 @@ class _Mesh:
     inputs: dict                  # the shader inputs at rest (mesh_data.layout_inputs)
     static: object                # GPUVertBuf of the inputs not in POSE_INPUTS
     edges: object                 # GPUIndexBuf
+    triangles: _OctantTriangles
     rest: _Drawn | None = None
-    octants: dict = field(default_factory=dict)  # view octant -> GPUIndexBuf (mesh_data.octant_triangles)
-
-    def triangles(self, octant: int):
-        if octant not in self.octants:
-            self.octants[octant] = gpu.types.GPUIndexBuf(
-                type="TRIS", seq=mesh_data.octant_triangles(self.baked, octant))
-        return self.octants[octant]
 
 
 @dataclass
@@ -142,7 +151,7 @@ def _mesh(mesh, layout) -> _Mesh:
         inputs = mesh_data.layout_inputs(layout, baked)
         static = _vertex_buffer({k: v for k, v in inputs.items() if k not in POSE_INPUTS})
         edges = gpu.types.GPUIndexBuf(type="LINES", seq=baked.edges)
-        mesh = _Mesh(baked=baked, inputs=inputs, static=static, edges=edges)
+        mesh = _Mesh(baked=baked, inputs=inputs, static=static, edges=edges, triangles=_OctantTriangles(baked))
         mesh.rest = _batches({k: v for k, v in inputs.items() if k in POSE_INPUTS}, mesh, baked.positions,
                              mesh_data.box_data(baked).offsets, lambda: mesh_data.frame_axes(baked.quaternions))
         _meshes[key] = mesh
