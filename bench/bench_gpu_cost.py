@@ -57,24 +57,24 @@ def camera(eye, target, width, height, up=(0.0, 0.0, 1.0), fov_deg=40.0):
 
 
 def scenes_to_measure(size, far_boxes):
-    """name -> (origins, quaternions, half_extents, sdf, camera)."""
+    """name -> (origins, rotations (S, 3, 3), half_extents, sdf, camera)."""
     import chain_arm
 
     made = {}
     _, centres, sizes, rotations = scenes.random_boxes(16000, seed=0)
-    made["cloud"] = (centres, quaternions_of(rotations), sizes / 2, "SPHERE",
+    made["cloud"] = (centres, rotations, sizes / 2, "SPHERE",
                      camera((0.0, -60.0, 10.0), (0.0, 40.0, 0.0), size, size))
     centres, rotations = chain_arm.chain_geometry()
-    links = (centres, quaternions_of(rotations), np.tile(chain_arm.LINK / 2, (len(centres), 1)), "LINK")
+    links = (centres, rotations, np.tile(chain_arm.LINK / 2, (len(centres), 1)), "LINK")
     made["chain side"] = links + (camera((6.0, -4.0, 4.5), (0.0, 0.0, 4.5), size, size),)
     made["chain down the arm"] = links + (camera((0.4, -1.2, 14.0), (0.0, 0.0, 4.5), size, size),)
     rng = np.random.default_rng(1)
     pile = rng.uniform(-2.0, 2.0, (4000, 3))
-    made["pile"] = (pile, quaternions_of(scenes.random_rotations(4000, rng)), np.tile(chain_arm.LINK / 2, (4000, 1)),
+    made["pile"] = (pile, scenes.random_rotations(4000, rng), np.tile(chain_arm.LINK / 2, (4000, 1)),
                     "LINK", camera((0.0, -7.0, 1.0), (0.0, 0.0, 0.0), size, size))
     side = round(far_boxes ** (1 / 3))
     grid = np.stack(np.meshgrid(*[np.arange(side) * 0.5] * 3, indexing="ij"), -1).reshape(-1, 3)
-    made["far"] = (grid, quaternions_of(scenes.random_rotations(len(grid), rng)),
+    made["far"] = (grid, scenes.random_rotations(len(grid), rng),
                    np.tile([0.2, 0.15, 0.1], (len(grid), 1)), "ROUNDED_BOX",
                    camera((side * 0.25, side * 0.25 - 150.0, side * 0.25), (side * 0.25,) * 3, size, size))
     return made
@@ -103,7 +103,8 @@ def image_error(result, reference):
 
 
 def rows_for(name, scene, size, qualities):
-    origins, quaternions, half, sdf, (to_clip, to_view, eye) = scene
+    origins, rotations, half, sdf, (to_clip, to_view, eye) = scene
+    quaternions = quaternions_of(rotations)
     render = lambda **plan: core.render_boxes(origins, quaternions, half, to_clip, to_view, size, size, sdf=sdf,  # noqa: E731
                                               max_steps=64, epsilon=1e-3, **plan)
     sorted_order = core.front_to_back(origins, eye)

@@ -163,7 +163,7 @@ inline float bm_normal_tap(float epsilon, vec3 h)
 inline vec3 bm_quality(float q)
 {
   float loss = 1.0f - glm::clamp(q, 0.0f, 1.0f);
-  return vec3(loss, 2.0f / glm::max(loss, 1e-6f), 4.0f * loss);
+  return vec3(0.5f * loss * loss, 2.0f / glm::max(loss, 1e-9f), 4.0f * loss);
 }
 
 // Size of one pixel, in object units, at a point whose clip-space w is clip_w: row_y = length of

@@ -58,7 +58,7 @@ bool bm_one_tap(vec3 ro, vec3 rd, float t_end, float footprint, out float t)
 vec3 bm_quality(float q)
 {
   float loss = 1.0 - clamp(q, 0.0, 1.0);
-  return vec3(loss, 2.0 / max(loss, 1e-6), 4.0 * loss);
+  return vec3(0.5 * loss * loss, 2.0 / max(loss, 1e-9), 4.0 * loss);
 }
 
 // Size of one pixel, in object units, at a point whose clip-space w is clip_w: row_y = length of

@@ -29,6 +29,11 @@ _posed: dict = {}
 # modifier the preview cannot follow.
 errors: dict = {}
 
+# Draw boxes front to back (one index order per view octant) so early depth testing skips the
+# marches of hidden boxes; False draws them in the mesh's order (bench/bench_preview_cost.py
+# compares the two).
+FRONT_TO_BACK = True
+
 # The shader inputs a pose changes: skinning moves positions, normals and tangents; every other
 # channel stays as baked.
 POSE_INPUTS = ("pos", "ch_normal", "ch_tangent")
@@ -77,7 +82,7 @@ class _Drawn:
 
     moving: object                # GPUVertBuf of the POSE_INPUTS
     static: object                # GPUVertBuf of the other inputs
-    triangles: Callable           # octant -> GPUIndexBuf, boxes front to back for views in it
+    triangles: Callable           # octant -> GPUIndexBuf, boxes front to back for views in it (None: mesh order)
     outline: object               # GPUBatch of the mesh edges (the same vertex buffers)
     positions: np.ndarray         # float32 (N, 3) as drawn
     offsets: np.ndarray           # float64 (N, 3) f, box-local
@@ -85,7 +90,7 @@ class _Drawn:
     vectors: tuple | None = None  # the overlay's two line batches, made when first shown
     marches: dict = field(default_factory=dict)  # octant -> GPUBatch of the preview shader
 
-    def march(self, octant: int):
+    def march(self, octant: int | None):
         """The batch of the preview shader drawing the boxes front to back for ``octant``."""
         if octant not in self.marches:
             batch = gpu.types.GPUBatch(type="TRIS", buf=self.moving, elem=self.triangles(octant))
@@ -103,9 +108,11 @@ class _OctantTriangles:
         self.baked = baked
         self.buffers = {}
 
-    def __call__(self, octant: int):
+    def __call__(self, octant: int | None):
+        """The buffer for ``octant``; None: the mesh's own triangle order."""
         if octant not in self.buffers:
-            self.buffers[octant] = gpu.types.GPUIndexBuf(type="TRIS", seq=mesh_data.octant_triangles(self.baked, octant))
+            triangles = self.baked.triangles if octant is None else mesh_data.octant_triangles(self.baked, octant)
+            self.buffers[octant] = gpu.types.GPUIndexBuf(type="TRIS", seq=triangles)
         return self.buffers[octant]
 
 
@@ -300,7 +307,7 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, 
         ubo = gpu.types.GPUUniformBuf(block.tobytes())
         shader.bind()
         shader.uniform_block(sources.UNIFORM_NAME, ubo)
-        drawn.march(mesh_data.view_octant(object_to_view)).draw(shader)
+        drawn.march(mesh_data.view_octant(object_to_view) if FRONT_TO_BACK else None).draw(shader)
     if output_mode != 0:
         return shader is not None
     lines = uniform_shader()
