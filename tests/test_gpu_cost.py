@@ -1,10 +1,15 @@
 """The GPU cost model of the CPU reference (core.render_boxes' cost counts, draw order, early depth,
 quality knob) on scenes whose counts are worked out by hand, and the preview's octant orders."""
+import re
+import subprocess
+
 import numpy as np
 import pytest
 
 from boxmarch import core
-from boxmarch.preview import mesh_data
+from boxmarch.preview import mesh_data, sources
+
+SHADERS = sources.shader_dir()
 
 SIZE = 8  # pixels; the orthographic view below maps x, y in [-1, 1] onto them: pixel centres at
 # -0.875, -0.625, ..., 0.875 (0.25 apart)
@@ -122,3 +127,35 @@ def test_octant_orders_draw_the_boxes_nearest_the_camera_first():
     boxes = mesh_data.octant_triangles(baked, octant)[::2, 0] // 4
     assert boxes.tolist() == [1, 0, 2]
     assert mesh_data.octant_triangles(baked, octant ^ 1)[::2, 0].tolist() == [8, 0, 4]  # looking along -x
+
+
+def test_preview_fragment_compiles_with_the_depth_greater_declaration(tmp_path):
+    """What Blender 4+'s create-info depth_write('GREATER') puts before the source (GLSL 4.20+)."""
+    from helpers.glsl import blender_declarations, validator
+
+    declared = blender_declarations("frag").replace("#version 330 core", "#version 450 core")
+    declared += "layout(depth_greater) out float gl_FragDepth;\n"
+    path = tmp_path / "preview.frag"
+    for sdf in ("LINK", "SPHERE"):
+        path.write_text(declared + sources.fragment_source(sdf))
+        proc = subprocess.run([validator(), str(path)], capture_output=True, text=True)
+        assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def spirv_depth_modes(tmp_path, hlsl_path, defines=()):
+    from helpers.glsl import validator
+
+    proc = subprocess.run([validator(), "-D", "-V", "-H", *defines, "-I" + str(SHADERS / "hlsl"), "-e", "frag", "-S",
+                           "frag", str(hlsl_path), "-o", str(tmp_path / "frag.spv")], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    return set(re.findall(r"ExecutionMode \d+ (Depth\w+)", proc.stdout))
+
+
+def test_hlsl_example_declares_its_depth_direction(tmp_path):
+    example = SHADERS / "hlsl" / "boxmarch_example.hlsl"
+    assert spirv_depth_modes(tmp_path, example) == {"DepthReplacing", "DepthGreater"}
+    assert spirv_depth_modes(tmp_path, example, ["-DUNITY_REVERSED_Z"]) == {"DepthReplacing", "DepthLess"}
+    # negative control: the plain SV_Depth of an undeclared write gives neither direction
+    undeclared = tmp_path / "undeclared.hlsl"
+    undeclared.write_text(example.read_text().replace(": BM_CONSERVATIVE_DEPTH)", ": SV_Depth)"))
+    assert spirv_depth_modes(tmp_path, undeclared) == {"DepthReplacing"}
