@@ -163,7 +163,7 @@ inline float bm_normal_tap(float epsilon, vec3 h)
 inline vec3 bm_quality(float q)
 {
   float loss = 1.0f - glm::clamp(q, 0.0f, 1.0f);
-  return vec3(0.5f * loss * loss, 2.0f / glm::max(loss, 1e-9f), 4.0f * loss);
+  return vec3(0.5f * loss * loss, 8.0f / glm::max(loss, 1e-9f), 4.0f * loss);
 }
 
 // Size of one pixel, in object units, at a point whose clip-space w is clip_w: row_y = length of
@@ -174,11 +174,11 @@ inline float bm_pixel_size(float clip_w, float row_y, float height)
   return 2.0f * clip_w / (height * row_y);
 }
 
-// Step limit of a box box_pixels wide on screen: steps_per_pixel per pixel, at least 8, at most
+// Step limit of a box box_pixels wide on screen: steps_per_pixel per pixel, at least 16, at most
 // max_steps (a float holding a whole number).
 inline float bm_step_limit(float box_pixels, float steps_per_pixel, float max_steps)
 {
-  return glm::min(max_steps, glm::max(8.0f, glm::floor(steps_per_pixel * box_pixels)));
+  return glm::min(max_steps, glm::max(16.0f, glm::floor(steps_per_pixel * box_pixels)));
 }
 
 // Lambert from a light fixed in view space plus a sky/ground hemisphere, like the viewport's

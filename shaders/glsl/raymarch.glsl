@@ -58,7 +58,7 @@ bool bm_one_tap(vec3 ro, vec3 rd, float t_end, float footprint, out float t)
 vec3 bm_quality(float q)
 {
   float loss = 1.0 - clamp(q, 0.0, 1.0);
-  return vec3(0.5 * loss * loss, 2.0 / max(loss, 1e-9), 4.0 * loss);
+  return vec3(0.5 * loss * loss, 8.0 / max(loss, 1e-9), 4.0 * loss);
 }
 
 // Size of one pixel, in object units, at a point whose clip-space w is clip_w: row_y = length of
@@ -69,11 +69,11 @@ float bm_pixel_size(float clip_w, float row_y, float height)
   return 2.0 * clip_w / (height * row_y);
 }
 
-// Step limit of a box box_pixels wide on screen: steps_per_pixel per pixel, at least 8, at most
+// Step limit of a box box_pixels wide on screen: steps_per_pixel per pixel, at least 16, at most
 // max_steps (a float holding a whole number).
 float bm_step_limit(float box_pixels, float steps_per_pixel, float max_steps)
 {
-  return min(max_steps, max(8.0, floor(steps_per_pixel * box_pixels)));
+  return min(max_steps, max(16.0, floor(steps_per_pixel * box_pixels)));
 }
 
 // Tap distance of bm_normal: taps closer than a thousandth of the box lose the gradient in float
