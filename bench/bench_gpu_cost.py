@@ -13,8 +13,9 @@ plus the 4 normal taps of a hit) and how many of those end up hidden. Each techn
   one tap under a few pixels).
 
 Error against the full-quality render (today's row): pixels changed (coverage differs or a colour
-channel moves more than 1/255) as a share of the pixels covered in either image; depth error
-where both hit, in scene units along the view axis (99th percentile and worst).
+channel moves more than 1/255) as a share of the pixels covered in either image, and of those the
+pixels hit in one image only; depth error where both hit, in scene units along the view axis
+(99th percentile and worst).
 
     python3 bench/bench_gpu_cost.py [--size 480] [--far-boxes 1000000] [--quick]
 
@@ -92,14 +93,15 @@ def linear_depth(depth):
 
 
 def image_error(result, reference):
-    """(pixels changed / pixels covered in either, depth error p99, worst) against ``reference``."""
+    """(pixels changed, pixels whose coverage changed, both / pixels covered in either; depth error
+    p99, worst) against ``reference``."""
     a, b = result.depth < 1, reference.depth < 1
     either = max(int((a | b).sum()), 1)
     colour = np.abs(result.rgba[..., :3] - reference.rgba[..., :3]).max(-1) > 1 / 255
     changed = ((a != b) | (a & b & colour)).sum()
     both = a & b
     error = np.abs(linear_depth(result.depth) - linear_depth(reference.depth))[both] if both.any() else np.zeros(1)
-    return changed / either, np.percentile(error, 99), error.max()
+    return changed / either, (a != b).sum() / either, np.percentile(error, 99), error.max()
 
 
 def rows_for(name, scene, size, qualities):
@@ -122,12 +124,13 @@ def rows_for(name, scene, size, qualities):
         reference = reference or result
         cost = result.cost
         covered = max(cost["covered_pixels"], 1)
-        changed, depth_p99, depth_max = image_error(result, reference)
+        changed, coverage_changed, depth_p99, depth_max = image_error(result, reference)
         rows.append([name, label, f"{cost['fragments'] / covered:.2f}", f"{cost['marched_fragments'] / covered:.2f}",
                      f"{cost['sdf_evaluations'] / covered:.1f}",
                      f"{reference.cost['sdf_evaluations'] / max(cost['sdf_evaluations'], 1):.2f}x",
                      f"{100 * cost['hidden_evaluations'] / max(cost['sdf_evaluations'], 1):.0f}%",
-                     f"{cost['lod_fragments']}", f"{100 * changed:.2f}%", f"{depth_p99:.2g}", f"{depth_max:.2g}",
+                     f"{cost['lod_fragments']}", f"{100 * changed:.2f}%", f"{100 * coverage_changed:.2f}%",
+                     f"{depth_p99:.2g}", f"{depth_max:.2g}",
                      f"{1000 * seconds:.0f}"])
     return rows
 
@@ -146,7 +149,7 @@ def main():
         rows += rows_for(name, scene, args.size, qualities)
     print(f"{args.size} x {args.size} px, max_steps 64, epsilon 1e-3; per covered pixel (inside some box's silhouette)")
     print(table(["scene", "technique", "fragments/px", "marched/px", "SDF evals/px", "saving", "hidden evals",
-                 "one-tap fragments", "pixels changed", "depth err p99", "depth err max", "CPU ms"], rows))
+                 "one-tap fragments", "pixels changed", "coverage changed", "depth err p99", "depth err max", "CPU ms"], rows))
 
 
 if __name__ == "__main__":

@@ -159,3 +159,36 @@ def test_hlsl_example_declares_its_depth_direction(tmp_path):
     undeclared = tmp_path / "undeclared.hlsl"
     undeclared.write_text(example.read_text().replace(": BM_CONSERVATIVE_DEPTH)", ": SV_Depth)"))
     assert spirv_depth_modes(tmp_path, undeclared) == {"DepthReplacing"}
+
+
+_CONSERVATIVE_DEPTH_JOB = """function () {
+  var gl = document.createElement('canvas').getContext('webgl2');
+  var extension = gl.getExtension('EXT_conservative_depth');
+  var body = 'layout(depth_greater) out highp float gl_FragDepth;\\nout highp vec4 colour;\\n' +
+             'void main() { gl_FragDepth = max(0.75, gl_FragCoord.z); colour = vec4(1.0); }\\n';
+  function compile(source) {
+    var s = gl.createShader(gl.FRAGMENT_SHADER);
+    gl.shaderSource(s, source);
+    gl.compileShader(s);
+    return gl.getShaderParameter(s, gl.COMPILE_STATUS) ? 'ok' : gl.getShaderInfoLog(s);
+  }
+  return {extension: !!extension,
+          first: compile('#version 300 es\\n#extension GL_EXT_conservative_depth : enable\\nprecision highp float;\\n' + body),
+          after_precision: compile('#version 300 es\\nprecision highp float;\\n#extension GL_EXT_conservative_depth : enable\\n' + body)};
+}"""
+
+
+@pytest.mark.slow
+def test_webgl2_conservative_depth_needs_its_extension_line_first():
+    """What docs/ENGINES.md says of three.js: WebGL 2 (ANGLE on SwiftShader) takes depth_greater
+    when the #extension line comes before any other token, and refuses it after a precision
+    statement, where three.js's ShaderMaterial puts its own."""
+    from engines import threejs
+
+    reason = threejs.available()
+    if reason:
+        pytest.skip(reason)
+    result = threejs.run_page(b"", _CONSERVATIVE_DEPTH_JOB)
+    assert result["extension"] is True
+    assert result["first"] == "ok", result["first"]
+    assert "before any non-preprocessor tokens" in result["after_precision"], result["after_precision"]
