@@ -34,10 +34,9 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "scripts"))
 sys.path.insert(0, str(HERE.parent / "addon"))
-sys.path.insert(0, str(HERE.parent / "tests"))
 
 from boxmarch import core, scenes  # noqa: E402
-from helpers.preview_render import quaternions_of  # noqa: E402
+from boxmarch.export.transforms import matrix_quaternions  # noqa: E402
 
 NEAR, FAR = 0.1, 4000.0
 
@@ -106,7 +105,7 @@ def image_error(result, reference):
 
 def rows_for(name, scene, size, qualities):
     origins, rotations, half, sdf, (to_clip, to_view, eye) = scene
-    quaternions = quaternions_of(rotations)
+    quaternions = matrix_quaternions(rotations).astype(np.float32)
     render = lambda **plan: core.render_boxes(origins, quaternions, half, to_clip, to_view, size, size, sdf=sdf,  # noqa: E731
                                               max_steps=64, epsilon=1e-3, **plan)
     sorted_order = core.front_to_back(origins, eye)
@@ -135,6 +134,46 @@ def rows_for(name, scene, size, qualities):
     return rows
 
 
+HEADERS = ["scene", "technique", "fragments/px", "marched/px", "SDF evals/px", "saving", "hidden evals",
+           "one-tap fragments", "pixels changed", "coverage changed", "depth err p99", "depth err max", "CPU ms"]
+
+
+def measured_table(size=480, far_boxes=1_000_000, qualities=(1.0, 0.9, 0.75, 0.5, 0.25)):
+    from common import table
+
+    rows = [row for name, scene in scenes_to_measure(size, far_boxes).items() for row in rows_for(name, scene, size, qualities)]
+    return table(HEADERS, rows)
+
+
+def accuracy_section():
+    """The GPU cost section of docs/ACCURACY.md (bench_accuracy.py writes the page with it)."""
+    return f"""
+## GPU cost against error: early depth, draw order, the quality knob
+
+`bench/bench_gpu_cost.py` renders each scene with the CPU reference exactly as the preview's shader
+draws it and counts what a GPU would spend (`core.render_boxes(...).cost`, cpp `RenderCost`): a
+fragment is one box's face at one pixel centre; SDF evaluations are march steps plus the 4 normal
+taps of a hit; per covered pixel = per pixel inside at least one box's silhouette. *today*: file
+order, the depth test after the march (an undeclared `gl_FragDepth` write turns early depth
+testing off). *early depth*: the face's depth tested before the march (what a declared
+`depth_greater` keeps). *octant order*: the preview's index orders (boxes sorted along the view
+octant's diagonal); *front to back*: sorted by distance to the eye. *quality q*: the knob of
+docs/PREVIEW.md. Error against *today*: pixels changed (coverage differs or a colour channel
+moves more than 1/255) and pixels whose coverage changed, as shares of the pixels covered in
+either image; depth error where both hit, in scene units (chain links are 0.46 long). 480 x 480
+px, max_steps 64, epsilon 1e-3.
+
+{measured_table()}
+
+Early depth and the draw order change no pixel: the same fragment wins every pixel, only hidden
+marches are skipped. How much they save is how many boxes overlap on screen: 1.05x in the sparse
+cloud, 2.9x down the chain's stacked turns, 6.8x through the pile, 34x for a million boxes. The
+quality knob then trades exactness for the rest: its pixel-sized hit distance moves hits on
+features under a few pixels across (thin link wire, small spheres), and most of its changed pixels
+are shading, not coverage.
+"""
+
+
 def main():
     from common import table
 
@@ -148,8 +187,7 @@ def main():
     for name, scene in scenes_to_measure(args.size, args.far_boxes).items():
         rows += rows_for(name, scene, args.size, qualities)
     print(f"{args.size} x {args.size} px, max_steps 64, epsilon 1e-3; per covered pixel (inside some box's silhouette)")
-    print(table(["scene", "technique", "fragments/px", "marched/px", "SDF evals/px", "saving", "hidden evals",
-                 "one-tap fragments", "pixels changed", "coverage changed", "depth err p99", "depth err max", "CPU ms"], rows))
+    print(table(HEADERS, rows))
 
 
 if __name__ == "__main__":
