@@ -2,7 +2,8 @@
 
 The scenes of bench_gpu_cost.py that fit a preview mesh (chain down the arm, pile, cloud), baked
 and drawn by the preview's own draw_object into an offscreen buffer, timed from clear to a 1-pixel
-read-back (best of --repeats frames). Rows:
+read-back (best of REPEATS frames, wall time and the process's CPU time over all of llvmpipe's
+threads, which a busy machine disturbs less). Rows:
 
 * today: depth written undeclared (create-info depth_write ANY), boxes in mesh order, quality 1;
 * depth_greater: depth_write GREATER (Blender 4+ only: 3.4 has no declaration, so the row repeats
@@ -17,6 +18,7 @@ pixels covered in either image.
     blender -b --factory-startup --python bench/bench_preview_cost.py   # Debian's Blender 3.4
 """
 import sys
+import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -79,6 +81,7 @@ def frame_rows(bpy, name, scene):
 
     # Round robin over the configurations, best of REPEATS each, so a busy machine slows them alike.
     best = {config: float("inf") for config in CONFIGS}
+    best_cpu = dict(best)
     images = {}
     for config in CONFIGS:
         use(config)
@@ -87,13 +90,16 @@ def frame_rows(bpy, name, scene):
     for _ in range(REPEATS):
         for config in CONFIGS:
             use(config)
+            cpu = time.process_time()
             best[config] = min(best[config], best_of(1, frame))
+            best_cpu[config] = min(best_cpu[config], time.process_time() - cpu)
     today = images[CONFIGS[0]]
     rows = []
     for config in CONFIGS:
         covered = (today[..., 3] > 0) | (images[config][..., 3] > 0)
         changed = (np.abs(images[config] - today).max(-1) > 1 / 255) & covered
         rows.append([name, config[0], f"{best[config] * 1e3:.0f}", f"{best[CONFIGS[0]] / best[config]:.2f}x",
+                     f"{best_cpu[config] * 1e3:.0f}", f"{best_cpu[CONFIGS[0]] / best_cpu[config]:.2f}x",
                      f"{100 * changed.sum() / max(covered.sum(), 1):.2f}%"])
     shader.DEPTH_WRITE, draw.FRONT_TO_BACK = "GREATER", True
     bpy.data.objects.remove(ob)
@@ -115,7 +121,7 @@ def main():
     made = scenes_to_measure(SIZE, 8)
     rows = [row for name in SCENES for row in frame_rows(bpy, name, made[name])]
     print(f"Blender {bpy.app.version_string}, {gpu.platform.renderer_get()}, {SIZE} x {SIZE} px, best of {REPEATS}")
-    print(table(["scene", "preview", "frame ms", "speed-up", "pixels changed"], rows))
+    print(table(["scene", "preview", "frame ms", "speed-up", "CPU ms", "CPU speed-up", "pixels changed"], rows))
     sys.stdout.flush()
 
 
