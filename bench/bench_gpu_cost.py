@@ -106,8 +106,11 @@ def image_error(result, reference):
 def rows_for(name, scene, size, qualities):
     origins, rotations, half, sdf, (to_clip, to_view, eye) = scene
     quaternions = matrix_quaternions(rotations).astype(np.float32)
-    render = lambda **plan: core.render_boxes(origins, quaternions, half, to_clip, to_view, size, size, sdf=sdf,  # noqa: E731
-                                              max_steps=64, epsilon=1e-3, **plan)
+
+    def render(**plan):
+        return core.render_boxes(origins, quaternions, half, to_clip, to_view, size, size, sdf=sdf, max_steps=64,
+                                 epsilon=1e-3, **plan)
+
     sorted_order = core.front_to_back(origins, eye)
     plans = [("today", {}), ("early depth", {"early_depth": True}),
              ("early depth + octant order", {"early_depth": True, "order": octant_order(origins, eye, to_view)}),
@@ -141,7 +144,8 @@ HEADERS = ["scene", "technique", "fragments/px", "marched/px", "SDF evals/px", "
 def measured_table(size=480, far_boxes=1_000_000, qualities=(1.0, 0.9, 0.75, 0.5, 0.25)):
     from common import table
 
-    rows = [row for name, scene in scenes_to_measure(size, far_boxes).items() for row in rows_for(name, scene, size, qualities)]
+    rows = [row for name, scene in scenes_to_measure(size, far_boxes).items()
+            for row in rows_for(name, scene, size, qualities)]
     return table(HEADERS, rows)
 
 

@@ -160,8 +160,9 @@ def glm_library() -> str:
     body = to_glm("\n".join(functions.values()), set(functions))
     usings = "".join(f"using glm::{v};\n" for v in ("vec2", "vec3", "vec4") if re.search(rf"\b{v}\b", body))
     return (f"// {GENERATED_BY} from shaders/glsl/sdf.glsl, raymarch.glsl (bm_box_span,\n"
-            f"// bm_normal_tap, bm_quality, bm_pixel_size, bm_step_limit) and preview.frag.glsl (bm_shade): edit those, not this file. The shaders'\n"
-            f"// functions that do not call map(), in GLM, so the CPU reference evaluates what the GPU does.\n"
+            f"// bm_normal_tap, bm_quality, bm_pixel_size, bm_step_limit) and preview.frag.glsl (bm_shade):\n"
+            f"// edit those, not this file. The shaders' functions that do not call map(), in GLM, so the\n"
+            f"// CPU reference evaluates what the GPU does.\n"
             f"#pragma once\n\n#include <glm/glm.hpp>\n\nnamespace boxmarch::shader {{\n\n{usings}\n{body}\n"
             f"}}  // namespace boxmarch::shader\n")
 

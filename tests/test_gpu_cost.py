@@ -172,9 +172,11 @@ _CONSERVATIVE_DEPTH_JOB = """function () {
     gl.compileShader(s);
     return gl.getShaderParameter(s, gl.COMPILE_STATUS) ? 'ok' : gl.getShaderInfoLog(s);
   }
+  var extension_line = '#extension GL_EXT_conservative_depth : enable\\n';
+  var precision = 'precision highp float;\\n';
   return {extension: !!extension,
-          first: compile('#version 300 es\\n#extension GL_EXT_conservative_depth : enable\\nprecision highp float;\\n' + body),
-          after_precision: compile('#version 300 es\\nprecision highp float;\\n#extension GL_EXT_conservative_depth : enable\\n' + body)};
+          first: compile('#version 300 es\\n' + extension_line + precision + body),
+          after_precision: compile('#version 300 es\\n' + precision + extension_line + body)};
 }"""
 
 
