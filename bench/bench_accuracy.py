@@ -42,6 +42,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 from boxmarch import core, scenes  # noqa: E402
 from common import best_of, reset_peak_rss, rss_bytes, table  # noqa: E402
+import bench_gpu_cost  # noqa: E402
 import bench_skinning  # noqa: E402
 
 DOCS = pathlib.Path(__file__).resolve().parents[1] / "docs"
@@ -639,6 +640,7 @@ Fitted log-log slopes over 10,000..{counts[-1]:,} boxes (1.0 is linear):
         [[t, *(f"{slopes[t][key]:.2f}" for key in ("cpu", "wall", "memory"))] for t in TOOLS])}
 """
     page += bench_skinning.accuracy_section()  # its plot: scripts/skinning_accuracy_plot.py
+    page += bench_gpu_cost.accuracy_section()
     (out / "ACCURACY.md").write_text(page)
     print(page)
 

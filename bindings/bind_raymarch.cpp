@@ -74,7 +74,8 @@ void bind_raymarch(py::module_& m) {
           [](const py::object& origins, const py::object& quaternions, const py::object& half_extents,
              const py::object& object_to_clip, const py::object& object_to_view, const py::object& base_color,
              const py::object& rgba, const py::object& depth, const py::object& normals, const py::object& steps,
-             int sdf, int max_steps, float epsilon, float relaxation, float max_distance, int threads) {
+             int sdf, int max_steps, float epsilon, float relaxation, float max_distance, int threads,
+             const py::object& order, bool early_depth, float quality) {
               auto c = checked<float>(origins, "origins", -1, 3);
               auto q = checked<float>(quaternions, "quaternions", c.shape(0), 4);
               auto h = checked<float>(half_extents, "half_extents", c.shape(0), 3);
@@ -103,14 +104,37 @@ void bind_raymarch(py::module_& m) {
               images.depth = d.mutable_data();
               images.normals = normals.is_none() ? nullptr : nrm.mutable_data();
               images.steps = steps.is_none() ? nullptr : st.mutable_data();
-              py::gil_scoped_release release;
-              render_boxes(c.data(), q.data(), h.data(), size_t(c.shape(0)), view, o, images);
+              py::array_t<uint32_t> draw_order;
+              RenderCost cost;
+              RenderPlan plan;
+              if (!order.is_none()) {
+                  draw_order = checked<uint32_t>(order, "order", c.shape(0), 0);
+                  plan.order = draw_order.data();
+              }
+              plan.early_depth = early_depth;
+              plan.quality = quality;
+              plan.cost = &cost;
+              {
+                  py::gil_scoped_release release;
+                  render_boxes(c.data(), q.data(), h.data(), size_t(c.shape(0)), view, o, images, plan);
+              }
+              py::dict counts;
+              counts["fragments"] = cost.fragments;
+              counts["marched_fragments"] = cost.marched_fragments;
+              counts["lod_fragments"] = cost.lod_fragments;
+              counts["sdf_evaluations"] = cost.sdf_evaluations;
+              counts["hidden_fragments"] = cost.hidden_fragments;
+              counts["hidden_evaluations"] = cost.hidden_evaluations;
+              counts["covered_pixels"] = cost.covered_pixels;
+              return counts;
           },
           py::arg("origins"), py::arg("quaternions"), py::arg("half_extents"), py::arg("object_to_clip"),
           py::arg("object_to_view"), py::arg("base_color"), py::arg("rgba"), py::arg("depth"), py::arg("normals"),
           py::arg("steps"), py::kw_only(), py::arg("sdf"), py::arg("max_steps"), py::arg("epsilon"),
-          py::arg("relaxation"), py::arg("max_distance"), py::arg("threads") = 0,
-          "Raymarch boxes into caller-owned images (rgba (H*W, 4), depth (H, W), normals (H*W, 3), steps (H*W,)); "
+          py::arg("relaxation"), py::arg("max_distance"), py::arg("threads") = 0, py::arg("order") = py::none(),
+          py::arg("early_depth") = false, py::arg("quality") = 1.0f,
+          "Raymarch boxes into caller-owned images (rgba (H*W, 4), depth (H, W), normals (H*W, 3), steps (H*W,)) "
+          "in draw order `order` (None: as given); returns the frame's cost counts (RenderCost); "
           "see boxmarch.core.render_boxes.");
 
     m.def("sdf_distance",

@@ -157,13 +157,15 @@ def hlsl_file(glsl_name: str, guard: str) -> str:
 def glm_library() -> str:
     raymarch = top_level_functions(glsl("raymarch.glsl"))
     functions = {**top_level_functions(glsl("sdf.glsl")), "bm_box_span": raymarch["bm_box_span"],
-                 "bm_normal_tap": raymarch["bm_normal_tap"],
+                 "bm_normal_tap": raymarch["bm_normal_tap"], "bm_quality": raymarch["bm_quality"],
+                 "bm_pixel_size": raymarch["bm_pixel_size"], "bm_step_limit": raymarch["bm_step_limit"],
                  "bm_shade": top_level_functions(glsl("preview.frag.glsl"))["bm_shade"]}
     body = to_glm("\n".join(functions.values()), set(functions))
     usings = "".join(f"using glm::{v};\n" for v in ("vec2", "vec3", "vec4") if re.search(rf"\b{v}\b", body))
     return (f"// {GENERATED_BY} from shaders/glsl/sdf.glsl, raymarch.glsl (bm_box_span,\n"
-            f"// bm_normal_tap) and preview.frag.glsl (bm_shade): edit those, not this file. The shaders'\n"
-            f"// functions that do not call map(), in GLM, so the CPU reference evaluates what the GPU does.\n"
+            f"// bm_normal_tap, bm_quality, bm_pixel_size, bm_step_limit) and preview.frag.glsl (bm_shade):\n"
+            f"// edit those, not this file. The shaders' functions that do not call map(), in GLM, so the\n"
+            f"// CPU reference evaluates what the GPU does.\n"
             f"#pragma once\n\n#include <glm/glm.hpp>\n\nnamespace boxmarch::shader {{\n\n{usings}\n{body}\n"
             f"}}  // namespace boxmarch::shader\n")
 

@@ -83,7 +83,8 @@ def draw(programs, attributes, count, camera):
                 "unity_MatrixVP": vp.T.ravel().tolist(), "_WorldSpaceCameraPos": list(eye),
                 "_WorldSpaceLightPos0": [0.0, 1.0, 0.0, 0.0], "_Color": [1.0, 1.0, 1.0, 1.0],
                 "_UVChannels": [1.0, 2.0, 0.0, 0.0], "_HalfExtents": [0.0, 0.0, 0.0, 0.0], "_MaxSteps": 256,
-                "_Epsilon": 1e-4, "_Relaxation": 1.0, "_MaxDistance": 1000.0}
+                "_Epsilon": 1e-4, "_Relaxation": 1.0, "_MaxDistance": 1000.0, "_Quality": 1.0,
+                "_ScreenParams": [float(W), float(H), 1.0 + 1.0 / W, 1.0 + 1.0 / H]}
     pixels = hlsl_webgl.render(programs["vert"], programs["frag"], attributes, uniforms, count, W, H)
     return Shot(pixels, view, ndc_to_pixels(W, H) @ vp)
 

@@ -39,16 +39,18 @@ def reference(r, sdf, view=None, projection=None, shift=0.0):
                              base_color=r["color"][:3])
 
 
-def reference_from_layers(r, sdf):
+def reference_from_layers(r, sdf, view=None, projection=None, size=None, quality=1.0):
     """The CPU reference fed with the baked layers themselves: the presets that are not symmetric
     under axis swaps depend on the frame the bake chose."""
-    height, width = r["BOX_SHADED_depth"].shape
-    model, view, projection = r["matrix_world"], r["view"], r["projection"]
+    height, width = r["BOX_SHADED_depth"].shape if size is None else size
+    model = r["matrix_world"]
+    view = r["view"] if view is None else view
+    projection = r["projection"] if projection is None else projection
     positions = r["layer_positions"]
     submesh_of_vertex = np.repeat(np.arange(len(positions) // 8), 8)  # 8 vertices per box, in order
     return core.render_baked_mesh(positions, r["layer_offsets"], r["layer_corner_verts"],
                                   r["layer_corner_quaternions"], submesh_of_vertex, projection @ view @ model,
-                                  view @ model, width, height, sdf=sdf, base_color=r["color"][:3])
+                                  view @ model, width, height, sdf=sdf, base_color=r["color"][:3], quality=quality)
 
 
 @pytest.mark.parametrize("sdf", core.SDF_PRESETS)
@@ -136,6 +138,21 @@ def view_distance(depth, projection):
     """Distance along the view axis of window depths (perspective projection)."""
     ndc = 2.0 * depth.astype(np.float64) - 1.0
     return projection[2, 3] / (ndc + projection[2, 2])
+
+
+def test_quality_knob_matches_cpu_reference(rendered):
+    """The preview's quality knob (hit distance, step limit, one tap) is the CPU reference's:
+    TORUS at quality 0.05 on 40 x 30 px; the full-quality reference must differ more."""
+    depth = rendered["QUALITY_depth"]
+    low = reference_from_layers(rendered, "TORUS", rendered["quality_view"], rendered["quality_projection"],
+                                size=depth.shape, quality=0.05)
+    assert low.cost["lod_fragments"] > 0 and (low.depth < 1.0).mean() > 0.1
+    coverage, depth_error = agreement(depth, low)
+    assert coverage >= 0.99 and depth_error <= 2e-6, (coverage, depth_error)
+    full = reference_from_layers(rendered, "TORUS", rendered["quality_view"], rendered["quality_projection"],
+                                 size=depth.shape)
+    full_coverage, full_depth = agreement(depth, full)
+    assert full_coverage < coverage or full_depth > 1e-4, (full_coverage, full_depth)
 
 
 def test_camera_inside_a_box(rendered):

@@ -20,8 +20,10 @@ def test_settings_contract(blender):
     assert settings.preview is False and settings.sdf == "BOX"
     items = {item.identifier for item in settings.bl_rna.properties["sdf"].enum_items}
     assert {"BOX", "SPHERE", "USER"} <= items
-    for name in ("max_steps", "epsilon", "relaxation", "max_distance", "show_outline", "user_text"):
+    for name in ("max_steps", "epsilon", "relaxation", "max_distance", "quality", "show_outline", "user_text"):
         assert name in settings.bl_rna.properties
+    quality = settings.bl_rna.properties["quality"]
+    assert settings.quality == 1.0 and quality.hard_max == 1.0 and quality.hard_min > 0.0  # 1: the full march
     ob.display_type = "SOLID"
     settings.preview = True
     assert ob.display_type == "WIRE"  # the solid box would hide the raymarched shape inside it

@@ -178,12 +178,15 @@ class MarchResult:
 class RenderResult:
     """Images with row 0 at the TOP: ``rgba`` (H, W, 4) float32, ``depth`` (H, W) window depth (0
     near plane, 1 far plane and background), ``normals`` (H, W, 3) object-space unit normals
-    (zero where nothing was hit), ``steps`` (H, W) SDF evaluations summed over boxes."""
+    (zero where nothing was hit), ``steps`` (H, W) march steps summed over boxes; ``cost`` what a
+    GPU spends on the frame (cpp RenderCost: fragments, marched_fragments, lod_fragments,
+    sdf_evaluations, hidden_fragments, hidden_evaluations, covered_pixels)."""
 
     rgba: np.ndarray
     depth: np.ndarray
     normals: np.ndarray
     steps: np.ndarray
+    cost: dict
 
     @property
     def coverage(self) -> np.ndarray:
@@ -276,7 +279,7 @@ def boxes_from_bake(positions, offsets, vertex_quaternions, submesh_of_vertex):
 def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_view, width, height, *,
                  base_color=(0.8, 0.8, 0.8), sdf="BOX", max_steps=64, epsilon=1e-3, relaxation=1.0,
                  max_distance=1e6, background=(0.0, 0.0, 0.0, 0.0), depth=None, rgba=None,
-                 threads=0) -> RenderResult:
+                 threads=0, order=None, early_depth=False, quality=1.0) -> RenderResult:
     """Render boxes as the viewport preview does (docs/PREVIEW.md), on the CPU.
 
     Boxes: ``origins`` (S, 3), ``quaternions`` (S, 4), ``half_extents`` (S, 3) in object space
@@ -284,7 +287,10 @@ def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_v
     ``object_to_view`` = view @ object matrix (4x4, row-major NumPy as in mathutils). One sample
     at each pixel centre. ``depth``/``rgba`` (optional (H, W) / (H, W, 4) float32) are images to
     composite into (depth-tested, updated in place); otherwise depth starts at 1.0 and rgba at
-    ``background``."""
+    ``background``. ``order``: the boxes' draw order (e.g. :func:`front_to_back`), each index once;
+    ``early_depth``: fragments whose rasterised depth fails the depth test do not march (what a
+    declared depth_greater keeps on a GPU); ``quality`` in (0, 1]: the preview's quality knob
+    (docs/PREVIEW.md), 1 = every fragment marched in full."""
     width, height = int(width), int(height)
     if width <= 0 or height <= 0:
         raise ValueError(f"width and height must be positive, got {width} x {height}")
@@ -303,14 +309,30 @@ def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_v
     _check_finite(origins=origins, quaternions=quaternions, half_extents=half_extents)
     normals = np.zeros((height, width, 3), np.float32)
     steps = np.zeros((height, width), np.int32)
-    _core.render_boxes(origins, quaternions, half_extents,
+    if order is not None:
+        order = np.asarray(order)
+        if order.shape != (n,) or order.dtype.kind not in "iu" or (n and (order.min() < 0 or order.max() >= n)):
+            raise ValueError(f"order must be {n} box indices 0..{n - 1}")
+        order = order.astype(np.uint32)
+    cost = _core.render_boxes(origins, quaternions, half_extents,
                        np.ascontiguousarray(object_to_clip, np.float32), np.ascontiguousarray(object_to_view, np.float32),
                        np.ascontiguousarray(base_color, np.float32), rgba.reshape(-1, 4), depth,
                        normals.reshape(-1, 3), steps.reshape(-1), sdf=_preset_index(sdf),
                        max_steps=checked_int(max_steps, "max_steps", -2**31),
                        epsilon=float(epsilon), relaxation=float(relaxation), max_distance=float(max_distance),
-                       threads=checked_int(threads, "threads", -2**31))
-    return RenderResult(rgba=rgba, depth=depth, normals=normals, steps=steps)
+                       threads=checked_int(threads, "threads", -2**31), order=order,
+                       early_depth=bool(early_depth), quality=float(quality))
+    return RenderResult(rgba=rgba, depth=depth, normals=normals, steps=steps, cost=cost)
+
+
+def front_to_back(origins, eye) -> np.ndarray:
+    """Draw order (uint32) of boxes centred at ``origins`` (S, 3), nearest first, for ``eye`` =
+    (x, y, z, 1) a camera position or (x, y, z, 0) a view direction (orthographic), both in the
+    boxes' space: the order early depth testing saves the most with."""
+    origins = np.asarray(origins, np.float64).reshape(-1, 3)
+    eye = np.asarray(eye, np.float64).reshape(4)
+    key = (np.einsum("ij,ij->i", origins - eye[:3], origins - eye[:3]) if eye[3] > 0.5 else origins @ eye[:3])
+    return np.argsort(key, kind="stable").astype(np.uint32)
 
 
 def render_baked_mesh(positions, offsets, corner_verts, corner_quaternions, submesh_of_vertex, object_to_clip,

@@ -41,6 +41,10 @@ class BoxmarchObjectSettings(bpy.types.PropertyGroup):
                               description="Each step advances this times the distance (below 1 is safer for inexact SDFs)")
     max_distance: FloatProperty(name="Max Distance", default=1000.0, min=1e-4, update=_redraw,
                                 description="Longest march inside a box (box-local units)")
+    quality: FloatProperty(name="Quality", default=1.0, min=0.05, max=1.0, update=_redraw,
+                           description="One knob for cost against error (docs/PREVIEW.md): below 1 a hit may stop "
+                                       "a share of a pixel from the surface, small boxes get fewer steps and boxes "
+                                       "under a few pixels take one SDF tap")
     show_outline: BoolProperty(name="Box Outline", default=False, update=_redraw,
                                description="Draw the mesh edges over the preview")
     engine: EnumProperty(

@@ -81,6 +81,7 @@ class BOXMARCH_PT_preview(bpy.types.Panel):
             row = layout.row(align=True)
             row.prop_search(settings, "user_text", bpy.data, "texts")
             row.operator("boxmarch.new_sdf_text", text="", icon="FILE_NEW")
+        layout.prop(settings, "quality", slider=True)
         col = layout.column(align=True)
         col.prop(settings, "max_steps")
         col.prop(settings, "epsilon")

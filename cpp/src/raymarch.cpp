@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -68,6 +69,12 @@ March bm_march(SdfPreset kind, vec3 ro, vec3 rd, vec3 h, float t_end, const Marc
     return {false, t, o.max_steps};
 }
 
+// raymarch.glsl: bm_one_tap (one map() where the ray passes nearest the box's centre).
+March bm_one_tap(SdfPreset kind, vec3 ro, vec3 rd, vec3 h, float t_end, float footprint) {
+    const float t = std::clamp(-glm::dot(ro, rd), 0.0f, t_end);
+    return {sdf_preset(kind, ro + rd * t, h) < 0.5f * footprint, t, 1};
+}
+
 // raymarch.glsl: bm_normal (four tetrahedral taps).
 vec3 bm_normal(SdfPreset kind, vec3 p, vec3 h, float e) {
     const vec3 a(1.0f, -1.0f, -1.0f), b(-1.0f, -1.0f, 1.0f), c(-1.0f, 1.0f, -1.0f), d(1.0f, 1.0f, 1.0f);
@@ -75,6 +82,82 @@ vec3 bm_normal(SdfPreset kind, vec3 p, vec3 h, float e) {
              c * sdf_preset(kind, p + c * e, h) + d * sdf_preset(kind, p + d * e, h);
     float len = glm::length(n);
     return len > 0.0f ? n / len : vec3(0.0f);
+}
+
+void check_plan(const RenderPlan& plan, size_t box_count) {
+    if (!(plan.quality > 0.0f && plan.quality <= 1.0f))
+        throw std::invalid_argument("quality must be in (0, 1], got " + std::to_string(plan.quality));
+    if (!plan.order) return;
+    std::vector<uint8_t> seen(box_count, 0);
+    for (size_t k = 0; k < box_count; ++k) {
+        const uint32_t b = plan.order[k];
+        if (b >= box_count || seen[b])
+            throw std::invalid_argument("order must list every box index 0.." + std::to_string(box_count) +
+                                        " - 1 once; entry " + std::to_string(k) + " is " + std::to_string(b));
+        seen[b] = 1;
+    }
+}
+
+// The pixel rectangle of every box (x0, y0, x1, y1 inclusive, rows from the top): the rasteriser's
+// coverage, conservatively; the slab test per pixel decides exactly.
+std::vector<glm::ivec4> pixel_rects(const float* origins, const float* quaternions, const float* half_extents,
+                                    size_t box_count, const glm::mat4& to_clip, int W, int H) {
+    std::vector<glm::ivec4> rects(box_count);
+    for (size_t b = 0; b < box_count; ++b) {
+        const glm::quat q(quaternions[4 * b + 3], quaternions[4 * b], quaternions[4 * b + 1], quaternions[4 * b + 2]);
+        const vec3 c = glm::make_vec3(origins + 3 * b), h = glm::make_vec3(half_extents + 3 * b);
+        // Clip the box against the near plane (z + w >= 0 in GL clip space): the pixel rectangle
+        // of what lies in front is the box of the front corners and the edge crossings.
+        vec4 clip[8];
+        float front[8];
+        for (int k = 0; k < 8; ++k) {
+            vec3 corner(k & 1 ? h.x : -h.x, k & 2 ? h.y : -h.y, k & 4 ? h.z : -h.z);
+            clip[k] = to_clip * vec4(c + q * corner, 1.0f);
+            front[k] = clip[k].z + clip[k].w;
+        }
+        float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
+        auto include = [&](vec4 p) {
+            float sx = (p.x / p.w * 0.5f + 0.5f) * float(W);
+            float sy = (0.5f - p.y / p.w * 0.5f) * float(H);
+            x0 = std::min(x0, sx); x1 = std::max(x1, sx); y0 = std::min(y0, sy); y1 = std::max(y1, sy);
+        };
+        for (int k = 0; k < 8; ++k) {
+            if (front[k] >= 0.0f) include(clip[k]);
+            for (int bit = 1; bit < 8; bit <<= 1) {  // the three edges from k to k | bit
+                const int l = k | bit;
+                if (l == k || (front[k] >= 0.0f) == (front[l] >= 0.0f)) continue;
+                include(clip[k] + (clip[l] - clip[k]) * (front[k] / (front[k] - front[l])));
+            }
+        }
+        // first and last pixel centre inside [lo, hi], clamped before the cast (far-off boxes)
+        auto first = [](float lo, int n) { return int(std::ceil(std::clamp(lo - 0.5f, -1.0f, float(n)))); };
+        auto last = [](float hi, int n) { return int(std::floor(std::clamp(hi - 0.5f, -1.0f, float(n)))); };
+        if (!(x0 <= x1 && y0 <= y1)) rects[b] = glm::ivec4(0, 0, -1, -1);  // wholly behind the near plane
+        else rects[b] = glm::ivec4(std::max(first(x0, W) - 1, 0), std::max(first(y0, H) - 1, 0),
+                                   std::min(last(x1, W) + 1, W - 1), std::min(last(y1, H) + 1, H - 1));
+    }
+    return rects;
+}
+
+// The counts of one band of rows, added to the frame's: shown[pixel] = map() calls of the fragment
+// the pixel shows (-1: none), covered[pixel] = inside some silhouette.
+void add_band_cost(RenderCost& band, const std::vector<int32_t>& shown, const std::vector<uint8_t>& covered,
+                   RenderCost& frame, std::mutex& lock) {
+    uint64_t shown_fragments = 0, shown_evaluations = 0;
+    for (size_t i = 0; i < shown.size(); ++i) {
+        band.covered_pixels += covered[i];
+        if (shown[i] >= 0) ++shown_fragments, shown_evaluations += uint64_t(shown[i]);
+    }
+    band.hidden_fragments = band.marched_fragments - shown_fragments;
+    band.hidden_evaluations = band.sdf_evaluations - shown_evaluations;
+    std::lock_guard<std::mutex> guard(lock);
+    frame.fragments += band.fragments;
+    frame.marched_fragments += band.marched_fragments;
+    frame.lod_fragments += band.lod_fragments;
+    frame.sdf_evaluations += band.sdf_evaluations;
+    frame.hidden_fragments += band.hidden_fragments;
+    frame.hidden_evaluations += band.hidden_evaluations;
+    frame.covered_pixels += band.covered_pixels;
 }
 
 template <class Fn>
@@ -119,8 +202,9 @@ void raymarch(const float* origins, const float* directions, const float* half_e
 }
 
 void render_boxes(const float* origins, const float* quaternions, const float* half_extents, size_t box_count,
-                  const RenderView& view, const MarchOptions& o, const RenderImages& images) {
+                  const RenderView& view, const MarchOptions& o, const RenderImages& images, const RenderPlan& plan) {
     check_options(o);
+    check_plan(plan, box_count);
     if (!view.object_to_clip || !view.object_to_view || !images.rgba || !images.depth)
         throw std::invalid_argument("render_boxes needs both matrices, rgba and depth");
     const int W = int(view.width), H = int(view.height);
@@ -128,51 +212,28 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
     const glm::dmat4 from_clip = glm::inverse(glm::dmat4(to_clip));
     const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(glm::make_mat4(view.object_to_view))));
     const vec3 base = glm::make_vec3(view.base_color);
-
-    // Pixel rectangle of every box (x0, y0, x1, y1 inclusive, rows from the top): the rasteriser's
-    // coverage, conservatively; the slab test per pixel decides exactly.
-    std::vector<glm::ivec4> rects(box_count);
-    for (size_t b = 0; b < box_count; ++b) {
-        const glm::quat q(quaternions[4 * b + 3], quaternions[4 * b], quaternions[4 * b + 1], quaternions[4 * b + 2]);
-        const vec3 c = glm::make_vec3(origins + 3 * b), h = glm::make_vec3(half_extents + 3 * b);
-        // Clip the box against the near plane (z + w >= 0 in GL clip space): the pixel rectangle
-        // of what lies in front is the box of the front corners and the edge crossings.
-        vec4 clip[8];
-        float front[8];
-        for (int k = 0; k < 8; ++k) {
-            vec3 corner(k & 1 ? h.x : -h.x, k & 2 ? h.y : -h.y, k & 4 ? h.z : -h.z);
-            clip[k] = to_clip * vec4(c + q * corner, 1.0f);
-            front[k] = clip[k].z + clip[k].w;
-        }
-        float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
-        auto include = [&](vec4 p) {
-            float sx = (p.x / p.w * 0.5f + 0.5f) * float(W);
-            float sy = (0.5f - p.y / p.w * 0.5f) * float(H);
-            x0 = std::min(x0, sx); x1 = std::max(x1, sx); y0 = std::min(y0, sy); y1 = std::max(y1, sy);
-        };
-        for (int k = 0; k < 8; ++k) {
-            if (front[k] >= 0.0f) include(clip[k]);
-            for (int bit = 1; bit < 8; bit <<= 1) {  // the three edges from k to k | bit
-                const int l = k | bit;
-                if (l == k || (front[k] >= 0.0f) == (front[l] >= 0.0f)) continue;
-                include(clip[k] + (clip[l] - clip[k]) * (front[k] / (front[k] - front[l])));
-            }
-        }
-        // first and last pixel centre inside [lo, hi], clamped before the cast (far-off boxes)
-        auto first = [](float lo, int n) { return int(std::ceil(std::clamp(lo - 0.5f, -1.0f, float(n)))); };
-        auto last = [](float hi, int n) { return int(std::floor(std::clamp(hi - 0.5f, -1.0f, float(n)))); };
-        if (!(x0 <= x1 && y0 <= y1)) rects[b] = glm::ivec4(0, 0, -1, -1);  // wholly behind the near plane
-        else rects[b] = glm::ivec4(std::max(first(x0, W) - 1, 0), std::max(first(y0, H) - 1, 0),
-                                   std::min(last(x1, W) + 1, W - 1), std::min(last(y1, H) + 1, H - 1));
-    }
+    const float row_y = glm::length(vec3(to_clip[0][1], to_clip[1][1], to_clip[2][1]));
+    const vec3 quality = shader::bm_quality(plan.quality);
+    const std::vector<glm::ivec4> rects = pixel_rects(origins, quaternions, half_extents, box_count, to_clip, W, H);
+    RenderCost frame_cost;
+    std::mutex cost_lock;
 
     parallel_for(size_t(H), o.threads, [&](size_t row_begin, size_t row_end) {
-        for (size_t b = 0; b < box_count; ++b) {
+        RenderCost cost;
+        const size_t band_start = row_begin * size_t(W);
+        std::vector<int32_t> shown((row_end - row_begin) * size_t(W), -1);
+        std::vector<uint8_t> covered(shown.size(), 0);
+        for (size_t drawn = 0; drawn < box_count; ++drawn) {
+            const size_t b = plan.order ? plan.order[drawn] : drawn;
             const glm::ivec4 r = rects[b];
             if (r.y > int(row_end) - 1 || r.w < int(row_begin) || r.x > r.z) continue;
             const glm::quat q(quaternions[4 * b + 3], quaternions[4 * b], quaternions[4 * b + 1], quaternions[4 * b + 2]);
             const glm::quat iq = glm::conjugate(q);
             const vec3 c = glm::make_vec3(origins + 3 * b), h = glm::make_vec3(half_extents + 3 * b);
+            auto window_depth = [&](vec3 local) {
+                const vec4 clip = to_clip * vec4(c + q * local, 1.0f);
+                return clip.z / clip.w * 0.5f + 0.5f;
+            };
             for (int y = std::max(r.y, int(row_begin)); y <= std::min(r.w, int(row_end) - 1); ++y) {
                 for (int x = r.x; x <= r.z; ++x) {
                     const double nx = (x + 0.5) / W * 2.0 - 1.0, ny = 1.0 - (y + 0.5) / H * 2.0;
@@ -184,18 +245,35 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                     vec2 span = shader::bm_box_span(ro, rd, h);
                     float t0 = std::max(span.x, 0.0f);
                     if (span.y < t0) continue;
-                    vec3 start = ro + rd * t0;
-                    March m = bm_march(o.sdf, start, rd, h, std::min(span.y - t0, o.max_distance), o);
                     const size_t pix = size_t(y) * size_t(W) + size_t(x);
+                    ++cost.fragments;
+                    covered[pix - band_start] = 1;
+                    // The rasterised face: where the ray enters, or (the ray starting inside) the far side.
+                    const vec3 face = ro + rd * (span.x >= 0.0f ? span.x : span.y);
+                    const float face_depth = window_depth(face);
+                    if (plan.early_depth && !(face_depth >= 0.0f && face_depth < images.depth[pix])) continue;
+                    ++cost.marched_fragments;
+                    const float footprint = shader::bm_pixel_size((to_clip * vec4(c + q * face, 1.0f)).w, row_y, float(H));
+                    const float box_pixels = 2.0f * shader::max3(h) / footprint;
+                    MarchOptions fragment = o;
+                    fragment.epsilon = std::max(o.epsilon, quality.x * footprint);
+                    fragment.max_steps = int(shader::bm_step_limit(box_pixels, quality.y, float(o.max_steps)));
+                    vec3 start = ro + rd * t0;
+                    const float t_end = std::min(span.y - t0, o.max_distance);
+                    const bool one_tap = box_pixels < quality.z;
+                    cost.lod_fragments += one_tap;
+                    March m = one_tap ? bm_one_tap(o.sdf, start, rd, h, t_end, footprint)
+                                      : bm_march(o.sdf, start, rd, h, t_end, fragment);
+                    const int evaluations = m.steps + (m.hit ? 4 : 0);
+                    cost.sdf_evaluations += uint64_t(evaluations);
                     if (images.steps) images.steps[pix] += m.steps;
                     if (!m.hit) continue;
                     vec3 local_hit = start + rd * m.t;
-                    vec3 object_hit = c + q * local_hit;
-                    vec4 clip = to_clip * vec4(object_hit, 1.0f);
-                    float depth = clip.z / clip.w * 0.5f + 0.5f;
+                    float depth = std::max(window_depth(local_hit), face_depth);
                     if (!(depth >= 0.0f && depth < images.depth[pix])) continue;
-                    vec3 n_object = q * bm_normal(o.sdf, local_hit, h, shader::bm_normal_tap(o.epsilon, h));
+                    vec3 n_object = q * bm_normal(o.sdf, local_hit, h, shader::bm_normal_tap(fragment.epsilon, h));
                     vec3 color = shader::bm_shade(glm::normalize(normal_matrix * n_object), base);
+                    shown[pix - band_start] = evaluations;
                     images.depth[pix] = depth;
                     for (int k = 0; k < 3; ++k) images.rgba[4 * pix + k] = color[k];
                     images.rgba[4 * pix + 3] = 1.0f;
@@ -203,7 +281,9 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                 }
             }
         }
+        add_band_cost(cost, shown, covered, frame_cost, cost_lock);
     });
+    if (plan.cost) *plan.cost = frame_cost;
 }
 
 }  // namespace boxmarch

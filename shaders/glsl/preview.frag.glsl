@@ -7,7 +7,10 @@
 // frame: identity, or an export preset's orthonormal axis change); eye (object-space camera position with w = 1, or for
 // orthographic views the object-space view direction with w = 0); march (epsilon, relaxation,
 // max_distance, max_steps); base_color; mode.x (0 shaded, 1 object-space normal as colour,
-// 2 steps of every fragment in red with alpha 1, for Blender's ADDITIVE blend: src * alpha + dst).
+// 2 steps of every fragment in red with alpha 1, for Blender's ADDITIVE blend: src * alpha + dst);
+// quality (x: the quality knob of bm_quality, y: the viewport height in pixels).
+// The written depth is never nearer than the rasterised face's (clamped): the create-info
+// declares it (depth_write GREATER, Blender 4+), which keeps early depth testing on.
 // Mirrored by cpp/src/raymarch.cpp (render_boxes); bm_shade is translated into it by
 // shaders/generate.py.
 
@@ -52,10 +55,18 @@ void main()
     t_end = eye_distance;
   }
 
-  int max_steps = int(preview.march.w);
+  // The quality knob: a pixel's size at the rasterised face, the box's size on screen from it.
+  vec3 quality = bm_quality(preview.quality.x);
+  vec3 row_y = vec3(preview.object_to_clip[0][1], preview.object_to_clip[1][1], preview.object_to_clip[2][1]);
+  float footprint = bm_pixel_size(1.0 / gl_FragCoord.w, length(row_y), preview.quality.y);
+  float box_pixels = 2.0 * max3(box_half) / footprint;
+  float epsilon = max(preview.march.x, quality.x * footprint);
+  int max_steps = int(bm_step_limit(box_pixels, quality.y, preview.march.w));
   float t;
-  int steps;
-  bool hit = bm_march(ro, rd, min(t_end, preview.march.z), max_steps, preview.march.x, preview.march.y, t, steps);
+  int steps = 1;
+  bool hit = box_pixels < quality.z
+    ? bm_one_tap(ro, rd, min(t_end, preview.march.z), footprint, t)
+    : bm_march(ro, rd, min(t_end, preview.march.z), max_steps, epsilon, preview.march.y, t, steps);
   if (preview.mode.x == 2) {
     frag_color = vec4(float(steps), 0.0, 0.0, 1.0);
     return;
@@ -66,9 +77,9 @@ void main()
   vec3 local_hit = ro + rd * t;
   vec3 obj_hit = obj_pos + transpose(frame) * bm_from_local(local_hit + f, x, y, z);
   vec4 clip = preview.object_to_clip * vec4(obj_hit, 1.0);
-  gl_FragDepth = clip.z / clip.w * 0.5 + 0.5;
+  gl_FragDepth = max(clip.z / clip.w * 0.5 + 0.5, gl_FragCoord.z);
 
-  vec3 n_object = transpose(frame) * bm_from_local(bm_normal(local_hit, bm_normal_tap(preview.march.x, box_half)), x, y, z);
+  vec3 n_object = transpose(frame) * bm_from_local(bm_normal(local_hit, bm_normal_tap(epsilon, box_half)), x, y, z);
   if (preview.mode.x == 1) {
     frag_color = vec4(n_object * 0.5 + 0.5, 1.0);
   }

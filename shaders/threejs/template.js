@@ -44,7 +44,8 @@ function prepareBoxmarchGeometry(THREE, geometry) {
 }
 
 // options: map (GLSL body of float map(vec3 p), box-local; box_half and box_index are set),
-// color (THREE.Color), maxSteps, epsilon, skinning (true for a SkinnedMesh; read before r129).
+// color (THREE.Color), maxSteps, epsilon, quality (the quality knob, 0 < q <= 1, 1 = the full
+// march: shaders/glsl/raymarch.glsl bm_quality), skinning (true for a SkinnedMesh; read before r129).
 function createBoxmarchMaterial(THREE, options) {
   options = options || {};
   var map = options.map || 'return sd_round_box(p, box_half, 0.1 * min3(box_half));';
@@ -53,7 +54,8 @@ function createBoxmarchMaterial(THREE, options) {
     uniforms: {
       bmEye: { value: new THREE.Vector4(0, 0, 0, 1) },
       bmColor: { value: options.color || new THREE.Color(0.8, 0.8, 0.8) },
-      bmMarch: { value: new THREE.Vector4(options.epsilon || 1e-4, options.maxSteps || 96, 0, 0) }
+      bmMarch: { value: new THREE.Vector4(options.epsilon || 1e-4, options.maxSteps || 96, 0, 0) },
+      bmQuality: { value: new THREE.Vector2(options.quality || 1, 1) }  // x: the knob, y: viewport height (px)
     },
     vertexShader: BOXMARCH_DECODE + '\n' + BOXMARCH_VERTEX,
     fragmentShader: BOXMARCH_DECODE + '\n' + BOXMARCH_LIBRARY + '\nfloat box_index = 0.0;\nfloat map(vec3 p)\n{\n' + map + '\n}\n' + BOXMARCH_FRAGMENT,
@@ -73,7 +75,9 @@ function useBoxmarchMaterial(THREE, mesh, material) {
   mesh.material = material;
   var inverse = new THREE.Matrix4();
   var eye = new THREE.Vector3();
+  var size = new THREE.Vector2();
   mesh.onBeforeRender = function (renderer, scene, camera) {
+    material.uniforms.bmQuality.value.y = renderer.getDrawingBufferSize(size).y;
     inverse.getInverse ? inverse.getInverse(mesh.matrixWorld) : inverse.copy(mesh.matrixWorld).invert();
     if (camera.isOrthographicCamera) {
       camera.getWorldDirection(eye).transformDirection(inverse);
@@ -181,6 +185,7 @@ var BOXMARCH_FRAGMENT = [
   'uniform vec4 bmEye;',
   'uniform vec3 bmColor;',
   'uniform vec4 bmMarch;',
+  'uniform vec2 bmQuality;',
   BOXMARCH_VARYINGS,
   'void main() {',
   '  vec3 z = normalize(vAxisZ);',
@@ -201,14 +206,25 @@ var BOXMARCH_FRAGMENT = [
   '    ro -= rd * eye_distance;',
   '    t_end = eye_distance;',
   '  }',
+  // The quality knob (as the Blender preview applies it): a pixel's size at the face, the box's size on screen.
+  '  mat4 objectToClip = projectionMatrix * modelViewMatrix;',
+  '  vec3 knob = bm_quality(bmQuality.x);',
+  '  float footprint = bm_pixel_size(1.0 / gl_FragCoord.w, length(vec3(objectToClip[0][1], objectToClip[1][1], objectToClip[2][1])), bmQuality.y);',
+  '  float boxPixels = 2.0 * max3(box_half) / footprint;',
+  '  float epsilon = max(bmMarch.x, knob.x * footprint);',
   '  float t;',
-  '  int steps;',
-  '  if (!bm_march(ro, rd, t_end, int(bmMarch.y), bmMarch.x, 1.0, t, steps)) discard;',
+  '  int steps = 1;',
+  '  bool hit = boxPixels < knob.z ? bm_one_tap(ro, rd, t_end, footprint, t)',
+  '    : bm_march(ro, rd, t_end, int(bm_step_limit(boxPixels, knob.y, bmMarch.y)), epsilon, 1.0, t, steps);',
+  '  if (!hit) discard;',
   '  vec3 local_hit = ro + rd * t;',
   '  vec3 obj_hit = vObjPos + bm_from_local(local_hit + f, x, y, z);',
-  '  vec4 clip = projectionMatrix * modelViewMatrix * vec4(obj_hit, 1.0);',
-  '  gl_FragDepthEXT = 0.5 + 0.5 * clip.z / clip.w;',
-  '  vec3 n = normalize(normalMatrix * bm_from_local(bm_normal(local_hit, bm_normal_tap(bmMarch.x, box_half)), x, y, z));',
+  '  vec4 clip = objectToClip * vec4(obj_hit, 1.0);',
+  // Never nearer than the rasterised face. WebGL 2's EXT_conservative_depth could declare it
+  // (keeping early depth testing), but its #extension line must precede every other token and
+  // three.js's ShaderMaterial puts its precision statements first (docs/ENGINES.md).
+  '  gl_FragDepthEXT = max(0.5 + 0.5 * clip.z / clip.w, gl_FragCoord.z);',
+  '  vec3 n = normalize(normalMatrix * bm_from_local(bm_normal(local_hit, bm_normal_tap(epsilon, box_half)), x, y, z));',
   '  gl_FragColor = vec4(bmColor * (0.35 + 0.65 * max(n.z, 0.0)), 1.0);',
   '}'
 ].join('\n');

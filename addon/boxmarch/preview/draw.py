@@ -2,7 +2,7 @@
 overlay. Shared by the viewport draw handler and the offscreen render (``preview.render``)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 import bpy
@@ -28,6 +28,11 @@ _posed: dict = {}
 # that does not compile (its outline is drawn instead), a malformed frame property, an Armature
 # modifier the preview cannot follow.
 errors: dict = {}
+
+# Draw boxes front to back (one index order per view octant) so early depth testing skips the
+# marches of hidden boxes; False draws them in the mesh's order (bench/bench_preview_cost.py
+# compares the two).
+FRONT_TO_BACK = True
 
 # The shader inputs a pose changes: skinning moves positions, normals and tangents; every other
 # channel stays as baked.
@@ -87,12 +92,40 @@ def _vertex_buffer(inputs: dict):
 class _Drawn:
     """The GPU batches of one object's preview, and the CPU arrays its overlay and poses need."""
 
-    march: object                 # GPUBatch of the preview shader
+    moving: object                # GPUVertBuf of the POSE_INPUTS
+    static: object                # GPUVertBuf of the other inputs
+    triangles: Callable           # octant -> GPUIndexBuf, boxes front to back for views in it (None: mesh order)
     outline: object               # GPUBatch of the mesh edges (the same vertex buffers)
     positions: np.ndarray         # float32 (N, 3) as drawn
     offsets: np.ndarray           # float64 (N, 3) f, box-local
     frame: Callable               # () -> float64 (N, 3, 3) the frame the layout decodes to (unit columns)
     vectors: tuple | None = None  # the overlay's two line batches, made when first shown
+    marches: dict = field(default_factory=dict)  # octant -> GPUBatch of the preview shader
+
+    def march(self, octant: int | None):
+        """The batch of the preview shader drawing the boxes front to back for ``octant``."""
+        if octant not in self.marches:
+            batch = gpu.types.GPUBatch(type="TRIS", buf=self.moving, elem=self.triangles(octant))
+            batch.vertbuf_add(self.static)
+            self.marches[octant] = batch
+        return self.marches[octant]
+
+
+class _OctantTriangles:
+    """The triangle index buffer of each view octant (mesh_data.octant_triangles), made when first
+    drawn. Held apart from _Mesh so the drawings that share it make no reference cycle: GPU
+    buffers must be freed while Blender's GPU context lives, not by the collector at exit."""
+
+    def __init__(self, baked: mesh_data.BakedMesh):
+        self.baked = baked
+        self.buffers = {}
+
+    def __call__(self, octant: int | None):
+        """The buffer for ``octant``; None: the mesh's own triangle order."""
+        if octant not in self.buffers:
+            triangles = self.baked.triangles if octant is None else mesh_data.octant_triangles(self.baked, octant)
+            self.buffers[octant] = gpu.types.GPUIndexBuf(type="TRIS", seq=triangles)
+        return self.buffers[octant]
 
 
 @dataclass
@@ -102,9 +135,9 @@ class _Mesh:
     baked: mesh_data.BakedMesh
     inputs: dict                  # the shader inputs at rest (mesh_data.layout_inputs)
     static: object                # GPUVertBuf of the inputs not in POSE_INPUTS
-    triangles: object             # GPUIndexBuf
     edges: object                 # GPUIndexBuf
-    rest: _Drawn
+    triangles: _OctantTriangles
+    rest: _Drawn | None = None
 
 
 @dataclass
@@ -118,12 +151,11 @@ class _Posed:
     stale: bool = True
 
 
-def _batches(pose_inputs: dict, static, triangles, edges, positions, offsets, frame) -> _Drawn:
+def _batches(pose_inputs: dict, mesh: _Mesh, positions, offsets, frame) -> _Drawn:
     moving = _vertex_buffer(pose_inputs)
-    march = gpu.types.GPUBatch(type="TRIS", buf=moving, elem=triangles)
-    march.vertbuf_add(static)
-    outline = gpu.types.GPUBatch(type="LINES", buf=moving, elem=edges)
-    return _Drawn(march=march, outline=outline, positions=positions, offsets=offsets, frame=frame)
+    outline = gpu.types.GPUBatch(type="LINES", buf=moving, elem=mesh.edges)
+    return _Drawn(moving=moving, static=mesh.static, triangles=mesh.triangles, outline=outline,
+                  positions=positions, offsets=offsets, frame=frame)
 
 
 def _normalised(vectors):
@@ -137,12 +169,11 @@ def _mesh(mesh, layout) -> _Mesh:
         baked = mesh_data.read_baked(mesh)
         inputs = mesh_data.layout_inputs(layout, baked)
         static = _vertex_buffer({k: v for k, v in inputs.items() if k not in POSE_INPUTS})
-        triangles = gpu.types.GPUIndexBuf(type="TRIS", seq=baked.triangles)
         edges = gpu.types.GPUIndexBuf(type="LINES", seq=baked.edges)
-        offsets = mesh_data.box_data(baked).offsets
-        rest = _batches({k: v for k, v in inputs.items() if k in POSE_INPUTS}, static, triangles, edges,
-                        baked.positions, offsets, lambda: mesh_data.frame_axes(baked.quaternions))
-        _meshes[key] = _Mesh(baked=baked, inputs=inputs, static=static, triangles=triangles, edges=edges, rest=rest)
+        mesh = _Mesh(baked=baked, inputs=inputs, static=static, edges=edges, triangles=_OctantTriangles(baked))
+        mesh.rest = _batches({k: v for k, v in inputs.items() if k in POSE_INPUTS}, mesh, baked.positions,
+                             mesh_data.box_data(baked).offsets, lambda: mesh_data.frame_axes(baked.quaternions))
+        _meshes[key] = mesh
     return _meshes[key]
 
 
@@ -171,7 +202,7 @@ def _posed_drawing(ob, layout, modifier, depsgraph) -> _Drawn:
             def frame(normal=normal, tangent=tangent):
                 axis_y = np.cross(normal, tangent[:, :3]) * tangent[:, 3:]
                 return _normalised(np.stack([tangent[:, :3], axis_y, normal], axis=2).astype(np.float64))
-        posed.drawn = _batches(inputs, mesh.static, mesh.triangles, mesh.edges, positions, mesh.rest.offsets, frame)
+        posed.drawn = _batches(inputs, mesh, positions, mesh.rest.offsets, frame)
         posed.stale = False
     return posed.drawn
 
@@ -211,11 +242,11 @@ def object_frame(ob) -> np.ndarray:
 
 
 def uniform_block_data(object_to_clip, object_to_view, perspective, settings, output_mode=0,
-                       base_color=(0.8, 0.8, 0.8, 1.0), frame=None) -> np.ndarray:
+                       base_color=(0.8, 0.8, 0.8, 1.0), frame=None, viewport_height=1080) -> np.ndarray:
     """The BoxmarchPreview block (shaders/glsl/preview.frag.glsl) as std140 float32 words."""
     object_to_clip = np.asarray(object_to_clip, np.float64)
     object_to_view = np.asarray(object_to_view, np.float64)
-    data = np.zeros(64, np.float32)
+    data = np.zeros(68, np.float32)
     data[0:16] = object_to_clip.T.ravel()   # GLSL matrices are column-major
     normal = np.eye(4)
     normal[:3, :3] = np.linalg.inv(object_to_view[:3, :3]).T
@@ -235,6 +266,7 @@ def uniform_block_data(object_to_clip, object_to_view, perspective, settings, ou
     data[52:56] = settings.epsilon, settings.relaxation, settings.max_distance, settings.max_steps
     data[56:60] = base_color
     data.view(np.int32)[60] = output_mode
+    data[64:66] = settings.quality, viewport_height
     return data
 
 
@@ -283,11 +315,11 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, 
         shader = None
     if shader is not None:
         block = uniform_block_data(object_to_clip, object_to_view, perspective, settings, output_mode,
-                                   tuple(ob.color[:3]) + (1.0,), frame)
+                                   tuple(ob.color[:3]) + (1.0,), frame, gpu.state.viewport_get()[3])
         ubo = gpu.types.GPUUniformBuf(block.tobytes())
         shader.bind()
         shader.uniform_block(sources.UNIFORM_NAME, ubo)
-        drawn.march.draw(shader)
+        drawn.march(mesh_data.view_octant(object_to_view) if FRONT_TO_BACK else None).draw(shader)
     if output_mode != 0:
         return shader is not None
     lines = uniform_shader()

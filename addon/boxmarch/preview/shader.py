@@ -21,6 +21,11 @@ class UserSdfError(Exception):
         self.line = line
 
 
+# The fragment depth's declared direction: the marched depth is never nearer than the face's
+# (preview.frag.glsl clamps it), so GREATER is true and keeps early depth testing on; ANY
+# (what gl_FragDepth implies undeclared) turns it off (bench/bench_preview_cost.py compares them).
+DEPTH_WRITE = "GREATER"
+
 _cache: dict = {}
 # User texts that failed, so a broken text is compiled once, not at every redraw.
 _failed: dict = {}
@@ -40,8 +45,8 @@ def _create_info(fragment: str, layout: str):
     info.uniform_buf(0, sources.UNIFORM_TYPE, sources.UNIFORM_NAME)
     for slot, type_name, name in sources.FRAGMENT_OUTPUTS:
         info.fragment_out(slot, type_name, name)
-    if hasattr(info, "depth_write"):  # Blender 4+: required where gl_FragDepth is not implied (Metal)
-        info.depth_write("ANY")
+    if hasattr(info, "depth_write"):  # Blender 4+; 3.4 has no declaration
+        info.depth_write(DEPTH_WRITE)
     info.vertex_source(sources.vertex_source(layout))
     info.fragment_source(fragment)
     return info, iface
@@ -115,7 +120,7 @@ def preview_shader(sdf: str = "BOX", user_text: str | None = None, local_mirror=
     """The compiled preview shader for a preset, or for user text defining ``float map(vec3 p)``,
     as an engine with ``local_mirror`` sees it, reading the channels of engine ``layout``. Raises
     UserSdfError with the line for user text that does not compile."""
-    key = (sdf, user_text, tuple(float(v) for v in local_mirror), layout)
+    key = (sdf, user_text, tuple(float(v) for v in local_mirror), layout, DEPTH_WRITE)
     if key in _cache:
         return _cache[key]
     if key in _failed:

@@ -54,6 +54,7 @@ UNIFORM_STRUCT = """struct BoxmarchPreview {
   vec4 march;
   vec4 base_color;
   ivec4 mode;
+  vec4 quality;
 };
 """
 FRAGMENT_OUTPUTS = ((0, "VEC4", "frag_color"),)

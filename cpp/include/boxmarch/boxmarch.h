@@ -206,15 +206,44 @@ struct RenderImages {
     int32_t* steps = nullptr;  // height * width SDF evaluations, summed over boxes (may be null)
 };
 
+// What a GPU would spend on a frame of render_boxes, counted per fragment: a fragment is one
+// box's front face at one pixel centre inside the box's silhouette (a back face discards before
+// marching unless the eye is inside the box, where it stands in for the front face).
+struct RenderCost {
+    uint64_t fragments = 0;           // fragments rasterised
+    uint64_t marched_fragments = 0;   // fragments that ran the shader (not killed by early depth)
+    uint64_t lod_fragments = 0;       // of those, drawn by one tap (bm_one_tap) instead of a march
+    uint64_t sdf_evaluations = 0;     // map() calls: march steps plus the 4 normal taps of a hit
+    uint64_t hidden_fragments = 0;    // marched fragments that are not what the pixel shows at the end
+    uint64_t hidden_evaluations = 0;  // their map() calls
+    uint64_t covered_pixels = 0;      // pixels inside at least one box's silhouette
+};
+
+// How render_boxes orders, tests and limits its fragments (the GPU-side techniques of
+// docs/BENCHMARKS.md "GPU cost"); the defaults draw as the preview did without them.
+struct RenderPlan {
+    const uint32_t* order = nullptr;  // box_count indices, the draw order (each box once); null: 0, 1, ...
+    bool early_depth = false;         // test the rasterised depth before marching (a declared
+                                      // depth_greater/SV_DepthGreaterEqual keeps the hardware doing it)
+    float quality = 1.0f;             // the quality knob, 0 < quality <= 1 (raymarch.glsl bm_quality)
+    RenderCost* cost = nullptr;       // counts written here when not null
+};
+
 // Renders boxes the way the viewport preview does, one sample at each pixel centre: each box
 // (object-space origin[3], quaternion x,y,z,w [4] mapping local to object, half-extents[3]) is
 // rasterised as its own box, every covered pixel raymarches the preset in box-local space, and
-// the nearest hit wins by depth against the values already in images.depth. Hits are shaded
-// with the preview's Lambert + hemisphere light in view space. Reads box_count boxes; writes the
-// covered pixels of images. Throws std::invalid_argument on bad options (see raymarch).
+// the nearest hit wins by depth against the values already in images.depth. A hit's depth is
+// never nearer than the rasterised face's (clamped, as the shaders' declared depth_greater
+// requires). Boxes are drawn in plan.order; plan.early_depth skips the march of a fragment whose
+// rasterised depth fails the depth test; plan.quality below 1 widens the hit distance to a share
+// of a pixel, caps a box's steps by its size on screen and draws boxes under a few pixels with one
+// map() tap (bm_quality). Hits are shaded with the preview's Lambert + hemisphere light in view
+// space. Reads box_count boxes; writes the covered pixels of images and, if plan.cost is set, the
+// counts. Throws std::invalid_argument on bad options (see raymarch), a quality outside (0, 1] or
+// an order that is not a permutation of the boxes.
 void render_boxes(const float* origins, const float* quaternions, const float* half_extents,
                   size_t box_count, const RenderView& view, const MarchOptions& options,
-                  const RenderImages& images);
+                  const RenderImages& images, const RenderPlan& plan = RenderPlan());
 
 // =============================================================================================
 // Submesh tools (select linked, select across, dedup, merge per submesh, pack UVs by Z).

@@ -14,6 +14,7 @@ Shader "Boxmarch/Example"
     _Epsilon ("Hit epsilon", Float) = 0.001
     _Relaxation ("Step relaxation", Range(0.1, 2)) = 1
     _MaxDistance ("Max distance", Float) = 1000
+    _Quality ("Quality (1 = full march)", Range(0.05, 1)) = 1
   }
   SubShader
   {

@@ -12,6 +12,7 @@ float4x4 unity_WorldToObject;
 float4x4 unity_MatrixVP;
 float3 _WorldSpaceCameraPos;
 float4 _WorldSpaceLightPos0;
+float4 _ScreenParams;  // x, y: the render target's width and height in pixels
 #endif
 
 float4 _Color;
@@ -21,6 +22,16 @@ int _MaxSteps;
 float _Epsilon;
 float _Relaxation;
 float _MaxDistance;
+float _Quality;  // the quality knob (bm_quality): 1 = the full march, lower = cheaper, less exact
+
+// The written depth is never nearer than the rasterised face's (frag clamps it), and saying so
+// keeps early depth testing on: greater-or-equal in [0, 1] depth, less-or-equal where the depth
+// is reversed (UNITY_REVERSED_Z: near = 1).
+#if defined(UNITY_REVERSED_Z)
+#define BM_CONSERVATIVE_DEPTH SV_DepthLessEqual
+#else
+#define BM_CONSERVATIVE_DEPTH SV_DepthGreaterEqual
+#endif
 
 float map(float3 p)
 {
@@ -86,17 +97,25 @@ v2f vert(appdata v)
   return o;
 }
 
-float4 frag(v2f i, bool front_facing : SV_IsFrontFace, out float depth : SV_Depth) : SV_Target
+float4 frag(v2f i, bool front_facing : SV_IsFrontFace, out float depth : BM_CONSERVATIVE_DEPTH) : SV_Target
 {
   float3 obj_camera = mul(unity_WorldToObject, float4(_WorldSpaceCameraPos, 1.0)).xyz;
+  float4x4 object_to_clip = mul(unity_MatrixVP, unity_ObjectToWorld);
+  float footprint = bm_pixel_size(mul(object_to_clip, float4(i.obj_pos, 1.0)).w, length(object_to_clip[1].xyz),
+                                  _ScreenParams.y);
   bm_hit h = bm_raymarch_in_frame(i.obj_pos, obj_camera, i.offset, normalize(i.axis_x), normalize(i.axis_y),
                                   normalize(i.axis_z), i.half_extents, front_facing, _MaxSteps, _Epsilon,
-                                  _Relaxation, _MaxDistance);
+                                  _Relaxation, _MaxDistance, _Quality, footprint);
   clip(h.hit ? 1.0 : -1.0);
-  float4 clip_pos = mul(unity_MatrixVP, mul(unity_ObjectToWorld, float4(h.obj_pos, 1.0)));
+  float4 clip_pos = mul(object_to_clip, float4(h.obj_pos, 1.0));
   depth = clip_pos.z / clip_pos.w;
 #if defined(UNITY_CG_INCLUDED) && !defined(UNITY_REVERSED_Z)
   depth = depth * 0.5 + 0.5;  // OpenGL-style clip space: z / w in [-1, 1]
+#endif
+#if defined(UNITY_REVERSED_Z)
+  depth = min(depth, i.pos.z);  // i.pos.z: the rasterised face's depth
+#else
+  depth = max(depth, i.pos.z);
 #endif
   float3 world_normal = normalize(mul(h.obj_normal, (float3x3)unity_WorldToObject));
   float lambert = max(dot(world_normal, normalize(_WorldSpaceLightPos0.xyz)), 0.0);

@@ -47,6 +47,41 @@ bool bm_march(float3 ro, float3 rd, float t_end, int step_limit, float epsilon, 
   return false;
 }
 
+// Level of detail for a box a few pixels wide: one map() evaluation where the ray passes nearest
+// the box's centre (within its span) stands for the march; a hit when that point lies within half
+// a pixel (footprint, box-local units) of the surface or inside. t: that point's distance.
+bool bm_one_tap(float3 ro, float3 rd, float t_end, float footprint, out float t)
+{
+  t = clamp(-dot(ro, rd), 0.0, t_end);
+  return map(ro + rd * t) < 0.5 * footprint;
+}
+
+// The quality knob q (0 < q <= 1) as the three settings it stands for. x: hit distance as a share
+// of a pixel's footprint (the march stops that close to the surface when that is more than the
+// epsilon); y: steps allowed per pixel of the box's size on screen (bm_step_limit); z: size on
+// screen in pixels under which a box takes one tap (bm_one_tap). q = 1 leaves the march as the
+// epsilon and step limit set it.
+float3 bm_quality(float q)
+{
+  float loss = 1.0 - clamp(q, 0.0, 1.0);
+  return float3(0.5 * loss * loss, 8.0 / max(loss, 1e-9), 4.0 * loss);
+}
+
+// Size of one pixel, in object units, at a point whose clip-space w is clip_w: row_y = length of
+// the object-to-clip matrix's y row (xyz), height = viewport height in pixels. Perspective and
+// orthographic alike (w = 1 there).
+float bm_pixel_size(float clip_w, float row_y, float height)
+{
+  return 2.0 * clip_w / (height * row_y);
+}
+
+// Step limit of a box box_pixels wide on screen: steps_per_pixel per pixel, at least 16, at most
+// max_steps (a float holding a whole number).
+float bm_step_limit(float box_pixels, float steps_per_pixel, float max_steps)
+{
+  return min(max_steps, max(16.0, floor(steps_per_pixel * box_pixels)));
+}
+
 // Tap distance of bm_normal: taps closer than a thousandth of the box lose the gradient in float
 // rounding, so small epsilons do not shrink them further.
 float bm_normal_tap(float epsilon, float3 h)

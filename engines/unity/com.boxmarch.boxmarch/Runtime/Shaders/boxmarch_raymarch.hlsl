@@ -34,10 +34,11 @@ struct bm_hit {
 // obj_pos = the fragment's interpolated object-space position, obj_camera = the camera in object
 // space, f = the decoded box-local vector to the box origin, x, y, z = the box's unit axes in
 // engine object space, half_extents = the box's half-extents, front_facing = SV_IsFrontFace;
-// max_steps up to 512 (bm_march's bound).
+// max_steps up to 512 (bm_march's bound); quality = the quality knob (bm_quality; 1 = the full
+// march) and footprint = one pixel's size in object units at the fragment (bm_pixel_size).
 bm_hit bm_raymarch_in_frame(float3 obj_pos, float3 obj_camera, float3 f, float3 x, float3 y, float3 z,
                             float3 half_extents, bool front_facing, int max_steps, float epsilon,
-                            float relaxation, float max_distance)
+                            float relaxation, float max_distance, float quality, float footprint)
 {
   bm_hit o;
   o.hit = false;
@@ -58,28 +59,38 @@ bm_hit bm_raymarch_in_frame(float3 obj_pos, float3 obj_camera, float3 f, float3 
     ro -= rd * eye_distance;
     t_end = eye_distance;
   }
+  // the quality knob, as the preview applies it (shaders/glsl/preview.frag.glsl)
+  float3 knob = bm_quality(quality);
+  float box_pixels = 2.0 * max3(box_half) / footprint;
+  float hit_epsilon = max(epsilon, knob.x * footprint);
   float t;
-  int steps;
-  o.hit = bm_march(ro, rd, min(t_end, max_distance), max_steps, epsilon, relaxation, t, steps);
+  int steps = 1;
+  if (box_pixels < knob.z)
+    o.hit = bm_one_tap(ro, rd, min(t_end, max_distance), footprint, t);
+  else
+    o.hit = bm_march(ro, rd, min(t_end, max_distance), int(bm_step_limit(box_pixels, knob.y, float(max_steps))),
+                     hit_epsilon, relaxation, t, steps);
   o.steps = steps;
   if (!o.hit) return o;
   float3 local_hit = ro + rd * t;
   o.obj_pos = obj_pos + bm_from_local(local_hit + f, x, y, z);
-  o.obj_normal = bm_from_local(bm_normal(local_hit, bm_normal_tap(epsilon, box_half)), x, y, z);
+  o.obj_normal = bm_from_local(bm_normal(local_hit, bm_normal_tap(hit_epsilon, box_half)), x, y, z);
   return o;
 }
 
 // bm_raymarch_in_frame for the CLASSIC layout: color = the BoxOffset colour, quat = the
 // decoded quaternion (Blender's object frame, turned into the engine's by BOXMARCH_FRAME).
 bm_hit bm_raymarch(float3 obj_pos, float3 obj_camera, float4 color, float4 quat, float3 half_extents,
-                   bool front_facing, int max_steps, float epsilon, float relaxation, float max_distance)
+                   bool front_facing, int max_steps, float epsilon, float relaxation, float max_distance,
+                   float quality, float footprint)
 {
   float4 q = normalize(quat);
   return bm_raymarch_in_frame(obj_pos, obj_camera, bm_offset_from_color(color),
                               mul(BOXMARCH_FRAME, bm_rotate_vector(float3(1.0, 0.0, 0.0), q)),
                               mul(BOXMARCH_FRAME, bm_rotate_vector(float3(0.0, 1.0, 0.0), q)),
                               mul(BOXMARCH_FRAME, bm_rotate_vector(float3(0.0, 0.0, 1.0), q)),
-                              half_extents, front_facing, max_steps, epsilon, relaxation, max_distance);
+                              half_extents, front_facing, max_steps, epsilon, relaxation, max_distance,
+                              quality, footprint);
 }
 
 #endif  // BOXMARCH_RAYMARCH_INCLUDED

@@ -1,0 +1,196 @@
+"""The GPU cost model of the CPU reference (core.render_boxes' cost counts, draw order, early depth,
+quality knob) on scenes whose counts are worked out by hand, and the preview's octant orders."""
+import re
+import subprocess
+
+import numpy as np
+import pytest
+
+from boxmarch import core
+from boxmarch.preview import mesh_data, sources
+
+SHADERS = sources.shader_dir()
+
+SIZE = 8  # pixels; the orthographic view below maps x, y in [-1, 1] onto them: pixel centres at
+# -0.875, -0.625, ..., 0.875 (0.25 apart)
+
+
+def orthographic():
+    """Looks down -z from z = 0; window depth = (-z - 0.1) / 9.9 for z in [-10, -0.1]."""
+    near, far = 0.1, 10.0
+    m = np.eye(4)
+    m[2, 2], m[2, 3] = -2 / (far - near), -(far + near) / (far - near)
+    return m
+
+
+def render(origins, half, sdf="BOX", **plan):
+    n = len(origins)
+    q = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
+    return core.render_boxes(origins, q, half, orthographic(), np.eye(4), SIZE, SIZE, sdf=sdf, **plan)
+
+
+# Box A: half 0.5 at z = -2 covers the 4 x 4 pixel centres with |x|, |y| < 0.5 (16 fragments);
+# box B: half 1 at z = -4 covers all 8 x 8 (64). A BOX hit is at the face where the march starts:
+# 1 step, plus 4 normal taps = 5 map() calls per fragment.
+A_THEN_B = ([[0.0, 0.0, -2.0], [0.0, 0.0, -4.0]], [[0.5, 0.5, 0.5], [1.0, 1.0, 0.5]])
+
+
+def test_counts_of_two_overlapping_boxes_without_early_depth():
+    cost = render(*A_THEN_B).cost
+    assert cost == {"fragments": 80, "marched_fragments": 80, "lod_fragments": 0, "sdf_evaluations": 400,
+                    "hidden_fragments": 16, "hidden_evaluations": 80, "covered_pixels": 64}
+
+
+def test_early_depth_front_first_skips_the_hidden_marches():
+    result = render(*A_THEN_B, early_depth=True)
+    assert result.cost == {"fragments": 80, "marched_fragments": 64, "lod_fragments": 0, "sdf_evaluations": 320,
+                           "hidden_fragments": 0, "hidden_evaluations": 0, "covered_pixels": 64}
+    # the image is the one without early depth: A's face at z = -1.5 over B's at z = -3.5
+    assert np.array_equal(result.depth, render(*A_THEN_B).depth)
+    window = lambda z: (-z - 0.1) / 9.9  # noqa: E731
+    assert result.depth[3, 3] == pytest.approx(window(-1.5), abs=1e-6)
+    assert result.depth[0, 0] == pytest.approx(window(-3.5), abs=1e-6)
+
+
+def test_early_depth_back_to_front_saves_nothing():
+    result = render(*A_THEN_B, early_depth=True, order=[1, 0])
+    assert result.cost["marched_fragments"] == 80
+    assert result.cost["hidden_fragments"] == 16 and result.cost["hidden_evaluations"] == 80
+    assert np.array_equal(result.depth, render(*A_THEN_B).depth)
+
+
+def test_front_to_back_orders_by_distance_or_direction():
+    origins = [[0, 0, -1], [0, 0, -5], [0, 0, -3]]
+    assert core.front_to_back(origins, [0, 0, 0, 1]).tolist() == [0, 2, 1]
+    assert core.front_to_back(origins, [0, 0, 1, 0]).tolist() == [1, 2, 0]  # looking up +z
+    assert render(*A_THEN_B, early_depth=True, order=core.front_to_back(A_THEN_B[0], [0, 0, 0, 1])).cost[
+        "marched_fragments"] == 64
+
+
+def test_one_tap_for_a_box_under_the_quality_threshold():
+    # A sphere of radius min(h) = 0.1 at the pixel centre (0.125, 0.125), in a box 0.6 deep: 2.4
+    # pixels (2 * max(h) / 0.25), under bm_quality(0.25)'s 3. Its box covers that one pixel centre.
+    # One tap: one map() where the ray passes the centre (-0.1 < half a pixel: a hit, at the
+    # centre's depth), then 4 normal taps. The full march: 0.2 from the face to the sphere, 2 steps.
+    box = ([[0.125, 0.125, -2.0]], [[0.1, 0.1, 0.3]])
+    low = render(*box, sdf="SPHERE", quality=0.25)
+    assert low.cost == {"fragments": 1, "marched_fragments": 1, "lod_fragments": 1, "sdf_evaluations": 5,
+                        "hidden_fragments": 0, "hidden_evaluations": 0, "covered_pixels": 1}
+    assert low.depth[3, 4] == pytest.approx((2.0 - 0.1) / 9.9, abs=1e-6)
+    full = render(*box, sdf="SPHERE", quality=0.5)
+    assert full.cost["lod_fragments"] == 0 and full.cost["sdf_evaluations"] == 6
+    assert full.depth[3, 4] == pytest.approx((1.9 - 0.1) / 9.9, abs=1e-5)
+
+
+def test_quality_one_is_the_full_march_and_lower_costs_less():
+    rng = np.random.default_rng(3)
+    origins = np.column_stack([rng.uniform(-1, 1, (40, 2)), rng.uniform(-9, -1, 40)])
+    half = rng.uniform(0.02, 0.3, (40, 3))
+    full = render(origins, half, sdf="TORUS")
+    same = render(origins, half, sdf="TORUS", quality=1.0, early_depth=True,
+                  order=core.front_to_back(origins, [0, 0, 0, 1]))
+    assert np.array_equal(full.rgba, same.rgba) and np.array_equal(full.depth, same.depth)
+    low = render(origins, half, sdf="TORUS", quality=0.25)
+    assert low.cost["sdf_evaluations"] < full.cost["sdf_evaluations"]
+
+
+@pytest.mark.parametrize("plan, message", [({"quality": 0.0}, "quality"), ({"quality": 1.5}, "quality"),
+                                           ({"order": [0, 0]}, "order"), ({"order": [0, 2]}, "order"),
+                                           ({"order": [0]}, "order")])
+def test_bad_plans_are_refused_and_change_nothing(plan, message):
+    depth = np.full((SIZE, SIZE), 0.5, np.float32)
+    with pytest.raises(ValueError, match=message):
+        core.render_boxes(*A_THEN_B[:1], np.tile([0.0, 0, 0, 1], (2, 1)), A_THEN_B[1], orthographic(), np.eye(4),
+                          SIZE, SIZE, depth=depth, **plan)
+    assert (depth == 0.5).all()
+
+
+def baked_boxes(xs):
+    """A BakedMesh of one two-triangle quad per box, boxes centred at x = xs."""
+    count = len(xs)
+    triangles = (np.arange(count)[:, None, None] * 4 + np.array([[0, 1, 2], [0, 2, 3]])).reshape(-1, 3)
+    zeros = np.zeros((4 * count, 3), np.float32)
+    return mesh_data.BakedMesh(positions=zeros, offsets=np.zeros((4 * count, 4), np.float32),
+                               quaternions=np.zeros((4 * count, 4), np.float32), half_extents=zeros,
+                               triangles=triangles.astype(np.int32), edges=np.zeros((0, 2), np.int32),
+                               origins=np.column_stack([xs, np.zeros(count), np.zeros(count)]).astype(np.float32),
+                               box_quaternions=np.zeros((count, 4), np.float32), box_half_extents=np.zeros((count, 3)),
+                               submesh_of_vertex=np.repeat(np.arange(count), 4).astype(np.int32))
+
+
+def test_octant_orders_draw_the_boxes_nearest_the_camera_first():
+    baked = baked_boxes([5.0, 0.0, 10.0])
+    view = np.eye(4)
+    view[:3, :3] = [[0, 0, 1], [0, 1, 0], [-1, 0, 0]]  # the camera looks along +x (row 2: -forward)
+    octant = mesh_data.view_octant(view)
+    assert octant & 1
+    boxes = mesh_data.octant_triangles(baked, octant)[::2, 0] // 4
+    assert boxes.tolist() == [1, 0, 2]
+    assert mesh_data.octant_triangles(baked, octant ^ 1)[::2, 0].tolist() == [8, 0, 4]  # looking along -x
+
+
+def test_preview_fragment_compiles_with_the_depth_greater_declaration(tmp_path):
+    """What Blender 4+'s create-info depth_write('GREATER') puts before the source (GLSL 4.20+)."""
+    from helpers.glsl import blender_declarations, validator
+
+    declared = blender_declarations("frag").replace("#version 330 core", "#version 450 core")
+    declared += "layout(depth_greater) out float gl_FragDepth;\n"
+    path = tmp_path / "preview.frag"
+    for sdf in ("LINK", "SPHERE"):
+        path.write_text(declared + sources.fragment_source(sdf))
+        proc = subprocess.run([validator(), str(path)], capture_output=True, text=True)
+        assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def spirv_depth_modes(tmp_path, hlsl_path, defines=()):
+    from helpers.glsl import validator
+
+    proc = subprocess.run([validator(), "-D", "-V", "-H", *defines, "-I" + str(SHADERS / "hlsl"), "-e", "frag", "-S",
+                           "frag", str(hlsl_path), "-o", str(tmp_path / "frag.spv")], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    return set(re.findall(r"ExecutionMode \d+ (Depth\w+)", proc.stdout))
+
+
+def test_hlsl_example_declares_its_depth_direction(tmp_path):
+    example = SHADERS / "hlsl" / "boxmarch_example.hlsl"
+    assert spirv_depth_modes(tmp_path, example) == {"DepthReplacing", "DepthGreater"}
+    assert spirv_depth_modes(tmp_path, example, ["-DUNITY_REVERSED_Z"]) == {"DepthReplacing", "DepthLess"}
+    # negative control: the plain SV_Depth of an undeclared write gives neither direction
+    undeclared = tmp_path / "undeclared.hlsl"
+    undeclared.write_text(example.read_text().replace(": BM_CONSERVATIVE_DEPTH)", ": SV_Depth)"))
+    assert spirv_depth_modes(tmp_path, undeclared) == {"DepthReplacing"}
+
+
+_CONSERVATIVE_DEPTH_JOB = """function () {
+  var gl = document.createElement('canvas').getContext('webgl2');
+  var extension = gl.getExtension('EXT_conservative_depth');
+  var body = 'layout(depth_greater) out highp float gl_FragDepth;\\nout highp vec4 colour;\\n' +
+             'void main() { gl_FragDepth = max(0.75, gl_FragCoord.z); colour = vec4(1.0); }\\n';
+  function compile(source) {
+    var s = gl.createShader(gl.FRAGMENT_SHADER);
+    gl.shaderSource(s, source);
+    gl.compileShader(s);
+    return gl.getShaderParameter(s, gl.COMPILE_STATUS) ? 'ok' : gl.getShaderInfoLog(s);
+  }
+  var extension_line = '#extension GL_EXT_conservative_depth : enable\\n';
+  var precision = 'precision highp float;\\n';
+  return {extension: !!extension,
+          first: compile('#version 300 es\\n' + extension_line + precision + body),
+          after_precision: compile('#version 300 es\\n' + precision + extension_line + body)};
+}"""
+
+
+@pytest.mark.slow
+def test_webgl2_conservative_depth_needs_its_extension_line_first():
+    """What docs/ENGINES.md says of three.js: WebGL 2 (ANGLE on SwiftShader) takes depth_greater
+    when the #extension line comes before any other token, and refuses it after a precision
+    statement, where three.js's ShaderMaterial puts its own."""
+    from engines import threejs
+
+    reason = threejs.available()
+    if reason:
+        pytest.skip(reason)
+    result = threejs.run_page(b"", _CONSERVATIVE_DEPTH_JOB)
+    assert result["extension"] is True
+    assert result["first"] == "ok", result["first"]
+    assert "before any non-preprocessor tokens" in result["after_precision"], result["after_precision"]
