@@ -26,6 +26,7 @@ def test_unity_postprocessor_sets_the_table_and_reads_the_sidecar_values():
     assert sorted(constants["LayoutsRead"]) == sorted(transforms.PRESETS["UNITY"].layouts)
 
 
+@pytest.mark.slow
 def test_unity_postprocessor_compiles_against_the_stub_and_a_misspelled_member_does_not(tmp_path):
     reason = import_helpers.mcs_missing()
     if reason:

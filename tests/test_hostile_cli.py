@@ -21,6 +21,7 @@ def last_line(proc):
     return proc.stderr.strip().splitlines()[-1]
 
 
+@pytest.mark.slow
 def test_a_refused_json_is_not_written_even_with_the_error(baked_blend, tmp_path):
     before = digest(baked_blend)
     r = run_module(["bake", str(baked_blend), "--json", str(baked_blend)], tmp_path)
@@ -67,6 +68,7 @@ def test_two_writers_of_one_file_at_once_both_succeed_and_the_last_wins(tmp_path
     assert path.read_text() == "first" and os.listdir(tmp_path) == ["same.json"]
 
 
+@pytest.mark.slow
 def test_a_second_run_writing_the_same_outputs_meanwhile_both_succeed(baked_blend, tmp_path):
     """The second run starts and ends while the first holds its export under the temporary name."""
     r = subprocess.run([sys.executable, str(SCRIPTS / "second_run_during_export.py"), "export", str(baked_blend),
@@ -96,6 +98,7 @@ LONGEST_STEM = 255 - len(".boxmarch.json")
 
 @pytest.mark.parametrize("stem, out", [("a" * LONGEST_STEM, "b" * 249 + ".blend"), ("é" * (LONGEST_STEM // 2), None)],
                          ids=["241-byte-stem-255-byte-blend", "240-byte-utf8-stem"])
+@pytest.mark.slow
 def test_output_names_up_to_255_bytes_are_written(baked_blend, tmp_path, stem, out):
     to = stem + ".glb"
     r = run_module(["export", str(baked_blend), "--to", to] + (["--out", out] if out else []), tmp_path)
@@ -103,6 +106,7 @@ def test_output_names_up_to_255_bytes_are_written(baked_blend, tmp_path, stem, o
     assert sorted(os.listdir(tmp_path)) == sorted(["world.blend", to, stem + ".boxmarch.json"] + ([out] if out else []))
 
 
+@pytest.mark.slow
 def test_a_to_whose_sidecar_name_passes_255_bytes_is_refused(baked_blend, tmp_path):
     to = "a" * (LONGEST_STEM + 1) + ".glb"  # 246 bytes itself, its sidecar 256
     r = run_module(["export", str(baked_blend), "--to", to], tmp_path)
@@ -110,12 +114,14 @@ def test_a_to_whose_sidecar_name_passes_255_bytes_is_refused(baked_blend, tmp_pa
     assert os.listdir(tmp_path) == ["world.blend"]
 
 
+@pytest.mark.slow
 def test_a_name_longer_than_255_bytes_is_refused(baked_blend, tmp_path):
     r = run_module(["export", str(baked_blend), "--to", "a" * 253 + ".glb"], tmp_path)
     assert r.returncode == 2 and "257 bytes, longer than the 255" in last_line(r), r.stderr
     assert os.listdir(tmp_path) == ["world.blend"]
 
 
+@pytest.mark.slow
 def test_sigint_during_the_fbx_export_exits_130_and_leaves_no_file(baked_blend, tmp_path):
     r = subprocess.run([sys.executable, str(SCRIPTS / "interrupted_fbx_export.py"), "export", str(baked_blend),
                         "--preset", "UNITY", "--to", "w.fbx", "--json", "r.json"], cwd=tmp_path,
@@ -126,12 +132,14 @@ def test_sigint_during_the_fbx_export_exits_130_and_leaves_no_file(baked_blend, 
     assert json.loads((tmp_path / "r.json").read_text())["exit_code"] == 130
 
 
+@pytest.mark.slow
 def test_module_form_keeps_the_arguments_before_a_double_dash(baked_blend, tmp_path):
     shutil.copy(baked_blend, tmp_path / "-w.blend")
     r = run_module(["bake", "--out", "o.blend", "--", "-w.blend"], tmp_path)
     assert r.returncode == 0 and (tmp_path / "o.blend").exists(), r.stderr
 
 
+@pytest.mark.slow
 def test_pack_uv_refuses_the_baked_quaternion_map(baked_blend, tmp_path):
     before = digest(baked_blend)
     r = run_module(["pack-uv", str(baked_blend), "--uv-map", "BoxQuatXY", "--out", "p.blend"], tmp_path)
@@ -145,6 +153,7 @@ def test_pack_uv_refuses_the_baked_quaternion_map(baked_blend, tmp_path):
     (["demo", "--count", str(2**40)], "--count must be in 100..1,000,000"),
     (["demo", "--seed", "-1"], "--seed must be 0 or more"),
 ])
+@pytest.mark.slow
 def test_demo_arguments_that_were_internal_errors(tmp_path, args, reason):
     (tmp_path / "notes.txt").write_text("a file")
     r = run_module(args, tmp_path)
