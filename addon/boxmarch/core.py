@@ -23,12 +23,15 @@ import numpy as np
 from .core_tools import (  # noqa: F401 (re-exported: the submesh tools are part of this API)
     find_close_pairs, find_duplicate_submeshes, merge_passes, merge_targets, pack_uv_by_height, remove_vertices,
     select_linked_across, select_linked_submeshes, weld)
-from .native import _core, checked_int
+from .native import _core, check_index_range, checked_int, checked_mask
 
 ORIGIN_MODES = ("BOUNDS", "MEAN")
 ENCODINGS = ("FLOAT_COLOR", "BYTE_COLOR")
 FRAME_SOURCES = ("FACES", "FACE_EDGE", "EDGES", "ONE_AXIS", "IDENTITY")
 STATUS_BAKED, STATUS_UNCHANGED, STATUS_NOT_SELECTED = 0, 1, 2
+# Radians; the core's own bounds (boxmarch.h kAngleEpsilonMin/Max), read by the bake operator's
+# property limits and the command line.
+ANGLE_EPSILON_RANGE = (_core.ANGLE_EPSILON_MIN, _core.ANGLE_EPSILON_MAX)
 
 
 @dataclass
@@ -73,7 +76,8 @@ def bake(positions, edges, face_starts, face_sizes, corner_verts, *, mask=None,
          threads=0) -> BakeResult:
     """Bake every submesh (connected component) of a mesh.
 
-    ``mask`` (uint8 per vertex) limits the bake to submeshes with a nonzero vertex;
+    ``mask`` (booleans or numbers, one per vertex) limits the bake to submeshes with a nonzero
+    vertex; ``angle_epsilon`` (radians) must lie in ANGLE_EPSILON_RANGE;
     ``previous_fingerprints`` (uint32 per vertex, from an earlier bake) skips submeshes whose
     geometry and options are unchanged; ``offsets`` (optional, float32 or uint8 (N, 4)) is
     written in place, keeping the values of submeshes not baked. Raises ValueError on malformed
@@ -83,6 +87,8 @@ def bake(positions, edges, face_starts, face_sizes, corner_verts, *, mask=None,
         raise ValueError(f"origin must be one of {ORIGIN_MODES}, got {origin!r}")
     if encoding not in ENCODINGS:
         raise ValueError(f"encoding must be one of {ENCODINGS}, got {encoding!r}")
+    if mask is not None:
+        mask = checked_mask(mask, "mask", np.shape(positions)[0] if np.ndim(positions) else 0)
     r = _core.bake(positions, edges, face_starts, face_sizes, corner_verts, mask=mask,
                    previous_fingerprints=previous_fingerprints, offsets=offsets,
                    angle_epsilon=float(angle_epsilon), origin=origin,
@@ -244,8 +250,9 @@ def vertex_values_from_corners(corner_values, corner_verts, vertex_count) -> np.
     """Per-vertex copy of a per-corner array (the bake writes the same quaternion to every corner
     of a vertex): the value of each vertex's last corner; vertices without corners get zeros."""
     corner_values = np.asarray(corner_values)
-    out = np.zeros((int(vertex_count),) + corner_values.shape[1:], corner_values.dtype)
-    out[np.asarray(corner_verts)] = corner_values
+    vertex_count = checked_int(vertex_count, "vertex_count")
+    out = np.zeros((vertex_count,) + corner_values.shape[1:], corner_values.dtype)
+    out[check_index_range(corner_verts, "corner_verts", vertex_count)] = corner_values
     return out
 
 
@@ -258,7 +265,7 @@ def boxes_from_bake(positions, offsets, vertex_quaternions, submesh_of_vertex):
     the origins decoded at the submesh's vertices, half-extents = the largest |f| per local axis
     (the bounding box in the baked frame for BOUNDS origins)."""
     positions = np.asarray(positions, np.float64).reshape(-1, 3)
-    ids = np.asarray(submesh_of_vertex, np.int64)
+    ids = check_index_range(submesh_of_vertex, "submesh_of_vertex", 2**31)
     q = np.asarray(vertex_quaternions, np.float64).reshape(-1, 4)
     f = decode_offsets(offsets)
     count = int(ids.max()) + 1 if len(ids) else 0
@@ -285,9 +292,7 @@ def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_v
     at each pixel centre. ``depth``/``rgba`` (optional (H, W) / (H, W, 4) float32) are images to
     composite into (depth-tested, updated in place); otherwise depth starts at 1.0 and rgba at
     ``background``."""
-    width, height = int(width), int(height)
-    if width <= 0 or height <= 0:
-        raise ValueError(f"width and height must be positive, got {width} x {height}")
+    width, height = checked_int(width, "width", 1), checked_int(height, "height", 1)
     origins = np.ascontiguousarray(origins, np.float32).reshape(-1, 3)
     n = len(origins)
     quaternions = np.ascontiguousarray(quaternions, np.float32).reshape(-1, 4)

@@ -3,6 +3,8 @@ core.py and core_tools.py: a bad value becomes a one-line ValueError before any 
 the bindings."""
 from __future__ import annotations
 
+import operator
+
 import numpy as np
 
 try:
@@ -13,10 +15,13 @@ except ImportError:  # installed as a Blender 4.2+ extension: the module comes f
 
 def checked_int(value, name, lo=0, hi=2**31 - 1) -> int:
     """value as an int in [lo, hi], else a one-line ValueError (the bindings' own TypeError for
-    an integer past 32 bits lists every overload)."""
+    an integer past 32 bits lists every overload). Integers of any type and floats with an
+    integral value are accepted; 2.7 is refused, not truncated to 2."""
+    if isinstance(value, (float, np.floating)) and float(value).is_integer():
+        value = int(value)
     try:
-        number = int(value)
-    except (TypeError, ValueError, OverflowError):
+        number = operator.index(value)
+    except TypeError:
         raise ValueError(f"{name} must be an integer, got {value!r}") from None
     if not lo <= number <= hi:
         raise ValueError(f"{name} must be in {lo}..{hi}, got {value!r}")
@@ -24,7 +29,36 @@ def checked_int(value, name, lo=0, hi=2**31 - 1) -> int:
 
 
 def checked_mask(values, name, length) -> np.ndarray:
+    """Any array of booleans or numbers, one per element (nonzero: set), as the uint8 0/1 array
+    the bindings take."""
     mask = np.ascontiguousarray(np.asarray(values) != 0, dtype=np.uint8)
     if mask.shape != (length,):
         raise ValueError(f"{name} must have shape ({length},), got {np.shape(values)}")
     return mask
+
+
+def checked_indices(values, name) -> np.ndarray:
+    """An array of integer indices as int32, refusing what a cast would change: a value outside
+    the int32 range (2**32 + 5 would wrap to 5) or a non-integer dtype (2.7 would become 2)."""
+    array = np.asarray(values)
+    if array.dtype == np.int32:
+        return np.ascontiguousarray(array)
+    if array.dtype.kind not in "iub":
+        raise ValueError(f"{name} must hold integers, got dtype {array.dtype}")
+    outside = np.flatnonzero((array.reshape(-1) < -2**31) | (array.reshape(-1) > 2**31 - 1))
+    if len(outside):
+        raise ValueError(f"{name}[{int(outside[0])}] = {int(array.reshape(-1)[outside[0]])} does not fit a 32-bit index")
+    return np.ascontiguousarray(array, np.int32)
+
+
+def check_index_range(values, name, limit) -> np.ndarray:
+    """values (integers) as an int64 array, or a ValueError naming the first outside 0..limit-1
+    (NumPy would wrap a negative index silently and raise a bare IndexError past the end)."""
+    array = np.asarray(values)
+    if array.dtype.kind not in "iub":
+        raise ValueError(f"{name} must hold integers, got dtype {array.dtype}")
+    array = array.astype(np.int64, copy=False)
+    bad = np.flatnonzero((array.reshape(-1) < 0) | (array.reshape(-1) >= limit))
+    if len(bad):
+        raise ValueError(f"{name}[{int(bad[0])}] = {int(array.reshape(-1)[bad[0]])} is outside 0..{limit - 1}")
+    return array
