@@ -1,7 +1,8 @@
 """Blender-free NumPy API of boxmarch.
 
 Everything here takes and returns NumPy arrays; nothing imports ``bpy``. The heavy work runs in
-the native module ``boxmarch._core`` with the GIL released.
+the native module ``boxmarch._core`` with the GIL released, on private copies of the input arrays
+(another thread writing them during a call cannot change what was checked).
 
 Mesh arrays (the layout Blender uses):
 
@@ -124,7 +125,7 @@ def corner_quaternion_uv(corner_uv, half, corner_verts, result: BakeResult, writ
     """Fill ``corner_uv`` (float32 (C, 2)) in place with each corner's (q.x, q.y) (half=0) or
     (q.z, q.w) (half=1); corners of submeshes this bake did not write are left as they are
     unless ``write_all``."""
-    _core.expand_corner_quaternions(corner_uv, half, corner_verts, result.submesh_of_vertex,
+    _core.expand_corner_quaternions(corner_uv, checked_int(half, "half", 0, 1), corner_verts, result.submesh_of_vertex,
                                     result.quaternions, None if write_all else result.written)
 
 
