@@ -83,20 +83,26 @@ def bake_child(count, repeats):
         core.bake(*arrays)
         wall.append(time.perf_counter() - start)
         cpu.append(time.process_time() - start_cpu)
-    print(json.dumps({"wall": wall, "cpu": cpu, "peak": peak, "input": sum(a.nbytes for a in arrays)}))
+    checks = []  # validate_mesh: the mesh checks, with the copies of this checkout
+    for _ in range(10):
+        start_cpu = time.process_time()
+        core.validate_mesh(*arrays)
+        checks.append(time.process_time() - start_cpu)
+    print(json.dumps({"wall": wall, "cpu": cpu, "checks": checks, "peak": peak, "input": sum(a.nbytes for a in arrays)}))
 
 
 def bake_rows(before, rounds=4):
     """Rows of the bake table: per box count, child processes of this checkout and of `before`
     alternately (`rounds` each, so load drifts hit both alike); the best and median wall time and
-    the best CPU time (all threads) over every call, and the peak memory of a first bake."""
+    the best CPU time (all threads) over every call, the best CPU time of validate_mesh (with the
+    copies: their cost alone), and the peak memory of a first bake."""
     import statistics
 
     here = os.path.dirname(os.path.abspath(__file__))
     modules = [("this checkout", None)] + ([("before", os.path.abspath(before))] if before else [])
     rows = []
     for count, repeats in ((125_000, 5), (1_000_000, 2)):
-        runs = {label: {"wall": [], "cpu": [], "peak": [], "input": 0} for label, _ in modules}
+        runs = {label: {"wall": [], "cpu": [], "checks": [], "peak": [], "input": 0} for label, _ in modules}
         for _ in range(rounds):
             for label, path in modules:
                 env = dict(os.environ)
@@ -105,22 +111,23 @@ def bake_rows(before, rounds=4):
                 out = subprocess.run([sys.executable, __file__, "--bake-child", str(count), str(repeats)],
                                      capture_output=True, text=True, env=env, check=True)
                 r = json.loads(out.stdout.strip().splitlines()[-1])
-                for key in ("wall", "cpu"):
+                for key in ("wall", "cpu", "checks"):
                     runs[label][key] += r[key]
                 runs[label]["peak"].append(r["peak"])
                 runs[label]["input"] = r["input"]
         stats = {}
         for label, _ in modules:
             r = runs[label]
-            stats[label] = (min(r["wall"]), statistics.median(r["wall"]), min(r["cpu"]), min(r["peak"]))
-            best, median, cpu, peak = stats[label]
+            stats[label] = (min(r["wall"]), statistics.median(r["wall"]), min(r["cpu"]), min(r["checks"]),
+                            min(r["peak"]))
+            best, median, cpu, checks, peak = stats[label]
             rows.append([f"{count:,}", label, f"{best * 1e3:.1f}", f"{median * 1e3:.1f}", f"{cpu * 1e3:.1f}",
-                         f"{peak / 2**20:.0f}", f"{r['input'] / 2**20:.0f}"])
+                         f"{checks * 1e3:.1f}", f"{peak / 2**20:.0f}", f"{r['input'] / 2**20:.0f}"])
         if before:
             now, then = stats["this checkout"], stats["before"]
             rows.append([f"{count:,}", "difference"] +
-                        [f"{(a - b) * 1e3:+.1f} ({(a / b - 1) * 100:+.1f}%)" for a, b in zip(now[:3], then[:3])] +
-                        [f"{(now[3] - then[3]) / 2**20:+.0f}", ""])
+                        [f"{(a - b) * 1e3:+.1f} ({(a / b - 1) * 100:+.1f}%)" for a, b in zip(now[:4], then[:4])] +
+                        [f"{(now[4] - then[4]) / 2**20:+.0f}", ""])
     return rows
 
 
@@ -146,8 +153,8 @@ if __name__ == "__main__":
         bake_child(int(sys.argv[2]), int(sys.argv[3]))
     elif sys.argv[1:2] == ["--bake"]:
         before = sys.argv[sys.argv.index("--before") + 1] if "--before" in sys.argv else None
-        print(table(["boxes", "module", "core.bake best ms", "median ms", "best CPU ms", "peak MiB above inputs",
-                     "inputs MiB"],
+        print(table(["boxes", "module", "core.bake best ms", "median ms", "best CPU ms", "validate_mesh CPU ms",
+                     "peak MiB above inputs", "inputs MiB"],
                     bake_rows(before)))
     else:
         main(int(sys.argv[1]) if len(sys.argv) > 1 else 1_000_000)

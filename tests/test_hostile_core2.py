@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 import boxmarch
 from boxmarch import cli_args, core, scenes
-from helpers.core_reference import decoded_origins
+from helpers.core_reference import decoded_origins, mesh_from_polys
 
 HERE = Path(__file__).parent
 PACKAGE_PARENT = Path(boxmarch.__file__).parent.parent
@@ -66,8 +66,6 @@ def test_the_reported_decode_error_is_never_below_the_true_one(log_epsilon, tilt
     points, faces = prism(min(tilt_over_epsilon * epsilon, 1.2))
     rotation = scenes.quaternion_matrices(np.asarray(quaternion)[None] / np.linalg.norm(quaternion))[0]
     points = points @ rotation.T + shift
-    from helpers.core_reference import mesh_from_polys
-
     arrays = mesh_from_polys([(points, faces)])
     r = core.bake(*arrays, angle_epsilon=epsilon, origin=origin, encoding=encoding)
     p64 = arrays[0].astype(np.float64)
