@@ -62,7 +62,7 @@ def test_the_reported_decode_error_is_never_below_the_true_one(log_epsilon, tilt
     MEAN the origin is the vertex mean; with either origin no point is closer to all decoded
     points than half their spread. The bake's max_error must not be below either (up to double
     rounding of the coordinates)."""
-    epsilon = 10.0 ** log_epsilon
+    epsilon = float(np.clip(10.0 ** log_epsilon, *core.ANGLE_EPSILON_RANGE))  # the power may round outside
     points, faces = prism(min(tilt_over_epsilon * epsilon, 1.2))
     rotation = scenes.quaternion_matrices(np.asarray(quaternion)[None] / np.linalg.norm(quaternion))[0]
     points = points @ rotation.T + shift

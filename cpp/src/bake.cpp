@@ -165,7 +165,7 @@ void check_bake_arguments(const MeshView& mesh, const int32_t* submesh_of_vertex
                           const BakeOptions& options, const BakeOutput& out) {
     if (!(options.angle_epsilon >= kAngleEpsilonMin && options.angle_epsilon <= kAngleEpsilonMax)) {
         char message[120];
-        std::snprintf(message, sizeof message, "angle_epsilon must be in [%g, %.7g] radians, got %g",
+        std::snprintf(message, sizeof message, "angle_epsilon must be in [%g, %.7g] radians, got %.9g",
                       kAngleEpsilonMin, kAngleEpsilonMax, options.angle_epsilon);
         throw std::invalid_argument(message);
     }
