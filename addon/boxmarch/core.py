@@ -24,7 +24,7 @@ import numpy as np
 from .core_tools import (  # noqa: F401 (re-exported: the submesh tools are part of this API)
     find_close_pairs, find_duplicate_submeshes, merge_passes, merge_targets, pack_uv_by_height, remove_vertices,
     select_linked_across, select_linked_submeshes, weld)
-from .native import _core, check_index_range, checked_int, checked_mask
+from .native import _core, checked_indices, checked_int, checked_mask, row_count
 
 ORIGIN_MODES = ("BOUNDS", "MEAN")
 ENCODINGS = ("FLOAT_COLOR", "BYTE_COLOR")
@@ -89,7 +89,7 @@ def bake(positions, edges, face_starts, face_sizes, corner_verts, *, mask=None,
     if encoding not in ENCODINGS:
         raise ValueError(f"encoding must be one of {ENCODINGS}, got {encoding!r}")
     if mask is not None:
-        mask = checked_mask(mask, "mask", np.shape(positions)[0] if np.ndim(positions) else 0)
+        mask = checked_mask(mask, "mask", row_count(positions))
     r = _core.bake(positions, edges, face_starts, face_sizes, corner_verts, mask=mask,
                    previous_fingerprints=previous_fingerprints, offsets=offsets,
                    angle_epsilon=float(angle_epsilon), origin=origin,
@@ -253,7 +253,7 @@ def vertex_values_from_corners(corner_values, corner_verts, vertex_count) -> np.
     corner_values = np.asarray(corner_values)
     vertex_count = checked_int(vertex_count, "vertex_count")
     out = np.zeros((vertex_count,) + corner_values.shape[1:], corner_values.dtype)
-    out[check_index_range(corner_verts, "corner_verts", vertex_count)] = corner_values
+    out[checked_indices(corner_verts, "corner_verts", vertex_count)] = corner_values
     return out
 
 
@@ -266,7 +266,7 @@ def boxes_from_bake(positions, offsets, vertex_quaternions, submesh_of_vertex):
     the origins decoded at the submesh's vertices, half-extents = the largest |f| per local axis
     (the bounding box in the baked frame for BOUNDS origins)."""
     positions = np.asarray(positions, np.float64).reshape(-1, 3)
-    ids = check_index_range(submesh_of_vertex, "submesh_of_vertex", 2**31)
+    ids = checked_indices(submesh_of_vertex, "submesh_of_vertex", row_count(positions))
     q = np.asarray(vertex_quaternions, np.float64).reshape(-1, 4)
     f = decode_offsets(offsets)
     count = int(ids.max()) + 1 if len(ids) else 0

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .native import _core, check_index_range, checked_indices, checked_int, checked_mask
+from .native import _core, checked_indices, checked_int, checked_mask, row_count
 
 
 def find_close_pairs(positions, radius, groups=None, method="HASH", threads=0) -> np.ndarray:
@@ -89,7 +89,7 @@ def weld(positions, edges, face_starts, face_sizes, corner_verts, target, corner
     ``corner_edges`` (int32 per corner, the edge to the next corner, as Blender stores it) makes
     the new corner edges a lookup instead of a search."""
     return _core.weld_topology(positions, edges, face_starts, face_sizes, corner_verts,
-                               checked_indices(target, "target"), corner_edges)
+                               checked_indices(target, "target", row_count(positions)), corner_edges)
 
 
 def remove_vertices(positions, edges, face_starts, face_sizes, corner_verts, remove, corner_edges) -> dict:
@@ -101,7 +101,7 @@ def remove_vertices(positions, edges, face_starts, face_sizes, corner_verts, rem
     keep = ~checked_mask(remove, "remove", len(positions)).astype(bool)
     edges = np.asarray(edges).reshape(-1, 2)
     corner_verts = np.asarray(corner_verts)
-    corner_edges = check_index_range(corner_edges, "corner_edges", len(edges))
+    corner_edges = checked_indices(corner_edges, "corner_edges", len(edges))
     if corner_edges.shape != corner_verts.shape:
         raise ValueError(f"corner_edges must have shape {corner_verts.shape}, got {corner_edges.shape}")
     starts, sizes = np.asarray(face_starts, np.int64), np.asarray(face_sizes, np.int64)

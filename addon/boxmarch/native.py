@@ -37,28 +37,21 @@ def checked_mask(values, name, length) -> np.ndarray:
     return mask
 
 
-def checked_indices(values, name) -> np.ndarray:
-    """An array of integer indices as int32, refusing what a cast would change: a value outside
-    the int32 range (2**32 + 5 would wrap to 5) or a non-integer dtype (2.7 would become 2)."""
+def checked_indices(values, name, limit) -> np.ndarray:
+    """Integer indices as an int32 array, or a ValueError naming the first outside 0..limit-1:
+    NumPy would wrap a negative index silently and raise a bare IndexError past the end, and a
+    cast to int32 would wrap 2**32 + 5 to 5 and truncate 2.7 to 2."""
     array = np.asarray(values)
-    if array.dtype == np.int32:
-        return np.ascontiguousarray(array)
     if array.dtype.kind not in "iub":
         raise ValueError(f"{name} must hold integers, got dtype {array.dtype}")
-    outside = np.flatnonzero((array.reshape(-1) < -2**31) | (array.reshape(-1) > 2**31 - 1))
-    if len(outside):
-        raise ValueError(f"{name}[{int(outside[0])}] = {int(array.reshape(-1)[outside[0]])} does not fit a 32-bit index")
+    flat = array.reshape(-1)
+    bad = np.flatnonzero((flat < 0) | (flat >= limit))
+    if len(bad):
+        raise ValueError(f"{name}[{int(bad[0])}] = {int(flat[bad[0]])} is outside 0..{limit - 1}")
     return np.ascontiguousarray(array, np.int32)
 
 
-def check_index_range(values, name, limit) -> np.ndarray:
-    """values (integers) as an int64 array, or a ValueError naming the first outside 0..limit-1
-    (NumPy would wrap a negative index silently and raise a bare IndexError past the end)."""
-    array = np.asarray(values)
-    if array.dtype.kind not in "iub":
-        raise ValueError(f"{name} must hold integers, got dtype {array.dtype}")
-    array = array.astype(np.int64, copy=False)
-    bad = np.flatnonzero((array.reshape(-1) < 0) | (array.reshape(-1) >= limit))
-    if len(bad):
-        raise ValueError(f"{name}[{int(bad[0])}] = {int(array.reshape(-1)[bad[0]])} is outside 0..{limit - 1}")
-    return array
+def row_count(values) -> int:
+    """Rows of an array-like (0 for a scalar or None), to size the checks of the arrays beside it
+    before the bindings check the array itself."""
+    return np.shape(values)[0] if np.ndim(values) else 0
