@@ -345,7 +345,11 @@ void fuzz_raymarch(Bytes& in) {
         raymarch(origins.data(), directions.data(), half.data(), rays, o, hit.data(), positions.data(), normals.data(),
                  steps.data());
     });
-    if (ok != march_options_valid(o)) fail(ok ? "raymarch accepted invalid options" : "raymarch rejected valid options");
+    bool directions_valid = true;  // a ray needs a direction: (0, 0, 0) is refused
+    for (size_t i = 0; i < rays; ++i)
+        directions_valid &= !(directions[3 * i] == 0.0f && directions[3 * i + 1] == 0.0f && directions[3 * i + 2] == 0.0f);
+    if (ok != (march_options_valid(o) && directions_valid))
+        fail(ok ? "raymarch accepted invalid options or a zero direction" : "raymarch rejected valid options");
     for (size_t i = 0; i < rays; ++i) {
         if (!ok) {
             if (hit[i] != 7 || steps[i] != -7) fail("rejected raymarch wrote output");
