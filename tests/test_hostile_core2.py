@@ -182,6 +182,21 @@ def test_offsets_sharing_memory_with_the_positions_bake_the_positions_as_passed(
     np.testing.assert_array_equal(buffer, expected.offsets)
 
 
+def test_corner_quaternions_written_over_the_quaternions_they_read_are_the_quaternions_passed():
+    arrays = scenes.box_arrays(np.array([[0.0, 0, 0], [3, 0, 0]]), [1.0, 0.6, 0.2],
+                               scenes.random_rotations(2, np.random.default_rng(9)))
+    r = core.bake(*arrays)
+    corner_verts = arrays[4]
+    expected = np.zeros((len(corner_verts), 2), np.float32)
+    core.corner_quaternion_uv(expected, 1, corner_verts, r, write_all=True)
+    corner_uv = np.zeros((len(corner_verts), 2), np.float32)
+    shared = corner_uv.reshape(-1)[:8].reshape(2, 4)  # the first four corners' memory
+    shared[:] = r.quaternions
+    r.quaternions = shared
+    core.corner_quaternion_uv(corner_uv, 1, corner_verts, r, write_all=True)
+    np.testing.assert_array_equal(corner_uv, expected)
+
+
 # -------------------------------------------------------------------------------------------------
 # Another Python thread writing the inputs during the call
 
