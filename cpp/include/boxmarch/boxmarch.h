@@ -85,8 +85,9 @@ enum class SubmeshStatus : uint8_t {
 
 // The range of BakeOptions::angle_epsilon (radians), the one statement of it: the Python API, the
 // bake operator's property limits and the command line read these. Below about 1e-8, cos(epsilon)
-// rounds to 1 in double and float noise would decide which face gives the second axis. Both
-// bounds are float32 values, so the operator's float32 property holds them exactly.
+// rounds to 1 in double and float noise would decide which face gives the second axis; the
+// minimum keeps two decades from there. Both bounds are float32 values, so the operator's
+// float32 property holds them exactly.
 constexpr double kAngleEpsilonMin = double(1e-6f);
 constexpr double kAngleEpsilonMax = double(1.5707963f);  // just below pi/2
 
