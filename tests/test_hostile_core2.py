@@ -163,8 +163,8 @@ def test_a_ray_without_direction_is_refused_and_a_tiny_one_marches():
     origins = np.array([[-5.0, 0, 0], [-5.0, 0, 0]], np.float32)
     with pytest.raises(ValueError, match="ray 1 has a zero direction"):
         core.raymarch(origins, np.array([[1.0, 0, 0], [0, 0, 0]]), [1.0, 1.0, 1.0])
-    # Components whose float32 squares underflow still give the direction they point in.
-    r = core.raymarch(origins, np.array([[1e-30, 0, 0], [1.0, 0, 0]]), [1.0, 1.0, 1.0])
+    # Components whose float32 squares underflow or overflow still give the direction they point in.
+    r = core.raymarch(origins, np.array([[1e-30, 0, 0], [1e20, 0, 0]]), [1.0, 1.0, 1.0])
     assert r.hit.all()
     np.testing.assert_allclose(r.positions, [[-1.0, 0, 0], [-1.0, 0, 0]], atol=2e-3)
 
