@@ -107,8 +107,8 @@ void raymarch(const float* origins, const float* directions, const float* half_e
             vec3 rd = glm::make_vec3(directions + 3 * i);
             vec3 h = glm::make_vec3(half_extents + 3 * i);
             const float len = glm::length(rd);
-            // A length that underflows or overflows float32 (components near 1e-20 or 1e19) is
-            // taken in double.
+            // A length whose float32 square underflows or overflows (every component below about
+            // 4e-23, or one above about 2e19) is taken in double.
             rd = len > 0.0f && len <= FLT_MAX ? rd / len : vec3(glm::normalize(glm::dvec3(rd)));
             vec2 span = shader::bm_box_span(ro, rd, h);
             float t0 = std::max(span.x, 0.0f);
