@@ -4,8 +4,17 @@ Blender's Merge by Distance (bpy.ops.mesh.remove_doubles) on the same vertices.
 
     python bench/bench_hostile.py [N]      (default 1000000)
 
+The cost of the private copies the bindings take of every input the core reads without the GIL
+(issue 21): ``core.bake`` of 125,000 and 1,000,000 random boxes, time and peak memory above the
+inputs, with this checkout's package and, given ``--before DIR``, with the package importable
+from DIR (e.g. the add-on folder of a build of the previous commit), in child processes run
+alternately:
+
+    python bench/bench_hostile.py --bake [--before DIR]
+
 Each measurement runs in its own process, so its peak RSS (VmHWM) is its own."""
 import json
+import os
 import subprocess
 import sys
 import time
@@ -58,6 +67,70 @@ def child(case, n):
     print(json.dumps({"seconds": seconds, "peak": rss_bytes("VmHWM") - base, "result": result}))
 
 
+def bake_child(count, repeats):
+    """Peak memory of a first core.bake of `count` boxes in this process, then the wall and CPU
+    time of `repeats` more."""
+    from boxmarch import core, scenes
+
+    arrays, *_ = scenes.random_boxes(count, seed=0)
+    base = rss_bytes()
+    reset_peak_rss()
+    core.bake(*arrays)
+    peak = rss_bytes("VmHWM") - base
+    wall, cpu = [], []
+    for _ in range(repeats):
+        start, start_cpu = time.perf_counter(), time.process_time()
+        core.bake(*arrays)
+        wall.append(time.perf_counter() - start)
+        cpu.append(time.process_time() - start_cpu)
+    checks = []  # validate_mesh: the mesh checks, with the copies of this checkout
+    for _ in range(10):
+        start_cpu = time.process_time()
+        core.validate_mesh(*arrays)
+        checks.append(time.process_time() - start_cpu)
+    print(json.dumps({"wall": wall, "cpu": cpu, "checks": checks, "peak": peak, "input": sum(a.nbytes for a in arrays)}))
+
+
+def bake_rows(before, rounds=4):
+    """Rows of the bake table: per box count, child processes of this checkout and of `before`
+    alternately (`rounds` each, so load drifts hit both alike); the best and median wall time and
+    the best CPU time (all threads) over every call, the best CPU time of validate_mesh (with the
+    copies: their cost alone), and the peak memory of a first bake."""
+    import statistics
+
+    here = os.path.dirname(os.path.abspath(__file__))
+    modules = [("this checkout", None)] + ([("before", os.path.abspath(before))] if before else [])
+    rows = []
+    for count, repeats in ((125_000, 5), (1_000_000, 2)):
+        runs = {label: {"wall": [], "cpu": [], "checks": [], "peak": [], "input": 0} for label, _ in modules}
+        for _ in range(rounds):
+            for label, path in modules:
+                env = dict(os.environ)
+                if path:
+                    env["PYTHONPATH"] = os.pathsep.join([path, here])
+                out = subprocess.run([sys.executable, __file__, "--bake-child", str(count), str(repeats)],
+                                     capture_output=True, text=True, env=env, check=True)
+                r = json.loads(out.stdout.strip().splitlines()[-1])
+                for key in ("wall", "cpu", "checks"):
+                    runs[label][key] += r[key]
+                runs[label]["peak"].append(r["peak"])
+                runs[label]["input"] = r["input"]
+        stats = {}
+        for label, _ in modules:
+            r = runs[label]
+            stats[label] = (min(r["wall"]), statistics.median(r["wall"]), min(r["cpu"]), min(r["checks"]),
+                            min(r["peak"]))
+            best, median, cpu, checks, peak = stats[label]
+            rows.append([f"{count:,}", label, f"{best * 1e3:.1f}", f"{median * 1e3:.1f}", f"{cpu * 1e3:.1f}",
+                         f"{checks * 1e3:.1f}", f"{peak / 2**20:.0f}", f"{r['input'] / 2**20:.0f}"])
+        if before:
+            now, then = stats["this checkout"], stats["before"]
+            rows.append([f"{count:,}", "difference"] +
+                        [f"{(a - b) * 1e3:+.1f} ({(a / b - 1) * 100:+.1f}%)" for a, b in zip(now[:4], then[:4])] +
+                        [f"{(now[4] - then[4]) / 2**20:+.0f}", ""])
+    return rows
+
+
 def main(n):
     rows = []
     for case, label, result_label in (
@@ -76,5 +149,12 @@ def main(n):
 if __name__ == "__main__":
     if sys.argv[1:2] == ["--child"]:
         child(sys.argv[2], int(sys.argv[3]))
+    elif sys.argv[1:2] == ["--bake-child"]:
+        bake_child(int(sys.argv[2]), int(sys.argv[3]))
+    elif sys.argv[1:2] == ["--bake"]:
+        before = sys.argv[sys.argv.index("--before") + 1] if "--before" in sys.argv else None
+        print(table(["boxes", "module", "core.bake best ms", "median ms", "best CPU ms", "validate_mesh CPU ms",
+                     "peak MiB above inputs", "inputs MiB"],
+                    bake_rows(before)))
     else:
         main(int(sys.argv[1]) if len(sys.argv) > 1 else 1_000_000)

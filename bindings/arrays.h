@@ -9,8 +9,10 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cstring>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace boxmarch::bindings {
 
@@ -54,18 +56,30 @@ py::array_t<T> checked(const py::object& obj, const char* name, py::ssize_t rows
     return py::reinterpret_borrow<py::array_t<T>>(a);
 }
 
-// Arrays of one mesh, kept alive while the view points into them.
+// checked(), then a private copy: the array the core reads with the GIL released. Another Python
+// thread may write the caller's array at any moment of the call (NumPy also releases the GIL
+// inside its own loops, so holding it would not stop a write already running): the core's checks
+// of indices and finiteness must see exactly what it then reads, so both read the copy.
+template <class T>
+py::array_t<T> input(const py::object& obj, const char* name, py::ssize_t rows, py::ssize_t cols) {
+    const py::array_t<T> a = checked<T>(obj, name, rows, cols);
+    py::array_t<T> copy(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim()));
+    std::memcpy(copy.mutable_data(), a.data(), size_t(a.nbytes()));
+    return copy;
+}
+
+// Arrays of one mesh (private copies, see input()), kept alive while the view points into them.
 struct MeshArrays {
     py::array_t<float> positions;
     py::array_t<int32_t> edges, face_starts, face_sizes, corner_verts;
     MeshView view;
 
     MeshArrays(const py::object& p, const py::object& e, const py::object& fs, const py::object& fz, const py::object& cv)
-        : positions(checked<float>(p, "positions", -1, 3)),
-          edges(checked<int32_t>(e, "edges", -1, 2)),
-          face_starts(checked<int32_t>(fs, "face_starts", -1, 0)),
-          face_sizes(checked<int32_t>(fz, "face_sizes", face_starts.shape(0), 0)),
-          corner_verts(checked<int32_t>(cv, "corner_verts", -1, 0)) {
+        : positions(input<float>(p, "positions", -1, 3)),
+          edges(input<int32_t>(e, "edges", -1, 2)),
+          face_starts(input<int32_t>(fs, "face_starts", -1, 0)),
+          face_sizes(input<int32_t>(fz, "face_sizes", face_starts.shape(0), 0)),
+          corner_verts(input<int32_t>(cv, "corner_verts", -1, 0)) {
         view.positions = positions.data();
         view.vertex_count = size_t(positions.shape(0));
         view.edges = edges.data();
@@ -85,9 +99,9 @@ py::array_t<T> empty(py::ssize_t rows, py::ssize_t cols = 0) {
     return cols ? py::array_t<T>({rows, cols}) : py::array_t<T>(rows);
 }
 
-// submesh_of_vertex as int32[vertex_count]; the core checks the ids' range.
+// submesh_of_vertex as int32[vertex_count] (a private copy); the core checks the ids' range.
 inline py::array_t<int32_t> checked_submeshes(const py::object& obj, py::ssize_t vertex_count) {
-    return checked<int32_t>(obj, "submesh_of_vertex", vertex_count, 0);
+    return input<int32_t>(obj, "submesh_of_vertex", vertex_count, 0);
 }
 
 

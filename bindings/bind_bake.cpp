@@ -36,8 +36,8 @@ py::dict bake_py(const py::object& positions, const py::object& edges, const py:
 
     py::array_t<uint8_t> mask_arr;
     py::array_t<uint32_t> previous;
-    if (!mask.is_none()) mask_arr = checked<uint8_t>(mask, "mask", n, 0);
-    if (!previous_fingerprints.is_none()) previous = checked<uint32_t>(previous_fingerprints, "previous_fingerprints", n, 0);
+    if (!mask.is_none()) mask_arr = input<uint8_t>(mask, "mask", n, 0);
+    if (!previous_fingerprints.is_none()) previous = input<uint32_t>(previous_fingerprints, "previous_fingerprints", n, 0);
     py::array offsets;
     if (offsets_out.is_none()) {
         offsets = bytes ? py::array(empty<uint8_t>(n, 4)) : py::array(empty<float>(n, 4));
@@ -118,12 +118,12 @@ void bind_bake(py::module_& m) {
     m.def("expand_corner_quaternions",
           [](const py::object& corner_uv, int half, const py::object& corner_verts, const py::object& submesh_of_vertex,
              const py::object& quaternions, const py::object& write_submesh) {
-              auto cv = checked<int32_t>(corner_verts, "corner_verts", -1, 0);
+              auto cv = input<int32_t>(corner_verts, "corner_verts", -1, 0);
               auto uv = checked<float>(corner_uv, "corner_uv", cv.shape(0), 2, true);
-              auto sv = checked<int32_t>(submesh_of_vertex, "submesh_of_vertex", -1, 0);
-              auto q = checked<float>(quaternions, "quaternions", -1, 4);
+              auto sv = input<int32_t>(submesh_of_vertex, "submesh_of_vertex", -1, 0);
+              auto q = input<float>(quaternions, "quaternions", -1, 4);
               py::array_t<uint8_t> w;
-              if (!write_submesh.is_none()) w = checked<uint8_t>(write_submesh, "write_submesh", q.shape(0), 0);
+              if (!write_submesh.is_none()) w = input<uint8_t>(write_submesh, "write_submesh", q.shape(0), 0);
               const uint8_t* wp = write_submesh.is_none() ? nullptr : w.data();
               float* out = uv.mutable_data();
               py::gil_scoped_release release;

@@ -43,9 +43,9 @@ void bind_raymarch(py::module_& m) {
     m.def("raymarch",
           [](const py::object& origins, const py::object& directions, const py::object& half_extents, int sdf,
              int max_steps, float epsilon, float relaxation, float max_distance, int threads) {
-              auto ro = checked<float>(origins, "origins", -1, 3);
-              auto rd = checked<float>(directions, "directions", ro.shape(0), 3);
-              auto h = checked<float>(half_extents, "half_extents", ro.shape(0), 3);
+              auto ro = input<float>(origins, "origins", -1, 3);
+              auto rd = input<float>(directions, "directions", ro.shape(0), 3);
+              auto h = input<float>(half_extents, "half_extents", ro.shape(0), 3);
               MarchOptions o = march_options(sdf, max_steps, epsilon, relaxation, max_distance, threads);
               const py::ssize_t n = ro.shape(0);
               py::array_t<uint8_t> hit = empty<uint8_t>(n);
@@ -76,10 +76,10 @@ void bind_raymarch(py::module_& m) {
              const py::object& rgba, const py::object& depth, const py::object& normals, const py::object& steps,
              int sdf, int max_steps, float epsilon, float relaxation, float max_distance, int threads,
              const py::object& order, bool early_depth, float quality) {
-              auto c = checked<float>(origins, "origins", -1, 3);
-              auto q = checked<float>(quaternions, "quaternions", c.shape(0), 4);
-              auto h = checked<float>(half_extents, "half_extents", c.shape(0), 3);
-              auto color = checked<float>(base_color, "base_color", 3, 0);
+              auto c = input<float>(origins, "origins", -1, 3);
+              auto q = input<float>(quaternions, "quaternions", c.shape(0), 4);
+              auto h = input<float>(half_extents, "half_extents", c.shape(0), 3);
+              auto color = input<float>(base_color, "base_color", 3, 0);
               if (!py::isinstance<py::array>(depth) || py::reinterpret_borrow<py::array>(depth).ndim() != 2)
                   throw py::value_error("depth must be a float32 array of shape (height, width)");
               const py::ssize_t height = py::reinterpret_borrow<py::array>(depth).shape(0);
@@ -108,7 +108,7 @@ void bind_raymarch(py::module_& m) {
               RenderCost cost;
               RenderPlan plan;
               if (!order.is_none()) {
-                  draw_order = checked<uint32_t>(order, "order", c.shape(0), 0);
+                  draw_order = input<uint32_t>(order, "order", c.shape(0), 0);
                   plan.order = draw_order.data();
               }
               plan.early_depth = early_depth;

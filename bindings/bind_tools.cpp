@@ -10,10 +10,10 @@ namespace {
 
 py::array_t<uint32_t> close_pairs_py(const py::object& positions, double radius, const py::object& groups,
                                      const std::string& method, int threads) {
-    auto p = checked<float>(positions, "positions", -1, 3);
+    auto p = input<float>(positions, "positions", -1, 3);
     const size_t n = size_t(p.shape(0));
     py::array_t<int32_t> g;
-    if (!groups.is_none()) g = checked<int32_t>(groups, "groups", p.shape(0), 0);
+    if (!groups.is_none()) g = input<int32_t>(groups, "groups", p.shape(0), 0);
     const int32_t* gp = groups.is_none() ? nullptr : g.data();
     if (method != "HASH" && method != "KDTREE")
         throw py::value_error("method must be 'HASH' or 'KDTREE', got '" + method + "'");
@@ -39,12 +39,14 @@ py::dict pack_uv_py(const py::object& corner_uv, const py::object& positions, co
                     const py::object& face_mask, const py::object& vertex_height, const py::object& submesh_of_vertex,
                     size_t submesh_count, double padding, size_t max_per_row, bool lock_overlapping) {
     MeshArrays mesh(positions, edges, face_starts, face_sizes, corner_verts);
-    auto uv = checked<float>(corner_uv, "corner_uv", py::ssize_t(mesh.view.corner_count), 2, true);
+    // corner_uv is read and written: the core works on a private copy (see input()), copied back.
+    auto uv_out = checked<float>(corner_uv, "corner_uv", py::ssize_t(mesh.view.corner_count), 2, true);
+    auto uv = input<float>(corner_uv, "corner_uv", py::ssize_t(mesh.view.corner_count), 2);
     const py::ssize_t n = py::ssize_t(mesh.view.vertex_count);
-    auto height = checked<float>(vertex_height, "vertex_height", n, 0);
+    auto height = input<float>(vertex_height, "vertex_height", n, 0);
     auto ids = checked_submeshes(submesh_of_vertex, n);
     py::array_t<uint8_t> mask;
-    if (!face_mask.is_none()) mask = checked<uint8_t>(face_mask, "face_mask", py::ssize_t(mesh.view.face_count), 0);
+    if (!face_mask.is_none()) mask = input<uint8_t>(face_mask, "face_mask", py::ssize_t(mesh.view.face_count), 0);
     PackUvOptions options;
     options.padding = padding;
     options.max_per_row = max_per_row;
@@ -56,6 +58,7 @@ py::dict pack_uv_py(const py::object& corner_uv, const py::object& positions, co
         py::gil_scoped_release release;
         report = pack_uv_by_height(out, mesh.view, mp, height.data(), ids.data(), submesh_count, options);
     }
+    std::memcpy(uv_out.mutable_data(), uv.data(), size_t(uv.nbytes()));
     py::dict r;
     r["islands"] = report.islands;
     r["groups"] = report.groups;
@@ -74,7 +77,7 @@ void bind_selection_tools(py::module_& m) {
 
     m.def("select_linked_submeshes",
           [](const py::object& selected, const py::object& submesh_of_vertex, size_t submesh_count) {
-              auto sel = checked<uint8_t>(selected, "selected", -1, 0);
+              auto sel = input<uint8_t>(selected, "selected", -1, 0);
               auto ids = checked_submeshes(submesh_of_vertex, sel.shape(0));
               py::array_t<uint8_t> out = empty<uint8_t>(sel.shape(0));
               size_t count;
@@ -91,8 +94,8 @@ void bind_selection_tools(py::module_& m) {
     m.def("select_linked_across",
           [](const py::object& positions, const py::object& selected, const py::object& submesh_of_vertex,
              size_t submesh_count, double epsilon, int threads) {
-              auto p = checked<float>(positions, "positions", -1, 3);
-              auto sel = checked<uint8_t>(selected, "selected", p.shape(0), 0);
+              auto p = input<float>(positions, "positions", -1, 3);
+              auto sel = input<uint8_t>(selected, "selected", p.shape(0), 0);
               auto ids = checked_submeshes(submesh_of_vertex, p.shape(0));
               py::array_t<uint8_t> out = empty<uint8_t>(p.shape(0));
               size_t count;
@@ -111,10 +114,10 @@ void bind_selection_tools(py::module_& m) {
     m.def("find_duplicate_submeshes",
           [](const py::object& positions, const py::object& submesh_of_vertex, size_t submesh_count,
              const py::object& candidate, double tolerance, int threads) {
-              auto p = checked<float>(positions, "positions", -1, 3);
+              auto p = input<float>(positions, "positions", -1, 3);
               auto ids = checked_submeshes(submesh_of_vertex, p.shape(0));
               py::array_t<uint8_t> cand;
-              if (!candidate.is_none()) cand = checked<uint8_t>(candidate, "candidate", py::ssize_t(submesh_count), 0);
+              if (!candidate.is_none()) cand = input<uint8_t>(candidate, "candidate", py::ssize_t(submesh_count), 0);
               py::array_t<int32_t> out = empty<int32_t>(py::ssize_t(submesh_count));
               size_t count;
               {
@@ -136,9 +139,9 @@ void bind_merge_tools(py::module_& m) {
     m.def("merge_passes",
           [](const py::object& positions, const py::object& submesh_of_vertex, size_t submesh_count,
              const py::object& chosen, double distance, int threads) {
-              auto p = checked<float>(positions, "positions", -1, 3);
+              auto p = input<float>(positions, "positions", -1, 3);
               auto ids = checked_submeshes(submesh_of_vertex, p.shape(0));
-              auto ch = checked<uint8_t>(chosen, "chosen", py::ssize_t(submesh_count), 0);
+              auto ch = input<uint8_t>(chosen, "chosen", py::ssize_t(submesh_count), 0);
               py::array_t<int32_t> out = empty<int32_t>(p.shape(0));
               size_t passes;
               {
@@ -156,9 +159,9 @@ void bind_merge_tools(py::module_& m) {
     m.def("merge_targets",
           [](const py::object& positions, const py::object& submesh_of_vertex, size_t submesh_count,
              const py::object& chosen, double distance, int threads) {
-              auto p = checked<float>(positions, "positions", -1, 3);
+              auto p = input<float>(positions, "positions", -1, 3);
               auto ids = checked_submeshes(submesh_of_vertex, p.shape(0));
-              auto ch = checked<uint8_t>(chosen, "chosen", py::ssize_t(submesh_count), 0);
+              auto ch = input<uint8_t>(chosen, "chosen", py::ssize_t(submesh_count), 0);
               py::array_t<int32_t> target = empty<int32_t>(p.shape(0));
               py::array_t<float> merged = empty<float>(p.shape(0), 3);
               size_t count;
@@ -180,10 +183,10 @@ void bind_merge_tools(py::module_& m) {
              const py::object& face_sizes, const py::object& corner_verts, const py::object& target,
              const py::object& corner_edges) {
               MeshArrays mesh(positions, edges, face_starts, face_sizes, corner_verts);
-              auto t = checked<int32_t>(target, "target", py::ssize_t(mesh.view.vertex_count), 0);
+              auto t = input<int32_t>(target, "target", py::ssize_t(mesh.view.vertex_count), 0);
               py::array_t<int32_t> ce_in;
               if (!corner_edges.is_none())
-                  ce_in = checked<int32_t>(corner_edges, "corner_edges", py::ssize_t(mesh.view.corner_count), 0);
+                  ce_in = input<int32_t>(corner_edges, "corner_edges", py::ssize_t(mesh.view.corner_count), 0);
               const int32_t* ce_ptr = corner_edges.is_none() ? nullptr : ce_in.data();
               const py::ssize_t nv = py::ssize_t(mesh.view.vertex_count), ne = py::ssize_t(mesh.view.edge_count),
                                 nf = py::ssize_t(mesh.view.face_count), nc = py::ssize_t(mesh.view.corner_count);

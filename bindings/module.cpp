@@ -27,9 +27,9 @@ void bind_mesh(py::module_& m) {
 
     m.def("face_starts_from_corner_edges",
           [](const py::object& corner_verts, const py::object& corner_edges, const py::object& edges, size_t vertex_count) {
-              auto cv = checked<int32_t>(corner_verts, "corner_verts", -1, 0);
-              auto ce = checked<int32_t>(corner_edges, "corner_edges", cv.shape(0), 0);
-              auto e = checked<int32_t>(edges, "edges", -1, 2);
+              auto cv = input<int32_t>(corner_verts, "corner_verts", -1, 0);
+              auto ce = input<int32_t>(corner_edges, "corner_edges", cv.shape(0), 0);
+              auto e = input<int32_t>(edges, "edges", -1, 2);
               std::vector<int32_t> starts(size_t(cv.shape(0)) / 3 + 1);
               size_t count;
               {
@@ -51,6 +51,8 @@ PYBIND11_MODULE(_core, m) {
     using namespace boxmarch::bindings;
     m.doc() = "boxmarch native core: submeshes, frames, offset encoding (see boxmarch.core for the documented API)";
 
+    m.attr("ANGLE_EPSILON_MIN") = boxmarch::kAngleEpsilonMin;
+    m.attr("ANGLE_EPSILON_MAX") = boxmarch::kAngleEpsilonMax;
     bind_mesh(m);
     bind_bake(m);
     bind_raymarch(m);

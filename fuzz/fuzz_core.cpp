@@ -112,8 +112,8 @@ FuzzMesh read_mesh(Bytes& in, uint8_t flags) {
 BakeOptions read_options(Bytes& in) {
     BakeOptions o;
     const uint8_t e = in.byte();
-    // 0 and values past pi/2 are invalid and must be rejected; 0.1 is the default.
-    o.angle_epsilon = e == 255 ? 0.1 : e * (1.7 / 254.0);
+    // 0, 1e-8 and values past pi/2 are invalid and must be rejected; 0.1 is the default.
+    o.angle_epsilon = e == 255 ? 0.1 : e == 254 ? 1e-8 : e * (1.7 / 253.0);
     o.origin = OriginMode(in.byte() % 2);
     o.sort_axes_by_extent = in.byte() & 1;
     o.axis_turn = int(int8_t(in.byte())) % 27;  // -26..26: valid is 0..23
@@ -207,7 +207,7 @@ void fuzz_bake(Bytes& in, const FuzzMesh& m, const MeshView& view) {
         report = bake(view, submesh_of_vertex.data(), count, mask.empty() ? nullptr : mask.data(),
                       previous.empty() ? nullptr : previous.data(), options, b.out);
     });
-    const bool options_valid = options.angle_epsilon > 0.0 && options.angle_epsilon <= M_PI / 2 &&
+    const bool options_valid = options.angle_epsilon >= kAngleEpsilonMin && options.angle_epsilon <= kAngleEpsilonMax &&
                                options.axis_turn >= 0 && options.axis_turn < 24;
     if (ok != options_valid) fail(ok ? "bake accepted invalid options" : "bake rejected a valid mesh and options");
     if (!ok) {
@@ -345,7 +345,11 @@ void fuzz_raymarch(Bytes& in) {
         raymarch(origins.data(), directions.data(), half.data(), rays, o, hit.data(), positions.data(), normals.data(),
                  steps.data());
     });
-    if (ok != march_options_valid(o)) fail(ok ? "raymarch accepted invalid options" : "raymarch rejected valid options");
+    bool directions_valid = true;  // a ray needs a direction: (0, 0, 0) is refused
+    for (size_t i = 0; i < rays; ++i)
+        directions_valid &= !(directions[3 * i] == 0.0f && directions[3 * i + 1] == 0.0f && directions[3 * i + 2] == 0.0f);
+    if (ok != (march_options_valid(o) && directions_valid))
+        fail(ok ? "raymarch accepted invalid options or a zero direction" : "raymarch rejected valid options");
     for (size_t i = 0; i < rays; ++i) {
         if (!ok) {
             if (hit[i] != 7 || steps[i] != -7) fail("rejected raymarch wrote output");

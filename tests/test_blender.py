@@ -274,7 +274,13 @@ def test_operator_is_registered_for_search_and_menus(blender):
     op = blender.types.BOXMARCH_OT_bake
     assert {"REGISTER", "UNDO"} <= set(op.bl_options)
     assert op.bl_label == "Bake Box Frames"
-    assert math.isclose(blender.ops.boxmarch.bake.get_rna_type().properties["angle_epsilon"].default, 0.1, rel_tol=1e-6)
+    angle_epsilon = blender.ops.boxmarch.bake.get_rna_type().properties["angle_epsilon"]
+    assert math.isclose(angle_epsilon.default, 0.1, rel_tol=1e-6)
+    # The core's range (float32 values, held exactly by the property): the limits accept nothing
+    # the core refuses.
+    from boxmarch import core
+
+    assert (angle_epsilon.hard_min, angle_epsilon.hard_max) == core.ANGLE_EPSILON_RANGE
     assert blender.types.BOXMARCH_PT_bake.bl_category == "Boxmarch"
 
 

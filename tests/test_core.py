@@ -829,7 +829,8 @@ def test_bad_mesh_raises_value_error_and_writes_nothing(case, encoding):
     (dict(axis_turn=-1), "axis_turn"),
     (dict(axis_turn=24), "axis_turn"),
     (dict(mask=np.ones(15, np.uint8)), "mask"),
-    (dict(mask=np.ones(16, np.float32)), "mask"),
+    (dict(mask=np.ones((16, 2), np.uint8)), "mask"),
+    (dict(angle_epsilon=1e-8), "angle_epsilon"),  # cos(1e-8) is 1 in double: float noise would pick the axes
     (dict(previous_fingerprints=np.zeros(16, np.int64)), "previous_fingerprints"),
     (dict(offsets=np.zeros((16, 4), np.uint8)), "offsets"),  # wrong dtype for FLOAT_COLOR
     (dict(offsets=np.zeros((16, 3), np.float32)), "offsets"),

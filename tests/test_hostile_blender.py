@@ -214,7 +214,7 @@ def test_integer_arguments_out_of_range_give_one_line(blender):
         assert len(str(info.value)) < 120 and "\n" not in str(info.value)
     edges = arrays[1].copy()
     edges[0, 0] = -1
-    with pytest.raises(ValueError, match="edges"):
+    with pytest.raises(ValueError, match="edge 0 names vertex -1"):
         core.remove_vertices(arrays[0], edges, *arrays[2:], np.zeros(8, np.uint8), np.zeros(24, np.int32))
 
 

@@ -17,6 +17,19 @@ class _Parser(argparse.ArgumentParser):
         raise InputError(f"{command[0]}: {message}" if command else message)
 
 
+def _angle_epsilon(text):
+    """--angle-epsilon as a float in core.ANGLE_EPSILON_RANGE (the bake operator's limits and the
+    core's check), so the command line refuses what the core would refuse before any file opens."""
+    lo, hi = core.ANGLE_EPSILON_RANGE
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"invalid float value: {text!r}") from None
+    if not lo <= value <= hi:
+        raise argparse.ArgumentTypeError(f"must be in [{lo:g}, {hi:.7g}] radians, got {text}")
+    return value
+
+
 def _target_options(p, out_help="write the result as a new .blend (the input file is never changed)"):
     p.add_argument("blend", nargs="?", metavar="FILE.blend",
                    help="file to open (omit inside `blender FILE.blend --python-expr ...`)")
@@ -27,7 +40,9 @@ def _target_options(p, out_help="write the result as a new .blend (the input fil
 
 def _bake_options(p):
     p.add_argument("--origin", choices=core.ORIGIN_MODES, default=core.ORIGIN_MODES[0])
-    p.add_argument("--angle-epsilon", type=float, default=0.1, help="radians (default 0.1)")
+    lo, hi = core.ANGLE_EPSILON_RANGE
+    p.add_argument("--angle-epsilon", type=_angle_epsilon, default=0.1,
+                   help=f"radians, {lo:g}..{hi:.7g} (default 0.1)")
     p.add_argument("--encoding", choices=core.ENCODINGS, default=core.ENCODINGS[0])
     p.add_argument("--domain", choices=("POINT", "CORNER"), default="POINT")
     p.add_argument("--axis-turn", type=int, default=0, choices=range(24), metavar="0..23")

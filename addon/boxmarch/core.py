@@ -1,7 +1,8 @@
 """Blender-free NumPy API of boxmarch.
 
 Everything here takes and returns NumPy arrays; nothing imports ``bpy``. The heavy work runs in
-the native module ``boxmarch._core`` with the GIL released.
+the native module ``boxmarch._core`` with the GIL released, on private copies of the input arrays
+(another thread writing them during a call cannot change what was checked).
 
 Mesh arrays (the layout Blender uses):
 
@@ -23,12 +24,15 @@ import numpy as np
 from .core_tools import (  # noqa: F401 (re-exported: the submesh tools are part of this API)
     find_close_pairs, find_duplicate_submeshes, merge_passes, merge_targets, pack_uv_by_height, remove_vertices,
     select_linked_across, select_linked_submeshes, weld)
-from .native import _core, checked_int
+from .native import _core, checked_indices, checked_int, checked_mask, row_count
 
 ORIGIN_MODES = ("BOUNDS", "MEAN")
 ENCODINGS = ("FLOAT_COLOR", "BYTE_COLOR")
 FRAME_SOURCES = ("FACES", "FACE_EDGE", "EDGES", "ONE_AXIS", "IDENTITY")
 STATUS_BAKED, STATUS_UNCHANGED, STATUS_NOT_SELECTED = 0, 1, 2
+# Radians; the core's own bounds (boxmarch.h kAngleEpsilonMin/Max), read by the bake operator's
+# property limits and the command line.
+ANGLE_EPSILON_RANGE = (_core.ANGLE_EPSILON_MIN, _core.ANGLE_EPSILON_MAX)
 
 
 @dataclass
@@ -73,7 +77,8 @@ def bake(positions, edges, face_starts, face_sizes, corner_verts, *, mask=None,
          threads=0) -> BakeResult:
     """Bake every submesh (connected component) of a mesh.
 
-    ``mask`` (uint8 per vertex) limits the bake to submeshes with a nonzero vertex;
+    ``mask`` (booleans or numbers, one per vertex) limits the bake to submeshes with a nonzero
+    vertex; ``angle_epsilon`` (radians) must lie in ANGLE_EPSILON_RANGE;
     ``previous_fingerprints`` (uint32 per vertex, from an earlier bake) skips submeshes whose
     geometry and options are unchanged; ``offsets`` (optional, float32 or uint8 (N, 4)) is
     written in place, keeping the values of submeshes not baked. Raises ValueError on malformed
@@ -83,6 +88,8 @@ def bake(positions, edges, face_starts, face_sizes, corner_verts, *, mask=None,
         raise ValueError(f"origin must be one of {ORIGIN_MODES}, got {origin!r}")
     if encoding not in ENCODINGS:
         raise ValueError(f"encoding must be one of {ENCODINGS}, got {encoding!r}")
+    if mask is not None:
+        mask = checked_mask(mask, "mask", row_count(positions))
     r = _core.bake(positions, edges, face_starts, face_sizes, corner_verts, mask=mask,
                    previous_fingerprints=previous_fingerprints, offsets=offsets,
                    angle_epsilon=float(angle_epsilon), origin=origin,
@@ -118,7 +125,7 @@ def corner_quaternion_uv(corner_uv, half, corner_verts, result: BakeResult, writ
     """Fill ``corner_uv`` (float32 (C, 2)) in place with each corner's (q.x, q.y) (half=0) or
     (q.z, q.w) (half=1); corners of submeshes this bake did not write are left as they are
     unless ``write_all``."""
-    _core.expand_corner_quaternions(corner_uv, half, corner_verts, result.submesh_of_vertex,
+    _core.expand_corner_quaternions(corner_uv, checked_int(half, "half", 0, 1), corner_verts, result.submesh_of_vertex,
                                     result.quaternions, None if write_all else result.written)
 
 
@@ -247,8 +254,9 @@ def vertex_values_from_corners(corner_values, corner_verts, vertex_count) -> np.
     """Per-vertex copy of a per-corner array (the bake writes the same quaternion to every corner
     of a vertex): the value of each vertex's last corner; vertices without corners get zeros."""
     corner_values = np.asarray(corner_values)
-    out = np.zeros((int(vertex_count),) + corner_values.shape[1:], corner_values.dtype)
-    out[np.asarray(corner_verts)] = corner_values
+    vertex_count = checked_int(vertex_count, "vertex_count")
+    out = np.zeros((vertex_count,) + corner_values.shape[1:], corner_values.dtype)
+    out[checked_indices(corner_verts, "corner_verts", vertex_count)] = corner_values
     return out
 
 
@@ -261,7 +269,7 @@ def boxes_from_bake(positions, offsets, vertex_quaternions, submesh_of_vertex):
     the origins decoded at the submesh's vertices, half-extents = the largest |f| per local axis
     (the bounding box in the baked frame for BOUNDS origins)."""
     positions = np.asarray(positions, np.float64).reshape(-1, 3)
-    ids = np.asarray(submesh_of_vertex, np.int64)
+    ids = checked_indices(submesh_of_vertex, "submesh_of_vertex", row_count(positions))
     q = np.asarray(vertex_quaternions, np.float64).reshape(-1, 4)
     f = decode_offsets(offsets)
     count = int(ids.max()) + 1 if len(ids) else 0
@@ -291,9 +299,7 @@ def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_v
     ``early_depth``: fragments whose rasterised depth fails the depth test do not march (what a
     declared depth_greater keeps on a GPU); ``quality`` in (0, 1]: the preview's quality knob
     (docs/PREVIEW.md), 1 = every fragment marched in full."""
-    width, height = int(width), int(height)
-    if width <= 0 or height <= 0:
-        raise ValueError(f"width and height must be positive, got {width} x {height}")
+    width, height = checked_int(width, "width", 1), checked_int(height, "height", 1)
     origins = np.ascontiguousarray(origins, np.float32).reshape(-1, 3)
     n = len(origins)
     quaternions = np.ascontiguousarray(quaternions, np.float32).reshape(-1, 4)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .native import _core, checked_int, checked_mask
+from .native import _core, checked_indices, checked_int, checked_mask, row_count
 
 
 def find_close_pairs(positions, radius, groups=None, method="HASH", threads=0) -> np.ndarray:
@@ -89,35 +89,44 @@ def weld(positions, edges, face_starts, face_sizes, corner_verts, target, corner
     ``corner_edges`` (int32 per corner, the edge to the next corner, as Blender stores it) makes
     the new corner edges a lookup instead of a search."""
     return _core.weld_topology(positions, edges, face_starts, face_sizes, corner_verts,
-                               np.ascontiguousarray(target, np.int32), corner_edges)
+                               checked_indices(target, "target", row_count(positions)), corner_edges)
 
 
 def remove_vertices(positions, edges, face_starts, face_sizes, corner_verts, remove, corner_edges) -> dict:
     """The mesh without the vertices marked in ``remove`` and every edge and face touching them,
-    survivors in their order: the same dict as :func:`weld` (with 'incomplete' False)."""
+    survivors in their order: the same dict as :func:`weld` (with 'incomplete' False). Raises
+    ValueError on a malformed mesh (as :func:`boxmarch.core.validate_mesh`), a corner edge out of
+    range, or faces naming more corners than there are (overlapping faces, as weld)."""
+    _core.validate_mesh(positions, edges, face_starts, face_sizes, corner_verts)
     keep = ~checked_mask(remove, "remove", len(positions)).astype(bool)
-    for name, values, limit in (("edges", edges, len(positions)), ("corner_verts", corner_verts, len(positions)),
-                                ("corner_edges", corner_edges, len(np.asarray(edges).reshape(-1, 2)))):
-        values = np.asarray(values)
-        bad = np.flatnonzero((values < 0) | (values >= limit))
-        if len(bad):
-            raise ValueError(f"{name}[{int(bad[0])}] = {int(values.reshape(-1)[bad[0]])} is outside 0..{limit - 1}")
-    new_index = np.cumsum(keep, dtype=np.int64) - 1
     edges = np.asarray(edges).reshape(-1, 2)
+    corner_verts = np.asarray(corner_verts)
+    corner_edges = checked_indices(corner_edges, "corner_edges", len(edges))
+    if corner_edges.shape != corner_verts.shape:
+        raise ValueError(f"corner_edges must have shape {corner_verts.shape}, got {corner_edges.shape}")
+    starts, sizes = np.asarray(face_starts, np.int64), np.asarray(face_sizes, np.int64)
+    if sizes.sum() > len(corner_verts):
+        raise ValueError(f"faces name {int(sizes.sum())} corners but there are {len(corner_verts)}: faces overlap")
+    # Each face's corners, face after face (faces may be stored in any order of their starts).
+    first_of_run = np.cumsum(sizes) - sizes
+    face_corner = np.repeat(starts - first_of_run, sizes) + np.arange(int(sizes.sum()))
+    face_of_corner = np.repeat(np.arange(len(sizes)), sizes)
+    dropped = np.zeros(len(sizes), bool)
+    np.logical_or.at(dropped, face_of_corner, ~keep[corner_verts[face_corner]])
+    keep_face = ~dropped
+    kept_corners = face_corner[keep_face[face_of_corner]]
+    new_index = np.cumsum(keep, dtype=np.int64) - 1
     keep_edge = keep[edges[:, 0]] & keep[edges[:, 1]]
     new_edge = np.cumsum(keep_edge, dtype=np.int64) - 1
-    corner_verts = np.asarray(corner_verts)
-    corner_keep_face = np.logical_and.reduceat(keep[corner_verts], face_starts) if len(face_starts) else np.zeros(0, bool)
-    keep_corner = np.repeat(corner_keep_face, face_sizes)
-    sizes = np.asarray(face_sizes)[corner_keep_face]
+    kept_sizes = sizes[keep_face]
     return {
         "vertex_source": np.flatnonzero(keep).astype(np.int32),
         "edge_source": np.flatnonzero(keep_edge).astype(np.int32),
         "edges": new_index[edges[keep_edge]].astype(np.int32),
-        "face_source": np.flatnonzero(corner_keep_face).astype(np.int32),
-        "face_starts": (np.cumsum(sizes) - sizes).astype(np.int32),
-        "corner_source": np.flatnonzero(keep_corner).astype(np.int32),
-        "corner_verts": new_index[corner_verts[keep_corner]].astype(np.int32),
-        "corner_edges": new_edge[np.asarray(corner_edges)[keep_corner]].astype(np.int32),
+        "face_source": np.flatnonzero(keep_face).astype(np.int32),
+        "face_starts": (np.cumsum(kept_sizes) - kept_sizes).astype(np.int32),
+        "corner_source": kept_corners.astype(np.int32),
+        "corner_verts": new_index[corner_verts[kept_corners]].astype(np.int32),
+        "corner_edges": new_edge[corner_edges[kept_corners]].astype(np.int32),
         "incomplete": False,
     }

@@ -3,6 +3,8 @@ core.py and core_tools.py: a bad value becomes a one-line ValueError before any 
 the bindings."""
 from __future__ import annotations
 
+import operator
+
 import numpy as np
 
 try:
@@ -13,10 +15,13 @@ except ImportError:  # installed as a Blender 4.2+ extension: the module comes f
 
 def checked_int(value, name, lo=0, hi=2**31 - 1) -> int:
     """value as an int in [lo, hi], else a one-line ValueError (the bindings' own TypeError for
-    an integer past 32 bits lists every overload)."""
+    an integer past 32 bits lists every overload). Integers of any type and floats with an
+    integral value are accepted; 2.7 is refused, not truncated to 2."""
+    if isinstance(value, (float, np.floating)) and float(value).is_integer():
+        value = int(value)
     try:
-        number = int(value)
-    except (TypeError, ValueError, OverflowError):
+        number = operator.index(value)
+    except TypeError:
         raise ValueError(f"{name} must be an integer, got {value!r}") from None
     if not lo <= number <= hi:
         raise ValueError(f"{name} must be in {lo}..{hi}, got {value!r}")
@@ -24,7 +29,29 @@ def checked_int(value, name, lo=0, hi=2**31 - 1) -> int:
 
 
 def checked_mask(values, name, length) -> np.ndarray:
+    """Any array of booleans or numbers, one per element (nonzero: set), as the uint8 0/1 array
+    the bindings take."""
     mask = np.ascontiguousarray(np.asarray(values) != 0, dtype=np.uint8)
     if mask.shape != (length,):
         raise ValueError(f"{name} must have shape ({length},), got {np.shape(values)}")
     return mask
+
+
+def checked_indices(values, name, limit) -> np.ndarray:
+    """Integer indices as an int32 array, or a ValueError naming the first outside 0..limit-1:
+    NumPy would wrap a negative index silently and raise a bare IndexError past the end, and a
+    cast to int32 would wrap 2**32 + 5 to 5 and truncate 2.7 to 2."""
+    array = np.asarray(values)
+    if array.dtype.kind not in "iub":
+        raise ValueError(f"{name} must hold integers, got dtype {array.dtype}")
+    flat = array.reshape(-1)
+    bad = np.flatnonzero((flat < 0) | (flat >= limit))
+    if len(bad):
+        raise ValueError(f"{name}[{int(bad[0])}] = {int(flat[bad[0]])} is outside 0..{limit - 1}")
+    return np.ascontiguousarray(array, np.int32)
+
+
+def row_count(values) -> int:
+    """Rows of an array-like (0 for a scalar or None), to size the checks of the arrays beside it
+    before the bindings check the array itself."""
+    return np.shape(values)[0] if np.ndim(values) else 0

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <numeric>
 #include <stdexcept>
@@ -163,8 +164,12 @@ struct BakeJob {
 
 void check_bake_arguments(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t submesh_count,
                           const BakeOptions& options, const BakeOutput& out) {
-    if (!(options.angle_epsilon > 0.0 && options.angle_epsilon <= M_PI / 2))
-        throw std::invalid_argument("angle_epsilon must be in (0, pi/2] radians");
+    if (!(options.angle_epsilon >= kAngleEpsilonMin && options.angle_epsilon <= kAngleEpsilonMax)) {
+        char message[120];
+        std::snprintf(message, sizeof message, "angle_epsilon must be in [%g, %.7g] radians, got %.9g",
+                      kAngleEpsilonMin, kAngleEpsilonMax, options.angle_epsilon);
+        throw std::invalid_argument(message);
+    }
     if (options.axis_turn < 0 || options.axis_turn >= 24) throw std::invalid_argument("axis_turn must be in 0..23");
     const bool bytes = options.encoding == ColorEncoding::Byte;
     if (bytes ? !out.offset_byte : !out.offset_float)

@@ -238,6 +238,10 @@ glm::dmat3 frame_from_choice(const FrameChoice& choice, const SubmeshView& s, co
         y = world_second_axis(x);
     } else {
         y = orthogonal_part(direction(choice.second_kind, choice.second), x);
+        // Twice is enough (Kahan): where the projection cancelled most of the unit direction (the
+        // two directions within 30 degrees), its rounding is no longer small next to y; a second
+        // projection leaves y orthogonal to x to double rounding, so the frame is a rotation.
+        if (glm::dot(y, y) < 0.25) y = orthogonal_part(y, x);
         const double len = glm::length(y);
         y = len > 0.0 ? y / len : world_second_axis(x);
     }

@@ -13,6 +13,7 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <mutex>
 #include <stdexcept>
@@ -177,13 +178,21 @@ float sdf_distance(SdfPreset kind, const float* p, const float* h) {
 void raymarch(const float* origins, const float* directions, const float* half_extents, size_t ray_count,
               const MarchOptions& o, uint8_t* hit, float* positions, float* normals, int32_t* steps) {
     check_options(o);
+    // A zero direction has no ray to march (taking any axis instead would report that axis's hit).
+    const size_t still = first_failing(ray_count, [&](size_t i) {
+        const float* d = directions + 3 * i;
+        return (d[0] == 0.0f) & (d[1] == 0.0f) & (d[2] == 0.0f);
+    });
+    if (still < ray_count) throw std::invalid_argument("ray " + std::to_string(still) + " has a zero direction");
     parallel_for(ray_count, o.threads, [&](size_t begin, size_t end) {
         for (size_t i = begin; i < end; ++i) {
             vec3 ro = glm::make_vec3(origins + 3 * i);
             vec3 rd = glm::make_vec3(directions + 3 * i);
             vec3 h = glm::make_vec3(half_extents + 3 * i);
-            float len = glm::length(rd);
-            rd = len > 0.0f ? rd / len : vec3(0.0f, 0.0f, 1.0f);
+            const float len = glm::length(rd);
+            // A length whose float32 square underflows or overflows (every component below about
+            // 4e-23, or one above about 2e19) is taken in double.
+            rd = len > 0.0f && len <= FLT_MAX ? rd / len : vec3(glm::normalize(glm::dvec3(rd)));
             vec2 span = shader::bm_box_span(ro, rd, h);
             float t0 = std::max(span.x, 0.0f);
             March m{false, 0.0f, 0};

@@ -323,7 +323,8 @@ void test_bake_decodes_box_centres(ColorEncoding encoding) {
 void test_bake_rejects_bad_options_and_numbering_and_writes_nothing() {
     const Mesh m = two_boxes();
     const MeshView view = m.view();
-    const double bad_epsilons[] = {0.0, -0.1, 2.0, std::numeric_limits<double>::quiet_NaN()};
+    const double bad_epsilons[] = {0.0, -0.1, 1e-8, std::nextafter(kAngleEpsilonMin, 0.0), M_PI / 2, 2.0,
+                                   std::numeric_limits<double>::quiet_NaN()};
     for (double eps : bad_epsilons) {
         Outputs o(view);
         BakeOptions options;

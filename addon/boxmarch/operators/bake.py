@@ -42,7 +42,8 @@ class BOXMARCH_OT_bake(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     angle_epsilon: FloatProperty(
-        name="Angle Epsilon", subtype="ANGLE", default=0.1, min=1e-6, max=1.5707963,
+        name="Angle Epsilon", subtype="ANGLE", default=0.1, min=core.ANGLE_EPSILON_RANGE[0],
+        max=core.ANGLE_EPSILON_RANGE[1],
         description="The second axis comes from the largest face at least this far from the first axis's plane")
     origin: EnumProperty(
         name="Origin", default=core.ORIGIN_MODES[0],

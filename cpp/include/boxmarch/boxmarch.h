@@ -4,7 +4,9 @@
 // The one public header of the native core. Every function works on flat arrays that the caller
 // owns; counts are element counts, not bytes. Functions throw std::invalid_argument with a
 // readable message when their input is malformed (out-of-range indices, non-finite positions,
-// mismatched counts) and write nothing in that case.
+// mismatched counts) and write nothing in that case. Inputs must not change during a call (the
+// checks read them once, before the work): the Python bindings pass private copies, so another
+// thread writing the caller's arrays cannot turn a checked index into one out of range.
 #pragma once
 
 #include <cstddef>
@@ -81,8 +83,17 @@ enum class SubmeshStatus : uint8_t {
     NotSelected = 2, // bake_mask excluded it: outputs left as they were
 };
 
+// The range of BakeOptions::angle_epsilon (radians), the one statement of it: the Python API, the
+// bake operator's property limits and the command line read these. Below about 1e-8, cos(epsilon)
+// rounds to 1 in double and float noise would decide which face gives the second axis; the
+// minimum keeps two decades from there. Both bounds are float32 values, so the operator's
+// float32 property holds them exactly.
+constexpr double kAngleEpsilonMin = double(1e-6f);
+constexpr double kAngleEpsilonMax = double(1.5707963f);  // just below pi/2
+
 struct BakeOptions {
-    double angle_epsilon = 0.1;      // radians: axis 2 needs |dot(n, axis1)| < cos(angle_epsilon)
+    double angle_epsilon = 0.1;      // radians, kAngleEpsilonMin..kAngleEpsilonMax: axis 2 needs
+                                     // |dot(n, axis1)| < cos(angle_epsilon)
     OriginMode origin = OriginMode::Bounds;
     bool sort_axes_by_extent = false; // local x longest, z shortest, before the turn
     int axis_turn = 0;               // 0..23, see axis_turn_matrix
@@ -129,8 +140,11 @@ struct BakeOutput {
 // bake_mask keeps its previous fingerprint, or 0 without one); for baked submeshes only, the
 // colour of each vertex (offset_float or offset_byte, by the encoding); and every submesh's
 // entry of the per-submesh arrays (for a submesh not baked, zeros and source Identity). Returns
-// the report. Throws std::invalid_argument, writing nothing, on invalid options, a missing
-// output array, or a numbering with an id out of range or a submesh without vertices.
+// the report. Throws std::invalid_argument, writing nothing, on invalid options (angle_epsilon
+// outside kAngleEpsilonMin..kAngleEpsilonMax or NaN, axis_turn outside 0..23), a missing output
+// array, or a numbering with an id out of range or a submesh without vertices. Every frame is
+// orthonormal to double rounding, so max_error measures the decode of the stored values against
+// the origin the bake defines (MEAN: the vertex mean, whatever the frame).
 BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t submesh_count,
                 const uint8_t* bake_mask, const uint32_t* previous_fingerprints,
                 const BakeOptions& options, const BakeOutput& out);
@@ -185,8 +199,9 @@ float sdf_distance(SdfPreset sdf, const float* p, const float* h);
 // Writes hit[ray_count] (1 = distance fell below epsilon), positions[ray_count * 3] (last
 // sample point, box-local), normals[ray_count * 3] (unit SDF gradient by 4 tetrahedral taps at
 // distance max(epsilon, max(h) / 1000); zero on a miss) and steps[ray_count] (SDF evaluations of the march).
-// Any output pointer may be null. Throws std::invalid_argument on max_steps < 0,
-// epsilon <= 0, relaxation outside (0, 2] or max_distance <= 0.
+// Any output pointer may be null. Throws std::invalid_argument (nothing written) on a ray whose
+// direction is (0, 0, 0), max_steps < 0, epsilon <= 0, relaxation outside (0, 2] or
+// max_distance <= 0.
 void raymarch(const float* origins, const float* directions, const float* half_extents,
               size_t ray_count, const MarchOptions& options, uint8_t* hit, float* positions,
               float* normals, int32_t* steps);
