@@ -20,8 +20,9 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 VERSIONS = ["3.4", "4.2", "4.5", "5.0"]
 # --quick: the add-on proved on a release in about a minute: registration and the bake operator,
-# every submesh tool, the export presets, the offscreen preview against the CPU reference, and the
-# 4.2+ extension zip validated, installed and enabled by that release's own extension tool.
+# the submesh tools, the export presets, the offscreen preview against the CPU reference (and a
+# broken user SDF named by its line), `python -m boxmarch` (exit codes 0 and 2), and the 4.2+
+# extension zip validated, installed and enabled by that release's own extension tool.
 QUICK = [
     "tests/test_blender.py::test_operator_is_registered_for_search_and_menus",
     "tests/test_blender.py::test_bake_operator_decodes_to_box_centres",
@@ -33,6 +34,10 @@ QUICK = [
     "tests/test_tools_blender.py::test_merge_per_submesh_equals_blenders_merge_of_each_submesh",
     "tests/test_export.py",
     "tests/test_preview_blender.py",
+    "tests/test_preview.py::test_preview_matches_cpu_reference",
+    "tests/test_preview.py::test_user_sdf_error_names_line_and_falls_back_to_outline",
+    "tests/test_cli.py::test_module_bake_export_pipeline_on_a_file",
+    "tests/test_cli.py::test_module_failure_report_is_json_when_asked",
     "tests/test_install.py::test_extension_installs_into_clean_blender_4_2_or_later_and_bakes",
 ]
 SUMMARY = re.compile(r"(\d+) (passed|failed|skipped|errors?|deselected|xfailed|xpassed)")
