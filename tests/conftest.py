@@ -15,12 +15,14 @@ from helpers.blender_program import BPY_PATH
 
 if BPY_PATH:  # another release's bpy module (tests/helpers/blender_program.py)
     sys.path.insert(0, BPY_PATH)
+
 _SANDBOX = tempfile.mkdtemp(prefix="boxmarch-tests-")
 # Headless Blender writes caches and its config under these: keep them out of the real home.
 os.environ["XDG_CACHE_HOME"] = os.path.join(_SANDBOX, "cache")
 os.environ["XDG_CONFIG_HOME"] = os.path.join(_SANDBOX, "config")
 
 
+@pytest.hookimpl(tryfirst=True)  # before -m deselects by marker
 def pytest_collection_modifyitems(items):
     for item in items:
         if "bpy_module" in item.fixturenames and item.get_closest_marker("blender_program") is None:
@@ -54,7 +56,6 @@ def bpy_module():
 
     if BPY_PATH:
         assert Path(bpy.__file__).is_relative_to(BPY_PATH), f"{bpy.__file__} is not from BOXMARCH_BPY_PATH={BPY_PATH}"
-
     if not hasattr(bpy.types, "BOXMARCH_OT_bake"):
         boxmarch.register()
     return bpy

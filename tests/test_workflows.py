@@ -31,7 +31,7 @@ def test_actionlint_finds_the_mistakes_it_is_trusted_with(tmp_path):
     broken.write_text((WORKFLOWS / "wheels.yml").read_text()
                       .replace("windows-2022", "windows-1999")
                       .replace("name: wheel-${{ matrix.os }}", "name: wheel-${{ matrix.system }}")
-                      .replace('run: python -m pip install "bpy==4.2.*"', "run: cd $HOME/x && ls"))
+                      .replace('python -m pip install "bpy==4.2.*"', "cd $HOME/x && ls"))
     proc = actionlint(broken)
     assert proc.returncode == 1, proc.stdout + proc.stderr
     for finding in ('label "windows-1999" is unknown', 'property "system" is not defined', "SC2086"):
