@@ -20,6 +20,7 @@ def bpy_42():
     return proc.stdout.strip()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fail, status, summary", [("0", 0, "1 passed"), ("1", 1, "1 failed")])
 def test_pytest_status_survives_the_exit_crash(bpy_42, tmp_path, fail, status, summary):
     env = dict(os.environ, BOXMARCH_BPY_PATH=bpy_42, BOXMARCH_PROBE_FAIL=fail, TMPDIR=str(tmp_path),

@@ -106,6 +106,7 @@ def test_extension_installs_into_clean_blender_4_2_or_later_and_bakes(packages, 
     assert Path(result["module_file"]).is_relative_to(tmp_path / "resources")
 
 
+@pytest.mark.slow
 @pytest.mark.bpy
 def test_one_extension_per_platform_from_a_wheelhouse(packages, tmp_path):
     """--wheels (the wheels workflow's extension job): Blender's tool with --split-platforms writes
