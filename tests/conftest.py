@@ -1,15 +1,51 @@
 """Shared fixtures. Blender (the ``bpy`` module) is imported lazily, once per process, and only by
-tests that ask for the ``blender`` fixture; the core tests never import it."""
+tests that ask for the ``blender`` fixture; the core tests never import it.
+
+Markers (scripts/blender_matrix.py selects with them): ``bpy``, the add-on under the bpy module
+(given to every test that uses the ``blender`` fixture, unless it is marked ``blender_program``);
+``blender_program``, the add-on inside Debian's Blender 3.4 program."""
 import os
+import sys
 import tempfile
 from pathlib import Path
 
 import pytest
 
+from helpers.blender_program import BPY_PATH
+
+if BPY_PATH:  # another release's bpy module (tests/helpers/blender_program.py)
+    sys.path.insert(0, BPY_PATH)
+
 _SANDBOX = tempfile.mkdtemp(prefix="boxmarch-tests-")
 # Headless Blender writes caches and its config under these: keep them out of the real home.
 os.environ["XDG_CACHE_HOME"] = os.path.join(_SANDBOX, "cache")
 os.environ["XDG_CONFIG_HOME"] = os.path.join(_SANDBOX, "config")
+
+
+@pytest.hookimpl(tryfirst=True)  # before -m deselects by marker
+def pytest_collection_modifyitems(items):
+    for item in items:
+        if "bpy_module" in item.fixturenames and item.get_closest_marker("blender_program") is None:
+            item.add_marker(pytest.mark.bpy)
+
+
+_exit_status = None
+
+
+def pytest_sessionfinish(session, exitstatus):
+    global _exit_status
+    _exit_status = int(exitstatus)
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_unconfigure(config):
+    """bpy 4.2 and 4.5 (PyPI) segfault at interpreter exit once an add-on registered classes
+    (exit 139 after every test ran): leave with pytest's own status, after its report."""
+    bpy = sys.modules.get("bpy")
+    if bpy is not None and _exit_status is not None and (4, 2) <= bpy.app.version[:2] < (5, 0):
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(_exit_status)
 
 
 @pytest.fixture(scope="session")
@@ -18,6 +54,8 @@ def bpy_module():
 
     import boxmarch
 
+    if BPY_PATH:
+        assert Path(bpy.__file__).is_relative_to(BPY_PATH), f"{bpy.__file__} is not from BOXMARCH_BPY_PATH={BPY_PATH}"
     if not hasattr(bpy.types, "BOXMARCH_OT_bake"):
         boxmarch.register()
     return bpy

@@ -8,7 +8,7 @@ import pytest
 
 from helpers.blender_program import SCRIPTS, blender_env, run_blender
 
-pytestmark = pytest.mark.slow  # Blender 3.4 program subprocesses
+pytestmark = [pytest.mark.slow, pytest.mark.blender_program]  # Blender 3.4 program subprocesses
 
 
 @pytest.mark.parametrize("encoding, tolerance", [("FLOAT_COLOR", 1e-5), ("BYTE_COLOR", 0.05)])

@@ -95,6 +95,7 @@ def assert_glb_decodes_to_centres(path, tolerance=1e-5):
 # --- python -m boxmarch -------------------------------------------------------------------------
 
 
+@pytest.mark.bpy
 @pytest.mark.parametrize("renderer", ["AUTO", "CPU"])
 def test_module_demo_prints_table_and_writes_checked_files(tmp_path, renderer):
     proc = run_module(["demo", "--count", "300", "--out", "out", "--json", "demo.json", "--preview", renderer], tmp_path)
@@ -127,6 +128,7 @@ def test_module_demo_prints_table_and_writes_checked_files(tmp_path, renderer):
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and int.from_bytes(png[16:20], "big") == 640
 
 
+@pytest.mark.bpy
 def test_module_bake_export_pipeline_on_a_file(boxes_blend_34, tmp_path):
     source = tmp_path / "in.blend"
     shutil.copy(boxes_blend_34, source)
@@ -147,6 +149,7 @@ def test_module_bake_export_pipeline_on_a_file(boxes_blend_34, tmp_path):
     assert (tmp_path / "boxes.fbx").stat().st_size > 0
 
 
+@pytest.mark.bpy
 def test_module_cleanup_pipeline_dedups_merges_bakes_and_packs(messy_blend_34, tmp_path, blender):
     proc = run_module(["pipeline", str(messy_blend_34), "--objects", "Messy", "--steps", "dedup,merge,bake,pack-uv",
                        "--tolerance", "1e-4", "--distance", "1e-3", "--padding", "0.01",
@@ -165,6 +168,7 @@ def test_module_cleanup_pipeline_dedups_merges_bakes_and_packs(messy_blend_34, t
     assert len(mesh.vertices) == 80 and uv.min() >= 0.0 and uv.max() <= 1.0 and np.ptp(uv) > 0.5
 
 
+@pytest.mark.bpy
 @pytest.mark.parametrize("args, reason", [
     (["bake", "missing.blend"], "no such file"),
     (["bake", "notes.txt"], "not a .blend file"),
@@ -204,6 +208,7 @@ def test_module_export_refuses_a_report_over_its_sidecar(boxes_blend_34, tmp_pat
     assert sorted(os.listdir(tmp_path)) == ["in.blend"]
 
 
+@pytest.mark.bpy
 def test_module_failure_report_is_json_when_asked(boxes_blend_34, tmp_path):
     shutil.copy(boxes_blend_34, tmp_path / "in.blend")
     proc = run_module(["bake", "in.blend", "--objects", "Camera", "--out", "o.blend", "--json", "r.json"], tmp_path)
@@ -216,6 +221,7 @@ def test_module_failure_report_is_json_when_asked(boxes_blend_34, tmp_path):
 # --- blender --background FILE --python-expr ... -- ---------------------------------------------
 
 
+@pytest.mark.blender_program
 def test_blender_34_form_bake_export_and_exit_codes(boxes_blend_34, package_parent, tmp_path, blender):  # noqa: F811
     proc = run_blender_cli(boxes_blend_34, ["bake", "--out", str(tmp_path / "baked.blend"),
                                             "--json", str(tmp_path / "bake.json")], package_parent, tmp_path)
@@ -252,6 +258,7 @@ def test_blender_34_form_bake_export_and_exit_codes(boxes_blend_34, package_pare
     assert proc.returncode == 2 and "no such file" in proc.stderr
 
 
+@pytest.mark.blender_program
 def test_blender_34_form_demo(package_parent, tmp_path):  # noqa: F811
     proc = run_blender_cli(None, ["demo", "--count", "300", "--out", str(tmp_path), "--json", str(tmp_path / "r.json")],
                            package_parent, tmp_path)
@@ -263,6 +270,7 @@ def test_blender_34_form_demo(package_parent, tmp_path):  # noqa: F811
         assert (tmp_path / name).exists()
 
 
+@pytest.mark.blender_program
 def test_blender_34_form_cleanup_commands(messy_blend_34, package_parent, tmp_path):  # noqa: F811
     for command, option, before, after in (("dedup", ["--tolerance", "1e-4"], 105, 81),
                                            ("merge", ["--distance", "1e-3"], 105, 104)):

@@ -167,6 +167,7 @@ def test_camera_inside_a_box(rendered):
     assert np.percentile(error, 99.9) <= 2e-3
 
 
+@pytest.mark.blender_program
 def test_draw_handler_in_a_real_viewport(package_parent, tmp_path):  # noqa: F811
     """Blender 3.4's window under Xvfb: the POST_VIEW handler draws the raymarched shapes."""
     if shutil.which("xvfb-run") is None:

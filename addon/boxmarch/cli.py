@@ -384,9 +384,11 @@ def main(argv=None):
     code = run(argv)
     sys.stdout.flush()
     sys.stderr.flush()
-    if _in_blender_program():
-        # There a SystemExit raised by --python-expr is swallowed and Blender exits 0, so end
-        # the process with the code here.
+    bpy = sys.modules.get("bpy")
+    if _in_blender_program() or (bpy is not None and (4, 2, 0) <= bpy.app.version < (5, 0, 0)):
+        # Inside the Blender program a SystemExit raised by --python-expr is swallowed and Blender
+        # exits 0; the bpy modules 4.2 and 4.5 segfault at interpreter exit once the add-on
+        # registered. Either way, end the process with the code here.
         os._exit(code)
     sys.exit(code)
 

@@ -59,6 +59,7 @@ try:
     rgba, _depth = preview.render(bpy.context.scene, camera, 64, 48)
     result["preview_covered"] = float((rgba[..., 3] > 0).mean())
     result["version"] = list(bpy.app.version)
+    result["bpy_file"] = bpy.__file__
 except Exception:
     result["error"] = traceback.format_exc()
 with open(out_path, "w") as f:

@@ -3,6 +3,7 @@ preview offscreen (GPU, llvmpipe here) and writes the images with the scene's gr
 
 Usage: blender --background --factory-startup --python preview_check.py -- PACKAGE_PARENT OUT.npz
 """
+import os
 import sys
 
 argv = sys.argv[sys.argv.index("--") + 1:]
@@ -200,3 +201,6 @@ result["MOVED_rgba"], result["MOVED_depth"] = preview.render(scene, camera, W, H
 
 np.savez_compressed(out_path, **result)
 print("preview_check: wrote", out_path)
+sys.stdout.flush()
+sys.stderr.flush()
+os._exit(0)  # the bpy modules 4.2 and 4.5 segfault at interpreter exit once the add-on registered

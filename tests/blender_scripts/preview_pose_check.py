@@ -7,6 +7,7 @@ posed boxes itself and renders them with the CPU reference.
 Usage: blender --background --factory-startup --python preview_pose_check.py -- PACKAGE_PARENT OUT.npz
 """
 import math
+import os
 import sys
 
 argv = sys.argv[sys.argv.index("--") + 1:]
@@ -159,3 +160,6 @@ result["envelopes_error"] = str(draw.errors.get(boxes.name))
 
 np.savez_compressed(out_path, **result)
 print("preview_pose_check: wrote", out_path)
+sys.stdout.flush()
+sys.stderr.flush()
+os._exit(0)  # the bpy modules 4.2 and 4.5 segfault at interpreter exit once the add-on registered

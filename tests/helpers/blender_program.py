@@ -1,5 +1,9 @@
 """Running the add-on outside this process: Debian's Blender program (3.4) with a clean
-environment, and ``python -m boxmarch`` with this Python."""
+environment, and ``python -m boxmarch`` (or a check script) with this Python and its bpy module.
+
+``BOXMARCH_BPY_PATH`` names a folder holding another release's bpy module (``pip install --target``,
+see scripts/install_bpy.sh): conftest puts it first on this process's sys.path and ``python_env``
+puts it first on a child Python's, so every test that runs the bpy module runs that release."""
 import os
 import shutil
 import subprocess
@@ -9,6 +13,7 @@ from pathlib import Path
 import boxmarch
 
 SCRIPTS = Path(__file__).resolve().parent.parent / "blender_scripts"
+BPY_PATH = os.environ.get("BOXMARCH_BPY_PATH", "")
 
 
 def blender_env(tmp_path):
@@ -31,10 +36,20 @@ def run_blender(args, tmp_path, timeout=240):
     return proc
 
 
+def python_env(env, *folders):
+    """``env`` for a child Python that imports bpy: PYTHONPATH holds BPY_PATH (when set), then folders."""
+    path = [str(p) for p in (BPY_PATH, *folders) if p]
+    if path:
+        env["PYTHONPATH"] = os.pathsep.join(path)
+    else:
+        env.pop("PYTHONPATH", None)
+    return env
+
+
 def module_environment(cwd):
-    """The environment of a ``python -m boxmarch`` run in ``cwd``: this boxmarch on the path,
-    Blender's caches in a folder beside ``cwd`` (outside the checked folder)."""
-    env = dict(os.environ, PYTHONPATH=str(Path(boxmarch.__file__).parent.parent))
+    """The environment of a ``python -m boxmarch`` run in ``cwd``: BPY_PATH and this boxmarch on
+    the path, Blender's caches in a folder beside ``cwd`` (outside the checked folder)."""
+    env = python_env(dict(os.environ), Path(boxmarch.__file__).parent.parent)
     home = Path(cwd).parent / f"{Path(cwd).name}-home"
     home.mkdir(exist_ok=True)
     for var in ("HOME", "TMPDIR", "XDG_CACHE_HOME"):

@@ -5,9 +5,13 @@ import sys
 
 import numpy as np
 
-from helpers.blender_program import blender_env, run_blender
+import pytest
 
-BLENDERS = ["blender-3.4-program", "bpy-5.0-module"]
+from helpers.blender_program import blender_env, python_env, run_blender
+
+# The two ways of running the add-on, marked for scripts/blender_matrix.py's selections.
+BLENDERS = [pytest.param("blender-3.4-program", marks=pytest.mark.blender_program),
+            pytest.param("bpy-module", marks=pytest.mark.bpy)]
 
 
 def run_check_script(blender, script, package_parent, out, tmp):
@@ -17,7 +21,7 @@ def run_check_script(blender, script, package_parent, out, tmp):
                      str(package_parent), str(out)], tmp, timeout=600)
     else:
         proc = subprocess.run([sys.executable, str(script), "--", str(package_parent), str(out)],
-                              env=blender_env(tmp), capture_output=True, text=True, timeout=600)
+                              env=python_env(blender_env(tmp)), capture_output=True, text=True, timeout=600)
         assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     return dict(np.load(out))
 

@@ -34,10 +34,11 @@ def new_mesh(name, positions, face_starts, face_sizes, corner_verts, edges=None)
     if bpy.app.version < (4, 0, 0):  # 4.0 derives sizes from the starts
         mesh.polygons.foreach_set("loop_total", np.asarray(face_sizes, np.int32))
     mesh.update(calc_edges=True)
-    # Blender 5.0.1 leaves the edges it derives with an INT32_2D '.select_edge' (a copy of the
-    # edge layout), and RNA access to edge selection then crashes; selection layers are optional.
+    # The edges Blender derives get a '.select_edge' that is wrong for a mesh with nothing selected:
+    # 4.2 selects every new edge; 5.0.1 leaves an INT32_2D copy of the edge layout, and RNA access
+    # to edge selection then crashes. Selection layers are optional: absent means none selected.
     select_edge = mesh.attributes.get(".select_edge")
-    if select_edge is not None and select_edge.data_type != "BOOLEAN":
+    if select_edge is not None:
         mesh.attributes.remove(select_edge)
     return mesh
 

@@ -52,9 +52,9 @@ def _create_info(fragment: str, layout: str):
     return info, iface
 
 
-def _compile_capturing_log(info):
+def _compile_capturing_log(info, echo=True):
     """create_from_info, with the compiler log that Blender prints (to stdout or stderr,
-    depending on the version) captured and passed on."""
+    depending on the version) captured and, when ``echo``, passed on."""
     sys.stdout.flush()
     sys.stderr.flush()
     saved = {fd: os.dup(fd) for fd in (1, 2)}
@@ -74,7 +74,7 @@ def _compile_capturing_log(info):
                 os.close(copy)
         log.seek(0)
         text = log.read().decode("utf-8", "replace")
-    if text:
+    if text and echo:
         sys.stderr.write(text)
     return shader, error, text
 
@@ -93,26 +93,56 @@ def _located(line: int, message: str):
     return f"line {line}: {message}", line
 
 
-def describe_compile_error(log: str):
-    """(message, user line or None) from a compiler log of a shader holding user text."""
+def _first_error(log: str):
+    """(message, line as the log numbers it, or None) of the first error in a compiler log.
+    Blender 3.4 to 4.2 and 5.0 print the numbered source line before its errors; 4.5 prints
+    errors it could not place first and the numbered line after them."""
     for raw in log.splitlines():
         match = _LOCATED_ERROR.search(raw)
         if match:
-            return _located(int(match.group(1)), match.group(2).strip())
-    last_line = None
+            return match.group(2).strip(), int(match.group(1))
+    message = line = None
     for raw in log.splitlines():
         numbered = _SOURCE_LINE.match(raw)
-        if numbered:
-            last_line = int(numbered.group(1))
-            continue
+        if numbered and line is None:
+            line = int(numbered.group(1))
         match = _BLENDER_ERROR.search(raw)
-        if match and last_line is not None:
-            return _located(last_line, match.group(1).strip())
+        if match and message is None:
+            message = match.group(1).strip()
         match = _DRIVER_ERROR.search(raw)
-        if match:
-            return _located(int(match.group(1)), match.group(2).strip())
+        if match and message is None:
+            message, line = match.group(2).strip(), int(match.group(1))
+        if message is not None and line is not None:
+            return message, line
+    if message is not None:
+        return message, None
     errors = [line.strip() for line in log.splitlines() if "error" in line.lower()]
     return (errors[0] if errors else "the shader did not compile (see the system console)"), None
+
+
+def describe_compile_error(log: str, line_offset: int = 0):
+    """(message, user line or None) from a compiler log of a shader holding user text, whose
+    line numbers are ``line_offset`` past the text's own (see _log_line_offset)."""
+    message, line = _first_error(log)
+    return _located(line - line_offset, message) if line is not None else (message, None)
+
+
+# Text with a syntax error on its line 3: where a log places it shows how that Blender numbers
+# the user's lines (4.5 adds the length of its own code before the fragment source; the others
+# keep the #line numbering of sources.user_map_source).
+_CALIBRATION_TEXT = "float map(vec3 p)\n{\n  return 1.0 +;\n}\n"
+_line_offsets: dict = {}
+
+
+def _log_line_offset(sdf, local_mirror, layout) -> int:
+    key = (sdf, local_mirror, layout)
+    if key not in _line_offsets:
+        info, iface = _create_info(sources.fragment_source(sdf, _CALIBRATION_TEXT, local_mirror), layout)
+        _shader, _error, log = _compile_capturing_log(info, echo=False)
+        del iface
+        line = _first_error(log)[1]
+        _line_offsets[key] = line - 3 if line is not None else 0
+    return _line_offsets[key]
 
 
 def preview_shader(sdf: str = "BOX", user_text: str | None = None, local_mirror=(1.0, 1.0, 1.0),
@@ -131,7 +161,7 @@ def preview_shader(sdf: str = "BOX", user_text: str | None = None, local_mirror=
     if shader is None:
         if user_text is None:
             raise RuntimeError(f"boxmarch preview shader failed to compile: {error}\n{log}")
-        _failed[key] = describe_compile_error(log)
+        _failed[key] = describe_compile_error(log, _log_line_offset(sdf, key[2], layout))
         raise UserSdfError(*_failed[key])
     if user_text is not None:
         user_keys = [k for k in _cache if k[1] is not None]

@@ -1,0 +1,97 @@
+#!/usr/bin/env bash
+# Compile-and-link check of the native code for Windows x64 and macOS arm64 from this Linux machine,
+# with zig's clang (PyPI `ziglang`). Nothing built here is run; the wheels for those platforms are
+# built and tested by .github/workflows/wheels.yml on their own runners.
+#   bash scripts/cross_compile.sh [--compile-only] [OUT]   (default OUT build/cross)
+# Per target, with -Wall -Wextra -Wpedantic -Werror (a warning fails the check):
+#   - every cpp/src/*.cpp compiled to an object file and archived into libboxmarch_core.a;
+#   - macOS arm64 only: the bindings (bindings/*.cpp) compiled against this machine's Python 3.11
+#     and pybind11 headers. The Windows bindings are not compiled here: this machine's pyconfig.h
+#     describes Linux (it includes <sys/select.h>, which Windows lacks); the Windows wheel job
+#     compiles them with MSVC;
+#   - unless --compile-only: the C++ tests (tests/cpp/test_core.cpp) linked with the library into
+#     an executable (test_core.exe, PE32+; test_core, Mach-O): the core links without Python,
+#     threads and the C++ runtime included; on macOS arm64 the bindings and the core linked into
+#     the extension module _core.cpython-311-darwin.so (-undefined dynamic_lookup, as macOS
+#     extension modules link). The first link per target builds zig's libc++ for it (minutes on
+#     2 cores; cached in ~/.cache/zig afterwards).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+PYTHON="${PYTHON:-python3}"
+LINK=1
+if [ "${1:-}" = "--compile-only" ]; then
+  LINK=0
+  shift
+fi
+OUT="${1:-build/cross}"
+ZIG=("$PYTHON" -m ziglang)
+"${ZIG[@]}" version >/dev/null 2>&1 || { echo "cross_compile: zig is missing (pip install ziglang)" >&2; exit 1; }
+PY_INCLUDE="$("$PYTHON" -c 'import sysconfig; print(sysconfig.get_paths()["include"])')"
+PYBIND11_INCLUDE="$("$PYTHON" -c 'import pybind11; print(pybind11.get_include())')"
+# Only the two header libraries from the system include folder: the rest of it is Linux's libc.
+HEADERS="$OUT/headers"
+mkdir -p "$HEADERS"
+GLM="$(dirname "$(find /usr/include /usr/local/include -maxdepth 3 -path '*/glm/glm.hpp' -print -quit)")"
+NANOFLANN="$(find /usr/include /usr/local/include -maxdepth 2 -name nanoflann.hpp -print -quit)"
+if [ ! -d "$GLM" ] || [ ! -f "$NANOFLANN" ]; then
+  echo "cross_compile: GLM or nanoflann headers missing (scripts/setup.sh)" >&2
+  exit 1
+fi
+ln -sfn "$GLM" "$HEADERS/glm"
+ln -sfn "$NANOFLANN" "$HEADERS/nanoflann.hpp"
+
+CXXFLAGS=(-std=c++17 -O0 -Wall -Wextra -Wpedantic -Werror -DGLM_FORCE_XYZW_ONLY -D_USE_MATH_DEFINES
+          -Icpp/include -Icpp/src -isystem "$HEADERS")
+
+compile() {  # TARGET OBJECT SOURCE EXTRA_FLAGS...
+  local target="$1" object="$2" source="$3"
+  shift 3
+  "${ZIG[@]}" c++ -target "$target" "${CXXFLAGS[@]}" "$@" -c "$source" -o "$object"
+}
+
+build_target() {  # TARGET
+  local target="$1" dir="$OUT/$1" start=$SECONDS object exe
+  local objects=() bindings=()
+  mkdir -p "$dir"
+  for source in cpp/src/*.cpp; do
+    object="$dir/$(basename "$source" .cpp).o"
+    compile "$target" "$object" "$source"
+    objects+=("$object")
+  done
+  rm -f "$dir/libboxmarch_core.a"
+  "${ZIG[@]}" ar rcs "$dir/libboxmarch_core.a" "${objects[@]}"
+  echo "[cross_compile] $target: ${#objects[@]} core sources compiled, $dir/libboxmarch_core.a" >&2
+  if [ "$target" = aarch64-macos ]; then
+    for source in bindings/*.cpp; do
+      object="$dir/$(basename "$source" .cpp).o"
+      compile "$target" "$object" "$source" -isystem "$PY_INCLUDE" -isystem "$PYBIND11_INCLUDE" -fvisibility=hidden
+      bindings+=("$object")
+    done
+    echo "[cross_compile] $target: ${#bindings[@]} binding sources compiled" >&2
+  fi
+  if [ "$LINK" = 1 ]; then
+    exe="$dir/test_core"
+    [ "$target" = x86_64-windows-gnu ] && exe="$dir/test_core.exe"
+    compile "$target" "$dir/test_core_main.o" tests/cpp/test_core.cpp
+    "${ZIG[@]}" c++ -target "$target" "$dir/test_core_main.o" "$dir/libboxmarch_core.a" -o "$exe"
+    echo "[cross_compile] $target: linked $exe (not run)" >&2
+    if [ "$target" = aarch64-macos ]; then
+      "${ZIG[@]}" c++ -target "$target" -shared -Wl,-undefined,dynamic_lookup "${bindings[@]}" \
+        "$dir/libboxmarch_core.a" -o "$dir/_core.cpython-311-darwin.so"
+      echo "[cross_compile] $target: linked $dir/_core.cpython-311-darwin.so (not run)" >&2
+    fi
+  fi
+  echo "[cross_compile] $target: $((SECONDS - start)) s" >&2
+}
+
+# The two targets side by side (one core each on a 2-core machine).
+pids=()
+for target in x86_64-windows-gnu aarch64-macos; do
+  build_target "$target" &
+  pids+=($!)
+done
+status=0
+for pid in "${pids[@]}"; do
+  wait "$pid" || status=1
+done
+exit "$status"
