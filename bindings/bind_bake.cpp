@@ -113,7 +113,8 @@ void bind_bake(py::module_& m) {
     m.def("bake", &bake_py, py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"),
           py::arg("corner_verts"), py::kw_only(), py::arg("mask") = py::none(),
           py::arg("previous_fingerprints") = py::none(), py::arg("offsets") = py::none(),
-          py::arg("angle_epsilon") = 0.1, py::arg("origin") = "BOUNDS", py::arg("sort_axes_by_extent") = false,
+          py::arg("angle_epsilon") = BakeOptions{}.angle_epsilon, py::arg("origin") = "BOUNDS",
+          py::arg("sort_axes_by_extent") = false,
           py::arg("axis_turn") = 0, py::arg("encoding") = "FLOAT_COLOR", py::arg("use_cache") = true,
           py::arg("threads") = 0, "Bake every submesh; see boxmarch.core.bake.");
 

@@ -53,6 +53,7 @@ PYBIND11_MODULE(_core, m) {
 
     m.attr("ANGLE_EPSILON_MIN") = boxmarch::kAngleEpsilonMin;
     m.attr("ANGLE_EPSILON_MAX") = boxmarch::kAngleEpsilonMax;
+    m.attr("ANGLE_EPSILON_DEFAULT") = boxmarch::BakeOptions{}.angle_epsilon;
     bind_mesh(m);
     bind_bake(m);
     bind_raymarch(m);

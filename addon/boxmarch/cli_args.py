@@ -41,8 +41,8 @@ def _target_options(p, out_help="write the result as a new .blend (the input fil
 def _bake_options(p):
     p.add_argument("--origin", choices=core.ORIGIN_MODES, default=core.ORIGIN_MODES[0])
     lo, hi = core.ANGLE_EPSILON_RANGE
-    p.add_argument("--angle-epsilon", type=_angle_epsilon, default=0.1,
-                   help=f"radians, {lo:g}..{hi:.7g} (default 0.1)")
+    p.add_argument("--angle-epsilon", type=_angle_epsilon, default=core.ANGLE_EPSILON_DEFAULT,
+                   help=f"radians, {lo:g}..{hi:.7g} (default {core.ANGLE_EPSILON_DEFAULT:g})")
     p.add_argument("--encoding", choices=core.ENCODINGS, default=core.ENCODINGS[0])
     p.add_argument("--domain", choices=("POINT", "CORNER"), default="POINT")
     p.add_argument("--axis-turn", type=int, default=0, choices=range(24), metavar="0..23")

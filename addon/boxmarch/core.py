@@ -33,6 +33,7 @@ STATUS_BAKED, STATUS_UNCHANGED, STATUS_NOT_SELECTED = 0, 1, 2
 # Radians; the core's own bounds (boxmarch.h kAngleEpsilonMin/Max), read by the bake operator's
 # property limits and the command line.
 ANGLE_EPSILON_RANGE = (_core.ANGLE_EPSILON_MIN, _core.ANGLE_EPSILON_MAX)
+ANGLE_EPSILON_DEFAULT = _core.ANGLE_EPSILON_DEFAULT  # BakeOptions' default, the one statement of it
 
 
 @dataclass
@@ -72,7 +73,7 @@ class BakeResult:
 
 
 def bake(positions, edges, face_starts, face_sizes, corner_verts, *, mask=None,
-         previous_fingerprints=None, offsets=None, angle_epsilon=0.1, origin="BOUNDS",
+         previous_fingerprints=None, offsets=None, angle_epsilon=ANGLE_EPSILON_DEFAULT, origin="BOUNDS",
          sort_axes_by_extent=False, axis_turn=0, encoding="FLOAT_COLOR", use_cache=True,
          threads=0) -> BakeResult:
     """Bake every submesh (connected component) of a mesh.

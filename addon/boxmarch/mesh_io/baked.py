@@ -176,7 +176,7 @@ def _colour_matches(mesh, name, data_type, domain) -> bool:
 
 @dataclass
 class BakeSettings:
-    angle_epsilon: float = 0.1
+    angle_epsilon: float = core.ANGLE_EPSILON_DEFAULT
     origin: str = core.ORIGIN_MODES[0]
     encoding: str = core.ENCODINGS[0]
     domain: str = "POINT"

@@ -42,7 +42,7 @@ class BOXMARCH_OT_bake(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     angle_epsilon: FloatProperty(
-        name="Angle Epsilon", subtype="ANGLE", default=0.1, min=core.ANGLE_EPSILON_RANGE[0],
+        name="Angle Epsilon", subtype="ANGLE", default=core.ANGLE_EPSILON_DEFAULT, min=core.ANGLE_EPSILON_RANGE[0],
         max=core.ANGLE_EPSILON_RANGE[1],
         description="The second axis comes from the largest face at least this far from the first axis's plane")
     origin: EnumProperty(
