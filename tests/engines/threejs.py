@@ -23,6 +23,7 @@ import signal
 import subprocess
 import tempfile
 import threading
+import time
 from typing import Callable, NamedTuple
 
 import numpy as np
@@ -30,6 +31,7 @@ import numpy as np
 from . import Shot, ndc_to_pixels
 
 CHROMIUM = "chromium"
+CLOCK = "clock"  # served path of the real-time clock (_Files)
 TIMEOUT_S = 60
 NICEGUI_THREE = os.path.join("elements", "scene", "dist", "index.js")  # inside the nicegui package
 
@@ -200,7 +202,10 @@ class _Files(http.server.BaseHTTPRequestHandler):
     files = {}  # served path -> bytes, set per server
 
     def do_GET(self):
-        body = self.files.get(self.path.split("?")[0].lstrip("/"))
+        name = self.path.split("?")[0].lstrip("/")
+        # CLOCK: this process's clock in ms, for pages that time themselves: under
+        # --virtual-time-budget, performance.now() stands still once the page has awaited anything.
+        body = f"{time.perf_counter() * 1e3!r}".encode() if name == CLOCK else self.files.get(name)
         if body is None:
             self.send_error(404)
             return
