@@ -2,20 +2,23 @@
 
 core.render_boxes renders each scene as the preview's shader does and counts, per frame
 (cpp RenderCost): fragments rasterised, fragments that marched, map() evaluations (march steps
-plus the 4 normal taps of a hit) and how many of those end up hidden. Each technique is a row:
+plus the normal taps of a hit) and how many of those end up hidden. Each technique is a row:
 
-* today: boxes in file order, depth tested after the march (writing gl_FragDepth without a
-  conservative-depth declaration turns early depth testing off), quality 1;
+* 4-tap normal (today): boxes in file order, depth tested after the march (writing gl_FragDepth
+  without a conservative-depth declaration turns early depth testing off), quality 1, the normal
+  from four tetrahedral taps at max(epsilon, h / 1000) (the common choice, the saving's baseline);
+* 3-tap normal: the shaders' bm_normal, forward differences from the hit's own distance;
 * early depth: the rasterised depth tested before the march (depth_greater declared);
 * + octant order: one index order per view octant, boxes sorted along the octant's diagonal (what
   the preview ships); + front to back: sorted by distance to the eye each frame;
 * + quality q: bm_quality(q) (hit distance a share of a pixel, a step limit by size on screen,
   one tap under a few pixels).
 
-Error against the full-quality render (today's row): pixels changed (coverage differs or a colour
-channel moves more than 1/255) as a share of the pixels covered in either image, and of those the
-pixels hit in one image only; depth error where both hit, in scene units along the view axis
-(99th percentile and worst).
+Error against the full-quality render (file order, quality 1, the normal from central
+differences, second order in the tap): pixels changed (coverage differs or a colour channel moves
+more than 1/255) as a share of the pixels covered in either image, and of those the pixels hit
+in one image only; the normal's angle to the reference's (99th percentile); depth error where both
+hit, in scene units along the view axis (99th percentile and worst).
 
     python3 bench/bench_gpu_cost.py [--size 480] [--far-boxes 1000000] [--quick]
 
@@ -103,6 +106,16 @@ def image_error(result, reference):
     return changed / either, (a != b).sum() / either, np.percentile(error, 99), error.max()
 
 
+def normal_angle(result, reference):
+    """99th percentile of the angle (degrees) between the two renders' normals where both hit."""
+    both = (result.depth < 1) & (reference.depth < 1)
+    a, b = result.normals[both].astype(np.float64), reference.normals[both].astype(np.float64)
+    if not len(a):
+        return 0.0
+    angle = np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), np.einsum("ij,ij->i", a, b))
+    return np.degrees(np.percentile(angle, 99))
+
+
 def rows_for(name, scene, size, qualities):
     origins, rotations, half, sdf, (to_clip, to_view, eye) = scene
     quaternions = matrix_quaternions(rotations).astype(np.float32)
@@ -112,33 +125,36 @@ def rows_for(name, scene, size, qualities):
                                  epsilon=1e-3, **plan)
 
     sorted_order = core.front_to_back(origins, eye)
-    plans = [("today", {}), ("early depth", {"early_depth": True}),
-             ("early depth + octant order", {"early_depth": True, "order": octant_order(origins, eye, to_view)}),
+    octant = {"early_depth": True, "order": octant_order(origins, eye, to_view)}
+    plans = [("4-tap normal (today)", {"normal": "TETRAHEDRAL"}), ("3-tap normal", {}),
+             ("early depth", {"early_depth": True}), ("early depth + octant order", octant),
              ("early depth + front to back", {"early_depth": True, "order": sorted_order}),
+             ("4-tap, early depth + octant", {**octant, "normal": "TETRAHEDRAL"}),
              ("quality 0.5 alone", {"quality": 0.5})]
-    plans += [(f"front to back + quality {q}", {"early_depth": True, "order": sorted_order, "quality": q})
-              for q in qualities]
-    reference, rows = None, []
+    plans += [(f"octant order + quality {q}", {**octant, "quality": q}) for q in qualities]
+    reference = render(normal="CENTRAL")
+    rows, today = [], None
     for label, plan in plans:
         start = time.perf_counter()
         result = render(**plan)
         seconds = time.perf_counter() - start
-        reference = reference or result
+        today = today or result
         cost = result.cost
         covered = max(cost["covered_pixels"], 1)
         changed, coverage_changed, depth_p99, depth_max = image_error(result, reference)
         rows.append([name, label, f"{cost['fragments'] / covered:.2f}", f"{cost['marched_fragments'] / covered:.2f}",
                      f"{cost['sdf_evaluations'] / covered:.1f}",
-                     f"{reference.cost['sdf_evaluations'] / max(cost['sdf_evaluations'], 1):.2f}x",
+                     f"{today.cost['sdf_evaluations'] / max(cost['sdf_evaluations'], 1):.2f}x",
                      f"{100 * cost['hidden_evaluations'] / max(cost['sdf_evaluations'], 1):.0f}%",
                      f"{cost['lod_fragments']}", f"{100 * changed:.2f}%", f"{100 * coverage_changed:.2f}%",
-                     f"{depth_p99:.2g}", f"{depth_max:.2g}",
+                     f"{normal_angle(result, reference):.2g}", f"{depth_p99:.2g}", f"{depth_max:.2g}",
                      f"{1000 * seconds:.0f}"])
     return rows
 
 
 HEADERS = ["scene", "technique", "fragments/px", "marched/px", "SDF evals/px", "saving", "hidden evals",
-           "one-tap fragments", "pixels changed", "coverage changed", "depth err p99", "depth err max", "CPU ms"]
+           "one-tap fragments", "pixels changed", "coverage changed", "normal err p99 (deg)", "depth err p99",
+           "depth err max", "CPU ms"]
 
 
 def measured_table(size=480, far_boxes=1_000_000, qualities=(1.0, 0.9, 0.75, 0.5, 0.25)):
@@ -156,25 +172,36 @@ def accuracy_section():
 
 `bench/bench_gpu_cost.py` renders each scene with the CPU reference exactly as the preview's shader
 draws it and counts what a GPU would spend (`core.render_boxes(...).cost`, cpp `RenderCost`): a
-fragment is one box's face at one pixel centre; SDF evaluations are march steps plus the 4 normal
-taps of a hit; per covered pixel = per pixel inside at least one box's silhouette. *today*: file
-order, the depth test after the march (an undeclared `gl_FragDepth` write turns early depth
-testing off). *early depth*: the face's depth tested before the march (what a declared
-`depth_greater` keeps). *octant order*: the preview's index orders (boxes sorted along the view
-octant's diagonal); *front to back*: sorted by distance to the eye. *quality q*: the knob of
-docs/PREVIEW.md. Error against *today*: pixels changed (coverage differs or a colour channel
-moves more than 1/255) and pixels whose coverage changed, as shares of the pixels covered in
-either image; depth error where both hit, in scene units (chain links are 0.46 long). 480 x 480
-px, max_steps 64, epsilon 1e-3.
+fragment is one box's face at one pixel centre; SDF evaluations are march steps plus the normal
+taps of a hit; per covered pixel = per pixel inside at least one box's silhouette. *4-tap normal
+(today)*: file order, the depth test after the march (an undeclared `gl_FragDepth` write turns
+early depth testing off), the normal from four tetrahedral taps at max(epsilon, h / 1000), the
+baseline of the saving column. *3-tap normal*: the shaders' `bm_normal`, three forward
+differences from the hit's own distance (the march's last `map()`) at 3/10,000 of the box.
+*early depth*: the face's depth tested before the march (what a declared `depth_greater`
+keeps). *octant order*: the preview's index orders (boxes sorted along the view octant's
+diagonal); *front to back*: sorted by distance to the eye. *quality q*: the knob of
+docs/PREVIEW.md. Error against the full-quality render (file order, quality 1, the normal from
+central differences at the same tap, six `map()` calls, second order in the tap): pixels changed
+(coverage differs or a colour channel moves more than 1/255) and pixels whose coverage changed,
+as shares of the pixels covered in either image; the normal's angle to the reference's (99th
+percentile, degrees); depth error where both hit, in scene units (chain links are 0.46 long).
+480 x 480 px, max_steps 64, epsilon 1e-3.
 
 {measured_table()}
 
 Early depth and the draw order change no pixel: the same fragment wins every pixel, only hidden
 marches are skipped. How much they save is how many boxes overlap on screen: 1.05x in the sparse
-cloud, 2.9x down the chain's stacked turns, 6.8x through the pile, 34x for a million boxes. The
-quality knob then trades exactness for the rest: its pixel-sized hit distance moves hits on
-features under a few pixels across (thin link wire, small spheres), and most of its changed pixels
-are shading, not coverage.
+cloud, 2.9x down the chain's stacked turns, 6x through the pile, 34x for a million boxes (the
+4-tap rows). The 3-tap normal saves one `map()` per hit and is the more accurate: the 4-tap
+normal's taps are first-order accurate only (the tetrahedron's second-order terms do not cancel)
+and at 1/29 of a link's wire radius stand 1.2 degrees from the reference (99th percentile),
+enough to move a colour channel by more than 1/255 on a third of the links' pixels; the 3-tap
+normal stands 0.07 degrees away (`tests/test_gpu_cost.py` holds it within 0.2 degree of a
+sphere's true normal). Together: 3.2x down the chain, 6.9x through the pile, 42x for a million
+boxes, at no pixel changed. The quality knob then trades exactness for the rest: its pixel-sized
+hit distance moves hits on features under a few pixels across (thin link wire, small spheres),
+and most of its changed pixels are shading, not coverage.
 """
 
 

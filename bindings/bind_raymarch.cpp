@@ -75,7 +75,7 @@ void bind_raymarch(py::module_& m) {
              const py::object& object_to_clip, const py::object& object_to_view, const py::object& base_color,
              const py::object& rgba, const py::object& depth, const py::object& normals, const py::object& steps,
              int sdf, int max_steps, float epsilon, float relaxation, float max_distance, int threads,
-             const py::object& order, bool early_depth, float quality) {
+             const py::object& order, bool early_depth, float quality, int normal) {
               auto c = input<float>(origins, "origins", -1, 3);
               auto q = input<float>(quaternions, "quaternions", c.shape(0), 4);
               auto h = input<float>(half_extents, "half_extents", c.shape(0), 3);
@@ -113,6 +113,7 @@ void bind_raymarch(py::module_& m) {
               }
               plan.early_depth = early_depth;
               plan.quality = quality;
+              plan.normal = NormalRule(normal);
               plan.cost = &cost;
               {
                   py::gil_scoped_release release;
@@ -132,7 +133,7 @@ void bind_raymarch(py::module_& m) {
           py::arg("object_to_view"), py::arg("base_color"), py::arg("rgba"), py::arg("depth"), py::arg("normals"),
           py::arg("steps"), py::kw_only(), py::arg("sdf"), py::arg("max_steps"), py::arg("epsilon"),
           py::arg("relaxation"), py::arg("max_distance"), py::arg("threads") = 0, py::arg("order") = py::none(),
-          py::arg("early_depth") = false, py::arg("quality") = 1.0f,
+          py::arg("early_depth") = false, py::arg("quality") = 1.0f, py::arg("normal") = 0,
           "Raymarch boxes into caller-owned images (rgba (H*W, 4), depth (H, W), normals (H*W, 3), steps (H*W,)) "
           "in draw order `order` (None: as given); returns the frame's cost counts (RenderCost); "
           "see boxmarch.core.render_boxes.");

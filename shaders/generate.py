@@ -10,7 +10,7 @@ the SDF library and the march.
   raymarch.glsl embedded as strings (three.js compiles them as they are, GLSL ES 1.00 on WebGL 1
   and 3.00 on WebGL 2);
 * godot3/boxmarch.shader: godot3/template.shader with decode.glsl, every function of sdf.glsl and
-  of raymarch.glsl; Godot 3 has no global variables, so bm_march and bm_normal take the box
+  of raymarch.glsl; Godot 3 has no global variables, so bm_march, bm_one_tap and bm_normal take the box
   (h, index) and pass it on to map() (``passing_the_box``);
 * the engine packages' copies: engines/unity/com.boxmarch.boxmarch/Runtime/Shaders (every file a
   Unity material needs from shaders/hlsl) and engines/godot3/addons/boxmarch/boxmarch.shader.
@@ -175,7 +175,7 @@ def threejs(module: bool) -> str:
     text = text.replace("/*@DECODE@*/''", json.dumps(glsl("decode.glsl")))
     text = text.replace("/*@LIBRARY@*/''", json.dumps(glsl("sdf.glsl") + "\n" + glsl("raymarch.glsl")))
     exports = ("loadBoxmarch, checkBoxmarchSidecar, createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, "
-               "boxmarchTexcoordName")
+               "boxmarchTexcoordName, sortBoxmarchFrontToBack")
     if module:
         return text + f"\nexport {{ {exports} }};\n"
     return text + f"\nif (typeof module !== 'undefined') {{\n  module.exports = {{ {exports} }};\n}}\n"
@@ -198,8 +198,10 @@ def godot3() -> str:
     raymarch = top_level_functions(glsl("raymarch.glsl"))
     text = text.replace("/*@DECODE@*/", glsl("decode.glsl"))
     text = text.replace("/*@SDF@*/", "".join(top_level_functions(glsl("sdf.glsl")).values()))
-    text = text.replace("/*@SPAN@*/", raymarch["bm_box_span"] + raymarch["bm_normal_tap"])
-    return text.replace("/*@MARCH@*/", passing_the_box(raymarch["bm_march"]) + passing_the_box(raymarch["bm_normal"]))
+    text = text.replace("/*@SPAN@*/", "".join(raymarch[name] for name in (
+        "bm_box_span", "bm_quality", "bm_pixel_size", "bm_step_limit", "bm_normal_tap")))
+    return text.replace("/*@MARCH@*/", "".join(passing_the_box(raymarch[name])
+                                               for name in ("bm_march", "bm_one_tap", "bm_normal")))
 
 
 # Paths relative to the repository root.

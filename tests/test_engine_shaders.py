@@ -10,7 +10,7 @@ import pytest
 
 SHADERS = Path(__file__).resolve().parent.parent / "shaders"
 EXPORTS = ["boxmarchTexcoordName", "checkBoxmarchSidecar", "createBoxmarchMaterial", "loadBoxmarch", "prepareBoxmarchGeometry",
-           "useBoxmarchMaterial"]
+           "sortBoxmarchFrontToBack", "useBoxmarchMaterial"]
 
 
 def test_generated_engine_shaders_are_up_to_date():

@@ -47,10 +47,11 @@ def setup_js(sdf_body, tamper=""):
             f"color: new THREE.Color(1, 1, 1), maxSteps: 256}})); }});")
 
 
-def loader_setup_js(name, sdf_body):
+def loader_setup_js(name, sdf_body, front_to_back=False):
     """Draws ``name``.glb as ``loadBoxmarch`` loads it (in place of the page's own parse)."""
     return (f"scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, '{name}.glb', "
-            f"{{map: {json.dumps(sdf_body)}, color: new THREE.Color(1, 1, 1), maxSteps: 256}});"
+            f"{{map: {json.dumps(sdf_body)}, color: new THREE.Color(1, 1, 1), maxSteps: 256, "
+            f"frontToBack: {json.dumps(front_to_back)}}});"
             " scene.add(loaded.scene); if (!loaded.meshes.length) throw new Error('loadBoxmarch: no meshes');")
 
 
@@ -58,6 +59,30 @@ def refusal_job(js):
     """A job whose result is the message of the error ``js`` (a Promise or a statement) raises, or 'no error'."""
     return ("async function (gltf) { try { await (async function () { " + js + " })(); return 'no error'; }"
             " catch (e) { return String(e && e.message || e); } }")
+
+
+# The index buffers of mixed.glb as the file has it (the job's own parse) and after loadBoxmarch's
+# frontToBack sorted it for the WIDE camera (two frames drawn: r111 uploads the sorted buffer at
+# the second), and whether a second sort for the same eye did anything.
+SORT_JOB = """async function (gltf) {
+  var loaded = await loadBoxmarch(THREE, GLTFLoader, 'mixed.glb', {frontToBack: true});
+  var cam = __CAMERA__, camera = new THREE.PerspectiveCamera(cam.fov, __W__ / __H__, cam.near, cam.far);
+  camera.position.fromArray(cam.position);
+  camera.lookAt(new THREE.Vector3().fromArray(cam.target));
+  var renderer = new THREE.WebGLRenderer({canvas: document.createElement('canvas')});
+  renderer.setSize(__W__, __H__, false);
+  var scene = new THREE.Scene();
+  scene.add(loaded.scene);
+  renderer.render(scene, camera);
+  renderer.render(scene, camera);
+  renderer.dispose();
+  renderer.forceContextLoss();
+  var file = null;
+  gltf.scene.traverse(function (o) { if (o.isMesh) file = o.geometry.index.array; });
+  var mesh = loaded.meshes[0];
+  return {file: __f64(file), sorted: __f64(mesh.geometry.index.array),
+          sorted_again: sortBoxmarchFrontToBack(THREE, mesh, camera)};
+}""".replace("__CAMERA__", json.dumps(WIDE)).replace("__W__", str(W)).replace("__H__", str(H))
 
 
 def covered(shot):
@@ -100,6 +125,9 @@ def page(request, exported):
     for name, tamper in (("offset-zeroed", offset_zeroed(release)), ("identity-frame", IDENTITY_FRAME)):
         jobs[name] = threejs.render_job(setup_js(BOX_MAP, tamper), W, H, WIDE)
     jobs["loader"] = threejs.render_job(loader_setup_js("mixed", BOX_MAP), W, H, WIDE)
+    jobs["loader-front-to-back"] = threejs.render_job(loader_setup_js("mixed", BOX_MAP, True), W, H, WIDE)
+    jobs["sort"] = threejs.Job(SORT_JOB, lambda out: {k: threejs.f64(v) if isinstance(v, str) else v
+                                                       for k, v in out.items()})
     # classic.glb and future.glb are not served: a refusal that fetched the .glb would say 404 instead
     for name in ("classic", "future", "missing"):
         jobs[f"refuse-{name}"] = refusal_job(f"await loadBoxmarch(THREE, GLTFLoader, '{name}.glb', {{}});")
@@ -168,6 +196,30 @@ def test_load_boxmarch_draws_the_export_from_its_url(page):
     mismatch = coverage_mismatch(covered(shot), silhouettes(shot, centres, INNER * sizes, rotations, TO_Y_UP))
     assert mismatch is None, mismatch
     assert covered(shot).sum() > 500
+
+
+def boxes_in_draw_order(index, positions, centres, sizes, rotations):
+    """The generating box of each triangle of ``index``, in order."""
+    return box_of_vertex(positions, centres, sizes, rotations, TO_Y_UP)[index[::3].astype(int)]
+
+
+def test_front_to_back_sort_draws_the_nearest_box_first_and_the_same_image(page):
+    """loadBoxmarch's frontToBack: the index buffer holds each box's triangles together, boxes in
+    the order of their centres' distance to the camera (the generating geometry's); the file's own
+    order is not that (the control); the image is the unsorted one; the same eye sorts nothing."""
+    out, centres, sizes, rotations = page
+    (mesh,) = out["meshes"]
+    assert np.allclose(mesh["matrixWorld"], np.eye(4))
+    positions = mesh["attributes"]["position"]
+    distance = np.linalg.norm(centres @ TO_Y_UP.T - WIDE["position"], axis=1)
+    drawn = boxes_in_draw_order(out["sort"]["sorted"], positions, centres, sizes, rotations)
+    assert np.array_equal(np.sort(out["sort"]["sorted"]), np.sort(out["sort"]["file"]))  # the same triangles
+    groups = drawn[np.r_[True, drawn[1:] != drawn[:-1]]]
+    assert np.array_equal(groups, np.argsort(distance))  # one group per box, nearest first
+    in_file = boxes_in_draw_order(out["sort"]["file"], positions, centres, sizes, rotations)
+    assert not np.all(np.diff(distance[in_file]) >= 0)
+    assert out["sort"]["sorted_again"] is False
+    assert np.array_equal(out["loader-front-to-back"].pixels, out["loader"].pixels)
 
 
 def test_load_boxmarch_refuses_a_sidecar_it_does_not_read(page):

@@ -31,19 +31,20 @@ def render(origins, half, sdf="BOX", **plan):
 
 # Box A: half 0.5 at z = -2 covers the 4 x 4 pixel centres with |x|, |y| < 0.5 (16 fragments);
 # box B: half 1 at z = -4 covers all 8 x 8 (64). A BOX hit is at the face where the march starts:
-# 1 step, plus 4 normal taps = 5 map() calls per fragment.
+# 1 step, plus 3 normal taps (forward differences from the hit's own distance) = 4 map() calls per
+# fragment.
 A_THEN_B = ([[0.0, 0.0, -2.0], [0.0, 0.0, -4.0]], [[0.5, 0.5, 0.5], [1.0, 1.0, 0.5]])
 
 
 def test_counts_of_two_overlapping_boxes_without_early_depth():
     cost = render(*A_THEN_B).cost
-    assert cost == {"fragments": 80, "marched_fragments": 80, "lod_fragments": 0, "sdf_evaluations": 400,
-                    "hidden_fragments": 16, "hidden_evaluations": 80, "covered_pixels": 64}
+    assert cost == {"fragments": 80, "marched_fragments": 80, "lod_fragments": 0, "sdf_evaluations": 320,
+                    "hidden_fragments": 16, "hidden_evaluations": 64, "covered_pixels": 64}
 
 
 def test_early_depth_front_first_skips_the_hidden_marches():
     result = render(*A_THEN_B, early_depth=True)
-    assert result.cost == {"fragments": 80, "marched_fragments": 64, "lod_fragments": 0, "sdf_evaluations": 320,
+    assert result.cost == {"fragments": 80, "marched_fragments": 64, "lod_fragments": 0, "sdf_evaluations": 256,
                            "hidden_fragments": 0, "hidden_evaluations": 0, "covered_pixels": 64}
     # the image is the one without early depth: A's face at z = -1.5 over B's at z = -3.5
     assert np.array_equal(result.depth, render(*A_THEN_B).depth)
@@ -55,7 +56,7 @@ def test_early_depth_front_first_skips_the_hidden_marches():
 def test_early_depth_back_to_front_saves_nothing():
     result = render(*A_THEN_B, early_depth=True, order=[1, 0])
     assert result.cost["marched_fragments"] == 80
-    assert result.cost["hidden_fragments"] == 16 and result.cost["hidden_evaluations"] == 80
+    assert result.cost["hidden_fragments"] == 16 and result.cost["hidden_evaluations"] == 64
     assert np.array_equal(result.depth, render(*A_THEN_B).depth)
 
 
@@ -71,14 +72,14 @@ def test_one_tap_for_a_box_under_the_quality_threshold():
     # A sphere of radius min(h) = 0.1 at the pixel centre (0.125, 0.125), in a box 0.6 deep: 2.4
     # pixels (2 * max(h) / 0.25), under bm_quality(0.25)'s 3. Its box covers that one pixel centre.
     # One tap: one map() where the ray passes the centre (-0.1 < half a pixel: a hit, at the
-    # centre's depth), then 4 normal taps. The full march: 0.2 from the face to the sphere, 2 steps.
+    # centre's depth), then 3 normal taps. The full march: 0.2 from the face to the sphere, 2 steps.
     box = ([[0.125, 0.125, -2.0]], [[0.1, 0.1, 0.3]])
     low = render(*box, sdf="SPHERE", quality=0.25)
-    assert low.cost == {"fragments": 1, "marched_fragments": 1, "lod_fragments": 1, "sdf_evaluations": 5,
+    assert low.cost == {"fragments": 1, "marched_fragments": 1, "lod_fragments": 1, "sdf_evaluations": 4,
                         "hidden_fragments": 0, "hidden_evaluations": 0, "covered_pixels": 1}
     assert low.depth[3, 4] == pytest.approx((2.0 - 0.1) / 9.9, abs=1e-6)
     full = render(*box, sdf="SPHERE", quality=0.5)
-    assert full.cost["lod_fragments"] == 0 and full.cost["sdf_evaluations"] == 6
+    assert full.cost["lod_fragments"] == 0 and full.cost["sdf_evaluations"] == 5
     assert full.depth[3, 4] == pytest.approx((1.9 - 0.1) / 9.9, abs=1e-5)
 
 
@@ -94,9 +95,65 @@ def test_quality_one_is_the_full_march_and_lower_costs_less():
     assert low.cost["sdf_evaluations"] < full.cost["sdf_evaluations"]
 
 
+def test_normal_rules_cost_three_four_and_six_taps_a_hit():
+    for rule, taps in (("FORWARD", 3), ("TETRAHEDRAL", 4), ("CENTRAL", 6)):  # 80 one-step hits (above)
+        assert render(*A_THEN_B, normal=rule).cost["sdf_evaluations"] == 80 * (1 + taps)
+
+
+def test_forward_normal_of_a_sphere_is_its_radius_direction():
+    """The shaders' normal (raymarch's is theirs) against the sphere's true one, the hit's direction
+    from the centre: a twentieth of a degree typically, a fifth at worst."""
+    rng = np.random.default_rng(5)
+    half = np.array([0.3, 0.3, 0.3])
+    eyes = rng.normal(size=(2000, 3)) * 2.0
+    result = core.raymarch(eyes, rng.uniform(-0.2, 0.2, (2000, 3)) - eyes, half, sdf="SPHERE", epsilon=1e-4)
+    hit = result.hit.astype(bool)
+    assert hit.sum() > 1500
+    normals, truth = result.normals[hit].astype(np.float64), result.positions[hit].astype(np.float64)
+    angle = np.arctan2(np.linalg.norm(np.cross(normals, truth), axis=1), np.einsum("ij,ij->i", normals, truth))
+    assert np.degrees(np.median(angle)) < 0.05 and np.degrees(angle.max()) < 0.2  # float rounding at the taps
+
+
+def chain_of_links(count=3):
+    """A chain along x (LINK boxes 0.46 x 0.23 x 0.06, 0.36 apart, each turned 90 degrees about x
+    from the last) and a view 5 units away turned 37 degrees about x: (origins, quaternions,
+    half-extents, object_to_view, view direction in object space)."""
+    origins = np.column_stack([0.36 * (np.arange(count) - (count - 1) / 2), np.zeros((count, 2))])
+    turn = [np.sin(np.pi / 4), 0.0, 0.0, np.cos(np.pi / 4)]
+    quaternions = np.where((np.arange(count) % 2 == 0)[:, None], [0.0, 0.0, 0.0, 1.0], turn)
+    view = np.eye(4)
+    view[:3, :3] = [[1.0, 0.0, 0.0], [0.0, 0.8, -0.6], [0.0, 0.6, 0.8]]
+    view[2, 3] = -5.0
+    return origins, quaternions, np.tile([0.23, 0.115, 0.03], (count, 1)), view, -view[2, :3]
+
+
+def pixels_changed(result, reference):
+    """Share of the pixels covered in either image whose coverage differs or whose colour moves by
+    more than 1/255 in a channel (bench_gpu_cost.py's measure)."""
+    a, b = result.depth < 1, reference.depth < 1
+    colour = np.abs(result.rgba[..., :3] - reference.rgba[..., :3]).max(-1) > 1 / 255
+    return ((a != b) | (a & b & colour)).sum() / max((a | b).sum(), 1)
+
+
+def test_forward_normal_changes_under_half_a_percent_of_a_chain_against_central_differences():
+    origins, quaternions, half, view, direction = chain_of_links()
+
+    def chain(**plan):
+        zoom = np.diag([1.6, 1.6, 1.0, 1.0])  # the view's 2 x 2 window onto 1.25 x 1.25 units
+        return core.render_boxes(origins, quaternions, half, orthographic() @ zoom @ view, view, 96, 96, sdf="LINK",
+                                 **plan)
+
+    reference = chain(normal="CENTRAL")
+    assert (reference.depth < 1).sum() > 800  # the three links cover a tenth of the image
+    forward = chain(early_depth=True, order=core.front_to_back(origins, np.append(direction, 0.0)))
+    assert pixels_changed(forward, reference) <= 0.005
+    # negative control: the tetrahedral taps at max(epsilon, h / 1000) move the shading visibly
+    assert pixels_changed(chain(normal="TETRAHEDRAL"), reference) > 0.05
+
+
 @pytest.mark.parametrize("plan, message", [({"quality": 0.0}, "quality"), ({"quality": 1.5}, "quality"),
                                            ({"order": [0, 0]}, "order"), ({"order": [0, 2]}, "order"),
-                                           ({"order": [0]}, "order")])
+                                           ({"order": [0]}, "order"), ({"normal": "SOBEL"}, "normal")])
 def test_bad_plans_are_refused_and_change_nothing(plan, message):
     depth = np.full((SIZE, SIZE), 0.5, np.float32)
     with pytest.raises(ValueError, match=message):

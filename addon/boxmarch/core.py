@@ -168,6 +168,7 @@ def decode_offsets(rgba) -> np.ndarray:
 # Reference raymarcher (cpp/src/raymarch.cpp; mirrors shaders/glsl, see docs/PREVIEW.md)
 
 SDF_PRESETS = ("BOX", "SPHERE", "ROUNDED_BOX", "CAPSULE", "CYLINDER", "TORUS", "LINK")
+NORMAL_RULES = ("FORWARD", "TETRAHEDRAL", "CENTRAL")  # render_boxes' normal (cpp NormalRule, in order)
 
 
 @dataclass
@@ -205,6 +206,12 @@ def _preset_index(sdf) -> int:
     if sdf not in SDF_PRESETS:
         raise ValueError(f"sdf must be one of {SDF_PRESETS}, got {sdf!r}")
     return SDF_PRESETS.index(sdf)
+
+
+def _normal_index(normal) -> int:
+    if normal not in NORMAL_RULES:
+        raise ValueError(f"normal must be one of {NORMAL_RULES}, got {normal!r}")
+    return NORMAL_RULES.index(normal)
 
 
 def _rows3(a, n, name):
@@ -288,7 +295,7 @@ def boxes_from_bake(positions, offsets, vertex_quaternions, submesh_of_vertex):
 def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_view, width, height, *,
                  base_color=(0.8, 0.8, 0.8), sdf="BOX", max_steps=64, epsilon=1e-3, relaxation=1.0,
                  max_distance=1e6, background=(0.0, 0.0, 0.0, 0.0), depth=None, rgba=None,
-                 threads=0, order=None, early_depth=False, quality=1.0) -> RenderResult:
+                 threads=0, order=None, early_depth=False, quality=1.0, normal="FORWARD") -> RenderResult:
     """Render boxes as the viewport preview does (docs/PREVIEW.md), on the CPU.
 
     Boxes: ``origins`` (S, 3), ``quaternions`` (S, 4), ``half_extents`` (S, 3) in object space
@@ -299,7 +306,9 @@ def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_v
     ``background``. ``order``: the boxes' draw order (e.g. :func:`front_to_back`), each index once;
     ``early_depth``: fragments whose rasterised depth fails the depth test do not march (what a
     declared depth_greater keeps on a GPU); ``quality`` in (0, 1]: the preview's quality knob
-    (docs/PREVIEW.md), 1 = every fragment marched in full."""
+    (docs/PREVIEW.md), 1 = every fragment marched in full; ``normal``, one of NORMAL_RULES: the
+    shaders' forward differences (3 map() calls a hit), TETRAHEDRAL taps (4) or CENTRAL
+    differences (6, the accuracy reference; cpp NormalRule)."""
     width, height = checked_int(width, "width", 1), checked_int(height, "height", 1)
     origins = np.ascontiguousarray(origins, np.float32).reshape(-1, 3)
     n = len(origins)
@@ -328,7 +337,7 @@ def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_v
                        max_steps=checked_int(max_steps, "max_steps", -2**31),
                        epsilon=float(epsilon), relaxation=float(relaxation), max_distance=float(max_distance),
                        threads=checked_int(threads, "threads", -2**31), order=order,
-                       early_depth=bool(early_depth), quality=float(quality))
+                       early_depth=bool(early_depth), quality=float(quality), normal=_normal_index(normal))
     return RenderResult(rgba=rgba, depth=depth, normals=normals, steps=steps, cost=cost)
 
 

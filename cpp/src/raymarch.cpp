@@ -56,38 +56,68 @@ struct March {
     bool hit;
     float t;
     int steps;
+    float d;  // the last map() value (bm_normal's d)
 };
 
 // raymarch.glsl: bm_march, without its 512-step bound (a GLSL ES 1.00 constant loop limit).
 March bm_march(SdfPreset kind, vec3 ro, vec3 rd, vec3 h, float t_end, const MarchOptions& o) {
-    float t = 0.0f;
+    float t = 0.0f, d = 0.0f;
     for (int i = 0; i < o.max_steps; ++i) {
-        float d = sdf_preset(kind, ro + rd * t, h);
-        if (d < o.epsilon) return {true, t, i + 1};
+        d = sdf_preset(kind, ro + rd * t, h);
+        if (d < o.epsilon) return {true, t, i + 1, d};
         t += o.relaxation * d;
-        if (t > t_end) return {false, t, i + 1};
+        if (t > t_end) return {false, t, i + 1, d};
     }
-    return {false, t, o.max_steps};
+    return {false, t, o.max_steps, d};
 }
 
 // raymarch.glsl: bm_one_tap (one map() where the ray passes nearest the box's centre).
 March bm_one_tap(SdfPreset kind, vec3 ro, vec3 rd, vec3 h, float t_end, float footprint) {
     const float t = std::clamp(-glm::dot(ro, rd), 0.0f, t_end);
-    return {sdf_preset(kind, ro + rd * t, h) < 0.5f * footprint, t, 1};
+    const float d = sdf_preset(kind, ro + rd * t, h);
+    return {d < 0.5f * footprint, t, 1, d};
 }
 
-// raymarch.glsl: bm_normal (four tetrahedral taps).
-vec3 bm_normal(SdfPreset kind, vec3 p, vec3 h, float e) {
-    const vec3 a(1.0f, -1.0f, -1.0f), b(-1.0f, -1.0f, 1.0f), c(-1.0f, 1.0f, -1.0f), d(1.0f, 1.0f, 1.0f);
-    vec3 n = a * sdf_preset(kind, p + a * e, h) + b * sdf_preset(kind, p + b * e, h) +
-             c * sdf_preset(kind, p + c * e, h) + d * sdf_preset(kind, p + d * e, h);
-    float len = glm::length(n);
+vec3 unit_or_zero(vec3 n) {
+    const float len = glm::length(n);
     return len > 0.0f ? n / len : vec3(0.0f);
+}
+
+// raymarch.glsl: bm_normal (forward differences from d = map(p)).
+vec3 bm_normal(SdfPreset kind, vec3 p, vec3 h, float d, float e) {
+    return unit_or_zero(vec3(sdf_preset(kind, p + vec3(e, 0.0f, 0.0f), h), sdf_preset(kind, p + vec3(0.0f, e, 0.0f), h),
+                             sdf_preset(kind, p + vec3(0.0f, 0.0f, e), h)) - d);
+}
+
+// The normal of a hit at p (map(p) = d) by `rule`, and its map() calls (NormalRule).
+struct Normal {
+    vec3 n;
+    int evaluations;
+};
+Normal normal_by_rule(NormalRule rule, SdfPreset kind, vec3 p, vec3 h, float d, float epsilon) {
+    const float e = shader::bm_normal_tap(h);
+    if (rule == NormalRule::Forward) return {bm_normal(kind, p, h, d, e), 3};
+    if (rule == NormalRule::Central) {
+        vec3 n;
+        for (int k = 0; k < 3; ++k) {
+            vec3 step(0.0f);
+            step[k] = e;
+            n[k] = sdf_preset(kind, p + step, h) - sdf_preset(kind, p - step, h);
+        }
+        return {unit_or_zero(n), 6};
+    }
+    const float tap = std::max(epsilon, 1e-3f * shader::max3(h));
+    const vec3 a(1.0f, -1.0f, -1.0f), b(-1.0f, -1.0f, 1.0f), c(-1.0f, 1.0f, -1.0f), one(1.0f);
+    return {unit_or_zero(a * sdf_preset(kind, p + a * tap, h) + b * sdf_preset(kind, p + b * tap, h) +
+                         c * sdf_preset(kind, p + c * tap, h) + one * sdf_preset(kind, p + one * tap, h)),
+            4};
 }
 
 void check_plan(const RenderPlan& plan, size_t box_count) {
     if (!(plan.quality > 0.0f && plan.quality <= 1.0f))
         throw std::invalid_argument("quality must be in (0, 1], got " + std::to_string(plan.quality));
+    if (int(plan.normal) < 0 || int(plan.normal) >= kNormalRuleCount)
+        throw std::invalid_argument("unknown normal rule " + std::to_string(int(plan.normal)));
     if (!plan.order) return;
     std::vector<uint8_t> seen(box_count, 0);
     for (size_t k = 0; k < box_count; ++k) {
@@ -195,14 +225,14 @@ void raymarch(const float* origins, const float* directions, const float* half_e
             rd = len > 0.0f && len <= FLT_MAX ? rd / len : vec3(glm::normalize(glm::dvec3(rd)));
             vec2 span = shader::bm_box_span(ro, rd, h);
             float t0 = std::max(span.x, 0.0f);
-            March m{false, 0.0f, 0};
+            March m{false, 0.0f, 0, 0.0f};
             vec3 start = ro + rd * t0;
             if (span.y >= t0) m = bm_march(o.sdf, start, rd, h, std::min(span.y - t0, o.max_distance), o);
             vec3 p = start + rd * m.t;
             if (hit) hit[i] = m.hit ? 1 : 0;
             if (positions) for (int k = 0; k < 3; ++k) positions[3 * i + k] = p[k];
             if (normals) {
-                vec3 n = m.hit ? bm_normal(o.sdf, p, h, shader::bm_normal_tap(o.epsilon, h)) : vec3(0.0f);
+                vec3 n = m.hit ? bm_normal(o.sdf, p, h, m.d, shader::bm_normal_tap(h)) : vec3(0.0f);
                 for (int k = 0; k < 3; ++k) normals[3 * i + k] = n[k];
             }
             if (steps) steps[i] = m.steps;
@@ -273,14 +303,16 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                     cost.lod_fragments += one_tap;
                     March m = one_tap ? bm_one_tap(o.sdf, start, rd, h, t_end, footprint)
                                       : bm_march(o.sdf, start, rd, h, t_end, fragment);
-                    const int evaluations = m.steps + (m.hit ? 4 : 0);
-                    cost.sdf_evaluations += uint64_t(evaluations);
                     if (images.steps) images.steps[pix] += m.steps;
-                    if (!m.hit) continue;
                     vec3 local_hit = start + rd * m.t;
+                    const Normal normal = m.hit ? normal_by_rule(plan.normal, o.sdf, local_hit, h, m.d, fragment.epsilon)
+                                                : Normal{vec3(0.0f), 0};
+                    const int evaluations = m.steps + normal.evaluations;
+                    cost.sdf_evaluations += uint64_t(evaluations);
+                    if (!m.hit) continue;
                     float depth = std::max(window_depth(local_hit), face_depth);
                     if (!(depth >= 0.0f && depth < images.depth[pix])) continue;
-                    vec3 n_object = q * bm_normal(o.sdf, local_hit, h, shader::bm_normal_tap(fragment.epsilon, h));
+                    vec3 n_object = q * normal.n;
                     vec3 color = shader::bm_shade(glm::normalize(normal_matrix * n_object), base);
                     shown[pix - band_start] = evaluations;
                     images.depth[pix] = depth;

@@ -149,11 +149,12 @@ inline vec2 bm_box_span(vec3 ro, vec3 rd, vec3 h)
   return vec2(max3(t_near), min3(t_far));
 }
 
-// Tap distance of bm_normal: taps closer than a thousandth of the box lose the gradient in float
-// rounding, so small epsilons do not shrink them further.
-inline float bm_normal_tap(float epsilon, vec3 h)
+// Tap distance of bm_normal, 3/10,000 of the box: a forward difference errs by about half the tap
+// times the surface's curvature, and closer taps lose the gradient in float rounding (measured in
+// docs/ACCURACY.md, "GPU cost against error": the normal error column).
+inline float bm_normal_tap(vec3 h)
 {
-  return glm::max(epsilon, 1e-3f * max3(h));
+  return 3e-4f * max3(h);
 }
 
 // The quality knob q (0 < q <= 1) as the three settings it stands for. x: hit distance as a share
@@ -176,10 +177,10 @@ inline float bm_pixel_size(float clip_w, float row_y, float height)
 }
 
 // Step limit of a box box_pixels wide on screen: steps_per_pixel per pixel, at least 16, at most
-// max_steps (a float holding a whole number).
-inline float bm_step_limit(float box_pixels, float steps_per_pixel, float max_steps)
+// step_cap (a float holding a whole number).
+inline float bm_step_limit(float box_pixels, float steps_per_pixel, float step_cap)
 {
-  return glm::min(max_steps, glm::max(16.0f, glm::floor(steps_per_pixel * box_pixels)));
+  return glm::min(step_cap, glm::max(16.0f, glm::floor(steps_per_pixel * box_pixels)));
 }
 
 // Lambert from a light fixed in view space plus a sky/ground hemisphere, like the viewport's

@@ -63,10 +63,11 @@ void main()
   float epsilon = max(preview.march.x, quality.x * footprint);
   int max_steps = int(bm_step_limit(box_pixels, quality.y, preview.march.w));
   float t;
+  float d;
   int steps = 1;
   bool hit = box_pixels < quality.z
-    ? bm_one_tap(ro, rd, min(t_end, preview.march.z), footprint, t)
-    : bm_march(ro, rd, min(t_end, preview.march.z), max_steps, epsilon, preview.march.y, t, steps);
+    ? bm_one_tap(ro, rd, min(t_end, preview.march.z), footprint, t, d)
+    : bm_march(ro, rd, min(t_end, preview.march.z), max_steps, epsilon, preview.march.y, t, steps, d);
   if (preview.mode.x == 2) {
     frag_color = vec4(float(steps), 0.0, 0.0, 1.0);
     return;
@@ -79,7 +80,7 @@ void main()
   vec4 clip = preview.object_to_clip * vec4(obj_hit, 1.0);
   gl_FragDepth = max(clip.z / clip.w * 0.5 + 0.5, gl_FragCoord.z);
 
-  vec3 n_object = transpose(frame) * bm_from_local(bm_normal(local_hit, bm_normal_tap(epsilon, box_half)), x, y, z);
+  vec3 n_object = transpose(frame) * bm_from_local(bm_normal(local_hit, d, bm_normal_tap(box_half)), x, y, z);
   if (preview.mode.x == 1) {
     frag_color = vec4(n_object * 0.5 + 0.5, 1.0);
   }

@@ -21,18 +21,20 @@ float2 bm_box_span(float3 ro, float3 rd, float3 h)
 
 // Sphere-traces map() from ro along unit rd until a distance falls below epsilon (true), the ray
 // passes t_end or step_limit evaluations (at most 512) are spent (false). t: distance travelled;
-// steps: map() evaluations. The loop's bound is a constant, as GLSL ES 1.00 (WebGL 1) requires.
+// steps: map() evaluations; d: the last map() value (at a hit, the hit's own distance, which
+// bm_normal reuses). The loop's bound is a constant, as GLSL ES 1.00 (WebGL 1) requires.
 bool bm_march(float3 ro, float3 rd, float t_end, int step_limit, float epsilon, float relaxation,
-              out float t, out int steps)
+              out float t, out int steps, out float d)
 {
   t = 0.0;
   steps = step_limit;
+  d = 0.0;
   [loop]
   for (int i = 0; i < 512; ++i) {
     if (i >= step_limit) {
       break;
     }
-    float d = map(ro + rd * t);
+    d = map(ro + rd * t);
     if (d < epsilon) {
       steps = i + 1;
       return true;
@@ -48,11 +50,13 @@ bool bm_march(float3 ro, float3 rd, float t_end, int step_limit, float epsilon, 
 
 // Level of detail for a box a few pixels wide: one map() evaluation where the ray passes nearest
 // the box's centre (within its span) stands for the march; a hit when that point lies within half
-// a pixel (footprint, box-local units) of the surface or inside. t: that point's distance.
-bool bm_one_tap(float3 ro, float3 rd, float t_end, float footprint, out float t)
+// a pixel (footprint, box-local units) of the surface or inside. t: that point's distance along
+// the ray; d: its map() value (for bm_normal).
+bool bm_one_tap(float3 ro, float3 rd, float t_end, float footprint, out float t, out float d)
 {
   t = clamp(-dot(ro, rd), 0.0, t_end);
-  return map(ro + rd * t) < 0.5 * footprint;
+  d = map(ro + rd * t);
+  return d < 0.5 * footprint;
 }
 
 // The quality knob q (0 < q <= 1) as the three settings it stands for. x: hit distance as a share
@@ -75,27 +79,25 @@ float bm_pixel_size(float clip_w, float row_y, float height)
 }
 
 // Step limit of a box box_pixels wide on screen: steps_per_pixel per pixel, at least 16, at most
-// max_steps (a float holding a whole number).
-float bm_step_limit(float box_pixels, float steps_per_pixel, float max_steps)
+// step_cap (a float holding a whole number).
+float bm_step_limit(float box_pixels, float steps_per_pixel, float step_cap)
 {
-  return min(max_steps, max(16.0, floor(steps_per_pixel * box_pixels)));
+  return min(step_cap, max(16.0, floor(steps_per_pixel * box_pixels)));
 }
 
-// Tap distance of bm_normal: taps closer than a thousandth of the box lose the gradient in float
-// rounding, so small epsilons do not shrink them further.
-float bm_normal_tap(float epsilon, float3 h)
+// Tap distance of bm_normal, 3/10,000 of the box: a forward difference errs by about half the tap
+// times the surface's curvature, and closer taps lose the gradient in float rounding (measured in
+// docs/ACCURACY.md, "GPU cost against error": the normal error column).
+float bm_normal_tap(float3 h)
 {
-  return max(epsilon, 1e-3 * max3(h));
+  return 3e-4 * max3(h);
 }
 
-// Unit SDF gradient from four tetrahedral taps at distance e.
-float3 bm_normal(float3 p, float e)
+// Unit SDF gradient at p from forward differences: d = map(p), which the march has already
+// computed (bm_march's d), so the normal costs three map() calls; taps at distance e.
+float3 bm_normal(float3 p, float d, float e)
 {
-  const float3 a = float3(1.0, -1.0, -1.0);
-  const float3 b = float3(-1.0, -1.0, 1.0);
-  const float3 c = float3(-1.0, 1.0, -1.0);
-  const float3 d = float3(1.0, 1.0, 1.0);
-  float3 n = a * map(p + a * e) + b * map(p + b * e) + c * map(p + c * e) + d * map(p + d * e);
+  float3 n = float3(map(p + float3(e, 0.0, 0.0)), map(p + float3(0.0, e, 0.0)), map(p + float3(0.0, 0.0, e))) - d;
   float len = length(n);
   return len > 0.0 ? n / len : float3(0.0, 0.0, 0.0);
 }

@@ -63,17 +63,18 @@ bm_hit bm_raymarch_in_frame(float3 obj_pos, float3 obj_camera, float3 f, float3 
   float box_pixels = 2.0 * max3(box_half) / footprint;
   float hit_epsilon = max(epsilon, knob.x * footprint);
   float t;
+  float d;
   int steps = 1;
   if (box_pixels < knob.z)
-    o.hit = bm_one_tap(ro, rd, min(t_end, max_distance), footprint, t);
+    o.hit = bm_one_tap(ro, rd, min(t_end, max_distance), footprint, t, d);
   else
     o.hit = bm_march(ro, rd, min(t_end, max_distance), int(bm_step_limit(box_pixels, knob.y, float(max_steps))),
-                     hit_epsilon, relaxation, t, steps);
+                     hit_epsilon, relaxation, t, steps, d);
   o.steps = steps;
   if (!o.hit) return o;
   float3 local_hit = ro + rd * t;
   o.obj_pos = obj_pos + bm_from_local(local_hit + f, x, y, z);
-  o.obj_normal = bm_from_local(bm_normal(local_hit, bm_normal_tap(hit_epsilon, box_half)), x, y, z);
+  o.obj_normal = bm_from_local(bm_normal(local_hit, d, bm_normal_tap(box_half)), x, y, z);
   return o;
 }
 

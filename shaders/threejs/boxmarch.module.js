@@ -69,27 +69,108 @@ function createBoxmarchMaterial(THREE, options) {
   return new THREE.ShaderMaterial(parameters);
 }
 
-// Gives a mesh the material and keeps its object-space eye up to date before every draw.
-function useBoxmarchMaterial(THREE, mesh, material) {
+// The camera in the mesh's object space, into eye (a THREE.Vector4): its position with w = 1, or
+// for an orthographic camera its view direction with w = 0. inverse: a THREE.Matrix4 to work in.
+function boxmarchObjectEye(THREE, mesh, camera, inverse, eye) {
+  inverse.getInverse ? inverse.getInverse(mesh.matrixWorld) : inverse.copy(mesh.matrixWorld).invert();
+  var v = new THREE.Vector3();
+  if (camera.isOrthographicCamera) {
+    camera.getWorldDirection(v).transformDirection(inverse);
+    return eye.set(v.x, v.y, v.z, 0);
+  }
+  v.setFromMatrixPosition(camera.matrixWorld).applyMatrix4(inverse);
+  return eye.set(v.x, v.y, v.z, 1);
+}
+
+// Gives a mesh the material and keeps its object-space eye up to date before every draw; with
+// frontToBack, also draws its boxes front to back (sortBoxmarchFrontToBack before every draw).
+function useBoxmarchMaterial(THREE, mesh, material, frontToBack) {
   prepareBoxmarchGeometry(THREE, mesh.geometry);
   mesh.material = material;
   var inverse = new THREE.Matrix4();
-  var eye = new THREE.Vector3();
   var size = new THREE.Vector2();
   mesh.onBeforeRender = function (renderer, scene, camera) {
     material.uniforms.bmQuality.value.y = renderer.getDrawingBufferSize(size).y;
-    inverse.getInverse ? inverse.getInverse(mesh.matrixWorld) : inverse.copy(mesh.matrixWorld).invert();
-    if (camera.isOrthographicCamera) {
-      camera.getWorldDirection(eye).transformDirection(inverse);
-      material.uniforms.bmEye.value.set(eye.x, eye.y, eye.z, 0);
-    } else {
-      eye.setFromMatrixPosition(camera.matrixWorld).applyMatrix4(inverse);
-      material.uniforms.bmEye.value.set(eye.x, eye.y, eye.z, 1);
-    }
+    boxmarchObjectEye(THREE, mesh, camera, inverse, material.uniforms.bmEye.value);
     // a material shared by several meshes: three.js uploads uniforms only on a material change
     material.uniformsNeedUpdate = true;
+    if (frontToBack) sortBoxmarchFrontToBack(THREE, mesh, camera);
   };
   return mesh;
+}
+
+// The boxes of an indexed geometry for sortBoxmarchFrontToBack: its triangles grouped by box (the
+// box number of TEXCOORD_2.y, bmOffsetZIndex), where each box's group starts, and each box's
+// centre (the mean of its vertices at rest).
+function boxmarchBoxes(geometry) {
+  var index = geometry.index.array, number = geometry.getAttribute('bmOffsetZIndex');
+  var position = geometry.getAttribute('position');
+  var boxOf = new Map(), boxOfTriangle = new Uint32Array(index.length / 3);
+  for (var t = 0; t < boxOfTriangle.length; t++) {
+    var id = number.getY(index[3 * t]);
+    if (!boxOf.has(id)) boxOf.set(id, boxOf.size);
+    boxOfTriangle[t] = boxOf.get(id);
+  }
+  var count = boxOf.size, start = new Uint32Array(count + 1), centres = new Float64Array(3 * count);
+  var vertices = new Float64Array(count), seen = new Uint8Array(position.count);
+  for (t = 0; t < boxOfTriangle.length; t++) {
+    var box = boxOfTriangle[t];
+    start[box + 1] += 3;
+    for (var k = 0; k < 3; k++) {
+      var v = index[3 * t + k];
+      if (seen[v]) continue;
+      seen[v] = 1;
+      centres[3 * box] += position.getX(v);
+      centres[3 * box + 1] += position.getY(v);
+      centres[3 * box + 2] += position.getZ(v);
+      vertices[box] += 1;
+    }
+  }
+  for (box = 0; box < count; box++) {
+    start[box + 1] += start[box];
+    for (k = 0; k < 3; k++) centres[3 * box + k] /= vertices[box];
+  }
+  var triangles = new index.constructor(index.length), filled = start.slice(0, count);
+  for (t = 0; t < boxOfTriangle.length; t++) {
+    box = boxOfTriangle[t];
+    triangles.set(index.subarray(3 * t, 3 * t + 3), filled[box]);
+    filled[box] += 3;
+  }
+  var order = new Uint32Array(count);
+  for (box = 0; box < count; box++) order[box] = box;
+  return { index: geometry.index, count: count, start: start, centres: centres, triangles: triangles, order: order,
+           key: new Float64Array(count), eye: null };
+}
+
+// Draws the boxes of mesh front to back for camera: rewrites its index buffer box by box, the
+// box whose centre is nearest the eye (orthographic: least far along the view direction) first, so
+// the depth test stops the marches of fragments behind nearer boxes (the same image: the nearest
+// hit wins a pixel whatever the order). Sorts again only when the eye has moved in the mesh's
+// space; returns whether it sorted. A mesh without an index buffer is left as it is. three.js
+// uploads the changed index buffer before the mesh's next draw (r180); r111 uploads it at the
+// frame after (its renderer updates geometry before onBeforeRender runs).
+function sortBoxmarchFrontToBack(THREE, mesh, camera) {
+  var geometry = mesh.geometry;
+  if (!geometry.index) return false;
+  var boxes = mesh.userData.boxmarchBoxes;
+  if (!boxes || boxes.index !== geometry.index) boxes = mesh.userData.boxmarchBoxes = boxmarchBoxes(geometry);
+  var eye = boxmarchObjectEye(THREE, mesh, camera, new THREE.Matrix4(), new THREE.Vector4());
+  if (boxes.eye && boxes.eye.equals(eye)) return false;
+  boxes.eye = eye;
+  var c = boxes.centres, key = boxes.key;
+  for (var b = 0; b < boxes.count; b++) {
+    var x = c[3 * b] - eye.x, y = c[3 * b + 1] - eye.y, z = c[3 * b + 2] - eye.z;
+    key[b] = eye.w > 0.5 ? x * x + y * y + z * z : c[3 * b] * eye.x + c[3 * b + 1] * eye.y + c[3 * b + 2] * eye.z;
+  }
+  boxes.order.sort(function (i, j) { return key[i] - key[j]; });
+  var out = geometry.index.array, at = 0;
+  for (var k = 0; k < boxes.count; k++) {
+    var box = boxes.order[k], group = boxes.triangles.subarray(boxes.start[box], boxes.start[box + 1]);
+    out.set(group, at);
+    at += group.length;
+  }
+  geometry.index.needsUpdate = true;
+  return true;
 }
 
 // The export's sidecar (NAME.boxmarch.json beside NAME.glb) format and the layout this material reads.
@@ -110,8 +191,8 @@ function checkBoxmarchSidecar(sidecar, name) {
 }
 
 // Loads the .glb at url (NAME.glb) after its sidecar NAME.boxmarch.json and gives every mesh,
-// skinned or not, its own material (options: those of createBoxmarchMaterial; skinning is set
-// per mesh). GLTFLoader: the class (THREE.GLTFLoader in r111's examples/js, imported from
+// skinned or not, its own material (options: those of createBoxmarchMaterial, skinning set per
+// mesh, and frontToBack: draw each mesh's boxes front to back, useBoxmarchMaterial). GLTFLoader: the class (THREE.GLTFLoader in r111's examples/js, imported from
 // three/addons later). Resolves to { scene, meshes, gltf, sidecar }; rejects with the reason,
 // before the .glb is fetched, when the sidecar is missing or describes a file the material does
 // not read.
@@ -130,7 +211,7 @@ function loadBoxmarch(THREE, GLTFLoader, url, options) {
     loaded.gltf.scene.traverse(function (o) { if (o.isMesh) meshes.push(o); });
     meshes.forEach(function (mesh) {
       var settings = Object.assign({}, options, { skinning: !!mesh.isSkinnedMesh });
-      useBoxmarchMaterial(THREE, mesh, createBoxmarchMaterial(THREE, settings));
+      useBoxmarchMaterial(THREE, mesh, createBoxmarchMaterial(THREE, settings), !!(options && options.frontToBack));
     });
     return { scene: loaded.gltf.scene, meshes: meshes, gltf: loaded.gltf, sidecar: loaded.sidecar };
   });
@@ -213,9 +294,10 @@ var BOXMARCH_FRAGMENT = [
   '  float boxPixels = 2.0 * max3(box_half) / footprint;',
   '  float epsilon = max(bmMarch.x, knob.x * footprint);',
   '  float t;',
+  '  float d;',
   '  int steps = 1;',
-  '  bool hit = boxPixels < knob.z ? bm_one_tap(ro, rd, t_end, footprint, t)',
-  '    : bm_march(ro, rd, t_end, int(bm_step_limit(boxPixels, knob.y, bmMarch.y)), epsilon, 1.0, t, steps);',
+  '  bool hit = boxPixels < knob.z ? bm_one_tap(ro, rd, t_end, footprint, t, d)',
+  '    : bm_march(ro, rd, t_end, int(bm_step_limit(boxPixels, knob.y, bmMarch.y)), epsilon, 1.0, t, steps, d);',
   '  if (!hit) discard;',
   '  vec3 local_hit = ro + rd * t;',
   '  vec3 obj_hit = vObjPos + bm_from_local(local_hit + f, x, y, z);',
@@ -224,13 +306,13 @@ var BOXMARCH_FRAGMENT = [
   // (keeping early depth testing), but its #extension line must precede every other token and
   // three.js's ShaderMaterial puts its precision statements first (docs/ENGINES.md).
   '  gl_FragDepthEXT = max(0.5 + 0.5 * clip.z / clip.w, gl_FragCoord.z);',
-  '  vec3 n = normalize(normalMatrix * bm_from_local(bm_normal(local_hit, bm_normal_tap(epsilon, box_half)), x, y, z));',
+  '  vec3 n = normalize(normalMatrix * bm_from_local(bm_normal(local_hit, d, bm_normal_tap(box_half)), x, y, z));',
   '  gl_FragColor = vec4(bmColor * (0.35 + 0.65 * max(n.z, 0.0)), 1.0);',
   '}'
 ].join('\n');
 
 // The shared GLSL: shaders/glsl/decode.glsl, and sdf.glsl + raymarch.glsl.
 var BOXMARCH_DECODE = "// boxmarch decode: recover a fragment's box-local frame from the baked vertex data\n// (docs/FORMAT.md). shaders/generate.py translates it into every engine's language.\n// Names: snake_case with a bm_ prefix for the decode and the march (sdf.glsl keeps the sd_ and\n// op_ families that users' map() texts call). The blog post's shader has its own GetFragToOrigin,\n// GetRotation and rotate_vector; bm_offset_from_color, bm_quaternion and bm_rotate_vector compute\n// the same, so that shader reads the CLASSIC layout unchanged (docs/FORMAT.md names the pairs).\n\n// f = vector from the fragment to its submesh's origin, in box-local coordinates.\n// color = the BoxOffset colour attribute (rgb = 0.5 + 0.5 * s * f, a = s).\nvec3 bm_offset_from_color(vec4 color)\n{\n  return (color.rgb * 2.0 - 1.0) / color.a;\n}\n\n// q = the submesh's frame as a quaternion (x, y, z, w) mapping box-local to object space,\n// from the two UV maps BoxQuatXY and BoxQuatZW.\nvec4 bm_quaternion(vec2 quat_xy, vec2 quat_zw)\n{\n  return vec4(quat_xy, quat_zw);\n}\n\n// q v q* for a unit quaternion q; bm_rotate_vector(v, bm_quat_conjugate(q)) is the inverse\n// rotation.\nvec3 bm_rotate_vector(vec3 v, vec4 q)\n{\n  return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v);\n}\n\n// The inverse rotation of a unit quaternion.\nvec4 bm_quat_conjugate(vec4 q)\n{\n  return vec4(-q.xyz, q.w);\n}\n\n// ---- Engine layouts (docs/ENGINES.md). The NORMAL_* layouts carry the frame in the normal\n// (local z) and the tangent (local x, w = +1), the two vectors every engine's skinning\n// transforms; UV_FRAME carries the quaternion as CLASSIC does. The offset f, the box index and\n// the half-extents h ride in float channels: UVa = f.xy, UVb = (f.z, index), UVc = h.xy,\n// UVd = (h.z, 0) (NORMAL_COLOR: colour = (f, index), h from the box table).\n\n// Local y axis of a NORMAL_* frame: the glTF bitangent cross(normal, tangent.xyz) * tangent.w.\nvec3 bm_axis_y(vec3 normal, vec4 tangent)\n{\n  return cross(normal, tangent.xyz) * tangent.w;\n}\n\n// Box-local coordinates of v, given the frame's unit axes x, y, z in v's space.\nvec3 bm_to_local(vec3 v, vec3 x, vec3 y, vec3 z)\n{\n  return vec3(dot(v, x), dot(v, y), dot(v, z));\n}\n\n// The vector with box-local coordinates l, in the space of the axes x, y, z.\nvec3 bm_from_local(vec3 l, vec3 x, vec3 y, vec3 z)\n{\n  return x * l.x + y * l.y + z * l.z;\n}\n\n// f from the offset pair of channels (f.xy, (f.z, index)).\nvec3 bm_offset(vec2 offset_xy, vec2 offset_z_index)\n{\n  return vec3(offset_xy, offset_z_index.x);\n}\n\n// The box number from its interpolated channel (constant over a box; rounding absorbs\n// interpolation round-off).\nfloat bm_box_index(float channel)\n{\n  return floor(channel + 0.5);\n}\n\n// h from the half-extent pair of channels (h.xy, (h.z, 0)).\nvec3 bm_half_extents(vec2 half_xy, vec2 half_z)\n{\n  return vec3(half_xy, half_z.x);\n}\n";
-var BOXMARCH_LIBRARY = "// boxmarch SDF library. Units are box-local: p is measured from the submesh's origin along its\n// baked axes, and `box_half` holds the box's half-extents (a 1 x 0.6 x 0.2 box has\n// box_half = (0.5, 0.3, 0.1)), so shapes can be sized without typing numbers.\n// shaders/generate.py translates it into HLSL and into GLM for the CPU reference (cpp/src).\n// Each distance function states what it returns, as hg_sdf does: exact (the signed Euclidean\n// distance to its surface), or a bound (never more than the exact distance in magnitude: sphere\n// tracing stays safe but may take more steps). Exactness of an op_ assumes exact inputs.\n\n// Half-extents of the box being marched; set by the raymarcher before map() is called.\nvec3 box_half = vec3(0.0);\n\nfloat min3(vec3 v) { return min(v.x, min(v.y, v.z)); }\nfloat max3(vec3 v) { return max(v.x, max(v.y, v.z)); }\n\n// ---- primitives, centred at the origin\n// Exact.\nfloat sd_sphere(vec3 p, float r) { return length(p) - r; }\n\n// Exact. Half-extents b.\nfloat sd_box(vec3 p, vec3 b)\n{\n  vec3 q = abs(p) - b;\n  return length(max(q, vec3(0.0))) + min(max3(q), 0.0);\n}\n\n// Exact for r <= min3(b): the box b with its edges rounded by r (outer size b).\nfloat sd_round_box(vec3 p, vec3 b, float r) { return sd_box(p, b - vec3(r)) - r; }\n\n// Exact. Segment a-b with radius r.\nfloat sd_capsule(vec3 p, vec3 a, vec3 b, float r)\n{\n  vec3 pa = p - a;\n  vec3 ba = b - a;\n  float h = clamp(dot(pa, ba) / max(dot(ba, ba), 1e-20), 0.0, 1.0);\n  return length(pa - ba * h) - r;\n}\n\n// Exact. Capped, axis z.\nfloat sd_cylinder(vec3 p, float r, float half_height)\n{\n  vec2 d = abs(vec2(length(p.xy), p.z)) - vec2(r, half_height);\n  return min(max(d.x, d.y), 0.0) + length(max(d, vec2(0.0)));\n}\n\n// Exact. Around axis z.\nfloat sd_torus(vec3 p, float major, float minor)\n{\n  vec2 q = vec2(length(p.xy) - major, p.z);\n  return length(q) - minor;\n}\n\n// Exact. Chain link: a ring of radius `ring` in the xy plane stretched by half_length along y.\nfloat sd_link(vec3 p, float half_length, float ring, float thickness)\n{\n  vec3 q = vec3(p.x, max(abs(p.y) - half_length, 0.0), p.z);\n  return length(vec2(length(q.xy) - ring, q.z)) - thickness;\n}\n\n// Exact for a unit normal n. Plane with normal n, offset along n.\nfloat sd_plane(vec3 p, vec3 n, float offset) { return dot(p, n) + offset; }\n\n// ---- combinations of two distances\n// Exact outside both shapes, a bound inside.\nfloat op_union(float a, float b) { return min(a, b); }\n// A bound outside the result, exact inside. a minus b.\nfloat op_subtract(float a, float b) { return max(a, -b); }\n// A bound outside the result, exact inside.\nfloat op_intersect(float a, float b) { return max(a, b); }\n\n// Smooth versions: k is the blend radius (box-local units).\n// A bound; equals op_union where |a - b| >= k.\nfloat op_smooth_union(float a, float b, float k)\n{\n  float h = clamp(0.5 + 0.5 * (b - a) / k, 0.0, 1.0);\n  return mix(b, a, h) - k * h * (1.0 - h);\n}\n// A bound; equals op_intersect where |a - b| >= k.\nfloat op_smooth_intersect(float a, float b, float k) { return -op_smooth_union(-a, -b, k); }\n// A bound; equals op_subtract where |a + b| >= k.\nfloat op_smooth_subtract(float a, float b, float k) { return op_smooth_intersect(a, -b, k); }\n\n// ---- modifiers\n// The shape grown by r: exact outside, a bound inside.\nfloat op_round(float d, float r) { return d - r; }\n// A shell of half-thickness `thickness` around the surface: exact outside the shell, a bound\n// inside it.\nfloat op_onion(float d, float thickness) { return abs(d) - thickness; }\n\n// Finite repetition: copies every `spacing`, `limit` copies each side of the centre per axis.\n// Moves p (returns no distance): a shape evaluated at the result stays exact when it is\n// mirror-symmetric in each axis and fits its cell (half of `spacing` each side); otherwise it can\n// overestimate (neither exact nor a bound: march with relaxation below 1).\n// floor(x + 0.5), not round(): GLSL ES 1.00 (WebGL 1) has no round().\nvec3 op_repeat_limited(vec3 p, vec3 spacing, vec3 limit)\n{\n  return p - spacing * clamp(floor(p / spacing + 0.5), -limit, limit);\n}\n\n// ---- presets of the preview's SDF menu, sized by the box\n// Exact.\nfloat sdf_preset_box(vec3 p, vec3 h) { return sd_box(p, h); }\n// Exact.\nfloat sdf_preset_sphere(vec3 p, vec3 h) { return sd_sphere(p, min3(h)); }\n// Exact.\nfloat sdf_preset_rounded_box(vec3 p, vec3 h) { return sd_round_box(p, h, 0.25 * min3(h)); }\n// Exact.\nfloat sdf_preset_capsule(vec3 p, vec3 h)\n{\n  float r = min(h.y, h.z);\n  float a = max(h.x - r, 0.0);\n  return sd_capsule(p, vec3(-a, 0.0, 0.0), vec3(a, 0.0, 0.0), r);\n}\n// Exact.\nfloat sdf_preset_cylinder(vec3 p, vec3 h) { return sd_cylinder(p, min(h.x, h.y), h.z); }\n// Exact.\nfloat sdf_preset_torus(vec3 p, vec3 h)\n{\n  float minor = min(h.z, 0.5 * min(h.x, h.y));\n  return sd_torus(p, min(h.x, h.y) - minor, minor);\n}\n// Exact.\nfloat sdf_preset_link(vec3 p, vec3 h)\n{\n  float thickness = min(h.z, 0.25 * min(h.x, h.y));\n  return sd_link(p.yxz, max(h.x - h.y, 0.0), h.y - thickness, thickness);\n}\n\n// boxmarch raymarcher: sphere tracing inside one box, box-local coordinates.\n// Needs decode.glsl and sdf.glsl before it and a `float map(vec3 p)` after it.\n// shaders/generate.py translates it into HLSL, and bm_box_span and bm_normal_tap into GLM for the\n// CPU reference (cpp/src/raymarch.cpp writes bm_march and bm_normal around its preset switch).\n\nfloat map(vec3 p);\n\n// Entry (x) and exit (y) distances of the ray ro + t rd with the box |p| <= h.\nvec2 bm_box_span(vec3 ro, vec3 rd, vec3 h)\n{\n  vec3 s = vec3(rd.x < 0.0 ? -1.0 : 1.0, rd.y < 0.0 ? -1.0 : 1.0, rd.z < 0.0 ? -1.0 : 1.0);\n  vec3 inv = 1.0 / max(abs(rd), vec3(1e-12));\n  vec3 t_near = (-h - s * ro) * inv;\n  vec3 t_far = (h - s * ro) * inv;\n  return vec2(max3(t_near), min3(t_far));\n}\n\n// Sphere-traces map() from ro along unit rd until a distance falls below epsilon (true), the ray\n// passes t_end or step_limit evaluations (at most 512) are spent (false). t: distance travelled;\n// steps: map() evaluations. The loop's bound is a constant, as GLSL ES 1.00 (WebGL 1) requires.\nbool bm_march(vec3 ro, vec3 rd, float t_end, int step_limit, float epsilon, float relaxation,\n              out float t, out int steps)\n{\n  t = 0.0;\n  steps = step_limit;\n  for (int i = 0; i < 512; ++i) {\n    if (i >= step_limit) {\n      break;\n    }\n    float d = map(ro + rd * t);\n    if (d < epsilon) {\n      steps = i + 1;\n      return true;\n    }\n    t += relaxation * d;\n    if (t > t_end) {\n      steps = i + 1;\n      return false;\n    }\n  }\n  return false;\n}\n\n// Level of detail for a box a few pixels wide: one map() evaluation where the ray passes nearest\n// the box's centre (within its span) stands for the march; a hit when that point lies within half\n// a pixel (footprint, box-local units) of the surface or inside. t: that point's distance.\nbool bm_one_tap(vec3 ro, vec3 rd, float t_end, float footprint, out float t)\n{\n  t = clamp(-dot(ro, rd), 0.0, t_end);\n  return map(ro + rd * t) < 0.5 * footprint;\n}\n\n// The quality knob q (0 < q <= 1) as the three settings it stands for. x: hit distance as a share\n// of a pixel's footprint (the march stops that close to the surface when that is more than the\n// epsilon); y: steps allowed per pixel of the box's size on screen (bm_step_limit); z: size on\n// screen in pixels under which a box takes one tap (bm_one_tap). q = 1 leaves the march as the\n// epsilon and step limit set it.\nvec3 bm_quality(float q)\n{\n  float loss = 1.0 - clamp(q, 0.0, 1.0);\n  return vec3(0.5 * loss * loss, 8.0 / max(loss, 1e-9), 4.0 * loss);\n}\n\n// Size of one pixel, in object units, at a point whose clip-space w is clip_w: row_y = length of\n// the object-to-clip matrix's y row (xyz), height = viewport height in pixels. Perspective and\n// orthographic alike (w = 1 there).\nfloat bm_pixel_size(float clip_w, float row_y, float height)\n{\n  return 2.0 * clip_w / (height * row_y);\n}\n\n// Step limit of a box box_pixels wide on screen: steps_per_pixel per pixel, at least 16, at most\n// max_steps (a float holding a whole number).\nfloat bm_step_limit(float box_pixels, float steps_per_pixel, float max_steps)\n{\n  return min(max_steps, max(16.0, floor(steps_per_pixel * box_pixels)));\n}\n\n// Tap distance of bm_normal: taps closer than a thousandth of the box lose the gradient in float\n// rounding, so small epsilons do not shrink them further.\nfloat bm_normal_tap(float epsilon, vec3 h)\n{\n  return max(epsilon, 1e-3 * max3(h));\n}\n\n// Unit SDF gradient from four tetrahedral taps at distance e.\nvec3 bm_normal(vec3 p, float e)\n{\n  const vec3 a = vec3(1.0, -1.0, -1.0);\n  const vec3 b = vec3(-1.0, -1.0, 1.0);\n  const vec3 c = vec3(-1.0, 1.0, -1.0);\n  const vec3 d = vec3(1.0, 1.0, 1.0);\n  vec3 n = a * map(p + a * e) + b * map(p + b * e) + c * map(p + c * e) + d * map(p + d * e);\n  float len = length(n);\n  return len > 0.0 ? n / len : vec3(0.0);\n}\n";
+var BOXMARCH_LIBRARY = "// boxmarch SDF library. Units are box-local: p is measured from the submesh's origin along its\n// baked axes, and `box_half` holds the box's half-extents (a 1 x 0.6 x 0.2 box has\n// box_half = (0.5, 0.3, 0.1)), so shapes can be sized without typing numbers.\n// shaders/generate.py translates it into HLSL and into GLM for the CPU reference (cpp/src).\n// Each distance function states what it returns, as hg_sdf does: exact (the signed Euclidean\n// distance to its surface), or a bound (never more than the exact distance in magnitude: sphere\n// tracing stays safe but may take more steps). Exactness of an op_ assumes exact inputs.\n\n// Half-extents of the box being marched; set by the raymarcher before map() is called.\nvec3 box_half = vec3(0.0);\n\nfloat min3(vec3 v) { return min(v.x, min(v.y, v.z)); }\nfloat max3(vec3 v) { return max(v.x, max(v.y, v.z)); }\n\n// ---- primitives, centred at the origin\n// Exact.\nfloat sd_sphere(vec3 p, float r) { return length(p) - r; }\n\n// Exact. Half-extents b.\nfloat sd_box(vec3 p, vec3 b)\n{\n  vec3 q = abs(p) - b;\n  return length(max(q, vec3(0.0))) + min(max3(q), 0.0);\n}\n\n// Exact for r <= min3(b): the box b with its edges rounded by r (outer size b).\nfloat sd_round_box(vec3 p, vec3 b, float r) { return sd_box(p, b - vec3(r)) - r; }\n\n// Exact. Segment a-b with radius r.\nfloat sd_capsule(vec3 p, vec3 a, vec3 b, float r)\n{\n  vec3 pa = p - a;\n  vec3 ba = b - a;\n  float h = clamp(dot(pa, ba) / max(dot(ba, ba), 1e-20), 0.0, 1.0);\n  return length(pa - ba * h) - r;\n}\n\n// Exact. Capped, axis z.\nfloat sd_cylinder(vec3 p, float r, float half_height)\n{\n  vec2 d = abs(vec2(length(p.xy), p.z)) - vec2(r, half_height);\n  return min(max(d.x, d.y), 0.0) + length(max(d, vec2(0.0)));\n}\n\n// Exact. Around axis z.\nfloat sd_torus(vec3 p, float major, float minor)\n{\n  vec2 q = vec2(length(p.xy) - major, p.z);\n  return length(q) - minor;\n}\n\n// Exact. Chain link: a ring of radius `ring` in the xy plane stretched by half_length along y.\nfloat sd_link(vec3 p, float half_length, float ring, float thickness)\n{\n  vec3 q = vec3(p.x, max(abs(p.y) - half_length, 0.0), p.z);\n  return length(vec2(length(q.xy) - ring, q.z)) - thickness;\n}\n\n// Exact for a unit normal n. Plane with normal n, offset along n.\nfloat sd_plane(vec3 p, vec3 n, float offset) { return dot(p, n) + offset; }\n\n// ---- combinations of two distances\n// Exact outside both shapes, a bound inside.\nfloat op_union(float a, float b) { return min(a, b); }\n// A bound outside the result, exact inside. a minus b.\nfloat op_subtract(float a, float b) { return max(a, -b); }\n// A bound outside the result, exact inside.\nfloat op_intersect(float a, float b) { return max(a, b); }\n\n// Smooth versions: k is the blend radius (box-local units).\n// A bound; equals op_union where |a - b| >= k.\nfloat op_smooth_union(float a, float b, float k)\n{\n  float h = clamp(0.5 + 0.5 * (b - a) / k, 0.0, 1.0);\n  return mix(b, a, h) - k * h * (1.0 - h);\n}\n// A bound; equals op_intersect where |a - b| >= k.\nfloat op_smooth_intersect(float a, float b, float k) { return -op_smooth_union(-a, -b, k); }\n// A bound; equals op_subtract where |a + b| >= k.\nfloat op_smooth_subtract(float a, float b, float k) { return op_smooth_intersect(a, -b, k); }\n\n// ---- modifiers\n// The shape grown by r: exact outside, a bound inside.\nfloat op_round(float d, float r) { return d - r; }\n// A shell of half-thickness `thickness` around the surface: exact outside the shell, a bound\n// inside it.\nfloat op_onion(float d, float thickness) { return abs(d) - thickness; }\n\n// Finite repetition: copies every `spacing`, `limit` copies each side of the centre per axis.\n// Moves p (returns no distance): a shape evaluated at the result stays exact when it is\n// mirror-symmetric in each axis and fits its cell (half of `spacing` each side); otherwise it can\n// overestimate (neither exact nor a bound: march with relaxation below 1).\n// floor(x + 0.5), not round(): GLSL ES 1.00 (WebGL 1) has no round().\nvec3 op_repeat_limited(vec3 p, vec3 spacing, vec3 limit)\n{\n  return p - spacing * clamp(floor(p / spacing + 0.5), -limit, limit);\n}\n\n// ---- presets of the preview's SDF menu, sized by the box\n// Exact.\nfloat sdf_preset_box(vec3 p, vec3 h) { return sd_box(p, h); }\n// Exact.\nfloat sdf_preset_sphere(vec3 p, vec3 h) { return sd_sphere(p, min3(h)); }\n// Exact.\nfloat sdf_preset_rounded_box(vec3 p, vec3 h) { return sd_round_box(p, h, 0.25 * min3(h)); }\n// Exact.\nfloat sdf_preset_capsule(vec3 p, vec3 h)\n{\n  float r = min(h.y, h.z);\n  float a = max(h.x - r, 0.0);\n  return sd_capsule(p, vec3(-a, 0.0, 0.0), vec3(a, 0.0, 0.0), r);\n}\n// Exact.\nfloat sdf_preset_cylinder(vec3 p, vec3 h) { return sd_cylinder(p, min(h.x, h.y), h.z); }\n// Exact.\nfloat sdf_preset_torus(vec3 p, vec3 h)\n{\n  float minor = min(h.z, 0.5 * min(h.x, h.y));\n  return sd_torus(p, min(h.x, h.y) - minor, minor);\n}\n// Exact.\nfloat sdf_preset_link(vec3 p, vec3 h)\n{\n  float thickness = min(h.z, 0.25 * min(h.x, h.y));\n  return sd_link(p.yxz, max(h.x - h.y, 0.0), h.y - thickness, thickness);\n}\n\n// boxmarch raymarcher: sphere tracing inside one box, box-local coordinates.\n// Needs decode.glsl and sdf.glsl before it and a `float map(vec3 p)` after it.\n// shaders/generate.py translates it into HLSL, and bm_box_span and bm_normal_tap into GLM for the\n// CPU reference (cpp/src/raymarch.cpp writes bm_march and bm_normal around its preset switch).\n\nfloat map(vec3 p);\n\n// Entry (x) and exit (y) distances of the ray ro + t rd with the box |p| <= h.\nvec2 bm_box_span(vec3 ro, vec3 rd, vec3 h)\n{\n  vec3 s = vec3(rd.x < 0.0 ? -1.0 : 1.0, rd.y < 0.0 ? -1.0 : 1.0, rd.z < 0.0 ? -1.0 : 1.0);\n  vec3 inv = 1.0 / max(abs(rd), vec3(1e-12));\n  vec3 t_near = (-h - s * ro) * inv;\n  vec3 t_far = (h - s * ro) * inv;\n  return vec2(max3(t_near), min3(t_far));\n}\n\n// Sphere-traces map() from ro along unit rd until a distance falls below epsilon (true), the ray\n// passes t_end or step_limit evaluations (at most 512) are spent (false). t: distance travelled;\n// steps: map() evaluations; d: the last map() value (at a hit, the hit's own distance, which\n// bm_normal reuses). The loop's bound is a constant, as GLSL ES 1.00 (WebGL 1) requires.\nbool bm_march(vec3 ro, vec3 rd, float t_end, int step_limit, float epsilon, float relaxation,\n              out float t, out int steps, out float d)\n{\n  t = 0.0;\n  steps = step_limit;\n  d = 0.0;\n  for (int i = 0; i < 512; ++i) {\n    if (i >= step_limit) {\n      break;\n    }\n    d = map(ro + rd * t);\n    if (d < epsilon) {\n      steps = i + 1;\n      return true;\n    }\n    t += relaxation * d;\n    if (t > t_end) {\n      steps = i + 1;\n      return false;\n    }\n  }\n  return false;\n}\n\n// Level of detail for a box a few pixels wide: one map() evaluation where the ray passes nearest\n// the box's centre (within its span) stands for the march; a hit when that point lies within half\n// a pixel (footprint, box-local units) of the surface or inside. t: that point's distance along\n// the ray; d: its map() value (for bm_normal).\nbool bm_one_tap(vec3 ro, vec3 rd, float t_end, float footprint, out float t, out float d)\n{\n  t = clamp(-dot(ro, rd), 0.0, t_end);\n  d = map(ro + rd * t);\n  return d < 0.5 * footprint;\n}\n\n// The quality knob q (0 < q <= 1) as the three settings it stands for. x: hit distance as a share\n// of a pixel's footprint (the march stops that close to the surface when that is more than the\n// epsilon); y: steps allowed per pixel of the box's size on screen (bm_step_limit); z: size on\n// screen in pixels under which a box takes one tap (bm_one_tap). q = 1 leaves the march as the\n// epsilon and step limit set it.\nvec3 bm_quality(float q)\n{\n  float loss = 1.0 - clamp(q, 0.0, 1.0);\n  return vec3(0.5 * loss * loss, 8.0 / max(loss, 1e-9), 4.0 * loss);\n}\n\n// Size of one pixel, in object units, at a point whose clip-space w is clip_w: row_y = length of\n// the object-to-clip matrix's y row (xyz), height = viewport height in pixels. Perspective and\n// orthographic alike (w = 1 there).\nfloat bm_pixel_size(float clip_w, float row_y, float height)\n{\n  return 2.0 * clip_w / (height * row_y);\n}\n\n// Step limit of a box box_pixels wide on screen: steps_per_pixel per pixel, at least 16, at most\n// step_cap (a float holding a whole number).\nfloat bm_step_limit(float box_pixels, float steps_per_pixel, float step_cap)\n{\n  return min(step_cap, max(16.0, floor(steps_per_pixel * box_pixels)));\n}\n\n// Tap distance of bm_normal, 3/10,000 of the box: a forward difference errs by about half the tap\n// times the surface's curvature, and closer taps lose the gradient in float rounding (measured in\n// docs/ACCURACY.md, \"GPU cost against error\": the normal error column).\nfloat bm_normal_tap(vec3 h)\n{\n  return 3e-4 * max3(h);\n}\n\n// Unit SDF gradient at p from forward differences: d = map(p), which the march has already\n// computed (bm_march's d), so the normal costs three map() calls; taps at distance e.\nvec3 bm_normal(vec3 p, float d, float e)\n{\n  vec3 n = vec3(map(p + vec3(e, 0.0, 0.0)), map(p + vec3(0.0, e, 0.0)), map(p + vec3(0.0, 0.0, e))) - d;\n  float len = length(n);\n  return len > 0.0 ? n / len : vec3(0.0);\n}\n";
 
-export { loadBoxmarch, checkBoxmarchSidecar, createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, boxmarchTexcoordName };
+export { loadBoxmarch, checkBoxmarchSidecar, createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, boxmarchTexcoordName, sortBoxmarchFrontToBack };

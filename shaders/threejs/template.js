@@ -69,27 +69,108 @@ function createBoxmarchMaterial(THREE, options) {
   return new THREE.ShaderMaterial(parameters);
 }
 
-// Gives a mesh the material and keeps its object-space eye up to date before every draw.
-function useBoxmarchMaterial(THREE, mesh, material) {
+// The camera in the mesh's object space, into eye (a THREE.Vector4): its position with w = 1, or
+// for an orthographic camera its view direction with w = 0. inverse: a THREE.Matrix4 to work in.
+function boxmarchObjectEye(THREE, mesh, camera, inverse, eye) {
+  inverse.getInverse ? inverse.getInverse(mesh.matrixWorld) : inverse.copy(mesh.matrixWorld).invert();
+  var v = new THREE.Vector3();
+  if (camera.isOrthographicCamera) {
+    camera.getWorldDirection(v).transformDirection(inverse);
+    return eye.set(v.x, v.y, v.z, 0);
+  }
+  v.setFromMatrixPosition(camera.matrixWorld).applyMatrix4(inverse);
+  return eye.set(v.x, v.y, v.z, 1);
+}
+
+// Gives a mesh the material and keeps its object-space eye up to date before every draw; with
+// frontToBack, also draws its boxes front to back (sortBoxmarchFrontToBack before every draw).
+function useBoxmarchMaterial(THREE, mesh, material, frontToBack) {
   prepareBoxmarchGeometry(THREE, mesh.geometry);
   mesh.material = material;
   var inverse = new THREE.Matrix4();
-  var eye = new THREE.Vector3();
   var size = new THREE.Vector2();
   mesh.onBeforeRender = function (renderer, scene, camera) {
     material.uniforms.bmQuality.value.y = renderer.getDrawingBufferSize(size).y;
-    inverse.getInverse ? inverse.getInverse(mesh.matrixWorld) : inverse.copy(mesh.matrixWorld).invert();
-    if (camera.isOrthographicCamera) {
-      camera.getWorldDirection(eye).transformDirection(inverse);
-      material.uniforms.bmEye.value.set(eye.x, eye.y, eye.z, 0);
-    } else {
-      eye.setFromMatrixPosition(camera.matrixWorld).applyMatrix4(inverse);
-      material.uniforms.bmEye.value.set(eye.x, eye.y, eye.z, 1);
-    }
+    boxmarchObjectEye(THREE, mesh, camera, inverse, material.uniforms.bmEye.value);
     // a material shared by several meshes: three.js uploads uniforms only on a material change
     material.uniformsNeedUpdate = true;
+    if (frontToBack) sortBoxmarchFrontToBack(THREE, mesh, camera);
   };
   return mesh;
+}
+
+// The boxes of an indexed geometry for sortBoxmarchFrontToBack: its triangles grouped by box (the
+// box number of TEXCOORD_2.y, bmOffsetZIndex), where each box's group starts, and each box's
+// centre (the mean of its vertices at rest).
+function boxmarchBoxes(geometry) {
+  var index = geometry.index.array, number = geometry.getAttribute('bmOffsetZIndex');
+  var position = geometry.getAttribute('position');
+  var boxOf = new Map(), boxOfTriangle = new Uint32Array(index.length / 3);
+  for (var t = 0; t < boxOfTriangle.length; t++) {
+    var id = number.getY(index[3 * t]);
+    if (!boxOf.has(id)) boxOf.set(id, boxOf.size);
+    boxOfTriangle[t] = boxOf.get(id);
+  }
+  var count = boxOf.size, start = new Uint32Array(count + 1), centres = new Float64Array(3 * count);
+  var vertices = new Float64Array(count), seen = new Uint8Array(position.count);
+  for (t = 0; t < boxOfTriangle.length; t++) {
+    var box = boxOfTriangle[t];
+    start[box + 1] += 3;
+    for (var k = 0; k < 3; k++) {
+      var v = index[3 * t + k];
+      if (seen[v]) continue;
+      seen[v] = 1;
+      centres[3 * box] += position.getX(v);
+      centres[3 * box + 1] += position.getY(v);
+      centres[3 * box + 2] += position.getZ(v);
+      vertices[box] += 1;
+    }
+  }
+  for (box = 0; box < count; box++) {
+    start[box + 1] += start[box];
+    for (k = 0; k < 3; k++) centres[3 * box + k] /= vertices[box];
+  }
+  var triangles = new index.constructor(index.length), filled = start.slice(0, count);
+  for (t = 0; t < boxOfTriangle.length; t++) {
+    box = boxOfTriangle[t];
+    triangles.set(index.subarray(3 * t, 3 * t + 3), filled[box]);
+    filled[box] += 3;
+  }
+  var order = new Uint32Array(count);
+  for (box = 0; box < count; box++) order[box] = box;
+  return { index: geometry.index, count: count, start: start, centres: centres, triangles: triangles, order: order,
+           key: new Float64Array(count), eye: null };
+}
+
+// Draws the boxes of mesh front to back for camera: rewrites its index buffer box by box, the
+// box whose centre is nearest the eye (orthographic: least far along the view direction) first, so
+// the depth test stops the marches of fragments behind nearer boxes (the same image: the nearest
+// hit wins a pixel whatever the order). Sorts again only when the eye has moved in the mesh's
+// space; returns whether it sorted. A mesh without an index buffer is left as it is. three.js
+// uploads the changed index buffer before the mesh's next draw (r180); r111 uploads it at the
+// frame after (its renderer updates geometry before onBeforeRender runs).
+function sortBoxmarchFrontToBack(THREE, mesh, camera) {
+  var geometry = mesh.geometry;
+  if (!geometry.index) return false;
+  var boxes = mesh.userData.boxmarchBoxes;
+  if (!boxes || boxes.index !== geometry.index) boxes = mesh.userData.boxmarchBoxes = boxmarchBoxes(geometry);
+  var eye = boxmarchObjectEye(THREE, mesh, camera, new THREE.Matrix4(), new THREE.Vector4());
+  if (boxes.eye && boxes.eye.equals(eye)) return false;
+  boxes.eye = eye;
+  var c = boxes.centres, key = boxes.key;
+  for (var b = 0; b < boxes.count; b++) {
+    var x = c[3 * b] - eye.x, y = c[3 * b + 1] - eye.y, z = c[3 * b + 2] - eye.z;
+    key[b] = eye.w > 0.5 ? x * x + y * y + z * z : c[3 * b] * eye.x + c[3 * b + 1] * eye.y + c[3 * b + 2] * eye.z;
+  }
+  boxes.order.sort(function (i, j) { return key[i] - key[j]; });
+  var out = geometry.index.array, at = 0;
+  for (var k = 0; k < boxes.count; k++) {
+    var box = boxes.order[k], group = boxes.triangles.subarray(boxes.start[box], boxes.start[box + 1]);
+    out.set(group, at);
+    at += group.length;
+  }
+  geometry.index.needsUpdate = true;
+  return true;
 }
 
 // The export's sidecar (NAME.boxmarch.json beside NAME.glb) format and the layout this material reads.
@@ -110,8 +191,8 @@ function checkBoxmarchSidecar(sidecar, name) {
 }
 
 // Loads the .glb at url (NAME.glb) after its sidecar NAME.boxmarch.json and gives every mesh,
-// skinned or not, its own material (options: those of createBoxmarchMaterial; skinning is set
-// per mesh). GLTFLoader: the class (THREE.GLTFLoader in r111's examples/js, imported from
+// skinned or not, its own material (options: those of createBoxmarchMaterial, skinning set per
+// mesh, and frontToBack: draw each mesh's boxes front to back, useBoxmarchMaterial). GLTFLoader: the class (THREE.GLTFLoader in r111's examples/js, imported from
 // three/addons later). Resolves to { scene, meshes, gltf, sidecar }; rejects with the reason,
 // before the .glb is fetched, when the sidecar is missing or describes a file the material does
 // not read.
@@ -130,7 +211,7 @@ function loadBoxmarch(THREE, GLTFLoader, url, options) {
     loaded.gltf.scene.traverse(function (o) { if (o.isMesh) meshes.push(o); });
     meshes.forEach(function (mesh) {
       var settings = Object.assign({}, options, { skinning: !!mesh.isSkinnedMesh });
-      useBoxmarchMaterial(THREE, mesh, createBoxmarchMaterial(THREE, settings));
+      useBoxmarchMaterial(THREE, mesh, createBoxmarchMaterial(THREE, settings), !!(options && options.frontToBack));
     });
     return { scene: loaded.gltf.scene, meshes: meshes, gltf: loaded.gltf, sidecar: loaded.sidecar };
   });
@@ -213,9 +294,10 @@ var BOXMARCH_FRAGMENT = [
   '  float boxPixels = 2.0 * max3(box_half) / footprint;',
   '  float epsilon = max(bmMarch.x, knob.x * footprint);',
   '  float t;',
+  '  float d;',
   '  int steps = 1;',
-  '  bool hit = boxPixels < knob.z ? bm_one_tap(ro, rd, t_end, footprint, t)',
-  '    : bm_march(ro, rd, t_end, int(bm_step_limit(boxPixels, knob.y, bmMarch.y)), epsilon, 1.0, t, steps);',
+  '  bool hit = boxPixels < knob.z ? bm_one_tap(ro, rd, t_end, footprint, t, d)',
+  '    : bm_march(ro, rd, t_end, int(bm_step_limit(boxPixels, knob.y, bmMarch.y)), epsilon, 1.0, t, steps, d);',
   '  if (!hit) discard;',
   '  vec3 local_hit = ro + rd * t;',
   '  vec3 obj_hit = vObjPos + bm_from_local(local_hit + f, x, y, z);',
@@ -224,7 +306,7 @@ var BOXMARCH_FRAGMENT = [
   // (keeping early depth testing), but its #extension line must precede every other token and
   // three.js's ShaderMaterial puts its precision statements first (docs/ENGINES.md).
   '  gl_FragDepthEXT = max(0.5 + 0.5 * clip.z / clip.w, gl_FragCoord.z);',
-  '  vec3 n = normalize(normalMatrix * bm_from_local(bm_normal(local_hit, bm_normal_tap(epsilon, box_half)), x, y, z));',
+  '  vec3 n = normalize(normalMatrix * bm_from_local(bm_normal(local_hit, d, bm_normal_tap(box_half)), x, y, z));',
   '  gl_FragColor = vec4(bmColor * (0.35 + 0.65 * max(n.z, 0.0)), 1.0);',
   '}'
 ].join('\n');

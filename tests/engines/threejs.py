@@ -23,6 +23,7 @@ import signal
 import subprocess
 import tempfile
 import threading
+import time
 from typing import Callable, NamedTuple
 
 import numpy as np
@@ -30,6 +31,7 @@ import numpy as np
 from . import Shot, ndc_to_pixels
 
 CHROMIUM = "chromium"
+CLOCK = "clock"  # served path of the real-time clock (_Files)
 TIMEOUT_S = 60
 NICEGUI_THREE = os.path.join("elements", "scene", "dist", "index.js")  # inside the nicegui package
 
@@ -200,7 +202,10 @@ class _Files(http.server.BaseHTTPRequestHandler):
     files = {}  # served path -> bytes, set per server
 
     def do_GET(self):
-        body = self.files.get(self.path.split("?")[0].lstrip("/"))
+        name = self.path.split("?")[0].lstrip("/")
+        # CLOCK: this process's clock in ms, for pages that time themselves: under
+        # --virtual-time-budget, performance.now() stands still once the page has awaited anything.
+        body = f"{time.perf_counter() * 1e3!r}".encode() if name == CLOCK else self.files.get(name)
         if body is None:
             self.send_error(404)
             return
@@ -268,7 +273,8 @@ def run_page(glb_bytes, job_js, material_js="", release="r111"):
     return run_jobs(glb_bytes, [job_js], material_js, release)[0]
 
 
-def _f64(b64):
+def f64(b64):
+    """The float64 array a page sent as base64 bytes (its __f64)."""
     return np.frombuffer(base64.b64decode(b64), dtype=np.float64)
 
 
@@ -278,10 +284,10 @@ def _meshes(result):
         attrs = m["attributes"]
         meshes.append({
             "name": m["name"],
-            "attributes": {k: _f64(a["data"]).reshape(-1, a["itemSize"]) for k, a in attrs.items()},
+            "attributes": {k: f64(a["data"]).reshape(-1, a["itemSize"]) for k, a in attrs.items()},
             "normalized": {k: a["normalized"] for k, a in attrs.items()},
-            "index": None if m["index"] is None else _f64(m["index"]),
-            "matrixWorld": _f64(m["matrixWorld"]).reshape(4, 4, order="F"),
+            "index": None if m["index"] is None else f64(m["index"]),
+            "matrixWorld": f64(m["matrixWorld"]).reshape(4, 4, order="F"),
         })
     return meshes
 
@@ -323,8 +329,8 @@ def render_job(setup_js, width, height, camera):
     def shot(out):
         pixels = np.frombuffer(base64.b64decode(out["pixels"]), dtype=np.uint8)
         pixels = pixels.reshape(height, width, 4)[::-1].copy()  # readPixels starts at the bottom row
-        view = _f64(out["view"]).reshape(4, 4, order="F")
-        projection = _f64(out["projection"]).reshape(4, 4, order="F")
+        view = f64(out["view"]).reshape(4, 4, order="F")
+        projection = f64(out["projection"]).reshape(4, 4, order="F")
         return Shot(pixels, view, ndc_to_pixels(width, height) @ projection @ view)
 
     return Job(js, shot)

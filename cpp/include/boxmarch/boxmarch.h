@@ -197,8 +197,9 @@ float sdf_distance(SdfPreset sdf, const float* p, const float* h);
 // ray_count * 3. A ray marches from where it enters its box (its origin when inside) until it
 // leaves the box or travels options.max_distance; a ray that misses the box takes 0 steps.
 // Writes hit[ray_count] (1 = distance fell below epsilon), positions[ray_count * 3] (last
-// sample point, box-local), normals[ray_count * 3] (unit SDF gradient by 4 tetrahedral taps at
-// distance max(epsilon, max(h) / 1000); zero on a miss) and steps[ray_count] (SDF evaluations of the march).
+// sample point, box-local), normals[ray_count * 3] (unit SDF gradient by forward differences at
+// distance max(h) / 10000 from the hit, as the shaders' bm_normal; zero on a miss) and
+// steps[ray_count] (SDF evaluations of the march).
 // Any output pointer may be null. Throws std::invalid_argument (nothing written) on a ray whose
 // direction is (0, 0, 0), max_steps < 0, epsilon <= 0, relaxation outside (0, 2] or
 // max_distance <= 0.
@@ -228,19 +229,30 @@ struct RenderCost {
     uint64_t fragments = 0;           // fragments rasterised
     uint64_t marched_fragments = 0;   // fragments that ran the shader (not killed by early depth)
     uint64_t lod_fragments = 0;       // of those, drawn by one tap (bm_one_tap) instead of a march
-    uint64_t sdf_evaluations = 0;     // map() calls: march steps plus the 4 normal taps of a hit
+    uint64_t sdf_evaluations = 0;     // map() calls: march steps plus the normal taps of a hit
     uint64_t hidden_fragments = 0;    // marched fragments that are not what the pixel shows at the end
     uint64_t hidden_evaluations = 0;  // their map() calls
     uint64_t covered_pixels = 0;      // pixels inside at least one box's silhouette
 };
 
+// How render_boxes takes a hit's normal (RenderPlan::normal).
+enum class NormalRule {
+    Forward,      // raymarch.glsl bm_normal, what every shader does: three forward differences at
+                  // bm_normal_tap from the hit's own distance (the march's last map()): 3 map() calls
+    Tetrahedral,  // four tetrahedral taps at max(epsilon, 1e-3 x the largest half-extent): 4 calls
+    Central,      // central differences at bm_normal_tap (error second order in the tap): 6 calls;
+                  // the accuracy reference of bench/bench_gpu_cost.py
+};
+constexpr int kNormalRuleCount = 3;
+
 // How render_boxes orders, tests and limits its fragments (the GPU-side techniques of
-// docs/BENCHMARKS.md "GPU cost"); the defaults draw as the preview did without them.
+// docs/BENCHMARKS.md "GPU cost"); the defaults draw as the preview does without them.
 struct RenderPlan {
     const uint32_t* order = nullptr;  // box_count indices, the draw order (each box once); null: 0, 1, ...
     bool early_depth = false;         // test the rasterised depth before marching (a declared
                                       // depth_greater/SV_DepthGreaterEqual keeps the hardware doing it)
     float quality = 1.0f;             // the quality knob, 0 < quality <= 1 (raymarch.glsl bm_quality)
+    NormalRule normal = NormalRule::Forward;
     RenderCost* cost = nullptr;       // counts written here when not null
 };
 
@@ -252,10 +264,10 @@ struct RenderPlan {
 // requires). Boxes are drawn in plan.order; plan.early_depth skips the march of a fragment whose
 // rasterised depth fails the depth test; plan.quality below 1 widens the hit distance to a share
 // of a pixel, caps a box's steps by its size on screen and draws boxes under a few pixels with one
-// map() tap (bm_quality). Hits are shaded with the preview's Lambert + hemisphere light in view
-// space. Reads box_count boxes; writes the covered pixels of images and, if plan.cost is set, the
-// counts. Throws std::invalid_argument on bad options (see raymarch), a quality outside (0, 1] or
-// an order that is not a permutation of the boxes.
+// map() tap (bm_quality); plan.normal picks the normal's differences. Hits are shaded with the
+// preview's Lambert + hemisphere light in view space. Reads box_count boxes; writes the covered
+// pixels of images and, if plan.cost is set, the counts. Throws std::invalid_argument on bad options (see raymarch), a quality outside (0, 1], an
+// unknown normal rule or an order that is not a permutation of the boxes.
 void render_boxes(const float* origins, const float* quaternions, const float* half_extents,
                   size_t box_count, const RenderView& view, const MarchOptions& options,
                   const RenderImages& images, const RenderPlan& plan = RenderPlan());

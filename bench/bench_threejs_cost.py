@@ -1,0 +1,173 @@
+"""three.js frame times on SwiftShader with and without the GPU-side techniques, in one run.
+
+The chain down the arm and the pile of bench_gpu_cost.py, baked and exported with the GLTF preset,
+loaded by the shipped loadBoxmarch (shaders/threejs/, r180 on WebGL 2 and r111 on WebGL 1, headless
+Chromium on SwiftShader through tests/engines/threejs.py) once per configuration, each in its own
+scene, and drawn from bench_gpu_cost's camera. Timed from render() to a 1-pixel readPixels (which
+waits for the frame) on the serving process's clock less one reading's round trip (*clock ms*),
+round robin over the configurations, best of REPEATS frames each. Rows:
+
+* plain: the material as loadBoxmarch sets it (file order, quality 1);
+* front to back: loadBoxmarch's frontToBack (sortBoxmarchFrontToBack before each draw; the camera
+  stands still, so the boxes are sorted once, before the timed frames);
+* quality 0.5: the quality knob; both: the two together.
+
+Pixels changed: pixels whose colour differs from plain's by more than 1/255, as a share of the
+pixels covered in either image. *sort ms*: one sortBoxmarchFrontToBack after the eye moved (mean
+of 20).
+The material writes gl_FragDepth without a conservative-depth declaration (three.js's
+ShaderMaterial cannot put the #extension line first, docs/ENGINES.md), so the depth test runs after
+the march whatever the order: the front-to-back rows measure what the order costs there.
+
+    python3 bench/bench_threejs_cost.py        # PyPI bpy for the bake and the export
+"""
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path[:0] = [str(HERE), str(HERE.parent / "tests"), str(HERE.parent / "addon")]
+
+SIZE, REPEATS = 320, 7
+SCENES = ("chain down the arm", "pile")
+MAPS = {"LINK": "return sdf_preset_link(p, box_half);"}
+CONFIGS = (("plain", 1.0, False), ("front to back", 1.0, True), ("quality 0.5", 0.5, False),
+           ("front to back + quality 0.5", 0.5, True))
+
+TIMING_JOB = """async function (gltf) {
+  var W = __SIZE__, H = __SIZE__, cam = __CAMERA__, configs = __CONFIGS__;
+  var renderer = new THREE.WebGLRenderer({canvas: document.createElement('canvas'), antialias: false, alpha: true});
+  renderer.setPixelRatio(1);
+  renderer.setSize(W, H, false);
+  renderer.setClearColor(0x000000, 0);
+  var camera = new THREE.PerspectiveCamera(cam.fov, W / H, cam.near, cam.far);
+  camera.position.fromArray(cam.position);
+  camera.up.fromArray(cam.up);
+  camera.lookAt(new THREE.Vector3().fromArray(cam.target));
+  var drawn = [];
+  for (var i = 0; i < configs.length; i++) {
+    var loaded = await loadBoxmarch(THREE, GLTFLoader, 'model.glb', {map: __MAP__, quality: configs[i][1],
+      frontToBack: configs[i][2], maxSteps: 64, epsilon: 1e-3});
+    var scene = new THREE.Scene();
+    scene.add(loaded.scene);
+    drawn.push({scene: scene, mesh: loaded.meshes[0]});
+  }
+  // The serving process's clock (performance.now() stands still under Chromium's virtual time
+  // once the page has awaited anything); a reading costs a loopback round trip, taken off below.
+  function now() {
+    var request = new XMLHttpRequest();
+    request.open('GET', '__CLOCK__', false);
+    request.send();
+    return parseFloat(request.responseText);
+  }
+  var overhead = Infinity;
+  for (var e = 0; e < 10; e++) {
+    var before = now();
+    overhead = Math.min(overhead, now() - before);
+  }
+  var gl = renderer.getContext(), pixel = new Uint8Array(4);
+  function frame(k) {
+    var start = now();
+    renderer.render(drawn[k].scene, camera);
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+    return now() - start - overhead;
+  }
+  var images = [], best = [];
+  for (var k = 0; k < drawn.length; k++) {
+    frame(k);
+    frame(k);  // r111 uploads an index buffer sorted in onBeforeRender at the next frame
+    var px = new Uint8Array(W * H * 4);
+    gl.readPixels(0, 0, W, H, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    images.push(__b64(px));
+    best.push(Infinity);
+  }
+  for (var r = 0; r < __REPEATS__; r++) {
+    for (k = 0; k < drawn.length; k++) best[k] = Math.min(best[k], frame(k));
+  }
+  var mesh = drawn[1].mesh, start = now();
+  for (var s = 0; s < 20; s++) {
+    mesh.userData.boxmarchBoxes.eye = null;  // as if the camera had moved
+    sortBoxmarchFrontToBack(THREE, mesh, camera);
+  }
+  var sortMs = (now() - start - overhead) / 20;
+  renderer.dispose();
+  renderer.forceContextLoss();
+  return {best: best, images: images, sort_ms: sortMs, boxes: mesh.userData.boxmarchBoxes.count, overhead: overhead};
+}"""
+
+
+def three_camera(to_view, eye):
+    """The bench_gpu_cost camera in glTF's frame (Blender's x, z, -y)."""
+    from engine_scene import TO_Y_UP
+
+    forward = -np.asarray(to_view)[2, :3]
+    return {"position": (TO_Y_UP @ eye[:3]).tolist(), "target": (TO_Y_UP @ (eye[:3] + forward)).tolist(),
+            "up": (TO_Y_UP @ [0.0, 0.0, 1.0]).tolist(), "fov": 40.0, "near": 0.1, "far": 4000.0}
+
+
+def exported_glb(bpy, name, scene, folder):
+    from bench_preview_cost import baked_object
+    from boxmarch.export import scene as export_scene
+
+    ob = baked_object(bpy, name, scene)
+    path = os.path.join(folder, "model.glb")
+    export_scene.export_objects(bpy.context, [ob], "GLTF", path, "NORMAL_FRAME")
+    bpy.data.objects.remove(ob)
+    return Path(path).read_bytes(), Path(path).with_suffix(".boxmarch.json").read_bytes()
+
+
+def rows_for(name, scene, glb, sidecar, release):
+    import base64
+
+    from engines import threejs
+
+    _origins, _rotations, _half, sdf, (_to_clip, to_view, eye) = scene
+    parts = {"__SIZE__": str(SIZE), "__CAMERA__": json.dumps(three_camera(to_view, eye)),
+             "__CONFIGS__": json.dumps(CONFIGS), "__MAP__": json.dumps(MAPS[sdf]), "__REPEATS__": str(REPEATS),
+             "__CLOCK__": threejs.CLOCK}
+    js = TIMING_JOB
+    for key, value in parts.items():
+        js = js.replace(key, value)
+    out = threejs.run_jobs(glb, [js], threejs.shipped_material(release), release,
+                           {"model.boxmarch.json": sidecar})[0]
+    images = [np.frombuffer(base64.b64decode(b), np.uint8).reshape(SIZE, SIZE, 4).astype(int) for b in out["images"]]
+    rows = []
+    for (label, _quality, _sort), best, image in zip(CONFIGS, out["best"], images):
+        covered = (images[0][..., 3] > 0) | (image[..., 3] > 0)
+        changed = (np.abs(image - images[0])[..., :3].max(-1) > 1) & covered
+        rows.append([name, f"r{threejs.RELEASES[release].revision}", label, f"{best:.0f}",
+                     f"{out['best'][0] / best:.2f}x", f"{100 * changed.sum() / max(covered.sum(), 1):.2f}%",
+                     f"{100 * covered.mean():.0f}%", f"{out['sort_ms']:.1f} ({out['boxes']} boxes)",
+                     f"{out['overhead']:.1f}"])
+    return rows
+
+
+def main():
+    import bpy
+
+    import boxmarch
+    from bench_gpu_cost import scenes_to_measure
+    from common import table
+    from engines import threejs
+
+    boxmarch.register()
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    made = scenes_to_measure(SIZE, 8)
+    releases = [r for r in ("r180", "r111") if threejs.available(r) is None]
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="bench-threejs-") as folder:
+        for name in SCENES:
+            glb, sidecar = exported_glb(bpy, name, made[name], folder)
+            for release in releases:
+                rows += rows_for(name, made[name], glb, sidecar, release)
+    print(f"three.js on SwiftShader (headless Chromium), {SIZE} x {SIZE} px, best of {REPEATS}")
+    print(table(["scene", "three.js", "material", "frame ms", "speed-up", "pixels changed", "covered",
+                 "sort ms", "clock ms"], rows))
+
+
+if __name__ == "__main__":
+    main()
