@@ -70,7 +70,7 @@ PRESETS = {
         "float colour, half-extents in a .tres float texture beside it",
         layouts=("NORMAL_COLOR",), godot3_compression=True,
         default_import_loss="mesh compression: 8-bit colour clamped to [0, 1], 8-bit normal and tangent",
-        import_fix="in Godot's Import dock for the .glb, Meshes > Compress off",
+        import_fix="copy NAME.glb.import (written beside) with the .glb, or in the Import dock Meshes > Compress off",
         import_settings="Import dock of the .glb: Meshes > Compress off (else colour is 8-bit and normals, "
                         "tangents and UV2 are packed): the NAME.glb.import written beside it sets this when copied "
                         "with it, or the boxmarch plug-in (engines/godot3) does; keep the .boxes.tres beside it and "
@@ -84,7 +84,7 @@ PRESETS = {
                         "Mesh Compression Off; UV_FRAME needs no vertex colour; NORMAL_FRAME (skinned meshes): Normals "
                         "Import, Tangents Import (their frame is the box's)",
         half_float_uvs=(2, 3, 4, 5, 6), default_import_loss="vertex compression: half-float UV2-UV6",
-        import_fix="in Unity's model import, Read/Write on (or Vertex Compression without Tex Coord 2-7)"),
+        import_fix="engines/unity's postprocessor sets it, or in the model import Read/Write on"),
     "UNREAL": Preset(
         "UNREAL", "Unreal (FBX)", ".fbx", np.eye(3), np.array([1.0, -1.0, 1.0]),
         "FBX for Unreal's importer: left-handed Z-up centimetres (y mirrored), V flipped, box data in float UVs",
@@ -92,7 +92,7 @@ PRESETS = {
         import_settings="Static mesh import: Use Full Precision UVs on (else UVs are 16-bit halves), "
                         "Generate Lightmap UVs off (it writes into UV channel 1), Convert Scene on (default)",
         half_float_uvs=(1, 2, 3, 4, 5, 6), default_import_loss="16-bit half-float UVs",
-        import_fix="in Unreal's static mesh import, Use Full Precision UVs on"),
+        import_fix="import with engines/unreal/boxmarch_import.py, or Use Full Precision UVs on"),
     "BLENDER": Preset(
         "BLENDER", "Blender (raw)", ".blend", np.eye(3), np.ones(3),
         "The selected objects in a .blend, baked data in Blender's own object space"),
