@@ -15,8 +15,10 @@ For each scene and size, the configurations:
   this framebuffer), declared and undeclared: which of the two keeps the GPU's early test off;
 
 and the naive full-screen raymarch over every box (bench/naive_fullscreen.frag.glsl) for the
-cloud (measure_naive: the smallest size in one draw, larger ones in stencil lattice passes). Frame: clear colour and depth, one draw call (the preview's state: depth test LESS_EQUAL,
-depth writes on, no culling, no blending) into an RGBA16F + DEPTH24_STENCIL8 framebuffer.
+cloud (measure_naive: the smallest size in one draw, larger ones in strips).
+
+Frame: clear colour and depth, one draw call (the preview's state: depth test LESS_EQUAL, depth
+writes on, no culling, no blending) into an RGBA16F + DEPTH24_STENCIL8 framebuffer.
 Each configuration: warm-up frames, then frames until about BUDGET seconds of GPU time (at most
 MAX_FRAMES); median and mean of the queries; the whole list is run twice (two passes) so the
 spread between passes shows the noise.
@@ -58,9 +60,9 @@ CONFIGS = (("shipped", "depth_greater", "octant", 1.0), ("undeclared", "undeclar
            ("face depth, file order (diagnostic)", "face_depth", "file", 1.0),
            ("no discard (diagnostic)", "depth_greater_no_discard", "octant", 1.0),
            ("undeclared, no discard (diagnostic)", "undeclared_no_discard", "octant", 1.0))
-# The naive frame's largest draw: 16 strips of 960 x 34 px queued at once ran past the NVIDIA
-# driver's time limit and lost the context (measure_naive projects larger frames).
-NAIVE_STOP_MS = 2000.0
+# The naive frame is drawn in strips (measure_naive): 16 strips of 960 x 34 px queued at once ran
+# past the NVIDIA driver's time limit and lost the context.
+NAIVE_ROWS = 4
 NAIVE_BUDGET_MS = 20000.0
 GL_FRAGMENT_SHADER_INVOCATIONS = 0x82F4  # ARB_pipeline_statistics_query
 
@@ -159,11 +161,10 @@ def measure_scene(data, sizes, passes):
 
 def measure_naive(data, sizes):
     """GPU milliseconds of the naive full-screen frame, smallest size first: the first in one draw,
-    larger ones in lattice passes (lattice_stencil) of about the first one's pixel count each, so
-    no draw runs into the driver's time limit while each still spreads over the whole frame (as a
-    whole-frame draw does; a strip or a small frame does not fill the GPU). After NAIVE_BUDGET_MS
-    the frame is projected from the passes drawn (their mean times the pass count). Coverage,
-    steps per pixel, and at REFERENCE_SIZE the coverage agreement with the CPU reference."""
+    larger ones in strips of NAIVE_ROWS rows, one draw each, so that no draw runs into the driver's
+    time limit. Strips in a shuffled order; after NAIVE_BUDGET_MS the frame is projected from the
+    strips drawn (their mean times the strip count). Coverage, steps per pixel, and at
+    REFERENCE_SIZE the coverage agreement with the CPU reference (complete frames only)."""
     handle = program(data["source_naive_vertex"], data["source_naive_fragment"])
     boxes = np.ascontiguousarray(data["naive_boxes"], np.float32)
     texture = GL.glGenTextures(1)
@@ -184,73 +185,38 @@ def measure_naive(data, sizes):
     GL.glUniformMatrix4fv(GL.glGetUniformLocation(handle, "clip_to_object"), 1, GL.GL_TRUE, clip_to_object)
     GL.glUniform4f(GL.glGetUniformLocation(handle, "march"), *[float(v) for v in data["march"]])
     GL.glUniform1i(GL.glGetUniformLocation(handle, "boxes"), 0)
-    marker = program(data["source_naive_vertex"], LATTICE_FRAGMENT)
-    result, last = {}, None
+    result, first = {}, True
     for width, height in sorted(sizes, key=lambda size: size[0] * size[1]):
         fbo = framebuffer(width, height)
         GL.glDisable(GL.GL_DEPTH_TEST)
-        GL.glUseProgram(handle)
         GL.glUniform4i(GL.glGetUniformLocation(handle, "sizes"), len(boxes), width, height, 0)
-        if last is None:  # warm-up: one pixel, compiles outside the timing
-            GL.glEnable(GL.GL_SCISSOR_TEST)
+        GL.glEnable(GL.GL_SCISSOR_TEST)
+        if first:  # warm-up: one pixel, compiles outside the timing
             GL.glScissor(0, 0, 1, 1)
             GL.glDrawArrays(GL.GL_TRIANGLES, 0, 3)
             GL.glFinish()
-            GL.glDisable(GL.GL_SCISSOR_TEST)
-        # a frame larger than the last drawn one by more than NAIVE_STOP_MS allows: lattice passes
-        grid = 1 if last is None else max(1, int(np.ceil(np.sqrt(width * height / last["pixels"]))))
-        passes, start = [], time.perf_counter()
-        for pass_index in range(grid * grid):
-            if grid > 1:
-                lattice_stencil(marker, grid, pass_index)
-                GL.glUseProgram(handle)
-            passes.append(float(timed_frames_exact(lambda: GL.glDrawArrays(GL.GL_TRIANGLES, 0, 3), 1)[0]))
-            if sum(passes) > NAIVE_BUDGET_MS or passes[-1] > NAIVE_STOP_MS:
+        # the smallest frame in one draw; larger ones in NAIVE_ROWS-row strips, in a shuffled order
+        rows = height if first else NAIVE_ROWS
+        starts = np.random.default_rng(0).permutation(np.arange(0, height, rows))
+        strips, start = [], time.perf_counter()
+        for y0 in starts:
+            GL.glScissor(0, int(y0), width, min(rows, height - int(y0)))
+            strips.append(float(timed_frames_exact(lambda: GL.glDrawArrays(GL.GL_TRIANGLES, 0, 3), 1)[0]))
+            if sum(strips) > NAIVE_BUDGET_MS:
                 break
-        GL.glDisable(GL.GL_STENCIL_TEST)
-        entry = {"ms": float(np.mean(passes)) * grid * grid, "passes": [len(passes), grid * grid],
-                 "wall_ms": (time.perf_counter() - start) * 1e3, "pixels": width * height,
-                 "gl_error": int(GL.glGetError())}
-        if len(passes) == grid * grid:
+        GL.glDisable(GL.GL_SCISSOR_TEST)
+        entry = {"ms": float(np.mean(strips)) * len(starts), "strips": [len(strips), len(starts)],
+                 "wall_ms": (time.perf_counter() - start) * 1e3, "gl_error": int(GL.glGetError())}
+        if len(strips) == len(starts):
             image = read_back(width, height)[0]
             naive_hit = image[..., 0] > 0.5
             entry.update(coverage=float(naive_hit.mean()), steps_per_pixel=float(image[..., 1].mean()))
             if (width, height) == REFERENCE_SIZE:
                 entry["coverage_agreement"] = float((naive_hit == (data["reference_depth_1.0"] < 1.0)).mean())
         result[f"{width}x{height}"] = entry
-        if grid == 1:
-            last = entry
+        first = False
         GL.glDeleteFramebuffers(1, [fbo])
     return result
-
-
-# Marks in the stencil buffer the pixels (x, y) with x % grid, y % grid = pass_index's: one pass of
-# the naive frame draws only those, spread over the whole frame as a full frame's are.
-LATTICE_FRAGMENT = """#version 430 core
-uniform ivec3 lattice;
-void main()
-{
-  ivec2 p = ivec2(gl_FragCoord.xy) % lattice.x;
-  if (p.x != lattice.y || p.y != lattice.z) {
-    discard;
-  }
-}
-"""
-
-
-def lattice_stencil(marker, grid, pass_index):
-    GL.glClearStencil(0)
-    GL.glClear(GL.GL_STENCIL_BUFFER_BIT)
-    GL.glEnable(GL.GL_STENCIL_TEST)
-    GL.glStencilFunc(GL.GL_ALWAYS, 1, 0xFF)
-    GL.glStencilOp(GL.GL_KEEP, GL.GL_KEEP, GL.GL_REPLACE)
-    GL.glColorMask(GL.GL_FALSE, GL.GL_FALSE, GL.GL_FALSE, GL.GL_FALSE)
-    GL.glUseProgram(marker)
-    GL.glUniform3i(GL.glGetUniformLocation(marker, "lattice"), grid, pass_index % grid, pass_index // grid)
-    GL.glDrawArrays(GL.GL_TRIANGLES, 0, 3)
-    GL.glColorMask(GL.GL_TRUE, GL.GL_TRUE, GL.GL_TRUE, GL.GL_TRUE)
-    GL.glStencilFunc(GL.GL_EQUAL, 1, 0xFF)
-    GL.glStencilOp(GL.GL_KEEP, GL.GL_KEEP, GL.GL_KEEP)
 
 
 def parse_sizes(text):
@@ -286,9 +252,9 @@ def report(result):
                      "colour err p99"], rows), ""]
     for scene, naive in result.get("naive", {}).items():
         for size, entry in naive.items():
-            drawn, count = entry["passes"]
-            how = "one draw" if count == 1 else f"{count} lattice passes" if drawn == count else \
-                f"projected from {drawn} of {count} lattice passes"
+            drawn, count = entry["strips"]
+            how = "one draw" if count == 1 else f"{count} strips" if drawn == count else \
+                f"projected from {drawn} of {count} strips"
             agreement = entry.get("coverage_agreement")
             lines.append(f"naive full-screen raymarch, {scene}, {size}: {entry['ms']:.1f} ms per frame ({how}; "
                          f"{entry['wall_ms']:.0f} ms wall clock)"
