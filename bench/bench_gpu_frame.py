@@ -13,6 +13,7 @@ For each scene and size, the configurations:
   depth testing certainly on; the depth left is the face's, so wrong), in octant and file order;
   no discard, `discard` replaced by writing the cleared colour and depth (the same picture in
   this framebuffer), declared and undeclared: which of the two keeps the GPU's early test off;
+  the declared shader under `#version 450 core`, and with `#extension GL_ARB_conservative_depth`;
 
 and the naive full-screen raymarch over every box (bench/naive_fullscreen.frag.glsl) for the
 cloud (measure_naive: the smallest size in one draw, larger ones in strips).
@@ -59,7 +60,9 @@ CONFIGS = (("shipped", "depth_greater", "octant", 1.0), ("undeclared", "undeclar
            ("face depth (diagnostic)", "face_depth", "octant", 1.0),
            ("face depth, file order (diagnostic)", "face_depth", "file", 1.0),
            ("no discard (diagnostic)", "depth_greater_no_discard", "octant", 1.0),
-           ("undeclared, no discard (diagnostic)", "undeclared_no_discard", "octant", 1.0))
+           ("undeclared, no discard (diagnostic)", "undeclared_no_discard", "octant", 1.0),
+           ("GLSL 4.50 (diagnostic)", "depth_greater_450", "octant", 1.0),
+           ("extension named (diagnostic)", "depth_greater_extension", "octant", 1.0))
 # The naive frame is drawn in strips (measure_naive): 16 strips of 960 x 34 px queued at once ran
 # past the NVIDIA driver's time limit and lost the context.
 NAIVE_ROWS = 4

@@ -49,13 +49,18 @@ NAIVE_VERTEX_SOURCE = (f"#version {GL_VERSION}\nlayout(location = 0) in vec2 pos
 def shader_sources(sdf: str) -> dict:
     """Every GLSL stage the harness compiles for a scene of preset ``sdf``."""
     fragment = sources.fragment_source(sdf)
+    declared = sources.gl_declarations("frag", "CLASSIC", GL_VERSION, "GREATER") + fragment
     return {"vertex": sources.gl_declarations("vert", "CLASSIC", GL_VERSION) + sources.vertex_source("CLASSIC"),
-            "fragment_depth_greater": sources.gl_declarations("frag", "CLASSIC", GL_VERSION, "GREATER") + fragment,
+            "fragment_depth_greater": declared,
             "fragment_undeclared": sources.gl_declarations("frag", "CLASSIC", GL_VERSION) + fragment,
             # diagnostic: the marched depth not written (the face's stays), so early depth testing is
             # certainly on: shows what the GPU's early test can skip (the depth it leaves is wrong)
             "fragment_face_depth": sources.gl_declarations("frag", "CLASSIC", GL_VERSION)
             + fragment.replace("gl_FragDepth = ", "float marched_depth = "),
+            # diagnostics: the declaration under GLSL 4.50, and with the extension named
+            "fragment_depth_greater_450": declared.replace(f"#version {GL_VERSION}", "#version 450 core", 1),
+            "fragment_depth_greater_extension": declared.replace(
+                f"#version {GL_VERSION}\n", f"#version {GL_VERSION}\n#extension GL_ARB_conservative_depth : enable\n", 1),
             # diagnostic: `discard` replaced by writing the cleared colour and depth (the same
             # picture in a framebuffer cleared to 0 and 1.0; not in Blender's viewport)
             **{f"fragment_{kind}_no_discard": sources.gl_declarations("frag", "CLASSIC", GL_VERSION, depth_write)
