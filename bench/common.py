@@ -3,12 +3,12 @@ import time
 
 import numpy as np
 
-from boxmarch import mesh_io, scenes
-
 
 def boxes_object(bpy, count, seed=0, name="boxes"):
     """One mesh object of ``count`` random boxes (8 vertices, 6 quads, 12 edges each), selected
     and active. Returns (object, centres, sizes)."""
+    from boxmarch import mesh_io, scenes  # here: bench_gpu_frame.py uses table() where boxmarch is absent
+
     (positions, _edges, face_starts, face_sizes, corner_verts), centres, sizes, _ = scenes.random_boxes(count, seed=seed)
     mesh = mesh_io.new_mesh(name, positions, face_starts, face_sizes, corner_verts)
     ob = bpy.data.objects.new(name, mesh)

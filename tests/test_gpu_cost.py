@@ -190,8 +190,7 @@ def test_preview_fragment_compiles_with_the_depth_greater_declaration(tmp_path):
     """What Blender 4+'s create-info depth_write('GREATER') puts before the source (GLSL 4.20+)."""
     from helpers.glsl import blender_declarations, validator
 
-    declared = blender_declarations("frag").replace("#version 330 core", "#version 450 core")
-    declared += "layout(depth_greater) out float gl_FragDepth;\n"
+    declared = blender_declarations("frag", version="450 core", depth_write="GREATER")
     path = tmp_path / "preview.frag"
     for sdf in ("LINK", "SPHERE"):
         path.write_text(declared + sources.fragment_source(sdf))

@@ -7,8 +7,6 @@ import pytest
 
 from boxmarch.preview import sources
 
-GLSL_TYPES = {"FLOAT": "float", "INT": "int", "VEC2": "vec2", "VEC3": "vec3", "VEC4": "vec4", "MAT4": "mat4"}
-
 
 def validator():
     path = shutil.which("glslangValidator")
@@ -17,18 +15,8 @@ def validator():
     return path
 
 
-def blender_declarations(stage, layout="CLASSIC"):
-    """What Blender generates from the preview's create-info before our source (GL backend)."""
-    lines = ["#version 330 core", sources.UNIFORM_STRUCT,
-             f"layout(std140) uniform _{sources.UNIFORM_NAME} {{ {sources.UNIFORM_TYPE} {sources.UNIFORM_NAME}; }};"]
-    if stage == "vert":
-        lines += [f"layout(location = {i}) in {GLSL_TYPES[t]} {name};" for i, (t, name) in enumerate(sources.VERTEX_INPUTS[layout])]
-    direction = "out" if stage == "vert" else "in"
-    lines += [f"{'flat ' if interp == 'flat' else ''}{direction} {GLSL_TYPES[t]} {name};"
-              for interp, t, name in sources.STAGE_INTERFACE]
-    if stage == "frag":
-        lines += [f"layout(location = {slot}) out {GLSL_TYPES[t]} {name};" for slot, t, name in sources.FRAGMENT_OUTPUTS]
-    return "\n".join(lines) + "\n"
+# What Blender generates from the preview's create-info before our source (GL backend).
+blender_declarations = sources.gl_declarations
 
 
 def compile_glsl(tmp_path, name, stage, source, layout="CLASSIC"):

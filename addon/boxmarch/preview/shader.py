@@ -22,8 +22,9 @@ class UserSdfError(Exception):
 
 
 # The fragment depth's declared direction: the marched depth is never nearer than the face's
-# (preview.frag.glsl clamps it), so GREATER is true and keeps early depth testing on; ANY
-# (what gl_FragDepth implies undeclared) turns it off (bench/bench_preview_cost.py compares them).
+# (preview.frag.glsl clamps it), so GREATER is true and allows early depth testing; ANY (what
+# gl_FragDepth implies undeclared) forbids it. Mesa llvmpipe and NVIDIA's OpenGL driver 580 were
+# measured not to test early either way (bench/bench_preview_cost.py, bench/bench_gpu_frame.py).
 DEPTH_WRITE = "GREATER"
 
 _cache: dict = {}

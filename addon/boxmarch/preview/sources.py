@@ -61,6 +61,31 @@ FRAGMENT_OUTPUTS = ((0, "VEC4", "frag_color"),)
 
 OUTPUT_MODES = ("SHADED", "NORMAL", "STEPS")
 
+GLSL_TYPES = {"FLOAT": "float", "INT": "int", "VEC2": "vec2", "VEC3": "vec3", "VEC4": "vec4", "MAT4": "mat4"}
+# Blender's GL backend spells a create-info depth_write as a gl_FragDepth redeclaration (GLSL 4.20+).
+DEPTH_LAYOUTS = {"ANY": "depth_any", "GREATER": "depth_greater", "LESS": "depth_less"}
+
+
+def gl_declarations(stage: str, layout: str = "CLASSIC", version: str = "330 core",
+                    depth_write: str | None = None) -> str:
+    """What Blender's GL backend puts before our source from the preview's create-info (stage
+    'vert' or 'frag'): uniform block, vertex inputs, stage interface, outputs and, for
+    ``depth_write`` (a key of DEPTH_LAYOUTS; None: no declaration, as Blender 3.4), the
+    gl_FragDepth layout. For compilers and drivers outside Blender (tests, bench/bench_gpu_frame.py)."""
+    lines = [f"#version {version}", UNIFORM_STRUCT,
+             f"layout(std140) uniform _{UNIFORM_NAME} {{ {UNIFORM_TYPE} {UNIFORM_NAME}; }};"]
+    if stage == "vert":
+        lines += [f"layout(location = {i}) in {GLSL_TYPES[t]} {name};"
+                  for i, (t, name) in enumerate(VERTEX_INPUTS[layout])]
+    direction = "out" if stage == "vert" else "in"
+    lines += [f"{'flat ' if interp == 'flat' else ''}{direction} {GLSL_TYPES[t]} {name};"
+              for interp, t, name in STAGE_INTERFACE]
+    if stage == "frag":
+        lines += [f"layout(location = {slot}) out {GLSL_TYPES[t]} {name};" for slot, t, name in FRAGMENT_OUTPUTS]
+        if depth_write is not None:
+            lines.append(f"layout({DEPTH_LAYOUTS[depth_write]}) out float gl_FragDepth;")
+    return "\n".join(lines) + "\n"
+
 # map() of each preset; `box_half` is set by the fragment stage (shaders/glsl/sdf.glsl).
 PRESET_MAPS = {name: f"float map(vec3 p)\n{{\n  return sdf_preset_{name.lower()}(p, box_half);\n}}\n"
                for name in core.SDF_PRESETS}

@@ -1,0 +1,139 @@
+"""Input of bench/bench_gpu_frame.py: what the viewport preview uploads for each scene, and the
+CPU reference, written as one .npz per scene so that a machine without Blender can draw it.
+
+Scenes (bench_gpu_cost.scenes_to_measure, their cameras made 16:9): cloud (the 16,000-box
+world, SPHERE, camera inside), chain side and chain down the arm (scripts/chain_arm.py's links,
+LINK), pile (4,000 links, seen through). Each is baked by the add-on's operator in the bpy module
+and read back through the preview's own functions: preview/mesh_data.py (CLASSIC layout's vertex
+inputs, file and octant triangle orders) and preview/draw.py (the uniform block). The shader
+sources are the preview's (preview/sources.py) behind the declarations Blender's GL backend
+generates from its create-info, with and without the depth_greater declaration; the naive
+full-screen raymarch (naive_fullscreen.frag.glsl) is assembled as bench_preview.py compiles it.
+The CPU reference (core.render_boxes, every quality of QUALITIES) at REFERENCE_SIZE.
+
+    python3 bench/gpu_frame_data.py OUTDIR          # bpy 5.0.1 (PyPI module)
+"""
+import sys
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parent / "addon"))
+
+from boxmarch.preview import sources  # noqa: E402
+
+SCENES = ("cloud", "chain side", "chain down the arm", "pile")
+ASPECT = (16, 9)
+REFERENCE_SIZE = (960, 540)
+QUALITIES = (1.0, 0.5, 0.25)
+BASE_COLOR = (0.8, 0.8, 0.8, 1.0)
+GL_VERSION = "430 core"  # what Blender's GL backend asks for
+
+
+def naive_fragment_source() -> str:
+    """The naive full-screen raymarch with the declarations bench_preview.py's create-info makes
+    (push constants and sampler as plain uniforms)."""
+    header = "\n".join([f"#version {GL_VERSION}", "uniform mat4 clip_to_object;", "uniform vec4 march;",
+                        "uniform ivec4 sizes;", "uniform sampler2D boxes;",
+                        "layout(location = 0) out vec4 frag_color;", ""])
+    return header + "\n".join([sources.read_glsl("decode.glsl"), sources.read_glsl("sdf.glsl"),
+                               (HERE / "naive_fullscreen.frag.glsl").read_text()])
+
+
+NAIVE_VERTEX_SOURCE = (f"#version {GL_VERSION}\nlayout(location = 0) in vec2 pos;\n"
+                       "void main() { gl_Position = vec4(pos, 0.0, 1.0); }\n")
+
+
+def shader_sources(sdf: str) -> dict:
+    """Every GLSL stage the harness compiles for a scene of preset ``sdf``."""
+    fragment = sources.fragment_source(sdf)
+    declared = sources.gl_declarations("frag", "CLASSIC", GL_VERSION, "GREATER") + fragment
+    return {"vertex": sources.gl_declarations("vert", "CLASSIC", GL_VERSION) + sources.vertex_source("CLASSIC"),
+            "fragment_depth_greater": declared,
+            "fragment_undeclared": sources.gl_declarations("frag", "CLASSIC", GL_VERSION) + fragment,
+            # diagnostic: the marched depth not written (the face's stays), so early depth testing is
+            # certainly on: shows what the GPU's early test can skip (the depth it leaves is wrong)
+            "fragment_face_depth": sources.gl_declarations("frag", "CLASSIC", GL_VERSION)
+            + fragment.replace("gl_FragDepth = ", "float marched_depth = "),
+            # diagnostics: the declaration under GLSL 4.50, and with the extension named
+            "fragment_depth_greater_450": declared.replace(f"#version {GL_VERSION}", "#version 450 core", 1),
+            "fragment_depth_greater_extension": declared.replace(
+                f"#version {GL_VERSION}\n", f"#version {GL_VERSION}\n#extension GL_ARB_conservative_depth : enable\n", 1),
+            # diagnostic: `discard` replaced by writing the cleared colour and depth (the same
+            # picture in a framebuffer cleared to 0 and 1.0; not in Blender's viewport)
+            **{f"fragment_{kind}_no_discard": sources.gl_declarations("frag", "CLASSIC", GL_VERSION, depth_write)
+               + fragment.replace("discard;", "{ gl_FragDepth = 1.0; frag_color = vec4(0.0); return; }")
+               for kind, depth_write in (("depth_greater", "GREATER"), ("undeclared", None))},
+            "naive_vertex": NAIVE_VERTEX_SOURCE, "naive_fragment": naive_fragment_source()}
+
+
+def widescreen(camera):
+    """(object_to_clip, object_to_view) of a square camera of bench_gpu_cost made ASPECT wide:
+    the same vertical field of view."""
+    to_clip, to_view, _eye = camera
+    projection = to_clip @ np.linalg.inv(to_view)
+    projection[0, 0] *= ASPECT[1] / ASPECT[0]
+    return projection @ to_view, to_view
+
+
+def scene_arrays(bpy, name, scene) -> dict:
+    from bench_preview_cost import baked_object
+    from boxmarch import core
+    from boxmarch.preview import draw, mesh_data
+
+    ob = baked_object(bpy, name, scene)
+    settings = ob.boxmarch
+    to_clip, to_view = widescreen(scene[4])
+    baked = mesh_data.read_baked(ob.data)
+    inputs = mesh_data.layout_inputs("CLASSIC", baked)
+    octant = mesh_data.view_octant(to_view)
+    arrays = {f"input_{k}": np.ascontiguousarray(v, np.float32) for k, v in inputs.items()}
+    arrays["input_names"] = np.array(list(inputs))
+    arrays["triangles_file"] = baked.triangles.astype(np.uint32)
+    arrays["triangles_octant"] = mesh_data.octant_triangles(baked, octant).astype(np.uint32)
+    arrays["uniform_block"] = draw.uniform_block_data(to_clip, to_view, True, settings, 0, BASE_COLOR, None,
+                                                      REFERENCE_SIZE[1])
+    arrays["object_to_clip"], arrays["object_to_view"] = to_clip, to_view
+    arrays["march"] = np.array([settings.epsilon, settings.relaxation, settings.max_distance, settings.max_steps])
+    boxes = np.zeros((len(baked.origins), 3, 4), np.float32)  # the naive shader's texture
+    boxes[:, 0, :3], boxes[:, 1], boxes[:, 2, :3] = baked.origins, baked.box_quaternions, baked.box_half_extents
+    arrays["naive_boxes"] = boxes
+    for quality in QUALITIES:
+        reference = core.render_boxes(baked.origins, baked.box_quaternions, baked.box_half_extents, to_clip, to_view,
+                                      *REFERENCE_SIZE, base_color=BASE_COLOR[:3], sdf=settings.sdf,
+                                      max_steps=settings.max_steps, epsilon=settings.epsilon,
+                                      relaxation=settings.relaxation, max_distance=settings.max_distance,
+                                      quality=quality)
+        arrays[f"reference_depth_{quality}"] = reference.depth
+        if quality == 1.0:
+            arrays["reference_rgba8"] = np.rint(np.clip(reference.rgba, 0, 1) * 255).astype(np.uint8)
+    arrays.update({f"source_{k}": np.array(v) for k, v in shader_sources(settings.sdf).items()})
+    arrays["info"] = np.array([name, settings.sdf, str(len(baked.origins)), str(octant)])
+    bpy.data.objects.remove(ob)
+    return arrays
+
+
+def main():
+    import bpy
+
+    import boxmarch
+    from bench_gpu_cost import scenes_to_measure
+
+    out = Path(sys.argv[1])
+    out.mkdir(parents=True, exist_ok=True)
+    boxmarch.register()
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    made = scenes_to_measure(480, 8)
+    for name in SCENES:
+        path = out / (name.replace(" ", "_") + ".npz")
+        np.savez_compressed(path, **scene_arrays(bpy, name, made[name]))
+        print(f"{path}: {path.stat().st_size / 2**20:.1f} MiB")
+    sys.stdout.flush()
+    import os
+    os._exit(0)  # bpy modules with registered add-ons may crash at exit (docs: shared notes)
+
+
+if __name__ == "__main__":
+    main()
