@@ -110,8 +110,9 @@ def test_module_demo_prints_table_and_writes_checked_files(tmp_path, renderer):
     meshes = read_glb(tmp_path / "out" / "demo.glb")
     assert [m["name"] for m in meshes] == ["BoxWorld", "Chains"]
     assert sorted(os.listdir(tmp_path / "out")) == sorted([
-        "demo.blend", "demo.glb", "demo.png", "demo_gltf.glb", "demo_godot3.glb", "demo_godot3.boxes.tres",
-        "demo_unity.fbx", "demo_unreal.fbx"])
+        "demo.blend", "demo.glb", "demo.boxes.bin", "demo.png", "demo_gltf.glb", "demo_gltf.boxes.bin",
+        "demo_godot3.glb", "demo_godot3.boxes.tres", "demo_unity.fbx", "demo_unity.boxes.bin", "demo_unreal.fbx",
+        "demo_unreal.boxes.bin"])
     for preset, layout in (("GLTF", "NORMAL_FRAME"), ("GODOT3", "NORMAL_COLOR"), ("UNITY", "UV_FRAME"),
                            ("UNREAL", "UV_FRAME")):
         assert re.search(rf"export {preset} .*layout {layout}", proc.stdout), proc.stdout

@@ -10,7 +10,7 @@ ENGINE_PRESETS = ("GLTF", "GODOT3", "UNITY", "UNREAL")
 
 def export_every_engine(context, objects, folder: str, stem: str) -> list:
     """Exports ``objects`` with every engine preset's default layout to
-    ``folder/STEM_<preset>.<ext>`` (GODOT3 also writes its box table beside it). Returns the
+    ``folder/STEM_<preset>.<ext>`` (each with its box table beside it: STEM_<preset>.boxes.tres or .bin). Returns the
     export reports in ENGINE_PRESETS order; raises scene.ExportInputError before writing
     anything for objects no preset can export."""
     reports = []

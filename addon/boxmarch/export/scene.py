@@ -31,11 +31,16 @@ def baked_layers(mesh) -> mesh_io.BakedLayers:
 # UV_FRAME and CLASSIC names; NORMAL_FRAME's UV1..UV4 hold what UV_FRAME's UV3..UV6 hold.
 CHANNEL_UV_NAMES = {"UV1": mesh_io.QUAT_XY_UV, "UV2": mesh_io.QUAT_ZW_UV, "UV3": "BoxOffsetXY",
                     "UV4": "BoxOffsetZIndex", "UV5": "BoxHalfXY", "UV6": "BoxHalfZ"}
-_BOXMARCH_UV_NAMES = set(CHANNEL_UV_NAMES.values())
+# The box parameters' channels (layouts.PARAM_CHANNELS), named by the pair of values they hold.
+PARAM_UV_NAMES = {("shape", "material"): "BoxShapeMaterial", ("random", "user"): "BoxRandomUser",
+                  ("parent", "depth"): "BoxParentDepth"}
+_BOXMARCH_UV_NAMES = set(CHANNEL_UV_NAMES.values()) | set(PARAM_UV_NAMES.values())
 
 
 def uv_name(layout: str, channel: str) -> str:
     """The FBX UV map name of a layout's channel "UVn"."""
+    if channel in layouts.PARAM_CHANNELS[layout]:
+        return PARAM_UV_NAMES[layouts.PARAM_CHANNELS[layout][channel]]
     if layouts.LAYOUTS[layout].skin_safe:
         channel = f"UV{int(channel[2:]) + 2}"
     return CHANNEL_UV_NAMES[channel]
@@ -56,9 +61,14 @@ def box_data(mesh, preset, index_base: int = 0):
     f = core.decode_offsets(offsets)
     target_f = transforms.target_local(f, preset)
     target_half = box_half.astype(np.float64) * preset.length_scale
+    boxes = mesh_io.read_box_layers(mesh, submesh_of_vertex, count)
     data = layouts.BoxData(quaternions=target_q, offsets=target_f, half_extents=target_half[submesh_of_vertex],
                            index=index_base + submesh_of_vertex.astype(np.int64),
-                           classic_rgba=transforms.target_offsets(offsets, preset), box_half_extents=target_half)
+                           classic_rgba=transforms.target_offsets(offsets, preset), box_half_extents=target_half,
+                           index_base=index_base)
+    if boxes is not None:  # box numbers run on across the file's meshes: so do the parents
+        data.box_params, data.box_depth = boxes.params, boxes.depth
+        data.box_parent = np.where(boxes.parent >= 0, boxes.parent + index_base, -1)
     # Self-check: the decode in the target frame must land where the target frame puts Blender's.
     blender_origin = positions + core.rotate_vector(f, q)
     target_origin = transforms.target_positions(positions, preset) + core.rotate_vector(target_f, target_q)
@@ -67,8 +77,16 @@ def box_data(mesh, preset, index_base: int = 0):
     stats = {"mesh": mesh.name, "vertices": len(positions), "corners": len(corner_verts), "boxes": int(count),
              "colour": mesh.color_attributes[mesh_io.OFFSET_ATTRIBUTE].data_type,
              "max_alpha": float(data.classic_rgba[:, 3].max()) if len(positions) else 0.0,
-             "transform_error": error}
+             "transform_error": error, "box_parameters": box_parameter_stats(data, boxes is not None)}
     return data, corner_verts, stats
+
+
+def box_parameter_stats(data: layouts.BoxData, stored: bool) -> dict:
+    """The export report's figures of a mesh's box parameters and hierarchy."""
+    params, parent, depth = data.box_values()
+    return {"stored": stored, "roots": int((parent < 0).sum()), "max_depth": int(depth.max()) if len(depth) else 0,
+            **{f"{name}_range": [float(params[:, i].min()), float(params[:, i].max())] if len(params) else [0.0, 0.0]
+               for i, name in enumerate(core.PARAM_NAMES)}}
 
 
 def _keep_artist_uv0(copy) -> None:
@@ -165,9 +183,12 @@ def _run_exporter(preset, layout, path):
             export_active_vertex_color_when_no_material=True, export_animations=False)))
 
 
-def table_path(filepath: str) -> str:
-    """Where the NORMAL_COLOR layout's box table goes: beside the file, ``NAME.boxes.tres``."""
-    return os.path.splitext(filepath)[0] + ".boxes.tres"
+def table_path(filepath: str, layout: str = "NORMAL_COLOR") -> str | None:
+    """Where a layout's box table goes, beside the file: ``NAME.boxes.tres`` (NORMAL_COLOR, for
+    Godot 3), ``NAME.boxes.bin`` (the other layouts with an index); None for CLASSIC."""
+    if layout == "CLASSIC":
+        return None
+    return os.path.splitext(filepath)[0] + (".boxes.tres" if layout == "NORMAL_COLOR" else ".boxes.bin")
 
 
 def export_objects(context, objects, preset_name: str, filepath: str, layout: str | None = None) -> dict:
@@ -207,8 +228,9 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
         raise ExportInputError(f"folder '{folder}' does not exist")
     partial = files.partial_path
     outputs = {partial(filepath): filepath}
-    if layout == "NORMAL_COLOR":
-        outputs[partial(table_path(filepath))] = table_path(filepath)
+    table_file = table_path(filepath, layout) if preset.name != "BLENDER" else None
+    if table_file:
+        outputs[partial(table_file)] = table_file
     warnings = mesh_io.modifier_warnings(objects, "export")
     if preset.extension == ".fbx" and context.scene.unit_settings.scale_length != 1.0:
         warnings.append(f"unit scale is not 1: {preset.label} will scale positions by it and the offsets will not match")
@@ -219,9 +241,12 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             bpy.data.libraries.write(temp, set(objects), fake_user=True, compress=False)
         else:
             stats, table = _export_with_copies(context, objects, meshes, preset, layout, temp, skins)
-            if table is not None:
-                with open(partial(table_path(filepath)), "w") as f:
+            if layout == "NORMAL_COLOR":
+                with open(partial(table_file), "w") as f:
                     f.write(godot.image_texture_tres(table))
+            elif table_file:
+                with open(partial(table_file), "wb") as f:
+                    f.write(godot.table_bin(table))
             if preset.name == "UNITY" and layout == "CLASSIC":
                 floats = [m for m in stats if m["colour"] == "FLOAT_COLOR"]
                 if floats:
@@ -253,10 +278,17 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             "skinned": {name: {"armature": skin.armature.name, "bones": list(skin.bones)}
                         for name, skin in skins.items()},
             "default_import_error": max(default_errors) if default_errors else None,
-            "table": os.path.abspath(table_path(filepath)) if layout == "NORMAL_COLOR" else None,
+            "table": os.path.abspath(table_file) if table_file else None,
+            "table_size": _table_image_size(stats) if table_file else None,
             "objects": [ob.name for ob in objects], "meshes": stats, "seconds": time.perf_counter() - start,
             "warnings": warnings, "import_settings": preset.import_settings,
             "transform_error": max((s["transform_error"] for s in stats), default=0.0)}
+
+
+def _table_image_size(stats) -> list:
+    """[width, height] in texels of the file's box table image (godot.table_image)."""
+    width, height = godot.table_size(sum(m["boxes"] for m in stats))
+    return [width, height * layouts.TABLE_PLANES]
 
 
 def _skins(context, objects, preset) -> dict:

@@ -65,12 +65,14 @@ def layout_inputs(layout: str, baked: BakedMesh) -> dict[str, np.ndarray]:
     NORMAL_COLOR: its box table read at each vertex's stored index, as an engine samples it)."""
     channels = layouts.channels(layout, box_data(baked))
     table = channels.pop("TABLE", None)
+    for name in layouts.PARAM_CHANNELS[layout]:  # per-box values: not inputs of the frame's decode
+        del channels[name]
     inputs = {"pos": baked.positions}
     inputs.update({"ch_" + name.lower(): values for name, values in channels.items()})
     if layout == "CLASSIC":
         inputs["ch_half"] = baked.half_extents.astype(np.float32)
-    elif table is not None:
-        inputs["ch_half"] = table[np.rint(channels["COLOR"][:, 3]).astype(np.int64), :3]
+    elif layout == "NORMAL_COLOR":
+        inputs["ch_half"] = table[np.rint(channels["COLOR"][:, 3]).astype(np.int64), 0, :3]
     return inputs
 
 
