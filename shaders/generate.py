@@ -1,16 +1,16 @@
 """Writes every other form of the shared GLSL (shaders/glsl): one source of truth for the decode,
 the SDF library and the march.
 
-* hlsl/boxmarch_decode.hlsl, boxmarch_sdf.hlsl, boxmarch_march.hlsl: decode.glsl, sdf.glsl and
-  raymarch.glsl translated into HLSL (``to_hlsl``);
-* cpp/src/shader_library.h: the functions of sdf.glsl, bm_box_span and bm_normal_tap of
+* hlsl/boxmarch_decode.hlsl, boxmarch_sdf.hlsl, boxmarch_box_params.hlsl, boxmarch_march.hlsl:
+  decode.glsl, sdf.glsl, box_params.glsl and raymarch.glsl translated into HLSL (``to_hlsl``);
+* cpp/src/shader_library.h: the functions of sdf.glsl and box_params.glsl, bm_box_span and bm_normal_tap of
   raymarch.glsl and bm_shade of preview.frag.glsl translated into GLM for the CPU reference
   (``to_glm``; the functions that call map() stay in raymarch.cpp, around its preset switch);
-* threejs/boxmarch.js and boxmarch.module.js: threejs/template.js with decode.glsl, sdf.glsl and
-  raymarch.glsl embedded as strings (three.js compiles them as they are, GLSL ES 1.00 on WebGL 1
+* threejs/boxmarch.js and boxmarch.module.js: threejs/template.js with decode.glsl, sdf.glsl,
+  box_params.glsl and raymarch.glsl embedded as strings (three.js compiles them as they are, GLSL ES 1.00 on WebGL 1
   and 3.00 on WebGL 2);
-* godot3/boxmarch.shader: godot3/template.shader with decode.glsl, every function of sdf.glsl and
-  of raymarch.glsl; Godot 3 has no global variables, so bm_march and bm_normal take the box
+* godot3/boxmarch.shader: godot3/template.shader with decode.glsl, every function of sdf.glsl,
+  box_params.glsl and raymarch.glsl; Godot 3 has no global variables, so bm_march and bm_normal take the box
   (h, index) and pass it on to map() (``passing_the_box``).
 
 The translators rewrite only what differs between the languages, and refuse a source that calls
@@ -143,7 +143,7 @@ def to_glm(source: str, defined: set[str]) -> str:
 
 def library_names() -> set[str]:
     """The functions of the library an engine shader includes."""
-    return {name for source in ("decode.glsl", "sdf.glsl", "raymarch.glsl")
+    return {name for source in ("decode.glsl", "sdf.glsl", "box_params.glsl", "raymarch.glsl")
             for name in top_level_functions(glsl(source))}
 
 
@@ -154,12 +154,13 @@ def hlsl_file(glsl_name: str, guard: str) -> str:
 
 def glm_library() -> str:
     raymarch = top_level_functions(glsl("raymarch.glsl"))
-    functions = {**top_level_functions(glsl("sdf.glsl")), "bm_box_span": raymarch["bm_box_span"],
+    functions = {**top_level_functions(glsl("sdf.glsl")), **top_level_functions(glsl("box_params.glsl")),
+                 "bm_box_span": raymarch["bm_box_span"],
                  "bm_normal_tap": raymarch["bm_normal_tap"],
                  "bm_shade": top_level_functions(glsl("preview.frag.glsl"))["bm_shade"]}
     body = to_glm("\n".join(functions.values()), set(functions))
     usings = "".join(f"using glm::{v};\n" for v in ("vec2", "vec3", "vec4") if re.search(rf"\b{v}\b", body))
-    return (f"// {GENERATED_BY} from shaders/glsl/sdf.glsl, raymarch.glsl (bm_box_span,\n"
+    return (f"// {GENERATED_BY} from shaders/glsl/sdf.glsl, box_params.glsl, raymarch.glsl (bm_box_span,\n"
             f"// bm_normal_tap) and preview.frag.glsl (bm_shade): edit those, not this file. The shaders'\n"
             f"// functions that do not call map(), in GLM, so the CPU reference evaluates what the GPU does.\n"
             f"#pragma once\n\n#include <glm/glm.hpp>\n\nnamespace boxmarch::shader {{\n\n{usings}\n{body}\n"
@@ -169,7 +170,8 @@ def glm_library() -> str:
 def threejs(module: bool) -> str:
     text = (SHADERS / "threejs" / "template.js").read_text()
     text = text.replace("/*@DECODE@*/''", json.dumps(glsl("decode.glsl")))
-    text = text.replace("/*@LIBRARY@*/''", json.dumps(glsl("sdf.glsl") + "\n" + glsl("raymarch.glsl")))
+    text = text.replace("/*@LIBRARY@*/''", json.dumps(glsl("sdf.glsl") + "\n" + glsl("box_params.glsl") + "\n"
+                                                    + glsl("raymarch.glsl")))
     exports = ("loadBoxmarch, checkBoxmarchSidecar, createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, "
                "boxmarchTexcoordName")
     if module:
@@ -193,7 +195,8 @@ def godot3() -> str:
     text = (SHADERS / "godot3" / "template.shader").read_text()
     raymarch = top_level_functions(glsl("raymarch.glsl"))
     text = text.replace("/*@DECODE@*/", glsl("decode.glsl"))
-    text = text.replace("/*@SDF@*/", "".join(top_level_functions(glsl("sdf.glsl")).values()))
+    text = text.replace("/*@SDF@*/", "".join(top_level_functions(glsl("sdf.glsl")).values())
+                        + "".join(top_level_functions(glsl("box_params.glsl")).values()))
     text = text.replace("/*@SPAN@*/", raymarch["bm_box_span"] + raymarch["bm_normal_tap"])
     return text.replace("/*@MARCH@*/", passing_the_box(raymarch["bm_march"]) + passing_the_box(raymarch["bm_normal"]))
 
@@ -202,6 +205,7 @@ def godot3() -> str:
 OUTPUTS = {
     "shaders/hlsl/boxmarch_decode.hlsl": lambda: hlsl_file("decode.glsl", "BOXMARCH_DECODE_INCLUDED"),
     "shaders/hlsl/boxmarch_sdf.hlsl": lambda: hlsl_file("sdf.glsl", "BOXMARCH_SDF_INCLUDED"),
+    "shaders/hlsl/boxmarch_box_params.hlsl": lambda: hlsl_file("box_params.glsl", "BOXMARCH_BOX_PARAMS_INCLUDED"),
     "shaders/hlsl/boxmarch_march.hlsl": lambda: hlsl_file("raymarch.glsl", "BOXMARCH_MARCH_INCLUDED"),
     "cpp/src/shader_library.h": glm_library,
     "shaders/threejs/boxmarch.js": lambda: threejs(module=False),

@@ -67,6 +67,30 @@ def test_preview_matches_cpu_reference(rendered, sdf):
 
 
 @pytest.mark.parametrize("layout", layouts.LAYOUTS)
+def test_per_box_shape_matches_cpu_reference(rendered, layout):
+    """Each box draws the preset its painted shape id picks, read from the layout's channels or
+    box table; the CPU reference draws the same boxes by id; with the ids shuffled it must not
+    match (the negative control)."""
+    height, width = rendered["BOX_SHADED_depth"].shape
+    model, view, projection = rendered["matrix_world"], rendered["view"], rendered["projection"]
+    positions = rendered["layer_positions"]
+    n = len(positions)
+    q = core.vertex_values_from_corners(rendered["layer_corner_quaternions"], rendered["layer_corner_verts"], n)
+    boxes = core.boxes_from_bake(positions, rendered["layer_offsets"], q, np.repeat(np.arange(n // 8), 8))
+    shapes = rendered["shapes"]
+    assert set(shapes.tolist()) == set(range(len(core.SDF_PRESETS)))  # every preset is drawn
+
+    def by_shape(ids):
+        return core.render_boxes_by_shape(*boxes, ids, projection @ view @ model, view @ model, width, height)
+    ref = by_shape(shapes)
+    assert (ref.depth < 1.0).mean() > 0.1
+    coverage, depth = agreement(rendered[f"PER_BOX_{layout}_depth"], ref)
+    assert coverage >= 0.99 and depth <= 2e-6, (coverage, depth)
+    coverage, depth = agreement(rendered[f"PER_BOX_{layout}_depth"], by_shape(np.roll(shapes, 1)))
+    assert coverage < 0.99 or depth > 1e-3, (coverage, depth)
+
+
+@pytest.mark.parametrize("layout", layouts.LAYOUTS)
 def test_every_layout_matches_cpu_reference(rendered, layout):
     """The preview drawn from each engine layout's channels (issue 12) lands on the known boxes;
     with the frame channels replaced by the identity frame it must not."""

@@ -16,8 +16,10 @@ _SDF_DESCRIPTIONS = {
 }
 SDF_ITEMS = [(name, name.replace("_", " ").title(), _SDF_DESCRIPTIONS[name], i)
              for i, name in enumerate(core.SDF_PRESETS)]
-SDF_ITEMS.append(("USER", "Text Block", "GLSL 'float map(vec3 p)' from a text block (box_half = half-extents)",
-                  len(core.SDF_PRESETS)))
+SDF_ITEMS.append(("USER", "Text Block", "GLSL 'float map(vec3 p)' from a text block (box_half = half-extents, "
+                  "box_params = the box's shape, material, random, user)", len(core.SDF_PRESETS)))
+SDF_ITEMS.append(("PER_BOX", "Per-Box Shape", "Each box the preset its shape id picks (0 box, 1 sphere, 2 rounded box, "
+                  "3 capsule, 4 cylinder, 5 torus, 6 link: paint boxmarch_shape and bake)", len(core.SDF_PRESETS) + 1))
 
 
 def _redraw(self, context):

@@ -29,6 +29,7 @@ void main()
   vec3 z = normalize(frag_axis_z);
   vec3 f = frag_offset;
   box_half = frag_half;
+  box_params = frag_params;
   vec3 ro = -f;
   vec3 ray_object = preview.eye.w > 0.5 ? obj_pos - preview.eye.xyz : preview.eye.xyz;
   float eye_distance = length(ray_object);

@@ -3,7 +3,8 @@
 // that engine's shader does. sources.py defines BM_LAYOUT_<name> first; the create-info
 // (addon/boxmarch/preview/shader.py) declares the layout's inputs (sources.VERTEX_INPUTS: pos and
 // the channels as ch_color, ch_normal, ch_tangent, ch_uv1 .. ch_uv6, plus ch_half where the layout
-// carries no per-vertex half-extents), the outputs (sources.STAGE_INTERFACE) and the uniform block
+// carries no per-vertex half-extents, and ch_params, the box's parameters as the layout carries
+// them), the outputs (sources.STAGE_INTERFACE) and the uniform block
 // preview (BoxmarchPreview, see preview.frag.glsl).
 void main()
 {
@@ -34,6 +35,7 @@ void main()
   frag_offset = bm_offset(ch_color.xy, ch_color.zw);
   frag_half = ch_half;
 #endif
+  frag_params = ch_params;
   obj_pos = pos;
   gl_Position = preview.object_to_clip * vec4(pos, 1.0);
 }

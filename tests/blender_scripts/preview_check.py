@@ -33,6 +33,9 @@ boxes.rotation_euler = (0.2, 0.1, 0.4)
 boxes.scale = (1.15, 0.85, 1.0)  # non-uniform: rays and normals must go through the right matrices
 bpy.context.view_layer.objects.active = boxes
 boxes.select_set(True)
+# Per-box shape ids: box i (vertices 8i..8i+7) draws preset SHAPES[i] in the PER_BOX renders.
+shapes = (np.arange(24) * 5 + 1) % 7
+mesh.attributes.new("boxmarch_shape", "INT", "POINT").data.foreach_set("value", np.repeat(shapes, 8).astype(np.int32))
 assert bpy.ops.boxmarch.bake() == {"FINISHED"}
 
 camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
@@ -43,7 +46,7 @@ camera.data.clip_start, camera.data.clip_end = 0.5, 40.0
 scene.camera = camera
 bpy.context.view_layer.update()
 
-result = {"centres": centres, "sizes": sizes, "rotations": rotations,
+result = {"centres": centres, "sizes": sizes, "rotations": rotations, "shapes": shapes,
           "matrix_world": np.array(boxes.matrix_world), "color": np.array(boxes.color)}
 view, projection = preview.camera_matrices(scene, camera, W, H)
 result["view"], result["projection"] = view, projection
@@ -96,6 +99,12 @@ for layout in layouts.LAYOUTS:
     result[f"UNTURNED_{layout}_rgba"], result[f"UNTURNED_{layout}_depth"] = preview.render(scene, camera, W, H)
 mesh_data.layout_inputs = layout_inputs
 draw.forget()
+
+# Each box the preset its shape id picks, read from every layout's channels or box table.
+boxes.boxmarch.sdf = "PER_BOX"
+for layout in layouts.LAYOUTS:
+    boxes.boxmarch.layout = layout
+    result[f"PER_BOX_{layout}_rgba"], result[f"PER_BOX_{layout}_depth"] = preview.render(scene, camera, W, H)
 boxes.boxmarch.layout = "CLASSIC"
 
 # A user SDF: the same sphere written by hand must give the SPHERE preset's image.

@@ -24,6 +24,7 @@ class BakedMesh:
     box_quaternions: np.ndarray  # float32 (S, 4)
     box_half_extents: np.ndarray  # float32 (S, 3)
     submesh_of_vertex: np.ndarray  # int32 (N,) the box number of each vertex
+    box_layers: mesh_io.BoxLayers | None = None  # per-box parameters and parents (None: baked without)
 
 
 def read_baked(mesh) -> BakedMesh:
@@ -35,12 +36,13 @@ def read_baked(mesh) -> BakedMesh:
     colour, quaternions = layers.shader_offsets(), layers.vertex_quaternions()
     if n and np.any(colour[:, 3] <= 0):
         raise NotBakedError(f"mesh '{mesh.name}' has BoxOffset alpha 0: bake it again")
-    submesh_of_vertex, _count = core.find_submeshes(positions, edges, face_starts, face_sizes, corner_verts)
+    submesh_of_vertex, count = core.find_submeshes(positions, edges, face_starts, face_sizes, corner_verts)
     origins, box_q, box_half = core.boxes_from_bake(positions, colour, quaternions, submesh_of_vertex)
     return BakedMesh(positions=positions, offsets=colour, quaternions=quaternions,
                      half_extents=box_half[submesh_of_vertex], triangles=mesh_io.read_triangles(mesh), edges=edges,
                      origins=origins, box_quaternions=box_q, box_half_extents=box_half,
-                     submesh_of_vertex=submesh_of_vertex)
+                     submesh_of_vertex=submesh_of_vertex,
+                     box_layers=mesh_io.read_box_layers(mesh, submesh_of_vertex, count))
 
 
 def read_triangles(mesh):
@@ -55,7 +57,10 @@ def box_data(baked: BakedMesh) -> layouts.BoxData:
                            offsets=core.decode_offsets(baked.offsets).astype(np.float64),
                            half_extents=baked.half_extents.astype(np.float64),
                            index=baked.submesh_of_vertex.astype(np.int64), classic_rgba=baked.offsets,
-                           box_half_extents=baked.box_half_extents.astype(np.float64))
+                           box_half_extents=baked.box_half_extents.astype(np.float64),
+                           **({} if baked.box_layers is None else {
+                               "box_params": baked.box_layers.params, "box_parent": baked.box_layers.parent,
+                               "box_depth": baked.box_layers.depth}))
 
 
 def layout_inputs(layout: str, baked: BakedMesh) -> dict[str, np.ndarray]:
@@ -65,6 +70,7 @@ def layout_inputs(layout: str, baked: BakedMesh) -> dict[str, np.ndarray]:
     NORMAL_COLOR: its box table read at each vertex's stored index, as an engine samples it)."""
     channels = layouts.channels(layout, box_data(baked))
     table = channels.pop("TABLE", None)
+    params = box_params_input(layout, channels, table)
     for name in layouts.PARAM_CHANNELS[layout]:  # per-box values: not inputs of the frame's decode
         del channels[name]
     inputs = {"pos": baked.positions}
@@ -73,7 +79,23 @@ def layout_inputs(layout: str, baked: BakedMesh) -> dict[str, np.ndarray]:
         inputs["ch_half"] = baked.half_extents.astype(np.float32)
     elif layout == "NORMAL_COLOR":
         inputs["ch_half"] = table[np.rint(channels["COLOR"][:, 3]).astype(np.int64), 0, :3]
+    inputs["ch_params"] = params
     return inputs
+
+
+def box_params_input(layout: str, channels: dict, table) -> np.ndarray:
+    """float32 (N, 4) each vertex's box parameters as an engine reads them from ``layout``
+    (docs/ENGINES.md): the (shape, material) and (random, user) channels, or the box table's
+    plane 1 at the vertex's index where the layout has no such channel."""
+    if layout == "CLASSIC":
+        return np.concatenate([channels["UV3"], channels["UV4"]], 1)
+    if layout == "NORMAL_FRAME":
+        return np.concatenate([channels["UV5"], channels["UV6"]], 1)
+    index = channels["COLOR"][:, 3] if layout == "NORMAL_COLOR" else channels["UV4"][:, 1]
+    params = table[np.rint(index).astype(np.int64), 1].copy()
+    if layout == "UV_FRAME":
+        params[:, :2] = channels["UV7"]
+    return params
 
 
 def frame_axes(quaternions) -> np.ndarray:
