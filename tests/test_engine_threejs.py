@@ -12,6 +12,7 @@ import json
 import numpy as np
 import pytest
 
+from boxmarch import core, mesh_io
 from conftest import empty_scene
 from engine_scene import (TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame, frame_and_size_errors,
                           rounded_box_mismatch, silhouettes)
@@ -29,6 +30,9 @@ INNER = 0.6
 ROUNDED_MAP = "return sd_round_box(p, box_half, 0.1 * min3(box_half));"
 IDENTITY_FRAME = ("var n = g.getAttribute('normal').array, t = g.getAttribute('tangent').array;"
                   "for (var i = 0; i < n.length / 3; i++) { n.set([0, 0, 1], 3 * i); t.set([1, 0, 0, 1], 4 * i); }")
+# Per-box shape ids of the mixed scene's 9 boxes (painted, baked, exported in TEXCOORD_5.x).
+SHAPES = np.array([5, 1, 6, 3, 4, 2, 1, 3, 5])
+PER_BOX_MAP = "return bm_sdf_by_id(box_params.x, p, box_half);"
 pytestmark = pytest.mark.slow
 
 
@@ -66,8 +70,13 @@ def covered(shot):
 def exported(bpy_module, tmp_path_factory):
     """The mixed scene exported with the GLTF preset (NORMAL_FRAME) and with layout CLASSIC."""
     blender = empty_scene(bpy_module)
-    _ob, centres, sizes, rotations = baked_scene(blender)
-    files = {}
+    ob, centres, sizes, rotations = baked_scene(blender)
+    ob.data.attributes.new("boxmarch_shape", "INT", "POINT").data.foreach_set("value", np.repeat(SHAPES, 8))
+    assert blender.ops.boxmarch.bake() == {"FINISHED"}  # the geometry is unchanged: only the ids are written
+    layers = mesh_io.read_baked_layers(ob.data)
+    baked_boxes = core.boxes_from_bake(mesh_io.read_positions(ob.data), layers.shader_offsets(),
+                                       layers.vertex_quaternions(), np.repeat(np.arange(len(SHAPES)), 8))
+    files = {"baked_boxes": baked_boxes}
     for layout in ("NORMAL_FRAME", "CLASSIC"):
         path = tmp_path_factory.mktemp("threejs") / f"{layout}.glb"
         assert blender.ops.boxmarch.export(filepath=str(path), preset="GLTF", layout=layout) == {"FINISHED"}
@@ -97,6 +106,7 @@ def page(request, exported):
     for name, tamper in (("offset-zeroed", offset_zeroed(release)), ("identity-frame", IDENTITY_FRAME)):
         jobs[name] = threejs.render_job(setup_js(BOX_MAP, tamper), W, H, WIDE)
     jobs["loader"] = threejs.render_job(loader_setup_js("mixed", BOX_MAP), W, H, WIDE)
+    jobs["per-box"] = threejs.render_job(setup_js(PER_BOX_MAP), W, H, WIDE)
     # classic.glb and future.glb are not served: a refusal that fetched the .glb would say 404 instead
     for name in ("classic", "future", "missing"):
         jobs[f"refuse-{name}"] = refusal_job(f"await loadBoxmarch(THREE, GLTFLoader, '{name}.glb', {{}});")
@@ -104,7 +114,7 @@ def page(request, exported):
         "var g = await new Promise(function (ok, no) { new GLTFLoader().load('classic-layout.glb', ok, undefined, no); });"
         " g.scene.traverse(function (o) { if (o.isMesh) useBoxmarchMaterial(THREE, o, createBoxmarchMaterial(THREE)); });")
     results = threejs.run_jobs(glb, list(jobs.values()), threejs.shipped_material(release), release, served)
-    return dict(zip(jobs, results), release=release), centres, sizes, rotations
+    return dict(zip(jobs, results), release=release, baked_boxes=files["baked_boxes"]), centres, sizes, rotations
 
 
 def test_threejs_receives_every_channel_and_decodes_to_the_boxes(page):
@@ -112,7 +122,7 @@ def test_threejs_receives_every_channel_and_decodes_to_the_boxes(page):
     (mesh,) = out["meshes"]
     a = mesh["attributes"]
     t = threejs.RELEASES[out["release"]].texcoords  # TEXCOORD_n as this release names them
-    assert set(a) == {"position", "normal", "tangent", *t[:5]}  # NORMAL_FRAME writes TEXCOORD_0 .. 4
+    assert set(a) == {"position", "normal", "tangent", *t[:8]}  # NORMAL_FRAME writes TEXCOORD_0 .. 7
     assert not any(mesh["normalized"].values())
     box = box_of_vertex(a["position"], centres, sizes, rotations, TO_Y_UP)
     offset = np.concatenate([a[t[1]], a[t[2]][:, :1]], axis=1)
@@ -149,6 +159,32 @@ def test_threejs_rounded_boxes_lie_between_the_box_and_its_core(page):
         assert mismatch is None, (camera, mismatch)
 
 
+def perspective(camera, aspect):
+    """OpenGL's perspective projection of the harness's camera (fov in degrees, vertical)."""
+    f = 1.0 / np.tan(np.radians(camera["fov"]) / 2)
+    near, far = camera["near"], camera["far"]
+    return np.array([[f / aspect, 0, 0, 0], [0, f, 0, 0],
+                     [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)], [0, 0, -1, 0]])
+
+
+def test_threejs_draws_the_shape_each_box_id_picks(page):
+    """Each box drawn with the preset its painted shape id picks (TEXCOORD_5.x through
+    bm_sdf_by_id): the coverage matches the CPU reference drawing the same ids on >= 99.5% of
+    pixels; against the ids shuffled (rolled by one box) it must not."""
+    out, centres, sizes, rotations = page
+    shot = out["per-box"]
+    to_world = np.eye(4)
+    to_world[:3, :3] = TO_Y_UP
+    to_clip = perspective(WIDE, W / H) @ shot.view @ to_world
+
+    def reference(ids):
+        return core.render_boxes_by_shape(*out["baked_boxes"], ids, to_clip, shot.view @ to_world, W, H).coverage
+    agree = (covered(shot) == reference(SHAPES)).mean()
+    shuffled = (covered(shot) == reference(np.roll(SHAPES, 1))).mean()
+    assert covered(shot).sum() > 500
+    assert agree >= 0.995 and shuffled < 0.99, (agree, shuffled)
+
+
 @pytest.mark.parametrize("tamper", ["offset-zeroed", "identity-frame"])
 def test_threejs_negative_controls_fail(page, tamper):
     out, centres, sizes, rotations = page
@@ -176,4 +212,5 @@ def test_load_boxmarch_refuses_a_sidecar_it_does_not_read(page):
 
 
 def test_material_refuses_a_classic_export(page):
-    assert "no TEXCOORD_3" in page[0]["material-on-classic"]
+    # CLASSIC holds TEXCOORD_1..5 (frame, then the box parameters): the first one missing is 6
+    assert "no TEXCOORD_6" in page[0]["material-on-classic"]

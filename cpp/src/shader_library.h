@@ -9,7 +9,6 @@ namespace boxmarch::shader {
 
 using glm::vec2;
 using glm::vec3;
-using glm::vec4;
 
 inline float min3(vec3 v) { return glm::min(v.x, glm::min(v.y, v.z)); }
 
@@ -137,30 +136,6 @@ inline float sdf_preset_link(vec3 p, vec3 h)
 {
   float thickness = glm::min(h.z, 0.25f * glm::min(h.x, h.y));
   return sd_link(vec3(p.y, p.x, p.z), glm::max(h.x - h.y, 0.0f), h.y - thickness, thickness);
-}
-
-// The box's parameters (shape, material, random, user) from the layout's two channels
-// (shape, material) and (random, user) (docs/ENGINES.md), or from the box table's plane 1 texel
-// passed as (texel.xy, texel.zw).
-inline vec4 bm_box_params(vec2 shape_material, vec2 random_user)
-{
-  return vec4(shape_material, random_user);
-}
-
-// The parent's box number from its interpolated channel, -1 for a root (rounding absorbs
-// interpolation round-off, as bm_box_index does).
-inline float bm_parent_index(float channel)
-{
-  return glm::floor(channel + 0.5f);
-}
-
-// Texel (x, y) of box `index` in plane `plane` of the box table, an image `size` texels wide and
-// high holding 3 planes of size.y / 3 rows each (docs/ENGINES.md). Integer-valued floats, for
-// texelFetch, Load or a texture lookup at (x + 0.5, y + 0.5) / size.
-inline vec2 bm_box_table_texel(float index, float plane, vec2 size)
-{
-  float row = glm::floor(index / size.x);
-  return vec2(index - row * size.x, plane * glm::floor(size.y / 3.0f + 0.5f) + row);
 }
 
 // The SDF preset a shape id picks, sized by the box's half-extents h: the id rounded to the
