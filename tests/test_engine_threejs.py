@@ -12,10 +12,9 @@ import json
 import numpy as np
 import pytest
 
-from boxmarch import core, mesh_io
 from conftest import empty_scene
-from engine_scene import (TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame, frame_and_size_errors,
-                          rounded_box_mismatch, silhouettes)
+from engine_scene import (MIXED_SHAPES, TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame,
+                          frame_and_size_errors, paint_shapes, per_box_agreement, rounded_box_mismatch, silhouettes)
 from engines import coverage_mismatch, threejs
 
 W, H = 320, 240
@@ -30,8 +29,6 @@ INNER = 0.6
 ROUNDED_MAP = "return sd_round_box(p, box_half, 0.1 * min3(box_half));"
 IDENTITY_FRAME = ("var n = g.getAttribute('normal').array, t = g.getAttribute('tangent').array;"
                   "for (var i = 0; i < n.length / 3; i++) { n.set([0, 0, 1], 3 * i); t.set([1, 0, 0, 1], 4 * i); }")
-# Per-box shape ids of the mixed scene's 9 boxes (painted, baked, exported in TEXCOORD_5.x).
-SHAPES = np.array([5, 1, 6, 3, 4, 2, 1, 3, 5])
 PER_BOX_MAP = "return bm_sdf_by_id(box_params.x, p, box_half);"
 pytestmark = pytest.mark.slow
 
@@ -71,12 +68,7 @@ def exported(bpy_module, tmp_path_factory):
     """The mixed scene exported with the GLTF preset (NORMAL_FRAME) and with layout CLASSIC."""
     blender = empty_scene(bpy_module)
     ob, centres, sizes, rotations = baked_scene(blender)
-    ob.data.attributes.new("boxmarch_shape", "INT", "POINT").data.foreach_set("value", np.repeat(SHAPES, 8))
-    assert blender.ops.boxmarch.bake() == {"FINISHED"}  # the geometry is unchanged: only the ids are written
-    layers = mesh_io.read_baked_layers(ob.data)
-    baked_boxes = core.boxes_from_bake(mesh_io.read_positions(ob.data), layers.shader_offsets(),
-                                       layers.vertex_quaternions(), np.repeat(np.arange(len(SHAPES)), 8))
-    files = {"baked_boxes": baked_boxes}
+    files = {"baked_boxes": paint_shapes(blender, ob, MIXED_SHAPES)}
     for layout in ("NORMAL_FRAME", "CLASSIC"):
         path = tmp_path_factory.mktemp("threejs") / f"{layout}.glb"
         assert blender.ops.boxmarch.export(filepath=str(path), preset="GLTF", layout=layout) == {"FINISHED"}
@@ -159,28 +151,14 @@ def test_threejs_rounded_boxes_lie_between_the_box_and_its_core(page):
         assert mismatch is None, (camera, mismatch)
 
 
-def perspective(camera, aspect):
-    """OpenGL's perspective projection of the harness's camera (fov in degrees, vertical)."""
-    f = 1.0 / np.tan(np.radians(camera["fov"]) / 2)
-    near, far = camera["near"], camera["far"]
-    return np.array([[f / aspect, 0, 0, 0], [0, f, 0, 0],
-                     [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)], [0, 0, -1, 0]])
-
-
 def test_threejs_draws_the_shape_each_box_id_picks(page):
     """Each box drawn with the preset its painted shape id picks (TEXCOORD_5.x through
     bm_sdf_by_id): the coverage matches the CPU reference drawing the same ids on >= 99.5% of
     pixels; against the ids shuffled (rolled by one box) it must not."""
-    out, centres, sizes, rotations = page
+    out, _centres, _sizes, _rotations = page
     shot = out["per-box"]
-    to_world = np.eye(4)
-    to_world[:3, :3] = TO_Y_UP
-    to_clip = perspective(WIDE, W / H) @ shot.view @ to_world
-
-    def reference(ids):
-        return core.render_boxes_by_shape(*out["baked_boxes"], ids, to_clip, shot.view @ to_world, W, H).coverage
-    agree = (covered(shot) == reference(SHAPES)).mean()
-    shuffled = (covered(shot) == reference(np.roll(SHAPES, 1))).mean()
+    agree = per_box_agreement(covered(shot), shot, WIDE, out["baked_boxes"], MIXED_SHAPES)
+    shuffled = per_box_agreement(covered(shot), shot, WIDE, out["baked_boxes"], np.roll(MIXED_SHAPES, 1))
     assert covered(shot).sum() > 500
     assert agree >= 0.995 and shuffled < 0.99, (agree, shuffled)
 
