@@ -3,7 +3,8 @@ the SDF library and the march.
 
 * hlsl/boxmarch_decode.hlsl, boxmarch_sdf.hlsl, boxmarch_box_params.hlsl, boxmarch_march.hlsl:
   decode.glsl, sdf.glsl, box_params.glsl and raymarch.glsl translated into HLSL (``to_hlsl``);
-* cpp/src/shader_library.h: the functions of sdf.glsl and box_params.glsl, bm_box_span and bm_normal_tap of
+* cpp/src/shader_library.h: the functions of sdf.glsl and box_params.glsl, bm_rotate_vector and
+  bm_quat_conjugate of decode.glsl, bm_box_span and bm_normal_tap of
   raymarch.glsl and bm_shade of preview.frag.glsl translated into GLM for the CPU reference
   (``to_glm``; the functions that call map() stay in raymarch.cpp, around its preset switch);
 * threejs/boxmarch.js and boxmarch.module.js: threejs/template.js with decode.glsl, sdf.glsl,
@@ -154,14 +155,17 @@ def hlsl_file(glsl_name: str, guard: str) -> str:
 
 def glm_library() -> str:
     raymarch = top_level_functions(glsl("raymarch.glsl"))
-    functions = {**top_level_functions(glsl("sdf.glsl")), **top_level_functions(glsl("box_params.glsl")),
+    decode = top_level_functions(glsl("decode.glsl"))
+    functions = {**top_level_functions(glsl("sdf.glsl")), "bm_rotate_vector": decode["bm_rotate_vector"],
+                 "bm_quat_conjugate": decode["bm_quat_conjugate"], **top_level_functions(glsl("box_params.glsl")),
                  "bm_box_span": raymarch["bm_box_span"],
                  "bm_normal_tap": raymarch["bm_normal_tap"],
                  "bm_shade": top_level_functions(glsl("preview.frag.glsl"))["bm_shade"]}
     body = to_glm("\n".join(functions.values()), set(functions))
     usings = "".join(f"using glm::{v};\n" for v in ("vec2", "vec3", "vec4") if re.search(rf"\b{v}\b", body))
-    return (f"// {GENERATED_BY} from shaders/glsl/sdf.glsl, box_params.glsl, raymarch.glsl (bm_box_span,\n"
-            f"// bm_normal_tap) and preview.frag.glsl (bm_shade): edit those, not this file. The shaders'\n"
+    return (f"// {GENERATED_BY} from shaders/glsl/sdf.glsl, box_params.glsl, decode.glsl (bm_rotate_vector,\n"
+            f"// bm_quat_conjugate), raymarch.glsl (bm_box_span, bm_normal_tap) and preview.frag.glsl\n"
+            f"// (bm_shade): edit those, not this file. The shaders'\n"
             f"// functions that do not call map(), in GLM, so the CPU reference evaluates what the GPU does.\n"
             f"#pragma once\n\n#include <glm/glm.hpp>\n\nnamespace boxmarch::shader {{\n\n{usings}\n{body}\n"
             f"}}  // namespace boxmarch::shader\n")

@@ -189,3 +189,37 @@ def test_draw_handler_in_a_real_viewport(package_parent, tmp_path):  # noqa: F81
     assert result["display_type"] == "WIRE"
     assert result["red_pixels"]["False"] == 0
     assert result["red_pixels"]["True"] > 2000
+
+
+def chain_contacts_px(r):
+    """Pixel positions (x right, y down) of the chain's two contact points, and the pixel length
+    of 0.6 object units there (the neck of radius-0.3 spheres-blend stays well inside it)."""
+    height, width = r["CHAIN_PER_BOX_depth"].shape
+    to_clip = r["chain_projection"] @ r["chain_view"] @ r["chain_matrix"]
+    contacts = np.array([[0.5, 0.0, 0.0, 1.0], [1.5, 0.0, 0.0, 1.0], [0.5, 0.0, 0.6, 1.0]])
+    clip = contacts @ to_clip.T
+    ndc = clip[:, :2] / clip[:, 3:]
+    px = np.stack([(ndc[:, 0] + 1) * width / 2, (1 - ndc[:, 1]) * height / 2], 1)
+    return px[:2], float(np.linalg.norm(px[2] - px[0]))
+
+
+def test_blend_into_parent_adds_a_neck_only_at_the_joints(rendered):
+    """Three spheres in touching unit boxes, each the child of the one before, blended (radius
+    0.3): the blend only adds (coverage is a superset, never farther than the hit band: a grown
+    box starts its march elsewhere, so at grazing rays the hit lands elsewhere inside the
+    epsilon band, measured up to 2.1e-5 of window depth), it adds many pixels, and everything it
+    changes by more than 1e-4 of window depth lies near the two contact points; the same boxes
+    without parents change nothing (the control)."""
+    plain, blend = rendered["CHAIN_PER_BOX_depth"], rendered["CHAIN_PER_BOX_BLEND_depth"]
+    covered, blended = plain < 1.0, blend < 1.0
+    assert covered.sum() > 500
+    assert not (covered & ~blended).any()
+    assert (blend - plain)[covered].max() <= 5e-5
+    added = blended & ~covered
+    changed = added | (covered & (np.abs(blend - plain) > 1e-4))
+    contacts, reach = chain_contacts_px(rendered)
+    ys, xs = np.nonzero(changed)
+    near = np.min(np.linalg.norm(np.stack([xs + 0.5, ys + 0.5], 1)[:, None, :] - contacts[None], axis=2), axis=1)
+    assert added.sum() >= 50 and near.max() <= reach, (added.sum(), near.max(), reach)
+    roots = rendered["CHAIN_ROOTS_depth"]
+    assert np.array_equal(roots < 1.0, covered) and np.abs(roots - plain)[covered].max() <= 2e-6

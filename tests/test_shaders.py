@@ -35,11 +35,11 @@ def test_vertex_inputs_are_the_layouts_channels():
         written = {"ch_" + name.lower(): values.shape[1] for name, values in layouts.channels(layout, data).items()
                    if name != "TABLE" and name not in layouts.PARAM_CHANNELS[layout]}
         read = {name: int(t[-1]) for t, name in sources.VERTEX_INPUTS[layout]
-                if name not in ("pos", "ch_half", "ch_params")}
+                if name not in ("pos", "ch_half", "ch_params", "ch_parent_origin", "ch_parent_q", "ch_parent_half")}
         assert read == written, layout
 
 
-@pytest.mark.parametrize("sdf", [*core.SDF_PRESETS, sources.PER_BOX])
+@pytest.mark.parametrize("sdf", [*core.SDF_PRESETS, sources.PER_BOX, sources.PER_BOX_BLEND])
 def test_fragment_stage_compiles_for_every_preset(tmp_path, sdf):
     proc = compile_glsl(tmp_path, f"preview_{sdf}", "frag", sources.fragment_source(sdf))
     assert proc.returncode == 0, proc.stdout + proc.stderr

@@ -77,6 +77,8 @@ class BOXMARCH_PT_preview(bpy.types.Panel):
         layout.prop(settings, "layout")
         if not layouts.LAYOUTS[settings.layout].skin_safe and skinning.armature_modifier(ob) is not None:
             layout.label(text="Frame in UVs: stays in the rest pose when bones move", icon="INFO")
+        if settings.sdf == "PER_BOX_BLEND":
+            layout.prop(settings, "blend_radius")
         if settings.sdf == "USER":
             row = layout.row(align=True)
             row.prop_search(settings, "user_text", bpy.data, "texts")

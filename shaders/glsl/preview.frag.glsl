@@ -7,7 +7,8 @@
 // frame: identity, or an export preset's orthonormal axis change); eye (object-space camera position with w = 1, or for
 // orthographic views the object-space view direction with w = 0); march (epsilon, relaxation,
 // max_distance, max_steps); base_color; mode.x (0 shaded, 1 object-space normal as colour,
-// 2 steps of every fragment in red with alpha 1, for Blender's ADDITIVE blend: src * alpha + dst).
+// 2 steps of every fragment in red with alpha 1, for Blender's ADDITIVE blend: src * alpha + dst);
+// blend.x (the blend radius of PER_BOX_BLEND, else 0).
 // Mirrored by cpp/src/raymarch.cpp (render_boxes); bm_shade is translated into it by
 // shaders/generate.py.
 
@@ -28,8 +29,14 @@ void main()
   vec3 y = normalize(frag_axis_y);
   vec3 z = normalize(frag_axis_z);
   vec3 f = frag_offset;
-  box_half = frag_half;
   box_params = frag_params;
+  box_parent_origin = frag_parent_origin;
+  box_parent_q = frag_parent_q;
+  box_parent_half = frag_parent_half;
+  // The box as drawn (grown by the blend radius where it blends into a parent) bounds the march;
+  // the shapes are sized by the box itself.
+  vec3 drawn_half = frag_half;
+  box_half = frag_half - vec3(frag_parent_half.x < 0.0 ? 0.0 : preview.blend.x);
   vec3 ro = -f;
   vec3 ray_object = preview.eye.w > 0.5 ? obj_pos - preview.eye.xyz : preview.eye.xyz;
   float eye_distance = length(ray_object);
@@ -39,7 +46,7 @@ void main()
   // A fragment where the ray enters: front-facing, or (whatever the winding) more of the box
   // ahead than behind. A fragment of the far side only marches when the eye is inside the box
   // (from the eye).
-  vec2 span = bm_box_span(ro, rd, box_half);
+  vec2 span = bm_box_span(ro, rd, drawn_half);
   float t_end = span.y;
   if (!gl_FrontFacing && span.x + span.y < 0.0) {
     if (preview.eye.w < 0.5 || eye_distance > -span.x) {

@@ -36,6 +36,17 @@ void main()
   frag_half = ch_half;
 #endif
   frag_params = ch_params;
-  obj_pos = pos;
-  gl_Position = preview.object_to_clip * vec4(pos, 1.0);
+  // A box with a parent grows by the blend radius (preview.blend.x) when it blends into it: the
+  // fillet lies within that distance of its shape. Each vertex moves away from the origin along
+  // the box's axes, so f grows by the same amount.
+  float grow = ch_parent_half.x < 0.0 ? 0.0 : preview.blend.x;
+  vec3 outward = -sign(frag_offset) * grow;
+  frag_offset -= outward;
+  frag_half += vec3(grow);
+  frag_parent_origin = vec4(ch_parent_origin.xyz, preview.blend.x);
+  frag_parent_q = ch_parent_q;
+  frag_parent_half = ch_parent_half;
+  vec3 grown = pos + transpose(mat3(preview.frame)) * bm_from_local(outward, frag_axis_x, frag_axis_y, frag_axis_z);
+  obj_pos = grown;
+  gl_Position = preview.object_to_clip * vec4(grown, 1.0);
 }

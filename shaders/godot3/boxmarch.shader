@@ -259,6 +259,22 @@ float bm_sdf_by_id(float shape, vec3 p, vec3 h)
   }
   return sdf_preset_box(p, h);
 }
+// This box's shape (its shape id, sized by h) blended into its parent's across their boundary:
+// the parent's shape evaluated in the parent's frame (parent_origin: its origin in this box's
+// local coordinates; parent_q: its frame relative to this box's; parent_half.xyz its
+// half-extents, parent_half.w its shape id; parent_half.x < 0: no parent), joined by
+// op_smooth_union with blend radius k (k <= 0: the own shape). A bound. Two SDF evaluations
+// with a parent, one without; the fillet lies within k of this box's shape, so the box it is
+// drawn in must be grown by k.
+float bm_sdf_blend_parent(float shape, vec3 p, vec3 h, vec3 parent_origin, vec4 parent_q, vec4 parent_half, float k)
+{
+  float own = bm_sdf_by_id(shape, p, h);
+  if (k <= 0.0 || parent_half.x < 0.0) {
+    return own;
+  }
+  vec3 in_parent = bm_rotate_vector(p - parent_origin, bm_quat_conjugate(parent_q));
+  return op_smooth_union(own, bm_sdf_by_id(parent_half.w, in_parent, parent_half.xyz), k);
+}
 
 // Entry (x) and exit (y) distances of the ray ro + t rd with the box |p| <= h.
 vec2 bm_box_span(vec3 ro, vec3 rd, vec3 h)

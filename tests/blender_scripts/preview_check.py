@@ -198,5 +198,36 @@ bpy.context.view_layer.update()
 result["shift"] = shift
 result["MOVED_rgba"], result["MOVED_depth"] = preview.render(scene, camera, W, H)
 
+# A chain of three unit boxes along x, faces touching, each drawn as its sphere (shape 1), box i
+# the parent of box i + 1: blended into its parent (radius 0.3) a neck joins the spheres where
+# they touch (x = 0.5, 1.5). Then the same with no parents: nothing may change.
+boxes.hide_viewport = True
+chain_arrays = scenes.box_arrays(np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]]), 1.0, np.eye(3))
+chain_mesh = mesh_io.new_mesh("chain", chain_arrays[0], chain_arrays[2], chain_arrays[3], chain_arrays[4])
+chain = bpy.data.objects.new("chain", chain_mesh)
+scene.collection.objects.link(chain)
+chain_mesh.attributes.new("boxmarch_shape", "INT", "POINT").data.foreach_set("value", np.ones(24, np.int32))
+chain_mesh.attributes.new("boxmarch_parent", "INT", "POINT").data.foreach_set(
+    "value", np.repeat([-1, 0, 1], 8).astype(np.int32))
+for ob in scene.objects:
+    ob.select_set(ob == chain)
+bpy.context.view_layer.objects.active = chain
+assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+chain.boxmarch.preview = True
+chain.boxmarch.blend_radius = 0.3
+result["chain_matrix"] = np.array(chain.matrix_world)
+camera.location = (1.0, -5.0, 1.5)  # from the side, a little above: the joints in view
+camera.rotation_euler = (mathutils.Vector((1.0, 0.0, 0.0)) - camera.location).to_track_quat("-Z", "Y").to_euler()
+bpy.context.view_layer.update()
+result["chain_view"], result["chain_projection"] = preview.camera_matrices(scene, camera, W, H)
+for sdf in ("PER_BOX", "PER_BOX_BLEND"):
+    chain.boxmarch.sdf = sdf
+    result[f"CHAIN_{sdf}_rgba"], result[f"CHAIN_{sdf}_depth"] = preview.render(scene, camera, W, H)
+    result[f"CHAIN_{sdf}_steps"] = preview.render(scene, camera, W, H, output="STEPS")[0]
+chain_mesh.attributes.remove(chain_mesh.attributes["boxmarch_parent"])
+assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+draw.forget()
+result["CHAIN_ROOTS_rgba"], result["CHAIN_ROOTS_depth"] = preview.render(scene, camera, W, H)
+
 np.savez_compressed(out_path, **result)
 print("preview_check: wrote", out_path)

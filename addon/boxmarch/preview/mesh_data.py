@@ -6,7 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import core, layouts, mesh_io
+from .. import core, layouts, mesh_io, scenes
+from ..export import transforms
 
 
 NotBakedError = mesh_io.NotBakedError  # the preview's name for it (draw.py, tests)
@@ -80,7 +81,29 @@ def layout_inputs(layout: str, baked: BakedMesh) -> dict[str, np.ndarray]:
     elif layout == "NORMAL_COLOR":
         inputs["ch_half"] = table[np.rint(channels["COLOR"][:, 3]).astype(np.int64), 0, :3]
     inputs["ch_params"] = params
+    inputs.update(parent_inputs(baked))
     return inputs
+
+
+def parent_inputs(baked: BakedMesh) -> dict[str, np.ndarray]:
+    """float32 (N, 4) per vertex, its box's parent in the box's own local coordinates (the
+    preview's PER_BOX_BLEND, shaders/glsl/box_params.glsl): ch_parent_origin (the parent's
+    origin, 0), ch_parent_q (the parent's frame relative to the box's), ch_parent_half (the
+    parent's half-extents and shape id; (-1, -1, -1, 0) for a root)."""
+    boxes = len(baked.origins)
+    layers = baked.box_layers
+    parent = np.full(boxes, -1) if layers is None else layers.parent.astype(np.int64)
+    shapes = np.zeros(boxes) if layers is None else layers.params[:, 0]
+    has = parent >= 0
+    other = np.where(has, parent, np.arange(boxes))
+    frames = scenes.quaternion_matrices(baked.box_quaternions)
+    relative = np.einsum("nji,njk->nik", frames, frames[other])  # R_box^T R_parent
+    origin = np.einsum("nji,nj->ni", frames, baked.origins[other].astype(np.float64) - baked.origins)
+    half = np.where(has[:, None], np.concatenate([baked.box_half_extents[other], shapes[other, None]], 1),
+                    np.array([-1.0, -1.0, -1.0, 0.0]))
+    per_box = {"ch_parent_origin": np.concatenate([origin, np.zeros((boxes, 1))], 1),
+               "ch_parent_q": transforms.matrix_quaternions(relative), "ch_parent_half": half}
+    return {name: values[baked.submesh_of_vertex].astype(np.float32) for name, values in per_box.items()}
 
 
 def box_params_input(layout: str, channels: dict, table) -> np.ndarray:
