@@ -131,7 +131,7 @@ def test_module_bake_export_pipeline_on_a_file(boxes_blend_34, tmp_path):
     bake, export = report["steps"]
     assert (bake["step"], bake["baked"], bake["submeshes"]) == ("bake", COUNT, COUNT)
     assert bake["max_relative_error"] < 1e-5
-    assert export["preset"] == "GLTF" and export["meshes"][0]["uv_channels"] == [1, 2, 3, 4]
+    assert export["preset"] == "GLTF" and export["meshes"][0]["uv_channels"] == [1, 2, 3, 4, 5, 6, 7]
     assert digest(source) == before  # the input is never written
     assert_glb_decodes_to_centres(tmp_path / "boxes.glb")
     # The written .blend holds the bake: export from it alone gives the same file content.
