@@ -88,3 +88,19 @@ def test_bad_parent_attribute_is_refused_and_nothing_written(blender):
     with pytest.raises(mesh_io.BakeInputError, match="cycle"):
         bake(mesh)
     assert mesh.attributes.get(".boxmarch_params") is None and mesh.color_attributes.get("BoxOffset") is None
+
+
+@pytest.mark.parametrize("name, data_type, domain, values, message", [
+    ("boxmarch_shape", "FLOAT", "POINT", np.r_[np.nan, np.zeros(47)], "NaN"),
+    ("boxmarch_user", "FLOAT_VECTOR", "POINT", np.zeros(48 * 3), "FLOAT_VECTOR"),
+    ("boxmarch_material", "INT", "EDGE", None, "EDGE"),
+    ("boxmarch_params", "FLOAT", "POINT", np.zeros(48), "must be a colour"),
+])
+def test_unreadable_attributes_are_refused_and_nothing_written(blender, name, data_type, domain, values, message):
+    mesh = chain_object(blender).data
+    attr = mesh.attributes.new(name, data_type, domain)
+    values = np.zeros(len(mesh.edges), np.int32) if values is None else values
+    attr.data.foreach_set("vector" if data_type == "FLOAT_VECTOR" else "value", np.asarray(values).ravel())
+    with pytest.raises(mesh_io.BakeInputError, match=message):
+        bake(mesh)
+    assert mesh.attributes.get(".boxmarch_params") is None and mesh.color_attributes.get("BoxOffset") is None
