@@ -8,7 +8,7 @@ import pytest
 
 from boxmarch import scenes
 from conftest import mesh_object
-from engine_scene import table_texels
+from engine_scene import TO_Y_UP, UNITY, UNREAL, table_texels
 from fbx_reader import read_fbx_geometry
 from gltf_reader import read_glb
 
@@ -90,6 +90,26 @@ def table_rows(texels, width, boxes, index):
     return np.concatenate([at(1), at(0)[:, 3:4], at(2)[:, :1]], 1)
 
 
+def rotate(v, q):
+    """v turned by unit quaternions q (x, y, z, w), as docs/FORMAT.md states the decode."""
+    u, w = q[:, :3], q[:, 3:]
+    return v + 2.0 * np.cross(u, np.cross(u, v) + w * v)
+
+
+def check_table_frames(texels, width, boxes, index, positions, offsets, keys, to_engine, scale):
+    """The table's planes 3 (origin) and 4 (frame) of each vertex's box: the origin is the box's
+    known centre in the engine's frame, and position + R(q) f, with f from the layout's
+    channels, lands on it (within 1e-6 of the half-extent)."""
+    rows_per_plane = -(-boxes // width)
+    i = np.rint(index).astype(int)
+    at = lambda plane: texels[(plane * rows_per_plane + i // width) * width + i % width].astype(np.float64)
+    origin, q = at(3)[:, :3], at(4)
+    centre = np.stack([SPACING * keys, 0 * keys, 0 * keys], 1) @ to_engine.T
+    half = 0.5 * scale
+    assert np.abs(origin - centre).max() <= 1e-6 * half + 2e-7 * np.abs(centre).max()
+    assert np.abs(positions + rotate(offsets, q) - origin).max() <= 1e-6 * half + 2e-7 * np.abs(centre).max()
+
+
 def merge_table(vertex_values, table_values):
     out = vertex_values.copy()
     missing = np.isnan(out)
@@ -111,9 +131,13 @@ def test_gltf(blender, scene, tmp_path, layout):
         (p,) = mesh["primitives"]
         uv = {n: p[f"TEXCOORD_{n}"].astype(np.float64) for n in range(1, 8) if f"TEXCOORD_{n}" in p}
         values = decode_vertex_channels(layout, uv)
+        keys = box_key(p["POSITION"][:, 0])
         if texels is not None:
             values = merge_table(values, table_rows(texels, 11, 11, index_of(layout, uv)))
-        check(values, box_key(p["POSITION"][:, 0]), mesh["name"], random, base)
+            offsets = np.concatenate([uv[1], uv[2][:, :1]] if layout == "NORMAL_FRAME" else [uv[3], uv[4][:, :1]], 1)
+            check_table_frames(texels, 11, 11, index_of(layout, uv), p["POSITION"].astype(np.float64), offsets, keys,
+                               TO_Y_UP, 1.0)
+        check(values, keys, mesh["name"], random, base)
         base += len(KEYS[mesh["name"]]) if layout != "CLASSIC" else 0
     assert base == (11 if layout != "CLASSIC" else 0)
 
@@ -126,8 +150,12 @@ def test_godot3_table(blender, scene, tmp_path):
     base = 0
     for mesh in read_glb(path):
         (p,) = mesh["primitives"]
-        values = table_rows(texels, 11, 11, p["COLOR_0"][:, 3])
-        check(values, box_key(p["POSITION"][:, 0]), mesh["name"], random, base)
+        colour = p["COLOR_0"].astype(np.float64)
+        values = table_rows(texels, 11, 11, colour[:, 3])
+        keys = box_key(p["POSITION"][:, 0])
+        check(values, keys, mesh["name"], random, base)
+        check_table_frames(texels, 11, 11, colour[:, 3], p["POSITION"].astype(np.float64), colour[:, :3], keys,
+                           TO_Y_UP, 1.0)
         base += len(KEYS[mesh["name"]])
 
 
@@ -150,10 +178,15 @@ def test_fbx(blender, scene, tmp_path, preset, layout):
         for values in uv.values():
             values[:, 1] = 1.0 - values[:, 1]
     values = decode_vertex_channels(layout, uv)
+    keys = box_key(raw["position"][:, 0])
     if layout != "CLASSIC":
         texels = np.fromfile(tmp_path / "f.boxes.bin", "<f4").reshape(-1, 4)
         values = merge_table(values, table_rows(texels, 6, 6, index_of(layout, uv)))
-    check(values, box_key(raw["position"][:, 0]), "A", random, 0)
+        engine = UNITY if preset == "UNITY" else UNREAL
+        offsets = np.concatenate([uv[1], uv[2][:, :1]] if layout == "NORMAL_FRAME" else [uv[3], uv[4][:, :1]], 1)
+        check_table_frames(texels, 6, 6, index_of(layout, uv), raw["position"] @ engine["from_file"].T,
+                           offsets, keys, engine["to_engine"], engine["scale"])
+    check(values, keys, "A", random, 0)
 
 
 def test_shuffled_ids_fail_the_check(blender, scene, tmp_path):

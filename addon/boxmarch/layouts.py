@@ -16,8 +16,8 @@ UV_FRAME       UV1 = q.xy; UV2 = q.zw (where CLASSIC has them); UV3 = f.xy; UV4 
 NORMAL_FRAME   NORMAL = x_z; TANGENT = (x_x, 1); UV1 = f.xy; UV2 = (f.z, index); UV3 = h.xy;
                UV4 = (h.z, 0); UV5 = (shape, material); UV6 = (random, user); UV7 = (parent, depth)
 NORMAL_COLOR   NORMAL = x_z; TANGENT = (x_x, 1); COLOR = (f, index); TABLE[index] = (h, parent), a
-               float texture one texel per box (UV2 stays free for lightmaps), with two more planes:
-               (shape, material, random, user) and (depth, 0, 0, 0)
+               float texture one texel per box (UV2 stays free for lightmaps), with four more planes:
+               (shape, material, random, user), (depth, 0, 0, 0), (origin, 0), q
 =============  ==================================================================================
 
 q: the box frame as a unit quaternion (x, y, z, w), box-local to object; x_x, x_z: the frame's
@@ -27,7 +27,8 @@ glTF bitangent); f: vertex to box origin in box-local coordinates; h: half-exten
 origin (largest |f| per local axis over the box); index: the box's number, 0 .. boxes - 1;
 shape, material, random, user: the box's four parameters (core.PARAM_NAMES); parent: the parent
 box's number (-1: a root), depth: 0 at a root. The box table (:func:`box_table`, every layout
-with an index) holds, per box, (h, parent), (shape, material, random, user), (depth, 0, 0, 0).
+with an index) holds, per box, (h, parent), (shape, material, random, user), (depth, 0, 0, 0),
+(origin, 0) and q (object space).
 """
 from __future__ import annotations
 
@@ -71,6 +72,8 @@ class BoxData:
     box_params: np.ndarray | None = None  # (boxes, 4) shape, material, random, user (None: zeros)
     box_parent: np.ndarray | None = None  # (boxes,) parent's box number, -1 for a root (None: all roots)
     box_depth: np.ndarray | None = None   # (boxes,) 0 at a root (None: zeros)
+    box_origins: np.ndarray | None = None  # (boxes, 3) object-space origins (None: zeros)
+    box_quaternions: np.ndarray | None = None  # (boxes, 4) frames, x, y, z, w (None: identity)
     index_base: int = 0                   # box number of this mesh's first box (index - index_base: row)
 
     def box_values(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -91,7 +94,7 @@ def frame_axes(q) -> tuple[np.ndarray, np.ndarray]:
     return axis_x, axis_z
 
 
-TABLE_PLANES = 3  # texels per box in the box table
+TABLE_PLANES = 5  # texels per box in the box table
 # Per layout, the UV channels holding only box parameters and parents (by their pair of values).
 PARAM_CHANNELS = {
     "CLASSIC": {"UV3": ("shape", "material"), "UV4": ("random", "user"), "UV5": ("parent", "depth")},
@@ -103,13 +106,17 @@ PARAM_CHANNELS = {
 
 def box_table(data: BoxData) -> np.ndarray:
     """float32 (boxes, TABLE_PLANES, 4): per box (h, parent), (shape, material, random, user),
-    (depth, 0, 0, 0)."""
+    (depth, 0, 0, 0), (origin, 0) and the frame's quaternion, so a shader reaches its parent's
+    frame, size and parameters by the parent's number."""
     params, parent, depth = data.box_values()
     table = np.zeros((len(params), TABLE_PLANES, 4))
     table[:, 0, :3] = data.box_half_extents
     table[:, 0, 3] = parent
     table[:, 1] = params
     table[:, 2, 0] = depth
+    if data.box_origins is not None:
+        table[:, 3, :3] = data.box_origins
+    table[:, 4] = [0.0, 0.0, 0.0, 1.0] if data.box_quaternions is None else data.box_quaternions
     return table.astype(np.float32)
 
 

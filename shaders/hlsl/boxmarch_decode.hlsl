@@ -98,12 +98,13 @@ float bm_parent_index(float channel)
 }
 
 // Texel (x, y) of box `index` in plane `plane` of the box table, an image `size` texels wide and
-// high holding 3 planes of size.y / 3 rows each (docs/ENGINES.md). Integer-valued floats, for
-// texelFetch, Load or a texture lookup at (x + 0.5, y + 0.5) / size.
+// high holding 5 planes of size.y / 5 rows each (docs/ENGINES.md): 0 (h, parent), 1 (shape,
+// material, random, user), 2 (depth, 0, 0, 0), 3 (origin, 0), 4 the frame's quaternion.
+// Integer-valued floats, for texelFetch, Load or a texture lookup at (x + 0.5, y + 0.5) / size.
 float2 bm_box_table_texel(float index, float plane, float2 size)
 {
   float row = floor(index / size.x);
-  return float2(index - row * size.x, plane * floor(size.y / 3.0 + 0.5) + row);
+  return float2(index - row * size.x, plane * floor(size.y / 5.0 + 0.5) + row);
 }
 
 #endif

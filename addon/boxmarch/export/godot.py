@@ -4,9 +4,9 @@ texels (.bin, the other layouts with an index). Blender-free.
 Godot 3's glTF importer keeps two UV sets, so the half-extents of every box travel as a float
 texture, one RGBA texel per box number and plane (Unreal's Pivot Painter carries per-element data
 the same way): plane 0 = (h, parent), plane 1 = (shape, material, random, user), plane 2 =
-(depth, 0, 0, 0) (layouts.box_table). An ImageTexture resource with an embedded ``RGBAFloat`` image keeps the float32 bits
+(depth, 0, 0, 0), plane 3 = (origin, 0), plane 4 = the frame's quaternion (layouts.box_table). An ImageTexture resource with an embedded ``RGBAFloat`` image keeps the float32 bits
 exactly (an imported .exr would pass through Godot's image importer); flags 0: no filtering,
-mipmaps or repeat. The shader reads texel (index % width, plane * height / 3 + index / width) with texelFetch.
+mipmaps or repeat. The shader reads texel (index % width, plane * height / 5 + index / width) with texelFetch.
 """
 from __future__ import annotations
 

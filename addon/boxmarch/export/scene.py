@@ -56,7 +56,7 @@ def box_data(mesh, preset, index_base: int = 0):
     edges, face_starts, face_sizes, _ = mesh_io.read_topology(mesh)
     submesh_of_vertex, count = core.find_submeshes(positions.astype(np.float32), edges, face_starts, face_sizes,
                                                    corner_verts)
-    _, _, box_half = core.boxes_from_bake(positions, offsets, q, submesh_of_vertex)
+    box_origins, box_q, box_half = core.boxes_from_bake(positions, offsets, q, submesh_of_vertex)
     target_q = transforms.target_quaternions(q, preset)
     f = core.decode_offsets(offsets)
     target_f = transforms.target_local(f, preset)
@@ -65,7 +65,8 @@ def box_data(mesh, preset, index_base: int = 0):
     data = layouts.BoxData(quaternions=target_q, offsets=target_f, half_extents=target_half[submesh_of_vertex],
                            index=index_base + submesh_of_vertex.astype(np.int64),
                            classic_rgba=transforms.target_offsets(offsets, preset), box_half_extents=target_half,
-                           index_base=index_base)
+                           index_base=index_base, box_origins=transforms.target_positions(box_origins, preset),
+                           box_quaternions=transforms.target_quaternions(box_q, preset))
     if boxes is not None:  # box numbers run on across the file's meshes: so do the parents
         data.box_params, data.box_depth = boxes.params, boxes.depth
         data.box_parent = np.where(boxes.parent >= 0, boxes.parent + index_base, -1)

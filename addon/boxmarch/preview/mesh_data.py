@@ -59,6 +59,7 @@ def box_data(baked: BakedMesh) -> layouts.BoxData:
                            half_extents=baked.half_extents.astype(np.float64),
                            index=baked.submesh_of_vertex.astype(np.int64), classic_rgba=baked.offsets,
                            box_half_extents=baked.box_half_extents.astype(np.float64),
+                           box_origins=baked.origins.astype(np.float64), box_quaternions=baked.box_quaternions,
                            **({} if baked.box_layers is None else {
                                "box_params": baked.box_layers.params, "box_parent": baked.box_layers.parent,
                                "box_depth": baked.box_layers.depth}))
