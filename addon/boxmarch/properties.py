@@ -49,6 +49,8 @@ class BoxmarchObjectSettings(bpy.types.PropertyGroup):
                                 "reaches (each box with a parent is drawn grown by it)")
     max_distance: FloatProperty(name="Max Distance", default=1000.0, min=1e-4, update=_redraw,
                                 description="Longest march inside a box (box-local units)")
+    colour_by_material: BoolProperty(name="Colour by Material", default=False, update=_redraw,
+                                     description="Shade each box in a colour of its own material id (boxmarch_material)")
     show_outline: BoolProperty(name="Box Outline", default=False, update=_redraw,
                                description="Draw the mesh edges over the preview")
     engine: EnumProperty(

@@ -90,6 +90,7 @@ class BOXMARCH_PT_preview(bpy.types.Panel):
         col.prop(settings, "max_distance")
         col = layout.column(heading="Show")
         col.prop(settings, "show_outline")
+        col.prop(settings, "colour_by_material")
         col.prop(settings, "show_vectors")
         error = preview_draw.errors.get(ob.name)
         if settings.preview and error:

@@ -8,7 +8,8 @@
 // orthographic views the object-space view direction with w = 0); march (epsilon, relaxation,
 // max_distance, max_steps); base_color; mode.x (0 shaded, 1 object-space normal as colour,
 // 2 steps of every fragment in red with alpha 1, for Blender's ADDITIVE blend: src * alpha + dst);
-// blend.x (the blend radius of PER_BOX_BLEND, else 0).
+// blend.x (the blend radius of PER_BOX_BLEND, else 0); blend.y (1: colour each box by its
+// material id).
 // Mirrored by cpp/src/raymarch.cpp (render_boxes); bm_shade is translated into it by
 // shaders/generate.py.
 
@@ -20,6 +21,13 @@ vec3 bm_shade(vec3 n_view, vec3 base)
   float lambert = max(dot(n_view, light), 0.0);
   vec3 ambient = mix(vec3(0.20, 0.19, 0.18), vec3(0.42, 0.45, 0.50), 0.5 + 0.5 * n_view.y);
   return base * (ambient + 0.8 * lambert);
+}
+
+// A distinct colour per material id (golden-ratio hues), for the preview's Colour by Material.
+vec3 bm_material_colour(float material)
+{
+  vec3 phase = vec3(0.0, 0.33, 0.67) + vec3(0.618034 * floor(material + 0.5));
+  return vec3(0.55) + 0.4 * vec3(cos(6.283185 * phase.x), cos(6.283185 * phase.y), cos(6.283185 * phase.z));
 }
 
 void main()
@@ -82,6 +90,7 @@ void main()
   }
   else {
     vec3 n_view = normalize(mat3(preview.normal_to_view) * n_object);
-    frag_color = vec4(bm_shade(n_view, preview.base_color.rgb), preview.base_color.a);
+    vec3 base = preview.blend.y > 0.5 ? bm_material_colour(box_params.y) : preview.base_color.rgb;
+    frag_color = vec4(bm_shade(n_view, base), preview.base_color.a);
   }
 }

@@ -224,6 +224,7 @@ def uniform_block_data(object_to_clip, object_to_view, perspective, settings, ou
     data[56:60] = base_color
     data.view(np.int32)[60] = output_mode
     data[64] = settings.blend_radius if settings.sdf == "PER_BOX_BLEND" else 0.0
+    data[65] = float(settings.colour_by_material)
     return data
 
 
