@@ -25,9 +25,15 @@ def stored(mesh, name, data_type):
     n = len(mesh.vertices)
     attr = mesh.attributes[name]
     assert attr.domain == "POINT" and attr.data_type == data_type
-    buf = np.empty(n * 4 if data_type == "FLOAT_COLOR" else n, np.float32 if data_type == "FLOAT_COLOR" else np.int32)
-    attr.data.foreach_get("color" if data_type == "FLOAT_COLOR" else "value", buf)
-    return buf.reshape(n, -1) if data_type == "FLOAT_COLOR" else buf
+    buf = np.empty(n * 2 if data_type == "FLOAT2" else n, np.float32 if data_type == "FLOAT2" else np.int32)
+    attr.data.foreach_get("vector" if data_type == "FLOAT2" else "value", buf)
+    return buf.reshape(n, -1) if data_type == "FLOAT2" else buf
+
+
+def stored_params(mesh):
+    """(vertices, 4) shape, material, random, user as the bake stored them."""
+    return np.concatenate([stored(mesh, ".boxmarch_shape_material", "FLOAT2"),
+                           stored(mesh, ".boxmarch_random_user", "FLOAT2")], 1)
 
 
 def bake(mesh, **settings):
@@ -51,7 +57,7 @@ def test_painted_parameters_and_parents_reach_the_stored_layers(blender):
     assert report["disagreeing_attributes"] == {"boxmarch_shape": {"submeshes": 1, "first": [2]}}
     assert report["max_depth"] == 3 and report["roots"] == 1
 
-    params = stored(mesh, ".boxmarch_params", "FLOAT_COLOR")
+    params = stored_params(mesh)
     per_box = params[::8]
     assert np.array_equal(params, np.repeat(per_box, 8, axis=0))  # one value per box
     assert per_box[:, 0].tolist() == list(range(BOXES))
@@ -65,14 +71,17 @@ def test_painted_parameters_and_parents_reach_the_stored_layers(blender):
 def test_random_survives_a_rebake_and_a_repaint(blender):
     mesh = chain_object(blender).data
     bake(mesh, random_seed=5)
-    first = stored(mesh, ".boxmarch_params", "FLOAT_COLOR")[::8, 2].copy()
+    # the stored parameters are no colour: BoxOffset stays the only, active and render colour
+    assert [c.name for c in mesh.color_attributes] == ["BoxOffset"]
+    assert mesh.color_attributes.active_color.name == "BoxOffset"
+    first = stored_params(mesh)[::8, 2].copy()
     paint(mesh, "boxmarch_shape", "INT", "POINT", np.repeat(np.arange(BOXES), 8).astype(np.int32))
     report = bake(mesh, random_seed=5)
     assert report["unchanged"] == BOXES  # geometry untouched: skipped, the painted ids still written
-    again = stored(mesh, ".boxmarch_params", "FLOAT_COLOR")[::8]
+    again = stored_params(mesh)[::8]
     assert np.array_equal(again[:, 2], first) and again[:, 0].tolist() == list(range(BOXES))
     bake(mesh, random_seed=6, incremental=False)
-    assert np.mean(stored(mesh, ".boxmarch_params", "FLOAT_COLOR")[::8, 2] == first) < 0.5
+    assert np.mean(stored_params(mesh)[::8, 2] == first) < 0.5
 
 
 @pytest.mark.parametrize("rule, parents", [("CHAIN", [-1, 0, 1, 2, 3, 4]), ("CONTAINMENT", [-1] * BOXES)])
@@ -82,12 +91,26 @@ def test_rules_from_geometry(blender, rule, parents):
     assert stored(mesh, ".boxmarch_parent", "INT")[::8].tolist() == parents
 
 
+def test_geometric_rules_see_the_unchanged_boxes_of_an_incremental_bake(blender):
+    """Only box 3 moves (and is baked again): the other boxes' places come from the stored
+    layers, so the chain is still found (with zeros in their place, box 3 would pick another)."""
+    mesh = chain_object(blender).data
+    bake(mesh, hierarchy="CHAIN")
+    positions = mesh_io.read_positions(mesh)
+    positions[24:32, 1] += 0.01
+    mesh.vertices.foreach_set("co", positions.ravel())
+    mesh.update()
+    report = bake(mesh, hierarchy="CHAIN")
+    assert report["baked"] == 1 and report["unchanged"] == BOXES - 1
+    assert stored(mesh, ".boxmarch_parent", "INT")[::8].tolist() == [-1, 0, 1, 2, 3, 4]
+
+
 def test_bad_parent_attribute_is_refused_and_nothing_written(blender):
     mesh = chain_object(blender).data
     paint(mesh, "boxmarch_parent", "INT", "POINT", np.repeat([1, 0, -1, -1, -1, -1], 8).astype(np.int32))
     with pytest.raises(mesh_io.BakeInputError, match="cycle"):
         bake(mesh)
-    assert mesh.attributes.get(".boxmarch_params") is None and mesh.color_attributes.get("BoxOffset") is None
+    assert mesh.attributes.get(".boxmarch_shape_material") is None and mesh.color_attributes.get("BoxOffset") is None
 
 
 @pytest.mark.parametrize("name, data_type, domain, values, message", [
@@ -103,4 +126,4 @@ def test_unreadable_attributes_are_refused_and_nothing_written(blender, name, da
     attr.data.foreach_set("vector" if data_type == "FLOAT_VECTOR" else "value", np.asarray(values).ravel())
     with pytest.raises(mesh_io.BakeInputError, match=message):
         bake(mesh)
-    assert mesh.attributes.get(".boxmarch_params") is None and mesh.color_attributes.get("BoxOffset") is None
+    assert mesh.attributes.get(".boxmarch_shape_material") is None and mesh.color_attributes.get("BoxOffset") is None

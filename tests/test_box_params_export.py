@@ -39,9 +39,9 @@ def scene(blender):
     assert blender.ops.boxmarch.bake() == {"FINISHED"}
     random = {}
     for ob in objects:
-        stored = np.empty(len(ob.data.vertices) * 4, np.float32)
-        ob.data.attributes[".boxmarch_params"].data.foreach_get("color", stored)
-        random[ob.name] = stored.reshape(-1, 4)[::8, 2]
+        stored = np.empty(len(ob.data.vertices) * 2, np.float32)
+        ob.data.attributes[".boxmarch_random_user"].data.foreach_get("vector", stored)
+        random[ob.name] = stored.reshape(-1, 2)[::8, 0]
     return objects, random
 
 

@@ -24,7 +24,7 @@ from .baked import (FINGERPRINT_ATTRIBUTE, LAYERS_DIGEST, MAX_UV_MAPS, NEUTRAL_B
                     OFFSET_ATTRIBUTE, QUAT_XY_UV, QUAT_ZW_UV, BakedLayers, BakeInputError, BakeSettings,
                     NotBakedError, PreparedBake, modifier_warnings, prepare_bake, read_baked_layers,
                     stored_layers_digest)
-from .box_layers import (DEPTH_LAYER, PARAM_ATTRIBUTES, PARAMS_COLOUR_ATTRIBUTE, PARAMS_LAYER, PARENT_ATTRIBUTE,
+from .box_layers import (DEPTH_LAYER, PARAM_ATTRIBUTES, PARAMS_COLOUR_ATTRIBUTE, PARAMS_LAYERS, PARENT_ATTRIBUTE,
                          PARENT_LAYER, BoxLayerError, BoxLayers, read_box_layers)
 from .rebuild import can_rebuild, rebuild_welded
 from .weights import Skin, SkinError, check_skin_modifier, read_skin, read_vertex_weights

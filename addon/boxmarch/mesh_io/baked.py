@@ -285,7 +285,7 @@ def prepare_bake(mesh, settings: BakeSettings, selected_only: bool = False) -> P
     try:
         box_layers, box_report = compute_box_layers(
             mesh, result, face_starts, corner_verts,
-            _boxes_for_hierarchy(mesh, result, positions, corner_verts, keep_previous),
+            _boxes_for_hierarchy(mesh, result, positions, corner_verts, keep_previous, settings.hierarchy),
             settings.hierarchy, settings.random_seed)
     except BoxLayerError as error:
         raise BakeInputError(str(error)) from None
@@ -299,11 +299,12 @@ def prepare_bake(mesh, settings: BakeSettings, selected_only: bool = False) -> P
     return PreparedBake(mesh, settings, corner_verts, result, keep_previous, report, box_layers)
 
 
-def _boxes_for_hierarchy(mesh, result, positions, corner_verts, keep_previous):
-    """(origins, quaternions, half-extents) of every box after this bake: this bake's where it
-    baked, the stored layers' elsewhere (zeros where nothing is stored yet)."""
+def _boxes_for_hierarchy(mesh, result, positions, corner_verts, keep_previous, rule):
+    """(origins, quaternions, half-extents) of every box after this bake, for the geometric
+    hierarchy rules: this bake's where it baked, the stored layers' elsewhere (zeros where
+    nothing is stored yet). The ATTRIBUTE rule reads none: this bake's arrays stand in."""
     boxes = (result.origins, result.quaternions, result.half_extents)
-    if result.baked == result.submesh_count or not keep_previous:
+    if rule == "ATTRIBUTE" or result.baked == result.submesh_count or not keep_previous:
         return boxes
     stored = read_baked_layers(mesh, corner_verts)
     merged = core.boxes_from_bake(positions, stored.offsets, stored.vertex_quaternions(), result.submesh_of_vertex)

@@ -1,8 +1,8 @@
 """Per-box parameters and hierarchy in Blender mesh data: reading what the artist painted
 (``boxmarch_shape``, ``boxmarch_material``, ``boxmarch_user``, ``boxmarch_parent``, or one colour
 ``boxmarch_params``), reducing it to one value per box (core), and the stored layers the bake
-writes (``.boxmarch_params``, ``.boxmarch_parent``, ``.boxmarch_depth``) that the export and the
-preview read. docs/FORMAT.md states the names and the rules."""
+writes (``.boxmarch_shape_material``, ``.boxmarch_random_user``, ``.boxmarch_parent``,
+``.boxmarch_depth``) that the export and the preview read. docs/FORMAT.md states the names and the rules."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -17,8 +17,9 @@ from .. import core
 PARAM_ATTRIBUTES = {"shape": "boxmarch_shape", "material": "boxmarch_material", "user": "boxmarch_user"}
 PARAMS_COLOUR_ATTRIBUTE = "boxmarch_params"
 PARENT_ATTRIBUTE = "boxmarch_parent"
-# What the bake stores, per vertex (hidden: the names start with a dot).
-PARAMS_LAYER = ".boxmarch_params"   # FLOAT_COLOR POINT: shape, material, random, user
+# What the bake stores, per vertex (hidden: the names start with a dot). Pairs of floats, not
+# one colour: a colour attribute could become the mesh's active or render colour.
+PARAMS_LAYERS = (".boxmarch_shape_material", ".boxmarch_random_user")  # FLOAT2 POINT
 PARENT_LAYER = ".boxmarch_parent"   # INT POINT: the parent box's index, -1 for a root
 DEPTH_LAYER = ".boxmarch_depth"     # INT POINT: 0 at a root
 _SCALAR_TYPES = {"FLOAT": ("value", np.float32), "INT": ("value", np.int32), "INT8": ("value", np.int32),
@@ -124,7 +125,8 @@ def compute_box_layers(mesh, result, face_starts, corner_verts, boxes, rule="ATT
 
 def write_box_layers(mesh, submesh_of_vertex, layers: BoxLayers) -> None:
     """Store ``layers`` per vertex (every vertex holds its box's values)."""
-    for name, data_type, values, prop in ((PARAMS_LAYER, "FLOAT_COLOR", layers.params, "color"),
+    for name, data_type, values, prop in ((PARAMS_LAYERS[0], "FLOAT2", layers.params[:, :2], "vector"),
+                                          (PARAMS_LAYERS[1], "FLOAT2", layers.params[:, 2:], "vector"),
                                           (PARENT_LAYER, "INT", layers.parent, "value"),
                                           (DEPTH_LAYER, "INT", layers.depth, "value")):
         old = mesh.attributes.get(name)
@@ -139,15 +141,17 @@ def write_box_layers(mesh, submesh_of_vertex, layers: BoxLayers) -> None:
 def read_box_layers(mesh, submesh_of_vertex, count):
     """The stored BoxLayers of ``mesh`` per box (each box takes its lowest vertex's values), or
     None when the mesh was baked without them."""
-    attrs = [mesh.attributes.get(name) for name in (PARAMS_LAYER, PARENT_LAYER, DEPTH_LAYER)]
+    attrs = [mesh.attributes.get(name) for name in (*PARAMS_LAYERS, PARENT_LAYER, DEPTH_LAYER)]
     if any(a is None or a.domain != "POINT" for a in attrs):
         return None
     n = len(mesh.vertices)
-    params = np.empty(n * 4, np.float32)
-    attrs[0].data.foreach_get("color", params)
+    pairs = [np.empty(n * 2, np.float32), np.empty(n * 2, np.float32)]
+    for attr, pair in zip(attrs, pairs):
+        attr.data.foreach_get("vector", pair)
     parent, depth = np.empty(n, np.int32), np.empty(n, np.int32)
-    attrs[1].data.foreach_get("value", parent)
-    attrs[2].data.foreach_get("value", depth)
+    attrs[2].data.foreach_get("value", parent)
+    attrs[3].data.foreach_get("value", depth)
     first = np.zeros(int(count), np.int64)
     first[submesh_of_vertex[::-1]] = np.arange(n)[::-1]
-    return BoxLayers(params.reshape(-1, 4)[first], parent[first], depth[first])
+    params = np.concatenate([pair.reshape(-1, 2) for pair in pairs], 1)
+    return BoxLayers(params[first], parent[first], depth[first])
