@@ -111,5 +111,6 @@ void bind_raymarch(py::module_& m);
 void bind_selection_tools(py::module_& m);
 void bind_merge_tools(py::module_& m);
 void bind_pack_uv(py::module_& m);
+void bind_box_params(py::module_& m);
 
 }  // namespace boxmarch::bindings

@@ -60,4 +60,5 @@ PYBIND11_MODULE(_core, m) {
     bind_selection_tools(m);
     bind_merge_tools(m);
     bind_pack_uv(m);
+    bind_box_params(m);
 }

@@ -486,6 +486,57 @@ void fuzz_tools(Bytes& in, const FuzzMesh& m, const MeshView& view) {
 
 }  // namespace
 
+void fuzz_box_params(Bytes& in) {
+    const size_t element_count = in.byte() % 33, submesh_count = in.byte() % 9, components = in.byte() % 6;
+    std::vector<int32_t> ids(element_count);
+    for (int32_t& id : ids) id = int32_t(int8_t(in.byte())) % 10;
+    std::vector<float> values(element_count * 5);
+    for (float& v : values) {
+        const uint32_t bits = in.byte() & 1 ? in.u32() : uint32_t(in.byte() % 3) << 23 | 0x3f000000u;
+        std::memcpy(&v, &bits, sizeof v);  // raw bits (NaN, infinities) or a few repeated values
+    }
+    std::vector<float> out(submesh_count * 5, 7.0f);
+    std::vector<uint8_t> disagrees(submesh_count, 7);
+    size_t count = 0;
+    if (accepted([&] {
+            count = reduce_per_submesh(out.data(), disagrees.data(), values.data(), element_count, components, ids.data(),
+                                       submesh_count);
+        })) {
+        size_t flagged = 0;
+        for (uint8_t d : disagrees) flagged += d == 1;
+        if (flagged != count) fail("reduce_per_submesh's count differs from its flags");
+    } else {
+        for (float x : out) if (x != 7.0f) fail("rejected reduce_per_submesh wrote values");
+    }
+    const uint32_t fingerprints[2] = {in.u32(), in.u32()};
+    float random[2];
+    box_random(random, fingerprints, 2, in.u32());
+    for (float r : random) if (!(r >= 0.0f && r < 1.0f)) fail("box_random left [0, 1)");
+
+    const size_t boxes = in.byte() % 9;
+    const HierarchyRule rule = HierarchyRule(int(in.byte() % 5) - 1);  // -1..3: valid is 0..2
+    std::vector<double> origins(boxes * 3), half(boxes * 3);
+    std::vector<float> quaternions(boxes * 4);
+    for (double& o : origins) o = double(int8_t(in.byte())) / 8.0;
+    for (double& h : half) h = double(in.byte() % 5) / 4.0;
+    for (size_t i = 0; i < boxes; ++i) quaternions[i * 4 + 3] = 1.0f;
+    std::vector<int32_t> given(boxes), parent(boxes, 7), depth(boxes, 7);
+    for (int32_t& g : given) g = int32_t(int8_t(in.byte())) % 10;
+    const bool use_given = in.byte() & 1;
+    if (accepted([&] {
+            box_hierarchy(parent.data(), depth.data(), origins.data(), quaternions.data(), half.data(), boxes, rule,
+                          use_given ? given.data() : nullptr);
+        })) {
+        for (size_t i = 0; i < boxes; ++i) {
+            if (parent[i] < -1 || parent[i] >= int32_t(boxes) || parent[i] == int32_t(i)) fail("box_hierarchy wrote a bad parent");
+            else if (depth[i] != (parent[i] < 0 ? 0 : depth[size_t(parent[i])] + 1)) fail("box_hierarchy's depth is not its parent's + 1");
+        }
+    } else {
+        for (size_t i = 0; i < boxes; ++i)
+            if (parent[i] != 7 || depth[i] != 7) fail("rejected box_hierarchy wrote output");
+    }
+}
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     Bytes in(data, size);
     const uint8_t flags = in.byte();
@@ -502,5 +553,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     fuzz_small_functions(in);
     fuzz_raymarch(in);
     fuzz_render(in);
+    fuzz_box_params(in);
     return 0;
 }

@@ -1,17 +1,18 @@
 """Writes every other form of the shared GLSL (shaders/glsl): one source of truth for the decode,
 the SDF library and the march.
 
-* hlsl/boxmarch_decode.hlsl, boxmarch_sdf.hlsl, boxmarch_march.hlsl: decode.glsl, sdf.glsl and
-  raymarch.glsl translated into HLSL (``to_hlsl``);
-* cpp/src/shader_library.h: the functions of sdf.glsl, bm_box_span and bm_normal_tap of
+* hlsl/boxmarch_decode.hlsl, boxmarch_sdf.hlsl, boxmarch_box_params.hlsl, boxmarch_march.hlsl:
+  decode.glsl, sdf.glsl, box_params.glsl and raymarch.glsl translated into HLSL (``to_hlsl``);
+* cpp/src/shader_library.h: the functions of sdf.glsl and box_params.glsl, bm_rotate_vector and
+  bm_quat_conjugate of decode.glsl, bm_box_span and bm_normal_tap of
   raymarch.glsl and bm_shade of preview.frag.glsl translated into GLM for the CPU reference
   (``to_glm``; the functions that call map() stay in raymarch.cpp, around its preset switch);
-* threejs/boxmarch.js and boxmarch.module.js: threejs/template.js with decode.glsl, sdf.glsl and
-  raymarch.glsl embedded as strings (three.js compiles them as they are, GLSL ES 1.00 on WebGL 1
+* threejs/boxmarch.js and boxmarch.module.js: threejs/template.js with decode.glsl, sdf.glsl,
+  box_params.glsl and raymarch.glsl embedded as strings (three.js compiles them as they are, GLSL ES 1.00 on WebGL 1
   and 3.00 on WebGL 2);
-* godot3/boxmarch.shader: godot3/template.shader with decode.glsl, every function of sdf.glsl and
-  of raymarch.glsl; Godot 3 has no global variables, so bm_march, bm_one_tap and bm_normal take the box
-  (h, index) and pass it on to map() (``passing_the_box``);
+* godot3/boxmarch.shader: godot3/template.shader with decode.glsl, every function of sdf.glsl,
+  box_params.glsl and raymarch.glsl; Godot 3 has no global variables, so bm_march, bm_one_tap and
+  bm_normal take the box (h, index) and pass it on to map() (``passing_the_box``);
 * the engine packages' copies: engines/unity/com.boxmarch.boxmarch/Runtime/Shaders (every file a
   Unity material needs from shaders/hlsl) and engines/godot3/addons/boxmarch/boxmarch.shader.
 
@@ -145,7 +146,7 @@ def to_glm(source: str, defined: set[str]) -> str:
 
 def library_names() -> set[str]:
     """The functions of the library an engine shader includes."""
-    return {name for source in ("decode.glsl", "sdf.glsl", "raymarch.glsl")
+    return {name for source in ("decode.glsl", "sdf.glsl", "box_params.glsl", "raymarch.glsl")
             for name in top_level_functions(glsl(source))}
 
 
@@ -156,16 +157,19 @@ def hlsl_file(glsl_name: str, guard: str) -> str:
 
 def glm_library() -> str:
     raymarch = top_level_functions(glsl("raymarch.glsl"))
-    functions = {**top_level_functions(glsl("sdf.glsl")), "bm_box_span": raymarch["bm_box_span"],
+    decode = top_level_functions(glsl("decode.glsl"))
+    functions = {**top_level_functions(glsl("sdf.glsl")), "bm_rotate_vector": decode["bm_rotate_vector"],
+                 "bm_quat_conjugate": decode["bm_quat_conjugate"], **top_level_functions(glsl("box_params.glsl")),
+                 "bm_box_span": raymarch["bm_box_span"],
                  "bm_normal_tap": raymarch["bm_normal_tap"], "bm_quality": raymarch["bm_quality"],
                  "bm_pixel_size": raymarch["bm_pixel_size"], "bm_step_limit": raymarch["bm_step_limit"],
                  "bm_shade": top_level_functions(glsl("preview.frag.glsl"))["bm_shade"]}
     body = to_glm("\n".join(functions.values()), set(functions))
     usings = "".join(f"using glm::{v};\n" for v in ("vec2", "vec3", "vec4") if re.search(rf"\b{v}\b", body))
-    return (f"// {GENERATED_BY} from shaders/glsl/sdf.glsl, raymarch.glsl (bm_box_span,\n"
-            f"// bm_normal_tap, bm_quality, bm_pixel_size, bm_step_limit) and preview.frag.glsl (bm_shade):\n"
-            f"// edit those, not this file. The shaders' functions that do not call map(), in GLM, so the\n"
-            f"// CPU reference evaluates what the GPU does.\n"
+    return (f"// {GENERATED_BY} from shaders/glsl/sdf.glsl, box_params.glsl, decode.glsl (bm_rotate_vector,\n"
+            f"// bm_quat_conjugate), raymarch.glsl (bm_box_span, bm_normal_tap, bm_quality, bm_pixel_size,\n"
+            f"// bm_step_limit) and preview.frag.glsl (bm_shade): edit those, not this file. The shaders'\n"
+            f"// functions that do not call map(), in GLM, so the CPU reference evaluates what the GPU does.\n"
             f"#pragma once\n\n#include <glm/glm.hpp>\n\nnamespace boxmarch::shader {{\n\n{usings}\n{body}\n"
             f"}}  // namespace boxmarch::shader\n")
 
@@ -173,7 +177,8 @@ def glm_library() -> str:
 def threejs(module: bool) -> str:
     text = (SHADERS / "threejs" / "template.js").read_text()
     text = text.replace("/*@DECODE@*/''", json.dumps(glsl("decode.glsl")))
-    text = text.replace("/*@LIBRARY@*/''", json.dumps(glsl("sdf.glsl") + "\n" + glsl("raymarch.glsl")))
+    text = text.replace("/*@LIBRARY@*/''", json.dumps(glsl("sdf.glsl") + "\n" + glsl("box_params.glsl") + "\n"
+                                                    + glsl("raymarch.glsl")))
     exports = ("loadBoxmarch, checkBoxmarchSidecar, createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, "
                "boxmarchTexcoordName, sortBoxmarchFrontToBack")
     if module:
@@ -197,7 +202,8 @@ def godot3() -> str:
     text = (SHADERS / "godot3" / "template.shader").read_text()
     raymarch = top_level_functions(glsl("raymarch.glsl"))
     text = text.replace("/*@DECODE@*/", glsl("decode.glsl"))
-    text = text.replace("/*@SDF@*/", "".join(top_level_functions(glsl("sdf.glsl")).values()))
+    text = text.replace("/*@SDF@*/", "".join(top_level_functions(glsl("sdf.glsl")).values())
+                        + "".join(top_level_functions(glsl("box_params.glsl")).values()))
     text = text.replace("/*@SPAN@*/", "".join(raymarch[name] for name in (
         "bm_box_span", "bm_quality", "bm_pixel_size", "bm_step_limit", "bm_normal_tap")))
     return text.replace("/*@MARCH@*/", "".join(passing_the_box(raymarch[name])
@@ -208,6 +214,7 @@ def godot3() -> str:
 OUTPUTS = {
     "shaders/hlsl/boxmarch_decode.hlsl": lambda: hlsl_file("decode.glsl", "BOXMARCH_DECODE_INCLUDED"),
     "shaders/hlsl/boxmarch_sdf.hlsl": lambda: hlsl_file("sdf.glsl", "BOXMARCH_SDF_INCLUDED"),
+    "shaders/hlsl/boxmarch_box_params.hlsl": lambda: hlsl_file("box_params.glsl", "BOXMARCH_BOX_PARAMS_INCLUDED"),
     "shaders/hlsl/boxmarch_march.hlsl": lambda: hlsl_file("raymarch.glsl", "BOXMARCH_MARCH_INCLUDED"),
     "cpp/src/shader_library.h": glm_library,
     "shaders/threejs/boxmarch.js": lambda: threejs(module=False),

@@ -368,3 +368,38 @@ def unity_skinned_decode(raw, skin):
     half = np.concatenate([raw["BoxHalfXY"], raw["BoxHalfZ"][:, :1]], 1)
     return (decode_normal_frame(positions, normals, tangents, offset, half),
             decode_normal_frame(positions, rest_normals, rest_tangents, offset, half))
+
+
+# Per-box shape ids of mixed_boxes() for the engines' per-box shape checks: box i draws the SDF
+# preset MIXED_SHAPES[i] (bm_sdf_by_id), every preset but the box among them.
+MIXED_SHAPES = np.array([5, 1, 6, 3, 4, 2, 1, 3, 5])
+
+
+def paint_shapes(bpy, ob, shapes):
+    """Paints ``shapes`` (one id per box, 8 vertices per box in order) as boxmarch_shape and
+    bakes again (the geometry is unchanged: only the ids are written). Returns the baked boxes
+    (origins, quaternions, half-extents; Blender object space) as core.boxes_from_bake reads them
+    from the stored layers."""
+    from boxmarch import core, mesh_io
+
+    ob.data.attributes.new("boxmarch_shape", "INT", "POINT").data.foreach_set("value", np.repeat(shapes, 8))
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+    layers = mesh_io.read_baked_layers(ob.data)
+    return core.boxes_from_bake(mesh_io.read_positions(ob.data), layers.shader_offsets(),
+                                layers.vertex_quaternions(), np.repeat(np.arange(len(shapes)), 8))
+
+
+def per_box_agreement(covered, shot, camera, boxes, shapes):
+    """Fraction of pixels where ``covered`` (an engine's (H, W) mask) equals the CPU reference
+    drawing each of the Blender-space ``boxes`` with the preset its id in ``shapes`` picks
+    (core.render_boxes_by_shape), seen by the engine's camera (``shot.view`` and the harness's
+    ``camera``: vertical fov in degrees, near, far) in the Y-up engine frame."""
+    from boxmarch import core
+    from engines import perspective
+
+    height, width = covered.shape
+    to_world = np.eye(4)
+    to_world[:3, :3] = TO_Y_UP
+    to_clip = perspective(camera, width / height) @ shot.view @ to_world
+    reference = core.render_boxes_by_shape(*boxes, shapes, to_clip, shot.view @ to_world, width, height)
+    return float((covered == reference.coverage).mean())

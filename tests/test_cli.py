@@ -118,8 +118,9 @@ def test_module_demo_prints_table_and_writes_checked_files(tmp_path, renderer):
     meshes = read_glb(tmp_path / "out" / "demo.glb")
     assert [m["name"] for m in meshes] == ["BoxWorld", "Chains"]
     assert sorted(os.listdir(tmp_path / "out")) == sorted([
-        "demo.blend", "demo.glb", "demo.png", "demo_godot3.glb", "demo_godot3.boxes.tres",
-        "demo_unity.fbx", "demo_unreal.fbx", "demo_godot3.glb.import"]  # demo.glb is the GLTF preset's file
+        "demo.blend", "demo.glb", "demo.boxes.bin", "demo.png", "demo_godot3.glb", "demo_godot3.boxes.tres",
+        "demo_unity.fbx", "demo_unity.boxes.bin", "demo_unreal.fbx", "demo_unreal.boxes.bin",
+        "demo_godot3.glb.import"]  # demo.glb is the GLTF preset's file
         + [f"demo{suffix}.boxmarch.json" for suffix in ("", "_godot3", "_unity", "_unreal")])
     for preset, layout in (("demo.glb \\(GLTF\\)", "NORMAL_FRAME"), ("GODOT3", "NORMAL_COLOR"), ("UNITY", "UV_FRAME"),
                            ("UNREAL", "UV_FRAME")):
@@ -140,7 +141,7 @@ def test_module_bake_export_pipeline_on_a_file(boxes_blend_34, tmp_path):
     bake, export = report["steps"]
     assert (bake["step"], bake["baked"], bake["submeshes"]) == ("bake", COUNT, COUNT)
     assert bake["max_relative_error"] < 1e-5
-    assert export["preset"] == "GLTF" and export["meshes"][0]["uv_channels"] == [1, 2, 3, 4]
+    assert export["preset"] == "GLTF" and export["meshes"][0]["uv_channels"] == [1, 2, 3, 4, 5, 6, 7]
     assert digest(source) == before  # the input is never written
     assert_glb_decodes_to_centres(tmp_path / "boxes.glb")
     # The written .blend holds the bake: export from it alone gives the same file content.

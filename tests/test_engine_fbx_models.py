@@ -33,7 +33,7 @@ def test_fbx_uv_frame_decodes_after_the_documented_import(blender, scene, tmp_pa
     path = tmp_path / "boxes.fbx"
     assert blender.ops.boxmarch.export(filepath=str(path), preset=preset) == {"FINISHED"}
     raw = read_fbx_geometry(path)
-    assert raw["uv_maps"] == ["UVMap"] + UV_NAMES  # UV0 stays the artist's
+    assert raw["uv_maps"] == ["UVMap"] + UV_NAMES + ["BoxShapeMaterial"]  # UV0 stays the artist's; UV7: the box parameters
     assert raw["colours"] == []
     positions, uvs = imported(raw, engine)
     centres_e, sizes_e = centres * engine["scale"], sizes * engine["scale"]
@@ -84,7 +84,8 @@ def test_unity_skinned_fbx_decodes_the_posed_boxes_after_the_documented_import(b
     assert report["layout"] == "NORMAL_FRAME"
     assert report["skinned"] == {"Skinned": {"armature": "Skinned-rig", "bones": ["bone0", "bone1", "bone2"]}}
     raw, skin = read_fbx_geometry(path), read_fbx_skin(path)
-    assert raw["uv_maps"] == ["UVMap", "BoxOffsetXY", "BoxOffsetZIndex", "BoxHalfXY", "BoxHalfZ"]
+    assert raw["uv_maps"] == ["UVMap", "BoxOffsetXY", "BoxOffsetZIndex", "BoxHalfXY", "BoxHalfZ", "BoxShapeMaterial",
+                              "BoxRandomUser", "BoxParentDepth"]
     centres, sizes, rotations, bone_of_box = rig_boxes()
     assert sorted(skin) == ["bone0", "bone1", "bone2"]
     box_of_point = box_of_vertex(raw["control_points"] @ UNITY["from_file"].T, centres, sizes, rotations,

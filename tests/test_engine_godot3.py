@@ -7,8 +7,9 @@ cover each box's projected silhouette within 1 px; a frame replaced by the ident
 import numpy as np
 import pytest
 
-from engine_scene import (TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame, frame_and_size_errors,
-                          rounded_box_mismatch, silhouettes, table_texels)
+from engine_scene import (MIXED_SHAPES, TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame,
+                          frame_and_size_errors, paint_shapes, per_box_agreement, rounded_box_mismatch, silhouettes,
+                          table_texels)
 from engines import coverage_mismatch, godot3, import_helpers
 
 pytestmark = pytest.mark.slow  # Godot 3 imports and renders
@@ -24,13 +25,14 @@ def imported(blender, tmp_path):
     if reason:
         pytest.skip(reason)
     ob, centres, sizes, rotations = baked_scene(blender)
+    boxes = paint_shapes(blender, ob, MIXED_SHAPES)
     path = tmp_path / "mixed.glb"
     assert blender.ops.boxmarch.export(filepath=str(path), preset="GODOT3") == {"FINISHED"}
     table = (tmp_path / "mixed.boxes.tres").read_text()
     project = tmp_path / "project"
     godot3.import_gltf(path.read_bytes(), str(project), compress=False,
                        extra_files={"model.boxes.tres": table.encode()})
-    return str(project), table, centres, sizes, rotations
+    return str(project), table, centres, sizes, rotations, boxes
 
 
 def assert_decodes_to_the_boxes(surface, table, centres, sizes, rotations):
@@ -62,7 +64,7 @@ def origin_error(surface, centres, sizes, rotations):
 
 
 def test_godot3_keeps_every_channel_and_decodes_to_the_boxes(imported):
-    project, table, centres, sizes, rotations = imported
+    project, table, centres, sizes, rotations, _boxes = imported
     (surface,) = godot3.dump_arrays(project)
     assert_decodes_to_the_boxes(surface, table, centres, sizes, rotations)
 
@@ -72,7 +74,7 @@ def shader(frame_code=None):
 
 
 def test_godot3_renders_each_box_at_its_own_size_and_the_negative_control_fails(imported):
-    project, _table, centres, sizes, rotations = imported
+    project, _table, centres, sizes, rotations, _boxes = imported
     uniforms = {"box_table": "res://model.boxes.tres", "max_steps": 256}
     shot = godot3.render(project, shader(), width=W, height=H, camera=WIDE, uniforms=uniforms)
     covered = shot.pixels[..., :3].max(axis=2) > 20
@@ -92,7 +94,7 @@ def test_godot3_shipped_shader_raymarches_a_rounded_box_of_each_box_own_size(imp
     """The shipped shader as it is (sd_round_box of the box's own half-extents, radius 0.1 x the
     smallest): every covered pixel within 1 px of its box, every pixel of the box's core covered;
     with every box given the first box's half-extents (a table of one size) the check fails."""
-    project, table, centres, sizes, rotations = imported
+    project, table, centres, sizes, rotations, _boxes = imported
     uniforms = {"box_table": "res://model.boxes.tres", "max_steps": 256}
     code = godot3.shipped_shader()
     shot = godot3.render(project, code, width=W, height=H, camera=WIDE, uniforms=uniforms)
@@ -104,6 +106,25 @@ def test_godot3_shipped_shader_raymarches_a_rounded_box_of_each_box_own_size(imp
     wrong = godot3.render(project, one_size, width=W, height=H, camera=WIDE, uniforms=uniforms)
     assert rounded_box_mismatch(wrong.pixels[..., :3].max(axis=2) > 20, wrong, centres, sizes, rotations,
                                 TO_Y_UP) is not None
+
+# Each box the preset its shape id picks, the id read from the box table's plane 1 (docs/ENGINES.md).
+PER_BOX_MAP = ("vec4 params = texelFetch(box_table, ivec2(bm_box_table_texel(index, 1.0, vec2(textureSize(box_table, 0)))), 0);\n"
+               "return bm_sdf_by_id(params.x, p, h);")
+
+
+def test_godot3_draws_the_shape_each_box_id_picks(imported):
+    """The shipped shader with map() drawing each box's painted shape id, read from the box
+    table (plane 1, bm_box_table_texel): coverage matches the CPU reference drawing the same ids
+    on >= 99.5% of pixels; against the ids shuffled (rolled by one box) it must not."""
+    project, _table, _centres, _sizes, _rotations, boxes = imported
+    uniforms = {"box_table": "res://model.boxes.tres", "max_steps": 256}
+    shot = godot3.render(project, godot3.shipped_shader(PER_BOX_MAP), width=W, height=H, camera=WIDE, uniforms=uniforms)
+    covered = shot.pixels[..., :3].max(axis=2) > 20
+    agree = per_box_agreement(covered, shot, WIDE, boxes, MIXED_SHAPES)
+    shuffled = per_box_agreement(covered, shot, WIDE, boxes, np.roll(MIXED_SHAPES, 1))
+    assert covered.sum() > 500
+    assert agree >= 0.995 and shuffled < 0.99, (agree, shuffled)
+
 
 def test_godot3_default_compression_error_is_what_the_report_states(blender, tmp_path):
     """Godot's default import (mesh compression on) quantizes the colour to clamped 8 bits and the

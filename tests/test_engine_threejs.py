@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from conftest import empty_scene
-from engine_scene import (TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame, frame_and_size_errors,
-                          rounded_box_mismatch, silhouettes)
+from engine_scene import (MIXED_SHAPES, TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame,
+                          frame_and_size_errors, paint_shapes, per_box_agreement, rounded_box_mismatch, silhouettes)
 from engines import coverage_mismatch, threejs
 
 pytestmark = pytest.mark.slow  # Chromium renders
@@ -31,6 +31,7 @@ INNER = 0.6
 ROUNDED_MAP = "return sd_round_box(p, box_half, 0.1 * min3(box_half));"
 IDENTITY_FRAME = ("var n = g.getAttribute('normal').array, t = g.getAttribute('tangent').array;"
                   "for (var i = 0; i < n.length / 3; i++) { n.set([0, 0, 1], 3 * i); t.set([1, 0, 0, 1], 4 * i); }")
+PER_BOX_MAP = "return bm_sdf_by_id(box_params.x, p, box_half);"
 pytestmark = pytest.mark.slow
 
 
@@ -93,8 +94,8 @@ def covered(shot):
 def exported(bpy_module, tmp_path_factory):
     """The mixed scene exported with the GLTF preset (NORMAL_FRAME) and with layout CLASSIC."""
     blender = empty_scene(bpy_module)
-    _ob, centres, sizes, rotations = baked_scene(blender)
-    files = {}
+    ob, centres, sizes, rotations = baked_scene(blender)
+    files = {"baked_boxes": paint_shapes(blender, ob, MIXED_SHAPES)}
     for layout in ("NORMAL_FRAME", "CLASSIC"):
         path = tmp_path_factory.mktemp("threejs") / f"{layout}.glb"
         assert blender.ops.boxmarch.export(filepath=str(path), preset="GLTF", layout=layout) == {"FINISHED"}
@@ -128,6 +129,7 @@ def page(request, exported):
     jobs["loader-front-to-back"] = threejs.render_job(loader_setup_js("mixed", BOX_MAP, True), W, H, WIDE)
     jobs["sort"] = threejs.Job(SORT_JOB, lambda out: {k: threejs.f64(v) if isinstance(v, str) else v
                                                        for k, v in out.items()})
+    jobs["per-box"] = threejs.render_job(setup_js(PER_BOX_MAP), W, H, WIDE)
     # classic.glb and future.glb are not served: a refusal that fetched the .glb would say 404 instead
     for name in ("classic", "future", "missing"):
         jobs[f"refuse-{name}"] = refusal_job(f"await loadBoxmarch(THREE, GLTFLoader, '{name}.glb', {{}});")
@@ -135,7 +137,7 @@ def page(request, exported):
         "var g = await new Promise(function (ok, no) { new GLTFLoader().load('classic-layout.glb', ok, undefined, no); });"
         " g.scene.traverse(function (o) { if (o.isMesh) useBoxmarchMaterial(THREE, o, createBoxmarchMaterial(THREE)); });")
     results = threejs.run_jobs(glb, list(jobs.values()), threejs.shipped_material(release), release, served)
-    return dict(zip(jobs, results), release=release), centres, sizes, rotations
+    return dict(zip(jobs, results), release=release, baked_boxes=files["baked_boxes"]), centres, sizes, rotations
 
 
 def test_threejs_receives_every_channel_and_decodes_to_the_boxes(page):
@@ -143,7 +145,7 @@ def test_threejs_receives_every_channel_and_decodes_to_the_boxes(page):
     (mesh,) = out["meshes"]
     a = mesh["attributes"]
     t = threejs.RELEASES[out["release"]].texcoords  # TEXCOORD_n as this release names them
-    assert set(a) == {"position", "normal", "tangent", *t[:5]}  # NORMAL_FRAME writes TEXCOORD_0 .. 4
+    assert set(a) == {"position", "normal", "tangent", *t[:8]}  # NORMAL_FRAME writes TEXCOORD_0 .. 7
     assert not any(mesh["normalized"].values())
     box = box_of_vertex(a["position"], centres, sizes, rotations, TO_Y_UP)
     offset = np.concatenate([a[t[1]], a[t[2]][:, :1]], axis=1)
@@ -178,6 +180,18 @@ def test_threejs_rounded_boxes_lie_between_the_box_and_its_core(page):
         shot = out[ROUNDED_MAP, camera]
         mismatch = rounded_box_mismatch(covered(shot), shot, centres[view], sizes[view], rotations[view], TO_Y_UP)
         assert mismatch is None, (camera, mismatch)
+
+
+def test_threejs_draws_the_shape_each_box_id_picks(page):
+    """Each box drawn with the preset its painted shape id picks (TEXCOORD_5.x through
+    bm_sdf_by_id): the coverage matches the CPU reference drawing the same ids on >= 99.5% of
+    pixels; against the ids shuffled (rolled by one box) it must not."""
+    out, _centres, _sizes, _rotations = page
+    shot = out["per-box"]
+    agree = per_box_agreement(covered(shot), shot, WIDE, out["baked_boxes"], MIXED_SHAPES)
+    shuffled = per_box_agreement(covered(shot), shot, WIDE, out["baked_boxes"], np.roll(MIXED_SHAPES, 1))
+    assert covered(shot).sum() > 500
+    assert agree >= 0.995 and shuffled < 0.99, (agree, shuffled)
 
 
 @pytest.mark.parametrize("tamper", ["offset-zeroed", "identity-frame"])
@@ -231,4 +245,5 @@ def test_load_boxmarch_refuses_a_sidecar_it_does_not_read(page):
 
 
 def test_material_refuses_a_classic_export(page):
-    assert "no TEXCOORD_3" in page[0]["material-on-classic"]
+    # CLASSIC holds TEXCOORD_1..5 (frame, then the box parameters): the first one missing is 6
+    assert "no TEXCOORD_6" in page[0]["material-on-classic"]

@@ -126,7 +126,8 @@ def test_unity_fbx_decodes_in_unity_frame_and_reimports_exactly(blender, tmp_pat
 
     export(bpy, "UNITY", tmp_path / "boxes.fbx", layout="CLASSIC")
     raw = read_fbx_geometry(tmp_path / "boxes.fbx")
-    assert raw["uv_maps"] == ["UVMap", "BoxQuatXY", "BoxQuatZW"]  # Unity's UV channels 0, 1, 2
+    # Unity's UV channels 0, 1, 2; the box parameters follow in 3-5 (docs/ENGINES.md)
+    assert raw["uv_maps"] == ["UVMap", "BoxQuatXY", "BoxQuatZW", "BoxShapeMaterial", "BoxRandomUser", "BoxParentDepth"]
     assert raw["colours"] == ["BoxOffset"]  # Unity reads one colour layer: it must be ours
     assert raw["settings"]["UnitScaleFactor"] == 100.0  # metres: Unity's file scale is 1
     assert np.array_equal(raw["vertex"], corner_verts)
@@ -194,7 +195,7 @@ def test_export_leaves_the_scene_as_it_was(blender, tmp_path):
     assert ob.data.name == "Boxes" and other.data.name == "Other"
     assert np.array_equal(np.array([d.uv[:] for d in ob.data.uv_layers["BoxQuatZW"].data]), uv_before)
     assert ob.select_get() and not other.select_get()
-    assert sorted(os.listdir(tmp_path)) == ["a.boxmarch.json", "a.fbx", "a.glb"]  # no partial files left
+    assert sorted(os.listdir(tmp_path)) == ["a.boxes.bin", "a.boxmarch.json", "a.fbx", "a.glb"]  # no partial files left
 
 
 def test_export_refuses_unbaked_mesh_and_writes_nothing(blender, tmp_path):

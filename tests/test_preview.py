@@ -71,6 +71,30 @@ def test_preview_matches_cpu_reference(rendered, sdf):
 
 
 @pytest.mark.parametrize("layout", layouts.LAYOUTS)
+def test_per_box_shape_matches_cpu_reference(rendered, layout):
+    """Each box draws the preset its painted shape id picks, read from the layout's channels or
+    box table; the CPU reference draws the same boxes by id; with the ids shuffled it must not
+    match (the negative control)."""
+    height, width = rendered["BOX_SHADED_depth"].shape
+    model, view, projection = rendered["matrix_world"], rendered["view"], rendered["projection"]
+    positions = rendered["layer_positions"]
+    n = len(positions)
+    q = core.vertex_values_from_corners(rendered["layer_corner_quaternions"], rendered["layer_corner_verts"], n)
+    boxes = core.boxes_from_bake(positions, rendered["layer_offsets"], q, np.repeat(np.arange(n // 8), 8))
+    shapes = rendered["shapes"]
+    assert set(shapes.tolist()) == set(range(len(core.SDF_PRESETS)))  # every preset is drawn
+
+    def by_shape(ids):
+        return core.render_boxes_by_shape(*boxes, ids, projection @ view @ model, view @ model, width, height)
+    ref = by_shape(shapes)
+    assert (ref.depth < 1.0).mean() > 0.1
+    coverage, depth = agreement(rendered[f"PER_BOX_{layout}_depth"], ref)
+    assert coverage >= 0.99 and depth <= 2e-6, (coverage, depth)
+    coverage, depth = agreement(rendered[f"PER_BOX_{layout}_depth"], by_shape(np.roll(shapes, 1)))
+    assert coverage < 0.99 or depth > 1e-3, (coverage, depth)
+
+
+@pytest.mark.parametrize("layout", layouts.LAYOUTS)
 def test_every_layout_matches_cpu_reference(rendered, layout):
     """The preview drawn from each engine layout's channels (issue 12) lands on the known boxes;
     with the frame channels replaced by the identity frame it must not."""
@@ -185,3 +209,37 @@ def test_draw_handler_in_a_real_viewport(package_parent, tmp_path):  # noqa: F81
     assert result["display_type"] == "WIRE"
     assert result["red_pixels"]["False"] == 0
     assert result["red_pixels"]["True"] > 2000
+
+
+def chain_contacts_px(r):
+    """Pixel positions (x right, y down) of the chain's two contact points, and the pixel length
+    of 0.6 object units there (the neck of radius-0.3 spheres-blend stays well inside it)."""
+    height, width = r["CHAIN_PER_BOX_depth"].shape
+    to_clip = r["chain_projection"] @ r["chain_view"] @ r["chain_matrix"]
+    contacts = np.array([[0.5, 0.0, 0.0, 1.0], [1.5, 0.0, 0.0, 1.0], [0.5, 0.0, 0.6, 1.0]])
+    clip = contacts @ to_clip.T
+    ndc = clip[:, :2] / clip[:, 3:]
+    px = np.stack([(ndc[:, 0] + 1) * width / 2, (1 - ndc[:, 1]) * height / 2], 1)
+    return px[:2], float(np.linalg.norm(px[2] - px[0]))
+
+
+def test_blend_into_parent_adds_a_neck_only_at_the_joints(rendered):
+    """Three spheres in touching unit boxes, each the child of the one before, blended (radius
+    0.3): the blend only adds (coverage is a superset, never farther than the hit band: a grown
+    box starts its march elsewhere, so at grazing rays the hit lands elsewhere inside the
+    epsilon band, measured up to 2.1e-5 of window depth), it adds many pixels, and everything it
+    changes by more than 1e-4 of window depth lies near the two contact points; the same boxes
+    without parents change nothing (the control)."""
+    plain, blend = rendered["CHAIN_PER_BOX_depth"], rendered["CHAIN_PER_BOX_BLEND_depth"]
+    covered, blended = plain < 1.0, blend < 1.0
+    assert covered.sum() > 500
+    assert not (covered & ~blended).any()
+    assert (blend - plain)[covered].max() <= 5e-5
+    added = blended & ~covered
+    changed = added | (covered & (np.abs(blend - plain) > 1e-4))
+    contacts, reach = chain_contacts_px(rendered)
+    ys, xs = np.nonzero(changed)
+    near = np.min(np.linalg.norm(np.stack([xs + 0.5, ys + 0.5], 1)[:, None, :] - contacts[None], axis=2), axis=1)
+    assert added.sum() >= 50 and near.max() <= reach, (added.sum(), near.max(), reach)
+    roots = rendered["CHAIN_ROOTS_depth"]
+    assert np.array_equal(roots < 1.0, covered) and np.abs(roots - plain)[covered].max() <= 2e-6

@@ -25,20 +25,21 @@ def test_vertex_stage_compiles_for_every_layout(tmp_path, layout):
 
 
 def test_vertex_inputs_are_the_layouts_channels():
-    """The preview reads exactly the per-vertex channels the export writes (and ch_half where the
-    layout has no per-vertex half-extents)."""
+    """The preview reads exactly the per-vertex frame channels the export writes (and ch_half where the
+    layout has no per-vertex half-extents); the per-box parameter channels are not the frame's."""
     n = 3
     data = layouts.BoxData(quaternions=np.tile([0.0, 0.0, 0.0, 1.0], (n, 1)), offsets=np.zeros((n, 3)),
                            half_extents=np.ones((n, 3)), index=np.zeros(n, np.int64),
                            classic_rgba=np.ones((n, 4), np.float32), box_half_extents=np.ones((1, 3)))
     for layout in layouts.LAYOUTS:
         written = {"ch_" + name.lower(): values.shape[1] for name, values in layouts.channels(layout, data).items()
-                   if name != "TABLE"}
-        read = {name: int(t[-1]) for t, name in sources.VERTEX_INPUTS[layout] if name not in ("pos", "ch_half")}
+                   if name != "TABLE" and name not in layouts.PARAM_CHANNELS[layout]}
+        read = {name: int(t[-1]) for t, name in sources.VERTEX_INPUTS[layout]
+                if name not in ("pos", "ch_half", "ch_params", "ch_parent_origin", "ch_parent_q", "ch_parent_half")}
         assert read == written, layout
 
 
-@pytest.mark.parametrize("sdf", core.SDF_PRESETS)
+@pytest.mark.parametrize("sdf", [*core.SDF_PRESETS, sources.PER_BOX, sources.PER_BOX_BLEND])
 def test_fragment_stage_compiles_for_every_preset(tmp_path, sdf):
     proc = compile_glsl(tmp_path, f"preview_{sdf}", "frag", sources.fragment_source(sdf))
     assert proc.returncode == 0, proc.stdout + proc.stderr

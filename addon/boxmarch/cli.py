@@ -147,7 +147,7 @@ def step_bake(objects, args) -> dict:
     settings = mesh_io.BakeSettings(
         angle_epsilon=args.angle_epsilon, origin=args.origin, encoding=args.encoding, domain=args.domain,
         axis_turn=args.axis_turn, sort_axes_by_extent=args.sort_axes_by_extent, use_cache=not args.no_cache,
-        incremental=not args.full)
+        incremental=not args.full, hierarchy=args.parents, random_seed=args.random_seed)
     meshes = [ob.data for ob in mesh_io.one_object_per_mesh(objects)]
     start = time.perf_counter()
     try:

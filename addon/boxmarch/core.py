@@ -13,7 +13,8 @@ Mesh arrays (the layout Blender uses):
 * ``corner_verts``: int32 (C,) the vertex of each corner
 
 The baked data and its decode are documented in docs/FORMAT.md. The submesh tools' functions live
-in core_tools.py and are part of this API (imported here).
+in core_tools.py, the per-box parameters and hierarchy in core_boxes.py; both are part of this
+API (imported here).
 """
 from __future__ import annotations
 
@@ -24,6 +25,9 @@ import numpy as np
 from .core_tools import (  # noqa: F401 (re-exported: the submesh tools are part of this API)
     find_close_pairs, find_duplicate_submeshes, merge_passes, merge_targets, pack_uv_by_height, remove_vertices,
     select_linked_across, select_linked_submeshes, weld)
+from .core_boxes import (  # noqa: F401 (re-exported: per-box parameters and hierarchy are part of this API)
+    HIERARCHY_RULES, PARAM_NAMES, box_fingerprints, box_hierarchy, box_random, preset_of_shape, reduce_per_submesh,
+    render_boxes_by_shape)
 from .native import _core, checked_indices, checked_int, checked_mask, row_count
 
 ORIGIN_MODES = ("BOUNDS", "MEAN")

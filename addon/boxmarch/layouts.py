@@ -8,20 +8,27 @@ layout against each engine's importer; docs/FORMAT.md states the decode of each.
 Channels (per vertex unless noted; UVn = the n-th UV map / TEXCOORD_n, UV0 stays the artist's):
 
 =============  ==================================================================================
-CLASSIC        COLOR = (0.5 + 0.5 s f, s); UV1 = q.xy; UV2 = q.zw
+CLASSIC        COLOR = (0.5 + 0.5 s f, s); UV1 = q.xy; UV2 = q.zw;
+               UV3 = (shape, material); UV4 = (random, user); UV5 = (parent, depth)
 UV_FRAME       UV1 = q.xy; UV2 = q.zw (where CLASSIC has them); UV3 = f.xy; UV4 = (f.z, index);
-               UV5 = h.xy; UV6 = (h.z, 0)
+               UV5 = h.xy; UV6 = (h.z, parent); UV7 = (shape, material); random, user and depth
+               in the box table only
 NORMAL_FRAME   NORMAL = x_z; TANGENT = (x_x, 1); UV1 = f.xy; UV2 = (f.z, index); UV3 = h.xy;
-               UV4 = (h.z, 0)
-NORMAL_COLOR   NORMAL = x_z; TANGENT = (x_x, 1); COLOR = (f, index); TABLE[index] = (h, 0), a
-               float texture one texel per box (UV2 stays free for lightmaps)
+               UV4 = (h.z, 0); UV5 = (shape, material); UV6 = (random, user); UV7 = (parent, depth)
+NORMAL_COLOR   NORMAL = x_z; TANGENT = (x_x, 1); COLOR = (f, index); TABLE[index] = (h, parent), a
+               float texture one texel per box (UV2 stays free for lightmaps), with four more planes:
+               (shape, material, random, user), (depth, 0, 0, 0), (origin, 0), q
 =============  ==================================================================================
 
 q: the box frame as a unit quaternion (x, y, z, w), box-local to object; x_x, x_z: the frame's
 local x and z axes in object space (the NORMAL_* layouts carry the frame in the two vectors every
 engine's skinning transforms; the local y axis is cross(NORMAL, TANGENT.xyz) * TANGENT.w, the
 glTF bitangent); f: vertex to box origin in box-local coordinates; h: half-extents about the
-origin (largest |f| per local axis over the box); index: the box's number, 0 .. boxes - 1.
+origin (largest |f| per local axis over the box); index: the box's number, 0 .. boxes - 1;
+shape, material, random, user: the box's four parameters (core.PARAM_NAMES); parent: the parent
+box's number (-1: a root), depth: 0 at a root. The box table (:func:`box_table`, every layout
+with an index) holds, per box, (h, parent), (shape, material, random, user), (depth, 0, 0, 0),
+(origin, 0) and q (object space).
 """
 from __future__ import annotations
 
@@ -40,13 +47,15 @@ class Layout:
 
 
 LAYOUTS = {layout.name: layout for layout in (
-    Layout("CLASSIC", "Classic (colour + 2 UVs)", "The blog's layout: offset in the colour, quaternion in UV1-2; "
-           "no half-extents or index", 2, False),
-    Layout("UV_FRAME", "Float UVs (6 UVs)", "Quaternion, offset, index and half-extents in float UV1-6", 6, False),
-    Layout("NORMAL_FRAME", "Normal + tangent frame (4 UVs)", "Frame in NORMAL + TANGENT (skinning carries it); "
-           "offset, index and half-extents in float UV1-4", 4, True),
+    Layout("CLASSIC", "Classic (colour + 5 UVs)", "The blog's layout: offset in the colour, quaternion in UV1-2, "
+           "box parameters and parent in UV3-5; no half-extents or index", 5, False),
+    Layout("UV_FRAME", "Float UVs (7 UVs)", "Quaternion, offset, index, half-extents and parent in float UV1-6, "
+           "shape and material in UV7 (the rest of the parameters in the box table)", 7, False),
+    Layout("NORMAL_FRAME", "Normal + tangent frame (7 UVs)", "Frame in NORMAL + TANGENT (skinning carries it); "
+           "offset, index and half-extents in float UV1-4, box parameters and parent in UV5-7", 7, True),
     Layout("NORMAL_COLOR", "Normal + tangent frame, colour, box table", "Frame in NORMAL + TANGENT, offset and "
-           "index in a float colour, half-extents in a float texture by index (UV2 left free)", 0, True),
+           "index in a float colour, half-extents, parent and box parameters in a float texture by index "
+           "(UV2 left free)", 0, True),
 )}
 
 
@@ -60,6 +69,20 @@ class BoxData:
     index: np.ndarray         # (n,) int64 box number
     classic_rgba: np.ndarray  # (n, 4) float32 the CLASSIC colour as the shader reads it
     box_half_extents: np.ndarray  # (boxes, 3) h by box number (the NORMAL_COLOR table)
+    box_params: np.ndarray | None = None  # (boxes, 4) shape, material, random, user (None: zeros)
+    box_parent: np.ndarray | None = None  # (boxes,) parent's box number, -1 for a root (None: all roots)
+    box_depth: np.ndarray | None = None   # (boxes,) 0 at a root (None: zeros)
+    box_origins: np.ndarray | None = None  # (boxes, 3) object-space origins (None: zeros)
+    box_quaternions: np.ndarray | None = None  # (boxes, 4) frames, x, y, z, w (None: identity)
+    index_base: int = 0                   # box number of this mesh's first box (index - index_base: row)
+
+    def box_values(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(params (boxes, 4), parent (boxes,), depth (boxes,)) as float64, defaults filled in."""
+        boxes = len(self.box_half_extents)
+        params = np.zeros((boxes, 4)) if self.box_params is None else np.asarray(self.box_params, np.float64)
+        parent = np.full(boxes, -1.0) if self.box_parent is None else np.asarray(self.box_parent, np.float64)
+        depth = np.zeros(boxes) if self.box_depth is None else np.asarray(self.box_depth, np.float64)
+        return params, parent, depth
 
 
 def frame_axes(q) -> tuple[np.ndarray, np.ndarray]:
@@ -71,9 +94,36 @@ def frame_axes(q) -> tuple[np.ndarray, np.ndarray]:
     return axis_x, axis_z
 
 
+TABLE_PLANES = 5  # texels per box in the box table
+# Per layout, the UV channels holding only box parameters and parents (by their pair of values).
+PARAM_CHANNELS = {
+    "CLASSIC": {"UV3": ("shape", "material"), "UV4": ("random", "user"), "UV5": ("parent", "depth")},
+    "UV_FRAME": {"UV7": ("shape", "material")},
+    "NORMAL_FRAME": {"UV5": ("shape", "material"), "UV6": ("random", "user"), "UV7": ("parent", "depth")},
+    "NORMAL_COLOR": {},
+}
+
+
+def box_table(data: BoxData) -> np.ndarray:
+    """float32 (boxes, TABLE_PLANES, 4): per box (h, parent), (shape, material, random, user),
+    (depth, 0, 0, 0), (origin, 0) and the frame's quaternion, so a shader reaches its parent's
+    frame, size and parameters by the parent's number."""
+    params, parent, depth = data.box_values()
+    table = np.zeros((len(params), TABLE_PLANES, 4))
+    table[:, 0, :3] = data.box_half_extents
+    table[:, 0, 3] = parent
+    table[:, 1] = params
+    table[:, 2, 0] = depth
+    if data.box_origins is not None:
+        table[:, 3, :3] = data.box_origins
+    table[:, 4] = [0.0, 0.0, 0.0, 1.0] if data.box_quaternions is None else data.box_quaternions
+    return table.astype(np.float32)
+
+
 def channels(layout: str, data: BoxData) -> dict[str, np.ndarray]:
     """float32 arrays by channel name ("COLOR", "NORMAL", "TANGENT", "UV1".."UV6": per vertex;
-    "TABLE": per box, RGBA) that ``layout`` writes for ``data``."""
+    "TABLE": the box table, :func:`box_table`, every layout with an index) that ``layout`` writes
+    for ``data``."""
     if layout not in LAYOUTS:
         raise ValueError(f"layout must be one of {sorted(LAYOUTS)}, got {layout!r}")
     n = len(data.index)
@@ -81,25 +131,33 @@ def channels(layout: str, data: BoxData) -> dict[str, np.ndarray]:
     index = data.index.astype(np.float64)
     zero = np.zeros(n)
     pair = lambda a, b: np.stack([a, b], 1).astype(np.float32)
-    payload = [pair(f[:, 0], f[:, 1]), pair(f[:, 2], index), pair(h[:, 0], h[:, 1]), pair(h[:, 2], zero)]
+    params, parent, depth = data.box_values()
+    row = data.index - data.index_base
+    p, up, d = params[row], parent[row], depth[row]
+    shape_material, random_user, parent_depth = pair(p[:, 0], p[:, 1]), pair(p[:, 2], p[:, 3]), pair(up, d)
+    last = up if layout == "UV_FRAME" else zero  # UV_FRAME's parent rides in its last frame channel's free half
+    payload = [pair(f[:, 0], f[:, 1]), pair(f[:, 2], index), pair(h[:, 0], h[:, 1]), pair(h[:, 2], last)]
     out = {}
     if layout == "CLASSIC":
         out["COLOR"] = np.asarray(data.classic_rgba, np.float32)
     if layout in ("CLASSIC", "UV_FRAME"):
         out["UV1"], out["UV2"] = pair(q[:, 0], q[:, 1]), pair(q[:, 2], q[:, 3])
+    if layout == "CLASSIC":
+        out.update(UV3=shape_material, UV4=random_user, UV5=parent_depth)
     if layout == "UV_FRAME":
         out.update({f"UV{3 + i}": values for i, values in enumerate(payload)})
+        out["UV7"] = shape_material
     if layout in ("NORMAL_FRAME", "NORMAL_COLOR"):
         axis_x, axis_z = frame_axes(q)
         out["NORMAL"] = axis_z.astype(np.float32)
         out["TANGENT"] = np.concatenate([axis_x, np.ones((n, 1))], 1).astype(np.float32)
     if layout == "NORMAL_FRAME":
         out.update({f"UV{1 + i}": values for i, values in enumerate(payload)})
+        out.update(UV5=shape_material, UV6=random_user, UV7=parent_depth)
     if layout == "NORMAL_COLOR":
         out["COLOR"] = np.concatenate([f, index[:, None]], 1).astype(np.float32)
-        table = np.zeros((len(data.box_half_extents), 4))
-        table[:, :3] = data.box_half_extents
-        out["TABLE"] = table.astype(np.float32)
+    if layout != "CLASSIC":
+        out["TABLE"] = box_table(data)
     return out
 
 

@@ -16,8 +16,13 @@ _SDF_DESCRIPTIONS = {
 }
 SDF_ITEMS = [(name, name.replace("_", " ").title(), _SDF_DESCRIPTIONS[name], i)
              for i, name in enumerate(core.SDF_PRESETS)]
-SDF_ITEMS.append(("USER", "Text Block", "GLSL 'float map(vec3 p)' from a text block (box_half = half-extents)",
-                  len(core.SDF_PRESETS)))
+SDF_ITEMS.append(("USER", "Text Block", "GLSL 'float map(vec3 p)' from a text block (box_half = half-extents, "
+                  "box_params = the box's shape, material, random, user)", len(core.SDF_PRESETS)))
+SDF_ITEMS.append(("PER_BOX", "Per-Box Shape", "Each box the preset its shape id picks (0 box, 1 sphere, 2 rounded box, "
+                  "3 capsule, 4 cylinder, 5 torus, 6 link: paint boxmarch_shape and bake)", len(core.SDF_PRESETS) + 1))
+SDF_ITEMS.append(("PER_BOX_BLEND", "Per-Box Shape, Blended into Parent", "Each box its shape id's preset, "
+                  "joined smoothly to its parent box's shape across their boundary (Blend Radius)",
+                  len(core.SDF_PRESETS) + 2))
 
 
 def _redraw(self, context):
@@ -39,12 +44,17 @@ class BoxmarchObjectSettings(bpy.types.PropertyGroup):
                            update=_redraw, description="A ray hits when the distance falls below this (box-local units)")
     relaxation: FloatProperty(name="Step Relaxation", default=1.0, min=0.05, max=2.0, update=_redraw,
                               description="Each step advances this times the distance (below 1 is safer for inexact SDFs)")
+    blend_radius: FloatProperty(name="Blend Radius", default=0.1, min=0.0, soft_max=10.0, subtype="DISTANCE",
+                                update=_redraw, description="Per-Box Shape, Blended into Parent: how far the smooth join "
+                                "reaches (each box with a parent is drawn grown by it)")
     max_distance: FloatProperty(name="Max Distance", default=1000.0, min=1e-4, update=_redraw,
                                 description="Longest march inside a box (box-local units)")
     quality: FloatProperty(name="Quality", default=1.0, min=0.05, max=1.0, update=_redraw,
                            description="One knob for cost against error (docs/PREVIEW.md): below 1 a hit may stop "
                                        "a share of a pixel from the surface, small boxes get fewer steps and boxes "
                                        "under a few pixels take one SDF tap")
+    colour_by_material: BoolProperty(name="Colour by Material", default=False, update=_redraw,
+                                     description="Shade each box in a colour of its own material id (boxmarch_material)")
     show_outline: BoolProperty(name="Box Outline", default=False, update=_redraw,
                                description="Draw the mesh edges over the preview")
     engine: EnumProperty(

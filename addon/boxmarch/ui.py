@@ -77,6 +77,8 @@ class BOXMARCH_PT_preview(bpy.types.Panel):
         layout.prop(settings, "layout")
         if not layouts.LAYOUTS[settings.layout].skin_safe and skinning.armature_modifier(ob) is not None:
             layout.label(text="Frame in UVs: stays in the rest pose when bones move", icon="INFO")
+        if settings.sdf == "PER_BOX_BLEND":
+            layout.prop(settings, "blend_radius")
         if settings.sdf == "USER":
             row = layout.row(align=True)
             row.prop_search(settings, "user_text", bpy.data, "texts")
@@ -89,6 +91,7 @@ class BOXMARCH_PT_preview(bpy.types.Panel):
         col.prop(settings, "max_distance")
         col = layout.column(heading="Show")
         col.prop(settings, "show_outline")
+        col.prop(settings, "colour_by_material")
         col.prop(settings, "show_vectors")
         error = preview_draw.errors.get(ob.name)
         if settings.preview and error:

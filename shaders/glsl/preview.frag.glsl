@@ -8,7 +8,9 @@
 // orthographic views the object-space view direction with w = 0); march (epsilon, relaxation,
 // max_distance, max_steps); base_color; mode.x (0 shaded, 1 object-space normal as colour,
 // 2 steps of every fragment in red with alpha 1, for Blender's ADDITIVE blend: src * alpha + dst);
-// quality (x: the quality knob of bm_quality, y: the viewport height in pixels).
+// quality (x: the quality knob of bm_quality, y: the viewport height in pixels);
+// blend.x (the blend radius of PER_BOX_BLEND, else 0); blend.y (1: colour each box by its
+// material id).
 // The written depth is never nearer than the rasterised face's (clamped): the create-info
 // declares it (depth_write GREATER, Blender 4+), which keeps early depth testing on.
 // Mirrored by cpp/src/raymarch.cpp (render_boxes); bm_shade is translated into it by
@@ -24,6 +26,13 @@ vec3 bm_shade(vec3 n_view, vec3 base)
   return base * (ambient + 0.8 * lambert);
 }
 
+// A distinct colour per material id (golden-ratio hues), for the preview's Colour by Material.
+vec3 bm_material_colour(float material)
+{
+  vec3 phase = vec3(0.0, 0.33, 0.67) + vec3(0.618034 * floor(material + 0.5));
+  return vec3(0.55) + 0.4 * vec3(cos(6.283185 * phase.x), cos(6.283185 * phase.y), cos(6.283185 * phase.z));
+}
+
 void main()
 {
   // The box frame's axes (the vertex stage decoded them from the layout's channels).
@@ -31,7 +40,14 @@ void main()
   vec3 y = normalize(frag_axis_y);
   vec3 z = normalize(frag_axis_z);
   vec3 f = frag_offset;
-  box_half = frag_half;
+  box_params = frag_params;
+  box_parent_origin = frag_parent_origin;
+  box_parent_q = frag_parent_q;
+  box_parent_half = frag_parent_half;
+  // The box as drawn (grown by the blend radius where it blends into a parent) bounds the march;
+  // the shapes are sized by the box itself.
+  vec3 drawn_half = frag_half;
+  box_half = frag_half - vec3(frag_parent_half.x < 0.0 ? 0.0 : preview.blend.x);
   vec3 ro = -f;
   vec3 ray_object = preview.eye.w > 0.5 ? obj_pos - preview.eye.xyz : preview.eye.xyz;
   float eye_distance = length(ray_object);
@@ -41,7 +57,7 @@ void main()
   // A fragment where the ray enters: front-facing, or (whatever the winding) more of the box
   // ahead than behind. A fragment of the far side only marches when the eye is inside the box
   // (from the eye).
-  vec2 span = bm_box_span(ro, rd, box_half);
+  vec2 span = bm_box_span(ro, rd, drawn_half);
   float t_end = span.y;
   if (!gl_FrontFacing && span.x + span.y < 0.0) {
     if (preview.eye.w < 0.5 || eye_distance > -span.x) {
@@ -86,6 +102,7 @@ void main()
   }
   else {
     vec3 n_view = normalize(mat3(preview.normal_to_view) * n_object);
-    frag_color = vec4(bm_shade(n_view, preview.base_color.rgb), preview.base_color.a);
+    vec3 base = preview.blend.y > 0.5 ? bm_material_colour(box_params.y) : preview.base_color.rgb;
+    frag_color = vec4(bm_shade(n_view, base), preview.base_color.a);
   }
 }

@@ -3,7 +3,8 @@
 // that engine's shader does. sources.py defines BM_LAYOUT_<name> first; the create-info
 // (addon/boxmarch/preview/shader.py) declares the layout's inputs (sources.VERTEX_INPUTS: pos and
 // the channels as ch_color, ch_normal, ch_tangent, ch_uv1 .. ch_uv6, plus ch_half where the layout
-// carries no per-vertex half-extents), the outputs (sources.STAGE_INTERFACE) and the uniform block
+// carries no per-vertex half-extents, and ch_params, the box's parameters as the layout carries
+// them), the outputs (sources.STAGE_INTERFACE) and the uniform block
 // preview (BoxmarchPreview, see preview.frag.glsl).
 void main()
 {
@@ -34,6 +35,18 @@ void main()
   frag_offset = bm_offset(ch_color.xy, ch_color.zw);
   frag_half = ch_half;
 #endif
-  obj_pos = pos;
-  gl_Position = preview.object_to_clip * vec4(pos, 1.0);
+  frag_params = ch_params;
+  // A box with a parent grows by the blend radius (preview.blend.x) when it blends into it: the
+  // fillet lies within that distance of its shape. Each vertex moves away from the origin along
+  // the box's axes, so f grows by the same amount.
+  float grow = ch_parent_half.x < 0.0 ? 0.0 : preview.blend.x;
+  vec3 outward = -sign(frag_offset) * grow;
+  frag_offset -= outward;
+  frag_half += vec3(grow);
+  frag_parent_origin = vec4(ch_parent_origin.xyz, preview.blend.x);
+  frag_parent_q = ch_parent_q;
+  frag_parent_half = ch_parent_half;
+  vec3 grown = pos + transpose(mat3(preview.frame)) * bm_from_local(outward, frag_axis_x, frag_axis_y, frag_axis_z);
+  obj_pos = grown;
+  gl_Position = preview.object_to_clip * vec4(grown, 1.0);
 }

@@ -104,6 +104,34 @@ vec3 bm_half_extents(vec2 half_xy, vec2 half_z)
   return vec3(half_xy, half_z.x);
 }
 
+// ---- Per-box parameters and parents (docs/ENGINES.md: which channels or box-table plane hold
+// them in each layout).
+
+// The box's parameters (shape, material, random, user) from the layout's two channels
+// (shape, material) and (random, user) (docs/ENGINES.md), or from the box table's plane 1 texel
+// passed as (texel.xy, texel.zw).
+vec4 bm_box_params(vec2 shape_material, vec2 random_user)
+{
+  return vec4(shape_material, random_user);
+}
+
+// The parent's box number from its interpolated channel, -1 for a root (rounding absorbs
+// interpolation round-off, as bm_box_index does).
+float bm_parent_index(float channel)
+{
+  return floor(channel + 0.5);
+}
+
+// Texel (x, y) of box `index` in plane `plane` of the box table, an image `size` texels wide and
+// high holding 5 planes of size.y / 5 rows each (docs/ENGINES.md): 0 (h, parent), 1 (shape,
+// material, random, user), 2 (depth, 0, 0, 0), 3 (origin, 0), 4 the frame's quaternion.
+// Integer-valued floats, for texelFetch, Load or a texture lookup at (x + 0.5, y + 0.5) / size.
+vec2 bm_box_table_texel(float index, float plane, vec2 size)
+{
+  float row = floor(index / size.x);
+  return vec2(index - row * size.x, plane * floor(size.y / 5.0 + 0.5) + row);
+}
+
 float min3(vec3 v) { return min(v.x, min(v.y, v.z)); }
 float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
 // ---- primitives, centred at the origin
@@ -205,6 +233,49 @@ float sdf_preset_link(vec3 p, vec3 h)
 {
   float thickness = min(h.z, 0.25 * min(h.x, h.y));
   return sd_link(p.yxz, max(h.x - h.y, 0.0), h.y - thickness, thickness);
+}
+// The SDF preset a shape id picks, sized by the box's half-extents h: the id rounded to the
+// nearest whole number indexes the presets in the preview's menu order (0 box, 1 sphere,
+// 2 rounded box, 3 capsule, 4 cylinder, 5 torus, 6 link); any other id draws the box. Exact
+// (each preset is).
+float bm_sdf_by_id(float shape, vec3 p, vec3 h)
+{
+  float id = floor(shape + 0.5);
+  if (id == 1.0) {
+    return sdf_preset_sphere(p, h);
+  }
+  if (id == 2.0) {
+    return sdf_preset_rounded_box(p, h);
+  }
+  if (id == 3.0) {
+    return sdf_preset_capsule(p, h);
+  }
+  if (id == 4.0) {
+    return sdf_preset_cylinder(p, h);
+  }
+  if (id == 5.0) {
+    return sdf_preset_torus(p, h);
+  }
+  if (id == 6.0) {
+    return sdf_preset_link(p, h);
+  }
+  return sdf_preset_box(p, h);
+}
+// This box's shape (its shape id, sized by h) blended into its parent's across their boundary:
+// the parent's shape evaluated in the parent's frame (parent_origin: its origin in this box's
+// local coordinates; parent_q: its frame relative to this box's; parent_half.xyz its
+// half-extents, parent_half.w its shape id; parent_half.x < 0: no parent), joined by
+// op_smooth_union with blend radius k (k <= 0: the own shape). A bound. Two SDF evaluations
+// with a parent, one without; the fillet lies within k of this box's shape, so the box it is
+// drawn in must be grown by k.
+float bm_sdf_blend_parent(float shape, vec3 p, vec3 h, vec3 parent_origin, vec4 parent_q, vec4 parent_half, float k)
+{
+  float own = bm_sdf_by_id(shape, p, h);
+  if (k <= 0.0 || parent_half.x < 0.0) {
+    return own;
+  }
+  vec3 in_parent = bm_rotate_vector(p - parent_origin, bm_quat_conjugate(parent_q));
+  return op_smooth_union(own, bm_sdf_by_id(parent_half.w, in_parent, parent_half.xyz), k);
 }
 
 // Entry (x) and exit (y) distances of the ray ro + t rd with the box |p| <= h.

@@ -79,4 +79,32 @@ float3 bm_half_extents(float2 half_xy, float2 half_z)
   return float3(half_xy, half_z.x);
 }
 
+// ---- Per-box parameters and parents (docs/ENGINES.md: which channels or box-table plane hold
+// them in each layout).
+
+// The box's parameters (shape, material, random, user) from the layout's two channels
+// (shape, material) and (random, user) (docs/ENGINES.md), or from the box table's plane 1 texel
+// passed as (texel.xy, texel.zw).
+float4 bm_box_params(float2 shape_material, float2 random_user)
+{
+  return float4(shape_material, random_user);
+}
+
+// The parent's box number from its interpolated channel, -1 for a root (rounding absorbs
+// interpolation round-off, as bm_box_index does).
+float bm_parent_index(float channel)
+{
+  return floor(channel + 0.5);
+}
+
+// Texel (x, y) of box `index` in plane `plane` of the box table, an image `size` texels wide and
+// high holding 5 planes of size.y / 5 rows each (docs/ENGINES.md): 0 (h, parent), 1 (shape,
+// material, random, user), 2 (depth, 0, 0, 0), 3 (origin, 0), 4 the frame's quaternion.
+// Integer-valued floats, for texelFetch, Load or a texture lookup at (x + 0.5, y + 0.5) / size.
+float2 bm_box_table_texel(float index, float plane, float2 size)
+{
+  float row = floor(index / size.x);
+  return float2(index - row * size.x, plane * floor(size.y / 5.0 + 0.5) + row);
+}
+
 #endif

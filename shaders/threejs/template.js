@@ -28,10 +28,11 @@ function boxmarchTexcoordName(THREE, n) {
   return n === 1 ? 'uv2' : 'texcoord_' + n;
 }
 
-// The layout's channels under stable names (bmOffsetXY, bmOffsetZIndex, bmHalfXY, bmHalfZ);
-// throws when the geometry lacks one, so a mesh exported with another layout fails loudly.
+// The layout's channels under stable names (bmOffsetXY, bmOffsetZIndex, bmHalfXY, bmHalfZ, and
+// the box parameters bmShapeMaterial, bmRandomUser); throws when the geometry lacks one, so a
+// mesh exported with another layout fails loudly.
 function prepareBoxmarchGeometry(THREE, geometry) {
-  var names = ['bmOffsetXY', 'bmOffsetZIndex', 'bmHalfXY', 'bmHalfZ'];
+  var names = ['bmOffsetXY', 'bmOffsetZIndex', 'bmHalfXY', 'bmHalfZ', 'bmShapeMaterial', 'bmRandomUser'];
   for (var i = 0; i < names.length; i++) {
     var attribute = geometry.getAttribute(boxmarchTexcoordName(THREE, i + 1));
     if (!attribute) throw new Error('boxmarch: the geometry has no TEXCOORD_' + (i + 1) + ' (export with the GLTF preset)');
@@ -43,7 +44,9 @@ function prepareBoxmarchGeometry(THREE, geometry) {
   return geometry;
 }
 
-// options: map (GLSL body of float map(vec3 p), box-local; box_half and box_index are set),
+// options: map (GLSL body of float map(vec3 p), box-local; box_half, box_index and box_params
+// (shape, material, random, user) are set: 'return bm_sdf_by_id(box_params.x, p, box_half);'
+// draws each box the preset its shape id picks),
 // color (THREE.Color), maxSteps, epsilon, quality (the quality knob, 0 < q <= 1, 1 = the full
 // march: shaders/glsl/raymarch.glsl bm_quality), skinning (true for a SkinnedMesh; read before r129).
 function createBoxmarchMaterial(THREE, options) {
@@ -225,7 +228,8 @@ var BOXMARCH_VARYINGS = [
   'varying vec3 vAxisZ;',
   'varying vec3 vOffset;',
   'varying vec3 vHalf;',
-  'varying float vIndex;'
+  'varying float vIndex;',
+  'varying vec4 vParams;'
 ].join('\n');
 
 var BOXMARCH_VERTEX = [
@@ -236,6 +240,8 @@ var BOXMARCH_VERTEX = [
   'attribute vec2 bmOffsetZIndex;',
   'attribute vec2 bmHalfXY;',
   'attribute vec2 bmHalfZ;',
+  'attribute vec2 bmShapeMaterial;',
+  'attribute vec2 bmRandomUser;',
   BOXMARCH_VARYINGS,
   'void main() {',
   '  #include <beginnormal_vertex>',
@@ -254,6 +260,7 @@ var BOXMARCH_VERTEX = [
   '  vOffset = bm_offset(bmOffsetXY, bmOffsetZIndex);',
   '  vIndex = bmOffsetZIndex.y;',
   '  vHalf = bm_half_extents(bmHalfXY, bmHalfZ);',
+  '  vParams = bm_box_params(bmShapeMaterial, bmRandomUser);',
   '  gl_Position = projectionMatrix * modelViewMatrix * vec4(transformed, 1.0);',
   '}'
 ].join('\n');
@@ -275,6 +282,7 @@ var BOXMARCH_FRAGMENT = [
   '  vec3 f = vOffset;',
   '  box_half = vHalf;',
   '  box_index = bm_box_index(vIndex);',
+  '  box_params = vParams;',
   '  vec3 ray = bmEye.w > 0.5 ? vObjPos - bmEye.xyz : bmEye.xyz;',
   '  float eye_distance = length(ray);',
   '  vec3 rd = normalize(bm_to_local(ray / eye_distance, x, y, z));',

@@ -34,6 +34,9 @@ boxes.rotation_euler = (0.2, 0.1, 0.4)
 boxes.scale = (1.15, 0.85, 1.0)  # non-uniform: rays and normals must go through the right matrices
 bpy.context.view_layer.objects.active = boxes
 boxes.select_set(True)
+# Per-box shape ids: box i (vertices 8i..8i+7) draws preset SHAPES[i] in the PER_BOX renders.
+shapes = (np.arange(24) * 5 + 1) % 7
+mesh.attributes.new("boxmarch_shape", "INT", "POINT").data.foreach_set("value", np.repeat(shapes, 8).astype(np.int32))
 assert bpy.ops.boxmarch.bake() == {"FINISHED"}
 
 camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
@@ -44,7 +47,7 @@ camera.data.clip_start, camera.data.clip_end = 0.5, 40.0
 scene.camera = camera
 bpy.context.view_layer.update()
 
-result = {"centres": centres, "sizes": sizes, "rotations": rotations,
+result = {"centres": centres, "sizes": sizes, "rotations": rotations, "shapes": shapes,
           "matrix_world": np.array(boxes.matrix_world), "color": np.array(boxes.color)}
 view, projection = preview.camera_matrices(scene, camera, W, H)
 result["view"], result["projection"] = view, projection
@@ -97,6 +100,12 @@ for layout in layouts.LAYOUTS:
     result[f"UNTURNED_{layout}_rgba"], result[f"UNTURNED_{layout}_depth"] = preview.render(scene, camera, W, H)
 mesh_data.layout_inputs = layout_inputs
 draw.forget()
+
+# Each box the preset its shape id picks, read from every layout's channels or box table.
+boxes.boxmarch.sdf = "PER_BOX"
+for layout in layouts.LAYOUTS:
+    boxes.boxmarch.layout = layout
+    result[f"PER_BOX_{layout}_rgba"], result[f"PER_BOX_{layout}_depth"] = preview.render(scene, camera, W, H)
 boxes.boxmarch.layout = "CLASSIC"
 
 # A user SDF: the same sphere written by hand must give the SPHERE preset's image.
@@ -198,6 +207,37 @@ assert bpy.ops.boxmarch.bake() == {"FINISHED"}
 bpy.context.view_layer.update()
 result["shift"] = shift
 result["MOVED_rgba"], result["MOVED_depth"] = preview.render(scene, camera, W, H)
+
+# A chain of three unit boxes along x, faces touching, each drawn as its sphere (shape 1), box i
+# the parent of box i + 1: blended into its parent (radius 0.3) a neck joins the spheres where
+# they touch (x = 0.5, 1.5). Then the same with no parents: nothing may change.
+boxes.hide_viewport = True
+chain_arrays = scenes.box_arrays(np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]]), 1.0, np.eye(3))
+chain_mesh = mesh_io.new_mesh("chain", chain_arrays[0], chain_arrays[2], chain_arrays[3], chain_arrays[4])
+chain = bpy.data.objects.new("chain", chain_mesh)
+scene.collection.objects.link(chain)
+chain_mesh.attributes.new("boxmarch_shape", "INT", "POINT").data.foreach_set("value", np.ones(24, np.int32))
+chain_mesh.attributes.new("boxmarch_parent", "INT", "POINT").data.foreach_set(
+    "value", np.repeat([-1, 0, 1], 8).astype(np.int32))
+for ob in scene.objects:
+    ob.select_set(ob == chain)
+bpy.context.view_layer.objects.active = chain
+assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+chain.boxmarch.preview = True
+chain.boxmarch.blend_radius = 0.3
+result["chain_matrix"] = np.array(chain.matrix_world)
+camera.location = (1.0, -5.0, 1.5)  # from the side, a little above: the joints in view
+camera.rotation_euler = (mathutils.Vector((1.0, 0.0, 0.0)) - camera.location).to_track_quat("-Z", "Y").to_euler()
+bpy.context.view_layer.update()
+result["chain_view"], result["chain_projection"] = preview.camera_matrices(scene, camera, W, H)
+for sdf in ("PER_BOX", "PER_BOX_BLEND"):
+    chain.boxmarch.sdf = sdf
+    result[f"CHAIN_{sdf}_rgba"], result[f"CHAIN_{sdf}_depth"] = preview.render(scene, camera, W, H)
+    result[f"CHAIN_{sdf}_steps"] = preview.render(scene, camera, W, H, output="STEPS")[0]
+chain_mesh.attributes.remove(chain_mesh.attributes["boxmarch_parent"])
+assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+draw.forget()
+result["CHAIN_ROOTS_rgba"], result["CHAIN_ROOTS_depth"] = preview.render(scene, camera, W, H)
 
 np.savez_compressed(out_path, **result)
 print("preview_check: wrote", out_path)

@@ -435,6 +435,55 @@ void test_options_seed_depends_on_every_output_option() {
     CHECK(options_seed(o) == options_seed(base));
 }
 
+void test_reduce_per_submesh_majority_ties_and_rejections() {
+    // submesh 0: 1, 1, 2 (majority 1, disagrees); 1: 5, 4 (tie: the lowest element's 5); 2: none
+    const float values[] = {1, 2, 1, 5, 4};
+    const int32_t ids[] = {0, 0, 0, 1, 1};
+    float out[3] = {-1, -1, -1};
+    uint8_t disagrees[3] = {9, 9, 9};
+    CHECK(reduce_per_submesh(out, disagrees, values, 5, 1, ids, 3) == 2);
+    CHECK(out[0] == 1 && out[1] == 5 && out[2] == 0);
+    CHECK(disagrees[0] == 1 && disagrees[1] == 1 && disagrees[2] == 0);
+    const float bad[] = {1, std::numeric_limits<float>::quiet_NaN()};
+    float untouched[2] = {7, 7};
+    CHECK(rejects([&] { reduce_per_submesh(untouched, nullptr, bad, 2, 1, ids, 1); }, "NaN"));
+    CHECK(rejects([&] { reduce_per_submesh(untouched, nullptr, values, 1, 5, ids, 1); }, "components"));
+    const int32_t out_of_range[] = {0, 3};
+    CHECK(rejects([&] { reduce_per_submesh(untouched, nullptr, values, 2, 1, out_of_range, 2); }, "names submesh 3"));
+    CHECK(untouched[0] == 7 && untouched[1] == 7);
+}
+
+void test_box_random_is_a_function_of_fingerprint_and_seed() {
+    const uint32_t fingerprints[] = {1, 2, 1};
+    float a[3], b[3];
+    box_random(a, fingerprints, 3, 0);
+    box_random(b, fingerprints, 3, 1);
+    CHECK(a[0] == a[2] && a[0] != a[1] && a[0] != b[0]);
+    for (float v : a) CHECK(v >= 0.0f && v < 1.0f && v * 16777216.0f == std::floor(v * 16777216.0f));
+}
+
+void test_box_hierarchy_rules_depths_and_cycles() {
+    // Boxes along x at 0, 1, 2, 3 (unit half-extents for 0, smaller for the others).
+    const double origins[] = {0, 0, 0, 1, 0, 0, 2, 0, 0, 0.5, 0, 0};
+    const float q[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+    const double half[] = {1, 1, 1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.2, 0.2, 0.2};
+    int32_t parent[4], depth[4];
+    CHECK(box_hierarchy(parent, depth, origins, q, half, 4, HierarchyRule::Chain, nullptr) == 2);
+    CHECK(parent[0] == -1 && parent[1] == 0 && parent[2] == 1 && parent[3] == 0);
+    CHECK(depth[0] == 0 && depth[1] == 1 && depth[2] == 2 && depth[3] == 1);
+    // Containment: 1 (origin x = 1, on box 0's face) and 3 lie in box 0; 2 in none.
+    CHECK(box_hierarchy(parent, depth, origins, q, half, 4, HierarchyRule::Containment, nullptr) == 1);
+    CHECK(parent[0] == -1 && parent[1] == 0 && parent[2] == -1 && parent[3] == 0);
+    const int32_t cycle[] = {1, 2, 0, -1};
+    int32_t kept[4] = {5, 5, 5, 5};
+    CHECK(rejects([&] { box_hierarchy(kept, kept, origins, q, half, 4, HierarchyRule::Given, cycle); }, "cycle"));
+    const int32_t self[] = {-1, 1, -1, -1};
+    CHECK(rejects([&] { box_hierarchy(kept, kept, origins, q, half, 4, HierarchyRule::Given, self); }, "own parent"));
+    const int32_t far[] = {-1, 4, -1, -1};
+    CHECK(rejects([&] { box_hierarchy(kept, kept, origins, q, half, 4, HierarchyRule::Given, far); }, "outside"));
+    CHECK(kept[0] == 5 && kept[3] == 5);
+}
+
 }  // namespace
 
 int main() {
@@ -455,6 +504,9 @@ int main() {
         {"incremental", test_rebake_with_previous_fingerprints_skips_and_a_moved_box_is_baked},
         {"expand_corner_quaternions", test_expand_corner_quaternions_writes_pairs_and_rejects_bad_indices},
         {"options_seed", test_options_seed_depends_on_every_output_option},
+        {"reduce_per_submesh", test_reduce_per_submesh_majority_ties_and_rejections},
+        {"box_random", test_box_random_is_a_function_of_fingerprint_and_seed},
+        {"box_hierarchy", test_box_hierarchy_rules_depths_and_cycles},
     };
     for (const Test& t : tests) {
         current_test = t.name;

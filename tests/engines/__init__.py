@@ -38,6 +38,15 @@ def ndc_to_pixels(width, height) -> np.ndarray:
     return np.array([[width / 2, 0, 0, width / 2], [0, -height / 2, 0, height / 2], [0, 0, 0, 1.0]])
 
 
+def perspective(camera, aspect) -> np.ndarray:
+    """4 x 4 OpenGL perspective projection of a harness ``camera`` (vertical ``fov`` in degrees,
+    ``near``, ``far``) for a ``aspect`` = width / height image."""
+    f = 1.0 / np.tan(np.radians(camera["fov"]) / 2)
+    near, far = camera["near"], camera["far"]
+    return np.array([[f / aspect, 0, 0, 0], [0, f, 0, 0],
+                     [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)], [0, 0, -1, 0]])
+
+
 def polygon_mask(shape, polygon) -> np.ndarray:
     """Boolean (H, W) mask of the pixels whose centres lie inside a convex 2D ``polygon``
     (pixel coordinates as :meth:`Shot.project` returns them, either winding)."""

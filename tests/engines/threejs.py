@@ -42,16 +42,16 @@ class Release(NamedTuple):
     revision: str      # THREE.REVISION
     context: str       # the WebGL context its WebGLRenderer creates
     material: str      # the shipped file of shaders/threejs/ this release loads
-    texcoords: tuple   # its GLTFLoader's attribute names for TEXCOORD_0 .. TEXCOORD_6
+    texcoords: tuple   # its GLTFLoader's attribute names for TEXCOORD_0 .. TEXCOORD_7
     installed_by: str
 
 
 RELEASES = {
     # r111 GLTFLoader: TEXCOORD_1 -> uv2, the others lower-cased.
-    "r111": Release("111", "WebGL 1", "boxmarch.js", ("uv", "uv2", *(f"texcoord_{n}" for n in range(2, 7))),
+    "r111": Release("111", "WebGL 1", "boxmarch.js", ("uv", "uv2", *(f"texcoord_{n}" for n in range(2, 8))),
                     "apt-get install chromium libjs-three"),
     # r151 renamed TEXCOORD_1..3 to uv1..uv3; TEXCOORD_4 and up stay lower-cased.
-    "r180": Release("180", "WebGL 2", "boxmarch.module.js", ("uv", "uv1", "uv2", "uv3", *(f"texcoord_{n}" for n in range(4, 7))),
+    "r180": Release("180", "WebGL 2", "boxmarch.module.js", ("uv", "uv1", "uv2", "uv3", *(f"texcoord_{n}" for n in range(4, 8))),
                     "apt-get install chromium; pip install nicegui==3.18.0"),
 }
 

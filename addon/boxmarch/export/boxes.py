@@ -52,19 +52,34 @@ def box_data(mesh, preset, index_base: int = 0, space=None):
     target_q = transforms.target_quaternions(q, preset)
     target_f = transforms.target_local(f, preset)
     target_half = np.asarray(box_half, np.float64) * preset.length_scale
+    # Self-check: the decode in the target frame must land where the target frame puts Blender's.
+    origins = transforms.target_positions(blender_origin, preset)
+    first_vertex = np.zeros(count, np.int64)  # one vertex of each box: its box's origin and frame
+    first_vertex[submesh_of_vertex[::-1]] = np.arange(len(positions))[::-1]
     data = layouts.BoxData(quaternions=target_q, offsets=target_f, half_extents=target_half[submesh_of_vertex],
                            index=index_base + submesh_of_vertex.astype(np.int64),
                            classic_rgba=transforms.target_offsets(offsets, preset) if space is None else None,
-                           box_half_extents=target_half)
-    # Self-check: the decode in the target frame must land where the target frame puts Blender's.
-    origins = transforms.target_positions(blender_origin, preset)
+                           box_half_extents=target_half, index_base=index_base,
+                           box_origins=origins[first_vertex], box_quaternions=target_q[first_vertex])
+    box_layers = mesh_io.read_box_layers(mesh, submesh_of_vertex, count)
+    if box_layers is not None:  # box numbers run on across the file's meshes: so do the parents
+        data.box_params, data.box_depth = box_layers.params, box_layers.depth
+        data.box_parent = np.where(box_layers.parent >= 0, box_layers.parent + index_base, -1)
     target_origin = transforms.target_positions(positions, preset) + core.rotate_vector(target_f, target_q)
     error = float(np.abs(target_origin - origins).max() / offset_reach(target_f)) if len(f) else 0.0
     stats = {"mesh": mesh.name, "vertices": len(positions), "corners": len(corner_verts), "boxes": int(count),
              "colour": layers.encoding, "max_alpha": float(offsets[:, 3].max()) / preset.length_scale if len(positions) else 0.0,
              "space": "object" if space is None else "world", "transform_error": error, "stale_boxes": stale,
-             "sheared_boxes": sheared}
+             "sheared_boxes": sheared, "box_parameters": box_parameter_stats(data, box_layers is not None)}
     return data, corner_verts, stats, origins
+
+
+def box_parameter_stats(data: layouts.BoxData, stored: bool) -> dict:
+    """The export report's figures of a mesh's box parameters and hierarchy."""
+    params, parent, depth = data.box_values()
+    return {"stored": stored, "roots": int((parent < 0).sum()), "max_depth": int(depth.max()) if len(depth) else 0,
+            **{f"{name}_range": [float(params[:, i].min()), float(params[:, i].max())] if len(params) else [0.0, 0.0]
+               for i, name in enumerate(core.PARAM_NAMES)}}
 
 
 def offset_reach(target_f) -> float:

@@ -17,7 +17,7 @@ def engine_path(folder: str, stem: str, preset_name: str) -> str:
 
 
 def engine_outputs(folder: str, stem: str, presets=ENGINE_PRESETS) -> list:
-    """Every file ``export_every_engine`` writes (the GODOT3 box table beside its .glb too)."""
+    """Every file ``export_every_engine`` writes (each preset's box table and sidecar beside it too)."""
     return [path for name in presets for path in outputs_of(engine_path(folder, stem, name), name)]
 
 

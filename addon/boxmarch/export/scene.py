@@ -20,11 +20,16 @@ from .boxes import ExportInputError, baked_layers
 # UV_FRAME and CLASSIC names; NORMAL_FRAME's UV1..UV4 hold what UV_FRAME's UV3..UV6 hold.
 CHANNEL_UV_NAMES = {"UV1": mesh_io.QUAT_XY_UV, "UV2": mesh_io.QUAT_ZW_UV, "UV3": "BoxOffsetXY",
                     "UV4": "BoxOffsetZIndex", "UV5": "BoxHalfXY", "UV6": "BoxHalfZ"}
-_BOXMARCH_UV_NAMES = set(CHANNEL_UV_NAMES.values())
+# The box parameters' channels (layouts.PARAM_CHANNELS), named by the pair of values they hold.
+PARAM_UV_NAMES = {("shape", "material"): "BoxShapeMaterial", ("random", "user"): "BoxRandomUser",
+                  ("parent", "depth"): "BoxParentDepth"}
+_BOXMARCH_UV_NAMES = set(CHANNEL_UV_NAMES.values()) | set(PARAM_UV_NAMES.values())
 
 
 def uv_name(layout: str, channel: str) -> str:
     """The FBX UV map name of a layout's channel "UVn"."""
+    if channel in layouts.PARAM_CHANNELS[layout]:
+        return PARAM_UV_NAMES[layouts.PARAM_CHANNELS[layout][channel]]
     if layouts.LAYOUTS[layout].skin_safe:
         channel = f"UV{int(channel[2:]) + 2}"
     return CHANNEL_UV_NAMES[channel]
@@ -171,6 +176,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             raise ExportInputError(f"'{path}' is the open .blend file: export to another path")
         if os.path.isdir(path):
             raise ExportInputError(f"'{path}' is a folder: the export writes a file there")
+    table_file = sidecar.table_path(outputs[0], layout, preset.name)
     warnings = mesh_io.modifier_warnings(objects, "export") + boxes.morph_warnings(objects, preset)
     if preset.extension == ".fbx" and context.scene.unit_settings.scale_length != 1.0:
         warnings.append(f"unit scale is not 1: {preset.label} will scale positions by it and the offsets will not match")
@@ -182,9 +188,12 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             bpy.data.libraries.write(temp, set(objects), fake_user=True, compress=False)
         else:
             stats, table = _export_with_copies(context, objects, meshes, preset, layout, temp, skins)
-            if table is not None:
-                with open(temps[sidecar.table_path(outputs[0])], "w") as f:
+            if table_file and layout == "NORMAL_COLOR":
+                with open(temps[table_file], "w") as f:
                     f.write(godot.image_texture_tres(table))
+            elif table_file:
+                with open(temps[table_file], "wb") as f:
+                    f.write(godot.table_bin(table))
         if preset.name == "GODOT3":
             with open(temps[import_settings.godot3_import_path(outputs[0])], "w") as f:
                 f.write(import_settings.godot3_import_text())
@@ -227,7 +236,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     return {"preset": preset.name, "layout": layout, "path": os.path.abspath(filepath),
             "skinned": _skin_summary(skins),
             "default_import_error": max(default_errors) if default_errors else None,
-            "table": os.path.abspath(sidecar.table_path(filepath)) if layout == "NORMAL_COLOR" else None,
+            "table": table_file, "table_size": _table_image_size(stats) if table_file else None,
             "sidecar": os.path.abspath(sidecar.sidecar_path(filepath)), "files": outputs,
             "objects": [ob.name for ob in objects], "meshes": stats, "seconds": time.perf_counter() - start,
             "warnings": warnings, "import_settings": preset.import_settings,
@@ -245,6 +254,12 @@ def _write_sidecar(path, preset, layout, filepath, stats, skins) -> None:
 
 def _skin_summary(skins) -> dict:
     return {name: {"armature": skin.armature.name, "bones": list(skin.bones)} for name, skin in skins.items()}
+
+
+def _table_image_size(stats) -> list:
+    """[width, height] in texels of the file's box table image (godot.table_image)."""
+    width, height = godot.table_size(sum(m["boxes"] for m in stats))
+    return [width, height * layouts.TABLE_PLANES]
 
 
 def _skins(context, objects, preset) -> dict:

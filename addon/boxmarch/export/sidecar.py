@@ -58,17 +58,22 @@ def sidecar_path(filepath: str) -> str:
     return os.path.splitext(filepath)[0] + SIDECAR_SUFFIX
 
 
-def table_path(filepath: str) -> str:
-    """Where the NORMAL_COLOR layout's box table goes: beside the file, ``NAME.boxes.tres``."""
-    return os.path.splitext(filepath)[0] + ".boxes.tres"
+def table_path(filepath: str, layout: str = "NORMAL_COLOR", preset_name: str = "GODOT3") -> str | None:
+    """Where a layout's box table goes, beside the file: ``NAME.boxes.tres`` (NORMAL_COLOR, for
+    Godot 3), ``NAME.boxes.bin`` (the other layouts with a box index); None for CLASSIC (no
+    index) and the BLENDER preset (the .blend holds the layers themselves)."""
+    if layout == "CLASSIC" or preset_name == "BLENDER":
+        return None
+    return os.path.splitext(filepath)[0] + (".boxes.tres" if layout == "NORMAL_COLOR" else ".boxes.bin")
 
 
 def written_beside(filepath: str, preset_name: str, layout: str) -> list[str]:
     """Every file an export of ``preset_name`` in ``layout`` writes besides ``filepath``: the
     sidecar, the box table of NORMAL_COLOR, Godot 3's import settings (``NAME.glb.import``)."""
     paths = [sidecar_path(filepath)]
-    if layout == "NORMAL_COLOR":
-        paths.append(table_path(filepath))
+    table = table_path(filepath, layout, preset_name)
+    if table:
+        paths.append(table)
     if preset_name == "GODOT3":
         paths.append(import_settings.godot3_import_path(filepath))
     return paths

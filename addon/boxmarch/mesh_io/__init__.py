@@ -12,6 +12,7 @@ that adds one.
 
     arrays   geometry, topology, selection flags, UV maps; new meshes from arrays
     baked    the baked layers: compute (prepare_bake), store (PreparedBake.write), read back
+    box_layers  per-box parameters and hierarchy: the artist's attributes, the stored layers
     rebuild  replace a mesh's geometry by arrays the core computed, keeping its attributes
     weights  vertex-group weights and the skin of an Armature modifier (preview, export)
 """
@@ -23,5 +24,7 @@ from .baked import (BAKED_UV_MAPS, FINGERPRINT_ATTRIBUTE, LAYERS_DIGEST, MAX_UV_
                     OFFSET_ATTRIBUTE, QUAT_XY_UV, QUAT_ZW_UV, BakedLayers, BakeInputError, BakeSettings,
                     NotBakedError, PreparedBake, modifier_warnings, prepare_bake, read_baked_layers,
                     shape_key_warning, stored_layers_digest, stray_bake_layers)
+from .box_layers import (DEPTH_LAYER, PARAM_ATTRIBUTES, PARAMS_COLOUR_ATTRIBUTE, PARAMS_LAYERS, PARENT_ATTRIBUTE,
+                         PARENT_LAYER, BoxLayerError, BoxLayers, read_box_layers)
 from .rebuild import rebuild_blocker, rebuild_welded
 from .weights import Skin, SkinError, check_skin_modifier, read_skin, read_vertex_weights

@@ -10,6 +10,7 @@ import numpy as np
 
 from .. import core
 from .arrays import read_positions, read_topology, read_uv, read_vertex_selection, write_uv
+from .box_layers import BoxLayerError, BoxLayers, compute_box_layers, write_box_layers
 
 OFFSET_ATTRIBUTE = "BoxOffset"
 QUAT_XY_UV = "BoxQuatXY"
@@ -185,6 +186,8 @@ class BakeSettings:
     use_cache: bool = True
     incremental: bool = True
     threads: int = 0
+    hierarchy: str = core.HIERARCHY_RULES[0]
+    random_seed: int = 0
 
 
 @dataclass
@@ -197,6 +200,7 @@ class PreparedBake:
     result: core.BakeResult
     keep_previous: bool
     report: dict = field(default_factory=dict)
+    box_layers: BoxLayers | None = None
 
     def write(self) -> dict:
         """Store the bake; call it once. The colour goes first so its buffer (the largest result
@@ -204,7 +208,10 @@ class PreparedBake:
         the corner array is released once expanded: peak memory stays close to the size of the
         layers written. The result's per-submesh arrays stay for the caller."""
         mesh, s, r = self.mesh, self.settings, self.result
+        if self.box_layers is not None:  # painted values may change without the geometry
+            write_box_layers(mesh, r.submesh_of_vertex, self.box_layers)
         if r.baked == 0:  # nothing changed: the stored data is already this bake's
+            mesh.update()
             return self.report
         corner_count = len(self.corner_verts)
         previous_uv = {name: read_uv(mesh, name)
@@ -324,10 +331,33 @@ def prepare_bake(mesh, settings: BakeSettings, selected_only: bool = False) -> P
                            use_cache=settings.use_cache, threads=settings.threads)
     except ValueError as error:
         raise BakeInputError(f"mesh '{mesh.name}': {error}") from None
+    try:
+        box_layers, box_report = compute_box_layers(
+            mesh, result, face_starts, corner_verts,
+            _boxes_for_hierarchy(mesh, result, positions, corner_verts, keep_previous, settings.hierarchy),
+            settings.hierarchy, settings.random_seed)
+    except BoxLayerError as error:
+        raise BakeInputError(str(error)) from None
     report = {
         "mesh": mesh.name, "submeshes": result.submesh_count, "baked": result.baked,
         "cache_hits": result.cache_hits, "unchanged": result.unchanged,
         "not_selected": result.not_selected, "degenerate": result.degenerate,
         "max_error": result.max_error, "max_relative_error": result.max_relative_error,
+        "boxes": box_report,
     }
-    return PreparedBake(mesh, settings, corner_verts, result, keep_previous, report)
+    return PreparedBake(mesh, settings, corner_verts, result, keep_previous, report, box_layers)
+
+
+def _boxes_for_hierarchy(mesh, result, positions, corner_verts, keep_previous, rule):
+    """(origins, quaternions, half-extents) of every box after this bake, for the geometric
+    hierarchy rules: this bake's where it baked, the stored layers' elsewhere (zeros where
+    nothing is stored yet). The ATTRIBUTE rule reads none: this bake's arrays stand in."""
+    boxes = (result.origins, result.quaternions, result.half_extents)
+    if rule == "ATTRIBUTE" or result.baked == result.submesh_count or not keep_previous:
+        return boxes
+    stored = read_baked_layers(mesh, corner_verts)
+    merged = core.boxes_from_bake(positions, stored.offsets, stored.vertex_quaternions(), result.submesh_of_vertex)
+    written = result.written.view(bool)
+    for old, new in zip(merged, boxes):
+        old[written] = new[written]
+    return merged

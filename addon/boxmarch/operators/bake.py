@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 
 import bpy
-from bpy.props import BoolProperty, EnumProperty, FloatProperty
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
 
 from .. import bake_job, core, edit_mode, mesh_io
 
@@ -32,6 +32,12 @@ _ORIGIN_ITEMS = [(mode, *_ORIGIN_LABELS[mode]) for mode in core.ORIGIN_MODES]
 _ENCODING_LABELS = {"FLOAT_COLOR": ("Float", "32-bit float colour: exact decode"),
                     "BYTE_COLOR": ("8-bit", "Byte colour: smaller, decode limited by quantisation")}
 _ENCODING_ITEMS = [(encoding, *_ENCODING_LABELS[encoding]) for encoding in core.ENCODINGS]
+# UI words of core.HIERARCHY_RULES.
+_HIERARCHY_LABELS = {
+    "ATTRIBUTE": ("Attribute", "Parent box index from the 'boxmarch_parent' attribute (none: every box a root)"),
+    "CONTAINMENT": ("Containment", "The smallest larger box holding the box's centre"),
+    "CHAIN": ("Chain", "The nearest lower-numbered box (instances along a curve are numbered along it)")}
+_HIERARCHY_ITEMS = [(rule, *_HIERARCHY_LABELS[rule]) for rule in core.HIERARCHY_RULES]
 
 
 class BOXMARCH_OT_bake(bpy.types.Operator):
@@ -63,6 +69,9 @@ class BOXMARCH_OT_bake(bpy.types.Operator):
                             description="Derive the frame once for translated, rotated or scaled copies")
     incremental: BoolProperty(name="Skip Unchanged", default=True,
                               description="Leave submeshes whose geometry has not changed since the last bake")
+    hierarchy: EnumProperty(name="Parents", default=core.HIERARCHY_RULES[0], items=_HIERARCHY_ITEMS)
+    random_seed: IntProperty(name="Random Seed", default=0, min=0,
+                             description="Seed of each box's random value (stable while the box is unchanged)")
 
     @classmethod
     def poll(cls, context):
@@ -72,7 +81,7 @@ class BOXMARCH_OT_bake(bpy.types.Operator):
         layout = self.layout
         layout.use_property_split = True
         for name in ("origin", "angle_epsilon", "encoding", "domain", "axis_turn",
-                     "sort_axes_by_extent", "use_cache", "incremental"):
+                     "sort_axes_by_extent", "use_cache", "incremental", "hierarchy", "random_seed"):
             layout.prop(self, name)
 
     def execute(self, context):
@@ -85,7 +94,8 @@ class BOXMARCH_OT_bake(bpy.types.Operator):
         settings = mesh_io.BakeSettings(
             angle_epsilon=self.angle_epsilon, origin=self.origin, encoding=self.encoding,
             domain=self.domain, axis_turn=int(self.axis_turn), sort_axes_by_extent=self.sort_axes_by_extent,
-            use_cache=self.use_cache, incremental=self.incremental)
+            use_cache=self.use_cache, incremental=self.incremental, hierarchy=self.hierarchy,
+            random_seed=self.random_seed)
         start = time.perf_counter()
         wm = context.window_manager
         wm.progress_begin(0, 2 * len(meshes))

@@ -246,7 +246,7 @@ def uniform_block_data(object_to_clip, object_to_view, perspective, settings, ou
     """The BoxmarchPreview block (shaders/glsl/preview.frag.glsl) as std140 float32 words."""
     object_to_clip = np.asarray(object_to_clip, np.float64)
     object_to_view = np.asarray(object_to_view, np.float64)
-    data = np.zeros(68, np.float32)
+    data = np.zeros(72, np.float32)
     data[0:16] = object_to_clip.T.ravel()   # GLSL matrices are column-major
     normal = np.eye(4)
     normal[:3, :3] = np.linalg.inv(object_to_view[:3, :3]).T
@@ -267,6 +267,8 @@ def uniform_block_data(object_to_clip, object_to_view, perspective, settings, ou
     data[56:60] = base_color
     data.view(np.int32)[60] = output_mode
     data[64:66] = settings.quality, viewport_height
+    data[68] = settings.blend_radius if settings.sdf == "PER_BOX_BLEND" else 0.0
+    data[69] = float(settings.colour_by_material)
     return data
 
 

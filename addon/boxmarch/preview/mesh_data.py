@@ -6,7 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import core, layouts, mesh_io
+from .. import core, layouts, mesh_io, scenes
+from ..export import transforms
 
 
 NotBakedError = mesh_io.NotBakedError  # the preview's name for it (draw.py, tests)
@@ -24,6 +25,7 @@ class BakedMesh:
     box_quaternions: np.ndarray  # float32 (S, 4)
     box_half_extents: np.ndarray  # float32 (S, 3)
     submesh_of_vertex: np.ndarray  # int32 (N,) the box number of each vertex
+    box_layers: mesh_io.BoxLayers | None = None  # per-box parameters and parents (None: baked without)
 
 
 def read_baked(mesh) -> BakedMesh:
@@ -35,12 +37,13 @@ def read_baked(mesh) -> BakedMesh:
     colour, quaternions = layers.shader_offsets(), layers.vertex_quaternions()
     if n and np.any(colour[:, 3] <= 0):
         raise NotBakedError(f"mesh '{mesh.name}' has BoxOffset alpha 0: bake it again")
-    submesh_of_vertex, _count = core.find_submeshes(positions, edges, face_starts, face_sizes, corner_verts)
+    submesh_of_vertex, count = core.find_submeshes(positions, edges, face_starts, face_sizes, corner_verts)
     origins, box_q, box_half = core.boxes_from_bake(positions, colour, quaternions, submesh_of_vertex)
     return BakedMesh(positions=positions, offsets=colour, quaternions=quaternions,
                      half_extents=box_half[submesh_of_vertex], triangles=mesh_io.read_triangles(mesh), edges=edges,
                      origins=origins, box_quaternions=box_q, box_half_extents=box_half,
-                     submesh_of_vertex=submesh_of_vertex)
+                     submesh_of_vertex=submesh_of_vertex,
+                     box_layers=mesh_io.read_box_layers(mesh, submesh_of_vertex, count))
 
 
 def read_triangles(mesh):
@@ -55,7 +58,11 @@ def box_data(baked: BakedMesh) -> layouts.BoxData:
                            offsets=core.decode_offsets(baked.offsets).astype(np.float64),
                            half_extents=baked.half_extents.astype(np.float64),
                            index=baked.submesh_of_vertex.astype(np.int64), classic_rgba=baked.offsets,
-                           box_half_extents=baked.box_half_extents.astype(np.float64))
+                           box_half_extents=baked.box_half_extents.astype(np.float64),
+                           box_origins=baked.origins.astype(np.float64), box_quaternions=baked.box_quaternions,
+                           **({} if baked.box_layers is None else {
+                               "box_params": baked.box_layers.params, "box_parent": baked.box_layers.parent,
+                               "box_depth": baked.box_layers.depth}))
 
 
 def layout_inputs(layout: str, baked: BakedMesh) -> dict[str, np.ndarray]:
@@ -65,13 +72,54 @@ def layout_inputs(layout: str, baked: BakedMesh) -> dict[str, np.ndarray]:
     NORMAL_COLOR: its box table read at each vertex's stored index, as an engine samples it)."""
     channels = layouts.channels(layout, box_data(baked))
     table = channels.pop("TABLE", None)
+    params = box_params_input(layout, channels, table)
+    for name in layouts.PARAM_CHANNELS[layout]:  # per-box values: not inputs of the frame's decode
+        del channels[name]
     inputs = {"pos": baked.positions}
     inputs.update({"ch_" + name.lower(): values for name, values in channels.items()})
     if layout == "CLASSIC":
         inputs["ch_half"] = baked.half_extents.astype(np.float32)
-    elif table is not None:
-        inputs["ch_half"] = table[np.rint(channels["COLOR"][:, 3]).astype(np.int64), :3]
+    elif layout == "NORMAL_COLOR":
+        inputs["ch_half"] = table[np.rint(channels["COLOR"][:, 3]).astype(np.int64), 0, :3]
+    inputs["ch_params"] = params
+    inputs.update(parent_inputs(baked))
     return inputs
+
+
+def parent_inputs(baked: BakedMesh) -> dict[str, np.ndarray]:
+    """float32 (N, 4) per vertex, its box's parent in the box's own local coordinates (the
+    preview's PER_BOX_BLEND, shaders/glsl/box_params.glsl): ch_parent_origin (the parent's
+    origin, 0), ch_parent_q (the parent's frame relative to the box's), ch_parent_half (the
+    parent's half-extents and shape id; (-1, -1, -1, 0) for a root)."""
+    boxes = len(baked.origins)
+    layers = baked.box_layers
+    parent = np.full(boxes, -1) if layers is None else layers.parent.astype(np.int64)
+    shapes = np.zeros(boxes) if layers is None else layers.params[:, 0]
+    has = parent >= 0
+    other = np.where(has, parent, np.arange(boxes))
+    frames = scenes.quaternion_matrices(baked.box_quaternions)
+    relative = np.einsum("nji,njk->nik", frames, frames[other])  # R_box^T R_parent
+    origin = np.einsum("nji,nj->ni", frames, baked.origins[other].astype(np.float64) - baked.origins)
+    half = np.where(has[:, None], np.concatenate([baked.box_half_extents[other], shapes[other, None]], 1),
+                    np.array([-1.0, -1.0, -1.0, 0.0]))
+    per_box = {"ch_parent_origin": np.concatenate([origin, np.zeros((boxes, 1))], 1),
+               "ch_parent_q": transforms.matrix_quaternions(relative), "ch_parent_half": half}
+    return {name: values[baked.submesh_of_vertex].astype(np.float32) for name, values in per_box.items()}
+
+
+def box_params_input(layout: str, channels: dict, table) -> np.ndarray:
+    """float32 (N, 4) each vertex's box parameters as an engine reads them from ``layout``
+    (docs/ENGINES.md): the (shape, material) and (random, user) channels, or the box table's
+    plane 1 at the vertex's index where the layout has no such channel."""
+    if layout == "CLASSIC":
+        return np.concatenate([channels["UV3"], channels["UV4"]], 1)
+    if layout == "NORMAL_FRAME":
+        return np.concatenate([channels["UV5"], channels["UV6"]], 1)
+    index = channels["COLOR"][:, 3] if layout == "NORMAL_COLOR" else channels["UV4"][:, 1]
+    params = table[np.rint(index).astype(np.int64), 1].copy()
+    if layout == "UV_FRAME":
+        params[:, :2] = channels["UV7"]
+    return params
 
 
 def frame_axes(quaternions) -> np.ndarray:

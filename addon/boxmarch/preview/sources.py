@@ -30,18 +30,24 @@ def read_glsl(name: str) -> str:
 # the largest, the preview derives them from the bake as before; NORMAL_COLOR's table read at the
 # vertex's index).
 _UV = {n: ("VEC2", f"ch_uv{n}") for n in range(1, 7)}
+# The box's parameters, from the layout's channels or box table, and its parent box in its own
+# local coordinates (box_params.glsl: box_parent_origin, box_parent_q, box_parent_half).
+_PARAMS = (("VEC4", "ch_params"), ("VEC4", "ch_parent_origin"), ("VEC4", "ch_parent_q"), ("VEC4", "ch_parent_half"))
 VERTEX_INPUTS = {
-    "CLASSIC": (("VEC3", "pos"), ("VEC4", "ch_color"), _UV[1], _UV[2], ("VEC3", "ch_half")),
-    "UV_FRAME": (("VEC3", "pos"), *(_UV[n] for n in range(1, 7))),
-    "NORMAL_FRAME": (("VEC3", "pos"), ("VEC3", "ch_normal"), ("VEC4", "ch_tangent"), *(_UV[n] for n in range(1, 5))),
+    "CLASSIC": (("VEC3", "pos"), ("VEC4", "ch_color"), _UV[1], _UV[2], ("VEC3", "ch_half"), *_PARAMS),
+    "UV_FRAME": (("VEC3", "pos"), *(_UV[n] for n in range(1, 7)), *_PARAMS),
+    "NORMAL_FRAME": (("VEC3", "pos"), ("VEC3", "ch_normal"), ("VEC4", "ch_tangent"), *(_UV[n] for n in range(1, 5)),
+                     *_PARAMS),
     "NORMAL_COLOR": (("VEC3", "pos"), ("VEC3", "ch_normal"), ("VEC4", "ch_tangent"), ("VEC4", "ch_color"),
-                     ("VEC3", "ch_half")),
+                     ("VEC3", "ch_half"), *_PARAMS),
 }
 # (interpolation, type, name): the axes are interpolated as an engine interpolates its normal and
 # tangent (constant over a rigid box); the half-extents are constant over a submesh.
 STAGE_INTERFACE = (("smooth", "VEC3", "obj_pos"), ("smooth", "VEC3", "frag_offset"),
                    ("smooth", "VEC3", "frag_axis_x"), ("smooth", "VEC3", "frag_axis_y"),
-                   ("smooth", "VEC3", "frag_axis_z"), ("flat", "VEC3", "frag_half"))
+                   ("smooth", "VEC3", "frag_axis_z"), ("flat", "VEC3", "frag_half"), ("flat", "VEC4", "frag_params"),
+                   ("flat", "VEC4", "frag_parent_origin"), ("flat", "VEC4", "frag_parent_q"),
+                   ("flat", "VEC4", "frag_parent_half"))
 # Everything per draw travels in one uniform block (push constants are limited to 128 bytes).
 # std140: three mat4 then vec4s, no padding; preview/draw.py packs it (uniform_block_data).
 UNIFORM_TYPE = "BoxmarchPreview"
@@ -55,6 +61,7 @@ UNIFORM_STRUCT = """struct BoxmarchPreview {
   vec4 base_color;
   ivec4 mode;
   vec4 quality;
+  vec4 blend;
 };
 """
 FRAGMENT_OUTPUTS = ((0, "VEC4", "frag_color"),)
@@ -89,6 +96,13 @@ def gl_declarations(stage: str, layout: str = "CLASSIC", version: str = "330 cor
 # map() of each preset; `box_half` is set by the fragment stage (shaders/glsl/sdf.glsl).
 PRESET_MAPS = {name: f"float map(vec3 p)\n{{\n  return sdf_preset_{name.lower()}(p, box_half);\n}}\n"
                for name in core.SDF_PRESETS}
+# Each box the preset its shape id picks (shaders/glsl/box_params.glsl, bm_sdf_by_id).
+PER_BOX = "PER_BOX"
+PRESET_MAPS[PER_BOX] = "float map(vec3 p)\n{\n  return bm_sdf_by_id(box_params.x, p, box_half);\n}\n"
+# Each box's shape blended into its parent's (bm_sdf_blend_parent), blend radius in box_parent_origin.w.
+PER_BOX_BLEND = "PER_BOX_BLEND"
+PRESET_MAPS[PER_BOX_BLEND] = ("float map(vec3 p)\n{\n  return bm_sdf_blend_parent(box_params.x, p, box_half, box_parent_origin.xyz, "
+                              "box_parent_q, box_parent_half, box_parent_origin.w);\n}\n")
 
 # User text goes between two #line directives: the compiler then reports errors in it by the
 # line number the user sees in the text editor, and anything after it from USER_END_LINE on.
@@ -117,8 +131,8 @@ def fragment_source(sdf: str = "BOX", user_text: str | None = None, local_mirror
     body = user_map_source(user_text) if user_text is not None else PRESET_MAPS[sdf]
     if any(float(v) < 0 for v in local_mirror):
         body = engine_map_source(body, local_mirror)
-    return "\n".join([read_glsl("decode.glsl"), read_glsl("sdf.glsl"), read_glsl("raymarch.glsl"), body,
-                      read_glsl("preview.frag.glsl")])
+    return "\n".join([read_glsl("decode.glsl"), read_glsl("sdf.glsl"), read_glsl("box_params.glsl"),
+                      read_glsl("raymarch.glsl"), body, read_glsl("preview.frag.glsl")])
 
 
 def vertex_source(layout: str = "CLASSIC") -> str:

@@ -163,6 +163,48 @@ void expand_corner_quaternions(float* corner_uv, int half, const int32_t* corner
 uint32_t options_seed(const BakeOptions& options);
 
 // ---------------------------------------------------------------------------------------------
+// box_params.cpp: per-box parameters (what an artist paints per submesh) and the per-box random
+
+// Reduces per-element values (faces, corners or vertices) to one value per submesh. Reads
+// values[element_count * components] and submesh_of_element[element_count] (ids in
+// 0..submesh_count-1). Each submesh takes the value tuple most of its elements hold (compared
+// exactly; ties: the tuple whose first element has the lowest index); a submesh without
+// elements gets zeros. Writes out_values[submesh_count * components] and
+// disagrees[submesh_count] (1 where the submesh's elements hold more than one tuple; may be
+// null). Returns the number of disagreeing submeshes. Throws std::invalid_argument (nothing
+// written) on components outside 1..4, a NaN or infinite value or an id out of range.
+size_t reduce_per_submesh(float* out_values, uint8_t* disagrees, const float* values,
+                          size_t element_count, size_t components,
+                          const int32_t* submesh_of_element, size_t submesh_count);
+
+// Per-box random value in [0, 1), a multiple of 2^-24 (exact in float32), from the box's bake
+// fingerprint and a seed: unchanged box (same geometry, same bake options) and seed, same
+// value; any change of either draws a new one. Writes out[count] from fingerprints[count].
+void box_random(float* out, const uint32_t* fingerprints, size_t count, uint32_t seed);
+
+// ---------------------------------------------------------------------------------------------
+// hierarchy.cpp: which box is each box's parent, and its depth
+
+enum class HierarchyRule : int {
+    Given = 0,        // parents as the caller names them (e.g. a painted attribute)
+    Containment = 1,  // the smallest larger box whose oriented bounds hold this box's origin
+    Chain = 2,        // the box with the nearest origin among lower-numbered boxes (box 0: root)
+};
+
+// Reads box_count boxes: origins[3] (object space), quaternions[4] (x, y, z, w; box-local to
+// object) and half_extents[3] per box. Rule Given reads given_parent[box_count] (-1: root);
+// the other rules ignore it (may be null). Containment: box j holds box i when i's origin lies
+// within j's half-extents (plus 1e-6 of j's largest half-extent) in j's frame and j is larger
+// (volume, ties: lower index), the parent is the smallest such j. Chain: the parent of box i > 0
+// is the j < i nearest to it (ties: lowest j). Both compare every pair: O(box_count^2).
+// Writes parent[box_count] (-1 for a root) and depth[box_count] (0 for a root, parent's + 1
+// otherwise). Returns the largest depth. Throws std::invalid_argument (nothing written) on a
+// given parent out of -1..box_count-1, a box its own parent or a cycle, naming the box.
+int32_t box_hierarchy(int32_t* parent, int32_t* depth, const double* origins,
+                      const float* quaternions, const double* half_extents, size_t box_count,
+                      HierarchyRule rule, const int32_t* given_parent);
+
+// ---------------------------------------------------------------------------------------------
 // raymarch.cpp: the CPU reference raymarcher (mirrors shaders/glsl/*.glsl line for line)
 //
 // Units are box-local: a point p is measured from the submesh's origin along its baked axes, and

@@ -24,5 +24,6 @@ float4 bm_quaternion_from_channels(float2 uv0, float2 uv1, float2 uv2, float2 uv
 
 // ---- SDF library. Units are box-local; box_half holds the box's half-extents.
 #include "boxmarch_sdf.hlsl"
+#include "boxmarch_box_params.hlsl"
 
 #endif  // BOXMARCH_INCLUDED

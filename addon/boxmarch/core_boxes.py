@@ -1,0 +1,108 @@
+"""Per-box parameters and the box hierarchy: the NumPy side of cpp/src/box_params.cpp and
+cpp/src/hierarchy.cpp (part of the core API: core.py re-exports them). docs/FORMAT.md states
+what each value means and where each layout carries it."""
+from __future__ import annotations
+
+import numpy as np
+
+from .native import _core, checked_int
+
+# The four floats every box carries, in their order in every layout and table.
+PARAM_NAMES = ("shape", "material", "random", "user")
+HIERARCHY_RULES = ("ATTRIBUTE", "CONTAINMENT", "CHAIN")
+_RULE_CODES = {"ATTRIBUTE": 0, "CONTAINMENT": 1, "CHAIN": 2}
+
+
+def reduce_per_submesh(values, submesh_of_element, submesh_count):
+    """One value tuple per submesh from per-element ``values`` ((E,) or (E, k), k <= 4) and
+    ``submesh_of_element`` (E,): the tuple most of the submesh's elements hold (ties: the one of
+    the lowest element). Returns (float32 (S, k), bool (S,) disagrees, disagreeing count)."""
+    values = np.asarray(values, np.float32)
+    flat = values.ndim == 1
+    values = np.ascontiguousarray(values.reshape(len(values), -1))
+    ids = np.ascontiguousarray(submesh_of_element, np.int32)
+    out, disagrees, count = _core.reduce_per_submesh(values, ids, checked_int(submesh_count, "submesh_count"))
+    return (out[:, 0] if flat else out), disagrees.astype(bool), int(count)
+
+
+def box_fingerprints(fingerprints, submesh_of_vertex, submesh_count) -> np.ndarray:
+    """uint32 (S,): the bake fingerprint of each submesh (that of its lowest vertex; every vertex
+    of a submesh holds the same one)."""
+    ids = np.asarray(submesh_of_vertex, np.int64)
+    first = np.full(int(submesh_count), len(ids), np.int64)
+    np.minimum.at(first, ids, np.arange(len(ids)))
+    fp = np.asarray(fingerprints, np.uint32)
+    return np.where(first < len(ids), fp[np.minimum(first, max(len(ids) - 1, 0))], 0).astype(np.uint32)
+
+
+def box_random(box_fingerprints_, seed=0) -> np.ndarray:
+    """float32 (S,) in [0, 1): each box's random value, stable while its fingerprint (geometry
+    and bake options) and ``seed`` (0 .. 2^32-1) stay the same."""
+    return _core.box_random(np.ascontiguousarray(box_fingerprints_, np.uint32),
+                            checked_int(seed, "random seed", 0, 2**32 - 1))
+
+
+def box_hierarchy(origins, quaternions, half_extents, rule="ATTRIBUTE", given_parent=None):
+    """(parent int32 (S,), depth int32 (S,), deepest): each box's parent box (-1: a root) and its
+    depth (0 at a root). ``rule``: ATTRIBUTE takes ``given_parent`` (int (S,), -1 for roots;
+    None: every box a root), CONTAINMENT the smallest larger box holding the box's origin, CHAIN
+    the nearest lower-numbered box (instances along a curve are numbered along it). Raises
+    ValueError on a parent out of range, a box its own parent or a cycle."""
+    if rule not in _RULE_CODES:
+        raise ValueError(f"hierarchy rule must be one of {HIERARCHY_RULES}, got {rule!r}")
+    origins = np.ascontiguousarray(origins, np.float64).reshape(-1, 3)
+    n = len(origins)
+    if rule == "ATTRIBUTE" and given_parent is None:
+        given_parent = np.full(n, -1, np.int32)
+    given = None
+    if given_parent is not None:
+        given = np.asarray(given_parent)
+        if given.shape != (n,) or not np.all(np.isfinite(given)) or np.any(given != np.round(given)):
+            raise ValueError(f"given parents must be {n} whole numbers (one per box)")
+        given = np.ascontiguousarray(np.clip(given, -2, 2**31 - 1), np.int32)
+    parent, depth, deepest = _core.box_hierarchy(
+        origins, np.ascontiguousarray(quaternions, np.float32).reshape(-1, 4),
+        np.ascontiguousarray(half_extents, np.float64).reshape(-1, 3), _RULE_CODES[rule], given)
+    return parent, depth, int(deepest)
+
+
+def preset_of_shape(shapes) -> np.ndarray:
+    """int (S,): the SDF preset (index into core.SDF_PRESETS) each shape id picks, as the shaders'
+    bm_sdf_by_id does: the id rounded to the nearest whole number, any id outside the presets
+    the box (0)."""
+    from .core import SDF_PRESETS
+
+    ids = np.floor(np.asarray(shapes, np.float64) + 0.5)
+    return np.where((ids >= 0) & (ids < len(SDF_PRESETS)), ids, 0).astype(np.int64)
+
+
+def render_boxes_by_shape(origins, quaternions, half_extents, shapes, object_to_clip, object_to_view, width, height,
+                          **options):
+    """core.render_boxes where each box draws the preset its shape id picks (``shapes`` (S,), as
+    bm_sdf_by_id): the boxes of each preset are rendered in turn into the same images, the
+    nearest hit winning by depth as in one pass (boxes never read each other). ``options`` as
+    render_boxes, but ``sdf``."""
+    from .core import SDF_PRESETS, render_boxes
+
+    if "sdf" in options:
+        raise ValueError("render_boxes_by_shape takes the preset of each box from its shape id, not sdf")
+    origins = np.asarray(origins, np.float32).reshape(-1, 3)
+    presets = preset_of_shape(shapes)
+    if presets.shape != (len(origins),):
+        raise ValueError(f"shapes must hold one id per box ({len(origins)}), got shape {np.shape(shapes)}")
+    quaternions = np.asarray(quaternions, np.float32).reshape(-1, 4)
+    half_extents = np.broadcast_to(np.asarray(half_extents, np.float32), (len(origins), 3))
+    result = None
+    for preset in np.unique(presets) if len(presets) else [0]:
+        chosen = presets == preset
+        if result is not None:
+            options.update(depth=result.depth, rgba=result.rgba)
+        part = render_boxes(origins[chosen], quaternions[chosen], half_extents[chosen], object_to_clip,
+                            object_to_view, width, height, sdf=SDF_PRESETS[preset], **options)
+        if result is None:
+            result = part
+            continue
+        won = np.any(part.normals != 0, axis=2)
+        result.normals[won] = part.normals[won]
+        result.steps += part.steps
+    return result

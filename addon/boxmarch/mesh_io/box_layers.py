@@ -1,0 +1,157 @@
+"""Per-box parameters and hierarchy in Blender mesh data: reading what the artist painted
+(``boxmarch_shape``, ``boxmarch_material``, ``boxmarch_user``, ``boxmarch_parent``, or one colour
+``boxmarch_params``), reducing it to one value per box (core), and the stored layers the bake
+writes (``.boxmarch_shape_material``, ``.boxmarch_random_user``, ``.boxmarch_parent``,
+``.boxmarch_depth``) that the export and the preview read. docs/FORMAT.md states the names and the rules."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import core
+
+# Artist-facing attributes: one scalar per element (FLOAT, INT, INT8 or BOOLEAN) on the point,
+# face or corner domain; or one colour whose R, G and A give shape, material and user (its B is
+# ignored: the random slot is the bake's). A scalar attribute wins over the colour's channel.
+PARAM_ATTRIBUTES = {"shape": "boxmarch_shape", "material": "boxmarch_material", "user": "boxmarch_user"}
+PARAMS_COLOUR_ATTRIBUTE = "boxmarch_params"
+PARENT_ATTRIBUTE = "boxmarch_parent"
+# What the bake stores, per vertex (hidden: the names start with a dot). Pairs of floats, not
+# one colour: a colour attribute could become the mesh's active or render colour.
+PARAMS_LAYERS = (".boxmarch_shape_material", ".boxmarch_random_user")  # FLOAT2 POINT
+PARENT_LAYER = ".boxmarch_parent"   # INT POINT: the parent box's index, -1 for a root
+DEPTH_LAYER = ".boxmarch_depth"     # INT POINT: 0 at a root
+_SCALAR_TYPES = {"FLOAT": ("value", np.float32), "INT": ("value", np.int32), "INT8": ("value", np.int32),
+                 "BOOLEAN": ("value", bool)}
+_COLOUR_CHANNELS = {"shape": 0, "material": 1, "user": 3}
+
+
+class BoxLayerError(ValueError):
+    """An artist attribute cannot give per-box values; the message names it and says why."""
+
+
+@dataclass
+class BoxLayers:
+    """Per-box values of one mesh: ``params`` float32 (S, 4) in PARAM_NAMES order, ``parent``
+    and ``depth`` int32 (S,)."""
+
+    params: np.ndarray
+    parent: np.ndarray
+    depth: np.ndarray
+
+
+def _element_submesh(domain, submesh_of_vertex, face_starts, corner_verts):
+    if domain == "POINT":
+        return submesh_of_vertex
+    if domain == "CORNER":
+        return submesh_of_vertex[corner_verts]
+    if domain == "FACE":
+        return submesh_of_vertex[corner_verts[face_starts]]
+    return None
+
+
+def _read_element_values(mesh, name, domain_size):
+    """(float32 (E, k), domain) of attribute ``name``, or None when the mesh has none."""
+    attr = mesh.attributes.get(name)
+    if attr is None:
+        return None
+    if attr.domain not in ("POINT", "FACE", "CORNER"):
+        raise BoxLayerError(f"mesh '{mesh.name}': attribute '{name}' is on the {attr.domain} domain; "
+                            "use POINT, FACE or CORNER")
+    count = domain_size[attr.domain]
+    if attr.data_type in ("FLOAT_COLOR", "BYTE_COLOR"):
+        buf = np.empty(count * 4, np.float32)
+        # color_srgb holds a byte colour's byte/255 untouched (color would apply the sRGB curve).
+        attr.data.foreach_get("color" if attr.data_type == "FLOAT_COLOR" else "color_srgb", buf)
+        return buf.reshape(-1, 4), attr.domain
+    if attr.data_type not in _SCALAR_TYPES:
+        raise BoxLayerError(f"mesh '{mesh.name}': attribute '{name}' is {attr.data_type}; "
+                            "use FLOAT, INT, BOOLEAN or a colour")
+    prop, dtype = _SCALAR_TYPES[attr.data_type]
+    buf = np.empty(count, dtype)
+    attr.data.foreach_get(prop, buf)
+    return buf.astype(np.float32)[:, None], attr.domain
+
+
+def _reduce(mesh, name, submesh_of_vertex, count, face_starts, corner_verts, disagreements):
+    sizes = {"POINT": len(mesh.vertices), "FACE": len(mesh.polygons), "CORNER": len(mesh.loops)}
+    read = _read_element_values(mesh, name, sizes)
+    if read is None:
+        return None
+    values, domain = read
+    try:
+        per_box, disagrees, n = core.reduce_per_submesh(
+            values, _element_submesh(domain, submesh_of_vertex, face_starts, corner_verts), count)
+    except ValueError as error:
+        raise BoxLayerError(f"mesh '{mesh.name}': attribute '{name}': {error}") from None
+    if n:
+        disagreements[name] = {"submeshes": n, "first": [int(s) for s in np.flatnonzero(disagrees)[:8]]}
+    return per_box
+
+
+def compute_box_layers(mesh, result, face_starts, corner_verts, boxes, rule="ATTRIBUTE", seed=0):
+    """(BoxLayers, report dict) for a bake ``result`` of ``mesh``. ``boxes`` = (origins,
+    quaternions, half_extents) per submesh, used by the CONTAINMENT and CHAIN rules. Raises
+    BoxLayerError on an attribute that cannot be read or parents that do not form a tree."""
+    sv, count = result.submesh_of_vertex, result.submesh_count
+    disagreements = {}
+    params = np.zeros((count, 4), np.float32)
+    colour = _reduce(mesh, PARAMS_COLOUR_ATTRIBUTE, sv, count, face_starts, corner_verts, disagreements)
+    if colour is not None and colour.shape[1] != 4:
+        raise BoxLayerError(f"mesh '{mesh.name}': attribute '{PARAMS_COLOUR_ATTRIBUTE}' must be a colour "
+                            "(FLOAT_COLOR or BYTE_COLOR)")
+    for key, name in PARAM_ATTRIBUTES.items():
+        column = core.PARAM_NAMES.index(key)
+        scalar = _reduce(mesh, name, sv, count, face_starts, corner_verts, disagreements)
+        if scalar is not None:
+            params[:, column] = scalar[:, 0]
+        elif colour is not None:
+            params[:, column] = colour[:, _COLOUR_CHANNELS[key]]
+    params[:, core.PARAM_NAMES.index("random")] = core.box_random(
+        core.box_fingerprints(result.fingerprints, sv, count), seed)
+    given = None
+    if rule == "ATTRIBUTE":
+        given = _reduce(mesh, PARENT_ATTRIBUTE, sv, count, face_starts, corner_verts, disagreements)
+        given = None if given is None else given[:, 0]
+    try:
+        parent, depth, deepest = core.box_hierarchy(*boxes, rule=rule, given_parent=given)
+    except ValueError as error:
+        raise BoxLayerError(f"mesh '{mesh.name}': box hierarchy: {error}") from None
+    report = {"hierarchy": rule, "max_depth": deepest, "roots": int((parent < 0).sum()),
+              "random_seed": int(seed), "disagreeing_attributes": disagreements}
+    return BoxLayers(params, parent, depth), report
+
+
+def write_box_layers(mesh, submesh_of_vertex, layers: BoxLayers) -> None:
+    """Store ``layers`` per vertex (every vertex holds its box's values)."""
+    for name, data_type, values, prop in ((PARAMS_LAYERS[0], "FLOAT2", layers.params[:, :2], "vector"),
+                                          (PARAMS_LAYERS[1], "FLOAT2", layers.params[:, 2:], "vector"),
+                                          (PARENT_LAYER, "INT", layers.parent, "value"),
+                                          (DEPTH_LAYER, "INT", layers.depth, "value")):
+        old = mesh.attributes.get(name)
+        if old is not None and (old.data_type != data_type or old.domain != "POINT"):
+            mesh.attributes.remove(old)
+            old = None
+        if old is None:
+            mesh.attributes.new(name, data_type, "POINT")
+        mesh.attributes[name].data.foreach_set(prop, np.ascontiguousarray(values[submesh_of_vertex]).reshape(-1))
+
+
+def read_box_layers(mesh, submesh_of_vertex, count):
+    """The stored BoxLayers of ``mesh`` per box (each box takes its lowest vertex's values), or
+    None when the mesh was baked without them."""
+    attrs = [mesh.attributes.get(name) for name in (*PARAMS_LAYERS, PARENT_LAYER, DEPTH_LAYER)]
+    if any(a is None or a.domain != "POINT" for a in attrs):
+        return None
+    n = len(mesh.vertices)
+    pairs = [np.empty(n * 2, np.float32), np.empty(n * 2, np.float32)]
+    for attr, pair in zip(attrs, pairs):
+        attr.data.foreach_get("vector", pair)
+    parent, depth = np.empty(n, np.int32), np.empty(n, np.int32)
+    attrs[2].data.foreach_get("value", parent)
+    attrs[3].data.foreach_get("value", depth)
+    first = np.zeros(int(count), np.int64)
+    first[submesh_of_vertex[::-1]] = np.arange(n)[::-1]
+    params = np.concatenate([pair.reshape(-1, 2) for pair in pairs], 1)
+    return BoxLayers(params[first], parent[first], depth[first])

@@ -1,0 +1,67 @@
+"""Per-box parameters and hierarchy: what they add to a bake (the core alone, and the whole bake
+job in Blender through the bpy module with painted attributes).
+
+    python bench/bench_box_params.py [BOXES ...]     (default: 1000 16000)
+
+Meshes: BOXES random boxes (8 vertices each) with boxmarch_shape painted per face and
+boxmarch_user per vertex (one face in a hundred boxes disagreeing)."""
+import sys
+
+import numpy as np
+
+sys.path.insert(0, __file__.rsplit("/", 1)[0])
+import bpy  # noqa: E402
+
+import boxmarch  # noqa: E402
+from boxmarch import bake_job, core, mesh_io, scenes  # noqa: E402
+from common import best_of, boxes_object, table  # noqa: E402
+
+
+def core_rows(count):
+    arrays, _centres, _sizes, _rotations = scenes.random_boxes(count, seed=1)
+    result = core.bake(*arrays)
+    sv = result.submesh_of_vertex
+    faces = np.repeat(np.arange(count) % 7, 6).astype(np.float32)
+    face_box = sv[arrays[4][arrays[2]]]
+    boxes = (result.origins, result.quaternions, result.half_extents)
+    rows = [(f"{count:,}", "bake (core)", best_of(3, lambda: core.bake(*arrays)))]
+    rows.append((f"{count:,}", "reduce per submesh (1 float per face)",
+                 best_of(3, lambda: core.reduce_per_submesh(faces, face_box, count))))
+    rows.append((f"{count:,}", "random (fingerprints + hash)",
+                 best_of(3, lambda: core.box_random(core.box_fingerprints(result.fingerprints, sv, count)))))
+    for rule in core.HIERARCHY_RULES:
+        rows.append((f"{count:,}", f"hierarchy {rule}", best_of(1, lambda: core.box_hierarchy(*boxes, rule=rule))))
+    return rows
+
+
+def job_rows(count):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    plain = boxes_object(bpy, count, name="plain")[0].data
+    settings = mesh_io.BakeSettings(incremental=False)
+    rows = [(f"{count:,}", "bake job, nothing painted (full)", best_of(3, lambda: bake_job.bake_meshes([plain], settings)))]
+    ob, _centres, _sizes = boxes_object(bpy, count)
+    mesh = ob.data
+    shape = np.repeat(np.arange(count) % 7, 6).astype(np.int32)
+    shape[6 * np.arange(0, count, 100)] = 9
+    mesh.attributes.new("boxmarch_shape", "INT", "FACE").data.foreach_set("value", shape)
+    mesh.attributes.new("boxmarch_user", "FLOAT", "POINT").data.foreach_set(
+        "value", np.repeat(np.linspace(0, 1, count), 8).astype(np.float32))
+    full = best_of(3, lambda: bake_job.bake_meshes([mesh], settings))
+    unchanged = best_of(3, lambda: bake_job.bake_meshes([mesh], mesh_io.BakeSettings()))
+    report = bake_job.bake_meshes([mesh], settings)[0].report["boxes"]
+    flagged = report["disagreeing_attributes"]["boxmarch_shape"]["submeshes"]
+    return rows + [(f"{count:,}", "bake job, painted (full)", full),
+            (f"{count:,}", f"bake job, painted (unchanged: params only; {flagged} disagreeing boxes reported)",
+             unchanged)]
+
+
+def main(counts):
+    boxmarch.register()
+    rows = []
+    for count in counts:
+        rows += core_rows(count) + job_rows(count)
+    print(table(["boxes", "step", "seconds"], [(b, s, f"{t:.4f}") for b, s, t in rows]))
+
+
+if __name__ == "__main__":
+    main([int(a) for a in sys.argv[1:]] or [1000, 16000])

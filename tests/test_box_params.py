@@ -1,0 +1,108 @@
+"""Per-box parameters and hierarchy in the core (cpp/src/box_params.cpp, hierarchy.cpp): the
+expectations come from the inputs' construction, never from the code under test."""
+import numpy as np
+import pytest
+
+from boxmarch import core, scenes
+
+
+def test_reduce_takes_the_majority_and_counts_disagreement():
+    # submesh 0: 1, 1, 2 -> 1 (disagrees); submesh 1: 3, 3 -> 3; submesh 2: 5, 4 tie -> 5 (first);
+    # submesh 3: no element -> 0.
+    values = np.array([1, 1, 2, 3, 3, 5, 4], np.float32)
+    ids = np.array([0, 0, 0, 1, 1, 2, 2])
+    per_box, disagrees, count = core.reduce_per_submesh(values, ids, 4)
+    assert per_box.tolist() == [1, 3, 5, 0]
+    assert disagrees.tolist() == [True, False, True, False] and count == 2
+
+
+def test_reduce_compares_whole_tuples():
+    values = np.array([[1, 2, 3, 4], [1, 2, 3, 4], [1, 2, 3, 5]], np.float32)
+    per_box, disagrees, count = core.reduce_per_submesh(values, [0, 0, 0], 1)
+    assert per_box.tolist() == [[1, 2, 3, 4]] and count == 1
+
+
+@pytest.mark.parametrize("values, ids, message", [
+    (np.array([1.0, np.nan], np.float32), [0, 0], "NaN"),
+    (np.array([1.0, 2.0], np.float32), [0, 3], "out of range|outside"),
+    (np.zeros((2, 5), np.float32), [0, 0], "components"),
+])
+def test_reduce_refuses_bad_input(values, ids, message):
+    with pytest.raises(ValueError, match=message):
+        core.reduce_per_submesh(values, ids, 2)
+
+
+def test_random_is_stable_seeded_and_uniform():
+    fingerprints = np.arange(1, 20001, dtype=np.uint32) * np.uint32(2654435761)
+    a, b = core.box_random(fingerprints, 7), core.box_random(fingerprints, 7)
+    assert np.array_equal(a, b)
+    other_seed = core.box_random(fingerprints, 8)
+    assert np.mean(a == other_seed) < 0.01
+    assert a.min() >= 0.0 and a.max() < 1.0
+    assert np.all(a * 2**24 == np.round(a * 2**24))  # multiples of 2^-24: exact in float32
+    # 20000 draws: the mean of U(0, 1) within 5 standard errors (0.0020 each), ten equal bins within 15 %
+    assert abs(a.mean() - 0.5) < 0.0102
+    bins = np.bincount((a * 10).astype(int), minlength=10)
+    assert bins.min() > 1700 and bins.max() < 2300
+
+
+def test_random_survives_a_rebake_of_an_unchanged_box():
+    arrays, centres, sizes, rotations = scenes.random_boxes(20, seed=3)
+    first = core.bake(*arrays)
+    moved = list(arrays)
+    moved[0] = arrays[0].copy()
+    moved[0][8 * 5:8 * 6] += np.float32(0.25)  # box 5 moves; the other 19 stay
+    second = core.bake(*moved)
+    r1 = core.box_random(core.box_fingerprints(first.fingerprints, first.submesh_of_vertex, 20), 0)
+    r2 = core.box_random(core.box_fingerprints(second.fingerprints, second.submesh_of_vertex, 20), 0)
+    unchanged = np.arange(20) != 5
+    assert np.array_equal(r1[unchanged], r2[unchanged])
+    assert r1[5] != r2[5]
+    assert len(np.unique(r1)) == 20
+
+
+def identity_boxes(origins, half_extents):
+    origins = np.asarray(origins, np.float64)
+    return origins, np.tile(np.float32([0, 0, 0, 1]), (len(origins), 1)), np.asarray(half_extents, np.float64)
+
+
+def test_chain_parents_follow_the_numbering():
+    # Links along a bent line, numbered along it (as instances along a curve are).
+    t = np.linspace(0, 3, 12)
+    boxes = identity_boxes(np.stack([t, np.sin(t), 0 * t], 1), np.full((12, 3), 0.1))
+    parent, depth, deepest = core.box_hierarchy(*boxes, rule="CHAIN")
+    assert parent.tolist() == [-1] + list(range(11))
+    assert depth.tolist() == list(range(12)) and deepest == 11
+
+
+def test_containment_picks_the_smallest_larger_box():
+    # 0: big box; 1: medium inside 0; 2: small inside 1 (and 0); 3: outside everything;
+    # 4: a box turned 45 degrees about z whose corner region holds box 5's origin only in its own frame.
+    origins = [[0, 0, 0], [1, 0, 0], [1.2, 0, 0], [10, 0, 0], [20, 0, 0], [20, 1.3, 0]]
+    half = [[3, 3, 3], [1, 1, 1], [0.1, 0.1, 0.1], [1, 1, 1], [1, 1, 1], [0.1, 0.1, 0.1]]
+    origins, q, half = identity_boxes(origins, half)
+    s = np.sin(np.pi / 8)
+    q[4] = [0, 0, s, np.cos(np.pi / 8)]
+    parent, depth, deepest = core.box_hierarchy(origins, q, half, rule="CONTAINMENT")
+    # (0, 1.3) lies outside the axis-aligned unit box but inside it turned 45 degrees (|x|+|y| <= 1.41)
+    assert parent.tolist() == [-1, 0, 1, -1, -1, 4]
+    assert depth.tolist() == [0, 1, 2, 0, 0, 1] and deepest == 2
+    q[4] = [0, 0, 0, 1]
+    assert core.box_hierarchy(origins, q, half, rule="CONTAINMENT")[0][5] == -1
+
+
+@pytest.mark.parametrize("given, message", [
+    ([1, 2, 0], "cycle"), ([-1, 1, 0], "own parent"), ([-1, 5, 0], "outside"), ([-1, 0.5, 0], "whole"),
+])
+def test_given_parents_must_form_a_tree(given, message):
+    boxes = identity_boxes(np.zeros((3, 3)), np.ones((3, 3)))
+    with pytest.raises(ValueError, match=message):
+        core.box_hierarchy(*boxes, rule="ATTRIBUTE", given_parent=np.array(given, np.float64))
+
+
+def test_given_parents_and_depths():
+    boxes = identity_boxes(np.zeros((5, 3)), np.ones((5, 3)))
+    parent, depth, deepest = core.box_hierarchy(*boxes, given_parent=np.array([-1, 0, 1, 1, -1]))
+    assert parent.tolist() == [-1, 0, 1, 1, -1] and depth.tolist() == [0, 1, 2, 2, 0] and deepest == 2
+    parent, depth, _ = core.box_hierarchy(*boxes)
+    assert parent.tolist() == [-1] * 5 and depth.tolist() == [0] * 5

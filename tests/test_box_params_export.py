@@ -1,0 +1,203 @@
+"""Box parameters, parents and depths through every preset's file: painted in Blender with
+known values, exported, read back with the tests' own file readers (tests/gltf_reader.py,
+tests/fbx_reader.py, the .tres / .bin table) and decoded as docs/ENGINES.md states for each
+layout: integers exact, floats within 1e-6. The random value is compared with the one the bake
+stored (read raw from the mesh), which the painted values cannot give."""
+import numpy as np
+import pytest
+
+from boxmarch import scenes
+from conftest import mesh_object
+from engine_scene import TO_Y_UP, UNITY, UNREAL, table_texels
+from fbx_reader import read_fbx_geometry
+from gltf_reader import read_glb
+
+SPACING = 1.5
+# Two meshes: boxes at x = 1.5 k, k = 0..5 (mesh A) and 10..14 (mesh B); k names the box in any file.
+KEYS = {"A": np.arange(6), "B": np.arange(10, 15)}
+SHAPE = {"A": [0, 1, 2, 3, 4, 5], "B": [6, 5, 4, 3, 2]}
+MATERIAL = {"A": [7, 8, 7, 8, 7, 8], "B": [1, 2, 3, 4, 5]}
+USER = {"A": [0.1, 0.2, 0.3, 0.4, 0.5, 0.6], "B": [-1.25, 2.5, 1e-3, 7.0, 0.0]}
+PARENT = {"A": [-1, 0, 1, 2, 0, 4], "B": [-1, 0, 0, 2, 3]}
+DEPTH = {"A": [0, 1, 2, 3, 1, 2], "B": [0, 1, 1, 2, 3]}
+
+
+def painted_object(blender, name):
+    keys = KEYS[name]
+    centres = np.stack([SPACING * keys, np.zeros(len(keys)), np.zeros(len(keys))], 1)
+    ob = mesh_object(blender, name, *scenes.box_arrays(centres, 1.0, np.eye(3)), select=True)
+    mesh = ob.data
+    for attr, values, kind in (("boxmarch_shape", SHAPE, "INT"), ("boxmarch_material", MATERIAL, "INT"),
+                               ("boxmarch_user", USER, "FLOAT"), ("boxmarch_parent", PARENT, "INT")):
+        mesh.attributes.new(attr, kind, "FACE").data.foreach_set("value", np.repeat(values[name], 6))
+    return ob
+
+
+@pytest.fixture
+def scene(blender):
+    objects = [painted_object(blender, name) for name in ("A", "B")]
+    assert blender.ops.boxmarch.bake() == {"FINISHED"}
+    random = {}
+    for ob in objects:
+        stored = np.empty(len(ob.data.vertices) * 2, np.float32)
+        ob.data.attributes[".boxmarch_random_user"].data.foreach_get("vector", stored)
+        random[ob.name] = stored.reshape(-1, 2)[::8, 0]
+    return objects, random
+
+
+def expected(name, random, index_base):
+    """Per box of mesh ``name``: shape, material, random, user, parent (file numbering), depth."""
+    parent = np.array(PARENT[name])
+    return np.stack([SHAPE[name], MATERIAL[name], random[name], USER[name],
+                     np.where(parent >= 0, parent + index_base, -1), DEPTH[name]], 1).astype(np.float64)
+
+
+def check(values, keys, name, random, index_base):
+    """values (n, 6) decoded per file vertex whose box key is ``keys``."""
+    want = expected(name, random, index_base)[keys - KEYS[name][0]]
+    ints = [0, 1, 4, 5]
+    assert np.array_equal(values[:, ints], want[:, ints])
+    assert np.abs(values[:, [2, 3]] - want[:, [2, 3]]).max() <= 1e-6
+
+
+def box_key(x):
+    return np.rint(np.asarray(x, np.float64) / SPACING).astype(int)
+
+
+def decode_vertex_channels(layout, uv):
+    """(n, 6) shape, material, random, user, parent, depth from a layout's per-vertex UV channels
+    (docs/ENGINES.md), or None where a value rides in the box table only (NaN columns)."""
+    nan = np.full(len(uv[1]), np.nan)
+    if layout == "CLASSIC":
+        return np.stack([uv[3][:, 0], uv[3][:, 1], uv[4][:, 0], uv[4][:, 1], uv[5][:, 0], uv[5][:, 1]], 1)
+    if layout == "NORMAL_FRAME":
+        return np.stack([uv[5][:, 0], uv[5][:, 1], uv[6][:, 0], uv[6][:, 1], uv[7][:, 0], uv[7][:, 1]], 1)
+    if layout == "UV_FRAME":  # random, user and depth: the box table only
+        return np.stack([uv[7][:, 0], uv[7][:, 1], nan, nan, uv[6][:, 1], nan], 1)
+    raise ValueError(layout)
+
+
+def index_of(layout, uv):
+    return {"UV_FRAME": uv[4][:, 1], "NORMAL_FRAME": uv[2][:, 1]}.get(layout)
+
+
+def table_rows(texels, width, boxes, index):
+    """(n, 6) from the box table's three planes (docs/ENGINES.md): plane 0 = (h, parent),
+    plane 1 = (shape, material, random, user), plane 2 = (depth, 0, 0, 0)."""
+    rows_per_plane = -(-boxes // width)
+    i = np.rint(index).astype(int)
+    at = lambda plane: texels[(plane * rows_per_plane + i // width) * width + i % width]
+    return np.concatenate([at(1), at(0)[:, 3:4], at(2)[:, :1]], 1)
+
+
+def rotate(v, q):
+    """v turned by unit quaternions q (x, y, z, w), as docs/FORMAT.md states the decode."""
+    u, w = q[:, :3], q[:, 3:]
+    return v + 2.0 * np.cross(u, np.cross(u, v) + w * v)
+
+
+def check_table_frames(texels, width, boxes, index, positions, offsets, keys, to_engine, scale):
+    """The table's planes 3 (origin) and 4 (frame) of each vertex's box: the origin is the box's
+    known centre in the engine's frame, and position + R(q) f, with f from the layout's
+    channels, lands on it (within 1e-6 of the half-extent)."""
+    rows_per_plane = -(-boxes // width)
+    i = np.rint(index).astype(int)
+    at = lambda plane: texels[(plane * rows_per_plane + i // width) * width + i % width].astype(np.float64)
+    origin, q = at(3)[:, :3], at(4)
+    centre = np.stack([SPACING * keys, 0 * keys, 0 * keys], 1) @ to_engine.T
+    half = 0.5 * scale
+    assert np.abs(origin - centre).max() <= 1e-6 * half + 2e-7 * np.abs(centre).max()
+    assert np.abs(positions + rotate(offsets, q) - origin).max() <= 1e-6 * half + 2e-7 * np.abs(centre).max()
+
+
+def merge_table(vertex_values, table_values):
+    out = vertex_values.copy()
+    missing = np.isnan(out)
+    out[missing] = table_values[missing]
+    assert np.array_equal(np.isnan(out), np.zeros_like(out, bool))
+    present = ~missing  # values carried twice must agree exactly
+    assert np.array_equal(vertex_values[present], table_values[present])
+    return out
+
+
+@pytest.mark.parametrize("layout", ["NORMAL_FRAME", "UV_FRAME", "CLASSIC"])
+def test_gltf(blender, scene, tmp_path, layout):
+    _, random = scene
+    path = tmp_path / "p.glb"
+    assert blender.ops.boxmarch.export(filepath=str(path), preset="GLTF", layout=layout) == {"FINISHED"}
+    texels = None if layout == "CLASSIC" else np.fromfile(tmp_path / "p.boxes.bin", "<f4").reshape(-1, 4)
+    base = 0
+    for mesh in read_glb(path):
+        (p,) = mesh["primitives"]
+        uv = {n: p[f"TEXCOORD_{n}"].astype(np.float64) for n in range(1, 8) if f"TEXCOORD_{n}" in p}
+        values = decode_vertex_channels(layout, uv)
+        keys = box_key(p["POSITION"][:, 0])
+        if texels is not None:
+            values = merge_table(values, table_rows(texels, 11, 11, index_of(layout, uv)))
+            offsets = np.concatenate([uv[1], uv[2][:, :1]] if layout == "NORMAL_FRAME" else [uv[3], uv[4][:, :1]], 1)
+            check_table_frames(texels, 11, 11, index_of(layout, uv), p["POSITION"].astype(np.float64), offsets, keys,
+                               TO_Y_UP, 1.0)
+        check(values, keys, mesh["name"], random, base)
+        base += len(KEYS[mesh["name"]]) if layout != "CLASSIC" else 0
+    assert base == (11 if layout != "CLASSIC" else 0)
+
+
+def test_godot3_table(blender, scene, tmp_path):
+    _, random = scene
+    path = tmp_path / "g.glb"
+    assert blender.ops.boxmarch.export(filepath=str(path), preset="GODOT3") == {"FINISHED"}
+    texels = table_texels((tmp_path / "g.boxes.tres").read_text())
+    base = 0
+    for mesh in read_glb(path):
+        (p,) = mesh["primitives"]
+        colour = p["COLOR_0"].astype(np.float64)
+        values = table_rows(texels, 11, 11, colour[:, 3])
+        keys = box_key(p["POSITION"][:, 0])
+        check(values, keys, mesh["name"], random, base)
+        check_table_frames(texels, 11, 11, colour[:, 3], p["POSITION"].astype(np.float64), colour[:, :3], keys,
+                           TO_Y_UP, 1.0)
+        base += len(KEYS[mesh["name"]])
+
+
+@pytest.mark.parametrize("preset, layout", [("UNITY", "UV_FRAME"), ("UNITY", "CLASSIC"), ("UNITY", "NORMAL_FRAME"),
+                                            ("UNREAL", "UV_FRAME")])
+def test_fbx(blender, scene, tmp_path, preset, layout):
+    objects, random = scene
+    objects[1].select_set(False)  # the reader reads the file's first geometry: mesh A alone
+    path = tmp_path / "f.fbx"
+    assert blender.ops.boxmarch.export(filepath=str(path), preset=preset, layout=layout) == {"FINISHED"}
+    raw = read_fbx_geometry(path)
+    names = {"CLASSIC": ["BoxQuatXY", "BoxQuatZW", "BoxShapeMaterial", "BoxRandomUser", "BoxParentDepth"],
+             "UV_FRAME": ["BoxQuatXY", "BoxQuatZW", "BoxOffsetXY", "BoxOffsetZIndex", "BoxHalfXY", "BoxHalfZ",
+                          "BoxShapeMaterial"],
+             "NORMAL_FRAME": ["BoxOffsetXY", "BoxOffsetZIndex", "BoxHalfXY", "BoxHalfZ", "BoxShapeMaterial",
+                              "BoxRandomUser", "BoxParentDepth"]}[layout]
+    assert raw["uv_maps"][1:] == names  # UV1.. in file order after the artist's UV0
+    uv = {n: raw[name].copy() for n, name in enumerate(names, 1)}
+    if preset == "UNREAL":  # its importer reads v as 1 - v
+        for values in uv.values():
+            values[:, 1] = 1.0 - values[:, 1]
+    values = decode_vertex_channels(layout, uv)
+    keys = box_key(raw["position"][:, 0])
+    if layout != "CLASSIC":
+        texels = np.fromfile(tmp_path / "f.boxes.bin", "<f4").reshape(-1, 4)
+        values = merge_table(values, table_rows(texels, 6, 6, index_of(layout, uv)))
+        engine = UNITY if preset == "UNITY" else UNREAL
+        offsets = np.concatenate([uv[1], uv[2][:, :1]] if layout == "NORMAL_FRAME" else [uv[3], uv[4][:, :1]], 1)
+        check_table_frames(texels, 6, 6, index_of(layout, uv), raw["position"] @ engine["from_file"].T,
+                           offsets, keys, engine["to_engine"], engine["scale"])
+    check(values, keys, "A", random, 0)
+
+
+def test_shuffled_ids_fail_the_check(blender, scene, tmp_path):
+    """Negative control: the same decode against shape ids in another order must fail."""
+    _, random = scene
+    path = tmp_path / "p.glb"
+    assert blender.ops.boxmarch.export(filepath=str(path), preset="GLTF") == {"FINISHED"}
+    (p,) = read_glb(path)[0]["primitives"]
+    values = decode_vertex_channels("NORMAL_FRAME", {n: p[f"TEXCOORD_{n}"].astype(np.float64) for n in range(1, 8)})
+    keys = box_key(p["POSITION"][:, 0])
+    check(values, keys, "A", random, 0)
+    values[:, 0] = np.array(SHAPE["A"])[::-1][keys]
+    with pytest.raises(AssertionError):
+        check(values, keys, "A", random, 0)
