@@ -3,6 +3,8 @@ known values, exported, read back with the tests' own file readers (tests/gltf_r
 tests/fbx_reader.py, the .tres / .bin table) and decoded as docs/ENGINES.md states for each
 layout: integers exact, floats within 1e-6. The random value is compared with the one the bake
 stored (read raw from the mesh), which the painted values cannot give."""
+import json
+
 import numpy as np
 import pytest
 
@@ -120,6 +122,24 @@ def merge_table(vertex_values, table_values):
     return out
 
 
+def decode_by_sidecar(sidecar, uv, texels):
+    """(n, 6) shape, material, random, user, parent, depth read where the export's sidecar says
+    they ride (its box_parameters: "UV5.x" or "TABLE.1.b", the box table's layout its box_table)."""
+    table = sidecar["box_table"]
+    columns = []
+    for name in ("shape", "material", "random", "user", "parent", "depth"):
+        channel, *rest = sidecar["box_parameters"][name].split(".")
+        if channel == "TABLE":
+            plane, component = int(rest[0]), "rgba".index(rest[1])
+            index = np.rint(uv[int(sidecar["quantities"]["index"]["channels"][0][2])][:, 1]).astype(int)
+            rows = table["height"] // len(table["planes"])
+            width = table["width"]
+            columns.append(texels[(plane * rows + index // width) * width + index % width, component])
+        else:
+            columns.append(uv[int(channel[2:])][:, "xy".index(rest[0])])
+    return np.stack(columns, 1).astype(np.float64)
+
+
 @pytest.mark.parametrize("layout", ["NORMAL_FRAME", "UV_FRAME", "CLASSIC"])
 def test_gltf(blender, scene, tmp_path, layout):
     _, random = scene
@@ -138,6 +158,10 @@ def test_gltf(blender, scene, tmp_path, layout):
             check_table_frames(texels, 11, 11, index_of(layout, uv), p["POSITION"].astype(np.float64), offsets, keys,
                                TO_Y_UP, 1.0)
         check(values, keys, mesh["name"], random, base)
+        # The sidecar names the same channels and texels: decoding through it gives the same values.
+        sidecar = json.loads((tmp_path / "p.boxmarch.json").read_text())
+        assert (sidecar["box_table"] is None) == (layout == "CLASSIC")
+        assert np.array_equal(decode_by_sidecar(sidecar, uv, texels), values)
         base += len(KEYS[mesh["name"]]) if layout != "CLASSIC" else 0
     assert base == (11 if layout != "CLASSIC" else 0)
 

@@ -149,8 +149,10 @@ def test_every_sidecar_validates_and_describes_its_file(blender, tmp_path, prese
     assert written["box_count"] == len(centres) and written["file"] == path.name
     assert written["decode_error"]["export"] == report["transform_error"] < 1e-6
     assert written["decode_error"]["default_import"] == report["default_import_error"]
-    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
-        [path.name, "boxes.boxmarch.json"] + (["boxes.boxes.tres", "boxes.glb.import"] if preset == "GODOT3" else []))
+    table = {"GODOT3": ["boxes.boxes.tres", "boxes.glb.import"], "BLENDER": []}.get(
+        preset, [] if layout == "CLASSIC" else ["boxes.boxes.bin"])
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([path.name, "boxes.boxmarch.json"] + table)
+    assert (written["box_table"] or {}).get("file") == (table[0] if table else None)
     check_against_file(blender, path, written)
     assert sorted(sidecar.written_beside(str(path), preset, layout)) == sorted(str(p) for p in tmp_path.iterdir()
                                                                                if p != path)

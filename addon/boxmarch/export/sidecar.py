@@ -13,8 +13,9 @@ import os
 
 import numpy as np
 
+from .. import layouts
 from . import import_settings, transforms
-from .godot import TABLE_WIDTH as GODOT3_TABLE_WIDTH
+from .godot import TABLE_WIDTH as GODOT3_TABLE_WIDTH, table_size
 
 FORMAT_VERSION = 1
 SIDECAR_SUFFIX = ".boxmarch.json"
@@ -51,6 +52,29 @@ _Y_UP = {"up": "+Y", "handedness": "right", "units": "metre"}
 DATA_FRAMES = {"GLTF": _Y_UP, "GODOT3": _Y_UP, "BLENDER": _BLENDER,
                "UNITY": {"up": "+Y", "handedness": "left", "units": "metre"},
                "UNREAL": {"up": "+Z", "handedness": "left", "units": "centimetre"}}
+
+
+# The box table's texels per box (layouts.box_table): plane 0 = (h, parent), 1 = (shape, material,
+# random, user), 2 = (depth, 0, 0, 0), 3 = (origin, 0), 4 = the frame's quaternion.
+TABLE_PLANES = [["half_extents.x", "half_extents.y", "half_extents.z", "parent"],
+                ["shape", "material", "random", "user"], ["depth", None, None, None],
+                ["origin.x", "origin.y", "origin.z", None], ["frame.x", "frame.y", "frame.z", "frame.w"]]
+
+
+def box_parameter_channels(layout: str) -> dict:
+    """Where ``layout`` keeps each per-box parameter and the hierarchy: a vertex channel
+    ("UV5.x") where it has room (layouts.PARAM_CHANNELS; UV_FRAME's parent rides in UV6.y), else
+    the box table's texel ("TABLE.1.b": plane 1, blue); CLASSIC has no table."""
+    found = {name: f"{channel}.{component}" for channel, names in layouts.PARAM_CHANNELS[layout].items()
+             for component, name in zip("xy", names)}
+    if layout == "UV_FRAME":
+        found["parent"] = "UV6.y"
+    if layout != "CLASSIC":
+        for plane, names in enumerate(TABLE_PLANES[:3]):
+            for component, name in zip("rgba", names):
+                if name in ("shape", "material", "random", "user", "parent", "depth"):
+                    found.setdefault(name, f"TABLE.{plane}.{component}")
+    return {name: found[name] for name in ("shape", "material", "random", "user", "parent", "depth")}
 
 
 def sidecar_path(filepath: str) -> str:
@@ -96,6 +120,7 @@ def describe(preset, layout: str, filepath: str, stats: list, skins: dict, file_
         quantities["half_extents"].update(file=os.path.basename(table_path(filepath)),
                                           texels_per_row=GODOT3_TABLE_WIDTH)
     default_errors = [m["default_import_error"] for m in stats if "default_import_error" in m]
+    table_width, table_height = table_size(int(sum(m["boxes"] for m in stats)))
     return {
         "format_version": FORMAT_VERSION,
         "preset": preset.name,
@@ -107,6 +132,11 @@ def describe(preset, layout: str, filepath: str, stats: list, skins: dict, file_
         "meshes": [{"name": m["mesh"], "vertices": int(m["vertices"]), "boxes": int(m["boxes"])} for m in stats],
         "skins": skins,
         "quantities": quantities,
+        "box_parameters": box_parameter_channels(layout),
+        "box_table": None if table_path(filepath, layout, preset.name) is None else {
+            "file": os.path.basename(table_path(filepath, layout, preset.name)),
+            "format": "godot3_tres" if layout == "NORMAL_COLOR" else "float32_rgba",
+            "planes": TABLE_PLANES, "width": table_width, "height": table_height * len(TABLE_PLANES)},
         "file_channels": file_channel_names,
         "axes": {"file": _BLENDER if preset.extension == ".blend" else _Y_UP, "data": DATA_FRAMES[preset.name],
                  "data_from_file": data_from_file(preset).tolist(), "length_scale": preset.length_scale,
