@@ -225,8 +225,8 @@ OUTPUTS = {
 
 # The engine packages (engines/) ship copies of the engine shaders, one folder a user copies.
 UNITY_SHADERS = "engines/unity/com.boxmarch.boxmarch/Runtime/Shaders"
-UNITY_COPIES = ("boxmarch.hlsl", "boxmarch_decode.hlsl", "boxmarch_sdf.hlsl", "boxmarch_march.hlsl",
-                "boxmarch_raymarch.hlsl", "boxmarch_example.hlsl", "BoxmarchExample.shader")
+UNITY_COPIES = ("boxmarch.hlsl", "boxmarch_decode.hlsl", "boxmarch_sdf.hlsl", "boxmarch_box_params.hlsl",
+                "boxmarch_march.hlsl", "boxmarch_raymarch.hlsl", "boxmarch_example.hlsl", "BoxmarchExample.shader")
 
 
 def copied(source: str) -> str:
