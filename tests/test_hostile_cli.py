@@ -103,7 +103,8 @@ def test_output_names_up_to_255_bytes_are_written(baked_blend, tmp_path, stem, o
     to = stem + ".glb"
     r = run_module(["export", str(baked_blend), "--to", to] + (["--out", out] if out else []), tmp_path)
     assert r.returncode == 0, r.stderr
-    assert sorted(os.listdir(tmp_path)) == sorted(["world.blend", to, stem + ".boxmarch.json"] + ([out] if out else []))
+    beside = [stem + ".boxmarch.json", stem + ".boxes.bin"]  # the sidecar and the box table
+    assert sorted(os.listdir(tmp_path)) == sorted(["world.blend", to, *beside] + ([out] if out else []))
 
 
 @pytest.mark.slow
