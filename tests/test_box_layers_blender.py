@@ -127,3 +127,34 @@ def test_unreadable_attributes_are_refused_and_nothing_written(blender, name, da
     with pytest.raises(mesh_io.BakeInputError, match=message):
         bake(mesh)
     assert mesh.attributes.get(".boxmarch_shape_material") is None and mesh.color_attributes.get("BoxOffset") is None
+
+
+def test_object_properties_give_what_no_attribute_paints(blender):
+    ob = chain_object(blender)
+    mesh = ob.data
+    ob["boxmarch_shape"], ob["boxmarch_material"], ob["boxmarch_user"] = 4, 2.5, -0.75
+    paint(mesh, "boxmarch_material", "INT", "POINT", np.repeat(np.arange(BOXES), 8).astype(np.int32))
+    report = bake(mesh)["boxes"]
+    per_box = stored_params(mesh)[::8]
+    assert per_box[:, 0].tolist() == [4] * BOXES and per_box[:, 3].tolist() == [-0.75] * BOXES
+    assert per_box[:, 1].tolist() == list(range(BOXES))  # the attribute wins over the property
+    assert report["object_properties"] == {"boxmarch_shape": 4.0, "boxmarch_material": 2.5, "boxmarch_user": -0.75}
+
+
+def test_linked_duplicates_must_agree_on_object_properties(blender):
+    ob = chain_object(blender)
+    twin = blender.data.objects.new("twin", ob.data)
+    blender.context.scene.collection.objects.link(twin)
+    ob["boxmarch_shape"], twin["boxmarch_shape"] = 3, 3
+    bake(ob.data)
+    assert stored_params(ob.data)[::8, 0].tolist() == [3] * BOXES
+    twin["boxmarch_shape"] = 5
+    with pytest.raises(mesh_io.BakeInputError, match="'chain' 3, 'twin' 5"):
+        bake(ob.data, incremental=False)
+    del twin["boxmarch_shape"]
+    with pytest.raises(mesh_io.BakeInputError, match="'twin' none"):
+        bake(ob.data)
+    assert stored_params(ob.data)[::8, 0].tolist() == [3] * BOXES  # the refused bakes wrote nothing
+    twin["boxmarch_shape"] = "gold"
+    with pytest.raises(mesh_io.BakeInputError, match="property 'boxmarch_shape' is 'gold'"):
+        bake(ob.data)

@@ -90,12 +90,41 @@ def _reduce(mesh, name, submesh_of_vertex, count, face_starts, corner_verts, dis
     return per_box
 
 
-def compute_box_layers(mesh, result, face_starts, corner_verts, boxes, rule="ATTRIBUTE", seed=0):
+def object_parameters(mesh) -> dict:
+    """{parameter key: value} of the custom properties named as PARAM_ATTRIBUTES on the objects
+    using ``mesh`` (linked duplicates share the mesh and so its bake: every one that gives a
+    value must give the same, and one that gives none with one that does is refused too).
+    Raises BoxLayerError naming the objects."""
+    import bpy
+
+    users = [ob for ob in bpy.data.objects if ob.type == "MESH" and ob.data == mesh and ob.users]
+    values = {}
+    for key, name in PARAM_ATTRIBUTES.items():
+        given = {ob.name: ob.get(name) for ob in users}
+        for ob_name, value in given.items():
+            if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))
+                                      or not np.isfinite(value)):
+                raise BoxLayerError(f"object '{ob_name}': property '{name}' is {value!r}; give a finite number")
+        if all(v is None for v in given.values()):
+            continue
+        if len(set(given.values())) > 1:
+            listed = ", ".join(f"'{k}' {'none' if v is None else v}" for k, v in sorted(given.items()))
+            raise BoxLayerError(f"mesh '{mesh.name}' is shared by objects whose property '{name}' differs ({listed}): "
+                                "the bake is per mesh; give them the same value, or make the mesh single-user "
+                                "(Object > Relations > Make Single User > Object & Data)")
+        values[key] = float(next(iter(given.values())))
+    return values
+
+
+def compute_box_layers(mesh, result, face_starts, corner_verts, boxes, rule="ATTRIBUTE", seed=0, object_values=None):
     """(BoxLayers, report dict) for a bake ``result`` of ``mesh``. ``boxes`` = (origins,
-    quaternions, half_extents) per submesh, used by the CONTAINMENT and CHAIN rules. Raises
-    BoxLayerError on an attribute that cannot be read or parents that do not form a tree."""
+    quaternions, half_extents) per submesh, used by the CONTAINMENT and CHAIN rules.
+    ``object_values`` ({parameter key: value}, object_parameters) gives every box a value no
+    attribute paints. Raises BoxLayerError on an attribute that cannot be read or parents that
+    do not form a tree."""
     sv, count = result.submesh_of_vertex, result.submesh_count
     disagreements = {}
+    object_values = object_values or {}
     params = np.zeros((count, 4), np.float32)
     colour = _reduce(mesh, PARAMS_COLOUR_ATTRIBUTE, sv, count, face_starts, corner_verts, disagreements)
     if colour is not None and colour.shape[1] != 4:
@@ -108,6 +137,8 @@ def compute_box_layers(mesh, result, face_starts, corner_verts, boxes, rule="ATT
             params[:, column] = scalar[:, 0]
         elif colour is not None:
             params[:, column] = colour[:, _COLOUR_CHANNELS[key]]
+        elif key in object_values:
+            params[:, column] = object_values[key]
     params[:, core.PARAM_NAMES.index("random")] = core.box_random(
         core.box_fingerprints(result.fingerprints, sv, count), seed)
     given = None
@@ -119,7 +150,8 @@ def compute_box_layers(mesh, result, face_starts, corner_verts, boxes, rule="ATT
     except ValueError as error:
         raise BoxLayerError(f"mesh '{mesh.name}': box hierarchy: {error}") from None
     report = {"hierarchy": rule, "max_depth": deepest, "roots": int((parent < 0).sum()),
-              "random_seed": int(seed), "disagreeing_attributes": disagreements}
+              "random_seed": int(seed), "disagreeing_attributes": disagreements,
+              "object_properties": {PARAM_ATTRIBUTES[k]: v for k, v in object_values.items()}}
     return BoxLayers(params, parent, depth), report
 
 
