@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from boxmarch import scenes
+from boxmarch.export import scene as export_scene
 from conftest import mesh_object
 from engine_scene import TO_Y_UP, UNITY, UNREAL, table_texels
 from fbx_reader import read_fbx_geometry
@@ -225,3 +226,61 @@ def test_shuffled_ids_fail_the_check(blender, scene, tmp_path):
     values[:, 0] = np.array(SHAPE["A"])[::-1][keys]
     with pytest.raises(AssertionError):
         check(values, keys, "A", random, 0)
+
+
+@pytest.mark.parametrize("layout", ["NORMAL_FRAME", "UV_FRAME"])
+def test_object_parent_gives_the_roots_a_parent_box(blender, scene, tmp_path, layout):
+    """Object B under object A, moved so that B's root box (key 10, at x = 15 in B) lies at
+    x = 3 in the world, on A's box 2 (depth 2): the file gives it parent 2 and depth 3, and
+    B's other boxes keep their parents in B with 3 added to their depths. A is unchanged."""
+    objects, random = scene
+    a, b = objects
+    b.parent = a
+    b.location = (-12.0, 0.0, 0.0)
+    blender.context.view_layer.update()
+    path = tmp_path / "p.glb"
+    report = export_scene.export_objects(blender.context, objects, "GLTF", str(path), layout)
+    assert report["meshes"][0]["box_parameters"].get("object_parent") is None
+    assert report["meshes"][1]["box_parameters"]["object_parent"] == {"object": "A", "mesh": "A", "linked_roots": 1}
+    assert report["meshes"][1]["box_parameters"]["max_depth"] == 6
+    texels = np.fromfile(tmp_path / "p.boxes.bin", "<f4").reshape(-1, 4)
+    want = {"A": (PARENT["A"], DEPTH["A"]), "B": ([2, 6, 6, 8, 9], [3, 4, 4, 5, 6])}
+    for mesh in read_glb(path):
+        (p,) = mesh["primitives"]
+        uv = {n: p[f"TEXCOORD_{n}"].astype(np.float64) for n in range(1, 8) if f"TEXCOORD_{n}" in p}
+        values = merge_table(decode_vertex_channels(layout, uv), table_rows(texels, 11, 11, index_of(layout, uv)))
+        rows = box_key(p["POSITION"][:, 0]) - KEYS[mesh["name"]][0]
+        parent, depth = want[mesh["name"]]
+        assert np.array_equal(values[:, 4], np.array(parent)[rows])
+        assert np.array_equal(values[:, 5], np.array(depth)[rows])
+
+
+def test_object_parent_control_without_the_move_fails(blender, scene, tmp_path):
+    """Negative control: unmoved, B's root lies nearest A's box 5 (x = 15 against 7.5), so the
+    parents expected above do not hold."""
+    objects, _ = scene
+    objects[1].parent = objects[0]
+    path = tmp_path / "p.glb"
+    assert blender.ops.boxmarch.export(filepath=str(path), preset="GLTF") == {"FINISHED"}
+    texels = np.fromfile(tmp_path / "p.boxes.bin", "<f4").reshape(-1, 4)
+    (p,) = next(mesh for mesh in read_glb(path) if mesh["name"] == "B")["primitives"]
+    uv = {n: p[f"TEXCOORD_{n}"].astype(np.float64) for n in range(1, 8)}
+    rows = box_key(p["POSITION"][:, 0]) - 10
+    values = decode_vertex_channels("NORMAL_FRAME", uv)
+    assert np.array_equal(values[:, 4], np.array([5, 6, 6, 8, 9])[rows])
+    assert np.array_equal(values[:, 5], np.array([3, 4, 4, 5, 6])[rows])  # A's box 5 has depth 2 too
+    with pytest.raises(AssertionError):
+        assert np.array_equal(values[:, 4], np.array([2, 6, 6, 8, 9])[rows])
+
+
+def test_linked_duplicates_under_different_meshes_are_refused(blender, scene, tmp_path):
+    """A copy of A's mesh under A: the mesh's boxes would need two parents."""
+    objects, _ = scene
+    twin = blender.data.objects.new("A twin", objects[0].data)
+    blender.context.scene.collection.objects.link(twin)
+    twin.select_set(True)
+    twin.parent = objects[0]
+    path = tmp_path / "p.glb"
+    with pytest.raises(RuntimeError, match="'A' and 'A twin' share the mesh 'A' but are under objects of different meshes \\(no object and 'A'\\)"):
+        blender.ops.boxmarch.export(filepath=str(path), preset="GLTF")
+    assert not path.exists()

@@ -190,3 +190,100 @@ def morph_warnings(objects, preset) -> list:
                        f"{'morph targets' if preset.extension == '.glb' else 'blend shapes'}, which move vertices "
                        "but not the baked boxes: a morph that moves a box's vertices unevenly makes it decode off")
     return out
+
+
+def exported_parent(ob, exported):
+    """The nearest ancestor object of ``ob`` whose name is in ``exported`` (objects between are
+    skipped: an empty or an armature holds no boxes), or None."""
+    parent = ob.parent
+    while parent is not None and parent.name_full not in exported:
+        parent = parent.parent
+    return parent
+
+
+def _parent_meshes(objects) -> dict:
+    """{mesh name: (object, parent object or None)} per mesh of ``objects``. Raises
+    ExportInputError where the objects sharing a mesh have no parent objects of one mesh (also
+    where one is under the other). With that settled the meshes' parents form a tree: each
+    mesh's parent is that of the mesh of its object's parent, so the chain follows the objects'."""
+    exported = {ob.name_full for ob in objects}
+    mesh_of = lambda ob: None if ob is None else ob.data.name_full
+    chosen = {}
+    for ob in objects:
+        up = exported_parent(ob, exported)
+        first = chosen.setdefault(ob.data.name_full, (ob, up))
+        if mesh_of(first[1]) != mesh_of(up):
+            under = lambda o: "no object" if o is None else f"'{o.name}'"
+            raise ExportInputError(
+                f"objects '{first[0].name}' and '{ob.name}' share the mesh '{ob.data.name}' but are under objects of "
+                f"different meshes ({under(first[1])} and {under(up)}): the file numbers a mesh's boxes once, so they "
+                "have one parent; make the mesh single-user (Object > Relations > Make Single User > Object & Data), "
+                "bake, then export")
+    return chosen
+
+
+def world_box_origins(ob, data: layouts.BoxData, preset, space) -> np.ndarray:
+    """(boxes, 3) each box's origin in Blender's world space: box_data's ``data.box_origins``
+    (target axes, in ``space``; None: ``ob``'s own) carried back."""
+    local = np.asarray(data.box_origins, np.float64) / preset.length_scale @ np.linalg.inv(preset.axes).T
+    if space is not None:
+        return local
+    matrix = np.array(ob.matrix_world, np.float64)
+    return local @ matrix[:3, :3].T + matrix[:3, 3]
+
+
+def nearest_rows(points, candidates) -> np.ndarray:
+    """(n,) the row of ``candidates`` nearest each of ``points`` (ties: the lower row), in
+    chunks of about 4 M distances."""
+    out = np.empty(len(points), np.int64)
+    chunk = max(1, (1 << 22) // max(len(candidates), 1))
+    for start in range(0, len(points), chunk):
+        d = ((points[start:start + chunk, None, :] - candidates[None, :, :]) ** 2).sum(axis=2)
+        out[start:start + chunk] = d.argmin(axis=1)
+    return out
+
+
+def link_object_parents(objects, entries, preset, layout) -> None:
+    """Give the root boxes of each mesh whose object has a parent object (the nearest exported
+    ancestor, exported_parent) a parent box there: the parent mesh's box whose origin lies
+    nearest the box's origin in world space. Depths add down the chain of objects: a box's depth
+    is its depth in its mesh plus its mesh root's depth in the file. ``entries``: (owner object,
+    box_data's result, box_data's space) per mesh in export order; their data and stats["box_parameters"] are
+    updated in place. CLASSIC numbers boxes per mesh, so it has no box of another mesh to name:
+    nothing changes there. Raises ExportInputError (see _parent_meshes)."""
+    chosen = _parent_meshes(objects)
+    if layout == "CLASSIC":
+        return
+    by_mesh = {ob.data.name_full: (ob, entry, space) for ob, entry, space in entries}
+    done = set()
+
+    def resolve(name):
+        if name in done:
+            return
+        done.add(name)
+        up = chosen[name][1]
+        if up is None:
+            return
+        resolve(up.data.name_full)
+        ob, (data, _, stats, _), space = by_mesh[name]
+        up_ob, (up_data, _, _, _), up_space = by_mesh[up.data.name_full]
+        _, parent, depth = data.box_values()
+        parent, depth = parent.astype(np.int64), depth.astype(np.int64)
+        row_parent = np.where(parent >= 0, parent - data.index_base, -1)
+        root = np.arange(len(parent))
+        for _ in range(int(depth.max()) if len(depth) else 0):
+            root = np.where(row_parent[root] >= 0, row_parent[root], root)
+        roots = np.flatnonzero(row_parent < 0)
+        nearest = nearest_rows(world_box_origins(ob, data, preset, space)[roots],
+                               world_box_origins(up_ob, up_data, preset, up_space))
+        _, _, up_depth = up_data.box_values()
+        root_depth = np.zeros(len(parent), np.int64)
+        root_depth[roots] = up_depth[nearest].astype(np.int64) + 1
+        parent[roots] = up_data.index_base + nearest
+        data.box_parent, data.box_depth = parent.astype(np.int32), (depth + root_depth[root]).astype(np.int32)
+        stored = stats["box_parameters"]["stored"]
+        stats["box_parameters"] = {**box_parameter_stats(data, stored),
+                                   "object_parent": {"object": up.name, "mesh": up.data.name, "linked_roots": len(roots)}}
+
+    for name in by_mesh:
+        resolve(name)

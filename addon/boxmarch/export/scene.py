@@ -45,16 +45,9 @@ def _keep_artist_uv0(copy) -> None:
         copy.uv_layers.new(name="UVMap")
 
 
-def _target_copy(mesh, preset, layout, index_base, skin=None, space=None, owner=""):
-    """(copy, channels, corner_verts, stats, origins): a copy of ``mesh`` holding what the exporter
-    must write, the channels the file must hold per Blender vertex, each corner's vertex, and
-    where each vertex's box origin must decode (box_data). glTF targets: the copy's only colour
-    is each vertex's index (the channels are written into the .glb afterwards,
-    glb.replace_vertex_channels); FBX targets: the channels as the copy's colour and UV maps
-    (Blender's FBX exporter writes them unchanged). The copy keeps the mesh's vertex groups
-    (mesh.copy()); ``skin`` (mesh_io.Skin of the object exported with it) adds the skin's figures
-    to the stats; ``space`` is box_data's, of the object named ``owner``. Raises ExportInputError
-    where ``space`` shears boxes."""
+def _checked_box_data(mesh, preset, index_base, space, owner):
+    """boxes.box_data of ``mesh`` (``space`` that of the object named ``owner``). Raises
+    ExportInputError where ``space`` shears boxes."""
     data, corner_verts, stats, origins = boxes.box_data(mesh, preset, index_base, space)
     if stats["sheared_boxes"]:
         raise ExportInputError(
@@ -62,6 +55,19 @@ def _target_copy(mesh, preset, layout, index_base, skin=None, space=None, owner=
             "unevenly across their axes (a non-uniform scale on a box it turns); a skinned glTF holds world "
             "positions, where those boxes are not boxes and no frame decodes them: apply the scale "
             "(Object > Apply > Scale), bake again, then export")
+    return data, corner_verts, stats, origins
+
+
+def _target_copy(mesh, preset, layout, data, corner_verts, stats, skin=None):
+    """(copy, channels): a copy of ``mesh`` holding what the exporter must write, and the
+    channels the file must hold per Blender vertex, from box_data's ``data`` (``corner_verts``
+    each corner's vertex, ``stats`` its figures). glTF targets: the copy's only colour is each
+    vertex's index (the channels are written into the .glb afterwards,
+    glb.replace_vertex_channels); FBX targets: the channels as the copy's colour and UV maps
+    (Blender's FBX exporter writes them unchanged). The copy keeps the mesh's vertex groups
+    (mesh.copy()); ``skin`` (mesh_io.Skin of the object exported with it) adds the skin's figures
+    to the stats."""
+    index_base = data.index_base
     if skin is not None:
         spread = boxes.box_weight_spread(skin.weights, data.index - index_base, stats["boxes"])
         stats["skin"] = {"armature": skin.armature.name, "bones": list(skin.bones),
@@ -97,7 +103,7 @@ def _target_copy(mesh, preset, layout, index_base, skin=None, space=None, owner=
     if preset.godot3_compression:
         stats["default_import_error"] = layouts.import_error(layout, channels, layouts.with_godot3_compression(channels),
                                                              data.half_extents)
-    return copy, channels, corner_verts, stats, origins
+    return copy, channels
 
 
 def _operator_kwargs(operator, wanted: dict) -> dict:
@@ -310,12 +316,19 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
         for rig in armatures:
             rig.data.pose_position = "REST"
         context.view_layer.update()  # world matrices at rest: an object parented to a bone moves with it
+        box_data, entries = {}, []
         for mesh in meshes:
-            index_base = sum(len(t) for t in tables)  # box numbers run on across the file's meshes
             ob = owner_of_mesh[mesh.as_pointer()]
-            skin = skins.get(ob.name)
-            copy, channels, corner_verts, mesh_stats, origins = _target_copy(
-                mesh, preset, layout, index_base, skin, boxes.written_space(ob, skin, preset), ob.name)
+            # box numbers run on across the file's meshes (CLASSIC has none: each mesh from 0)
+            index_base = sum(len(e[1][0].box_half_extents) for e in entries) if layout != "CLASSIC" else 0
+            space = boxes.written_space(ob, skins.get(ob.name), preset)
+            box_data[mesh.as_pointer()] = _checked_box_data(mesh, preset, index_base, space, ob.name)
+            entries.append((ob, box_data[mesh.as_pointer()], space))
+        boxes.link_object_parents(objects, entries, preset, layout)
+        for mesh in meshes:
+            ob = owner_of_mesh[mesh.as_pointer()]
+            data, corner_verts, mesh_stats, origins = box_data[mesh.as_pointer()]
+            copy, channels = _target_copy(mesh, preset, layout, data, corner_verts, mesh_stats, skins.get(ob.name))
             if "TABLE" in channels:
                 tables.append(channels.pop("TABLE"))
             name = mesh.name
