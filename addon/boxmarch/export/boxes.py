@@ -232,17 +232,6 @@ def world_box_origins(ob, data: layouts.BoxData, preset, space) -> np.ndarray:
     return local @ matrix[:3, :3].T + matrix[:3, 3]
 
 
-def nearest_rows(points, candidates) -> np.ndarray:
-    """(n,) the row of ``candidates`` nearest each of ``points`` (ties: the lower row), in
-    chunks of about 4 M distances."""
-    out = np.empty(len(points), np.int64)
-    chunk = max(1, (1 << 22) // max(len(candidates), 1))
-    for start in range(0, len(points), chunk):
-        d = ((points[start:start + chunk, None, :] - candidates[None, :, :]) ** 2).sum(axis=2)
-        out[start:start + chunk] = d.argmin(axis=1)
-    return out
-
-
 def link_object_parents(objects, entries, preset, layout) -> None:
     """Give the root boxes of each mesh whose object has a parent object (the nearest exported
     ancestor, exported_parent) a parent box there: the parent mesh's box whose origin lies
@@ -274,7 +263,7 @@ def link_object_parents(objects, entries, preset, layout) -> None:
         for _ in range(int(depth.max()) if len(depth) else 0):
             root = np.where(row_parent[root] >= 0, row_parent[root], root)
         roots = np.flatnonzero(row_parent < 0)
-        nearest = nearest_rows(world_box_origins(ob, data, preset, space)[roots],
+        nearest = core.nearest_rows(world_box_origins(ob, data, preset, space)[roots],
                                world_box_origins(up_ob, up_data, preset, up_space))
         _, _, up_depth = up_data.box_values()
         root_depth = np.zeros(len(parent), np.int64)
