@@ -255,6 +255,17 @@ def test_object_parent_gives_the_roots_a_parent_box(blender, scene, tmp_path, la
         assert np.array_equal(values[:, 5], np.array(depth)[rows])
 
 
+def test_object_parent_in_classic_is_reported_not_written(blender, scene, tmp_path):
+    objects, random = scene
+    objects[1].parent = objects[0]
+    report = export_scene.export_objects(blender.context, objects, "GLTF", str(tmp_path / "c.glb"), "CLASSIC")
+    assert report["meshes"][1]["box_parameters"]["object_parent"]["linked_roots"] == 0
+    assert any("CLASSIC numbers boxes per mesh" in w for w in report["warnings"])
+    (p,) = next(mesh for mesh in read_glb(tmp_path / "c.glb") if mesh["name"] == "B")["primitives"]
+    values = decode_vertex_channels("CLASSIC", {n: p[f"TEXCOORD_{n}"].astype(np.float64) for n in range(1, 6)})
+    check(values, box_key(p["POSITION"][:, 0]), "B", random, 0)  # B's own parents and depths, unchanged
+
+
 def test_object_parent_control_without_the_move_fails(blender, scene, tmp_path):
     """Negative control: unmoved, B's root lies nearest A's box 5 (x = 15 against 7.5), so the
     parents expected above do not hold."""

@@ -239,11 +239,16 @@ def link_object_parents(objects, entries, preset, layout) -> None:
     is its depth in its mesh plus its mesh root's depth in the file. ``entries``: (owner object,
     box_data's result, box_data's space) per mesh in export order; their data and stats["box_parameters"] are
     updated in place. CLASSIC numbers boxes per mesh, so it has no box of another mesh to name:
-    nothing changes there. Raises ExportInputError (see _parent_meshes)."""
+    its boxes keep their parents (the stats name the parent object, with 0 linked roots).
+    Raises ExportInputError (see _parent_meshes)."""
     chosen = _parent_meshes(objects)
-    if layout == "CLASSIC":
-        return
     by_mesh = {ob.data.name_full: (ob, entry, space) for ob, entry, space in entries}
+    if layout == "CLASSIC":
+        for name, (ob, (_, _, stats, _), _) in by_mesh.items():
+            up = chosen[name][1]
+            if up is not None:
+                stats["box_parameters"]["object_parent"] = {"object": up.name, "mesh": up.data.name, "linked_roots": 0}
+        return
     done = set()
 
     def resolve(name):

@@ -225,6 +225,11 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             warnings.append(f"{m['mesh']}: {skin['unweighted_vertices']} vertices carry no weight of "
                             f"'{skin['armature']}': Blender leaves them at rest, engines may not")
     owners = {ob.data.name: ob.name for ob in objects}
+    unlinked = [m["mesh"] for m in stats if layout == "CLASSIC" and "object_parent" in m.get("box_parameters", {})]
+    if unlinked:
+        warnings.append(f"{', '.join(unlinked)}: their objects have parent objects, but CLASSIC numbers boxes per "
+                        "mesh, so no box names a box of another mesh as parent: export with a layout that has "
+                        "box numbers (UV_FRAME, NORMAL_FRAME) for that")
     for m in stats:
         if m["transform_error"] > m.get("float32_error_bound", boxes.FILE_DECODE_TOLERANCE):
             warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': the file's boxes decode up to "
