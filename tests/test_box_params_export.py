@@ -255,6 +255,34 @@ def test_object_parent_gives_the_roots_a_parent_box(blender, scene, tmp_path, la
         assert np.array_equal(values[:, 5], np.array(depth)[rows])
 
 
+def test_object_parents_chain_in_any_export_order(blender, scene, tmp_path):
+    """C (one box at x = 20 in C) under B under A, exported first: A's boxes number from 1, B's
+    from 7. B moved as above: B's root takes A's box 2 (file 3, depth 3); C's box lies at x = 8
+    in the world, nearest B's box key 13 (x = 7.5: row 3, file 10, depth 2 + 3 = 5), so C's box
+    has parent 10 and depth 6."""
+    (a, b), _ = scene
+    c = mesh_object(blender, "C", *scenes.box_arrays(np.array([[20.0, 0.0, 0.0]]), 1.0, np.eye(3)))
+    for ob in blender.context.selected_objects:
+        ob.select_set(ob == c)
+    assert blender.ops.boxmarch.bake() == {"FINISHED"}
+    b.parent, c.parent = a, b
+    b.location = (-12.0, 0.0, 0.0)
+    blender.context.view_layer.update()
+    path = tmp_path / "p.glb"
+    report = export_scene.export_objects(blender.context, [c, a, b], "GLTF", str(path), "NORMAL_FRAME")
+    assert [m["mesh"] for m in report["meshes"]] == ["C", "A", "B"]
+    assert report["meshes"][0]["box_parameters"]["object_parent"] == {"object": "B", "mesh": "B", "linked_roots": 1}
+    want = {"C": ([10], [6]), "A": ([-1, 1, 2, 3, 1, 5], DEPTH["A"]), "B": ([3, 7, 7, 9, 10], [3, 4, 4, 5, 6])}
+    for mesh in read_glb(path):
+        (p,) = mesh["primitives"]
+        parent_depth = p["TEXCOORD_7"].astype(np.float64)
+        keys = box_key(p["POSITION"][:, 0])
+        rows = np.zeros_like(keys) if mesh["name"] == "C" else keys - KEYS[mesh["name"]][0]  # C: one box
+        parent, depth = want[mesh["name"]]
+        assert np.array_equal(parent_depth[:, 0], np.array(parent)[rows])
+        assert np.array_equal(parent_depth[:, 1], np.array(depth)[rows])
+
+
 def test_object_parent_in_classic_is_reported_not_written(blender, scene, tmp_path):
     objects, random = scene
     objects[1].parent = objects[0]
@@ -273,7 +301,6 @@ def test_object_parent_control_without_the_move_fails(blender, scene, tmp_path):
     objects[1].parent = objects[0]
     path = tmp_path / "p.glb"
     assert blender.ops.boxmarch.export(filepath=str(path), preset="GLTF") == {"FINISHED"}
-    texels = np.fromfile(tmp_path / "p.boxes.bin", "<f4").reshape(-1, 4)
     (p,) = next(mesh for mesh in read_glb(path) if mesh["name"] == "B")["primitives"]
     uv = {n: p[f"TEXCOORD_{n}"].astype(np.float64) for n in range(1, 8)}
     rows = box_key(p["POSITION"][:, 0]) - 10
@@ -292,6 +319,7 @@ def test_linked_duplicates_under_different_meshes_are_refused(blender, scene, tm
     twin.select_set(True)
     twin.parent = objects[0]
     path = tmp_path / "p.glb"
-    with pytest.raises(RuntimeError, match="'A' and 'A twin' share the mesh 'A' but are under objects of different meshes \\(no object and 'A'\\)"):
+    refusal = "'A' and 'A twin' share the mesh 'A' but are under objects of different meshes \\(no object and 'A'\\)"
+    with pytest.raises(RuntimeError, match=refusal):
         blender.ops.boxmarch.export(filepath=str(path), preset="GLTF")
     assert not path.exists()

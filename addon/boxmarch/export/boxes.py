@@ -244,7 +244,7 @@ def link_object_parents(objects, entries, preset, layout) -> None:
     chosen = _parent_meshes(objects)
     by_mesh = {ob.data.name_full: (ob, entry, space) for ob, entry, space in entries}
     if layout == "CLASSIC":
-        for name, (ob, (_, _, stats, _), _) in by_mesh.items():
+        for name, (_, (_, _, stats, _), _) in by_mesh.items():
             up = chosen[name][1]
             if up is not None:
                 stats["box_parameters"]["object_parent"] = {"object": up.name, "mesh": up.data.name, "linked_roots": 0}
