@@ -311,15 +311,29 @@ def test_object_parent_control_without_the_move_fails(blender, scene, tmp_path):
         assert np.array_equal(values[:, 4], np.array([2, 6, 6, 8, 9])[rows])
 
 
-def test_linked_duplicates_under_different_meshes_are_refused(blender, scene, tmp_path):
-    """A copy of A's mesh under A: the mesh's boxes would need two parents."""
-    objects, _ = scene
-    twin = blender.data.objects.new("A twin", objects[0].data)
-    blender.context.scene.collection.objects.link(twin)
-    twin.select_set(True)
-    twin.parent = objects[0]
+def test_linked_duplicates_follow_the_first_and_no_loop_is_written(blender, scene, tmp_path):
+    """a (mesh A) under b (mesh B), and linked duplicates b2 (mesh B) under a2 (mesh A), exported
+    as [a, b2, b, a2]: each mesh follows its first object (A under B, B under A), which would
+    loop; the second link is left out and warned about, and the file's parents form a tree."""
+    (a, b), _ = scene
+    a2, b2 = (blender.data.objects.new(name, ob.data) for name, ob in (("a2", a), ("b2", b)))
+    for ob in (a2, b2):
+        blender.context.scene.collection.objects.link(ob)
+    a.parent, b2.parent = b, a2
+    blender.context.view_layer.update()
     path = tmp_path / "p.glb"
-    refusal = "'A' and 'A twin' share the mesh 'A' but are under objects of different meshes \\(no object and 'A'\\)"
-    with pytest.raises(RuntimeError, match=refusal):
-        blender.ops.boxmarch.export(filepath=str(path), preset="GLTF")
-    assert not path.exists()
+    report = export_scene.export_objects(blender.context, [a, b2, b, a2], "GLTF", str(path), "NORMAL_FRAME")
+    assert sum("share the mesh" in w for w in report["warnings"]) == 2
+    assert sum("left out" in w for w in report["warnings"]) == 1
+    parents = np.full(11, -2)
+    for mesh in read_glb(path):
+        (p,) = mesh["primitives"]
+        parents[np.rint(p["TEXCOORD_2"][:, 1]).astype(int)] = np.rint(p["TEXCOORD_7"][:, 0]).astype(int)
+    assert (parents >= -1).all()
+    for box in range(11):  # every chain of parents ends at a root within 11 steps
+        steps = 0
+        while box >= 0 and steps <= 11:
+            box, steps = parents[box], steps + 1
+        assert box == -1
+    assert report["meshes"][0]["box_parameters"]["object_parent"]["mesh"] == "B"
+    assert "object_parent" not in report["meshes"][1]["box_parameters"]

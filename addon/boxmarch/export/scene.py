@@ -193,7 +193,8 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             stats = [boxes.box_data(mesh, preset)[2] for mesh in meshes]  # the .blend holds the layers as they are
             bpy.data.libraries.write(temp, set(objects), fake_user=True, compress=False)
         else:
-            stats, table = _export_with_copies(context, objects, meshes, preset, layout, temp, skins)
+            stats, table, notes = _export_with_copies(context, objects, meshes, preset, layout, temp, skins)
+            warnings.extend(notes)
             if table_file and layout == "NORMAL_COLOR":
                 with open(temps[table_file], "w") as f:
                     f.write(godot.image_texture_tres(table))
@@ -308,7 +309,7 @@ def _fbx_frame(channels, corner_verts, preset) -> dict:
 def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
     """Exports temporary copies of ``meshes`` in place of the originals, with the armatures of
     ``skins`` at their rest position (the file's skin binds the rest geometry); returns (stats,
-    the box table of the file or None)."""
+    the box table of the file or None, the hierarchy's warnings: boxes.link_object_parents)."""
     copies, originals, file_channels, file_corners, stats, tables = {}, {}, {}, {}, [], []
     selection = [ob for ob in context.view_layer.objects if ob.select_get()]
     active = context.view_layer.objects.active
@@ -329,7 +330,7 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
             space = boxes.written_space(ob, skins.get(ob.name), preset)
             box_data[mesh.as_pointer()] = _checked_box_data(mesh, preset, index_base, space, ob.name)
             entries.append((ob, box_data[mesh.as_pointer()], space))
-        boxes.link_object_parents(objects, entries, preset, layout)
+        hierarchy_warnings = boxes.link_object_parents(objects, entries, preset, layout)
         for mesh in meshes:
             ob = owner_of_mesh[mesh.as_pointer()]
             data, corner_verts, mesh_stats, origins = box_data[mesh.as_pointer()]
@@ -373,4 +374,4 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
         for ob in context.view_layer.objects:
             ob.select_set(ob in selection)
         context.view_layer.objects.active = active
-    return stats, (np.concatenate(tables) if tables else None)
+    return stats, (np.concatenate(tables) if tables else None), hierarchy_warnings
