@@ -17,6 +17,9 @@ from boxmarch import bake_job, core, mesh_io, scenes  # noqa: E402
 from common import best_of, boxes_object, table  # noqa: E402
 
 
+BONES = 32
+
+
 def core_rows(count):
     arrays, _centres, _sizes, _rotations = scenes.random_boxes(count, seed=1)
     result = core.bake(*arrays)
@@ -29,8 +32,11 @@ def core_rows(count):
                  best_of(3, lambda: core.reduce_per_submesh(faces, face_box, count))))
     rows.append((f"{count:,}", "random (fingerprints + hash)",
                  best_of(3, lambda: core.box_random(core.box_fingerprints(result.fingerprints, sv, count)))))
-    for rule in core.HIERARCHY_RULES:
+    for rule in ("ATTRIBUTE", "CONTAINMENT", "CHAIN"):
         rows.append((f"{count:,}", f"hierarchy {rule}", best_of(1, lambda: core.box_hierarchy(*boxes, rule=rule))))
+    chain = np.arange(BONES) - 1  # BONES: the boxes spread over a chain of bones, box k on bone k % BONES
+    rows.append((f"{count:,}", f"hierarchy BONES ({BONES}-bone chain)", best_of(1, lambda: core.box_hierarchy(
+        *boxes, rule="BONES", given_parent=core.parents_by_bone(np.arange(count) % BONES, chain, result.origins)))))
     return rows
 
 

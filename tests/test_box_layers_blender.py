@@ -127,3 +127,84 @@ def test_unreadable_attributes_are_refused_and_nothing_written(blender, name, da
     with pytest.raises(mesh_io.BakeInputError, match=message):
         bake(mesh)
     assert mesh.attributes.get(".boxmarch_shape_material") is None and mesh.color_attributes.get("BoxOffset") is None
+
+
+def test_object_properties_give_what_no_attribute_paints(blender):
+    ob = chain_object(blender)
+    mesh = ob.data
+    ob["boxmarch_shape"], ob["boxmarch_material"], ob["boxmarch_user"] = 4, 2.5, -0.75
+    paint(mesh, "boxmarch_material", "INT", "POINT", np.repeat(np.arange(BOXES), 8).astype(np.int32))
+    report = bake(mesh)["boxes"]
+    per_box = stored_params(mesh)[::8]
+    assert per_box[:, 0].tolist() == [4] * BOXES and per_box[:, 3].tolist() == [-0.75] * BOXES
+    assert per_box[:, 1].tolist() == list(range(BOXES))  # the attribute wins over the property
+    assert report["object_properties"] == {"boxmarch_shape": 4.0, "boxmarch_material": 2.5, "boxmarch_user": -0.75}
+
+
+def test_linked_duplicates_must_agree_on_object_properties(blender):
+    ob = chain_object(blender)
+    twin = blender.data.objects.new("twin", ob.data)
+    blender.context.scene.collection.objects.link(twin)
+    ob["boxmarch_shape"], twin["boxmarch_shape"] = 3, 3
+    bake(ob.data)
+    assert stored_params(ob.data)[::8, 0].tolist() == [3] * BOXES
+    twin["boxmarch_shape"] = 5
+    with pytest.raises(mesh_io.BakeInputError, match="'chain' 3, 'twin' 5"):
+        bake(ob.data, incremental=False)
+    del twin["boxmarch_shape"]
+    with pytest.raises(mesh_io.BakeInputError, match="'twin' none"):
+        bake(ob.data)
+    assert stored_params(ob.data)[::8, 0].tolist() == [3] * BOXES  # the refused bakes wrote nothing
+    twin["boxmarch_shape"] = "gold"
+    with pytest.raises(mesh_io.BakeInputError, match="property 'boxmarch_shape' is 'gold'"):
+        bake(ob.data)
+
+
+def bone_rule_expected(centres, bone_of_box, bone_parent):
+    """The BONES rule worked out from the rig's known boxes: nearest box (by centre) of the
+    parent bone, walking past bones without boxes; depths along the chain."""
+    parent = []
+    for i, bone in enumerate(bone_of_box):
+        up = bone_parent[bone]
+        while up >= 0 and up not in bone_of_box:
+            up = bone_parent[up]
+        candidates = [j for j in range(len(centres)) if up >= 0 and bone_of_box[j] == up]
+        parent.append(min(candidates, key=lambda j: np.sum((centres[j] - centres[i]) ** 2)) if candidates else -1)
+    depth = [0 if p < 0 else None for p in parent]
+    while None in depth:
+        depth = [d if d is not None else (depth[parent[i]] + 1 if depth[parent[i]] is not None else None)
+                 for i, d in enumerate(depth)]
+    return parent, depth
+
+
+def test_bones_rule_on_the_rig(blender):
+    """The 3-bone chain of tests/engine_scene.py, each box weighted to one bone: a box's parent
+    is the nearest box of the previous bone. Then bone1's boxes go to bone2 and bone1 holds no
+    box: bone2's boxes pass to bone0's."""
+    from engine_scene import rig_boxes, skinned_scene
+
+    ob, rig = skinned_scene(blender)
+    centres, _, _, bone_of_box = rig_boxes()
+    vertices = len(ob.data.vertices)
+    report = bake(ob.data, hierarchy="BONES")["boxes"]
+    parent, depth = bone_rule_expected(centres, list(bone_of_box), [-1, 0, 1])
+    assert stored(ob.data, ".boxmarch_parent", "INT")[::8].tolist() == parent
+    assert stored(ob.data, ".boxmarch_depth", "INT")[::8].tolist() == depth
+    assert report["max_depth"] == 2 and report["roots"] == int((bone_of_box == 0).sum())
+    assert set(parent) != {-1} and parent != [-1] + list(range(len(parent) - 1))  # neither all roots nor CHAIN's
+
+    moved = np.flatnonzero(np.repeat(bone_of_box, 8) == 1).tolist()
+    ob.vertex_groups["bone1"].remove(moved)
+    ob.vertex_groups["bone2"].add(moved, 1.0, "REPLACE")
+    bake(ob.data, hierarchy="BONES")
+    regrouped = np.where(bone_of_box == 1, 2, bone_of_box)
+    parent, depth = bone_rule_expected(centres, list(regrouped), [-1, 0, 1])
+    assert stored(ob.data, ".boxmarch_parent", "INT")[::8].tolist() == parent and max(depth) == 1
+    assert len(stored(ob.data, ".boxmarch_parent", "INT")) == vertices
+
+
+def test_bones_rule_without_a_rig_is_refused(blender):
+    mesh = chain_object(blender).data
+    with pytest.raises(mesh_io.BakeInputError, match="BONES rule needs"):
+        bake(mesh, hierarchy="BONES")
+    assert mesh.attributes.get(".boxmarch_parent") is None

@@ -106,3 +106,20 @@ def test_given_parents_and_depths():
     assert parent.tolist() == [-1, 0, 1, 1, -1] and depth.tolist() == [0, 1, 2, 2, 0] and deepest == 2
     parent, depth, _ = core.box_hierarchy(*boxes)
     assert parent.tolist() == [-1] * 5 and depth.tolist() == [0] * 5
+
+
+def test_parents_by_bone_walks_past_bones_without_boxes():
+    """Bones 0 <- 1 <- 2 <- 3, bone 1 holds no box: bone 2's boxes take bone 0's nearest box;
+    a box of no bone (-1) and the boxes of root bone 0 are roots."""
+    origins = np.array([[0, 0, 0], [5, 0, 0], [4, 0, 1], [0, 0, 2], [0, 0, 3], [9, 9, 9]], np.float64)
+    box_bone = [0, 0, 2, 2, 3, -1]
+    assert core.parents_by_bone(box_bone, [-1, 0, 1, 2], origins).tolist() == [-1, -1, 1, 0, 3, -1]
+    # Equal distances go to the lower box number.
+    assert core.parents_by_bone([0, 0, 1], [-1, 0], [[-1, 0, 0], [1, 0, 0], [0, 0, 0]]).tolist() == [-1, -1, 0]
+
+
+def test_dominant_per_submesh():
+    weights = np.array([[1.0, 0.0], [0.2, 0.9], [0.5, 0.5], [0.5, 0.5], [0.0, 0.0]])
+    assert core.dominant_per_submesh(weights, [0, 0, 1, 1, 2], 3).tolist() == [0, 0, -1]  # 0.5 : 0.5 ties to 0
+    assert core.dominant_per_submesh(weights[:2], [0, 0], 1).tolist() == [0]  # 1.2 against 0.9
+    assert core.dominant_per_submesh(weights[1:2], [0], 1).tolist() == [1]

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from boxmarch import scenes
+from boxmarch.export import scene as export_scene
 from conftest import mesh_object
 from engine_scene import TO_Y_UP, UNITY, UNREAL, table_texels
 from fbx_reader import read_fbx_geometry
@@ -225,3 +226,114 @@ def test_shuffled_ids_fail_the_check(blender, scene, tmp_path):
     values[:, 0] = np.array(SHAPE["A"])[::-1][keys]
     with pytest.raises(AssertionError):
         check(values, keys, "A", random, 0)
+
+
+@pytest.mark.parametrize("layout", ["NORMAL_FRAME", "UV_FRAME"])
+def test_object_parent_gives_the_roots_a_parent_box(blender, scene, tmp_path, layout):
+    """Object B under object A, moved so that B's root box (key 10, at x = 15 in B) lies at
+    x = 3 in the world, on A's box 2 (depth 2): the file gives it parent 2 and depth 3, and
+    B's other boxes keep their parents in B with 3 added to their depths. A is unchanged."""
+    objects, random = scene
+    a, b = objects
+    b.parent = a
+    b.location = (-12.0, 0.0, 0.0)
+    blender.context.view_layer.update()
+    path = tmp_path / "p.glb"
+    report = export_scene.export_objects(blender.context, objects, "GLTF", str(path), layout)
+    assert report["meshes"][0]["box_parameters"].get("object_parent") is None
+    assert report["meshes"][1]["box_parameters"]["object_parent"] == {"object": "A", "mesh": "A", "linked_roots": 1}
+    assert report["meshes"][1]["box_parameters"]["max_depth"] == 6
+    texels = np.fromfile(tmp_path / "p.boxes.bin", "<f4").reshape(-1, 4)
+    want = {"A": (PARENT["A"], DEPTH["A"]), "B": ([2, 6, 6, 8, 9], [3, 4, 4, 5, 6])}
+    for mesh in read_glb(path):
+        (p,) = mesh["primitives"]
+        uv = {n: p[f"TEXCOORD_{n}"].astype(np.float64) for n in range(1, 8) if f"TEXCOORD_{n}" in p}
+        values = merge_table(decode_vertex_channels(layout, uv), table_rows(texels, 11, 11, index_of(layout, uv)))
+        rows = box_key(p["POSITION"][:, 0]) - KEYS[mesh["name"]][0]
+        parent, depth = want[mesh["name"]]
+        assert np.array_equal(values[:, 4], np.array(parent)[rows])
+        assert np.array_equal(values[:, 5], np.array(depth)[rows])
+
+
+def test_object_parents_chain_in_any_export_order(blender, scene, tmp_path):
+    """C (one box at x = 20 in C) under B under A, exported first: A's boxes number from 1, B's
+    from 7. B moved as above: B's root takes A's box 2 (file 3, depth 3); C's box lies at x = 8
+    in the world, nearest B's box key 13 (x = 7.5: row 3, file 10, depth 2 + 3 = 5), so C's box
+    has parent 10 and depth 6."""
+    (a, b), _ = scene
+    c = mesh_object(blender, "C", *scenes.box_arrays(np.array([[20.0, 0.0, 0.0]]), 1.0, np.eye(3)))
+    for ob in blender.context.selected_objects:
+        ob.select_set(ob == c)
+    assert blender.ops.boxmarch.bake() == {"FINISHED"}
+    b.parent, c.parent = a, b
+    b.location = (-12.0, 0.0, 0.0)
+    blender.context.view_layer.update()
+    path = tmp_path / "p.glb"
+    report = export_scene.export_objects(blender.context, [c, a, b], "GLTF", str(path), "NORMAL_FRAME")
+    assert [m["mesh"] for m in report["meshes"]] == ["C", "A", "B"]
+    assert report["meshes"][0]["box_parameters"]["object_parent"] == {"object": "B", "mesh": "B", "linked_roots": 1}
+    want = {"C": ([10], [6]), "A": ([-1, 1, 2, 3, 1, 5], DEPTH["A"]), "B": ([3, 7, 7, 9, 10], [3, 4, 4, 5, 6])}
+    for mesh in read_glb(path):
+        (p,) = mesh["primitives"]
+        parent_depth = p["TEXCOORD_7"].astype(np.float64)
+        keys = box_key(p["POSITION"][:, 0])
+        rows = np.zeros_like(keys) if mesh["name"] == "C" else keys - KEYS[mesh["name"]][0]  # C: one box
+        parent, depth = want[mesh["name"]]
+        assert np.array_equal(parent_depth[:, 0], np.array(parent)[rows])
+        assert np.array_equal(parent_depth[:, 1], np.array(depth)[rows])
+
+
+def test_object_parent_in_classic_is_reported_not_written(blender, scene, tmp_path):
+    objects, random = scene
+    objects[1].parent = objects[0]
+    report = export_scene.export_objects(blender.context, objects, "GLTF", str(tmp_path / "c.glb"), "CLASSIC")
+    assert report["meshes"][1]["box_parameters"]["object_parent"]["linked_roots"] == 0
+    assert any("CLASSIC numbers boxes per mesh" in w for w in report["warnings"])
+    (p,) = next(mesh for mesh in read_glb(tmp_path / "c.glb") if mesh["name"] == "B")["primitives"]
+    values = decode_vertex_channels("CLASSIC", {n: p[f"TEXCOORD_{n}"].astype(np.float64) for n in range(1, 6)})
+    check(values, box_key(p["POSITION"][:, 0]), "B", random, 0)  # B's own parents and depths, unchanged
+
+
+def test_object_parent_control_without_the_move_fails(blender, scene, tmp_path):
+    """Negative control: unmoved, B's root lies nearest A's box 5 (x = 15 against 7.5), so the
+    parents expected above do not hold."""
+    objects, _ = scene
+    objects[1].parent = objects[0]
+    path = tmp_path / "p.glb"
+    assert blender.ops.boxmarch.export(filepath=str(path), preset="GLTF") == {"FINISHED"}
+    (p,) = next(mesh for mesh in read_glb(path) if mesh["name"] == "B")["primitives"]
+    uv = {n: p[f"TEXCOORD_{n}"].astype(np.float64) for n in range(1, 8)}
+    rows = box_key(p["POSITION"][:, 0]) - 10
+    values = decode_vertex_channels("NORMAL_FRAME", uv)
+    assert np.array_equal(values[:, 4], np.array([5, 6, 6, 8, 9])[rows])
+    assert np.array_equal(values[:, 5], np.array([3, 4, 4, 5, 6])[rows])  # A's box 5 has depth 2 too
+    with pytest.raises(AssertionError):
+        assert np.array_equal(values[:, 4], np.array([2, 6, 6, 8, 9])[rows])
+
+
+def test_linked_duplicates_follow_the_first_and_no_loop_is_written(blender, scene, tmp_path):
+    """a (mesh A) under b (mesh B), and linked duplicates b2 (mesh B) under a2 (mesh A), exported
+    as [a, b2, b, a2]: each mesh follows its first object (A under B, B under A), which would
+    loop; the second link is left out and warned about, and the file's parents form a tree."""
+    (a, b), _ = scene
+    a2, b2 = (blender.data.objects.new(name, ob.data) for name, ob in (("a2", a), ("b2", b)))
+    for ob in (a2, b2):
+        blender.context.scene.collection.objects.link(ob)
+    a.parent, b2.parent = b, a2
+    blender.context.view_layer.update()
+    path = tmp_path / "p.glb"
+    report = export_scene.export_objects(blender.context, [a, b2, b, a2], "GLTF", str(path), "NORMAL_FRAME")
+    assert sum("share the mesh" in w for w in report["warnings"]) == 2
+    assert sum("left out" in w for w in report["warnings"]) == 1
+    parents = np.full(11, -2)
+    for mesh in read_glb(path):
+        (p,) = mesh["primitives"]
+        parents[np.rint(p["TEXCOORD_2"][:, 1]).astype(int)] = np.rint(p["TEXCOORD_7"][:, 0]).astype(int)
+    assert (parents >= -1).all()
+    for box in range(11):  # every chain of parents ends at a root within 11 steps
+        steps = 0
+        while box >= 0 and steps <= 11:
+            box, steps = parents[box], steps + 1
+        assert box == -1
+    assert report["meshes"][0]["box_parameters"]["object_parent"]["mesh"] == "B"
+    assert "object_parent" not in report["meshes"][1]["box_parameters"]

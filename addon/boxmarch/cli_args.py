@@ -50,7 +50,8 @@ def _bake_options(p):
     p.add_argument("--no-cache", action="store_true", help="derive every frame (no copy cache)")
     p.add_argument("--full", action="store_true", help="re-bake unchanged submeshes too")
     p.add_argument("--parents", choices=core.HIERARCHY_RULES, default=core.HIERARCHY_RULES[0],
-                   help="each box's parent: ATTRIBUTE (boxmarch_parent), CONTAINMENT or CHAIN")
+                   help="each box's parent: ATTRIBUTE (boxmarch_parent), CONTAINMENT, CHAIN or BONES "
+                        "(the box of its bone's parent bone)")
     p.add_argument("--random-seed", type=int, default=0, help="seed of each box's random value (0..2^31-1)")
 
 

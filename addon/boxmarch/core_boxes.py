@@ -9,8 +9,9 @@ from .native import _core, checked_int
 
 # The four floats every box carries, in their order in every layout and table.
 PARAM_NAMES = ("shape", "material", "random", "user")
-HIERARCHY_RULES = ("ATTRIBUTE", "CONTAINMENT", "CHAIN")
-_RULE_CODES = {"ATTRIBUTE": 0, "CONTAINMENT": 1, "CHAIN": 2}
+HIERARCHY_RULES = ("ATTRIBUTE", "CONTAINMENT", "CHAIN", "BONES")
+# BONES parents are found in Python (parents_by_bone) and checked as given ones.
+_RULE_CODES = {"ATTRIBUTE": 0, "CONTAINMENT": 1, "CHAIN": 2, "BONES": 0}
 
 
 def reduce_per_submesh(values, submesh_of_element, submesh_count):
@@ -42,16 +43,62 @@ def box_random(box_fingerprints_, seed=0) -> np.ndarray:
                             checked_int(seed, "random seed", 0, 2**32 - 1))
 
 
+def dominant_per_submesh(weights, submesh_of_vertex, submesh_count) -> np.ndarray:
+    """int64 (S,): the column of ``weights`` (vertices, B) with the largest sum over each
+    submesh's vertices (ties: the lower column); -1 where the submesh has no weight."""
+    weights = np.asarray(weights, np.float64)
+    total = np.zeros((int(submesh_count), weights.shape[1]))
+    np.add.at(total, np.asarray(submesh_of_vertex, np.int64), weights)
+    if not weights.shape[1]:
+        return np.full(int(submesh_count), -1, np.int64)
+    return np.where(total.max(axis=1) > 0, total.argmax(axis=1), -1)
+
+
+def nearest_rows(points, candidates) -> np.ndarray:
+    """(n,) the row of ``candidates`` nearest each of ``points`` (ties: the lower row), in
+    chunks of about 4 M distances."""
+    points, candidates = np.asarray(points, np.float64), np.asarray(candidates, np.float64)
+    out = np.empty(len(points), np.int64)
+    chunk = max(1, (1 << 22) // max(len(candidates), 1))
+    for start in range(0, len(points), chunk):
+        d = ((points[start:start + chunk, None, :] - candidates[None, :, :]) ** 2).sum(axis=2)
+        out[start:start + chunk] = d.argmin(axis=1)
+    return out
+
+
+def parents_by_bone(box_bone, bone_parent, origins) -> np.ndarray:
+    """int32 (S,): each box's parent under the BONES rule. ``box_bone`` (S,): each box's bone
+    (-1: none), ``bone_parent`` (B,): each bone's parent bone (-1: a root bone). A box's parent
+    is the box of its bone's parent bone whose origin lies nearest its own (ties: the lower
+    number); a parent bone that holds no box passes to its own parent; -1 where no ancestor
+    bone holds a box."""
+    box_bone = np.asarray(box_bone, np.int64)
+    bone_parent = np.asarray(bone_parent, np.int64)
+    origins = np.asarray(origins, np.float64).reshape(-1, 3)
+    parent = np.full(len(box_bone), -1, np.int32)
+    for bone in np.unique(box_bone[box_bone >= 0]):
+        up = bone_parent[bone]
+        while up >= 0 and not np.any(box_bone == up):
+            up = bone_parent[up]
+        if up < 0:
+            continue
+        children, candidates = np.flatnonzero(box_bone == bone), np.flatnonzero(box_bone == up)
+        parent[children] = candidates[nearest_rows(origins[children], origins[candidates])]
+    return parent
+
+
 def box_hierarchy(origins, quaternions, half_extents, rule="ATTRIBUTE", given_parent=None):
     """(parent int32 (S,), depth int32 (S,), deepest): each box's parent box (-1: a root) and its
     depth (0 at a root). ``rule``: ATTRIBUTE takes ``given_parent`` (int (S,), -1 for roots;
     None: every box a root), CONTAINMENT the smallest larger box holding the box's origin, CHAIN
-    the nearest lower-numbered box (instances along a curve are numbered along it). Raises
-    ValueError on a parent out of range, a box its own parent or a cycle."""
+    the nearest lower-numbered box (instances along a curve are numbered along it), BONES takes
+    ``given_parent`` (parents_by_bone) as ATTRIBUTE does. Raises ValueError on a parent out of range, a box its own parent or a cycle."""
     if rule not in _RULE_CODES:
         raise ValueError(f"hierarchy rule must be one of {HIERARCHY_RULES}, got {rule!r}")
     origins = np.ascontiguousarray(origins, np.float64).reshape(-1, 3)
     n = len(origins)
+    if rule == "BONES" and given_parent is None:
+        raise ValueError("the BONES rule needs the parents found from the bones (parents_by_bone)")
     if rule == "ATTRIBUTE" and given_parent is None:
         given_parent = np.full(n, -1, np.int32)
     given = None

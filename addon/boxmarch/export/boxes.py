@@ -190,3 +190,105 @@ def morph_warnings(objects, preset) -> list:
                        f"{'morph targets' if preset.extension == '.glb' else 'blend shapes'}, which move vertices "
                        "but not the baked boxes: a morph that moves a box's vertices unevenly makes it decode off")
     return out
+
+
+def exported_parent(ob, exported):
+    """The nearest ancestor object of ``ob`` whose name is in ``exported`` (objects between are
+    skipped: an empty or an armature holds no boxes), or None."""
+    parent = ob.parent
+    while parent is not None and parent.name_full not in exported:
+        parent = parent.parent
+    return parent
+
+
+def _parent_meshes(objects, warnings) -> dict:
+    """{mesh name: (object, parent object or None)} per mesh of ``objects``, the first object
+    using the mesh deciding; a line in ``warnings`` where a later one is under an object of
+    another mesh (the file holds the mesh's boxes once, so they have one parent)."""
+    exported = {ob.name_full for ob in objects}
+    mesh_of = lambda ob: None if ob is None else ob.data.name_full
+    chosen = {}
+    for ob in objects:
+        up = exported_parent(ob, exported)
+        first = chosen.setdefault(ob.data.name_full, (ob, up))
+        if mesh_of(first[1]) != mesh_of(up):
+            under = lambda o: "no object" if o is None else f"'{o.name}'"
+            warnings.append(
+                f"objects '{first[0].name}' and '{ob.name}' share the mesh '{ob.data.name}' but are under objects of "
+                f"different meshes ({under(first[1])} and {under(up)}): the file holds the mesh's boxes once, their "
+                f"parents follow '{first[0].name}'; make the mesh single-user (Object > Relations > Make Single User "
+                "> Object & Data) for parents of their own")
+    return chosen
+
+
+def world_box_origins(ob, data: layouts.BoxData, preset, space) -> np.ndarray:
+    """(boxes, 3) each box's origin in Blender's world space: box_data's ``data.box_origins``
+    (target axes, in ``space``; None: ``ob``'s own) carried back."""
+    local = np.asarray(data.box_origins, np.float64) / preset.length_scale @ np.linalg.inv(preset.axes).T
+    if space is not None:
+        return local
+    matrix = np.array(ob.matrix_world, np.float64)
+    return local @ matrix[:3, :3].T + matrix[:3, 3]
+
+
+def link_object_parents(objects, entries, preset, layout) -> list:
+    """Give the root boxes of each mesh whose object has a parent object (the nearest exported
+    ancestor, exported_parent) a parent box there: the parent mesh's box whose origin lies
+    nearest the box's origin in world space. Depths add down the chain of objects: a box's depth
+    is its depth in its mesh plus its mesh root's depth in the file. ``entries``: (owner object,
+    box_data's result, box_data's space) per mesh in export order; their data and
+    stats["box_parameters"] are updated in place. CLASSIC numbers boxes per mesh, so it has no
+    box of another mesh to name: its boxes keep their parents (the stats name the parent object,
+    with 0 linked roots). Returns the warnings: linked duplicates under objects of different
+    meshes (the first decides), and a link that would close a loop through them (left out)."""
+    warnings = []
+    chosen = _parent_meshes(objects, warnings)
+    by_mesh = {ob.data.name_full: (ob, entry, space) for ob, entry, space in entries}
+    if layout == "CLASSIC":
+        for name, (_, (_, _, stats, _), _) in by_mesh.items():
+            up = chosen[name][1]
+            if up is not None:
+                stats["box_parameters"]["object_parent"] = {"object": up.name, "mesh": up.data.name, "linked_roots": 0}
+        return warnings
+    state = {}  # mesh name: "linking" while its parent mesh is being linked, then "linked"
+
+    def link(name):
+        if name in state:
+            return
+        state[name] = "linking"
+        up = chosen[name][1]
+        if up is not None and state.get(up.data.name_full) == "linking":
+            warnings.append(f"object '{chosen[name][0].name}' is under '{up.name}', whose mesh's boxes are (through "
+                            f"linked duplicates) below the mesh '{by_mesh[name][0].data.name}' already: that link "
+                            "would make boxes their own ancestors and is left out")
+        elif up is not None:
+            link(up.data.name_full)
+            _link_roots(by_mesh[name], by_mesh[up.data.name_full], up, preset)
+        state[name] = "linked"
+
+    for name in by_mesh:
+        link(name)
+    return warnings
+
+
+def _link_roots(child, parent_entry, up, preset) -> None:
+    """link_object_parents for one mesh: ``child`` and ``parent_entry`` are its and its parent
+    object ``up``'s mesh's entries."""
+    ob, (data, _, stats, _), space = child
+    up_ob, (up_data, _, _, _), up_space = parent_entry
+    _, parent, depth = data.box_values()
+    parent, depth = parent.astype(np.int64), depth.astype(np.int64)
+    row_parent = np.where(parent >= 0, parent - data.index_base, -1)
+    root = np.arange(len(parent))
+    for _ in range(int(depth.max()) if len(depth) else 0):
+        root = np.where(row_parent[root] >= 0, row_parent[root], root)
+    roots = np.flatnonzero(row_parent < 0)
+    nearest = core.nearest_rows(world_box_origins(ob, data, preset, space)[roots],
+                                world_box_origins(up_ob, up_data, preset, up_space))
+    _, _, up_depth = up_data.box_values()
+    root_depth = np.zeros(len(parent), np.int64)
+    root_depth[roots] = up_depth[nearest].astype(np.int64) + 1
+    parent[roots] = up_data.index_base + nearest
+    data.box_parent, data.box_depth = parent.astype(np.int32), (depth + root_depth[root]).astype(np.int32)
+    stats["box_parameters"] = {**box_parameter_stats(data, stats["box_parameters"]["stored"]),
+                               "object_parent": {"object": up.name, "mesh": up.data.name, "linked_roots": len(roots)}}

@@ -45,16 +45,9 @@ def _keep_artist_uv0(copy) -> None:
         copy.uv_layers.new(name="UVMap")
 
 
-def _target_copy(mesh, preset, layout, index_base, skin=None, space=None, owner=""):
-    """(copy, channels, corner_verts, stats, origins): a copy of ``mesh`` holding what the exporter
-    must write, the channels the file must hold per Blender vertex, each corner's vertex, and
-    where each vertex's box origin must decode (box_data). glTF targets: the copy's only colour
-    is each vertex's index (the channels are written into the .glb afterwards,
-    glb.replace_vertex_channels); FBX targets: the channels as the copy's colour and UV maps
-    (Blender's FBX exporter writes them unchanged). The copy keeps the mesh's vertex groups
-    (mesh.copy()); ``skin`` (mesh_io.Skin of the object exported with it) adds the skin's figures
-    to the stats; ``space`` is box_data's, of the object named ``owner``. Raises ExportInputError
-    where ``space`` shears boxes."""
+def _checked_box_data(mesh, preset, index_base, space, owner):
+    """boxes.box_data of ``mesh`` (``space`` that of the object named ``owner``). Raises
+    ExportInputError where ``space`` shears boxes."""
     data, corner_verts, stats, origins = boxes.box_data(mesh, preset, index_base, space)
     if stats["sheared_boxes"]:
         raise ExportInputError(
@@ -62,6 +55,19 @@ def _target_copy(mesh, preset, layout, index_base, skin=None, space=None, owner=
             "unevenly across their axes (a non-uniform scale on a box it turns); a skinned glTF holds world "
             "positions, where those boxes are not boxes and no frame decodes them: apply the scale "
             "(Object > Apply > Scale), bake again, then export")
+    return data, corner_verts, stats, origins
+
+
+def _target_copy(mesh, preset, layout, data, corner_verts, stats, skin=None):
+    """(copy, channels): a copy of ``mesh`` holding what the exporter must write, and the
+    channels the file must hold per Blender vertex, from box_data's ``data`` (``corner_verts``
+    each corner's vertex, ``stats`` its figures). glTF targets: the copy's only colour is each
+    vertex's index (the channels are written into the .glb afterwards,
+    glb.replace_vertex_channels); FBX targets: the channels as the copy's colour and UV maps
+    (Blender's FBX exporter writes them unchanged). The copy keeps the mesh's vertex groups
+    (mesh.copy()); ``skin`` (mesh_io.Skin of the object exported with it) adds the skin's figures
+    to the stats."""
+    index_base = data.index_base
     if skin is not None:
         spread = boxes.box_weight_spread(skin.weights, data.index - index_base, stats["boxes"])
         stats["skin"] = {"armature": skin.armature.name, "bones": list(skin.bones),
@@ -97,7 +103,7 @@ def _target_copy(mesh, preset, layout, index_base, skin=None, space=None, owner=
     if preset.godot3_compression:
         stats["default_import_error"] = layouts.import_error(layout, channels, layouts.with_godot3_compression(channels),
                                                              data.half_extents)
-    return copy, channels, corner_verts, stats, origins
+    return copy, channels
 
 
 def _operator_kwargs(operator, wanted: dict) -> dict:
@@ -187,7 +193,8 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             stats = [boxes.box_data(mesh, preset)[2] for mesh in meshes]  # the .blend holds the layers as they are
             bpy.data.libraries.write(temp, set(objects), fake_user=True, compress=False)
         else:
-            stats, table = _export_with_copies(context, objects, meshes, preset, layout, temp, skins)
+            stats, table, notes = _export_with_copies(context, objects, meshes, preset, layout, temp, skins)
+            warnings.extend(notes)
             if table_file and layout == "NORMAL_COLOR":
                 with open(temps[table_file], "w") as f:
                     f.write(godot.image_texture_tres(table))
@@ -219,6 +226,11 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             warnings.append(f"{m['mesh']}: {skin['unweighted_vertices']} vertices carry no weight of "
                             f"'{skin['armature']}': Blender leaves them at rest, engines may not")
     owners = {ob.data.name: ob.name for ob in objects}
+    unlinked = [m["mesh"] for m in stats if layout == "CLASSIC" and "object_parent" in m.get("box_parameters", {})]
+    if unlinked:
+        warnings.append(f"{', '.join(unlinked)}: their objects have parent objects, but CLASSIC numbers boxes per "
+                        "mesh, so no box names a box of another mesh as parent: export with a layout that has "
+                        "box numbers (UV_FRAME, NORMAL_FRAME) for that")
     for m in stats:
         if m["transform_error"] > m.get("float32_error_bound", boxes.FILE_DECODE_TOLERANCE):
             warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': the file's boxes decode up to "
@@ -297,7 +309,7 @@ def _fbx_frame(channels, corner_verts, preset) -> dict:
 def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
     """Exports temporary copies of ``meshes`` in place of the originals, with the armatures of
     ``skins`` at their rest position (the file's skin binds the rest geometry); returns (stats,
-    the box table of the file or None)."""
+    the box table of the file or None, the hierarchy's warnings: boxes.link_object_parents)."""
     copies, originals, file_channels, file_corners, stats, tables = {}, {}, {}, {}, [], []
     selection = [ob for ob in context.view_layer.objects if ob.select_get()]
     active = context.view_layer.objects.active
@@ -310,12 +322,19 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
         for rig in armatures:
             rig.data.pose_position = "REST"
         context.view_layer.update()  # world matrices at rest: an object parented to a bone moves with it
+        box_data, entries = {}, []
         for mesh in meshes:
-            index_base = sum(len(t) for t in tables)  # box numbers run on across the file's meshes
             ob = owner_of_mesh[mesh.as_pointer()]
-            skin = skins.get(ob.name)
-            copy, channels, corner_verts, mesh_stats, origins = _target_copy(
-                mesh, preset, layout, index_base, skin, boxes.written_space(ob, skin, preset), ob.name)
+            # box numbers run on across the file's meshes (CLASSIC has none: each mesh from 0)
+            index_base = sum(len(e[1][0].box_half_extents) for e in entries) if layout != "CLASSIC" else 0
+            space = boxes.written_space(ob, skins.get(ob.name), preset)
+            box_data[mesh.as_pointer()] = _checked_box_data(mesh, preset, index_base, space, ob.name)
+            entries.append((ob, box_data[mesh.as_pointer()], space))
+        hierarchy_warnings = boxes.link_object_parents(objects, entries, preset, layout)
+        for mesh in meshes:
+            ob = owner_of_mesh[mesh.as_pointer()]
+            data, corner_verts, mesh_stats, origins = box_data[mesh.as_pointer()]
+            copy, channels = _target_copy(mesh, preset, layout, data, corner_verts, mesh_stats, skins.get(ob.name))
             if "TABLE" in channels:
                 tables.append(channels.pop("TABLE"))
             name = mesh.name
@@ -355,4 +374,4 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
         for ob in context.view_layer.objects:
             ob.select_set(ob in selection)
         context.view_layer.objects.active = active
-    return stats, (np.concatenate(tables) if tables else None)
+    return stats, (np.concatenate(tables) if tables else None), hierarchy_warnings

@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import core
 from .arrays import read_positions, read_topology, read_uv, read_vertex_selection, write_uv
-from .box_layers import BoxLayerError, BoxLayers, compute_box_layers, write_box_layers
+from .box_layers import BoxLayerError, BoxLayers, compute_box_layers, object_parameters, write_box_layers
 
 OFFSET_ATTRIBUTE = "BoxOffset"
 QUAT_XY_UV = "BoxQuatXY"
@@ -335,7 +335,7 @@ def prepare_bake(mesh, settings: BakeSettings, selected_only: bool = False) -> P
         box_layers, box_report = compute_box_layers(
             mesh, result, face_starts, corner_verts,
             _boxes_for_hierarchy(mesh, result, positions, corner_verts, keep_previous, settings.hierarchy),
-            settings.hierarchy, settings.random_seed)
+            settings.hierarchy, settings.random_seed, object_parameters(mesh))
     except BoxLayerError as error:
         raise BakeInputError(str(error)) from None
     report = {

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import core
+from .weights import SkinError, read_skin
 
 # Artist-facing attributes: one scalar per element (FLOAT, INT, INT8 or BOOLEAN) on the point,
 # face or corner domain; or one colour whose R, G and A give shape, material and user (its B is
@@ -90,12 +91,75 @@ def _reduce(mesh, name, submesh_of_vertex, count, face_starts, corner_verts, dis
     return per_box
 
 
-def compute_box_layers(mesh, result, face_starts, corner_verts, boxes, rule="ATTRIBUTE", seed=0):
+def object_parameters(mesh) -> dict:
+    """{parameter key: value} of the custom properties named as PARAM_ATTRIBUTES on the objects
+    using ``mesh`` (linked duplicates share the mesh and so its bake: every one that gives a
+    value must give the same, and one that gives none with one that does is refused too).
+    Raises BoxLayerError naming the objects."""
+    users = _mesh_users(mesh)
+    values = {}
+    for key, name in PARAM_ATTRIBUTES.items():
+        given = {ob.name: ob.get(name) for ob in users}
+        for ob_name, value in given.items():
+            if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))
+                                      or not np.isfinite(value)):
+                raise BoxLayerError(f"object '{ob_name}': property '{name}' is {value!r}; give a finite number")
+        if all(v is None for v in given.values()):
+            continue
+        if len(set(given.values())) > 1:
+            listed = ", ".join(f"'{k}' {'none' if v is None else v}" for k, v in sorted(given.items()))
+            raise BoxLayerError(f"mesh '{mesh.name}' is shared by objects whose property '{name}' differs ({listed}): "
+                                "the bake is per mesh; give them the same value, or make the mesh single-user "
+                                "(Object > Relations > Make Single User > Object & Data)")
+        values[key] = float(next(iter(given.values())))
+    return values
+
+
+def _mesh_users(mesh) -> list:
+    """The objects using ``mesh`` (linked duplicates share it, and so its bake)."""
+    import bpy
+
+    return [ob for ob in bpy.data.objects if ob.type == "MESH" and ob.data == mesh and ob.users]
+
+
+def bone_parents(mesh, submesh_of_vertex, count, origins) -> np.ndarray:
+    """int32 (S,): the BONES rule's parents of ``mesh``'s boxes (core.parents_by_bone): each
+    box's bone is the deform bone with the most weight over its vertices, of the Armature
+    modifier of the objects using the mesh; a bone's parent is its nearest ancestor bone that
+    weights some vertex. Raises BoxLayerError without such a modifier, or where the users are
+    skinned differently."""
+    try:
+        skins = {ob.name: read_skin(ob) for ob in _mesh_users(mesh)}
+    except SkinError as error:
+        raise BoxLayerError(f"mesh '{mesh.name}': {error}") from None
+    rigs = {(skin.armature.name, tuple(skin.bones)) for skin in skins.values() if skin is not None}
+    if not rigs:
+        raise BoxLayerError(f"mesh '{mesh.name}': the BONES rule needs an object using it with an Armature modifier "
+                            "whose deform bones weight its vertices (vertex groups named as the bones)")
+    if len(rigs) > 1 or None in skins.values():
+        raise BoxLayerError(f"mesh '{mesh.name}' is shared by objects skinned by different armatures or none "
+                            f"({', '.join(sorted(skins))}): the BONES rule needs one")
+    skin = next(iter(skins.values()))
+    column = {name: k for k, name in enumerate(skin.bones)}
+    bone_parent = []
+    for name in skin.bones:
+        up = skin.armature.data.bones[name].parent
+        while up is not None and up.name not in column:
+            up = up.parent
+        bone_parent.append(-1 if up is None else column[up.name])
+    box_bone = core.dominant_per_submesh(skin.weights, submesh_of_vertex, count)
+    return core.parents_by_bone(box_bone, bone_parent, origins)
+
+
+def compute_box_layers(mesh, result, face_starts, corner_verts, boxes, rule="ATTRIBUTE", seed=0, object_values=None):
     """(BoxLayers, report dict) for a bake ``result`` of ``mesh``. ``boxes`` = (origins,
-    quaternions, half_extents) per submesh, used by the CONTAINMENT and CHAIN rules. Raises
-    BoxLayerError on an attribute that cannot be read or parents that do not form a tree."""
+    quaternions, half_extents) per submesh, used by the CONTAINMENT, CHAIN and BONES rules.
+    ``object_values`` ({parameter key: value}, object_parameters) gives every box a value no
+    attribute paints. Raises BoxLayerError on an attribute that cannot be read or parents that
+    do not form a tree."""
     sv, count = result.submesh_of_vertex, result.submesh_count
     disagreements = {}
+    object_values = object_values or {}
     params = np.zeros((count, 4), np.float32)
     colour = _reduce(mesh, PARAMS_COLOUR_ATTRIBUTE, sv, count, face_starts, corner_verts, disagreements)
     if colour is not None and colour.shape[1] != 4:
@@ -108,18 +172,23 @@ def compute_box_layers(mesh, result, face_starts, corner_verts, boxes, rule="ATT
             params[:, column] = scalar[:, 0]
         elif colour is not None:
             params[:, column] = colour[:, _COLOUR_CHANNELS[key]]
+        elif key in object_values:
+            params[:, column] = object_values[key]
     params[:, core.PARAM_NAMES.index("random")] = core.box_random(
         core.box_fingerprints(result.fingerprints, sv, count), seed)
     given = None
     if rule == "ATTRIBUTE":
         given = _reduce(mesh, PARENT_ATTRIBUTE, sv, count, face_starts, corner_verts, disagreements)
         given = None if given is None else given[:, 0]
+    elif rule == "BONES":
+        given = bone_parents(mesh, sv, count, boxes[0])
     try:
         parent, depth, deepest = core.box_hierarchy(*boxes, rule=rule, given_parent=given)
     except ValueError as error:
         raise BoxLayerError(f"mesh '{mesh.name}': box hierarchy: {error}") from None
     report = {"hierarchy": rule, "max_depth": deepest, "roots": int((parent < 0).sum()),
-              "random_seed": int(seed), "disagreeing_attributes": disagreements}
+              "random_seed": int(seed), "disagreeing_attributes": disagreements,
+              "object_properties": {PARAM_ATTRIBUTES[k]: v for k, v in object_values.items()}}
     return BoxLayers(params, parent, depth), report
 
 

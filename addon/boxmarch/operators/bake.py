@@ -36,7 +36,9 @@ _ENCODING_ITEMS = [(encoding, *_ENCODING_LABELS[encoding]) for encoding in core.
 _HIERARCHY_LABELS = {
     "ATTRIBUTE": ("Attribute", "Parent box index from the 'boxmarch_parent' attribute (none: every box a root)"),
     "CONTAINMENT": ("Containment", "The smallest larger box holding the box's centre"),
-    "CHAIN": ("Chain", "The nearest lower-numbered box (instances along a curve are numbered along it)")}
+    "CHAIN": ("Chain", "The nearest lower-numbered box (instances along a curve are numbered along it)"),
+    "BONES": ("Bones", "The nearest box of the parent bone of the box's bone (its vertex group with the most "
+              "weight; the Armature modifier's rig)")}
 _HIERARCHY_ITEMS = [(rule, *_HIERARCHY_LABELS[rule]) for rule in core.HIERARCHY_RULES]
 
 
