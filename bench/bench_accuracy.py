@@ -40,7 +40,7 @@ import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from boxmarch import core, scenes  # noqa: E402
+from boxmarch import core, layouts, scenes  # noqa: E402
 from common import best_of, reset_peak_rss, rss_bytes, table  # noqa: E402
 import bench_gpu_cost  # noqa: E402
 import bench_skinning  # noqa: E402
@@ -58,7 +58,7 @@ USABLE = 0.01  # a decode error up to 1% of the half-extent counts as usable for
 def quat_matrices(q):
     """(n, 3, 3) frames (columns = local axes) of quaternions (x, y, z, w), normalised in float64."""
     q = np.asarray(q, np.float64)
-    return scenes.quaternion_matrices(q / np.linalg.norm(q, axis=1, keepdims=True))
+    return layouts.quaternion_matrices(q / np.linalg.norm(q, axis=1, keepdims=True))
 
 
 def box_truth(positions, quaternions):

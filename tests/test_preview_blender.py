@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from conftest import mesh_object
-from boxmarch import core, scenes
+from boxmarch import core, layouts, scenes
 
 
 def baked_boxes(blender, encoding="FLOAT_COLOR", domain="POINT"):
@@ -43,7 +43,7 @@ def test_read_baked_recovers_boxes_and_vectors_meet_at_origins(blender, encoding
     assert np.allclose(np.sort(baked.box_half_extents, axis=1), np.sort(sizes / 2, axis=1), atol=tolerance * scale)
     assert np.allclose(baked.origins, centres, atol=tolerance * scale)
     raw, rotated = mesh_data.vector_lines(baked.positions, core.decode_offsets(baked.offsets),
-                                          mesh_data.frame_axes(baked.quaternions))
+                                          layouts.quaternion_matrices(baked.quaternions))
     assert raw.shape == rotated.shape == (2 * len(baked.positions), 3)
     assert np.array_equal(rotated[0::2], baked.positions)
     tips = rotated[1::2].reshape(-1, 8, 3)  # 8 vertices per box, in order
