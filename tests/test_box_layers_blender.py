@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from boxmarch import bake_job, mesh_io, scenes
-from conftest import mesh_object
+from tests.conftest import mesh_object
 
 BOXES = 6
 

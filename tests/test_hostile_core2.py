@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 import boxmarch
 from boxmarch import cli_args, core, layouts, scenes
-from helpers.core_reference import decoded_origins, mesh_from_polys
+from tests.helpers.core_reference import decoded_origins, mesh_from_polys
 
 HERE = Path(__file__).parent
 PACKAGE_PARENT = Path(boxmarch.__file__).parent.parent

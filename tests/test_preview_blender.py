@@ -3,7 +3,7 @@ the decoded-vector overlay (the GPU image itself is checked in tests/test_previe
 import numpy as np
 import pytest
 
-from conftest import mesh_object
+from tests.conftest import mesh_object
 from boxmarch import core, layouts, scenes
 
 
@@ -85,7 +85,7 @@ def test_new_sdf_text_template_compiles(blender, tmp_path):
     import subprocess
 
     from boxmarch.preview import sources
-    from helpers.glsl import blender_declarations
+    from tests.helpers.glsl import blender_declarations
 
     ob, _, _ = baked_boxes(blender)
     assert blender.ops.boxmarch.new_sdf_text() == {"FINISHED"}

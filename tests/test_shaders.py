@@ -9,7 +9,7 @@ import pytest
 
 from boxmarch import core, layouts
 from boxmarch.preview import sources
-from helpers.glsl import blender_declarations, compile_glsl, validator
+from tests.helpers.glsl import blender_declarations, compile_glsl, validator
 
 SHADERS = Path(__file__).resolve().parent.parent / "shaders"
 # Engine-side helpers without a GLSL twin (Blender reads UV maps by name, and the preview's main()
