@@ -31,7 +31,7 @@ W, H = 640, 540
 TO_Y_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])  # Blender -> glTF axes
 LINK_MAP = "return sdf_preset_link(p, box_half);"
 # The frame as the vertex carries it at rest (no skinning), in place of the skinned one.
-REST_FRAME = ("vObjPos = transformed;", "objectNormal = normal; axisX = tangent.xyz; vObjPos = transformed;")
+REST_FRAME = ("bmObjPos = transformed;", "objectNormal = normal; axisX = tangent.xyz; bmObjPos = transformed;")
 
 
 def setup_js(rest_frame):

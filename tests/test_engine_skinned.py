@@ -31,7 +31,7 @@ INNER = 0.6
 BOX_MAP = "return sd_box(p, 0.6 * box_half);"
 # The negative control: the frame as the vertex carries it at rest (attributes normal, tangent),
 # not the skinned one: what a layout with the frame in UV maps gives the shader.
-REST_FRAME = ("vObjPos = transformed;", "objectNormal = normal; axisX = tangent.xyz; vObjPos = transformed;")
+REST_FRAME = ("bmObjPos = transformed;", "objectNormal = normal; axisX = tangent.xyz; bmObjPos = transformed;")
 
 
 @pytest.fixture(scope="module")

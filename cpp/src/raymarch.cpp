@@ -114,7 +114,7 @@ Normal normal_by_rule(NormalRule rule, SdfPreset kind, vec3 p, vec3 h, float d, 
         }
         return {unit_or_zero(n), 6};
     }
-    const float tap = std::max(epsilon, 1e-3f * shader::max3(h));
+    const float tap = std::max(epsilon, 1e-3f * shader::bm_max3(h));
     const vec3 a(1.0f, -1.0f, -1.0f), b(-1.0f, -1.0f, 1.0f), c(-1.0f, 1.0f, -1.0f), one(1.0f);
     return {unit_or_zero(a * sdf_preset(kind, p + a * tap, h) + b * sdf_preset(kind, p + b * tap, h) +
                          c * sdf_preset(kind, p + c * tap, h) + one * sdf_preset(kind, p + one * tap, h)),
@@ -309,7 +309,7 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                     ++cost.marched_fragments;
                     const float footprint =
                             shader::bm_pixel_size((to_clip * vec4(c + q * face, 1.0f)).w, row_y, float(H));
-                    const float box_pixels = 2.0f * shader::max3(h) / footprint;
+                    const float box_pixels = 2.0f * shader::bm_max3(h) / footprint;
                     MarchOptions fragment = o;
                     fragment.epsilon = std::max(o.epsilon, quality.x * footprint);
                     fragment.max_steps = int(shader::bm_step_limit(box_pixels, quality.y, float(o.max_steps)));
