@@ -1,6 +1,6 @@
 """Accuracy against run time: writes docs/ACCURACY.md and its PNG plots (docs/accuracy_*.png).
 
-    PYTHONPATH=addon python3 bench/bench_accuracy.py [--quick]
+    PYTHONPATH=addon python3 -m bench.bench_accuracy [--quick]
 
 Sections (each measured here, from NumPy box scenes, with the native core; no Blender needed):
 
@@ -34,16 +34,15 @@ import time
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from boxmarch import core, scenes  # noqa: E402
-from common import best_of, reset_peak_rss, rss_bytes, table  # noqa: E402
-import bench_gpu_cost  # noqa: E402
-import bench_skinning  # noqa: E402
+from boxmarch import core, layouts, scenes  # noqa: E402
+from bench.common import best_of, reset_peak_rss, rss_bytes, table  # noqa: E402
+from bench import bench_gpu_cost  # noqa: E402
+from bench import bench_skinning  # noqa: E402
 
 DOCS = pathlib.Path(__file__).resolve().parents[1] / "docs"
 SIZES = [0.01, 0.1, 1.0, 10.0, 100.0, 1000.0]
@@ -58,7 +57,7 @@ USABLE = 0.01  # a decode error up to 1% of the half-extent counts as usable for
 def quat_matrices(q):
     """(n, 3, 3) frames (columns = local axes) of quaternions (x, y, z, w), normalised in float64."""
     q = np.asarray(q, np.float64)
-    return scenes.quaternion_matrices(q / np.linalg.norm(q, axis=1, keepdims=True))
+    return layouts.quaternion_matrices(q / np.linalg.norm(q, axis=1, keepdims=True))
 
 
 def box_truth(positions, quaternions):
@@ -511,7 +510,7 @@ def main():
 
     page = f"""# Accuracy against run time
 
-Measured by `PYTHONPATH=addon python3 bench/bench_accuracy.py` (one command: it writes this page
+Measured by `PYTHONPATH=addon python3 -m bench.bench_accuracy` (one command: it writes this page
 and its plots). {datetime.date.today().isoformat()}, {platform.machine()}, {os.cpu_count()} cores,
 no GPU; times are the best of several runs on a shared machine.
 

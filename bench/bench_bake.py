@@ -8,19 +8,18 @@ done by an operator called through bpy.ops as the bake is (and the re-bake's rat
 time, the peak extra memory of the bake against the size of the attributes it writes, and the
 worst decode error of what Blender stores, for FLOAT_COLOR and BYTE_COLOR.
 
-    python bench/bench_bake.py [N ...]     (default: 1000 16000 125000 1000000)
+    python3 -m bench.bench_bake [N ...]     (default: 1000 16000 125000 1000000)
 """
 import sys
 import time
 
 import numpy as np
 
-sys.path.insert(0, __file__.rsplit("/", 1)[0])
 import bpy  # noqa: E402
 
 import boxmarch  # noqa: E402
 from boxmarch import core, mesh_io  # noqa: E402
-from common import best_of, boxes_object, decode_error, reset_peak_rss, rss_bytes, table  # noqa: E402
+from bench.common import best_of, boxes_object, decode_error, reset_peak_rss, rss_bytes, table  # noqa: E402
 
 
 def transfer(mesh):

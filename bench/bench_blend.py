@@ -9,20 +9,18 @@ per map() call (its own shape and its parent's), the root one; the root is not g
 is the same in both modes, so its calls are measured alone (the root box drawn by itself) and
 SDF evaluations = 2 x calls(all) - calls(root).
 
-    python3 bench/bench_blend.py [--links N] [--picture docs/blend_chain.png]
+    python3 -m bench.bench_blend [--links N] [--picture docs/blend_chain.png]
 """
 import argparse
-import sys
 
 import numpy as np
 
-sys.path.insert(0, __file__.rsplit("/", 1)[0])
 import bpy  # noqa: E402
 import mathutils  # noqa: E402
 
 import boxmarch  # noqa: E402
 from boxmarch import bake_job, mesh_io, preview, scenes  # noqa: E402
-from common import table  # noqa: E402
+from bench.common import table  # noqa: E402
 
 W, H = 640, 360
 BLEND = 0.3

@@ -1,7 +1,7 @@
 """Per-box parameters and hierarchy: what they add to a bake (the core alone, and the whole bake
 job in Blender through the bpy module with painted attributes).
 
-    python bench/bench_box_params.py [BOXES ...]     (default: 1000 16000)
+    python3 -m bench.bench_box_params [BOXES ...]     (default: 1000 16000)
 
 Meshes: BOXES random boxes (8 vertices each) with boxmarch_shape painted per face and
 boxmarch_user per vertex (one face in a hundred boxes disagreeing)."""
@@ -9,12 +9,11 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, __file__.rsplit("/", 1)[0])
 import bpy  # noqa: E402
 
 import boxmarch  # noqa: E402
 from boxmarch import bake_job, core, mesh_io, scenes  # noqa: E402
-from common import best_of, boxes_object, table  # noqa: E402
+from bench.common import best_of, boxes_object, table  # noqa: E402
 
 
 BONES = 32

@@ -8,7 +8,7 @@ does). It then simulates what Unity stores by default (docs/EXPORT.md): vertex c
 16-bit floats of TexCoord2 (the quaternion's z, w) and of the colour when kept as floats, or the
 colour as Color32 bytes.
 
-    python bench/bench_export.py [N ...]     (default: 1000 16000)
+    python3 -m bench.bench_export [N ...]     (default: 1000 16000)
 """
 import os
 import sys
@@ -17,14 +17,13 @@ import tempfile
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path[:0] = [HERE, os.path.join(HERE, "..", "tests")]
 import bpy  # noqa: E402
 
 import boxmarch  # noqa: E402
 from boxmarch.export import scene as export_scene, transforms  # noqa: E402
-from common import best_of, boxes_object, table  # noqa: E402
-from fbx_reader import read_fbx_geometry  # noqa: E402
-from gltf_reader import read_glb  # noqa: E402
+from bench.common import best_of, boxes_object, table  # noqa: E402
+from tests.fbx_reader import read_fbx_geometry  # noqa: E402
+from tests.gltf_reader import read_glb  # noqa: E402
 
 
 def shader_origin(position, rgba, q):

@@ -20,7 +20,7 @@ more than 1/255) as a share of the pixels covered in either image, and of those 
 in one image only; the normal's angle to the reference's (99th percentile); depth error where both
 hit, in scene units along the view axis (99th percentile and worst).
 
-    python3 bench/bench_gpu_cost.py [--size 480] [--far-boxes 1000000] [--quick]
+    PYTHONPATH=addon python3 -m bench.bench_gpu_cost [--size 480] [--far-boxes 1000000] [--quick]
 
 Scenes: cloud (16,000 random boxes, bench_preview's, SPHERE, camera inside), chain side and chain
 down the arm (scripts/chain_arm.py's 258 links, LINK, seen from the side and from above the arm,
@@ -28,15 +28,12 @@ where its 25 turns stack), pile (4,000 links heaped in a 4 x 4 x 4 block, seen t
 (1,000,000 boxes, ROUNDED_BOX, in a 100^3 grid 0.5 apart, 150 units away, each 2 to 4 pixels wide).
 """
 import argparse
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "scripts"))
-sys.path.insert(0, str(HERE.parent / "addon"))
 
 from boxmarch import core, scenes  # noqa: E402
 from boxmarch.export.transforms import matrix_quaternions  # noqa: E402
@@ -61,7 +58,7 @@ def camera(eye, target, width, height, up=(0.0, 0.0, 1.0), fov_deg=40.0):
 
 def scenes_to_measure(size, far_boxes):
     """name -> (origins, rotations (S, 3, 3), half_extents, sdf, camera)."""
-    import chain_arm
+    from scripts import chain_arm
 
     made = {}
     _, centres, sizes, rotations = scenes.random_boxes(16000, seed=0)
@@ -158,7 +155,7 @@ HEADERS = ["scene", "technique", "fragments/px", "marched/px", "SDF evals/px", "
 
 
 def measured_table(size=480, far_boxes=1_000_000, qualities=(1.0, 0.9, 0.75, 0.5, 0.25)):
-    from common import table
+    from bench.common import table
 
     rows = [row for name, scene in scenes_to_measure(size, far_boxes).items()
             for row in rows_for(name, scene, size, qualities)]
@@ -206,7 +203,7 @@ and most of its changed pixels are shading, not coverage.
 
 
 def main():
-    from common import table
+    from bench.common import table
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=480, help="image width and height in pixels")

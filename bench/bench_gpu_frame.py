@@ -30,9 +30,9 @@ where both hit (view-axis distance, in units of the scene), colour error of the 
 and the fragment shader invocations of the frame (ARB_pipeline_statistics_query) per covered
 pixel, which show whether the early depth test skipped any march.
 
-    python3 bench/gpu_frame_data.py DATA           # here, with the bpy module
-    python3 bench/bench_gpu_frame.py DATA [--json OUT.json] [--sizes 960x540,1920x1080]
-    EGL_PLATFORM=surfaceless python3 bench/bench_gpu_frame.py DATA --scenes cloud \
+    PYTHONPATH=addon python3 -m bench.gpu_frame_data DATA           # here, with the bpy module
+    python3 -m bench.bench_gpu_frame DATA [--json OUT.json] [--sizes 960x540,1920x1080]
+    EGL_PLATFORM=surfaceless python3 -m bench.bench_gpu_frame DATA --scenes cloud \
         --sizes 960x540 --naive-sizes 24x14,48x27 --passes 1      # Mesa llvmpipe, a few minutes
 
 Needs numpy and PyOpenGL only (gl_headless.py), so it runs where Blender is absent (a GPU
@@ -41,16 +41,14 @@ machine: copy bench_gpu_frame.py, gl_headless.py, common.py and DATA). EGL: the 
 """
 import argparse
 import json
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from common import table  # noqa: E402
-from gl_headless import (GL, counted, egl_context, framebuffer, program, read_back, timed_frames,  # noqa: E402
-                         timed_frames_exact)
+from bench.common import table  # noqa: E402
+from bench.gl_headless import (GL, counted, egl_context, framebuffer, program, read_back, timed_frames,  # noqa: E402
+                               timed_frames_exact)
 
 REFERENCE_SIZE = (960, 540)
 # (label, fragment source, triangle order, quality)

@@ -2,7 +2,7 @@
 an epsilon that joins everything, time and peak memory above the arrays themselves, beside
 Blender's Merge by Distance (bpy.ops.mesh.remove_doubles) on the same vertices.
 
-    python bench/bench_hostile.py [N]      (default 1000000)
+    python3 -m bench.bench_hostile [N]      (default 1000000)
 
 The cost of the private copies the bindings take of every input the core reads without the GIL
 (issue 21): ``core.bake`` of 125,000 and 1,000,000 random boxes, time and peak memory above the
@@ -10,7 +10,7 @@ inputs, with this checkout's package and, given ``--before DIR``, with the packa
 from DIR (e.g. the add-on folder of a build of the previous commit), in child processes run
 alternately:
 
-    python bench/bench_hostile.py --bake [--before DIR]
+    python3 -m bench.bench_hostile --bake [--before DIR]
 
 Each measurement runs in its own process, so its peak RSS (VmHWM) is its own."""
 import json
@@ -19,8 +19,7 @@ import subprocess
 import sys
 import time
 
-sys.path.insert(0, __file__.rsplit("/", 1)[0])
-from common import reset_peak_rss, rss_bytes, table  # noqa: E402
+from bench.common import reset_peak_rss, rss_bytes, table  # noqa: E402
 
 
 def child(case, n):

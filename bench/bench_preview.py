@@ -18,7 +18,7 @@ baked, previewed with the SPHERE preset; a camera inside the cloud; 960 x 540; M
   uploaded) plus the draw; a redraw without one is the draw alone. Blender's own evaluation of the
   modifier (the depsgraph update a pose change causes) is timed apart, for scale.
 
-    python3 bench/bench_preview.py [--boxes N] [--repeats R]
+    python3 -m bench.bench_preview [--boxes N] [--repeats R]
 
 Runs itself inside Debian's Blender program (the GPU module needs it headless).
 """
@@ -44,7 +44,7 @@ def in_blender(args):
     import boxmarch
     from boxmarch import core, preview
     from boxmarch.preview import draw, mesh_data, sources
-    from common import best_of, boxes_object
+    from bench.common import best_of, boxes_object
     from mathutils import Matrix
 
     boxmarch.register()
@@ -169,7 +169,7 @@ def skinned(bpy, ob, view, projection, boxed_frame, repeats):
 
     from boxmarch import mesh_io
     from boxmarch.preview import draw, skinning
-    from common import best_of
+    from bench.common import best_of
 
     scene = bpy.context.scene
     ob.boxmarch.sdf = "SPHERE"
@@ -232,7 +232,7 @@ def skinned(bpy, ob, view, projection, boxed_frame, repeats):
 
 
 def report(r):
-    from common import table
+    from bench.common import table
 
     evaluations_naive = r["naive_steps_per_pixel"] * r["boxes"]
 
@@ -296,14 +296,13 @@ def main():
                               env=env, capture_output=True, text=True)
         if proc.returncode != 0 or not out.exists():
             sys.exit(proc.stdout[-4000:] + proc.stderr[-4000:])
-        sys.path.insert(0, str(HERE))
         report(json.loads(out.read_text()))
 
 
 if __name__ == "__main__":
     if "--" in sys.argv:  # inside Blender
         parent, out, options = sys.argv[sys.argv.index("--") + 1:]
-        sys.path[:0] = [parent, str(HERE)]
+        sys.path[:0] = [parent, str(HERE.parent)]  # Blender runs this file by path
         Path(out).write_text(json.dumps(in_blender(json.loads(options))))
     else:
         main()

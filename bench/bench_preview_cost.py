@@ -14,7 +14,7 @@ threads, which a busy machine disturbs less). Rows:
 Pixels changed: pixels whose colour differs from today's by more than 1/255, as a share of the
 pixels covered in either image.
 
-    python3 bench/bench_preview_cost.py            # PyPI bpy (Blender 5.0), EGL llvmpipe here
+    PYTHONPATH=addon python3 -m bench.bench_preview_cost   # PyPI bpy (Blender 5.0), EGL llvmpipe here
     blender -b --factory-startup --python bench/bench_preview_cost.py   # Debian's Blender 3.4
 """
 import sys
@@ -22,8 +22,6 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parent / "addon"))
 
 SIZE, REPEATS = 480, 5
 SCENES = ("chain down the arm", "pile", "cloud")
@@ -55,7 +53,7 @@ def frame_rows(bpy, name, scene):
     import numpy as np
 
     from boxmarch.preview import draw, shader
-    from common import best_of
+    from bench.common import best_of
 
     ob = baked_object(bpy, name, scene)
     to_clip, to_view, _eye = scene[4]
@@ -112,8 +110,8 @@ def main():
 
     import boxmarch
     from boxmarch import preview
-    from bench_gpu_cost import scenes_to_measure
-    from common import table
+    from bench.bench_gpu_cost import scenes_to_measure
+    from bench.common import table
 
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -126,4 +124,6 @@ def main():
 
 
 if __name__ == "__main__":
+    if not __package__:  # a Blender program runs this file by path: the repository and its add-on first
+        sys.path[:0] = [str(HERE.parent), str(HERE.parent / "addon")]
     main()

@@ -20,22 +20,20 @@ the turning bone, at the other w + s/2 (s: the spread). The error is the worst, 
 vertices, of |decoded origin - the box centre carried by the box's mean weights| over the
 largest half-extent (the shader normalises the skinned axes; y = cross(z, x)).
 
-    PYTHONPATH=addon python3 bench/bench_skinning.py            # the table
-    PYTHONPATH=addon python3 bench/bench_skinning.py --no-engine  # non-rigid table only (no Blender)
+    PYTHONPATH=addon python3 -m bench.bench_skinning            # the table
+    PYTHONPATH=addon python3 -m bench.bench_skinning --no-engine  # non-rigid table only (no Blender)
 """
 import argparse
 import os
 import pathlib
-import sys
 import tempfile
 import time
 
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path[:0] = [HERE, os.path.join(HERE, "..", "tests")]
-from common import table  # noqa: E402
-from engine_scene import axis_turn  # noqa: E402
+from bench.common import table  # noqa: E402
+from tests.engine_scene import axis_turn  # noqa: E402
 
 BOX_HALF = np.array([0.5, 0.3, 0.1])
 TURN = np.radians(40.0)
@@ -113,11 +111,11 @@ def engine_rows():
 
     import boxmarch
     from boxmarch.export import scene as export_scene
-    from engine_scene import (TO_Y_UP, UNITY, box_of_vertex, decode_normal_frame, frame_and_size_errors,
-                              posed_rig_boxes, rig_boxes, skinned_scene, unity_skinned_decode)
-    from fbx_reader import read_fbx_geometry, read_fbx_skin
-    import test_engine_skinned as skinned_test
-    from engines import godot3, threejs, tightest_tolerance
+    from tests.engine_scene import (TO_Y_UP, UNITY, box_of_vertex, decode_normal_frame, frame_and_size_errors,
+                                    posed_rig_boxes, rig_boxes, skinned_scene, unity_skinned_decode)
+    from tests.fbx_reader import read_fbx_geometry, read_fbx_skin
+    from tests import test_engine_skinned as skinned_test
+    from tests.engines import godot3, threejs, tightest_tolerance
 
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)

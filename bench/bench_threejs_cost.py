@@ -19,18 +19,16 @@ The material writes gl_FragDepth without a conservative-depth declaration (three
 ShaderMaterial cannot put the #extension line first, docs/ENGINES.md), so the depth test runs after
 the march whatever the order: the front-to-back rows measure what the order costs there.
 
-    python3 bench/bench_threejs_cost.py        # PyPI bpy for the bake and the export
+    PYTHONPATH=addon python3 -m bench.bench_threejs_cost        # PyPI bpy for the bake and the export
 """
 import json
 import os
-import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path[:0] = [str(HERE), str(HERE.parent / "tests"), str(HERE.parent / "addon")]
 
 SIZE, REPEATS = 320, 7
 SCENES = ("chain down the arm", "pile")
@@ -102,7 +100,7 @@ TIMING_JOB = """async function (gltf) {
 
 def three_camera(to_view, eye):
     """The bench_gpu_cost camera in glTF's frame (Blender's x, z, -y)."""
-    from engine_scene import TO_Y_UP
+    from tests.engine_scene import TO_Y_UP
 
     forward = -np.asarray(to_view)[2, :3]
     return {"position": (TO_Y_UP @ eye[:3]).tolist(), "target": (TO_Y_UP @ (eye[:3] + forward)).tolist(),
@@ -110,7 +108,7 @@ def three_camera(to_view, eye):
 
 
 def exported_glb(bpy, name, scene, folder):
-    from bench_preview_cost import baked_object
+    from bench.bench_preview_cost import baked_object
     from boxmarch.export import scene as export_scene
 
     ob = baked_object(bpy, name, scene)
@@ -123,7 +121,7 @@ def exported_glb(bpy, name, scene, folder):
 def rows_for(name, scene, glb, sidecar, release):
     import base64
 
-    from engines import threejs
+    from tests.engines import threejs
 
     _origins, _rotations, _half, sdf, (_to_clip, to_view, eye) = scene
     parts = {"__SIZE__": str(SIZE), "__CAMERA__": json.dumps(three_camera(to_view, eye)),
@@ -150,9 +148,9 @@ def main():
     import bpy
 
     import boxmarch
-    from bench_gpu_cost import scenes_to_measure
-    from common import table
-    from engines import threejs
+    from bench.bench_gpu_cost import scenes_to_measure
+    from bench.common import table
+    from tests.engines import threejs
 
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)

@@ -2,7 +2,7 @@
 (leaving and re-entering Edit Mode included) beside Blender's nearest built-in on the same mesh
 in the same run, then the core alone, and the hash grid against nanoflann radius searches.
 
-    python bench/bench_tools.py [BOXES ...]     (default: 1000 16000 125000)
+    python3 -m bench.bench_tools [BOXES ...]     (default: 1000 16000 125000)
 
 Meshes: BOXES random boxes (8 vertices each) for the select tools and the UV packing (every face
 its own UV island); the same count with 10% of them jittered copies (1e-5) for dedup; boxes whose
@@ -13,12 +13,11 @@ import time
 
 import numpy as np
 
-sys.path.insert(0, __file__.rsplit("/", 1)[0])
 import bpy  # noqa: E402
 
 import boxmarch  # noqa: E402
 from boxmarch import core, mesh_io, scenes  # noqa: E402
-from common import table  # noqa: E402
+from bench.common import table  # noqa: E402
 
 
 def place(mesh, name="bench"):

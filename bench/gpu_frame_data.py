@@ -11,7 +11,7 @@ generates from its create-info, with and without the depth_greater declaration; 
 full-screen raymarch (naive_fullscreen.frag.glsl) is assembled as bench_preview.py compiles it.
 The CPU reference (core.render_boxes, every quality of QUALITIES) at REFERENCE_SIZE.
 
-    python3 bench/gpu_frame_data.py OUTDIR          # bpy 5.0.1 (PyPI module)
+    PYTHONPATH=addon python3 -m bench.gpu_frame_data OUTDIR          # bpy 5.0.1 (PyPI module)
 """
 import sys
 from pathlib import Path
@@ -19,8 +19,6 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parent / "addon"))
 
 from boxmarch.preview import sources  # noqa: E402
 
@@ -79,7 +77,7 @@ def widescreen(camera):
 
 
 def scene_arrays(bpy, name, scene) -> dict:
-    from bench_preview_cost import baked_object
+    from bench.bench_preview_cost import baked_object
     from boxmarch import core
     from boxmarch.preview import draw, mesh_data
 
@@ -119,7 +117,7 @@ def main():
     import bpy
 
     import boxmarch
-    from bench_gpu_cost import scenes_to_measure
+    from bench.bench_gpu_cost import scenes_to_measure
 
     out = Path(sys.argv[1])
     out.mkdir(parents=True, exist_ok=True)

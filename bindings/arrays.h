@@ -20,11 +20,26 @@ namespace py = pybind11;
 
 template <class T>
 const char* dtype_name();
-template <> inline const char* dtype_name<float>() { return "float32"; }
-template <> inline const char* dtype_name<double>() { return "float64"; }
-template <> inline const char* dtype_name<int32_t>() { return "int32"; }
-template <> inline const char* dtype_name<uint32_t>() { return "uint32"; }
-template <> inline const char* dtype_name<uint8_t>() { return "uint8"; }
+template <>
+inline const char* dtype_name<float>() {
+    return "float32";
+}
+template <>
+inline const char* dtype_name<double>() {
+    return "float64";
+}
+template <>
+inline const char* dtype_name<int32_t>() {
+    return "int32";
+}
+template <>
+inline const char* dtype_name<uint32_t>() {
+    return "uint32";
+}
+template <>
+inline const char* dtype_name<uint8_t>() {
+    return "uint8";
+}
 
 inline std::string shape_of(const py::array& a) {
     std::ostringstream s;
@@ -37,9 +52,9 @@ inline std::string shape_of(const py::array& a) {
 // The array as a C-contiguous T array of shape (rows, cols) (cols 0: one dimension), or a
 // ValueError saying what was expected and what came. rows < 0 accepts any row count.
 template <class T>
-py::array_t<T> checked(const py::object& obj, const char* name, py::ssize_t rows, py::ssize_t cols, bool writable = false) {
-    if (!py::isinstance<py::array>(obj))
-        throw py::value_error(std::string(name) + " must be a NumPy array");
+py::array_t<T> checked(const py::object& obj, const char* name, py::ssize_t rows, py::ssize_t cols,
+                       bool writable = false) {
+    if (!py::isinstance<py::array>(obj)) throw py::value_error(std::string(name) + " must be a NumPy array");
     py::array a = py::reinterpret_borrow<py::array>(obj);
     const bool dtype_ok = a.dtype().is(py::dtype::of<T>()) || a.dtype().equal(py::dtype::of<T>());
     const bool shape_ok = cols ? (a.ndim() == 2 && a.shape(1) == cols) : a.ndim() == 1;
@@ -74,12 +89,13 @@ struct MeshArrays {
     py::array_t<int32_t> edges, face_starts, face_sizes, corner_verts;
     MeshView view;
 
-    MeshArrays(const py::object& p, const py::object& e, const py::object& fs, const py::object& fz, const py::object& cv)
-        : positions(input<float>(p, "positions", -1, 3)),
-          edges(input<int32_t>(e, "edges", -1, 2)),
-          face_starts(input<int32_t>(fs, "face_starts", -1, 0)),
-          face_sizes(input<int32_t>(fz, "face_sizes", face_starts.shape(0), 0)),
-          corner_verts(input<int32_t>(cv, "corner_verts", -1, 0)) {
+    MeshArrays(const py::object& p, const py::object& e, const py::object& fs, const py::object& fz,
+               const py::object& cv)
+            : positions(input<float>(p, "positions", -1, 3)),
+              edges(input<int32_t>(e, "edges", -1, 2)),
+              face_starts(input<int32_t>(fs, "face_starts", -1, 0)),
+              face_sizes(input<int32_t>(fz, "face_sizes", face_starts.shape(0), 0)),
+              corner_verts(input<int32_t>(cv, "corner_verts", -1, 0)) {
         view.positions = positions.data();
         view.vertex_count = size_t(positions.shape(0));
         view.edges = edges.data();
@@ -103,7 +119,6 @@ py::array_t<T> empty(py::ssize_t rows, py::ssize_t cols = 0) {
 inline py::array_t<int32_t> checked_submeshes(const py::object& obj, py::ssize_t vertex_count) {
     return input<int32_t>(obj, "submesh_of_vertex", vertex_count, 0);
 }
-
 
 void bind_mesh(py::module_& m);
 void bind_bake(py::module_& m);

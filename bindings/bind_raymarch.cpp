@@ -10,7 +10,8 @@ namespace {
 
 SdfPreset preset_of(int sdf) {
     if (sdf < 0 || sdf >= kSdfPresetCount)
-        throw py::value_error("sdf must be a preset index 0.." + std::to_string(kSdfPresetCount - 1) + ", got " + std::to_string(sdf));
+        throw py::value_error("sdf must be a preset index 0.." + std::to_string(kSdfPresetCount - 1) + ", got " +
+                              std::to_string(sdf));
     return SdfPreset(sdf);
 }
 
@@ -40,115 +41,118 @@ std::vector<float> column_major(const py::object& m, const char* name) {
 
 // The CPU reference raymarcher and renderer.
 void bind_raymarch(py::module_& m) {
-    m.def("raymarch",
-          [](const py::object& origins, const py::object& directions, const py::object& half_extents, int sdf,
-             int max_steps, float epsilon, float relaxation, float max_distance, int threads) {
-              auto ro = input<float>(origins, "origins", -1, 3);
-              auto rd = input<float>(directions, "directions", ro.shape(0), 3);
-              auto h = input<float>(half_extents, "half_extents", ro.shape(0), 3);
-              MarchOptions o = march_options(sdf, max_steps, epsilon, relaxation, max_distance, threads);
-              const py::ssize_t n = ro.shape(0);
-              py::array_t<uint8_t> hit = empty<uint8_t>(n);
-              py::array_t<float> positions = empty<float>(n, 3), normals = empty<float>(n, 3);
-              py::array_t<int32_t> steps = empty<int32_t>(n);
-              {
-                  uint8_t* hp = hit.mutable_data();
-                  float* pp = positions.mutable_data();
-                  float* np_ = normals.mutable_data();
-                  int32_t* sp = steps.mutable_data();
-                  py::gil_scoped_release release;
-                  raymarch(ro.data(), rd.data(), h.data(), size_t(n), o, hp, pp, np_, sp);
-              }
-              py::dict r;
-              r["hit"] = hit;
-              r["positions"] = positions;
-              r["normals"] = normals;
-              r["steps"] = steps;
-              return r;
-          },
-          py::arg("origins"), py::arg("directions"), py::arg("half_extents"), py::kw_only(), py::arg("sdf"),
-          py::arg("max_steps"), py::arg("epsilon"), py::arg("relaxation"), py::arg("max_distance"), py::arg("threads") = 0,
-          "Sphere-trace box-local rays; see boxmarch.core.raymarch.");
+    m.def(
+            "raymarch",
+            [](const py::object& origins, const py::object& directions, const py::object& half_extents, int sdf,
+               int max_steps, float epsilon, float relaxation, float max_distance, int threads) {
+                auto ro = input<float>(origins, "origins", -1, 3);
+                auto rd = input<float>(directions, "directions", ro.shape(0), 3);
+                auto h = input<float>(half_extents, "half_extents", ro.shape(0), 3);
+                MarchOptions o = march_options(sdf, max_steps, epsilon, relaxation, max_distance, threads);
+                const py::ssize_t n = ro.shape(0);
+                py::array_t<uint8_t> hit = empty<uint8_t>(n);
+                py::array_t<float> positions = empty<float>(n, 3), normals = empty<float>(n, 3);
+                py::array_t<int32_t> steps = empty<int32_t>(n);
+                {
+                    uint8_t* hp = hit.mutable_data();
+                    float* pp = positions.mutable_data();
+                    float* np_ = normals.mutable_data();
+                    int32_t* sp = steps.mutable_data();
+                    py::gil_scoped_release release;
+                    raymarch(ro.data(), rd.data(), h.data(), size_t(n), o, hp, pp, np_, sp);
+                }
+                py::dict r;
+                r["hit"] = hit;
+                r["positions"] = positions;
+                r["normals"] = normals;
+                r["steps"] = steps;
+                return r;
+            },
+            py::arg("origins"), py::arg("directions"), py::arg("half_extents"), py::kw_only(), py::arg("sdf"),
+            py::arg("max_steps"), py::arg("epsilon"), py::arg("relaxation"), py::arg("max_distance"),
+            py::arg("threads") = 0, "Sphere-trace box-local rays; see boxmarch.core.raymarch.");
 
-    m.def("render_boxes",
-          [](const py::object& origins, const py::object& quaternions, const py::object& half_extents,
-             const py::object& object_to_clip, const py::object& object_to_view, const py::object& base_color,
-             const py::object& rgba, const py::object& depth, const py::object& normals, const py::object& steps,
-             int sdf, int max_steps, float epsilon, float relaxation, float max_distance, int threads,
-             const py::object& order, bool early_depth, float quality, int normal) {
-              auto c = input<float>(origins, "origins", -1, 3);
-              auto q = input<float>(quaternions, "quaternions", c.shape(0), 4);
-              auto h = input<float>(half_extents, "half_extents", c.shape(0), 3);
-              auto color = input<float>(base_color, "base_color", 3, 0);
-              if (!py::isinstance<py::array>(depth) || py::reinterpret_borrow<py::array>(depth).ndim() != 2)
-                  throw py::value_error("depth must be a float32 array of shape (height, width)");
-              const py::ssize_t height = py::reinterpret_borrow<py::array>(depth).shape(0);
-              const py::ssize_t width = py::reinterpret_borrow<py::array>(depth).shape(1);
-              auto d = checked<float>(depth, "depth", height, width, true);
-              auto image = checked<float>(rgba, "rgba", height * width, 4, true);
-              py::array_t<float> nrm;
-              py::array_t<int32_t> st;
-              if (!normals.is_none()) nrm = checked<float>(normals, "normals", height * width, 3, true);
-              if (!steps.is_none()) st = checked<int32_t>(steps, "steps", height * width, 0, true);
-              std::vector<float> clip = column_major(object_to_clip, "object_to_clip");
-              std::vector<float> view_m = column_major(object_to_view, "object_to_view");
-              MarchOptions o = march_options(sdf, max_steps, epsilon, relaxation, max_distance, threads);
-              RenderView view;
-              view.object_to_clip = clip.data();
-              view.object_to_view = view_m.data();
-              view.width = uint32_t(width);
-              view.height = uint32_t(height);
-              for (int k = 0; k < 3; ++k) view.base_color[k] = color.data()[k];
-              RenderImages images;
-              images.rgba = image.mutable_data();
-              images.depth = d.mutable_data();
-              images.normals = normals.is_none() ? nullptr : nrm.mutable_data();
-              images.steps = steps.is_none() ? nullptr : st.mutable_data();
-              py::array_t<uint32_t> draw_order;
-              RenderCost cost;
-              RenderPlan plan;
-              if (!order.is_none()) {
-                  draw_order = input<uint32_t>(order, "order", c.shape(0), 0);
-                  plan.order = draw_order.data();
-              }
-              plan.early_depth = early_depth;
-              plan.quality = quality;
-              plan.normal = NormalRule(normal);
-              plan.cost = &cost;
-              {
-                  py::gil_scoped_release release;
-                  render_boxes(c.data(), q.data(), h.data(), size_t(c.shape(0)), view, o, images, plan);
-              }
-              py::dict counts;
-              counts["fragments"] = cost.fragments;
-              counts["marched_fragments"] = cost.marched_fragments;
-              counts["lod_fragments"] = cost.lod_fragments;
-              counts["sdf_evaluations"] = cost.sdf_evaluations;
-              counts["hidden_fragments"] = cost.hidden_fragments;
-              counts["hidden_evaluations"] = cost.hidden_evaluations;
-              counts["covered_pixels"] = cost.covered_pixels;
-              return counts;
-          },
-          py::arg("origins"), py::arg("quaternions"), py::arg("half_extents"), py::arg("object_to_clip"),
-          py::arg("object_to_view"), py::arg("base_color"), py::arg("rgba"), py::arg("depth"), py::arg("normals"),
-          py::arg("steps"), py::kw_only(), py::arg("sdf"), py::arg("max_steps"), py::arg("epsilon"),
-          py::arg("relaxation"), py::arg("max_distance"), py::arg("threads") = 0, py::arg("order") = py::none(),
-          py::arg("early_depth") = false, py::arg("quality") = 1.0f, py::arg("normal") = 0,
-          "Raymarch boxes into caller-owned images (rgba (H*W, 4), depth (H, W), normals (H*W, 3), steps (H*W,)) "
-          "in draw order `order` (None: as given); returns the frame's cost counts (RenderCost); "
-          "see boxmarch.core.render_boxes.");
+    m.def(
+            "render_boxes",
+            [](const py::object& origins, const py::object& quaternions, const py::object& half_extents,
+               const py::object& object_to_clip, const py::object& object_to_view, const py::object& base_color,
+               const py::object& rgba, const py::object& depth, const py::object& normals, const py::object& steps,
+               int sdf, int max_steps, float epsilon, float relaxation, float max_distance, int threads,
+               const py::object& order, bool early_depth, float quality, int normal) {
+                auto c = input<float>(origins, "origins", -1, 3);
+                auto q = input<float>(quaternions, "quaternions", c.shape(0), 4);
+                auto h = input<float>(half_extents, "half_extents", c.shape(0), 3);
+                auto color = input<float>(base_color, "base_color", 3, 0);
+                if (!py::isinstance<py::array>(depth) || py::reinterpret_borrow<py::array>(depth).ndim() != 2)
+                    throw py::value_error("depth must be a float32 array of shape (height, width)");
+                const py::ssize_t height = py::reinterpret_borrow<py::array>(depth).shape(0);
+                const py::ssize_t width = py::reinterpret_borrow<py::array>(depth).shape(1);
+                auto d = checked<float>(depth, "depth", height, width, true);
+                auto image = checked<float>(rgba, "rgba", height * width, 4, true);
+                py::array_t<float> nrm;
+                py::array_t<int32_t> st;
+                if (!normals.is_none()) nrm = checked<float>(normals, "normals", height * width, 3, true);
+                if (!steps.is_none()) st = checked<int32_t>(steps, "steps", height * width, 0, true);
+                std::vector<float> clip = column_major(object_to_clip, "object_to_clip");
+                std::vector<float> view_m = column_major(object_to_view, "object_to_view");
+                MarchOptions o = march_options(sdf, max_steps, epsilon, relaxation, max_distance, threads);
+                RenderView view;
+                view.object_to_clip = clip.data();
+                view.object_to_view = view_m.data();
+                view.width = uint32_t(width);
+                view.height = uint32_t(height);
+                for (int k = 0; k < 3; ++k) view.base_color[k] = color.data()[k];
+                RenderImages images;
+                images.rgba = image.mutable_data();
+                images.depth = d.mutable_data();
+                images.normals = normals.is_none() ? nullptr : nrm.mutable_data();
+                images.steps = steps.is_none() ? nullptr : st.mutable_data();
+                py::array_t<uint32_t> draw_order;
+                RenderCost cost;
+                RenderPlan plan;
+                if (!order.is_none()) {
+                    draw_order = input<uint32_t>(order, "order", c.shape(0), 0);
+                    plan.order = draw_order.data();
+                }
+                plan.early_depth = early_depth;
+                plan.quality = quality;
+                plan.normal = NormalRule(normal);
+                plan.cost = &cost;
+                {
+                    py::gil_scoped_release release;
+                    render_boxes(c.data(), q.data(), h.data(), size_t(c.shape(0)), view, o, images, plan);
+                }
+                py::dict counts;
+                counts["fragments"] = cost.fragments;
+                counts["marched_fragments"] = cost.marched_fragments;
+                counts["lod_fragments"] = cost.lod_fragments;
+                counts["sdf_evaluations"] = cost.sdf_evaluations;
+                counts["hidden_fragments"] = cost.hidden_fragments;
+                counts["hidden_evaluations"] = cost.hidden_evaluations;
+                counts["covered_pixels"] = cost.covered_pixels;
+                return counts;
+            },
+            py::arg("origins"), py::arg("quaternions"), py::arg("half_extents"), py::arg("object_to_clip"),
+            py::arg("object_to_view"), py::arg("base_color"), py::arg("rgba"), py::arg("depth"), py::arg("normals"),
+            py::arg("steps"), py::kw_only(), py::arg("sdf"), py::arg("max_steps"), py::arg("epsilon"),
+            py::arg("relaxation"), py::arg("max_distance"), py::arg("threads") = 0, py::arg("order") = py::none(),
+            py::arg("early_depth") = false, py::arg("quality") = 1.0f, py::arg("normal") = 0,
+            "Raymarch boxes into caller-owned images (rgba (H*W, 4), depth (H, W), normals (H*W, 3), steps (H*W,)) "
+            "in draw order `order` (None: as given); returns the frame's cost counts (RenderCost); "
+            "see boxmarch.core.render_boxes.");
 
-    m.def("sdf_distance",
-          [](int sdf, const py::object& points, const py::object& half_extents) {
-              auto p = checked<float>(points, "points", -1, 3);
-              auto h = checked<float>(half_extents, "half_extents", p.shape(0), 3);
-              const SdfPreset preset = preset_of(sdf);
-              py::array_t<float> d = empty<float>(p.shape(0));
-              for (py::ssize_t i = 0; i < p.shape(0); ++i)
-                  d.mutable_data()[i] = sdf_distance(preset, p.data() + 3 * i, h.data() + 3 * i);
-              return d;
-          },
-          py::arg("sdf"), py::arg("points"), py::arg("half_extents"), "Distances of box-local points to a preset.");
+    m.def(
+            "sdf_distance",
+            [](int sdf, const py::object& points, const py::object& half_extents) {
+                auto p = checked<float>(points, "points", -1, 3);
+                auto h = checked<float>(half_extents, "half_extents", p.shape(0), 3);
+                const SdfPreset preset = preset_of(sdf);
+                py::array_t<float> d = empty<float>(p.shape(0));
+                for (py::ssize_t i = 0; i < p.shape(0); ++i)
+                    d.mutable_data()[i] = sdf_distance(preset, p.data() + 3 * i, h.data() + 3 * i);
+                return d;
+            },
+            py::arg("sdf"), py::arg("points"), py::arg("half_extents"), "Distances of box-local points to a preset.");
 }
 
 }  // namespace boxmarch::bindings

@@ -6,43 +6,51 @@ namespace boxmarch::bindings {
 
 // Mesh checks and submeshes.
 void bind_mesh(py::module_& m) {
-    m.def("validate_mesh", [](const py::object& p, const py::object& e, const py::object& fs, const py::object& fz,
-                              const py::object& cv) { MeshArrays mesh(p, e, fs, fz, cv); },
-          py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"), py::arg("corner_verts"),
-          "Raise ValueError naming the first malformed element of the mesh arrays.");
+    m.def(
+            "validate_mesh",
+            [](const py::object& p, const py::object& e, const py::object& fs, const py::object& fz,
+               const py::object& cv) { MeshArrays mesh(p, e, fs, fz, cv); },
+            py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"),
+            py::arg("corner_verts"), "Raise ValueError naming the first malformed element of the mesh arrays.");
 
-    m.def("find_submeshes", [](const py::object& p, const py::object& e, const py::object& fs, const py::object& fz,
-                               const py::object& cv) {
-              MeshArrays mesh(p, e, fs, fz, cv);
-              py::array_t<int32_t> ids = empty<int32_t>(py::ssize_t(mesh.view.vertex_count));
-              size_t count;
-              {
-                  py::gil_scoped_release release;
-                  count = find_submeshes(ids.mutable_data(), mesh.view);
-              }
-              return py::make_tuple(ids, count);
-          },
-          py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"), py::arg("corner_verts"),
-          "Connected components: (submesh_of_vertex int32[N], count), numbered by lowest vertex.");
+    m.def(
+            "find_submeshes",
+            [](const py::object& p, const py::object& e, const py::object& fs, const py::object& fz,
+               const py::object& cv) {
+                MeshArrays mesh(p, e, fs, fz, cv);
+                py::array_t<int32_t> ids = empty<int32_t>(py::ssize_t(mesh.view.vertex_count));
+                size_t count;
+                {
+                    py::gil_scoped_release release;
+                    count = find_submeshes(ids.mutable_data(), mesh.view);
+                }
+                return py::make_tuple(ids, count);
+            },
+            py::arg("positions"), py::arg("edges"), py::arg("face_starts"), py::arg("face_sizes"),
+            py::arg("corner_verts"),
+            "Connected components: (submesh_of_vertex int32[N], count), numbered by lowest vertex.");
 
-    m.def("face_starts_from_corner_edges",
-          [](const py::object& corner_verts, const py::object& corner_edges, const py::object& edges, size_t vertex_count) {
-              auto cv = input<int32_t>(corner_verts, "corner_verts", -1, 0);
-              auto ce = input<int32_t>(corner_edges, "corner_edges", cv.shape(0), 0);
-              auto e = input<int32_t>(edges, "edges", -1, 2);
-              std::vector<int32_t> starts(size_t(cv.shape(0)) / 3 + 1);
-              size_t count;
-              {
-                  py::gil_scoped_release release;
-                  count = face_starts_from_corner_edges(starts.data(), cv.data(), ce.data(), size_t(cv.shape(0)),
-                                                        e.data(), size_t(e.shape(0)), vertex_count);
-              }
-              py::array_t<int32_t> result(py::ssize_t(std::min(count, starts.size())));
-              std::copy(starts.begin(), starts.begin() + result.shape(0), result.mutable_data());
-              return py::make_tuple(result, count);
-          },
-          py::arg("corner_verts"), py::arg("corner_edges"), py::arg("edges"), py::arg("vertex_count"),
-          "(face_starts int32, count): face boundaries recovered from corner edges; compare count with the real face count.");
+    m.def(
+            "face_starts_from_corner_edges",
+            [](const py::object& corner_verts, const py::object& corner_edges, const py::object& edges,
+               size_t vertex_count) {
+                auto cv = input<int32_t>(corner_verts, "corner_verts", -1, 0);
+                auto ce = input<int32_t>(corner_edges, "corner_edges", cv.shape(0), 0);
+                auto e = input<int32_t>(edges, "edges", -1, 2);
+                std::vector<int32_t> starts(size_t(cv.shape(0)) / 3 + 1);
+                size_t count;
+                {
+                    py::gil_scoped_release release;
+                    count = face_starts_from_corner_edges(starts.data(), cv.data(), ce.data(), size_t(cv.shape(0)),
+                                                          e.data(), size_t(e.shape(0)), vertex_count);
+                }
+                py::array_t<int32_t> result(py::ssize_t(std::min(count, starts.size())));
+                std::copy(starts.begin(), starts.begin() + result.shape(0), result.mutable_data());
+                return py::make_tuple(result, count);
+            },
+            py::arg("corner_verts"), py::arg("corner_edges"), py::arg("edges"), py::arg("vertex_count"),
+            "(face_starts int32, count): face boundaries recovered from corner edges; compare count with the real face "
+            "count.");
 }
 
 }  // namespace boxmarch::bindings

@@ -5,4 +5,4 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 "${PYTHON:-python3}" -m boxmarch demo "$@"
-exec "${PYTHON:-python3}" scripts/threejs_picture.py "$@"
+exec "${PYTHON:-python3}" -m scripts.threejs_picture "$@"

@@ -2,7 +2,7 @@
 bone weights, against the weight spread, under a 40 degree joint turn (bench/bench_skinning.py
 defines the box and computes the error; this script only plots it).
 
-Usage: PYTHONPATH=addon python3 scripts/skinning_accuracy_plot.py [OUT.png]
+Usage: PYTHONPATH=addon python3 -m scripts.skinning_accuracy_plot [OUT.png]
 """
 import os
 import sys
@@ -14,8 +14,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path[:0] = [os.path.join(HERE, "..", "bench")]
-import bench_skinning  # noqa: E402
+from bench import bench_skinning  # noqa: E402
 
 out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(HERE, "..", "docs", "accuracy_skinning.png")
 spreads = np.linspace(0.0, 0.5, 51)

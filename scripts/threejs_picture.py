@@ -2,7 +2,7 @@
 shipped ShaderMaterial (shaders/threejs/boxmarch.js), seen from the demo camera, to a PNG: the
 world's boxes as rounded boxes, the chains as links. Run by scripts/demo.sh after the demo.
 
-    python3 scripts/threejs_picture.py [--out demo_out]    (writes demo_out/demo_threejs.png)
+    python3 -m scripts.threejs_picture [--out demo_out]    (writes demo_out/demo_threejs.png)
 """
 import argparse
 import json
@@ -14,8 +14,7 @@ import zlib
 import struct
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "tests"))
-from engines import threejs  # noqa: E402
+from tests.engines import threejs  # noqa: E402
 
 # The demo's Blender camera (demo._camera: at (0, -24, 3), turned 85 degrees about x, 30 mm
 # lens on a 36 mm sensor fitted to the 640 px width) in glTF's Y-up axes (x, z, -y).

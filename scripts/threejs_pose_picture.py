@@ -6,7 +6,7 @@ the arm bent 40 degrees at each joint in the page, raymarched by the shipped Sha
 as a layout with the frame in UV maps gives it: the links slide out of their boxes. Seen as
 docs/preview_pose.png sees the same arm in Blender's preview.
 
-Usage: PYTHONPATH=addon python3 scripts/threejs_pose_picture.py [OUT.png]
+Usage: PYTHONPATH=addon python3 -m scripts.threejs_pose_picture [OUT.png]
 """
 import math
 import os
@@ -18,21 +18,20 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-sys.path[:0] = [HERE, os.path.join(ROOT, "tests")]
 import bpy  # noqa: E402
 
 import boxmarch  # noqa: E402
-import chain_arm  # noqa: E402
+from scripts import chain_arm  # noqa: E402
 from boxmarch import mesh_io  # noqa: E402
 from boxmarch.export import scene as export_scene  # noqa: E402
-from engines import threejs  # noqa: E402
-from threejs_picture import write_png  # noqa: E402
+from tests.engines import threejs  # noqa: E402
+from scripts.threejs_picture import write_png  # noqa: E402
 
 W, H = 640, 540
 TO_Y_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])  # Blender -> glTF axes
 LINK_MAP = "return sdf_preset_link(p, box_half);"
 # The frame as the vertex carries it at rest (no skinning), in place of the skinned one.
-REST_FRAME = ("vObjPos = transformed;", "objectNormal = normal; axisX = tangent.xyz; vObjPos = transformed;")
+REST_FRAME = ("bmObjPos = transformed;", "objectNormal = normal; axisX = tangent.xyz; bmObjPos = transformed;")
 
 
 def setup_js(rest_frame):

@@ -47,6 +47,16 @@ def glsl(name: str) -> str:
     return (SHADERS / "glsl" / name).read_text()
 
 
+CONVENTIONS = "// Conventions of every boxmarch shader"
+
+
+def pasted(name: str) -> str:
+    """shaders/glsl/``name`` without its leading conventions block (up to its closing ``//`` line),
+    for pasting into a template whose own header carries the block once."""
+    text = glsl(name)
+    return text[text.index("\n//\n") + 4:] if text.startswith(CONVENTIONS) else text
+
+
 def top_level_functions(text: str) -> dict[str, str]:
     """{name: source} of the top-level function definitions in ``text``, each with the comment
     lines right above it."""
@@ -176,9 +186,9 @@ def glm_library() -> str:
 
 def threejs(module: bool) -> str:
     text = (SHADERS / "threejs" / "template.js").read_text()
-    text = text.replace("/*@DECODE@*/''", json.dumps(glsl("decode.glsl")))
-    text = text.replace("/*@LIBRARY@*/''", json.dumps(glsl("sdf.glsl") + "\n" + glsl("box_params.glsl") + "\n"
-                                                    + glsl("raymarch.glsl")))
+    text = text.replace("/*@DECODE@*/''", json.dumps(pasted("decode.glsl")))
+    text = text.replace("/*@LIBRARY@*/''", json.dumps(pasted("sdf.glsl") + "\n" + pasted("box_params.glsl") + "\n"
+                                                    + pasted("raymarch.glsl")))
     exports = ("loadBoxmarch, checkBoxmarchSidecar, createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, "
                "boxmarchTexcoordName, sortBoxmarchFrontToBack")
     if module:
@@ -201,7 +211,7 @@ def passing_the_box(function: str) -> str:
 def godot3() -> str:
     text = (SHADERS / "godot3" / "template.shader").read_text()
     raymarch = top_level_functions(glsl("raymarch.glsl"))
-    text = text.replace("/*@DECODE@*/", glsl("decode.glsl"))
+    text = text.replace("/*@DECODE@*/", pasted("decode.glsl"))
     text = text.replace("/*@SDF@*/", "".join(top_level_functions(glsl("sdf.glsl")).values())
                         + "".join(top_level_functions(glsl("box_params.glsl")).values()))
     text = text.replace("/*@SPAN@*/", "".join(raymarch[name] for name in (

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from helpers.blender_program import BPY_PATH
+from tests.helpers.blender_program import BPY_PATH
 
 if BPY_PATH:  # another release's bpy module (tests/helpers/blender_program.py)
     sys.path.insert(0, BPY_PATH)

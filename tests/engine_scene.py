@@ -6,7 +6,7 @@ import re
 import numpy as np
 
 from boxmarch import scenes
-from engines import import_helpers
+from tests.engines import import_helpers
 
 # Blender object space -> glTF / Godot (x, z, -y).
 TO_Y_UP = np.array([[1, 0, 0], [0, 0, 1], [0, -1, 0]], float)
@@ -132,7 +132,7 @@ def rounded_box_mismatch(covered, shot, centres, sizes, rotations, to_engine, ra
     """None when rounded boxes of radius ``radius`` x the smallest half-extent lie between each
     box and its core: every covered pixel within 1 px of a box silhouette, every pixel of a core
     (the box shrunk by the radius) covered; else what differs."""
-    from engines import coverage_mismatch, polygon_mask
+    from tests.engines import coverage_mismatch, polygon_mask
 
     stray = coverage_mismatch(covered, silhouettes(shot, centres, sizes, rotations, to_engine))
     if stray is not None and "covered outside" in stray:
@@ -395,7 +395,7 @@ def per_box_agreement(covered, shot, camera, boxes, shapes):
     (core.render_boxes_by_shape), seen by the engine's camera (``shot.view`` and the harness's
     ``camera``: vertical fov in degrees, near, far) in the Y-up engine frame."""
     from boxmarch import core
-    from engines import perspective
+    from tests.engines import perspective
 
     height, width = covered.shape
     to_world = np.eye(4)

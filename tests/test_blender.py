@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from boxmarch import scenes
-from conftest import mesh_object
+from tests.conftest import mesh_object
 
 
 def read_colour(mesh, name, raw_bytes=False):

@@ -6,7 +6,7 @@ import subprocess
 
 import pytest
 
-from helpers.blender_program import SCRIPTS, blender_env, run_blender
+from tests.helpers.blender_program import SCRIPTS, blender_env, run_blender
 
 pytestmark = [pytest.mark.slow, pytest.mark.blender_program]  # Blender 3.4 program subprocesses
 

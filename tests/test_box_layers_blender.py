@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from boxmarch import bake_job, mesh_io, scenes
-from conftest import mesh_object
+from tests.conftest import mesh_object
 
 BOXES = 6
 
@@ -181,7 +181,7 @@ def test_bones_rule_on_the_rig(blender):
     """The 3-bone chain of tests/engine_scene.py, each box weighted to one bone: a box's parent
     is the nearest box of the previous bone. Then bone1's boxes go to bone2 and bone1 holds no
     box: bone2's boxes pass to bone0's."""
-    from engine_scene import rig_boxes, skinned_scene
+    from tests.engine_scene import rig_boxes, skinned_scene
 
     ob, rig = skinned_scene(blender)
     centres, _, _, bone_of_box = rig_boxes()

@@ -10,10 +10,10 @@ import pytest
 
 from boxmarch import scenes
 from boxmarch.export import scene as export_scene
-from conftest import mesh_object
-from engine_scene import TO_Y_UP, UNITY, UNREAL, table_texels
-from fbx_reader import read_fbx_geometry
-from gltf_reader import read_glb
+from tests.conftest import mesh_object
+from tests.engine_scene import TO_Y_UP, UNITY, UNREAL, table_texels
+from tests.fbx_reader import read_fbx_geometry
+from tests.gltf_reader import read_glb
 
 SPACING = 1.5
 # Two meshes: boxes at x = 1.5 k, k = 0..5 (mesh A) and 10..14 (mesh B); k names the box in any file.

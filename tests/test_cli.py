@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from boxmarch import scenes
-from fbx_reader import read_fbx_geometry
-from gltf_reader import read_glb
-from helpers.blender_program import SCRIPTS, blender_env, run_module
+from tests.fbx_reader import read_fbx_geometry
+from tests.gltf_reader import read_glb
+from tests.helpers.blender_program import SCRIPTS, blender_env, run_module
 
 pytestmark = pytest.mark.slow  # python -m boxmarch and Blender 3.4 program subprocesses
 

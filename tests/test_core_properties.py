@@ -15,10 +15,10 @@ from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
 from boxmarch import _core as bindings  # the pybind11 module: its own argument checks
-from boxmarch import core, scenes
-from helpers.core_reference import (U32, assert_frames_valid, bounds_centre, decode_rgba, decoded_origins,
-                                    half_extents_in, house, mesh_from_polys, newell, quat_matrix, reference_frame,
-                                    similar_copy, wedge)
+from boxmarch import core, layouts, scenes
+from tests.helpers.core_reference import (U32, assert_frames_valid, bounds_centre, decode_rgba, decoded_origins,
+                                          half_extents_in, house, mesh_from_polys, newell, quat_matrix, reference_frame,
+                                          similar_copy, wedge)
 
 SETTINGS = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 CACHE_TOLERANCE = 1e-5  # kCacheTolerance in bake.cpp: copies may deviate by this fraction of their rms radius
@@ -35,7 +35,7 @@ def rotations(draw):
     axis-aligned ones, which are the special cases)."""
     q = np.array(draw(st.lists(st.floats(-1.0, 1.0), min_size=4, max_size=4)))
     assume(np.linalg.norm(q) > 0.1)
-    return scenes.quaternion_matrices((q / np.linalg.norm(q))[None])[0]
+    return layouts.quaternion_matrices((q / np.linalg.norm(q))[None])[0]
 
 
 @st.composite
@@ -48,7 +48,7 @@ def half_turns(draw):
     delta = draw(st.sampled_from([0.0, 1e-9, 1e-7, 1e-6]))
     angle = np.pi - delta
     q = np.r_[axis * np.sin(angle / 2), np.cos(angle / 2)]
-    return scenes.quaternion_matrices(q[None])[0]
+    return layouts.quaternion_matrices(q[None])[0]
 
 
 def clear_decisions(points, faces, strict, angle_epsilon=0.1):
@@ -182,9 +182,9 @@ def test_vertex_face_and_edge_order_change_nothing(shape, data):
        sizes=st.lists(st.floats(0.1, 10.0), min_size=3, max_size=3).filter(
            lambda s: min(abs(a / b - 1) for a, b in [(s[0], s[1]), (s[1], s[2]), (s[0], s[2])]) > 0.05),
        encoding=st.sampled_from(core.ENCODINGS))
-@example(rotation=scenes.quaternion_matrices(np.array([[0.0, 0.0, 1.0, 0.0]]))[0], sizes=[1.0, 2.0, 3.0],
+@example(rotation=layouts.quaternion_matrices(np.array([[0.0, 0.0, 1.0, 0.0]]))[0], sizes=[1.0, 2.0, 3.0],
          encoding="FLOAT_COLOR")
-@example(rotation=scenes.quaternion_matrices(np.array([[0.0, -1.0, 0.0, 0.0]]))[0], sizes=[3.0, 2.0, 1.0],
+@example(rotation=layouts.quaternion_matrices(np.array([[0.0, -1.0, 0.0, 0.0]]))[0], sizes=[3.0, 2.0, 1.0],
          encoding="BYTE_COLOR")
 def test_quaternion_is_unit_with_w_nonnegative_and_matches_the_frame_near_w_zero(rotation, sizes, encoding):
     r = core.bake(*scenes.box_arrays([[0.5, -2.0, 1.0]], sizes, rotation), encoding=encoding)

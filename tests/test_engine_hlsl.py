@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 
 from boxmarch.preview import sources
-from engine_scene import (UNITY, baked_scene, imported, posed_rig_boxes, rig_boxes, silhouettes, skinned_scene,
-                          unity_skinned_vertices)
-from engines import Shot, coverage_mismatch, hlsl_webgl, ndc_to_pixels
-from fbx_reader import read_fbx_geometry, read_fbx_skin
+from tests.engine_scene import (UNITY, baked_scene, imported, posed_rig_boxes, rig_boxes, silhouettes, skinned_scene,
+                                unity_skinned_vertices)
+from tests.engines import Shot, coverage_mismatch, hlsl_webgl, ndc_to_pixels
+from tests.fbx_reader import read_fbx_geometry, read_fbx_skin
 
 pytestmark = pytest.mark.slow  # Chromium renders and Blender exports
 

@@ -12,8 +12,8 @@ import subprocess
 import numpy as np
 import pytest
 
-from engine_scene import UNITY, UNREAL, NotModelled, unity_import, unreal_import
-from engines import import_helpers
+from tests.engine_scene import UNITY, UNREAL, NotModelled, unity_import, unreal_import
+from tests.engines import import_helpers
 
 
 def test_unity_postprocessor_sets_the_table_and_reads_the_sidecar_values():

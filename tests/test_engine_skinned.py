@@ -15,11 +15,11 @@ import pathlib
 import numpy as np
 import pytest
 
-from conftest import empty_scene
-from engine_scene import (RIG_TURN_ANGLE, RIG_TURN_AXES, TO_Y_UP, axis_turn, box_of_vertex, decode_normal_frame,
-                          frame_and_size_errors, posed_rig_boxes, rig_boxes, silhouettes, skinned_scene)
-from engines import coverage_mismatch, godot3, threejs
-from gltf_reader import node_globals, read_glb, read_skin
+from tests.conftest import empty_scene
+from tests.engine_scene import (RIG_TURN_ANGLE, RIG_TURN_AXES, TO_Y_UP, axis_turn, box_of_vertex, decode_normal_frame,
+                                frame_and_size_errors, posed_rig_boxes, rig_boxes, silhouettes, skinned_scene)
+from tests.engines import coverage_mismatch, godot3, threejs
+from tests.gltf_reader import node_globals, read_glb, read_skin
 
 pytestmark = pytest.mark.slow  # Chromium and Godot 3 renders of skinned exports
 
@@ -31,7 +31,7 @@ INNER = 0.6
 BOX_MAP = "return sd_box(p, 0.6 * box_half);"
 # The negative control: the frame as the vertex carries it at rest (attributes normal, tangent),
 # not the skinned one: what a layout with the frame in UV maps gives the shader.
-REST_FRAME = ("vObjPos = transformed;", "objectNormal = normal; axisX = tangent.xyz; vObjPos = transformed;")
+REST_FRAME = ("bmObjPos = transformed;", "objectNormal = normal; axisX = tangent.xyz; bmObjPos = transformed;")
 
 
 @pytest.fixture(scope="module")

@@ -6,8 +6,8 @@ import pytest
 
 from boxmarch import scenes
 from boxmarch.preview import sources
-from conftest import mesh_object
-from helpers.glsl import compile_glsl
+from tests.conftest import mesh_object
+from tests.helpers.glsl import compile_glsl
 
 # A sphere off-centre along local +x: not symmetric in local x, so a mirror moves it.
 OFF_CENTRE = "float map(vec3 p)\n{\n  return length(p - vec3(0.45, 0.0, 0.0)) - 0.3;\n}\n"

@@ -6,7 +6,7 @@ import struct
 import numpy as np
 import pytest
 
-from engines import coverage_mismatch, godot3, threejs
+from tests.engines import coverage_mismatch, godot3, threejs
 
 pytestmark = pytest.mark.slow  # Chromium and Godot 3 runs
 

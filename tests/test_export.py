@@ -16,10 +16,10 @@ import pytest
 
 from boxmarch import scenes
 from boxmarch.export import glb, transforms
-from conftest import mesh_object
-from fbx_reader import read_fbx_geometry
-from gltf_reader import read_glb
-from helpers.menus import drawn_operators
+from tests.conftest import mesh_object
+from tests.fbx_reader import read_fbx_geometry
+from tests.gltf_reader import read_glb
+from tests.helpers.menus import drawn_operators
 
 HALF = math.sqrt(0.5)
 # Blender object space -> glTF (x, z, -y); -> Unity (-x, z, -y).

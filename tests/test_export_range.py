@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from boxmarch import mesh_io, scenes
-from engine_scene import UNITY, UNREAL, decode_normal_frame, decode_uv_frame, imported, table_texels
-from fbx_reader import read_fbx_geometry
-from gltf_reader import read_glb
+from tests.engine_scene import UNITY, UNREAL, decode_normal_frame, decode_uv_frame, imported, table_texels
+from tests.fbx_reader import read_fbx_geometry
+from tests.gltf_reader import read_glb
 
 BOUND = 1e-5
 

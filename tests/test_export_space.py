@@ -11,11 +11,11 @@ import pathlib
 import numpy as np
 import pytest
 
-from engine_scene import (TO_Y_UP, TRANSFORM_CASES, UNITY, baked_scene, box_of_vertex, decode_normal_frame,
-                          decode_uv_frame, frame_and_size_errors, imported, rig_boxes, skinned_scene, table_texels,
-                          transformed_rig, world_boxes)
-from fbx_reader import read_fbx_geometry
-from gltf_reader import node_globals, read_glb, read_skin
+from tests.engine_scene import (TO_Y_UP, TRANSFORM_CASES, UNITY, baked_scene, box_of_vertex, decode_normal_frame,
+                                decode_uv_frame, frame_and_size_errors, imported, rig_boxes, skinned_scene, table_texels,
+                                transformed_rig, world_boxes)
+from tests.fbx_reader import read_fbx_geometry
+from tests.gltf_reader import node_globals, read_glb, read_skin
 
 TOLERANCES = (1e-5, 1e-6, 1e-5)  # origin / half-extent, axis, half-extent (float32 data)
 
@@ -131,7 +131,7 @@ def test_static_gltf_of_a_parented_non_uniformly_scaled_object(blender, tmp_path
     path = tmp_path / "static.glb"
     report = scene.export_objects(blender.context, [ob], "GLTF", str(path))
     assert report["meshes"][0]["space"] == "object" and report["transform_error"] < 1e-5
-    from gltf_reader import _chunks, _node_matrix
+    from tests.gltf_reader import _chunks, _node_matrix
 
     doc, _ = _chunks(path.read_bytes())
     parent = np.full(len(doc["nodes"]), -1)
@@ -161,7 +161,7 @@ def test_static_fbx_of_a_parented_non_uniformly_scaled_object(blender, tmp_path,
     decode of the file, through the modelled importer, lands on the generating boxes in the
     object's space whatever the object's transform."""
     from boxmarch.export import scene
-    from engine_scene import UNREAL
+    from tests.engine_scene import UNREAL
 
     engine = {"UNITY": UNITY, "UNREAL": UNREAL}[preset]
     ob, centres, sizes, rotations = static_object(blender)
@@ -245,9 +245,9 @@ def test_engines_draw_a_turned_and_scaled_rig_where_its_boxes_are(blender, tmp_p
     mesh's half-extents, twice the world's) fails in both."""
     from boxmarch.export import boxes, scene
     from boxmarch.preview import sources
-    from engine_scene import silhouettes
-    from engines import coverage_mismatch, godot3, threejs
-    from test_engine_skinned import godot3_import_skinned, setup_js
+    from tests.engine_scene import silhouettes
+    from tests.engines import coverage_mismatch, godot3, threejs
+    from tests.test_engine_skinned import godot3_import_skinned, setup_js
 
     ob, rig = skinned_scene(blender)
     rig.scale, rig.rotation_euler, rig.location = (0.5,) * 3, (0.3, 0.2, 0.8), (0.5, -0.5, 0.2)
@@ -309,11 +309,11 @@ def test_skinned_gltf_from_blender_34_decodes_the_world_boxes(package_parent, tm
     program, decode the world boxes read back here."""
     import json
 
-    from helpers.blender_program import SCRIPTS, run_blender
+    from tests.helpers.blender_program import SCRIPTS, run_blender
 
     run_blender(["--background", "--factory-startup", "--python-exit-code", "1", "--python",
                  str(SCRIPTS / "export_space_check.py"), "--", str(package_parent),
-                 str(pathlib.Path(__file__).parent), str(tmp_path)], tmp_path)
+                 str(pathlib.Path(__file__).parent.parent), str(tmp_path)], tmp_path)
     result = json.loads((tmp_path / "result.json").read_text())
     assert result["version"][:2] == [3, 4]
     for case in TRANSFORM_CASES:

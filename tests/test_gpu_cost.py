@@ -188,7 +188,7 @@ def test_octant_orders_draw_the_boxes_nearest_the_camera_first():
 
 def test_preview_fragment_compiles_with_the_depth_greater_declaration(tmp_path):
     """What Blender 4+'s create-info depth_write('GREATER') puts before the source (GLSL 4.20+)."""
-    from helpers.glsl import blender_declarations, validator
+    from tests.helpers.glsl import blender_declarations, validator
 
     declared = blender_declarations("frag", version="450 core", depth_write="GREATER")
     path = tmp_path / "preview.frag"
@@ -199,7 +199,7 @@ def test_preview_fragment_compiles_with_the_depth_greater_declaration(tmp_path):
 
 
 def spirv_depth_modes(tmp_path, hlsl_path, defines=()):
-    from helpers.glsl import validator
+    from tests.helpers.glsl import validator
 
     proc = subprocess.run([validator(), "-D", "-V", "-H", *defines, "-I" + str(SHADERS / "hlsl"), "-e", "frag", "-S",
                            "frag", str(hlsl_path), "-o", str(tmp_path / "frag.spv")], capture_output=True, text=True)
@@ -241,7 +241,7 @@ def test_webgl2_conservative_depth_needs_its_extension_line_first():
     """What docs/ENGINES.md says of three.js: WebGL 2 (ANGLE on SwiftShader) takes depth_greater
     when the #extension line comes before any other token, and refuses it after a precision
     statement, where three.js's ShaderMaterial puts its own."""
-    from engines import threejs
+    from tests.engines import threejs
 
     reason = threejs.available()
     if reason:

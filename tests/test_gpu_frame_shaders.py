@@ -3,15 +3,12 @@ preview with and without the depth declaration, its diagnostic variants, the nai
 raymarch) passes glslangValidator, and the declared stage differs from the undeclared one by the
 gl_FragDepth layout alone."""
 import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
-from helpers.glsl import validator
+from tests.helpers.glsl import validator
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "bench"))
-import gpu_frame_data  # noqa: E402
+from bench import gpu_frame_data  # noqa: E402
 
 
 @pytest.mark.parametrize("sdf", ["SPHERE", "LINK"])

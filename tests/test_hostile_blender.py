@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from boxmarch import core, mesh_io, scenes
-from conftest import digest, random_boxes_object
-from helpers.blender_program import run_module
+from tests.conftest import digest, random_boxes_object
+from tests.helpers.blender_program import run_module
 
 
 def boxes(bpy, name="Boxes", count=4, offset=0.0, select=True):
@@ -73,7 +73,7 @@ def test_a_posed_rig_is_baked_at_rest_and_the_bake_says_so(blender, capfd):
     decode onto the rig's rest boxes (engine_scene.rig_boxes), not the posed ones."""
     import mathutils
 
-    from engine_scene import rig_boxes, skinned_scene
+    from tests.engine_scene import rig_boxes, skinned_scene
 
     bpy = blender
     ob, rig = skinned_scene(bpy)
@@ -109,7 +109,7 @@ def test_skinned_exports_that_cannot_work_are_refused_and_write_nothing(blender,
                                                                          message):
     from boxmarch.export import scene
 
-    from engine_scene import skinned_scene
+    from tests.engine_scene import skinned_scene
 
     bpy = blender
     ob, rig = skinned_scene(bpy)

@@ -13,8 +13,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import boxmarch
-from boxmarch import cli_args, core, scenes
-from helpers.core_reference import decoded_origins, mesh_from_polys
+from boxmarch import cli_args, core, layouts, scenes
+from tests.helpers.core_reference import decoded_origins, mesh_from_polys
 
 HERE = Path(__file__).parent
 PACKAGE_PARENT = Path(boxmarch.__file__).parent.parent
@@ -64,7 +64,7 @@ def test_the_reported_decode_error_is_never_below_the_true_one(log_epsilon, tilt
     rounding of the coordinates)."""
     epsilon = float(np.clip(10.0 ** log_epsilon, *core.ANGLE_EPSILON_RANGE))  # the power may round outside
     points, faces = prism(min(tilt_over_epsilon * epsilon, 1.2))
-    rotation = scenes.quaternion_matrices(np.asarray(quaternion)[None] / np.linalg.norm(quaternion))[0]
+    rotation = layouts.quaternion_matrices(np.asarray(quaternion)[None] / np.linalg.norm(quaternion))[0]
     points = points @ rotation.T + shift
     arrays = mesh_from_polys([(points, faces)])
     r = core.bake(*arrays, angle_epsilon=epsilon, origin=origin, encoding=encoding)

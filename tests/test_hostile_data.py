@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 
 from boxmarch import mesh_io, scenes
-from conftest import mesh_object
-from engine_scene import decode_normal_frame
-from gltf_reader import read_glb
-from test_tools_blender import faces_object, split_boxes
+from tests.conftest import mesh_object
+from tests.engine_scene import decode_normal_frame
+from tests.gltf_reader import read_glb
+from tests.test_tools_blender import faces_object, split_boxes
 
 
 def baked_boxes(bpy, name="Boxes", count=6, encoding="FLOAT_COLOR"):

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from helpers.blender_program import BPY_PATH, SCRIPTS, blender_env, python_env
+from tests.helpers.blender_program import BPY_PATH, SCRIPTS, blender_env, python_env
 
 pytestmark = pytest.mark.slow  # builds the zips and installs them into both Blenders
 

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from boxmarch import core, layouts
-from helpers.blender_program import blender_env
-from helpers.preview_render import BLENDERS, agreement, quaternions_of, run_check_script
+from tests.helpers.blender_program import blender_env
+from tests.helpers.preview_render import BLENDERS, agreement, quaternions_of, run_check_script
 
 SCRIPT = Path(__file__).parent / "blender_scripts" / "preview_check.py"
 OUTLINE_COLOR = (0.05, 0.05, 0.05)  # preview/draw.py OUTLINE_COLOR (that module needs bpy)

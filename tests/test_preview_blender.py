@@ -3,8 +3,8 @@ the decoded-vector overlay (the GPU image itself is checked in tests/test_previe
 import numpy as np
 import pytest
 
-from conftest import mesh_object
-from boxmarch import core, scenes
+from tests.conftest import mesh_object
+from boxmarch import core, layouts, scenes
 
 
 def baked_boxes(blender, encoding="FLOAT_COLOR", domain="POINT"):
@@ -43,7 +43,7 @@ def test_read_baked_recovers_boxes_and_vectors_meet_at_origins(blender, encoding
     assert np.allclose(np.sort(baked.box_half_extents, axis=1), np.sort(sizes / 2, axis=1), atol=tolerance * scale)
     assert np.allclose(baked.origins, centres, atol=tolerance * scale)
     raw, rotated = mesh_data.vector_lines(baked.positions, core.decode_offsets(baked.offsets),
-                                          mesh_data.frame_axes(baked.quaternions))
+                                          layouts.quaternion_matrices(baked.quaternions))
     assert raw.shape == rotated.shape == (2 * len(baked.positions), 3)
     assert np.array_equal(rotated[0::2], baked.positions)
     tips = rotated[1::2].reshape(-1, 8, 3)  # 8 vertices per box, in order
@@ -85,7 +85,7 @@ def test_new_sdf_text_template_compiles(blender, tmp_path):
     import subprocess
 
     from boxmarch.preview import sources
-    from helpers.glsl import blender_declarations
+    from tests.helpers.glsl import blender_declarations
 
     ob, _, _ = baked_boxes(blender)
     assert blender.ops.boxmarch.new_sdf_text() == {"FINISHED"}

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from boxmarch import core
-from helpers.preview_render import BLENDERS, agreement, quaternions_of, run_check_script
+from tests.helpers.preview_render import BLENDERS, agreement, quaternions_of, run_check_script
 
 SCRIPT = Path(__file__).parent / "blender_scripts" / "preview_pose_check.py"
 

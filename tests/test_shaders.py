@@ -9,7 +9,7 @@ import pytest
 
 from boxmarch import core, layouts
 from boxmarch.preview import sources
-from helpers.glsl import blender_declarations, compile_glsl, validator
+from tests.helpers.glsl import blender_declarations, compile_glsl, validator
 
 SHADERS = Path(__file__).resolve().parent.parent / "shaders"
 # Engine-side helpers without a GLSL twin (Blender reads UV maps by name, and the preview's main()
@@ -158,3 +158,103 @@ def test_benchmark_baseline_shader_compiles(tmp_path):
         (SHADERS.parent / "bench" / "naive_fullscreen.frag.glsl").read_text()]))
     proc = subprocess.run([validator(), str(path)], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+# The naming conventions every shader file's header states (docs/ENGINES.md, Shader conventions):
+# the prefixes of boxmarch's own names and of the families users' map() texts call, and the few
+# names an engine or the user owns.
+DOCUMENTED_PREFIXES = ("bm_", "BM_", "BOXMARCH_", "sd_", "op_", "sdf_preset_", "box_")
+ALIASES = {"min3": "bm_min3", "max3": "bm_max3"}  # the names map() texts use
+OWNED_ELSEWHERE = {
+    "map",  # the user's distance function
+    "main", "vertex", "fragment",  # entry points: three.js's stages, Godot 3's
+    "projectionMatrix", "modelViewMatrix", "normalMatrix", "tangent",  # three.js's names, declared for its stages
+    "base_color", "march_epsilon", "max_steps", "quality",  # Godot 3 material parameters, as its inspector shows them
+}
+
+
+def top_level_names(text: str) -> list[str]:
+    """Names a GLSL, HLSL or Godot shader text declares at file scope: functions, prototypes,
+    variables, uniforms, attributes, varyings, structs and macros (comments aside)."""
+    text = re.sub(r"//[^\n]*", "", re.sub(r"/\*.*?\*/", "", text, flags=re.S))
+    names = re.findall(r"^\s*#\s*define\s+(\w+)", text, re.M)
+    text = re.sub(r"^\s*#[^\n]*", "", text, flags=re.M)
+    depth, statement = 0, ""
+    for ch in text:
+        if depth:
+            depth += (ch == "{") - (ch == "}")
+        elif ch == "{":
+            struct = re.search(r"\bstruct\s+(\w+)", statement)
+            names.append(struct.group(1) if struct else re.search(r"(\w+)\s*\(", statement).group(1))
+            depth, statement = 1, ""
+        elif ch == ";":
+            words = statement.split()
+            if words and words[0] not in ("shader_type", "render_mode"):
+                if "(" in statement.split("=")[0].split(":")[0]:  # a prototype (after ":", a Godot hint)
+                    names.append(re.search(r"(\w+)\s*\(", statement).group(1))
+                else:
+                    declarators = re.sub(r"\[[^]]*\]", "", statement.split("=")[0].split(":")[0]).split(",")
+                    names += [re.findall(r"\w+", part)[-1] for part in declarators]
+            statement = ""
+        else:
+            statement += ch
+    return names
+
+
+def threejs_stages() -> str:
+    """The GLSL of the three.js material's own stages (template.js: the varyings, both stages and the
+    lines around the user's map()), from the JavaScript string literals that make them."""
+    template = (SHADERS / "threejs" / "template.js").read_text()
+    parts = re.findall(r"^var BOXMARCH_(?:VARYINGS|VERTEX|FRAGMENT) = \[(.*?)\]\.join", template, re.S | re.M)
+    parts.append(re.search(r"^\s*fragmentShader: (.*)$", template, re.M).group(1))
+    literals = re.findall(r"'((?:[^'\\]|\\.)*)'", "\n".join(parts))
+    return "\n".join(literal.replace("\\n", "\n") for literal in literals)
+
+
+def engine_shader_texts() -> dict[str, str]:
+    """What boxmarch puts into an engine's shader: the shared GLSL library (pasted into the three.js
+    material and the Godot 3 shader, translated into the HLSL includes), the hand-written HLSL
+    includes a Unity shader includes, the three.js stages and the whole Godot 3 shader. Not the
+    Unity example shader (a user's shader, in Unity's names) nor Blender's preview stages."""
+    texts = {f"glsl/{name}": (SHADERS / "glsl" / name).read_text()
+             for name in ("decode.glsl", "sdf.glsl", "box_params.glsl", "raymarch.glsl")}
+    texts.update({f"hlsl/{name}": (SHADERS / "hlsl" / name).read_text()
+                  for name in ("boxmarch.hlsl", "boxmarch_raymarch.hlsl")})
+    texts["threejs stages"] = threejs_stages()
+    texts["godot3/boxmarch.shader"] = (SHADERS / "godot3" / "boxmarch.shader").read_text()
+    return texts
+
+
+def undocumented_names(text: str) -> set[str]:
+    return {name for name in top_level_names(text)
+            if not name.startswith(DOCUMENTED_PREFIXES) and not re.match(r"bm[A-Z]", name)
+            and name not in ALIASES and name not in OWNED_ELSEWHERE}
+
+
+def test_engine_shader_names_carry_the_documented_prefixes():
+    texts = engine_shader_texts()
+    names = {where: top_level_names(text) for where, text in texts.items()}
+    assert all(len(found) >= 3 for found in names.values()), names  # the parser sees each file's declarations
+    assert {"bm_offset_from_color", "box_half", "sd_round_box", "sdf_preset_link", "bmEye", "bmObjPos",
+            "bm_hit", "BOXMARCH_FRAME", "bm_v_world_pos", "box_table", "quality"} <= {n for found in names.values() for n in found}
+    outside = {where: sorted(undocumented_names(text)) for where, text in texts.items()}
+    assert not any(outside.values()), outside
+
+
+def test_names_check_catches_a_stray_name():
+    """Negative control: a helper, a global and a varying without a documented prefix are found."""
+    library = (SHADERS / "glsl" / "sdf.glsl").read_text()
+    stray = library + "\nfloat min4(vec4 v) { return min(min3(v.xyz), v.w); }\nvec3 half_size = vec3(0.0);\n" \
+                      "varying vec3 vNormalLocal;\n"
+    assert undocumented_names(stray) == {"min4", "half_size", "vNormalLocal"}
+
+
+def test_min3_and_max3_are_only_aliases():
+    """min3 and max3 stay for users' map() texts and return the bm_ functions, which the library itself calls."""
+    library = (SHADERS / "glsl" / "sdf.glsl").read_text()
+    for alias, name in ALIASES.items():
+        assert f"float {alias}(vec3 v) {{ return {name}(v); }}" in library
+    for path in (SHADERS / "glsl").glob("*.glsl"):
+        code = re.sub(r"//[^\n]*", "", path.read_text())
+        calls = len(re.findall(r"(?<![\w.])(?:min3|max3)\(", code))
+        assert calls == (2 if path.name == "sdf.glsl" else 0), path.name  # the two alias definitions

@@ -11,9 +11,9 @@ import json
 import numpy as np
 import pytest
 
-from engine_scene import baked_scene, rotate, skinned_scene, table_texels
-from fbx_reader import read_fbx_geometry
-from gltf_reader import read_glb
+from tests.engine_scene import baked_scene, rotate, skinned_scene, table_texels
+from tests.fbx_reader import read_fbx_geometry
+from tests.gltf_reader import read_glb
 
 jsonschema = pytest.importorskip("jsonschema")
 

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from boxmarch import mesh_io, scenes
-from conftest import mesh_object
-from helpers.menus import drawn_operators
+from tests.conftest import mesh_object
+from tests.helpers.menus import drawn_operators
 
 
 def faces_object(bpy, name, positions, starts, sizes, corners):
@@ -499,7 +499,7 @@ def test_tools_and_undo_in_blender_34_window(tmp_path):
     import subprocess
     from pathlib import Path
 
-    from helpers.blender_program import SCRIPTS, blender_env
+    from tests.helpers.blender_program import SCRIPTS, blender_env
 
     import boxmarch
 

@@ -85,13 +85,15 @@ class BoxData:
         return params, parent, depth
 
 
-def frame_axes(q) -> tuple[np.ndarray, np.ndarray]:
-    """(x axis, z axis) of the frames of unit quaternions q (n, 4): R(q) e_x and R(q) e_z."""
-    q = np.asarray(q, np.float64).reshape(-1, 4)
-    x, y, z, w = q.T
-    axis_x = np.stack([1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)], 1)
-    axis_z = np.stack([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)], 1)
-    return axis_x, axis_z
+def quaternion_matrices(q) -> np.ndarray:
+    """float64 (n, 3, 3) rotation matrices R(q) of unit quaternions q (n, 4) as (x, y, z, w):
+    column i is R(q) e_i, the box's local axis i (the frame every layout encodes)."""
+    x, y, z, w = np.asarray(q, np.float64).reshape(-1, 4).T
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
+    ], 1)
 
 
 TABLE_PLANES = 5  # texels per box in the box table
@@ -148,7 +150,8 @@ def channels(layout: str, data: BoxData) -> dict[str, np.ndarray]:
         out.update({f"UV{3 + i}": values for i, values in enumerate(payload)})
         out["UV7"] = shape_material
     if layout in ("NORMAL_FRAME", "NORMAL_COLOR"):
-        axis_x, axis_z = frame_axes(q)
+        frames = quaternion_matrices(q)
+        axis_x, axis_z = frames[:, :, 0], frames[:, :, 2]
         out["NORMAL"] = axis_z.astype(np.float32)
         out["TANGENT"] = np.concatenate([axis_x, np.ones((n, 1))], 1).astype(np.float32)
     if layout == "NORMAL_FRAME":

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .layouts import quaternion_matrices
+
 # Unit cube corners (x, y, z in {-0.5, 0.5}), vertex i has bits (x, y, z) = (i >> 2, i >> 1, i) & 1.
 _CORNERS = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)])
 # Outward-wound quads: -x, +x, -y, +y, -z, +z.
@@ -16,16 +18,6 @@ def random_rotations(count: int, rng: np.random.Generator) -> np.ndarray:
     q = rng.normal(size=(count, 4))
     q /= np.linalg.norm(q, axis=1, keepdims=True)
     return quaternion_matrices(q)
-
-
-def quaternion_matrices(q: np.ndarray) -> np.ndarray:
-    """(n, 3, 3) rotation matrices of unit quaternions (x, y, z, w)."""
-    x, y, z, w = np.asarray(q, np.float64).T
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
-        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
-        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
-    ], 1)
 
 
 def box_arrays(centres, sizes, rotations):

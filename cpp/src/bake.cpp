@@ -58,8 +58,8 @@ void group(Grouped& g, const MeshView& mesh, const int32_t* submesh_of_vertex, s
 }
 
 // Local coordinates of every vertex in `frame`; writes their bounds.
-void local_bounds(const SubmeshView& s, const glm::dmat3& frame, std::vector<glm::dvec3>& local,
-                  glm::dvec3& lo, glm::dvec3& hi) {
+void local_bounds(const SubmeshView& s, const glm::dmat3& frame, std::vector<glm::dvec3>& local, glm::dvec3& lo,
+                  glm::dvec3& hi) {
     const glm::dmat3 to_local = glm::transpose(frame);
     lo = glm::dvec3(INFINITY);
     hi = glm::dvec3(-INFINITY);
@@ -121,7 +121,10 @@ struct Accumulated {
 
 uint32_t options_seed(const BakeOptions& o) {
     uint64_t h = 0x243F6A8885A308D3ull;
-    auto add = [&](uint64_t x) { h = (h ^ x) * 0x100000001B3ull; h ^= h >> 29; };
+    auto add = [&](uint64_t x) {
+        h = (h ^ x) * 0x100000001B3ull;
+        h ^= h >> 29;
+    };
     uint64_t eps_bits;
     static_assert(sizeof eps_bits == sizeof o.angle_epsilon, "double is 64-bit");
     std::memcpy(&eps_bits, &o.angle_epsilon, sizeof eps_bits);
@@ -152,9 +155,12 @@ struct BakeJob {
     SubmeshView view(size_t sm) const {
         const Grouped& g = grouped;
         SubmeshView s{&mesh,
-                      g.vertices + g.vertex_offsets[sm], g.vertex_offsets[sm + 1] - g.vertex_offsets[sm],
-                      g.faces + g.face_offsets[sm], g.face_offsets[sm + 1] - g.face_offsets[sm],
-                      g.edges + g.edge_offsets[sm], g.edge_offsets[sm + 1] - g.edge_offsets[sm],
+                      g.vertices + g.vertex_offsets[sm],
+                      g.vertex_offsets[sm + 1] - g.vertex_offsets[sm],
+                      g.faces + g.face_offsets[sm],
+                      g.face_offsets[sm + 1] - g.face_offsets[sm],
+                      g.edges + g.edge_offsets[sm],
+                      g.edge_offsets[sm + 1] - g.edge_offsets[sm],
                       glm::dvec3(0.0)};
         const float* p0 = mesh.positions + size_t(s.vertices[0]) * 3;
         s.base = glm::dvec3(p0[0], p0[1], p0[2]);
@@ -174,7 +180,8 @@ void check_bake_arguments(const MeshView& mesh, const int32_t* submesh_of_vertex
     const bool bytes = options.encoding == ColorEncoding::Byte;
     if (bytes ? !out.offset_byte : !out.offset_float)
         throw std::invalid_argument("no output array for the chosen colour encoding");
-    if (!out.quaternions || !out.fingerprints) throw std::invalid_argument("quaternion and fingerprint outputs are required");
+    if (!out.quaternions || !out.fingerprints)
+        throw std::invalid_argument("quaternion and fingerprint outputs are required");
     if (first_out_of_range(submesh_of_vertex, mesh.vertex_count, submesh_count) < mesh.vertex_count)
         throw std::invalid_argument("submesh_of_vertex does not match submesh_count");
 }
@@ -196,7 +203,7 @@ SubmeshStatus classify_submesh(const BakeJob& job, size_t sm, const SubmeshView&
         const uint32_t v = s.vertices[i];
         job.out.fingerprints[v] = selected ? fp : previous ? previous[v] : 0;
     }
-    const SubmeshStatus status = !selected ? SubmeshStatus::NotSelected
+    const SubmeshStatus status = !selected   ? SubmeshStatus::NotSelected
                                  : unchanged ? SubmeshStatus::Unchanged
                                              : SubmeshStatus::Baked;
     if (status == SubmeshStatus::Baked) return status;
@@ -294,9 +301,8 @@ BakeReport sum_parts(const std::vector<Accumulated>& parts, size_t submesh_count
 
 }  // namespace
 
-BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t submesh_count,
-                const uint8_t* bake_mask, const uint32_t* previous_fingerprints, const BakeOptions& options,
-                const BakeOutput& out) {
+BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t submesh_count, const uint8_t* bake_mask,
+                const uint32_t* previous_fingerprints, const BakeOptions& options, const BakeOutput& out) {
     check_bake_arguments(mesh, submesh_of_vertex, submesh_count, options, out);
     Grouped g;
     group(g, mesh, submesh_of_vertex, submesh_count);
@@ -306,13 +312,22 @@ BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t s
                                         std::to_string(sm) + " has no vertex");
     double turn[9];
     axis_turn_matrix(turn, options.axis_turn);
-    const BakeJob job{mesh, g, bake_mask, previous_fingerprints, options, out,
+    const BakeJob job{mesh,
+                      g,
+                      bake_mask,
+                      previous_fingerprints,
+                      options,
+                      out,
                       glm::dmat3(turn[0], turn[1], turn[2], turn[3], turn[4], turn[5], turn[6], turn[7], turn[8]),
-                      std::cos(options.angle_epsilon), options_seed(options), options.encoding == ColorEncoding::Byte};
+                      std::cos(options.angle_epsilon),
+                      options_seed(options),
+                      options.encoding == ColorEncoding::Byte};
 
     size_t threads = hardware_threads(options.threads);
     threads = std::min<size_t>({threads, 255, std::max<size_t>(1, submesh_count / 1024)});
-    auto range = [&](size_t t) { return std::make_pair(submesh_count * t / threads, submesh_count * (t + 1) / threads); };
+    auto range = [&](size_t t) {
+        return std::make_pair(submesh_count * t / threads, submesh_count * (t + 1) / threads);
+    };
     std::vector<Accumulated> parts(threads);
     // Pass 1: fingerprints and what to do with each submesh; cache keys of those to bake.
     std::vector<uint8_t> statuses(submesh_count);
@@ -379,7 +394,8 @@ void expand_corner_quaternions(float* corner_uv, int half, const int32_t* corner
     const size_t k = half ? 2 : 0;
     for (size_t c = 0; c < corner_count; ++c) {
         const size_t sm = size_t(submesh_of_vertex[corner_verts[c]]);
-        if (!write_submesh || write_submesh[sm]) std::memcpy(corner_uv + 2 * c, quaternions + sm * 4 + k, 2 * sizeof(float));
+        if (!write_submesh || write_submesh[sm])
+            std::memcpy(corner_uv + 2 * c, quaternions + sm * 4 + k, 2 * sizeof(float));
     }
 }
 

@@ -44,7 +44,10 @@ size_t reduce_per_submesh(float* out_values, uint8_t* disagrees, const float* va
             uint32_t* end = run + 1;
             while (end != last && tuple_equal(*run, *end)) ++end;
             const uint32_t count = uint32_t(end - run);
-            if (count > best_count || (count == best_count && *run < best)) { best = *run; best_count = count; }
+            if (count > best_count || (count == best_count && *run < best)) {
+                best = *run;
+                best_count = count;
+            }
             ++runs;
             run = end;
         }

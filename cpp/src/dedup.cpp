@@ -39,9 +39,8 @@ struct Matcher {
         cand.clear();
         if (n > kBruteForceLimit) {
             sorted_b.assign(b, b + n);
-            std::sort(sorted_b.begin(), sorted_b.end(), [&](uint32_t u, uint32_t v) {
-                return positions[3 * size_t(u)] < positions[3 * size_t(v)];
-            });
+            std::sort(sorted_b.begin(), sorted_b.end(),
+                      [&](uint32_t u, uint32_t v) { return positions[3 * size_t(u)] < positions[3 * size_t(v)]; });
             sorted_x.resize(n);
             for (uint32_t k = 0; k < n; ++k) sorted_x[k] = positions[3 * size_t(sorted_b[k])];
         }
@@ -55,7 +54,8 @@ struct Matcher {
                 auto first = std::lower_bound(sorted_x.begin(), sorted_x.end(), x - r * (1 + 1e-12));
                 for (auto it = first; it != sorted_x.end() && *it <= x + r * (1 + 1e-12); ++it) {
                     const uint32_t k = uint32_t(it - sorted_x.begin());
-                    if (dist2(a[i], sorted_b[k]) <= r2) cand.push_back(uint32_t(std::lower_bound(b, b + n, sorted_b[k]) - b));
+                    if (dist2(a[i], sorted_b[k]) <= r2)
+                        cand.push_back(uint32_t(std::lower_bound(b, b + n, sorted_b[k]) - b));
                 }
             }
             if (cand.size() == cand_start[i]) return false;  // a vertex with no partner
@@ -109,9 +109,8 @@ struct Matcher {
 
 }  // namespace
 
-size_t find_duplicate_submeshes(int32_t* duplicate_of, const float* positions,
-                                const int32_t* submesh_of_vertex, size_t vertex_count,
-                                size_t submesh_count, const uint8_t* candidate, double tolerance,
+size_t find_duplicate_submeshes(int32_t* duplicate_of, const float* positions, const int32_t* submesh_of_vertex,
+                                size_t vertex_count, size_t submesh_count, const uint8_t* candidate, double tolerance,
                                 int /*threads*/) {
     check_submesh_ids(submesh_of_vertex, vertex_count, submesh_count);
     check_radius(tolerance, "tolerance");
@@ -149,7 +148,8 @@ size_t find_duplicate_submeshes(int32_t* duplicate_of, const float* positions,
     std::vector<uint32_t> slot_of(submesh_count, UINT32_MAX), bucket_of_slot(g.items.size());
     for (uint32_t m = 0; m < g.items.size(); ++m) slot_of[g.items[m]] = m;
     for (size_t bk = 0; bk + 1 < g.bucket_start.size(); ++bk)
-        std::fill(bucket_of_slot.begin() + g.bucket_start[bk], bucket_of_slot.begin() + g.bucket_start[bk + 1], uint32_t(bk));
+        std::fill(bucket_of_slot.begin() + g.bucket_start[bk], bucket_of_slot.begin() + g.bucket_start[bk + 1],
+                  uint32_t(bk));
     const double reach2 = reach * reach;
 
     Matcher matcher{positions, tolerance * tolerance, {}, {}, {}, {}, {}, {}, {}, {}, {}};
@@ -176,7 +176,8 @@ size_t find_duplicate_submeshes(int32_t* duplicate_of, const float* positions,
         const uint32_t m = slot_of[later], bk = bucket_of_slot[m], to = g.bucket_end[bk]++;
         const uint32_t other = g.items[to];
         std::swap(g.items[m], g.items[to]);
-        for (int d = 0; d < 3; ++d) std::swap(g.sorted_positions[3 * size_t(m) + d], g.sorted_positions[3 * size_t(to) + d]);
+        for (int d = 0; d < 3; ++d)
+            std::swap(g.sorted_positions[3 * size_t(m) + d], g.sorted_positions[3 * size_t(to) + d]);
         slot_of[other] = m;
         slot_of[later] = to;
     }

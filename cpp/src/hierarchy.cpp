@@ -22,8 +22,8 @@ bool larger(const double* half_extents, size_t a, size_t b) {
     return va > vb || (va == vb && a < b);
 }
 
-void containment_parents(int32_t* parent, const double* origins, const float* quaternions,
-                         const double* half_extents, size_t count) {
+void containment_parents(int32_t* parent, const double* origins, const float* quaternions, const double* half_extents,
+                         size_t count) {
     for (size_t i = 0; i < count; ++i) {
         parent[i] = -1;
         const glm::dvec3 p = vec3_at(origins, i);
@@ -47,7 +47,10 @@ void chain_parents(int32_t* parent, const double* origins, size_t count) {
         double nearest = std::numeric_limits<double>::infinity();
         for (size_t j = 0; j < i; ++j) {
             const double d = glm::length(vec3_at(origins, i) - vec3_at(origins, j));
-            if (d < nearest) { nearest = d; parent[i] = int32_t(j); }
+            if (d < nearest) {
+                nearest = d;
+                parent[i] = int32_t(j);
+            }
         }
     }
 }
@@ -64,7 +67,8 @@ int32_t box_hierarchy(int32_t* parent, int32_t* depth, const double* origins, co
             if (p < -1 || (p >= 0 && size_t(p) >= box_count))
                 throw std::invalid_argument("box " + std::to_string(i) + " names parent " + std::to_string(p) +
                                             ", outside -1.." + std::to_string(int64_t(box_count) - 1));
-            if (p >= 0 && size_t(p) == i) throw std::invalid_argument("box " + std::to_string(i) + " is its own parent");
+            if (p >= 0 && size_t(p) == i)
+                throw std::invalid_argument("box " + std::to_string(i) + " is its own parent");
             parents[i] = p;
         }
     } else if (rule == HierarchyRule::Containment) {

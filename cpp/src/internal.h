@@ -86,8 +86,8 @@ void check_submesh_ids(const int32_t* submesh_of_vertex, size_t vertex_count, si
 // 0..submesh_count-1); writes offsets[submesh_count + 1] and items[item_count] so the items of
 // submesh s are items[offsets[s] .. offsets[s+1]-1], ascending. Throws std::invalid_argument
 // (writing nothing) on a value out of range. Internal: dedup's grouping, tested on its own.
-void group_by_submesh(uint32_t* offsets, uint32_t* items, const int32_t* submesh_of_item,
-                      size_t item_count, size_t submesh_count);
+void group_by_submesh(uint32_t* offsets, uint32_t* items, const int32_t* submesh_of_item, size_t item_count,
+                      size_t submesh_count);
 
 // Counting sort of items by their submesh owner(i) (ids in 0..submesh_count-1; callers check),
 // in two halves so callers can skip the second. count_by_owner writes offsets[submesh_count + 1]
@@ -142,13 +142,13 @@ FrameSource frame_source(const FrameChoice& choice);
 // how far a copy's vertex displacement could move the size and turn the direction.
 struct Candidate {
     glm::dvec3 vector;
-    double size2;         // squared length of vector: 4 area^2 for faces, length^2 for edges
-    double size;          // face area or edge length (displacement > 0 only)
-    double size_slack;    // how much the size may move on a copy within the displacement
-    double angle_slack;   // radians the direction may turn on that copy
-    bool usable;          // not degenerate (zero area or length)
-    bool eligible;        // passes the current selection's test
-    double margin;        // how clearly it passes or fails that test (<= 0: a copy may differ)
+    double size2;        // squared length of vector: 4 area^2 for faces, length^2 for edges
+    double size;         // face area or edge length (displacement > 0 only)
+    double size_slack;   // how much the size may move on a copy within the displacement
+    double angle_slack;  // radians the direction may turn on that copy
+    bool usable;         // not degenerate (zero area or length)
+    bool eligible;       // passes the current selection's test
+    double margin;       // how clearly it passes or fails that test (<= 0: a copy may differ)
 };
 
 // Buffers choose_frame reuses from one submesh to the next.

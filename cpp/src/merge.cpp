@@ -36,9 +36,8 @@ std::vector<uint32_t> marked_vertices(const std::vector<uint8_t>& mark) {
 // selection (Blender's own): select only vertices that have a partner in their own submesh, and
 // put submeshes whose selected vertices come within the distance of each other into different
 // passes, so one pass never merges across submeshes.
-size_t merge_passes(int32_t* pass_of_vertex, const float* positions,
-                    const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count,
-                    const uint8_t* chosen, double distance, int threads) {
+size_t merge_passes(int32_t* pass_of_vertex, const float* positions, const int32_t* submesh_of_vertex,
+                    size_t vertex_count, size_t submesh_count, const uint8_t* chosen, double distance, int threads) {
     check_submesh_ids(submesh_of_vertex, vertex_count, submesh_count);
     check_radius(distance, "distance");
     check_finite_positions(positions, vertex_count);
@@ -65,16 +64,18 @@ size_t merge_passes(int32_t* pass_of_vertex, const float* positions,
             const uint32_t first = g.bucket_start[b], last = g.bucket_start[b + 1];
             if (last - first > 1) {
                 order.assign(g.items.begin() + first, g.items.begin() + last);
-                std::stable_sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) {
-                    return submesh_of_vertex[x] < submesh_of_vertex[y];
-                });
+                std::stable_sort(order.begin(), order.end(),
+                                 [&](uint32_t x, uint32_t y) { return submesh_of_vertex[x] < submesh_of_vertex[y]; });
                 for (uint32_t m = first; m < last; ++m) {
                     g.items[m] = order[m - first];
-                    for (int d = 0; d < 3; ++d) g.sorted_positions[3 * size_t(m) + d] = positions[3 * size_t(order[m - first]) + d];
+                    for (int d = 0; d < 3; ++d)
+                        g.sorted_positions[3 * size_t(m) + d] = positions[3 * size_t(order[m - first]) + d];
                 }
             }
             for (uint32_t m = last; m > first; --m)
-                run_end[m - 1] = (m < last && submesh_of_vertex[g.items[m]] == submesh_of_vertex[g.items[m - 1]]) ? run_end[m] : m;
+                run_end[m - 1] = (m < last && submesh_of_vertex[g.items[m]] == submesh_of_vertex[g.items[m - 1]])
+                                         ? run_end[m]
+                                         : m;
         }
     }
 
@@ -117,9 +118,8 @@ size_t merge_passes(int32_t* pass_of_vertex, const float* positions,
     return passes;
 }
 
-size_t merge_targets(int32_t* target, float* merged_positions, const float* positions,
-                     const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count,
-                     const uint8_t* chosen, double distance, int threads) {
+size_t merge_targets(int32_t* target, float* merged_positions, const float* positions, const int32_t* submesh_of_vertex,
+                     size_t vertex_count, size_t submesh_count, const uint8_t* chosen, double distance, int threads) {
     check_submesh_ids(submesh_of_vertex, vertex_count, submesh_count);
     check_radius(distance, "distance");
     check_finite_positions(positions, vertex_count);
@@ -137,12 +137,14 @@ size_t merge_targets(int32_t* target, float* merged_positions, const float* posi
     std::vector<uint32_t> slot_of(vertex_count, UINT32_MAX), bucket_of_slot(g.items.size());
     for (uint32_t m = 0; m < g.items.size(); ++m) slot_of[g.items[m]] = m;
     for (size_t b = 0; b + 1 < g.bucket_start.size(); ++b)
-        std::fill(bucket_of_slot.begin() + g.bucket_start[b], bucket_of_slot.begin() + g.bucket_start[b + 1], uint32_t(b));
+        std::fill(bucket_of_slot.begin() + g.bucket_start[b], bucket_of_slot.begin() + g.bucket_start[b + 1],
+                  uint32_t(b));
     auto remove = [&](uint32_t v) {
         const uint32_t m = slot_of[v], b = bucket_of_slot[m], last = --g.bucket_end[b];
         const uint32_t w = g.items[last];
         std::swap(g.items[m], g.items[last]);
-        for (int d = 0; d < 3; ++d) std::swap(g.sorted_positions[3 * size_t(m) + d], g.sorted_positions[3 * size_t(last) + d]);
+        for (int d = 0; d < 3; ++d)
+            std::swap(g.sorted_positions[3 * size_t(m) + d], g.sorted_positions[3 * size_t(last) + d]);
         slot_of[w] = m;
         slot_of[v] = last;
     };
@@ -178,7 +180,8 @@ size_t merge_targets(int32_t* target, float* merged_positions, const float* posi
             double best = INFINITY;
             for (uint32_t m : members) {
                 double d2 = 0;
-                for (int d = 0; d < 3; ++d) d2 += (positions[3 * size_t(m) + d] - centroid[d]) * (positions[3 * size_t(m) + d] - centroid[d]);
+                for (int d = 0; d < 3; ++d)
+                    d2 += (positions[3 * size_t(m) + d] - centroid[d]) * (positions[3 * size_t(m) + d] - centroid[d]);
                 if (d2 < best || (d2 == best && m < chosen_target)) {
                     best = d2;
                     chosen_target = m;

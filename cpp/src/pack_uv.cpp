@@ -35,8 +35,8 @@ void grow(Unit& u, const Unit& other) {
 // Rows of units of widths w[k] and heights h[k] (in placing order, at scale 1) at scale s;
 // writes each unit's lower-left corner into x[k], y[k] when they are not null. Returns the
 // number of rows, or 0 when the layout does not fit the unit square.
-size_t layout(const std::vector<double>& w, const std::vector<double>& h, double s, double pad,
-              size_t max_per_row, double* x_out, double* y_out) {
+size_t layout(const std::vector<double>& w, const std::vector<double>& h, double s, double pad, size_t max_per_row,
+              double* x_out, double* y_out) {
     double x = pad, top = 1.0 - pad, row_height = 0.0;
     size_t in_row = 0, rows = 0, row_first = 0;
     auto close_row = [&](size_t end) {
@@ -86,8 +86,8 @@ std::vector<uint32_t> checked_selected_faces(const float* corner_uv, const MeshV
 }
 
 // The height of every submesh: the centre of its vertices' height range.
-std::vector<double> submesh_heights(const MeshView& mesh, const float* vertex_height,
-                                    const int32_t* submesh_of_vertex, size_t submesh_count) {
+std::vector<double> submesh_heights(const MeshView& mesh, const float* vertex_height, const int32_t* submesh_of_vertex,
+                                    size_t submesh_count) {
     std::vector<double> low(submesh_count, INFINITY), high(submesh_count, -INFINITY);
     for (size_t v = 0; v < mesh.vertex_count; ++v) {
         const size_t s = size_t(submesh_of_vertex[v]);
@@ -229,8 +229,8 @@ double largest_fitting_scale(const std::vector<double>& w, const std::vector<dou
 }  // namespace
 
 PackUvReport pack_uv_by_height(float* corner_uv, const MeshView& mesh, const uint8_t* face_mask,
-                               const float* vertex_height, const int32_t* submesh_of_vertex,
-                               size_t submesh_count, const PackUvOptions& options) {
+                               const float* vertex_height, const int32_t* submesh_of_vertex, size_t submesh_count,
+                               const PackUvOptions& options) {
     check_submesh_ids(submesh_of_vertex, mesh.vertex_count, submesh_count);
     const double pad = options.padding;
     const std::vector<uint32_t> faces = checked_selected_faces(corner_uv, mesh, face_mask, vertex_height, pad);

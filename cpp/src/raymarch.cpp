@@ -41,13 +41,20 @@ void check_options(const MarchOptions& o) {
 // The map() of a preset: sdf.glsl's sdf_preset_* for the box's half-extents h.
 float sdf_preset(SdfPreset kind, vec3 p, vec3 h) {
     switch (kind) {
-        case SdfPreset::Box: return shader::sdf_preset_box(p, h);
-        case SdfPreset::Sphere: return shader::sdf_preset_sphere(p, h);
-        case SdfPreset::RoundedBox: return shader::sdf_preset_rounded_box(p, h);
-        case SdfPreset::Capsule: return shader::sdf_preset_capsule(p, h);
-        case SdfPreset::Cylinder: return shader::sdf_preset_cylinder(p, h);
-        case SdfPreset::Torus: return shader::sdf_preset_torus(p, h);
-        case SdfPreset::Link: return shader::sdf_preset_link(p, h);
+        case SdfPreset::Box:
+            return shader::sdf_preset_box(p, h);
+        case SdfPreset::Sphere:
+            return shader::sdf_preset_sphere(p, h);
+        case SdfPreset::RoundedBox:
+            return shader::sdf_preset_rounded_box(p, h);
+        case SdfPreset::Capsule:
+            return shader::sdf_preset_capsule(p, h);
+        case SdfPreset::Cylinder:
+            return shader::sdf_preset_cylinder(p, h);
+        case SdfPreset::Torus:
+            return shader::sdf_preset_torus(p, h);
+        case SdfPreset::Link:
+            return shader::sdf_preset_link(p, h);
     }
     return shader::sdf_preset_box(p, h);
 }
@@ -86,7 +93,8 @@ vec3 unit_or_zero(vec3 n) {
 // raymarch.glsl: bm_normal (forward differences from d = map(p)).
 vec3 bm_normal(SdfPreset kind, vec3 p, vec3 h, float d, float e) {
     return unit_or_zero(vec3(sdf_preset(kind, p + vec3(e, 0.0f, 0.0f), h), sdf_preset(kind, p + vec3(0.0f, e, 0.0f), h),
-                             sdf_preset(kind, p + vec3(0.0f, 0.0f, e), h)) - d);
+                             sdf_preset(kind, p + vec3(0.0f, 0.0f, e), h)) -
+                        d);
 }
 
 // The normal of a hit at p (map(p) = d) by `rule`, and its map() calls (NormalRule).
@@ -106,7 +114,7 @@ Normal normal_by_rule(NormalRule rule, SdfPreset kind, vec3 p, vec3 h, float d, 
         }
         return {unit_or_zero(n), 6};
     }
-    const float tap = std::max(epsilon, 1e-3f * shader::max3(h));
+    const float tap = std::max(epsilon, 1e-3f * shader::bm_max3(h));
     const vec3 a(1.0f, -1.0f, -1.0f), b(-1.0f, -1.0f, 1.0f), c(-1.0f, 1.0f, -1.0f), one(1.0f);
     return {unit_or_zero(a * sdf_preset(kind, p + a * tap, h) + b * sdf_preset(kind, p + b * tap, h) +
                          c * sdf_preset(kind, p + c * tap, h) + one * sdf_preset(kind, p + one * tap, h)),
@@ -150,7 +158,10 @@ std::vector<glm::ivec4> pixel_rects(const float* origins, const float* quaternio
         auto include = [&](vec4 p) {
             float sx = (p.x / p.w * 0.5f + 0.5f) * float(W);
             float sy = (0.5f - p.y / p.w * 0.5f) * float(H);
-            x0 = std::min(x0, sx); x1 = std::max(x1, sx); y0 = std::min(y0, sy); y1 = std::max(y1, sy);
+            x0 = std::min(x0, sx);
+            x1 = std::max(x1, sx);
+            y0 = std::min(y0, sy);
+            y1 = std::max(y1, sy);
         };
         for (int k = 0; k < 8; ++k) {
             if (front[k] >= 0.0f) include(clip[k]);
@@ -163,9 +174,11 @@ std::vector<glm::ivec4> pixel_rects(const float* origins, const float* quaternio
         // first and last pixel centre inside [lo, hi], clamped before the cast (far-off boxes)
         auto first = [](float lo, int n) { return int(std::ceil(std::clamp(lo - 0.5f, -1.0f, float(n)))); };
         auto last = [](float hi, int n) { return int(std::floor(std::clamp(hi - 0.5f, -1.0f, float(n)))); };
-        if (!(x0 <= x1 && y0 <= y1)) rects[b] = glm::ivec4(0, 0, -1, -1);  // wholly behind the near plane
-        else rects[b] = glm::ivec4(std::max(first(x0, W) - 1, 0), std::max(first(y0, H) - 1, 0),
-                                   std::min(last(x1, W) + 1, W - 1), std::min(last(y1, H) + 1, H - 1));
+        if (!(x0 <= x1 && y0 <= y1))
+            rects[b] = glm::ivec4(0, 0, -1, -1);  // wholly behind the near plane
+        else
+            rects[b] = glm::ivec4(std::max(first(x0, W) - 1, 0), std::max(first(y0, H) - 1, 0),
+                                  std::min(last(x1, W) + 1, W - 1), std::min(last(y1, H) + 1, H - 1));
     }
     return rects;
 }
@@ -230,7 +243,8 @@ void raymarch(const float* origins, const float* directions, const float* half_e
             if (span.y >= t0) m = bm_march(o.sdf, start, rd, h, std::min(span.y - t0, o.max_distance), o);
             vec3 p = start + rd * m.t;
             if (hit) hit[i] = m.hit ? 1 : 0;
-            if (positions) for (int k = 0; k < 3; ++k) positions[3 * i + k] = p[k];
+            if (positions)
+                for (int k = 0; k < 3; ++k) positions[3 * i + k] = p[k];
             if (normals) {
                 vec3 n = m.hit ? bm_normal(o.sdf, p, h, m.d, shader::bm_normal_tap(h)) : vec3(0.0f);
                 for (int k = 0; k < 3; ++k) normals[3 * i + k] = n[k];
@@ -266,7 +280,8 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
             const size_t b = plan.order ? plan.order[drawn] : drawn;
             const glm::ivec4 r = rects[b];
             if (r.y > int(row_end) - 1 || r.w < int(row_begin) || r.x > r.z) continue;
-            const glm::quat q(quaternions[4 * b + 3], quaternions[4 * b], quaternions[4 * b + 1], quaternions[4 * b + 2]);
+            const glm::quat q(quaternions[4 * b + 3], quaternions[4 * b], quaternions[4 * b + 1],
+                              quaternions[4 * b + 2]);
             const glm::quat iq = glm::conjugate(q);
             const vec3 c = glm::make_vec3(origins + 3 * b), h = glm::make_vec3(half_extents + 3 * b);
             auto window_depth = [&](vec3 local) {
@@ -292,8 +307,9 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                     const float face_depth = window_depth(face);
                     if (plan.early_depth && !(face_depth >= 0.0f && face_depth < images.depth[pix])) continue;
                     ++cost.marched_fragments;
-                    const float footprint = shader::bm_pixel_size((to_clip * vec4(c + q * face, 1.0f)).w, row_y, float(H));
-                    const float box_pixels = 2.0f * shader::max3(h) / footprint;
+                    const float footprint =
+                            shader::bm_pixel_size((to_clip * vec4(c + q * face, 1.0f)).w, row_y, float(H));
+                    const float box_pixels = 2.0f * shader::bm_max3(h) / footprint;
                     MarchOptions fragment = o;
                     fragment.epsilon = std::max(o.epsilon, quality.x * footprint);
                     fragment.max_steps = int(shader::bm_step_limit(box_pixels, quality.y, float(o.max_steps)));
@@ -305,8 +321,9 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                                       : bm_march(o.sdf, start, rd, h, t_end, fragment);
                     if (images.steps) images.steps[pix] += m.steps;
                     vec3 local_hit = start + rd * m.t;
-                    const Normal normal = m.hit ? normal_by_rule(plan.normal, o.sdf, local_hit, h, m.d, fragment.epsilon)
-                                                : Normal{vec3(0.0f), 0};
+                    const Normal normal =
+                            m.hit ? normal_by_rule(plan.normal, o.sdf, local_hit, h, m.d, fragment.epsilon)
+                                  : Normal{vec3(0.0f), 0};
                     const int evaluations = m.steps + normal.evaluations;
                     cost.sdf_evaluations += uint64_t(evaluations);
                     if (!m.hit) continue;
@@ -318,7 +335,8 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                     images.depth[pix] = depth;
                     for (int k = 0; k < 3; ++k) images.rgba[4 * pix + k] = color[k];
                     images.rgba[4 * pix + 3] = 1.0f;
-                    if (images.normals) for (int k = 0; k < 3; ++k) images.normals[3 * pix + k] = n_object[k];
+                    if (images.normals)
+                        for (int k = 0; k < 3; ++k) images.normals[3 * pix + k] = n_object[k];
                 }
             }
         }

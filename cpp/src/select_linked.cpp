@@ -13,16 +13,16 @@ namespace boxmarch {
 namespace {
 
 // Writes the vertex mask of the marked submeshes; returns how many are marked.
-size_t expand_submeshes(uint8_t* out_selected, const std::vector<uint8_t>& marked,
-                        const int32_t* submesh_of_vertex, size_t vertex_count) {
+size_t expand_submeshes(uint8_t* out_selected, const std::vector<uint8_t>& marked, const int32_t* submesh_of_vertex,
+                        size_t vertex_count) {
     for (size_t v = 0; v < vertex_count; ++v) out_selected[v] = marked[size_t(submesh_of_vertex[v])];
     size_t count = 0;
     for (uint8_t m : marked) count += m;
     return count;
 }
 
-std::vector<uint8_t> touched_submeshes(const uint8_t* selected, const int32_t* submesh_of_vertex,
-                                       size_t vertex_count, size_t submesh_count) {
+std::vector<uint8_t> touched_submeshes(const uint8_t* selected, const int32_t* submesh_of_vertex, size_t vertex_count,
+                                       size_t submesh_count) {
     std::vector<uint8_t> marked(submesh_count, 0);
     for (size_t v = 0; v < vertex_count; ++v)
         if (selected[v]) marked[size_t(submesh_of_vertex[v])] = 1;
@@ -31,9 +31,8 @@ std::vector<uint8_t> touched_submeshes(const uint8_t* selected, const int32_t* s
 
 }  // namespace
 
-size_t select_linked_submeshes(uint8_t* out_selected, const uint8_t* selected,
-                               const int32_t* submesh_of_vertex, size_t vertex_count,
-                               size_t submesh_count) {
+size_t select_linked_submeshes(uint8_t* out_selected, const uint8_t* selected, const int32_t* submesh_of_vertex,
+                               size_t vertex_count, size_t submesh_count) {
     check_submesh_ids(submesh_of_vertex, vertex_count, submesh_count);
     const std::vector<uint8_t> marked = touched_submeshes(selected, submesh_of_vertex, vertex_count, submesh_count);
     return expand_submeshes(out_selected, marked, submesh_of_vertex, vertex_count);
@@ -44,8 +43,8 @@ namespace {
 // Sparse points: one radius search per point (partners of higher index), each thread joining the
 // submeshes it links in a forest of its own (a pair inside one set is not even measured twice
 // over), and the forests joined at the end. Memory: one forest per thread, never a pair list.
-void link_by_search(DisjointSets& sets, const Grid<float>& g, const int32_t* submesh_of_vertex,
-                    size_t submesh_count, double epsilon, int threads) {
+void link_by_search(DisjointSets& sets, const Grid<float>& g, const int32_t* submesh_of_vertex, size_t submesh_count,
+                    double epsilon, int threads) {
     const size_t n = g.items.size(), parts = thread_count(threads, n);
     std::vector<DisjointSets> forests;
     forests.reserve(parts);
@@ -77,8 +76,8 @@ void link_by_search(DisjointSets& sets, const Grid<float>& g, const int32_t* sub
 // sets differ, up to the first pair within epsilon. Linear memory; linear time when the cells
 // join (the cases that make the search above quadratic). Returns false (nothing done) when cells
 // that small cannot be numbered exactly.
-bool link_by_cells(DisjointSets& sets, const float* positions, size_t vertex_count,
-                   const int32_t* submesh_of_vertex, double epsilon) {
+bool link_by_cells(DisjointSets& sets, const float* positions, size_t vertex_count, const int32_t* submesh_of_vertex,
+                   double epsilon) {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t v = 0; v < vertex_count; ++v)
         for (int d = 0; d < 3; ++d) {
@@ -120,7 +119,10 @@ bool link_by_cells(DisjointSets& sets, const float* positions, size_t vertex_cou
         size_t a = 0, b = cell_count;
         while (a < b) {
             const size_t mid = (a + b) / 2;
-            if (less(cells[start[mid]], probe)) a = mid + 1; else b = mid;
+            if (less(cells[start[mid]], probe))
+                a = mid + 1;
+            else
+                b = mid;
         }
         return a < cell_count && !less(probe, cells[start[a]]) ? a : cell_count;
     };
@@ -155,8 +157,8 @@ bool link_by_cells(DisjointSets& sets, const float* positions, size_t vertex_cou
 }  // namespace
 
 size_t select_linked_across(uint8_t* out_selected, const uint8_t* selected, const float* positions,
-                            const int32_t* submesh_of_vertex, size_t vertex_count,
-                            size_t submesh_count, double epsilon, int threads) {
+                            const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count, double epsilon,
+                            int threads) {
     check_submesh_ids(submesh_of_vertex, vertex_count, submesh_count);
     check_radius(epsilon, "epsilon");
     check_finite_positions(positions, vertex_count);

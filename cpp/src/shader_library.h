@@ -12,9 +12,15 @@ using glm::vec2;
 using glm::vec3;
 using glm::vec4;
 
-inline float min3(vec3 v) { return glm::min(v.x, glm::min(v.y, v.z)); }
+// The smallest and the largest component.
+inline float bm_min3(vec3 v) { return glm::min(v.x, glm::min(v.y, v.z)); }
 
-inline float max3(vec3 v) { return glm::max(v.x, glm::max(v.y, v.z)); }
+inline float bm_max3(vec3 v) { return glm::max(v.x, glm::max(v.y, v.z)); }
+
+// min3 and max3: the same, under the names map() texts use.
+inline float min3(vec3 v) { return bm_min3(v); }
+
+inline float max3(vec3 v) { return bm_max3(v); }
 
 // ---- primitives, centred at the origin
 // Exact.
@@ -24,7 +30,7 @@ inline float sd_sphere(vec3 p, float r) { return glm::length(p) - r; }
 inline float sd_box(vec3 p, vec3 b)
 {
   vec3 q = glm::abs(p) - b;
-  return glm::length(glm::max(q, vec3(0.0f))) + glm::min(max3(q), 0.0f);
+  return glm::length(glm::max(q, vec3(0.0f))) + glm::min(bm_max3(q), 0.0f);
 }
 
 // Exact for r <= min3(b): the box b with its edges rounded by r (outer size b).
@@ -110,10 +116,10 @@ inline vec3 op_repeat_limited(vec3 p, vec3 spacing, vec3 limit)
 inline float sdf_preset_box(vec3 p, vec3 h) { return sd_box(p, h); }
 
 // Exact.
-inline float sdf_preset_sphere(vec3 p, vec3 h) { return sd_sphere(p, min3(h)); }
+inline float sdf_preset_sphere(vec3 p, vec3 h) { return sd_sphere(p, bm_min3(h)); }
 
 // Exact.
-inline float sdf_preset_rounded_box(vec3 p, vec3 h) { return sd_round_box(p, h, 0.25f * min3(h)); }
+inline float sdf_preset_rounded_box(vec3 p, vec3 h) { return sd_round_box(p, h, 0.25f * bm_min3(h)); }
 
 // Exact.
 inline float sdf_preset_capsule(vec3 p, vec3 h)
@@ -205,7 +211,7 @@ inline vec2 bm_box_span(vec3 ro, vec3 rd, vec3 h)
   vec3 inv = 1.0f / glm::max(glm::abs(rd), vec3(1e-12f));
   vec3 t_near = (-h - s * ro) * inv;
   vec3 t_far = (h - s * ro) * inv;
-  return vec2(max3(t_near), min3(t_far));
+  return vec2(bm_max3(t_near), bm_min3(t_far));
 }
 
 // Tap distance of bm_normal, 3/10,000 of the box: a forward difference errs by about half the tap
@@ -213,7 +219,7 @@ inline vec2 bm_box_span(vec3 ro, vec3 rd, vec3 h)
 // docs/ACCURACY.md, "GPU cost against error": the normal error column).
 inline float bm_normal_tap(vec3 h)
 {
-  return 3e-4f * max3(h);
+  return 3e-4f * bm_max3(h);
 }
 
 // The quality knob q (0 < q <= 1) as the three settings it stands for. x: hit distance as a share

@@ -26,8 +26,10 @@ int32_t find_root(std::vector<int32_t>& parent, int32_t v) {
 void unite(std::vector<int32_t>& parent, int32_t a, int32_t b) {
     a = find_root(parent, a);
     b = find_root(parent, b);
-    if (a < b) parent[b] = a;
-    else if (b < a) parent[a] = b;
+    if (a < b)
+        parent[b] = a;
+    else if (b < a)
+        parent[a] = b;
 }
 
 // Numbers the sets of `parent` into submesh_of_vertex; returns how many there are. Roots are the
@@ -66,9 +68,9 @@ size_t find_submeshes(int32_t* submesh_of_vertex, const MeshView& mesh) {
     return number_sets(submesh_of_vertex, parent);
 }
 
-size_t face_starts_from_corner_edges(int32_t* face_starts, const int32_t* corner_verts,
-                                     const int32_t* corner_edges, size_t corner_count,
-                                     const int32_t* edges, size_t edge_count, size_t vertex_count) {
+size_t face_starts_from_corner_edges(int32_t* face_starts, const int32_t* corner_verts, const int32_t* corner_edges,
+                                     size_t corner_count, const int32_t* edges, size_t edge_count,
+                                     size_t vertex_count) {
     const size_t bad_edge = first_out_of_range(corner_edges, corner_count, edge_count);
     const size_t bad_vertex = first_out_of_range(corner_verts, corner_count, vertex_count);
     if (bad_edge < corner_count || bad_vertex < corner_count)
@@ -93,13 +95,13 @@ size_t face_starts_from_corner_edges(int32_t* face_starts, const int32_t* corner
 void check_submesh_ids(const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count) {
     const size_t bad = first_out_of_range(submesh_of_vertex, vertex_count, submesh_count);
     if (bad < vertex_count)
-        throw std::invalid_argument("submesh_of_vertex[" + std::to_string(bad) + "] = " +
-                                    std::to_string(submesh_of_vertex[bad]) + " is outside 0.." +
+        throw std::invalid_argument("submesh_of_vertex[" + std::to_string(bad) +
+                                    "] = " + std::to_string(submesh_of_vertex[bad]) + " is outside 0.." +
                                     std::to_string(submesh_count) + "-1");
 }
 
-void group_by_submesh(uint32_t* offsets, uint32_t* items, const int32_t* submesh_of_item,
-                      size_t item_count, size_t submesh_count) {
+void group_by_submesh(uint32_t* offsets, uint32_t* items, const int32_t* submesh_of_item, size_t item_count,
+                      size_t submesh_count) {
     const size_t bad = first_out_of_range(submesh_of_item, item_count, submesh_count);
     if (bad < item_count)
         throw std::invalid_argument("item " + std::to_string(bad) + " names submesh " +

@@ -11,9 +11,7 @@ namespace boxmarch {
 
 namespace {
 
-inline uint64_t edge_key(uint32_t a, uint32_t b) {
-    return a < b ? (uint64_t(a) << 32) | b : (uint64_t(b) << 32) | a;
-}
+inline uint64_t edge_key(uint32_t a, uint32_t b) { return a < b ? (uint64_t(a) << 32) | b : (uint64_t(b) << 32) | a; }
 
 constexpr uint32_t kNone = UINT32_MAX;
 
@@ -63,8 +61,10 @@ std::vector<uint32_t> weld_edges(const MeshView& mesh, const VertexImage& image,
         const int32_t u = mesh.edges[2 * e], w = mesh.edges[2 * e + 1];
         const uint32_t a = image(u), b = image(w);
         if (a == b) continue;  // collapses
-        if (welded_old[size_t(u)] || welded_old[size_t(w)]) keyed.emplace_back(edge_key(a, b), uint32_t(e));
-        else first_of[e] = uint32_t(e);
+        if (welded_old[size_t(u)] || welded_old[size_t(w)])
+            keyed.emplace_back(edge_key(a, b), uint32_t(e));
+        else
+            first_of[e] = uint32_t(e);
     }
     std::sort(keyed.begin(), keyed.end());
     for (size_t k = 0, first = 0; k < keyed.size(); ++k) {
@@ -199,14 +199,16 @@ void flag_doubled_faces(size_t n, const VertexImage& image, const std::vector<ui
 }  // namespace
 
 WeldCounts weld_topology(const MeshView& mesh, const int32_t* corner_edges, const int32_t* target,
-                        const WeldOutput& out) {
+                         const WeldOutput& out) {
     check_weld_input(mesh, target);
     WeldCounts counts;
     const VertexImage image = keep_survivors(mesh.vertex_count, target, out, counts);
     const std::vector<uint32_t> new_of_old = weld_edges(mesh, image, out, counts);
     const std::vector<uint8_t> touched_face = weld_faces(mesh, image, out, counts);
-    if (corner_edges) corner_edges_from_old(mesh, corner_edges, new_of_old, out, counts);
-    else corner_edges_by_lookup(out, counts);
+    if (corner_edges)
+        corner_edges_from_old(mesh, corner_edges, new_of_old, out, counts);
+    else
+        corner_edges_by_lookup(out, counts);
     flag_doubled_faces(mesh.vertex_count, image, touched_face, out, counts);
     return counts;
 }

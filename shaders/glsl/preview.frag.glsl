@@ -1,3 +1,16 @@
+// Conventions of every boxmarch shader (docs/ENGINES.md, Shader conventions), as hg_sdf states its own:
+// * Names: bm_ on everything boxmarch adds to an engine's shader (bm plus CamelCase in the stages
+//   three.js's JavaScript assembles; BM_ and BOXMARCH_ on macros). The families users' map() texts
+//   call: sd_ (distances), op_ (operators), sdf_preset_ (presets); box_ the values of the box being
+//   marched that map() reads (box_half, box_index, box_params, box_parent_*); map() is the user's.
+//   min3 and max3 are bm_min3 and bm_max3 under the names map() texts use.
+// * Units: box-local, p measured from the box's origin along its baked axes, in the mesh's units.
+// * Distances: each distance function says whether it is exact (the signed Euclidean distance) or a
+//   bound (never more than the exact distance: sphere tracing stays safe, with more steps).
+// * Frames: the quaternion q (x, y, z, w; w >= 0) turns box-local into object space; the box's axes
+//   are TANGENT (x), cross(NORMAL, TANGENT) * tangent.w (y) and NORMAL (z) where a layout carries
+//   them; f is the box-local vector from the fragment to the box's origin.
+//
 // boxmarch viewport preview, fragment stage: one fragment of a rasterised submesh takes its box
 // frame, offset and half-extents from the vertex stage (which decoded the layout's channels),
 // sphere-traces map() inside the box, writes the hit's depth and shades it.
@@ -75,7 +88,7 @@ void main()
   vec3 quality = bm_quality(preview.quality.x);
   vec3 row_y = vec3(preview.object_to_clip[0][1], preview.object_to_clip[1][1], preview.object_to_clip[2][1]);
   float footprint = bm_pixel_size(1.0 / gl_FragCoord.w, length(row_y), preview.quality.y);
-  float box_pixels = 2.0 * max3(box_half) / footprint;
+  float box_pixels = 2.0 * bm_max3(box_half) / footprint;
   float epsilon = max(preview.march.x, quality.x * footprint);
   int max_steps = int(bm_step_limit(box_pixels, quality.y, preview.march.w));
   float t;

@@ -1,3 +1,16 @@
+// Conventions of every boxmarch shader (docs/ENGINES.md, Shader conventions), as hg_sdf states its own:
+// * Names: bm_ on everything boxmarch adds to an engine's shader (bm plus CamelCase in the stages
+//   three.js's JavaScript assembles; BM_ and BOXMARCH_ on macros). The families users' map() texts
+//   call: sd_ (distances), op_ (operators), sdf_preset_ (presets); box_ the values of the box being
+//   marched that map() reads (box_half, box_index, box_params, box_parent_*); map() is the user's.
+//   min3 and max3 are bm_min3 and bm_max3 under the names map() texts use.
+// * Units: box-local, p measured from the box's origin along its baked axes, in the mesh's units.
+// * Distances: each distance function says whether it is exact (the signed Euclidean distance) or a
+//   bound (never more than the exact distance: sphere tracing stays safe, with more steps).
+// * Frames: the quaternion q (x, y, z, w; w >= 0) turns box-local into object space; the box's axes
+//   are TANGENT (x), cross(NORMAL, TANGENT) * tangent.w (y) and NORMAL (z) where a layout carries
+//   them; f is the box-local vector from the fragment to the box's origin.
+//
 // boxmarch for Godot 3: raymarches an SDF inside every box of a mesh exported with the GODOT3
 // preset (NORMAL_COLOR layout, docs/ENGINES.md). Import the .glb with Meshes > Compress off, set
 // this shader on the mesh and the exported NAME.boxes.tres as box_table. Edit map() below.
@@ -20,17 +33,16 @@ uniform float quality : hint_range(0.01, 1.0) = 1.0;  // the quality knob (bm_qu
 // vertex stage's WORLD_MATRIX (NORMAL, TANGENT, VERTEX stay at rest there), so the posed frame
 // exists only after WORLD_MATRIX; the fragment stage takes them back into the object's space
 // with its own (unskinned) WORLD_MATRIX. Unskinned, the round trip changes nothing.
-varying vec3 v_world_pos;
-varying vec3 v_axis_x;
-varying vec3 v_axis_y;
-varying vec3 v_axis_z;
-varying vec3 v_offset;
-varying float v_index;
+varying vec3 bm_v_world_pos;
+varying vec3 bm_v_axis_x;
+varying vec3 bm_v_axis_y;
+varying vec3 bm_v_axis_z;
+varying vec3 bm_v_offset;
+varying float bm_v_index;
 
 // boxmarch decode: recover a fragment's box-local frame from the baked vertex data
 // (docs/FORMAT.md). shaders/generate.py translates it into every engine's language.
-// Names: snake_case with a bm_ prefix for the decode and the march (sdf.glsl keeps the sd_ and
-// op_ families that users' map() texts call). The blog post's shader has its own GetFragToOrigin,
+// The blog post's shader has its own GetFragToOrigin,
 // GetRotation and rotate_vector; bm_offset_from_color, bm_quaternion and bm_rotate_vector compute
 // the same, so that shader reads the CLASSIC layout unchanged (docs/FORMAT.md names the pairs).
 
@@ -132,8 +144,12 @@ vec2 bm_box_table_texel(float index, float plane, vec2 size)
   return vec2(index - row * size.x, plane * floor(size.y / 5.0 + 0.5) + row);
 }
 
-float min3(vec3 v) { return min(v.x, min(v.y, v.z)); }
-float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
+// The smallest and the largest component.
+float bm_min3(vec3 v) { return min(v.x, min(v.y, v.z)); }
+float bm_max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
+// min3 and max3: the same, under the names map() texts use.
+float min3(vec3 v) { return bm_min3(v); }
+float max3(vec3 v) { return bm_max3(v); }
 // ---- primitives, centred at the origin
 // Exact.
 float sd_sphere(vec3 p, float r) { return length(p) - r; }
@@ -141,7 +157,7 @@ float sd_sphere(vec3 p, float r) { return length(p) - r; }
 float sd_box(vec3 p, vec3 b)
 {
   vec3 q = abs(p) - b;
-  return length(max(q, vec3(0.0))) + min(max3(q), 0.0);
+  return length(max(q, vec3(0.0))) + min(bm_max3(q), 0.0);
 }
 // Exact for r <= min3(b): the box b with its edges rounded by r (outer size b).
 float sd_round_box(vec3 p, vec3 b, float r) { return sd_box(p, b - vec3(r)) - r; }
@@ -210,9 +226,9 @@ vec3 op_repeat_limited(vec3 p, vec3 spacing, vec3 limit)
 // Exact.
 float sdf_preset_box(vec3 p, vec3 h) { return sd_box(p, h); }
 // Exact.
-float sdf_preset_sphere(vec3 p, vec3 h) { return sd_sphere(p, min3(h)); }
+float sdf_preset_sphere(vec3 p, vec3 h) { return sd_sphere(p, bm_min3(h)); }
 // Exact.
-float sdf_preset_rounded_box(vec3 p, vec3 h) { return sd_round_box(p, h, 0.25 * min3(h)); }
+float sdf_preset_rounded_box(vec3 p, vec3 h) { return sd_round_box(p, h, 0.25 * bm_min3(h)); }
 // Exact.
 float sdf_preset_capsule(vec3 p, vec3 h)
 {
@@ -285,7 +301,7 @@ vec2 bm_box_span(vec3 ro, vec3 rd, vec3 h)
   vec3 inv = 1.0 / max(abs(rd), vec3(1e-12));
   vec3 t_near = (-h - s * ro) * inv;
   vec3 t_far = (h - s * ro) * inv;
-  return vec2(max3(t_near), min3(t_far));
+  return vec2(bm_max3(t_near), bm_min3(t_far));
 }
 // The quality knob q (0 < q <= 1) as the three settings it stands for. x: hit distance as a share
 // of a pixel's footprint (the march stops that close to the surface when that is more than the
@@ -315,7 +331,7 @@ float bm_step_limit(float box_pixels, float steps_per_pixel, float step_cap)
 // docs/ACCURACY.md, "GPU cost against error": the normal error column).
 float bm_normal_tap(vec3 h)
 {
-  return 3e-4 * max3(h);
+  return 3e-4 * bm_max3(h);
 }
 
 
@@ -373,28 +389,28 @@ vec3 bm_normal(vec3 p, float d, float e, vec3 h, float index)
 
 void vertex()
 {
-  v_world_pos = (WORLD_MATRIX * vec4(VERTEX, 1.0)).xyz;
-  v_axis_z = mat3(WORLD_MATRIX) * NORMAL;
-  v_axis_x = mat3(WORLD_MATRIX) * TANGENT;
-  v_axis_y = mat3(WORLD_MATRIX) * BINORMAL;  // Godot's cross(NORMAL, TANGENT) * tangent.w: bm_axis_y
-  v_offset = COLOR.rgb;
-  v_index = COLOR.a;
+  bm_v_world_pos = (WORLD_MATRIX * vec4(VERTEX, 1.0)).xyz;
+  bm_v_axis_z = mat3(WORLD_MATRIX) * NORMAL;
+  bm_v_axis_x = mat3(WORLD_MATRIX) * TANGENT;
+  bm_v_axis_y = mat3(WORLD_MATRIX) * BINORMAL;  // Godot's cross(NORMAL, TANGENT) * tangent.w: bm_axis_y
+  bm_v_offset = COLOR.rgb;
+  bm_v_index = COLOR.a;
 }
 
 void fragment()
 {
   mat4 object_from_world = inverse(WORLD_MATRIX);
-  vec3 v_obj_pos = (object_from_world * vec4(v_world_pos, 1.0)).xyz;
-  vec3 z = normalize(mat3(object_from_world) * v_axis_z);
-  vec3 x = normalize(mat3(object_from_world) * v_axis_x);
-  vec3 y = normalize(mat3(object_from_world) * v_axis_y);
-  vec3 f = v_offset;
-  float index = bm_box_index(v_index);
+  vec3 bm_v_obj_pos = (object_from_world * vec4(bm_v_world_pos, 1.0)).xyz;
+  vec3 z = normalize(mat3(object_from_world) * bm_v_axis_z);
+  vec3 x = normalize(mat3(object_from_world) * bm_v_axis_x);
+  vec3 y = normalize(mat3(object_from_world) * bm_v_axis_y);
+  vec3 f = bm_v_offset;
+  float index = bm_box_index(bm_v_index);
   int i = int(index);
   ivec2 size = textureSize(box_table, 0);
   vec3 h = texelFetch(box_table, ivec2(i % size.x, i / size.x), 0).xyz;
   bool perspective = PROJECTION_MATRIX[3][3] < 0.5;
-  vec3 ray = perspective ? v_obj_pos - (object_from_world * vec4(CAMERA_MATRIX[3].xyz, 1.0)).xyz
+  vec3 ray = perspective ? bm_v_obj_pos - (object_from_world * vec4(CAMERA_MATRIX[3].xyz, 1.0)).xyz
                          : (object_from_world * vec4(-CAMERA_MATRIX[2].xyz, 0.0)).xyz;
   float eye_distance = length(ray);
   vec3 rd = normalize(bm_to_local(ray / eye_distance, x, y, z));
@@ -412,7 +428,7 @@ void fragment()
   // box's size on screen from it.
   mat4 object_to_clip = PROJECTION_MATRIX * INV_CAMERA_MATRIX * WORLD_MATRIX;
   vec3 knob = bm_quality(quality);
-  float footprint = bm_pixel_size((object_to_clip * vec4(v_obj_pos, 1.0)).w,
+  float footprint = bm_pixel_size((object_to_clip * vec4(bm_v_obj_pos, 1.0)).w,
       length(vec3(object_to_clip[0][1], object_to_clip[1][1], object_to_clip[2][1])), VIEWPORT_SIZE.y);
   float box_pixels = 2.0 * max3(h) / footprint;
   float epsilon = max(march_epsilon, knob.x * footprint);
@@ -426,7 +442,7 @@ void fragment()
     discard;
   }
   vec3 local_hit = ro + rd * t;
-  vec3 obj_hit = v_obj_pos + bm_from_local(local_hit + f, x, y, z);
+  vec3 obj_hit = bm_v_obj_pos + bm_from_local(local_hit + f, x, y, z);
   vec4 clip = object_to_clip * vec4(obj_hit, 1.0);
   DEPTH = 0.5 + 0.5 * clip.z / clip.w;
   vec3 n = normalize((INV_CAMERA_MATRIX * WORLD_MATRIX * vec4(bm_from_local(

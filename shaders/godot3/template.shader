@@ -1,3 +1,16 @@
+// Conventions of every boxmarch shader (docs/ENGINES.md, Shader conventions), as hg_sdf states its own:
+// * Names: bm_ on everything boxmarch adds to an engine's shader (bm plus CamelCase in the stages
+//   three.js's JavaScript assembles; BM_ and BOXMARCH_ on macros). The families users' map() texts
+//   call: sd_ (distances), op_ (operators), sdf_preset_ (presets); box_ the values of the box being
+//   marched that map() reads (box_half, box_index, box_params, box_parent_*); map() is the user's.
+//   min3 and max3 are bm_min3 and bm_max3 under the names map() texts use.
+// * Units: box-local, p measured from the box's origin along its baked axes, in the mesh's units.
+// * Distances: each distance function says whether it is exact (the signed Euclidean distance) or a
+//   bound (never more than the exact distance: sphere tracing stays safe, with more steps).
+// * Frames: the quaternion q (x, y, z, w; w >= 0) turns box-local into object space; the box's axes
+//   are TANGENT (x), cross(NORMAL, TANGENT) * tangent.w (y) and NORMAL (z) where a layout carries
+//   them; f is the box-local vector from the fragment to the box's origin.
+//
 // boxmarch for Godot 3: raymarches an SDF inside every box of a mesh exported with the GODOT3
 // preset (NORMAL_COLOR layout, docs/ENGINES.md). Import the .glb with Meshes > Compress off, set
 // this shader on the mesh and the exported NAME.boxes.tres as box_table. Edit map() below.
@@ -20,12 +33,12 @@ uniform float quality : hint_range(0.01, 1.0) = 1.0;  // the quality knob (bm_qu
 // vertex stage's WORLD_MATRIX (NORMAL, TANGENT, VERTEX stay at rest there), so the posed frame
 // exists only after WORLD_MATRIX; the fragment stage takes them back into the object's space
 // with its own (unskinned) WORLD_MATRIX. Unskinned, the round trip changes nothing.
-varying vec3 v_world_pos;
-varying vec3 v_axis_x;
-varying vec3 v_axis_y;
-varying vec3 v_axis_z;
-varying vec3 v_offset;
-varying float v_index;
+varying vec3 bm_v_world_pos;
+varying vec3 bm_v_axis_x;
+varying vec3 bm_v_axis_y;
+varying vec3 bm_v_axis_z;
+varying vec3 bm_v_offset;
+varying float bm_v_index;
 
 /*@DECODE@*/
 /*@SDF@*/
@@ -40,28 +53,28 @@ float map(vec3 p, vec3 h, float index)
 /*@MARCH@*/
 void vertex()
 {
-  v_world_pos = (WORLD_MATRIX * vec4(VERTEX, 1.0)).xyz;
-  v_axis_z = mat3(WORLD_MATRIX) * NORMAL;
-  v_axis_x = mat3(WORLD_MATRIX) * TANGENT;
-  v_axis_y = mat3(WORLD_MATRIX) * BINORMAL;  // Godot's cross(NORMAL, TANGENT) * tangent.w: bm_axis_y
-  v_offset = COLOR.rgb;
-  v_index = COLOR.a;
+  bm_v_world_pos = (WORLD_MATRIX * vec4(VERTEX, 1.0)).xyz;
+  bm_v_axis_z = mat3(WORLD_MATRIX) * NORMAL;
+  bm_v_axis_x = mat3(WORLD_MATRIX) * TANGENT;
+  bm_v_axis_y = mat3(WORLD_MATRIX) * BINORMAL;  // Godot's cross(NORMAL, TANGENT) * tangent.w: bm_axis_y
+  bm_v_offset = COLOR.rgb;
+  bm_v_index = COLOR.a;
 }
 
 void fragment()
 {
   mat4 object_from_world = inverse(WORLD_MATRIX);
-  vec3 v_obj_pos = (object_from_world * vec4(v_world_pos, 1.0)).xyz;
-  vec3 z = normalize(mat3(object_from_world) * v_axis_z);
-  vec3 x = normalize(mat3(object_from_world) * v_axis_x);
-  vec3 y = normalize(mat3(object_from_world) * v_axis_y);
-  vec3 f = v_offset;
-  float index = bm_box_index(v_index);
+  vec3 bm_v_obj_pos = (object_from_world * vec4(bm_v_world_pos, 1.0)).xyz;
+  vec3 z = normalize(mat3(object_from_world) * bm_v_axis_z);
+  vec3 x = normalize(mat3(object_from_world) * bm_v_axis_x);
+  vec3 y = normalize(mat3(object_from_world) * bm_v_axis_y);
+  vec3 f = bm_v_offset;
+  float index = bm_box_index(bm_v_index);
   int i = int(index);
   ivec2 size = textureSize(box_table, 0);
   vec3 h = texelFetch(box_table, ivec2(i % size.x, i / size.x), 0).xyz;
   bool perspective = PROJECTION_MATRIX[3][3] < 0.5;
-  vec3 ray = perspective ? v_obj_pos - (object_from_world * vec4(CAMERA_MATRIX[3].xyz, 1.0)).xyz
+  vec3 ray = perspective ? bm_v_obj_pos - (object_from_world * vec4(CAMERA_MATRIX[3].xyz, 1.0)).xyz
                          : (object_from_world * vec4(-CAMERA_MATRIX[2].xyz, 0.0)).xyz;
   float eye_distance = length(ray);
   vec3 rd = normalize(bm_to_local(ray / eye_distance, x, y, z));
@@ -79,7 +92,7 @@ void fragment()
   // box's size on screen from it.
   mat4 object_to_clip = PROJECTION_MATRIX * INV_CAMERA_MATRIX * WORLD_MATRIX;
   vec3 knob = bm_quality(quality);
-  float footprint = bm_pixel_size((object_to_clip * vec4(v_obj_pos, 1.0)).w,
+  float footprint = bm_pixel_size((object_to_clip * vec4(bm_v_obj_pos, 1.0)).w,
       length(vec3(object_to_clip[0][1], object_to_clip[1][1], object_to_clip[2][1])), VIEWPORT_SIZE.y);
   float box_pixels = 2.0 * max3(h) / footprint;
   float epsilon = max(march_epsilon, knob.x * footprint);
@@ -93,7 +106,7 @@ void fragment()
     discard;
   }
   vec3 local_hit = ro + rd * t;
-  vec3 obj_hit = v_obj_pos + bm_from_local(local_hit + f, x, y, z);
+  vec3 obj_hit = bm_v_obj_pos + bm_from_local(local_hit + f, x, y, z);
   vec4 clip = object_to_clip * vec4(obj_hit, 1.0);
   DEPTH = 0.5 + 0.5 * clip.z / clip.w;
   vec3 n = normalize((INV_CAMERA_MATRIX * WORLD_MATRIX * vec4(bm_from_local(

@@ -1,3 +1,16 @@
+// Conventions of every boxmarch shader (docs/ENGINES.md, Shader conventions), as hg_sdf states its own:
+// * Names: bm_ on everything boxmarch adds to an engine's shader (bm plus CamelCase in the stages
+//   three.js's JavaScript assembles; BM_ and BOXMARCH_ on macros). The families users' map() texts
+//   call: sd_ (distances), op_ (operators), sdf_preset_ (presets); box_ the values of the box being
+//   marched that map() reads (box_half, box_index, box_params, box_parent_*); map() is the user's.
+//   min3 and max3 are bm_min3 and bm_max3 under the names map() texts use.
+// * Units: box-local, p measured from the box's origin along its baked axes, in the mesh's units.
+// * Distances: each distance function says whether it is exact (the signed Euclidean distance) or a
+//   bound (never more than the exact distance: sphere tracing stays safe, with more steps).
+// * Frames: the quaternion q (x, y, z, w; w >= 0) turns box-local into object space; the box's axes
+//   are TANGENT (x), cross(NORMAL, TANGENT) * tangent.w (y) and NORMAL (z) where a layout carries
+//   them; f is the box-local vector from the fragment to the box's origin.
+//
 // boxmarch_example.hlsl: a minimal complete raymarching material for a baked mesh (vertex and
 // fragment programs). Unity: BoxmarchExample.shader includes it (UnityCG provides the matrices);
 // elsewhere the same names are declared below. Compile check (add -D_LAYOUT_UV_FRAME or

@@ -2,6 +2,19 @@
 #ifndef BOXMARCH_MARCH_INCLUDED
 #define BOXMARCH_MARCH_INCLUDED
 
+// Conventions of every boxmarch shader (docs/ENGINES.md, Shader conventions), as hg_sdf states its own:
+// * Names: bm_ on everything boxmarch adds to an engine's shader (bm plus CamelCase in the stages
+//   three.js's JavaScript assembles; BM_ and BOXMARCH_ on macros). The families users' map() texts
+//   call: sd_ (distances), op_ (operators), sdf_preset_ (presets); box_ the values of the box being
+//   marched that map() reads (box_half, box_index, box_params, box_parent_*); map() is the user's.
+//   min3 and max3 are bm_min3 and bm_max3 under the names map() texts use.
+// * Units: box-local, p measured from the box's origin along its baked axes, in the mesh's units.
+// * Distances: each distance function says whether it is exact (the signed Euclidean distance) or a
+//   bound (never more than the exact distance: sphere tracing stays safe, with more steps).
+// * Frames: the quaternion q (x, y, z, w; w >= 0) turns box-local into object space; the box's axes
+//   are TANGENT (x), cross(NORMAL, TANGENT) * tangent.w (y) and NORMAL (z) where a layout carries
+//   them; f is the box-local vector from the fragment to the box's origin.
+//
 // boxmarch raymarcher: sphere tracing inside one box, box-local coordinates.
 // Needs decode.glsl and sdf.glsl before it and a `float map(float3 p)` after it.
 // shaders/generate.py translates it into HLSL, and bm_box_span and bm_normal_tap into GLM for the
@@ -16,7 +29,7 @@ float2 bm_box_span(float3 ro, float3 rd, float3 h)
   float3 inv = 1.0 / max(abs(rd), float3(1e-12, 1e-12, 1e-12));
   float3 t_near = (-h - s * ro) * inv;
   float3 t_far = (h - s * ro) * inv;
-  return float2(max3(t_near), min3(t_far));
+  return float2(bm_max3(t_near), bm_min3(t_far));
 }
 
 // Sphere-traces map() from ro along unit rd until a distance falls below epsilon (true), the ray
@@ -90,7 +103,7 @@ float bm_step_limit(float box_pixels, float steps_per_pixel, float step_cap)
 // docs/ACCURACY.md, "GPU cost against error": the normal error column).
 float bm_normal_tap(float3 h)
 {
-  return 3e-4 * max3(h);
+  return 3e-4 * bm_max3(h);
 }
 
 // Unit SDF gradient at p from forward differences: d = map(p), which the march has already

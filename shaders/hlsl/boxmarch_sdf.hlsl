@@ -2,19 +2,33 @@
 #ifndef BOXMARCH_SDF_INCLUDED
 #define BOXMARCH_SDF_INCLUDED
 
-// boxmarch SDF library. Units are box-local: p is measured from the submesh's origin along its
-// baked axes, and `box_half` holds the box's half-extents (a 1 x 0.6 x 0.2 box has
-// box_half = (0.5, 0.3, 0.1)), so shapes can be sized without typing numbers.
-// shaders/generate.py translates it into HLSL and into GLM for the CPU reference (cpp/src).
-// Each distance function states what it returns, as hg_sdf does: exact (the signed Euclidean
-// distance to its surface), or a bound (never more than the exact distance in magnitude: sphere
-// tracing stays safe but may take more steps). Exactness of an op_ assumes exact inputs.
+// Conventions of every boxmarch shader (docs/ENGINES.md, Shader conventions), as hg_sdf states its own:
+// * Names: bm_ on everything boxmarch adds to an engine's shader (bm plus CamelCase in the stages
+//   three.js's JavaScript assembles; BM_ and BOXMARCH_ on macros). The families users' map() texts
+//   call: sd_ (distances), op_ (operators), sdf_preset_ (presets); box_ the values of the box being
+//   marched that map() reads (box_half, box_index, box_params, box_parent_*); map() is the user's.
+//   min3 and max3 are bm_min3 and bm_max3 under the names map() texts use.
+// * Units: box-local, p measured from the box's origin along its baked axes, in the mesh's units.
+// * Distances: each distance function says whether it is exact (the signed Euclidean distance) or a
+//   bound (never more than the exact distance: sphere tracing stays safe, with more steps).
+// * Frames: the quaternion q (x, y, z, w; w >= 0) turns box-local into object space; the box's axes
+//   are TANGENT (x), cross(NORMAL, TANGENT) * tangent.w (y) and NORMAL (z) where a layout carries
+//   them; f is the box-local vector from the fragment to the box's origin.
+//
+// boxmarch SDF library. `box_half` holds the box's half-extents (a 1 x 0.6 x 0.2 box has
+// box_half = (0.5, 0.3, 0.1)), so shapes can be sized without typing numbers. Exactness of an op_
+// assumes exact inputs. shaders/generate.py translates it into HLSL and into GLM for the CPU
+// reference (cpp/src).
 
 // Half-extents of the box being marched; set by the raymarcher before map() is called.
 static float3 box_half = float3(0.0, 0.0, 0.0);
 
-float min3(float3 v) { return min(v.x, min(v.y, v.z)); }
-float max3(float3 v) { return max(v.x, max(v.y, v.z)); }
+// The smallest and the largest component.
+float bm_min3(float3 v) { return min(v.x, min(v.y, v.z)); }
+float bm_max3(float3 v) { return max(v.x, max(v.y, v.z)); }
+// min3 and max3: the same, under the names map() texts use.
+float min3(float3 v) { return bm_min3(v); }
+float max3(float3 v) { return bm_max3(v); }
 
 // ---- primitives, centred at the origin
 // Exact.
@@ -24,7 +38,7 @@ float sd_sphere(float3 p, float r) { return length(p) - r; }
 float sd_box(float3 p, float3 b)
 {
   float3 q = abs(p) - b;
-  return length(max(q, float3(0.0, 0.0, 0.0))) + min(max3(q), 0.0);
+  return length(max(q, float3(0.0, 0.0, 0.0))) + min(bm_max3(q), 0.0);
 }
 
 // Exact for r <= min3(b): the box b with its edges rounded by r (outer size b).
@@ -104,9 +118,9 @@ float3 op_repeat_limited(float3 p, float3 spacing, float3 limit)
 // Exact.
 float sdf_preset_box(float3 p, float3 h) { return sd_box(p, h); }
 // Exact.
-float sdf_preset_sphere(float3 p, float3 h) { return sd_sphere(p, min3(h)); }
+float sdf_preset_sphere(float3 p, float3 h) { return sd_sphere(p, bm_min3(h)); }
 // Exact.
-float sdf_preset_rounded_box(float3 p, float3 h) { return sd_round_box(p, h, 0.25 * min3(h)); }
+float sdf_preset_rounded_box(float3 p, float3 h) { return sd_round_box(p, h, 0.25 * bm_min3(h)); }
 // Exact.
 float sdf_preset_capsule(float3 p, float3 h)
 {

@@ -1,3 +1,16 @@
+// Conventions of every boxmarch shader (docs/ENGINES.md, Shader conventions), as hg_sdf states its own:
+// * Names: bm_ on everything boxmarch adds to an engine's shader (bm plus CamelCase in the stages
+//   three.js's JavaScript assembles; BM_ and BOXMARCH_ on macros). The families users' map() texts
+//   call: sd_ (distances), op_ (operators), sdf_preset_ (presets); box_ the values of the box being
+//   marched that map() reads (box_half, box_index, box_params, box_parent_*); map() is the user's.
+//   min3 and max3 are bm_min3 and bm_max3 under the names map() texts use.
+// * Units: box-local, p measured from the box's origin along its baked axes, in the mesh's units.
+// * Distances: each distance function says whether it is exact (the signed Euclidean distance) or a
+//   bound (never more than the exact distance: sphere tracing stays safe, with more steps).
+// * Frames: the quaternion q (x, y, z, w; w >= 0) turns box-local into object space; the box's axes
+//   are TANGENT (x), cross(NORMAL, TANGENT) * tangent.w (y) and NORMAL (z) where a layout carries
+//   them; f is the box-local vector from the fragment to the box's origin.
+//
 // boxmarch for three.js: a ShaderMaterial that raymarches an SDF inside every box of a mesh
 // exported with the GLTF preset (NORMAL_FRAME layout, docs/ENGINES.md). boxmarch.js is a plain
 // script (also CommonJS), boxmarch.module.js the same code as an ES module; both take THREE (and
@@ -222,14 +235,14 @@ function loadBoxmarch(THREE, GLTFLoader, url, options) {
 
 // The vertex stage's outputs, the fragment stage's inputs.
 var BOXMARCH_VARYINGS = [
-  'varying vec3 vObjPos;',
-  'varying vec3 vAxisX;',
-  'varying vec3 vAxisY;',
-  'varying vec3 vAxisZ;',
-  'varying vec3 vOffset;',
-  'varying vec3 vHalf;',
-  'varying float vIndex;',
-  'varying vec4 vParams;'
+  'varying vec3 bmObjPos;',
+  'varying vec3 bmAxisX;',
+  'varying vec3 bmAxisY;',
+  'varying vec3 bmAxisZ;',
+  'varying vec3 bmOffset;',
+  'varying vec3 bmHalf;',
+  'varying float bmIndex;',
+  'varying vec4 bmParams;'
 ].join('\n');
 
 var BOXMARCH_VERTEX = [
@@ -253,14 +266,14 @@ var BOXMARCH_VERTEX = [
   '#ifdef USE_SKINNING',
   '  axisX = (skinMatrix * vec4(axisX, 0.0)).xyz;',
   '#endif',
-  '  vObjPos = transformed;',
-  '  vAxisZ = objectNormal;',
-  '  vAxisX = axisX;',
-  '  vAxisY = bm_axis_y(objectNormal, vec4(axisX, tangent.w));',
-  '  vOffset = bm_offset(bmOffsetXY, bmOffsetZIndex);',
-  '  vIndex = bmOffsetZIndex.y;',
-  '  vHalf = bm_half_extents(bmHalfXY, bmHalfZ);',
-  '  vParams = bm_box_params(bmShapeMaterial, bmRandomUser);',
+  '  bmObjPos = transformed;',
+  '  bmAxisZ = objectNormal;',
+  '  bmAxisX = axisX;',
+  '  bmAxisY = bm_axis_y(objectNormal, vec4(axisX, tangent.w));',
+  '  bmOffset = bm_offset(bmOffsetXY, bmOffsetZIndex);',
+  '  bmIndex = bmOffsetZIndex.y;',
+  '  bmHalf = bm_half_extents(bmHalfXY, bmHalfZ);',
+  '  bmParams = bm_box_params(bmShapeMaterial, bmRandomUser);',
   '  gl_Position = projectionMatrix * modelViewMatrix * vec4(transformed, 1.0);',
   '}'
 ].join('\n');
@@ -276,14 +289,14 @@ var BOXMARCH_FRAGMENT = [
   'uniform vec2 bmQuality;',
   BOXMARCH_VARYINGS,
   'void main() {',
-  '  vec3 z = normalize(vAxisZ);',
-  '  vec3 x = normalize(vAxisX);',
-  '  vec3 y = normalize(vAxisY);',
-  '  vec3 f = vOffset;',
-  '  box_half = vHalf;',
-  '  box_index = bm_box_index(vIndex);',
-  '  box_params = vParams;',
-  '  vec3 ray = bmEye.w > 0.5 ? vObjPos - bmEye.xyz : bmEye.xyz;',
+  '  vec3 z = normalize(bmAxisZ);',
+  '  vec3 x = normalize(bmAxisX);',
+  '  vec3 y = normalize(bmAxisY);',
+  '  vec3 f = bmOffset;',
+  '  box_half = bmHalf;',
+  '  box_index = bm_box_index(bmIndex);',
+  '  box_params = bmParams;',
+  '  vec3 ray = bmEye.w > 0.5 ? bmObjPos - bmEye.xyz : bmEye.xyz;',
   '  float eye_distance = length(ray);',
   '  vec3 rd = normalize(bm_to_local(ray / eye_distance, x, y, z));',
   '  vec3 ro = -f;',
@@ -308,7 +321,7 @@ var BOXMARCH_FRAGMENT = [
   '    : bm_march(ro, rd, t_end, int(bm_step_limit(boxPixels, knob.y, bmMarch.y)), epsilon, 1.0, t, steps, d);',
   '  if (!hit) discard;',
   '  vec3 local_hit = ro + rd * t;',
-  '  vec3 obj_hit = vObjPos + bm_from_local(local_hit + f, x, y, z);',
+  '  vec3 obj_hit = bmObjPos + bm_from_local(local_hit + f, x, y, z);',
   '  vec4 clip = objectToClip * vec4(obj_hit, 1.0);',
   // Never nearer than the rasterised face. WebGL 2's EXT_conservative_depth could declare it
   // (keeping early depth testing), but its #extension line must precede every other token and

@@ -1,7 +1,7 @@
 """Run inside a Blender program: export the turned, scaled and parented skinned rigs of
 tests/engine_scene.py (TRANSFORM_CASES) with the GLTF preset, writing CASE.glb and, in
 OUT_DIR/result.json, each mesh object's world matrix and the export's report figures.
-Usage: blender -b --python export_space_check.py -- PACKAGE_PARENT TESTS_DIR OUT_DIR"""
+Usage: blender -b --python export_space_check.py -- PACKAGE_PARENT REPOSITORY_ROOT OUT_DIR"""
 import json
 import os
 import sys
@@ -13,7 +13,7 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 import boxmarch  # noqa: E402
-from engine_scene import TRANSFORM_CASES, transformed_rig  # noqa: E402
+from tests.engine_scene import TRANSFORM_CASES, transformed_rig  # noqa: E402
 
 boxmarch.register()
 from boxmarch.export import scene  # noqa: E402

@@ -189,13 +189,13 @@ _PROBES = [[x * d * 0.1, y * d * 0.1, -d] for d in (1.0, 3.0, 7.0) for x in (-1,
 
 # The shipped shader's map() body and frame lines, which tests replace.
 SHIPPED_MAP = "return sd_round_box(p, h, 0.1 * min3(h));"
-SHIPPED_FRAME = ("  v_axis_z = mat3(WORLD_MATRIX) * NORMAL;\n  v_axis_x = mat3(WORLD_MATRIX) * TANGENT;\n"
-                 "  v_axis_y = mat3(WORLD_MATRIX) * BINORMAL;")
+SHIPPED_FRAME = ("  bm_v_axis_z = mat3(WORLD_MATRIX) * NORMAL;\n  bm_v_axis_x = mat3(WORLD_MATRIX) * TANGENT;\n"
+                 "  bm_v_axis_y = mat3(WORLD_MATRIX) * BINORMAL;")
 # Negative controls for a mesh whose object sits at the world origin (the varyings are world
 # space): the identity frame, and the frame as the vertex carries it at rest (what a frame in
 # UV maps gives the shader: no skinning turns it).
-IDENTITY_FRAME = "  v_axis_z = vec3(0.0, 0.0, 1.0);\n  v_axis_x = vec3(1.0, 0.0, 0.0);\n  v_axis_y = vec3(0.0, 1.0, 0.0);"
-REST_FRAME = "  v_axis_z = NORMAL;\n  v_axis_x = TANGENT;\n  v_axis_y = BINORMAL;"
+IDENTITY_FRAME = "  bm_v_axis_z = vec3(0.0, 0.0, 1.0);\n  bm_v_axis_x = vec3(1.0, 0.0, 0.0);\n  bm_v_axis_y = vec3(0.0, 1.0, 0.0);"
+REST_FRAME = "  bm_v_axis_z = NORMAL;\n  bm_v_axis_x = TANGENT;\n  bm_v_axis_y = BINORMAL;"
 
 
 def shipped_shader(map_code=None, frame_code=None):

@@ -7,7 +7,7 @@ import numpy as np
 
 import pytest
 
-from helpers.blender_program import blender_env, python_env, run_blender
+from tests.helpers.blender_program import blender_env, python_env, run_blender
 
 # The two ways of running the add-on, marked for scripts/blender_matrix.py's selections.
 BLENDERS = [pytest.param("blender-3.4-program", marks=pytest.mark.blender_program),

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..layouts import frame_axes
+from ..layouts import quaternion_matrices
 
 
 # Blender's Z-up right-handed object space to the Y-up right-handed space of glTF and of FBX
@@ -193,8 +193,7 @@ def frames_in_space(q, f, box_half, box_of_vertex, linear):
     number of boxes the map shears: a non-uniform scale across a box's axes makes it a
     parallelepiped, which no frame decodes; their values are not meaningful)."""
     linear = np.asarray(linear, np.float64)
-    axis_x, axis_z = frame_axes(q)
-    columns = linear @ np.stack([axis_x, np.cross(axis_z, axis_x), axis_z], axis=2)  # column i = c_i
+    columns = linear @ quaternion_matrices(q)  # column i = c_i
     lengths = np.linalg.norm(columns, axis=1)  # (n, 3)
     unit = columns / np.maximum(lengths, 1e-300)[:, None, :]
     cosines = np.abs(np.einsum("nki,nkj->nij", unit, unit)) - np.eye(3)

@@ -10,7 +10,7 @@ import gpu
 import numpy as np
 from gpu_extras.batch import batch_for_shader
 
-from .. import mesh_io
+from .. import layouts, mesh_io
 from ..export import transforms
 from . import mesh_data, shader as preview_shader, skinning, sources
 
@@ -172,7 +172,8 @@ def _mesh(mesh, layout) -> _Mesh:
         edges = gpu.types.GPUIndexBuf(type="LINES", seq=baked.edges)
         mesh = _Mesh(baked=baked, inputs=inputs, static=static, edges=edges, triangles=_OctantTriangles(baked))
         mesh.rest = _batches({k: v for k, v in inputs.items() if k in POSE_INPUTS}, mesh, baked.positions,
-                             mesh_data.box_data(baked).offsets, lambda: mesh_data.frame_axes(baked.quaternions))
+                             mesh_data.box_data_in_object_frame(baked).offsets,
+                             lambda: layouts.quaternion_matrices(baked.quaternions))
         _meshes[key] = mesh
     return _meshes[key]
 
@@ -344,7 +345,8 @@ def draw_solid(ob, depsgraph):
     """An ordinary mesh object in one flat colour (for the offscreen render)."""
     evaluated = ob.evaluated_get(depsgraph)
     try:
-        positions, triangles = mesh_data.read_triangles(evaluated.to_mesh())
+        mesh = evaluated.to_mesh()
+        positions, triangles = mesh_io.read_positions(mesh), mesh_io.read_triangles(mesh)
     finally:
         evaluated.to_mesh_clear()
     shader = uniform_shader()

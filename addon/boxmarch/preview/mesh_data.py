@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import core, layouts, mesh_io, scenes
+from .. import core, layouts, mesh_io
 from ..export import transforms
 
 
@@ -46,12 +46,7 @@ def read_baked(mesh) -> BakedMesh:
                      box_layers=mesh_io.read_box_layers(mesh, submesh_of_vertex, count))
 
 
-def read_triangles(mesh):
-    """(positions float32 (N, 3), triangles int32 (T, 3) vertex indices) of any mesh."""
-    return mesh_io.read_positions(mesh), mesh_io.read_triangles(mesh)
-
-
-def box_data(baked: BakedMesh) -> layouts.BoxData:
+def box_data_in_object_frame(baked: BakedMesh) -> layouts.BoxData:
     """The bake's per-vertex box data in Blender's object frame, from which every layout's
     channels are made (as the export makes them in its target's frame)."""
     return layouts.BoxData(quaternions=baked.quaternions.astype(np.float64),
@@ -70,7 +65,7 @@ def layout_inputs(layout: str, baked: BakedMesh) -> dict[str, np.ndarray]:
     the layout's channels as layouts.channels() writes them for export, and ch_half where the
     layout has no per-vertex half-extents (CLASSIC: the bake's, as the preview always drew them;
     NORMAL_COLOR: its box table read at each vertex's stored index, as an engine samples it)."""
-    channels = layouts.channels(layout, box_data(baked))
+    channels = layouts.channels(layout, box_data_in_object_frame(baked))
     table = channels.pop("TABLE", None)
     params = box_params_input(layout, channels, table)
     for name in layouts.PARAM_CHANNELS[layout]:  # per-box values: not inputs of the frame's decode
@@ -97,7 +92,7 @@ def parent_inputs(baked: BakedMesh) -> dict[str, np.ndarray]:
     shapes = np.zeros(boxes) if layers is None else layers.params[:, 0]
     has = parent >= 0
     other = np.where(has, parent, np.arange(boxes))
-    frames = scenes.quaternion_matrices(baked.box_quaternions)
+    frames = layouts.quaternion_matrices(baked.box_quaternions)
     relative = np.einsum("nji,njk->nik", frames, frames[other])  # R_box^T R_parent
     origin = np.einsum("nji,nj->ni", frames, baked.origins[other].astype(np.float64) - baked.origins)
     half = np.where(has[:, None], np.concatenate([baked.box_half_extents[other], shapes[other, None]], 1),
@@ -120,12 +115,6 @@ def box_params_input(layout: str, channels: dict, table) -> np.ndarray:
     if layout == "UV_FRAME":
         params[:, :2] = channels["UV7"]
     return params
-
-
-def frame_axes(quaternions) -> np.ndarray:
-    """float64 (N, 3, 3) box frames of unit quaternions (N, 4): columns the local x, y, z axes."""
-    axis_x, axis_z = layouts.frame_axes(quaternions)
-    return np.stack([axis_x, np.cross(axis_z, axis_x), axis_z], axis=2)
 
 
 def vector_lines(positions, offsets, axes):

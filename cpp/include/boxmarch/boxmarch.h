@@ -18,9 +18,9 @@ namespace boxmarch {
 // corners (face f owns corners face_starts[f] .. face_starts[f] + face_sizes[f] - 1), each corner
 // naming its vertex.
 struct MeshView {
-    const float* positions = nullptr;    // vertex_count * 3
+    const float* positions = nullptr;  // vertex_count * 3
     size_t vertex_count = 0;
-    const int32_t* edges = nullptr;      // edge_count * 2
+    const int32_t* edges = nullptr;  // edge_count * 2
     size_t edge_count = 0;
     const int32_t* face_starts = nullptr;  // face_count
     const int32_t* face_sizes = nullptr;   // face_count
@@ -50,9 +50,8 @@ size_t find_submeshes(int32_t* submesh_of_vertex, const MeshView& mesh);
 // into face_starts (room for corner_count / 3 + 1 entries) and returns how many it wrote; exact
 // for valid meshes, so callers compare the count with the real face count. Throws
 // std::invalid_argument on an edge or vertex index out of range.
-size_t face_starts_from_corner_edges(int32_t* face_starts, const int32_t* corner_verts,
-                                     const int32_t* corner_edges, size_t corner_count,
-                                     const int32_t* edges, size_t edge_count, size_t vertex_count);
+size_t face_starts_from_corner_edges(int32_t* face_starts, const int32_t* corner_verts, const int32_t* corner_edges,
+                                     size_t corner_count, const int32_t* edges, size_t edge_count, size_t vertex_count);
 
 // ---------------------------------------------------------------------------------------------
 // frame.cpp: the 24 axis-aligned turns
@@ -70,17 +69,17 @@ enum class ColorEncoding : int { Float = 0, Byte = 1 };
 
 // How the frame of a submesh was derived. Anything but Faces counts as degenerate.
 enum class FrameSource : uint8_t {
-    Faces = 0,       // two face normals (the normal case)
-    FaceEdge = 1,    // one face normal and the longest edge not parallel to it (flat submesh)
-    Edges = 2,       // the two longest non-parallel edges (no face with area)
-    OneAxis = 3,     // one face normal or edge, and the world axis least aligned with it
-    Identity = 4,    // no direction at all (single vertex, coincident vertices)
+    Faces = 0,     // two face normals (the normal case)
+    FaceEdge = 1,  // one face normal and the longest edge not parallel to it (flat submesh)
+    Edges = 2,     // the two longest non-parallel edges (no face with area)
+    OneAxis = 3,   // one face normal or edge, and the world axis least aligned with it
+    Identity = 4,  // no direction at all (single vertex, coincident vertices)
 };
 
 enum class SubmeshStatus : uint8_t {
     Baked = 0,
-    Unchanged = 1,   // fingerprint equals the previous bake's: outputs left as they were
-    NotSelected = 2, // bake_mask excluded it: outputs left as they were
+    Unchanged = 1,    // fingerprint equals the previous bake's: outputs left as they were
+    NotSelected = 2,  // bake_mask excluded it: outputs left as they were
 };
 
 // The range of BakeOptions::angle_epsilon (radians), the one statement of it: the Python API, the
@@ -92,14 +91,14 @@ constexpr double kAngleEpsilonMin = double(1e-6f);
 constexpr double kAngleEpsilonMax = double(1.5707963f);  // just below pi/2
 
 struct BakeOptions {
-    double angle_epsilon = 0.1;      // radians, kAngleEpsilonMin..kAngleEpsilonMax: axis 2 needs
-                                     // |dot(n, axis1)| < cos(angle_epsilon)
+    double angle_epsilon = 0.1;  // radians, kAngleEpsilonMin..kAngleEpsilonMax: axis 2 needs
+                                 // |dot(n, axis1)| < cos(angle_epsilon)
     OriginMode origin = OriginMode::Bounds;
-    bool sort_axes_by_extent = false; // local x longest, z shortest, before the turn
-    int axis_turn = 0;               // 0..23, see axis_turn_matrix
+    bool sort_axes_by_extent = false;  // local x longest, z shortest, before the turn
+    int axis_turn = 0;                 // 0..23, see axis_turn_matrix
     ColorEncoding encoding = ColorEncoding::Float;
-    bool use_cache = true;           // reuse frame decisions between similar copies
-    int threads = 0;                 // 0: hardware concurrency
+    bool use_cache = true;  // reuse frame decisions between similar copies
+    int threads = 0;        // 0: hardware concurrency
 };
 
 struct BakeReport {
@@ -124,12 +123,12 @@ struct BakeOutput {
     uint32_t* fingerprints = nullptr;  // vertex_count
     float* offset_float = nullptr;     // vertex_count * 4 (Float encoding)
     uint8_t* offset_byte = nullptr;    // vertex_count * 4 (Byte encoding)
-    float* quaternions = nullptr;    // x, y, z, w per submesh; unit, w >= 0
-    double* origins = nullptr;       // object-space origin, 3 per submesh (may be null)
-    double* half_extents = nullptr;  // local half-extents, 3 per submesh (may be null)
-    float* scales = nullptr;         // alpha s per submesh (may be null)
-    uint8_t* sources = nullptr;      // FrameSource per submesh (may be null)
-    uint8_t* statuses = nullptr;     // SubmeshStatus per submesh (may be null)
+    float* quaternions = nullptr;      // x, y, z, w per submesh; unit, w >= 0
+    double* origins = nullptr;         // object-space origin, 3 per submesh (may be null)
+    double* half_extents = nullptr;    // local half-extents, 3 per submesh (may be null)
+    float* scales = nullptr;           // alpha s per submesh (may be null)
+    uint8_t* sources = nullptr;        // FrameSource per submesh (may be null)
+    uint8_t* statuses = nullptr;       // SubmeshStatus per submesh (may be null)
 };
 
 // Bakes every submesh of a validated mesh.
@@ -145,18 +144,16 @@ struct BakeOutput {
 // array, or a numbering with an id out of range or a submesh without vertices. Every frame is
 // orthonormal to double rounding, so max_error measures the decode of the stored values against
 // the origin the bake defines (MEAN: the vertex mean, whatever the frame).
-BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t submesh_count,
-                const uint8_t* bake_mask, const uint32_t* previous_fingerprints,
-                const BakeOptions& options, const BakeOutput& out);
+BakeReport bake(const MeshView& mesh, const int32_t* submesh_of_vertex, size_t submesh_count, const uint8_t* bake_mask,
+                const uint32_t* previous_fingerprints, const BakeOptions& options, const BakeOutput& out);
 
 // Writes, for every corner whose submesh has write_submesh[s] != 0 (null: all corners), the pair
 // (q.x, q.y) when half == 0 or (q.z, q.w) when half == 1 of its submesh's quaternion into
 // corner_uv[corner_count * 2]; other corners are left untouched. Reads corner_verts (values in
 // 0..vertex_count-1), submesh_of_vertex[vertex_count] (values in 0..submesh_count-1) and
 // quaternions[submesh_count * 4]. Throws std::invalid_argument on an index out of range.
-void expand_corner_quaternions(float* corner_uv, int half, const int32_t* corner_verts,
-                               size_t corner_count, const int32_t* submesh_of_vertex,
-                               size_t vertex_count, const float* quaternions,
+void expand_corner_quaternions(float* corner_uv, int half, const int32_t* corner_verts, size_t corner_count,
+                               const int32_t* submesh_of_vertex, size_t vertex_count, const float* quaternions,
                                size_t submesh_count, const uint8_t* write_submesh);
 
 // Fingerprint seed of the options that change the bake's output. Equal options give equal seeds.
@@ -173,9 +170,8 @@ uint32_t options_seed(const BakeOptions& options);
 // disagrees[submesh_count] (1 where the submesh's elements hold more than one tuple; may be
 // null). Returns the number of disagreeing submeshes. Throws std::invalid_argument (nothing
 // written) on components outside 1..4, a NaN or infinite value or an id out of range.
-size_t reduce_per_submesh(float* out_values, uint8_t* disagrees, const float* values,
-                          size_t element_count, size_t components,
-                          const int32_t* submesh_of_element, size_t submesh_count);
+size_t reduce_per_submesh(float* out_values, uint8_t* disagrees, const float* values, size_t element_count,
+                          size_t components, const int32_t* submesh_of_element, size_t submesh_count);
 
 // Per-box random value in [0, 1), a multiple of 2^-24 (exact in float32), from the box's bake
 // fingerprint and a seed: unchanged box (same geometry, same bake options) and seed, same
@@ -200,9 +196,8 @@ enum class HierarchyRule : int {
 // Writes parent[box_count] (-1 for a root) and depth[box_count] (0 for a root, parent's + 1
 // otherwise). Returns the largest depth. Throws std::invalid_argument (nothing written) on a
 // given parent out of -1..box_count-1, a box its own parent or a cycle, naming the box.
-int32_t box_hierarchy(int32_t* parent, int32_t* depth, const double* origins,
-                      const float* quaternions, const double* half_extents, size_t box_count,
-                      HierarchyRule rule, const int32_t* given_parent);
+int32_t box_hierarchy(int32_t* parent, int32_t* depth, const double* origins, const float* quaternions,
+                      const double* half_extents, size_t box_count, HierarchyRule rule, const int32_t* given_parent);
 
 // ---------------------------------------------------------------------------------------------
 // raymarch.cpp: the CPU reference raymarcher (mirrors shaders/glsl/*.glsl line for line)
@@ -245,9 +240,8 @@ float sdf_distance(SdfPreset sdf, const float* p, const float* h);
 // Any output pointer may be null. Throws std::invalid_argument (nothing written) on a ray whose
 // direction is (0, 0, 0), max_steps < 0, epsilon <= 0, relaxation outside (0, 2] or
 // max_distance <= 0.
-void raymarch(const float* origins, const float* directions, const float* half_extents,
-              size_t ray_count, const MarchOptions& options, uint8_t* hit, float* positions,
-              float* normals, int32_t* steps);
+void raymarch(const float* origins, const float* directions, const float* half_extents, size_t ray_count,
+              const MarchOptions& options, uint8_t* hit, float* positions, float* normals, int32_t* steps);
 
 // What render_boxes draws with and writes; matrices are 4x4 column-major (GLM / OpenGL order).
 struct RenderView {
@@ -295,7 +289,7 @@ struct RenderPlan {
                                       // depth_greater/SV_DepthGreaterEqual keeps the hardware doing it)
     float quality = 1.0f;             // the quality knob, 0 < quality <= 1 (raymarch.glsl bm_quality)
     NormalRule normal = NormalRule::Forward;
-    RenderCost* cost = nullptr;       // counts written here when not null
+    RenderCost* cost = nullptr;  // counts written here when not null
 };
 
 // Renders boxes the way the viewport preview does, one sample at each pixel centre: each box
@@ -310,9 +304,9 @@ struct RenderPlan {
 // preview's Lambert + hemisphere light in view space. Reads box_count boxes; writes the covered
 // pixels of images and, if plan.cost is set, the counts. Throws std::invalid_argument on bad options (see raymarch), a quality outside (0, 1], an
 // unknown normal rule or an order that is not a permutation of the boxes.
-void render_boxes(const float* origins, const float* quaternions, const float* half_extents,
-                  size_t box_count, const RenderView& view, const MarchOptions& options,
-                  const RenderImages& images, const RenderPlan& plan = RenderPlan());
+void render_boxes(const float* origins, const float* quaternions, const float* half_extents, size_t box_count,
+                  const RenderView& view, const MarchOptions& options, const RenderImages& images,
+                  const RenderPlan& plan = RenderPlan());
 
 // =============================================================================================
 // Submesh tools (select linked, select across, dedup, merge per submesh, pack UVs by Z).
@@ -331,13 +325,13 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
 // pairs found, as (i, j), into pairs[capacity * 2] (null when capacity is 0), ordered by i then
 // j; returns the total count, so a caller with too little room calls again with more.
 // Throws std::invalid_argument on a negative, NaN or infinite radius or a non-finite position.
-size_t find_close_pairs(uint32_t* pairs, size_t capacity, const float* positions, size_t count,
-                        double radius, const int32_t* group_of_point, int threads);
+size_t find_close_pairs(uint32_t* pairs, size_t capacity, const float* positions, size_t count, double radius,
+                        const int32_t* group_of_point, int threads);
 
 // kdtree_pairs.cpp: the same contract as find_close_pairs, answered by nanoflann radius searches
 // (one per point). Kept as the reference the benchmark and tests compare the hash with.
-size_t find_close_pairs_kdtree(uint32_t* pairs, size_t capacity, const float* positions,
-                               size_t count, double radius, const int32_t* group_of_point);
+size_t find_close_pairs_kdtree(uint32_t* pairs, size_t capacity, const float* positions, size_t count, double radius,
+                               const int32_t* group_of_point);
 
 // ---------------------------------------------------------------------------------------------
 // select_linked.cpp: selection flood fills over whole submeshes
@@ -345,9 +339,8 @@ size_t find_close_pairs_kdtree(uint32_t* pairs, size_t capacity, const float* po
 // Reads submesh_of_vertex[vertex_count] (ids 0..submesh_count-1, from find_submeshes) and
 // selected[vertex_count]; writes out_selected[vertex_count] = 1 for every vertex of a submesh
 // holding a selected vertex, else 0 (may alias selected). Returns the number of such submeshes.
-size_t select_linked_submeshes(uint8_t* out_selected, const uint8_t* selected,
-                               const int32_t* submesh_of_vertex, size_t vertex_count,
-                               size_t submesh_count);
+size_t select_linked_submeshes(uint8_t* out_selected, const uint8_t* selected, const int32_t* submesh_of_vertex,
+                               size_t vertex_count, size_t submesh_count);
 
 // Flood fill through edges and through vertices of other submeshes within epsilon (true
 // Euclidean distance <= epsilon) of a reached vertex. Reads positions[vertex_count * 3],
@@ -355,8 +348,8 @@ size_t select_linked_submeshes(uint8_t* out_selected, const uint8_t* selected,
 // (may alias selected). Returns the number of submeshes selected. Throws std::invalid_argument
 // on a negative, NaN or infinite epsilon or a non-finite position.
 size_t select_linked_across(uint8_t* out_selected, const uint8_t* selected, const float* positions,
-                            const int32_t* submesh_of_vertex, size_t vertex_count,
-                            size_t submesh_count, double epsilon, int threads);
+                            const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count, double epsilon,
+                            int threads);
 
 // ---------------------------------------------------------------------------------------------
 // dedup.cpp: duplicate submeshes
@@ -370,9 +363,8 @@ size_t select_linked_across(uint8_t* out_selected, const uint8_t* selected, cons
 // candidate; else the kept submesh it duplicates). Returns the number of duplicates. Candidates
 // come from a hash of submesh centroids, never from comparing all pairs. Throws
 // std::invalid_argument on a negative, NaN or infinite tolerance or a non-finite position.
-size_t find_duplicate_submeshes(int32_t* duplicate_of, const float* positions,
-                                const int32_t* submesh_of_vertex, size_t vertex_count,
-                                size_t submesh_count, const uint8_t* candidate, double tolerance,
+size_t find_duplicate_submeshes(int32_t* duplicate_of, const float* positions, const int32_t* submesh_of_vertex,
+                                size_t vertex_count, size_t submesh_count, const uint8_t* candidate, double tolerance,
                                 int threads);
 
 // ---------------------------------------------------------------------------------------------
@@ -387,9 +379,8 @@ size_t find_duplicate_submeshes(int32_t* duplicate_of, const float* positions,
 // submesh_of_vertex (from find_submeshes); writes pass_of_vertex[vertex_count] (-1: nothing to
 // merge at this vertex). Returns the number of passes (0: nothing to merge).
 // Throws std::invalid_argument on a negative, NaN or infinite distance or a non-finite position.
-size_t merge_passes(int32_t* pass_of_vertex, const float* positions,
-                    const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count,
-                    const uint8_t* chosen, double distance, int threads);
+size_t merge_passes(int32_t* pass_of_vertex, const float* positions, const int32_t* submesh_of_vertex,
+                    size_t vertex_count, size_t submesh_count, const uint8_t* chosen, double distance, int threads);
 
 // Merge by distance inside each chosen submesh. Vertices are visited by index; an unassigned one
 // gathers every unassigned vertex of its submesh within `distance` (inclusive) into a cluster
@@ -400,9 +391,8 @@ size_t merge_passes(int32_t* pass_of_vertex, const float* positions,
 // each merges into, itself for survivors) and merged_positions[vertex_count * 3] (positions,
 // with targets at their centroids). Returns the number of vertices merged away.
 // Throws std::invalid_argument on a negative, NaN or infinite distance or a non-finite position.
-size_t merge_targets(int32_t* target, float* merged_positions, const float* positions,
-                     const int32_t* submesh_of_vertex, size_t vertex_count, size_t submesh_count,
-                     const uint8_t* chosen, double distance, int threads);
+size_t merge_targets(int32_t* target, float* merged_positions, const float* positions, const int32_t* submesh_of_vertex,
+                     size_t vertex_count, size_t submesh_count, const uint8_t* chosen, double distance, int threads);
 
 // weld.cpp: the topology after merging vertices (the common case of a host's weld): in every face,
 // a corner whose vertex merges into the next corner's vertex goes; faces left with fewer than 3
@@ -419,14 +409,14 @@ struct WeldCounts {
 };
 
 struct WeldOutput {
-    int32_t* vertex_source;     // [vertex_count]
-    int32_t* edge_source;       // [edge_count]
-    int32_t* edges;             // [edge_count * 2], new vertex indices
-    int32_t* face_source;       // [face_count]
-    int32_t* face_starts;       // [face_count]
-    int32_t* corner_source;     // [corner_count]
-    int32_t* corner_verts;      // [corner_count], new vertex indices
-    int32_t* corner_edges;      // [corner_count], new edge indices
+    int32_t* vertex_source;  // [vertex_count]
+    int32_t* edge_source;    // [edge_count]
+    int32_t* edges;          // [edge_count * 2], new vertex indices
+    int32_t* face_source;    // [face_count]
+    int32_t* face_starts;    // [face_count]
+    int32_t* corner_source;  // [corner_count]
+    int32_t* corner_verts;   // [corner_count], new vertex indices
+    int32_t* corner_edges;   // [corner_count], new edge indices
 };
 
 // Reads mesh, corner_edges[corner_count] (each corner's edge to the next corner; may be null:
@@ -440,14 +430,14 @@ WeldCounts weld_topology(const MeshView& mesh, const int32_t* corner_edges, cons
 // pack_uv.cpp: UV islands packed in rows sorted by submesh height
 
 struct PackUvOptions {
-    double padding = 0.002;      // UV units between islands and at the square's border
-    size_t max_per_row = 0;      // 0: as many as fit the width
+    double padding = 0.002;         // UV units between islands and at the square's border
+    size_t max_per_row = 0;         // 0: as many as fit the width
     bool lock_overlapping = false;  // islands whose UV bounds overlap before packing move together
 };
 
 struct PackUvReport {
     size_t islands = 0;
-    size_t groups = 0;   // units moved as one (islands, or overlapping sets when locked)
+    size_t groups = 0;  // units moved as one (islands, or overlapping sets when locked)
     size_t rows = 0;
     double scale = 0.0;  // uniform scale applied to every island
 };
@@ -462,7 +452,7 @@ struct PackUvReport {
 // only. Throws std::invalid_argument (nothing written) on non-finite UVs or heights, a padding
 // outside [0, 0.5) or too large for the number of islands, or no selected face.
 PackUvReport pack_uv_by_height(float* corner_uv, const MeshView& mesh, const uint8_t* face_mask,
-                               const float* vertex_height, const int32_t* submesh_of_vertex,
-                               size_t submesh_count, const PackUvOptions& options);
+                               const float* vertex_height, const int32_t* submesh_of_vertex, size_t submesh_count,
+                               const PackUvOptions& options);
 
 }  // namespace boxmarch

@@ -1,4 +1,17 @@
 // COPIED by shaders/generate.py from shaders/hlsl/boxmarch_raymarch.hlsl: edit that file, not this copy
+// Conventions of every boxmarch shader (docs/ENGINES.md, Shader conventions), as hg_sdf states its own:
+// * Names: bm_ on everything boxmarch adds to an engine's shader (bm plus CamelCase in the stages
+//   three.js's JavaScript assembles; BM_ and BOXMARCH_ on macros). The families users' map() texts
+//   call: sd_ (distances), op_ (operators), sdf_preset_ (presets); box_ the values of the box being
+//   marched that map() reads (box_half, box_index, box_params, box_parent_*); map() is the user's.
+//   min3 and max3 are bm_min3 and bm_max3 under the names map() texts use.
+// * Units: box-local, p measured from the box's origin along its baked axes, in the mesh's units.
+// * Distances: each distance function says whether it is exact (the signed Euclidean distance) or a
+//   bound (never more than the exact distance: sphere tracing stays safe, with more steps).
+// * Frames: the quaternion q (x, y, z, w; w >= 0) turns box-local into object space; the box's axes
+//   are TANGENT (x), cross(NORMAL, TANGENT) * tangent.w (y) and NORMAL (z) where a layout carries
+//   them; f is the box-local vector from the fragment to the box's origin.
+//
 // boxmarch_raymarch.hlsl: the box-local sphere tracer. Include boxmarch.hlsl, define
 // `float map(float3 p)` (box-local, may use box_half), then include this file. The march is
 // generated from shaders/glsl/raymarch.glsl (boxmarch_march.hlsl); bm_raymarch is the fragment
@@ -61,7 +74,7 @@ bm_hit bm_raymarch_in_frame(float3 obj_pos, float3 obj_camera, float3 f, float3 
   }
   // the quality knob, as the preview applies it (shaders/glsl/preview.frag.glsl)
   float3 knob = bm_quality(quality);
-  float box_pixels = 2.0 * max3(box_half) / footprint;
+  float box_pixels = 2.0 * bm_max3(box_half) / footprint;
   float hit_epsilon = max(epsilon, knob.x * footprint);
   float t;
   float d;
