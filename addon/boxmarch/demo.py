@@ -253,11 +253,12 @@ def run_demo(count: int, seed: int, folder: str, renderer: str, progress) -> tup
     progress("exporting demo.glb (GLTF preset)")
     glb_path = os.path.abspath(engine_path(folder, "demo", "GLTF"))
     t = time.perf_counter()
-    export_scene.export_objects(bpy.context, objects, "GLTF", glb_path)
+    report = export_scene.export_objects(bpy.context, objects, "GLTF", glb_path)
     seconds = time.perf_counter() - t
     worst = _glb_decode_error(glb_path, objects, float_bakes)
-    rows.append(["export demo.glb (GLTF)", f"{seconds:.3f} s", f"{os.path.getsize(glb_path) / 1e6:.1f} MB, layout "
-                 "NORMAL_FRAME", f"read back: worst decode error {worst:.2e} of half-extent in glTF's frame"])
+    written = " + ".join(os.path.basename(p) for p in report["files"][1:])
+    rows.append(["export demo.glb (GLTF)", f"{seconds:.3f} s", f"{os.path.getsize(glb_path) / 1e6:.1f} MB + {written}, "
+                 f"layout {report['layout']}", f"read back: worst decode error {worst:.2e} of half-extent in glTF's frame"])
 
     progress("exporting for the other engines")
     for engine in export_every_engine(bpy.context, objects, os.path.abspath(folder), "demo", ENGINE_PRESETS[1:]):
