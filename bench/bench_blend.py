@@ -21,6 +21,7 @@ import mathutils  # noqa: E402
 import boxmarch  # noqa: E402
 from boxmarch import bake_job, mesh_io, preview, scenes  # noqa: E402
 from bench.common import table  # noqa: E402
+from scripts.chain_arm import save_side_by_side  # noqa: E402
 
 W, H = 640, 360
 BLEND = 0.3
@@ -87,19 +88,7 @@ def main():
     print(table(["map()", "covered px", "drawn px", "map() calls / covered px", "SDF evaluations / covered px",
                  "p99", "SDF evaluations, frame"], rows))
     if args.picture:
-        panels = []
-        for sdf in ("PER_BOX", "PER_BOX_BLEND"):
-            rgba = images[sdf][0]
-            alpha = np.clip(rgba[..., 3:4], 0.0, 1.0)
-            panels.append(np.clip(rgba[..., :3], 0.0, 1.0) * alpha + np.float32(0.08) * (1.0 - alpha))
-        picture = np.concatenate([panels[0], np.full((H, 4, 3), 0.5, np.float32), panels[1]], axis=1)
-        image = bpy.data.images.new("blend_chain", picture.shape[1], H, alpha=True)
-        pixels = np.ones((H, picture.shape[1], 4), np.float32)
-        pixels[..., :3] = picture[::-1]  # Blender stores rows bottom-up
-        image.pixels.foreach_set(pixels.ravel())
-        image.filepath_raw = args.picture
-        image.file_format = "PNG"
-        image.save()
+        save_side_by_side(bpy, images["PER_BOX"][0], images["PER_BOX_BLEND"][0], args.picture)
 
 
 if __name__ == "__main__":

@@ -1,6 +1,8 @@
-"""The chain-on-an-arm scene of the posed pictures (scripts/preview_pose_picture.py for the
-viewport preview, scripts/threejs_pose_picture.py for three.js): a chain of links wound in a
-helix around a 3-bone arm up z, baked at rest, every link rigidly weighted to the bone under it."""
+"""The chain-on-an-arm scene of the posed pictures (scripts/preview_pose_picture.py and
+per_box_picture.py for the viewport preview, scripts/threejs_pose_picture.py for three.js): a chain
+of links wound in a helix around a 3-bone arm up z, baked at rest, every link rigidly weighted to
+the bone under it; and the two steps those pictures share: a camera on the posed arm and two
+preview renders saved side by side."""
 import math
 
 import numpy as np
@@ -67,3 +69,41 @@ def pose(rig):
         pose_bone = rig.pose.bones[f"bone{k}"]
         pose_bone.rotation_mode = "XYZ"
         pose_bone.rotation_euler = (BONE_TURN, 0.0, 0.0)
+
+
+def camera_on_posed_arm(bpy, scene, chain):
+    """A camera framing ``chain`` as posed (its evaluated mesh), seen from +x, made the scene's."""
+    import mathutils
+
+    from boxmarch import mesh_io
+
+    bpy.context.view_layer.update()
+    posed = mesh_io.read_positions(chain.evaluated_get(bpy.context.evaluated_depsgraph_get()).data)
+    low, high = posed.min(axis=0), posed.max(axis=0)
+    camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+    scene.collection.objects.link(camera)
+    target = mathutils.Vector(((low + high) / 2).tolist())
+    camera.location = target + mathutils.Vector((1.0, -0.25, 0.15)) * 1.25 * float(np.linalg.norm(high - low))
+    camera.rotation_euler = (target - camera.location).to_track_quat("-Z", "Y").to_euler()
+    camera.data.lens = 40.0
+    scene.camera = camera
+    bpy.context.view_layer.update()
+    return camera
+
+
+def save_side_by_side(bpy, left_rgba, right_rgba, path):
+    """Two preview renders ((H, W, 4), premultiplied by coverage) over a dark ground, a grey line
+    between them, saved as a PNG at ``path``."""
+    panels = []
+    for rgba in (left_rgba, right_rgba):
+        alpha = np.clip(rgba[..., 3:4], 0.0, 1.0)
+        panels.append(np.clip(rgba[..., :3], 0.0, 1.0) * alpha + np.float32(0.08) * (1.0 - alpha))
+    height = panels[0].shape[0]
+    picture = np.concatenate([panels[0], np.full((height, 4, 3), 0.5, np.float32), panels[1]], axis=1)
+    image = bpy.data.images.new("side_by_side", picture.shape[1], height, alpha=True)
+    pixels = np.ones((height, picture.shape[1], 4), np.float32)
+    pixels[..., :3] = picture[::-1]  # Blender stores rows bottom-up
+    image.pixels.foreach_set(pixels.ravel())
+    image.filepath_raw = path
+    image.file_format = "PNG"
+    image.save()
