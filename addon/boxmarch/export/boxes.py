@@ -244,7 +244,7 @@ def link_object_parents(objects, entries, preset, layout) -> list:
     warnings = []
     chosen = _parent_meshes(objects, warnings)
     by_mesh = {ob.data.name_full: (ob, entry, space) for ob, entry, space in entries}
-    if layout == "CLASSIC":
+    if not layouts.LAYOUTS[layout].has_index:
         for name, (_, (_, _, stats, _), _) in by_mesh.items():
             up = chosen[name][1]
             if up is not None:
