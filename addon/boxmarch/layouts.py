@@ -43,7 +43,7 @@ _FRAME_QUATERNION = {"encoding": "quaternion_xyzw", "channels": ["UV1.x", "UV1.y
 _FRAME_NORMAL_TANGENT = {"encoding": "normal_tangent", "channels": ["NORMAL", "TANGENT"]}
 # FBX UV map names by what the channel holds (glTF files number the channels instead).
 _OFFSET_HALF_UV_NAMES = ("BoxOffsetXY", "BoxOffsetZIndex", "BoxHalfXY", "BoxHalfZ")
-PARAM_UV_NAMES = {("shape", "material"): "BoxShapeMaterial", ("random", "user"): "BoxRandomUser",
+_PARAM_UV_NAMES = {("shape", "material"): "BoxShapeMaterial", ("random", "user"): "BoxRandomUser",
                   ("parent", "depth"): "BoxParentDepth"}
 _ALL_PARAMS = {"shape_material": ("shape", "material"), "random_user": ("random", "user"),
                "parent_depth": ("parent", "depth")}
@@ -113,7 +113,7 @@ def _floats(offset: str, index: str, half: str) -> dict:
 
 def _layout(name, label, description, channels, quantities, param_channels, skin_safe, uv_names=(),
             table="float32_rgba", parent=""):
-    uv_names = tuple(uv_names) + tuple(PARAM_UV_NAMES[param_channels[f"UV{n}"]]
+    uv_names = tuple(uv_names) + tuple(_PARAM_UV_NAMES[param_channels[f"UV{n}"]]
                                        for n in range(len(uv_names) + 1, len(channels) + 1) if f"UV{n}" in param_channels)
     return Layout(name, label, description, tuple(channels), uv_names, quantities, param_channels, skin_safe,
                   table, parent)
