@@ -37,26 +37,123 @@ from dataclasses import dataclass
 import numpy as np
 
 
+QUAT_XY_UV = "BoxQuatXY"  # the bake's UV maps of the frame's quaternion (mesh_io), CLASSIC's UV1 and UV2
+QUAT_ZW_UV = "BoxQuatZW"
+_FRAME_QUATERNION = {"encoding": "quaternion_xyzw", "channels": ["UV1.x", "UV1.y", "UV2.x", "UV2.y"]}
+_FRAME_NORMAL_TANGENT = {"encoding": "normal_tangent", "channels": ["NORMAL", "TANGENT"]}
+# FBX UV map names by what the channel holds (glTF files number the channels instead).
+_OFFSET_HALF_UV_NAMES = ("BoxOffsetXY", "BoxOffsetZIndex", "BoxHalfXY", "BoxHalfZ")
+_PARAM_UV_NAMES = {("shape", "material"): "BoxShapeMaterial", ("random", "user"): "BoxRandomUser",
+                  ("parent", "depth"): "BoxParentDepth"}
+_ALL_PARAMS = {"shape_material": ("shape", "material"), "random_user": ("random", "user"),
+               "parent_depth": ("parent", "depth")}
+
+
 @dataclass(frozen=True)
 class Layout:
+    """Everything the add-on knows about one layout but its encode (:func:`channels`) and its
+    decodes (:func:`to_origin`, shaders/glsl/preview.vert.glsl's ``BM_LAYOUT_<name>`` branch)."""
+
     name: str
     label: str
     description: str
-    uv_channels: int        # UV maps after the artist's UV0
-    skin_safe: bool         # the frame rides in NORMAL + TANGENT
+    channels: tuple[str, ...]   # per-vertex channels in the order written ("COLOR", "NORMAL", "TANGENT", "UVn")
+    uv_names: tuple[str, ...]   # FBX UV map name of UV1, UV2, ... (UV0 stays the artist's)
+    quantities: dict            # quantity -> {"encoding", "channels"}: the sidecar's "quantities"
+    param_channels: dict        # "UVn" -> the pair of box values it holds (the rest in the box table)
+    skin_safe: bool             # the frame rides in NORMAL + TANGENT (FBX: the tangent-space patch)
+    table_format: str = ""      # the box table's file beside the model (sidecar "box_table" format; "": none)
+    parent_channel: str = ""    # a float channel's free component holding the parent's number ("UV6.y")
+
+    @property
+    def uv_channels(self) -> int:
+        """UV maps after the artist's UV0."""
+        return len(self.uv_names)
+
+    @property
+    def has_index(self) -> bool:
+        """Whether the layout numbers its boxes across the file (else each mesh from 0, no index stored)."""
+        return "index" in self.quantities
+
+    @property
+    def has_table(self) -> bool:
+        """Whether the layout writes the box table (:func:`box_table`)."""
+        return bool(self.table_format)
+
+    @property
+    def offset_in_uvs(self) -> bool:
+        """Whether the offset rides in float UV maps (an importer's half-float UVs round it)."""
+        return self.quantities["offset"]["channels"][0].startswith("UV")
+
+    @property
+    def classic_colour(self) -> bool:
+        """Whether the offset rides in the CLASSIC colour (an 8-bit colour clips its alpha above 1)."""
+        return self.quantities["offset"]["encoding"] == "classic_colour"
+
+    @property
+    def half_extents_per_vertex(self) -> bool:
+        """Whether a vertex channel holds the box's half-extents (else none or the box table)."""
+        return self.quantities.get("half_extents", {}).get("encoding") == "float"
+
+    def uv_name(self, channel: str) -> str:
+        """The FBX UV map name of this layout's channel "UVn"."""
+        return self.uv_names[int(channel[2:]) - 1]
 
 
+def _params(*uvs: str, names=("shape_material", "random_user", "parent_depth")) -> dict:
+    return {uv: _ALL_PARAMS[name] for uv, name in zip(uvs, names)}
+
+
+def _floats(offset: str, index: str, half: str) -> dict:
+    """The offset, index and half-extents quantities as float channels (``offset``: "UVa.x UVa.y UVb.x")."""
+    return {"offset": {"encoding": "float", "channels": offset.split()},
+            "index": {"encoding": "float", "channels": [index]},
+            "half_extents": {"encoding": "float", "channels": half.split()}}
+
+
+def _layout(name, label, description, channels, quantities, param_channels, skin_safe, uv_names=(),
+            table="float32_rgba", parent=""):
+    uv_names = tuple(uv_names) + tuple(_PARAM_UV_NAMES[param_channels[f"UV{n}"]]
+                                       for n in range(len(uv_names) + 1, len(channels) + 1) if f"UV{n}" in param_channels)
+    return Layout(name, label, description, tuple(channels), uv_names, quantities, param_channels, skin_safe,
+                  table, parent)
+
+
+_UVS = tuple(f"UV{n}" for n in range(1, 8))
 LAYOUTS = {layout.name: layout for layout in (
-    Layout("CLASSIC", "Classic (colour + 5 UVs)", "The blog's layout: offset in the colour, quaternion in UV1-2, "
-           "box parameters and parent in UV3-5; no half-extents or index", 5, False),
-    Layout("UV_FRAME", "Float UVs (7 UVs)", "Quaternion, offset, index, half-extents and parent in float UV1-6, "
-           "shape and material in UV7 (the rest of the parameters in the box table)", 7, False),
-    Layout("NORMAL_FRAME", "Normal + tangent frame (7 UVs)", "Frame in NORMAL + TANGENT (skinning carries it); "
-           "offset, index and half-extents in float UV1-4, box parameters and parent in UV5-7", 7, True),
-    Layout("NORMAL_COLOR", "Normal + tangent frame, colour, box table", "Frame in NORMAL + TANGENT, offset and "
-           "index in a float colour, half-extents, parent and box parameters in a float texture by index "
-           "(UV2 left free)", 0, True),
+    _layout("CLASSIC", "Classic (colour + 5 UVs)", "The blog's layout: offset in the colour, quaternion in UV1-2, "
+            "box parameters and parent in UV3-5; no half-extents or index", ("COLOR", *_UVS[:5]),
+            {"frame": _FRAME_QUATERNION,
+             "offset": {"encoding": "classic_colour", "channels": ["COLOR.r", "COLOR.g", "COLOR.b", "COLOR.a"]}},
+            _params("UV3", "UV4", "UV5"), False, (QUAT_XY_UV, QUAT_ZW_UV), table=""),
+    _layout("UV_FRAME", "Float UVs (7 UVs)", "Quaternion, offset, index, half-extents and parent in float UV1-6, "
+            "shape and material in UV7 (the rest of the parameters in the box table)", _UVS,
+            {"frame": _FRAME_QUATERNION, **_floats("UV3.x UV3.y UV4.x", "UV4.y", "UV5.x UV5.y UV6.x")},
+            _params("UV7"), False, (QUAT_XY_UV, QUAT_ZW_UV, *_OFFSET_HALF_UV_NAMES), parent="UV6.y"),
+    _layout("NORMAL_FRAME", "Normal + tangent frame (7 UVs)", "Frame in NORMAL + TANGENT (skinning carries it); "
+            "offset, index and half-extents in float UV1-4, box parameters and parent in UV5-7",
+            ("NORMAL", "TANGENT", *_UVS),
+            {"frame": _FRAME_NORMAL_TANGENT, **_floats("UV1.x UV1.y UV2.x", "UV2.y", "UV3.x UV3.y UV4.x")},
+            _params("UV5", "UV6", "UV7"), True, _OFFSET_HALF_UV_NAMES),
+    _layout("NORMAL_COLOR", "Normal + tangent frame, colour, box table", "Frame in NORMAL + TANGENT, offset and "
+            "index in a float colour, half-extents, parent and box parameters in a float texture by index "
+            "(UV2 left free)", ("NORMAL", "TANGENT", "COLOR"),
+            {"frame": _FRAME_NORMAL_TANGENT, "offset": {"encoding": "float", "channels": ["COLOR.r", "COLOR.g", "COLOR.b"]},
+             "index": {"encoding": "float", "channels": ["COLOR.a"]},
+             "half_extents": {"encoding": "box_table", "channels": ["TABLE.r", "TABLE.g", "TABLE.b"]}},
+            {}, True, table="godot3_tres"),
 )}
+
+
+def layout_named(name: str) -> Layout:
+    """The layout called ``name``, or a clear ValueError naming the layouts there are."""
+    if name not in LAYOUTS:
+        raise ValueError(f"layout must be one of {sorted(LAYOUTS)}, got {name!r}")
+    return LAYOUTS[name]
+
+
+# The UV channels holding only box parameters and parents, per layout (Layout.param_channels).
+PARAM_CHANNELS = {name: layout.param_channels for name, layout in LAYOUTS.items()}
 
 
 @dataclass
@@ -97,14 +194,6 @@ def quaternion_matrices(q) -> np.ndarray:
 
 
 TABLE_PLANES = 5  # texels per box in the box table
-# Per layout, the UV channels holding only box parameters and parents (by their pair of values).
-PARAM_CHANNELS = {
-    "CLASSIC": {"UV3": ("shape", "material"), "UV4": ("random", "user"), "UV5": ("parent", "depth")},
-    "UV_FRAME": {"UV7": ("shape", "material")},
-    "NORMAL_FRAME": {"UV5": ("shape", "material"), "UV6": ("random", "user"), "UV7": ("parent", "depth")},
-    "NORMAL_COLOR": {},
-}
-
 
 def box_table(data: BoxData) -> np.ndarray:
     """float32 (boxes, TABLE_PLANES, 4): per box (h, parent), (shape, material, random, user),
@@ -123,64 +212,65 @@ def box_table(data: BoxData) -> np.ndarray:
 
 
 def channels(layout: str, data: BoxData) -> dict[str, np.ndarray]:
-    """float32 arrays by channel name ("COLOR", "NORMAL", "TANGENT", "UV1".."UV6": per vertex;
-    "TABLE": the box table, :func:`box_table`, every layout with an index) that ``layout`` writes
-    for ``data``."""
-    if layout not in LAYOUTS:
-        raise ValueError(f"layout must be one of {sorted(LAYOUTS)}, got {layout!r}")
+    """float32 arrays by channel name ("COLOR", "NORMAL", "TANGENT", "UV1".."UV7": per vertex,
+    in the order of Layout.channels; "TABLE": the box table, :func:`box_table`, every layout with
+    an index) that ``layout`` writes for ``data``."""
+    spec = layout_named(layout)
     n = len(data.index)
     q, f, h = data.quaternions, data.offsets, data.half_extents
     index = data.index.astype(np.float64)
-    zero = np.zeros(n)
     pair = lambda a, b: np.stack([a, b], 1).astype(np.float32)
     params, parent, depth = data.box_values()
     row = data.index - data.index_base
-    p, up, d = params[row], parent[row], depth[row]
-    shape_material, random_user, parent_depth = pair(p[:, 0], p[:, 1]), pair(p[:, 2], p[:, 3]), pair(up, d)
-    last = up if layout == "UV_FRAME" else zero  # UV_FRAME's parent rides in its last frame channel's free half
-    payload = [pair(f[:, 0], f[:, 1]), pair(f[:, 2], index), pair(h[:, 0], h[:, 1]), pair(h[:, 2], last)]
-    out = {}
-    if layout == "CLASSIC":
-        out["COLOR"] = np.asarray(data.classic_rgba, np.float32)
-    if layout in ("CLASSIC", "UV_FRAME"):
-        out["UV1"], out["UV2"] = pair(q[:, 0], q[:, 1]), pair(q[:, 2], q[:, 3])
-    if layout == "CLASSIC":
-        out.update(UV3=shape_material, UV4=random_user, UV5=parent_depth)
-    if layout == "UV_FRAME":
-        out.update({f"UV{3 + i}": values for i, values in enumerate(payload)})
-        out["UV7"] = shape_material
-    if layout in ("NORMAL_FRAME", "NORMAL_COLOR"):
+    p = params[row]
+    values = {"shape": p[:, 0], "material": p[:, 1], "random": p[:, 2], "user": p[:, 3],
+              "parent": parent[row], "depth": depth[row]}
+    last = values["parent"] if spec.parent_channel else np.zeros(n)  # the parent in the last float channel's free half
+    out = {uv: pair(*(values[name] for name in names)) for uv, names in spec.param_channels.items()}
+    if spec.skin_safe:
         frames = quaternion_matrices(q)
         axis_x, axis_z = frames[:, :, 0], frames[:, :, 2]
         out["NORMAL"] = axis_z.astype(np.float32)
         out["TANGENT"] = np.concatenate([axis_x, np.ones((n, 1))], 1).astype(np.float32)
-    if layout == "NORMAL_FRAME":
-        out.update({f"UV{1 + i}": values for i, values in enumerate(payload)})
-        out.update(UV5=shape_material, UV6=random_user, UV7=parent_depth)
-    if layout == "NORMAL_COLOR":
+    else:
+        out["UV1"], out["UV2"] = pair(q[:, 0], q[:, 1]), pair(q[:, 2], q[:, 3])
+    offset = spec.quantities["offset"]
+    if spec.classic_colour:
+        out["COLOR"] = np.asarray(data.classic_rgba, np.float32)
+    elif offset["channels"][0].startswith("COLOR"):
         out["COLOR"] = np.concatenate([f, index[:, None]], 1).astype(np.float32)
-    if layout != "CLASSIC":
+    else:  # offset, index and half-extents in four float UV pairs from the offset's first
+        first = int(offset["channels"][0].split(".")[0][2:])
+        payload = [pair(f[:, 0], f[:, 1]), pair(f[:, 2], index), pair(h[:, 0], h[:, 1]), pair(h[:, 2], last)]
+        out.update({f"UV{first + i}": values for i, values in enumerate(payload)})
+    out = {name: out[name] for name in spec.channels}
+    if spec.has_table:
         out["TABLE"] = box_table(data)
     return out
+
+
+def component(channels: dict, name: str) -> np.ndarray:
+    """The values of one component of ``channels``, named as in Layout.quantities ("UV4.y", "COLOR.a")."""
+    channel, letter = name.split(".")
+    return np.asarray(channels[channel])[:, "xyzw".index(letter) if letter in "xyzw" else "rgba".index(letter)]
 
 
 def to_origin(layout: str, channels: dict) -> np.ndarray:
     """(n, 3) float64 object-space vectors from each vertex to its box origin, decoded from
     ``channels`` as docs/ENGINES.md (docs/FORMAT.md for CLASSIC) states for ``layout``."""
+    spec = layout_named(layout)
     c = {k: np.asarray(v, np.float64) for k, v in channels.items() if k != "TABLE"}
-    if layout in ("UV_FRAME", "CLASSIC"):
-        q = np.concatenate([c["UV1"], c["UV2"]], 1)
-        if layout == "UV_FRAME":
-            f = np.concatenate([c["UV3"], c["UV4"][:, :1]], 1)
-        else:
-            f = (c["COLOR"][:, :3] * 2.0 - 1.0) / c["COLOR"][:, 3:]
-        u = q[:, :3]
-        return f + 2.0 * np.cross(u, np.cross(u, f) + q[:, 3:] * f)
-    if layout in ("NORMAL_FRAME", "NORMAL_COLOR"):
+    offset = spec.quantities["offset"]
+    if spec.classic_colour:
+        f = (c["COLOR"][:, :3] * 2.0 - 1.0) / c["COLOR"][:, 3:]
+    else:
+        f = np.stack([component(c, name) for name in offset["channels"]], 1)
+    if spec.skin_safe:
         x, z = c["TANGENT"][:, :3], c["NORMAL"]
-        f = np.concatenate([c["UV1"], c["UV2"][:, :1]], 1) if layout == "NORMAL_FRAME" else c["COLOR"][:, :3]
         return x * f[:, :1] + np.cross(z, x) * c["TANGENT"][:, 3:] * f[:, 1:2] + z * f[:, 2:]
-    raise ValueError(f"layout must be one of {sorted(LAYOUTS)}, got {layout!r}")
+    q = np.concatenate([c["UV1"], c["UV2"]], 1)
+    u = q[:, :3]
+    return f + 2.0 * np.cross(u, np.cross(u, f) + q[:, 3:] * f)
 
 
 def with_half_float_uvs(channels: dict, half_float_uvs, flip_v: bool) -> dict:

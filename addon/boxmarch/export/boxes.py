@@ -133,7 +133,7 @@ def written_space(ob, skin, preset):
     box_data: None for the object's own (its glTF node or FBX model carries its transform), the
     world for a skinned glTF (Blender's glTF exporter writes a skinned mesh's vertices in world
     space, the joints' inverse bind matrices holding the armature's world transform, so the skin
-    at rest is the identity; the export measures it in the file, _file_decode_error)."""
+    at rest is the identity; the export measures it in the file, file_decode_error)."""
     if skin is None or preset.extension != ".glb":
         return None
     return np.array(ob.matrix_world, np.float64)
@@ -244,7 +244,7 @@ def link_object_parents(objects, entries, preset, layout) -> list:
     warnings = []
     chosen = _parent_meshes(objects, warnings)
     by_mesh = {ob.data.name_full: (ob, entry, space) for ob, entry, space in entries}
-    if layout == "CLASSIC":
+    if not layouts.LAYOUTS[layout].has_index:
         for name, (_, (_, _, stats, _), _) in by_mesh.items():
             up = chosen[name][1]
             if up is not None:

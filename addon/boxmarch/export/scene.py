@@ -16,23 +16,13 @@ from . import boxes, fbx, glb, godot, import_settings, outputs_of, sidecar, tran
 from .boxes import ExportInputError, baked_layers
 
 
-# UV map names of the layouts' channels UV1..UV6 in FBX files (glTF files number them): the
-# UV_FRAME and CLASSIC names; NORMAL_FRAME's UV1..UV4 hold what UV_FRAME's UV3..UV6 hold.
-CHANNEL_UV_NAMES = {"UV1": mesh_io.QUAT_XY_UV, "UV2": mesh_io.QUAT_ZW_UV, "UV3": "BoxOffsetXY",
-                    "UV4": "BoxOffsetZIndex", "UV5": "BoxHalfXY", "UV6": "BoxHalfZ"}
-# The box parameters' channels (layouts.PARAM_CHANNELS), named by the pair of values they hold.
-PARAM_UV_NAMES = {("shape", "material"): "BoxShapeMaterial", ("random", "user"): "BoxRandomUser",
-                  ("parent", "depth"): "BoxParentDepth"}
-_BOXMARCH_UV_NAMES = set(CHANNEL_UV_NAMES.values()) | set(PARAM_UV_NAMES.values())
+# Every UV map name a layout writes (Layout.uv_names): not the artist's.
+_BOXMARCH_UV_NAMES = {name for layout in layouts.LAYOUTS.values() for name in layout.uv_names}
 
 
 def uv_name(layout: str, channel: str) -> str:
-    """The FBX UV map name of a layout's channel "UVn"."""
-    if channel in layouts.PARAM_CHANNELS[layout]:
-        return PARAM_UV_NAMES[layouts.PARAM_CHANNELS[layout][channel]]
-    if layouts.LAYOUTS[layout].skin_safe:
-        channel = f"UV{int(channel[2:]) + 2}"
-    return CHANNEL_UV_NAMES[channel]
+    """The FBX UV map name of a layout's channel "UVn" (Layout.uv_name)."""
+    return layouts.LAYOUTS[layout].uv_name(channel)
 
 
 def _keep_artist_uv0(copy) -> None:
@@ -96,7 +86,7 @@ def _target_copy(mesh, preset, layout, data, corner_verts, stats, skin=None):
         copy.color_attributes.render_color_index = 0
     uv_channels = sorted(int(c[2:]) for c in channels if c.startswith("UV"))
     stats.update(layout=layout, uv_channels=uv_channels, channels=sorted(channels))
-    if preset.half_float_uvs and layout in ("UV_FRAME", "NORMAL_FRAME"):
+    if preset.half_float_uvs and layouts.LAYOUTS[layout].offset_in_uvs:
         stored = layouts.with_half_float_uvs(channels, [n for n in preset.half_float_uvs if n in uv_channels],
                                              preset.flip_v_on_import)
         stats["default_import_error"] = layouts.import_error(layout, channels, stored, data.half_extents)
@@ -195,7 +185,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
         else:
             stats, table, notes = _export_with_copies(context, objects, meshes, preset, layout, temp, skins)
             warnings.extend(notes)
-            if table_file and layout == "NORMAL_COLOR":
+            if table_file and layouts.LAYOUTS[layout].table_format == "godot3_tres":
                 with open(temps[table_file], "w") as f:
                     f.write(godot.image_texture_tres(table))
             elif table_file:
@@ -208,7 +198,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
         return stats
 
     stats = files.write_together(outputs, write)
-    if preset.name == "UNITY" and layout == "CLASSIC":
+    if preset.name == "UNITY" and layouts.LAYOUTS[layout].classic_colour:
         floats = [m for m in stats if m["colour"] == "FLOAT_COLOR"]
         if floats:
             warnings.append(
@@ -226,9 +216,10 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             warnings.append(f"{m['mesh']}: {skin['unweighted_vertices']} vertices carry no weight of "
                             f"'{skin['armature']}': Blender leaves them at rest, engines may not")
     owners = {ob.data.name: ob.name for ob in objects}
-    unlinked = [m["mesh"] for m in stats if layout == "CLASSIC" and "object_parent" in m.get("box_parameters", {})]
+    numbered_per_mesh = not layouts.LAYOUTS[layout].has_index
+    unlinked = [m["mesh"] for m in stats if numbered_per_mesh and "object_parent" in m.get("box_parameters", {})]
     if unlinked:
-        warnings.append(f"{', '.join(unlinked)}: their objects have parent objects, but CLASSIC numbers boxes per "
+        warnings.append(f"{', '.join(unlinked)}: their objects have parent objects, but {layout} numbers boxes per "
                         "mesh, so no box names a box of another mesh as parent: export with a layout that has "
                         "box numbers (UV_FRAME, NORMAL_FRAME) for that")
     for m in stats:
@@ -326,7 +317,7 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
         for mesh in meshes:
             ob = owner_of_mesh[mesh.as_pointer()]
             # box numbers run on across the file's meshes (CLASSIC has none: each mesh from 0)
-            index_base = sum(len(e[1][0].box_half_extents) for e in entries) if layout != "CLASSIC" else 0
+            index_base = sum(len(e[1][0].box_half_extents) for e in entries) if layouts.LAYOUTS[layout].has_index else 0
             space = boxes.written_space(ob, skins.get(ob.name), preset)
             box_data[mesh.as_pointer()] = _checked_box_data(mesh, preset, index_base, space, ob.name)
             entries.append((ob, box_data[mesh.as_pointer()], space))

@@ -22,28 +22,9 @@ SIDECAR_SUFFIX = ".boxmarch.json"
 SCHEMA_PATH = os.path.join(os.path.dirname(os.path.abspath(__file__)), "sidecar.schema.json")
 
 # Where each layout keeps each quantity, by channel ("UVn" = the n-th UV map after the artist's
-# UV0, "COLOR", "NORMAL", "TANGENT", "TABLE" = the box table texel of the vertex's index);
-# layouts.py writes them and docs/ENGINES.md states the decode.
-QUANTITIES = {
-    "CLASSIC": {
-        "frame": {"encoding": "quaternion_xyzw", "channels": ["UV1.x", "UV1.y", "UV2.x", "UV2.y"]},
-        "offset": {"encoding": "classic_colour", "channels": ["COLOR.r", "COLOR.g", "COLOR.b", "COLOR.a"]}},
-    "UV_FRAME": {
-        "frame": {"encoding": "quaternion_xyzw", "channels": ["UV1.x", "UV1.y", "UV2.x", "UV2.y"]},
-        "offset": {"encoding": "float", "channels": ["UV3.x", "UV3.y", "UV4.x"]},
-        "index": {"encoding": "float", "channels": ["UV4.y"]},
-        "half_extents": {"encoding": "float", "channels": ["UV5.x", "UV5.y", "UV6.x"]}},
-    "NORMAL_FRAME": {
-        "frame": {"encoding": "normal_tangent", "channels": ["NORMAL", "TANGENT"]},
-        "offset": {"encoding": "float", "channels": ["UV1.x", "UV1.y", "UV2.x"]},
-        "index": {"encoding": "float", "channels": ["UV2.y"]},
-        "half_extents": {"encoding": "float", "channels": ["UV3.x", "UV3.y", "UV4.x"]}},
-    "NORMAL_COLOR": {
-        "frame": {"encoding": "normal_tangent", "channels": ["NORMAL", "TANGENT"]},
-        "offset": {"encoding": "float", "channels": ["COLOR.r", "COLOR.g", "COLOR.b"]},
-        "index": {"encoding": "float", "channels": ["COLOR.a"]},
-        "half_extents": {"encoding": "box_table", "channels": ["TABLE.r", "TABLE.g", "TABLE.b"]}},
-}
+# UV0, "COLOR", "NORMAL", "TANGENT", "TABLE" = the box table texel of the vertex's index):
+# Layout.quantities; docs/ENGINES.md states the decode.
+QUANTITIES = {name: layout.quantities for name, layout in layouts.LAYOUTS.items()}
 
 # Blender's object space, the glTF / FBX files (both written right-handed Y-up in metres) and the
 # engines' object frames, in which the box data of each preset are expressed (export/transforms.py).
@@ -63,13 +44,14 @@ TABLE_PLANES = [["half_extents.x", "half_extents.y", "half_extents.z", "parent"]
 
 def box_parameter_channels(layout: str) -> dict:
     """Where ``layout`` keeps each per-box parameter and the hierarchy: a vertex channel
-    ("UV5.x") where it has room (layouts.PARAM_CHANNELS; UV_FRAME's parent rides in UV6.y), else
-    the box table's texel ("TABLE.1.b": plane 1, blue); CLASSIC has no table."""
-    found = {name: f"{channel}.{component}" for channel, names in layouts.PARAM_CHANNELS[layout].items()
+    ("UV5.x") where it has room (Layout.param_channels and parent_channel), else the box table's
+    texel ("TABLE.1.b": plane 1, blue) where the layout has one (Layout.has_table)."""
+    spec = layouts.layout_named(layout)
+    found = {name: f"{channel}.{component}" for channel, names in spec.param_channels.items()
              for component, name in zip("xy", names)}
-    if layout == "UV_FRAME":
-        found["parent"] = "UV6.y"
-    if layout != "CLASSIC":
+    if spec.parent_channel:
+        found["parent"] = spec.parent_channel
+    if spec.has_table:
         for plane, names in enumerate(TABLE_PLANES[:3]):
             for component, name in zip("rgba", names):
                 if name in ("shape", "material", "random", "user", "parent", "depth"):
@@ -82,13 +64,17 @@ def sidecar_path(filepath: str) -> str:
     return os.path.splitext(filepath)[0] + SIDECAR_SUFFIX
 
 
+TABLE_SUFFIXES = {"godot3_tres": ".boxes.tres", "float32_rgba": ".boxes.bin"}  # by Layout.table_format
+
+
 def table_path(filepath: str, layout: str = "NORMAL_COLOR", preset_name: str = "GODOT3") -> str | None:
-    """Where a layout's box table goes, beside the file: ``NAME.boxes.tres`` (NORMAL_COLOR, for
-    Godot 3), ``NAME.boxes.bin`` (the other layouts with a box index); None for CLASSIC (no
+    """Where a layout's box table goes, beside the file, by its Layout.table_format:
+    ``NAME.boxes.tres`` (NORMAL_COLOR, for Godot 3), ``NAME.boxes.bin``; None for CLASSIC (no
     index) and the BLENDER preset (the .blend holds the layers themselves)."""
-    if layout == "CLASSIC" or preset_name == "BLENDER":
+    table_format = layouts.layout_named(layout).table_format
+    if not table_format or preset_name == "BLENDER":
         return None
-    return os.path.splitext(filepath)[0] + (".boxes.tres" if layout == "NORMAL_COLOR" else ".boxes.bin")
+    return os.path.splitext(filepath)[0] + TABLE_SUFFIXES[table_format]
 
 
 def written_beside(filepath: str, preset_name: str, layout: str) -> list[str]:
@@ -115,9 +101,10 @@ def describe(preset, layout: str, filepath: str, stats: list, skins: dict, file_
     with ``preset`` (transforms.Preset) in ``layout``; ``skins``: {object: {"armature", "bones"}}
     of the skinned objects; ``file_channel_names``: the name each channel has in the file ("UV1"
     -> "TEXCOORD_1" or an FBX UV map name)."""
-    quantities = {name: dict(q) for name, q in QUANTITIES[layout].items()}
-    if layout == "NORMAL_COLOR":
-        quantities["half_extents"].update(file=os.path.basename(table_path(filepath)),
+    spec = layouts.layout_named(layout)
+    quantities = {name: dict(q) for name, q in spec.quantities.items()}
+    if quantities.get("half_extents", {}).get("encoding") == "box_table":
+        quantities["half_extents"].update(file=os.path.basename(table_path(filepath, layout)),
                                           texels_per_row=GODOT3_TABLE_WIDTH)
     default_errors = [m["default_import_error"] for m in stats if "default_import_error" in m]
     table_width, table_height = table_size(int(sum(m["boxes"] for m in stats)))
@@ -135,7 +122,7 @@ def describe(preset, layout: str, filepath: str, stats: list, skins: dict, file_
         "box_parameters": box_parameter_channels(layout),
         "box_table": None if table_path(filepath, layout, preset.name) is None else {
             "file": os.path.basename(table_path(filepath, layout, preset.name)),
-            "format": "godot3_tres" if layout == "NORMAL_COLOR" else "float32_rgba",
+            "format": spec.table_format,
             "planes": TABLE_PLANES, "width": table_width, "height": table_height * len(TABLE_PLANES)},
         "file_channels": file_channel_names,
         "axes": {"file": _BLENDER if preset.extension == ".blend" else _Y_UP, "data": DATA_FRAMES[preset.name],

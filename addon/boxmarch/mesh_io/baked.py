@@ -8,13 +8,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import core
+from .. import core, layouts
 from .arrays import read_positions, read_topology, read_uv, read_vertex_selection, write_uv
 from .box_layers import BoxLayerError, BoxLayers, compute_box_layers, object_parameters, write_box_layers
 
 OFFSET_ATTRIBUTE = "BoxOffset"
-QUAT_XY_UV = "BoxQuatXY"
-QUAT_ZW_UV = "BoxQuatZW"
+QUAT_XY_UV = layouts.QUAT_XY_UV  # the frame's quaternion, as CLASSIC and UV_FRAME carry it in UV1, UV2
+QUAT_ZW_UV = layouts.QUAT_ZW_UV
 BAKED_UV_MAPS = (QUAT_XY_UV, QUAT_ZW_UV)  # the UV maps the bake writes: never a tool's target
 FINGERPRINT_ATTRIBUTE = ".boxmarch_fingerprint"
 LAYERS_DIGEST = "_boxmarch_layers"  # mesh custom property: checksum of the stored layers

@@ -65,17 +65,18 @@ def layout_inputs(layout: str, baked: BakedMesh) -> dict[str, np.ndarray]:
     the layout's channels as layouts.channels() writes them for export, and ch_half where the
     layout has no per-vertex half-extents (CLASSIC: the bake's, as the preview always drew them;
     NORMAL_COLOR: its box table read at each vertex's stored index, as an engine samples it)."""
+    spec = layouts.layout_named(layout)
     channels = layouts.channels(layout, box_data_in_object_frame(baked))
     table = channels.pop("TABLE", None)
     params = box_params_input(layout, channels, table)
-    for name in layouts.PARAM_CHANNELS[layout]:  # per-box values: not inputs of the frame's decode
+    for name in spec.param_channels:  # per-box values: not inputs of the frame's decode
         del channels[name]
     inputs = {"pos": baked.positions}
     inputs.update({"ch_" + name.lower(): values for name, values in channels.items()})
-    if layout == "CLASSIC":
+    if not spec.has_table:
         inputs["ch_half"] = baked.half_extents.astype(np.float32)
-    elif layout == "NORMAL_COLOR":
-        inputs["ch_half"] = table[np.rint(channels["COLOR"][:, 3]).astype(np.int64), 0, :3]
+    elif not spec.half_extents_per_vertex:
+        inputs["ch_half"] = table[_stored_index(spec, channels), 0, :3]
     inputs["ch_params"] = params
     inputs.update(parent_inputs(baked))
     return inputs
@@ -106,15 +107,22 @@ def box_params_input(layout: str, channels: dict, table) -> np.ndarray:
     """float32 (N, 4) each vertex's box parameters as an engine reads them from ``layout``
     (docs/ENGINES.md): the (shape, material) and (random, user) channels, or the box table's
     plane 1 at the vertex's index where the layout has no such channel."""
-    if layout == "CLASSIC":
-        return np.concatenate([channels["UV3"], channels["UV4"]], 1)
-    if layout == "NORMAL_FRAME":
-        return np.concatenate([channels["UV5"], channels["UV6"]], 1)
-    index = channels["COLOR"][:, 3] if layout == "NORMAL_COLOR" else channels["UV4"][:, 1]
-    params = table[np.rint(index).astype(np.int64), 1].copy()
-    if layout == "UV_FRAME":
-        params[:, :2] = channels["UV7"]
+    spec = layouts.layout_named(layout)
+    held = {name: channels[channel][:, k] for channel, names in spec.param_channels.items()
+            for k, name in enumerate(names)}
+    names = ("shape", "material", "random", "user")
+    if all(name in held for name in names):
+        return np.stack([held[name] for name in names], 1).astype(np.float32)
+    params = table[_stored_index(spec, channels), 1].copy()
+    for k, name in enumerate(names):
+        if name in held:
+            params[:, k] = held[name]
     return params
+
+
+def _stored_index(spec: layouts.Layout, channels: dict) -> np.ndarray:
+    """Each vertex's box number as the layout stores it (a float channel), rounded as an engine reads it."""
+    return np.rint(layouts.component(channels, spec.quantities["index"]["channels"][0])).astype(np.int64)
 
 
 def vector_lines(positions, offsets, axes):

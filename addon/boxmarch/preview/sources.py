@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .. import core
+from .. import core, layouts
 
 _PACKAGE = Path(__file__).resolve().parent.parent
 
@@ -24,23 +24,25 @@ def read_glsl(name: str) -> str:
 
 
 # The create-info of the preview shader. Types are Blender's create-info type names.
-# Per engine layout (boxmarch/layouts.py): pos and the layout's per-vertex channels, "ch_" + the
-# channel's name in lower case (COLOR -> ch_color, UV1 -> ch_uv1), as layouts.channels() writes
-# them; ch_half: per-vertex half-extents where the layout has none per vertex (CLASSIC carries only
-# the largest, the preview derives them from the bake as before; NORMAL_COLOR's table read at the
-# vertex's index).
-_UV = {n: ("VEC2", f"ch_uv{n}") for n in range(1, 7)}
+# Per engine layout (boxmarch/layouts.py): pos and the layout's per-vertex channels but those of
+# its box parameters (Layout.channels less Layout.param_channels), "ch_" + the channel's name in
+# lower case (COLOR -> ch_color, UV1 -> ch_uv1), as layouts.channels() writes them; ch_half:
+# per-vertex half-extents where the layout has none per vertex (CLASSIC carries only the largest,
+# the preview derives them from the bake; NORMAL_COLOR's table read at the vertex's index).
+_CHANNEL_TYPES = {"COLOR": "VEC4", "NORMAL": "VEC3", "TANGENT": "VEC4"}
 # The box's parameters, from the layout's channels or box table, and its parent box in its own
 # local coordinates (box_params.glsl: box_parent_origin, box_parent_q, box_parent_half).
 _PARAMS = (("VEC4", "ch_params"), ("VEC4", "ch_parent_origin"), ("VEC4", "ch_parent_q"), ("VEC4", "ch_parent_half"))
-VERTEX_INPUTS = {
-    "CLASSIC": (("VEC3", "pos"), ("VEC4", "ch_color"), _UV[1], _UV[2], ("VEC3", "ch_half"), *_PARAMS),
-    "UV_FRAME": (("VEC3", "pos"), *(_UV[n] for n in range(1, 7)), *_PARAMS),
-    "NORMAL_FRAME": (("VEC3", "pos"), ("VEC3", "ch_normal"), ("VEC4", "ch_tangent"), *(_UV[n] for n in range(1, 5)),
-                     *_PARAMS),
-    "NORMAL_COLOR": (("VEC3", "pos"), ("VEC3", "ch_normal"), ("VEC4", "ch_tangent"), ("VEC4", "ch_color"),
-                     ("VEC3", "ch_half"), *_PARAMS),
-}
+
+
+def _vertex_inputs(layout: layouts.Layout) -> tuple:
+    frame = tuple((_CHANNEL_TYPES.get(name, "VEC2"), "ch_" + name.lower())
+                  for name in layout.channels if name not in layout.param_channels)
+    half = () if layout.half_extents_per_vertex else (("VEC3", "ch_half"),)
+    return (("VEC3", "pos"), *frame, *half, *_PARAMS)
+
+
+VERTEX_INPUTS = {name: _vertex_inputs(layout) for name, layout in layouts.LAYOUTS.items()}
 # (interpolation, type, name): the axes are interpolated as an engine interpolates its normal and
 # tangent (constant over a rigid box); the half-extents are constant over a submesh.
 STAGE_INTERFACE = (("smooth", "VEC3", "obj_pos"), ("smooth", "VEC3", "frag_offset"),
