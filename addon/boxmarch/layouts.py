@@ -193,7 +193,13 @@ def quaternion_matrices(q) -> np.ndarray:
     ], 1)
 
 
-TABLE_PLANES = 5  # texels per box in the box table
+# What the r, g, b, a of each texel a box has in the box table hold (None: 0), plane by plane: the
+# one statement of the table's layout, which box_table fills and the sidecar records.
+TABLE_PLANE_CONTENTS = [["half_extents.x", "half_extents.y", "half_extents.z", "parent"],
+                        ["shape", "material", "random", "user"], ["depth", None, None, None],
+                        ["origin.x", "origin.y", "origin.z", None], ["frame.x", "frame.y", "frame.z", "frame.w"]]
+TABLE_PLANES = len(TABLE_PLANE_CONTENTS)  # texels per box in the box table
+
 
 def box_table(data: BoxData) -> np.ndarray:
     """float32 (boxes, TABLE_PLANES, 4): per box (h, parent), (shape, material, random, user),

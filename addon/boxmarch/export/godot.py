@@ -23,6 +23,12 @@ def table_size(boxes: int) -> tuple[int, int]:
     return width, -(-max(boxes, 1) // width)
 
 
+def table_image_size(boxes: int, planes: int) -> tuple[int, int]:
+    """(width, height) in texels of :func:`table_image` of ``boxes`` boxes of ``planes`` planes."""
+    width, height = table_size(boxes)
+    return width, planes * height
+
+
 def table_image(table) -> np.ndarray:
     """float32 (planes * height, width, 4): the box table ``table`` ((boxes, planes, 4), or
     (boxes, 4) for one plane) as an image, plane after plane, each plane starting on a new row:

@@ -239,7 +239,9 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     return {"preset": preset.name, "layout": layout, "path": os.path.abspath(filepath),
             "skinned": _skin_summary(skins),
             "default_import_error": max(default_errors) if default_errors else None,
-            "table": table_file, "table_size": _table_image_size(stats) if table_file else None,
+            "table": table_file,
+            "table_size": list(godot.table_image_size(sum(m["boxes"] for m in stats), layouts.TABLE_PLANES))
+            if table_file else None,
             "sidecar": os.path.abspath(sidecar.sidecar_path(filepath)), "files": outputs,
             "objects": [ob.name for ob in objects], "meshes": stats, "seconds": time.perf_counter() - start,
             "warnings": warnings, "import_settings": preset.import_settings,
@@ -257,12 +259,6 @@ def _write_sidecar(path, preset, layout, filepath, stats, skins) -> None:
 
 def _skin_summary(skins) -> dict:
     return {name: {"armature": skin.armature.name, "bones": list(skin.bones)} for name, skin in skins.items()}
-
-
-def _table_image_size(stats) -> list:
-    """[width, height] in texels of the file's box table image (godot.table_image)."""
-    width, height = godot.table_size(sum(m["boxes"] for m in stats))
-    return [width, height * layouts.TABLE_PLANES]
 
 
 def _skins(context, objects, preset) -> dict:

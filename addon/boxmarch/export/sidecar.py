@@ -15,7 +15,7 @@ import numpy as np
 
 from .. import layouts
 from . import import_settings, transforms
-from .godot import TABLE_WIDTH as GODOT3_TABLE_WIDTH, table_size
+from .godot import TABLE_WIDTH as GODOT3_TABLE_WIDTH, table_image_size
 
 FORMAT_VERSION = 1
 SIDECAR_SUFFIX = ".boxmarch.json"
@@ -35,13 +35,6 @@ DATA_FRAMES = {"GLTF": _Y_UP, "GODOT3": _Y_UP, "BLENDER": _BLENDER,
                "UNREAL": {"up": "+Z", "handedness": "left", "units": "centimetre"}}
 
 
-# The box table's texels per box (layouts.box_table): plane 0 = (h, parent), 1 = (shape, material,
-# random, user), 2 = (depth, 0, 0, 0), 3 = (origin, 0), 4 = the frame's quaternion.
-TABLE_PLANES = [["half_extents.x", "half_extents.y", "half_extents.z", "parent"],
-                ["shape", "material", "random", "user"], ["depth", None, None, None],
-                ["origin.x", "origin.y", "origin.z", None], ["frame.x", "frame.y", "frame.z", "frame.w"]]
-
-
 def box_parameter_channels(layout: str) -> dict:
     """Where ``layout`` keeps each per-box parameter and the hierarchy: a vertex channel
     ("UV5.x") where it has room (Layout.param_channels and parent_channel), else the box table's
@@ -52,7 +45,7 @@ def box_parameter_channels(layout: str) -> dict:
     if spec.parent_channel:
         found["parent"] = spec.parent_channel
     if spec.has_table:
-        for plane, names in enumerate(TABLE_PLANES[:3]):
+        for plane, names in enumerate(layouts.TABLE_PLANE_CONTENTS):
             for component, name in zip("rgba", names):
                 if name in ("shape", "material", "random", "user", "parent", "depth"):
                     found.setdefault(name, f"TABLE.{plane}.{component}")
@@ -107,23 +100,24 @@ def describe(preset, layout: str, filepath: str, stats: list, skins: dict, file_
         quantities["half_extents"].update(file=os.path.basename(table_path(filepath, layout)),
                                           texels_per_row=GODOT3_TABLE_WIDTH)
     default_errors = [m["default_import_error"] for m in stats if "default_import_error" in m]
-    table_width, table_height = table_size(int(sum(m["boxes"] for m in stats)))
+    box_count = int(sum(m["boxes"] for m in stats))
+    table = table_path(filepath, layout, preset.name)
+    table_width, table_height = table_image_size(box_count, layouts.TABLE_PLANES)
     return {
         "format_version": FORMAT_VERSION,
         "preset": preset.name,
         "layout": layout,
         "skinned": bool(skins),
-        "box_count": int(sum(m["boxes"] for m in stats)),
+        "box_count": box_count,
         "file": os.path.basename(filepath),
         "vertex_count": int(sum(m["vertices"] for m in stats)),
         "meshes": [{"name": m["mesh"], "vertices": int(m["vertices"]), "boxes": int(m["boxes"])} for m in stats],
         "skins": skins,
         "quantities": quantities,
         "box_parameters": box_parameter_channels(layout),
-        "box_table": None if table_path(filepath, layout, preset.name) is None else {
-            "file": os.path.basename(table_path(filepath, layout, preset.name)),
-            "format": spec.table_format,
-            "planes": TABLE_PLANES, "width": table_width, "height": table_height * len(TABLE_PLANES)},
+        "box_table": None if table is None else {
+            "file": os.path.basename(table), "format": spec.table_format,
+            "planes": layouts.TABLE_PLANE_CONTENTS, "width": table_width, "height": table_height},
         "file_channels": file_channel_names,
         "axes": {"file": _BLENDER if preset.extension == ".blend" else _Y_UP, "data": DATA_FRAMES[preset.name],
                  "data_from_file": data_from_file(preset).tolist(), "length_scale": preset.length_scale,
