@@ -41,8 +41,9 @@ def pytest_sessionfinish(session, exitstatus):
 def pytest_unconfigure(config):
     """bpy 4.2 and 4.5 (PyPI) segfault at interpreter exit once an add-on registered classes
     (exit 139 after every test ran): leave with pytest's own status, after its report."""
-    bpy = sys.modules.get("bpy")
-    if bpy is not None and _exit_status is not None and (4, 2) <= bpy.app.version[:2] < (5, 0):
+    from boxmarch.cli import bpy_module_crashes_at_exit
+
+    if _exit_status is not None and bpy_module_crashes_at_exit():
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(_exit_status)

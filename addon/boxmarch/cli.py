@@ -379,16 +379,22 @@ def _in_blender_program() -> bool:
     return bpy is not None and bool(bpy.app.binary_path)
 
 
+def bpy_module_crashes_at_exit() -> bool:
+    """The bpy module in use is 4.2 or 4.5 (PyPI), which segfault at interpreter exit once an
+    add-on registered classes (docs/PLATFORMS.md): a process must leave with os._exit."""
+    bpy = sys.modules.get("bpy")
+    return bpy is not None and (4, 2, 0) <= bpy.app.version < (5, 0, 0)
+
+
 def main(argv=None):
     """Entry point of both forms: exits the Python (or Blender) with the command's code."""
     code = run(argv)
     sys.stdout.flush()
     sys.stderr.flush()
-    bpy = sys.modules.get("bpy")
-    if _in_blender_program() or (bpy is not None and (4, 2, 0) <= bpy.app.version < (5, 0, 0)):
+    if _in_blender_program() or bpy_module_crashes_at_exit():
         # Inside the Blender program a SystemExit raised by --python-expr is swallowed and Blender
-        # exits 0; the bpy modules 4.2 and 4.5 segfault at interpreter exit once the add-on
-        # registered. Either way, end the process with the code here.
+        # exits 0; the bpy modules 4.2 and 4.5 crash at interpreter exit. Either way, end the
+        # process with the code here.
         os._exit(code)
     sys.exit(code)
 
