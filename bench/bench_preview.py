@@ -44,7 +44,7 @@ def in_blender(args):
     import boxmarch
     from boxmarch import core, preview
     from boxmarch.preview import draw, mesh_data, sources
-    from bench.common import best_of, boxes_object
+    from bench.common import best_of, boxes_object, preview_frame
     from mathutils import Matrix
 
     boxmarch.register()
@@ -71,15 +71,7 @@ def in_blender(args):
     draw.draw_object(ob, view, projection, True)  # builds and caches the batch outside the timing
 
     def boxed_frame():
-        with offscreen.bind():
-            fb = gpu.state.active_framebuffer_get()
-            fb.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
-            gpu.state.depth_test_set("LESS_EQUAL")
-            gpu.state.depth_mask_set(True)
-            draw.draw_object(ob, view, projection, True)
-            fb.read_color(0, 0, 1, 1, 4, 0, "FLOAT")
-            gpu.state.depth_test_set("NONE")
-            gpu.state.depth_mask_set(False)
+        preview_frame(offscreen, ob, view, projection)
 
     boxed = best_of(args["repeats"], boxed_frame)
     steps_rgba, _ = preview.render(scene, camera, WIDTH, HEIGHT, output="STEPS")

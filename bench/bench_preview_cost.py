@@ -53,7 +53,7 @@ def frame_rows(bpy, name, scene):
     import numpy as np
 
     from boxmarch.preview import draw, shader
-    from bench.common import best_of
+    from bench.common import best_of, preview_frame
 
     ob = baked_object(bpy, name, scene)
     to_clip, to_view, _eye = scene[4]
@@ -61,18 +61,7 @@ def frame_rows(bpy, name, scene):
     offscreen = gpu.types.GPUOffScreen(SIZE, SIZE, format="RGBA32F")
 
     def frame(read=False):
-        with offscreen.bind():
-            fb = gpu.state.active_framebuffer_get()
-            fb.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
-            gpu.state.depth_test_set("LESS_EQUAL")
-            gpu.state.depth_mask_set(True)
-            draw.draw_object(ob, to_view, projection, True)
-            buffer = fb.read_color(0, 0, SIZE if read else 1, SIZE if read else 1, 4, 0, "FLOAT")
-            gpu.state.depth_test_set("NONE")
-            gpu.state.depth_mask_set(False)
-        if read:
-            buffer.dimensions = SIZE * SIZE * 4
-            return np.array(buffer, np.float32).reshape(SIZE, SIZE, 4)
+        return preview_frame(offscreen, ob, to_view, projection, read)
 
     def use(config):
         shader.DEPTH_WRITE, draw.FRONT_TO_BACK, ob.boxmarch.quality = config[1:]

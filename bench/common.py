@@ -29,6 +29,30 @@ def best_of(repeats, fn):
     return best
 
 
+def preview_frame(offscreen, ob, view, projection, read=False):
+    """One frame of the raymarch preview of ``ob`` drawn into ``offscreen`` as the viewport draws
+    it (depth test LESS_EQUAL, depth writes), then read back: one pixel (so the frame has finished
+    on the GPU) or, with ``read``, the whole image as a float32 (height, width, 4) array."""
+    import gpu
+
+    from boxmarch.preview import draw
+
+    width, height = (offscreen.width, offscreen.height) if read else (1, 1)
+    with offscreen.bind():
+        fb = gpu.state.active_framebuffer_get()
+        fb.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
+        gpu.state.depth_test_set("LESS_EQUAL")
+        gpu.state.depth_mask_set(True)
+        draw.draw_object(ob, view, projection, True)
+        buffer = fb.read_color(0, 0, width, height, 4, 0, "FLOAT")
+        gpu.state.depth_test_set("NONE")
+        gpu.state.depth_mask_set(False)
+    if read:
+        buffer.dimensions = width * height * 4
+        return np.array(buffer, np.float32).reshape(height, width, 4)
+    return None
+
+
 def reset_peak_rss():
     """Start a new peak-RSS measurement (Linux: writing 5 to clear_refs resets VmHWM)."""
     with open("/proc/self/clear_refs", "w") as f:
