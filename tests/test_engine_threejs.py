@@ -114,11 +114,11 @@ def page(request, exported):
         pytest.skip(reason)
     files, centres, sizes, rotations = exported
     glb = files["NORMAL_FRAME"]
-    boxes = len(centres)
     served = {"mixed.glb": glb, "mixed.boxmarch.json": files["NORMAL_FRAME", "sidecar"],
               "classic-layout.glb": files["CLASSIC"],
               "classic.boxmarch.json": files["CLASSIC", "sidecar"],
-              "future.boxmarch.json": threejs.sidecar_json(format_version=2, box_count=boxes)}
+              "future.boxmarch.json": json.dumps({**json.loads(files["NORMAL_FRAME", "sidecar"]),
+                                                  "format_version": 2}).encode()}
     jobs = {"meshes": threejs.load_job()}
     for sdf in (BOX_MAP, ROUNDED_MAP):
         for name, (camera, _view) in CAMERAS.items():

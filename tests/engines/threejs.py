@@ -341,12 +341,6 @@ def render(glb_bytes, material_js, setup_js, width, height, camera, release="r11
     return run_jobs(glb_bytes, [render_job(setup_js, width, height, camera)], material_js, release)[0]
 
 
-def sidecar_json(layout="NORMAL_FRAME", skinned=False, box_count=0, format_version=1, preset="GLTF"):
-    """The bytes of an export's sidecar ``NAME.boxmarch.json`` with the keys ``loadBoxmarch`` reads."""
-    return json.dumps({"format_version": format_version, "preset": preset, "layout": layout,
-                       "skinned": skinned, "box_count": box_count}).encode()
-
-
 def pose_bones_js(turns, angle):
     """JavaScript for :func:`render`'s ``setup_js``: turns each bone named in ``turns`` (name ->
     world axis (3,) as the axis points with the skeleton at rest) by ``angle`` radians about its
