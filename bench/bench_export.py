@@ -18,12 +18,13 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 import bpy  # noqa: E402
-
-import boxmarch  # noqa: E402
-from boxmarch.export import scene as export_scene, transforms  # noqa: E402
-from bench.common import best_of, boxes_object, table  # noqa: E402
 from tests.fbx_reader import read_fbx_geometry  # noqa: E402
 from tests.gltf_reader import read_glb  # noqa: E402
+
+import boxmarch  # noqa: E402
+from bench.common import best_of, boxes_object, table  # noqa: E402
+from boxmarch.export import scene as export_scene  # noqa: E402
+from boxmarch.formats import presets  # noqa: E402
 
 
 def shader_origin(position, rgba, q):
@@ -48,11 +49,11 @@ def measure(count, encoding, folder):
     positions = np.empty(len(ob.data.vertices) * 3, np.float32)
     ob.data.vertices.foreach_get("co", positions)
     positions = positions.reshape(-1, 3)
-    paths = {p: os.path.join(folder, f"b{count}{transforms.PRESETS[p].extension}") for p in transforms.PRESETS}
+    paths = {p: os.path.join(folder, f"b{count}{presets.PRESETS[p].extension}") for p in presets.PRESETS}
     seconds = {p: best_of(3, lambda p=p: export_scene.export_objects(bpy.context, [ob], p, paths[p]))
-               for p in transforms.PRESETS}
+               for p in presets.PRESETS}
 
-    gltf_axes = transforms.PRESETS["GLTF"].axes
+    gltf_axes = presets.PRESETS["GLTF"].axes
     lookup = {tuple(v): i for i, v in enumerate((positions.astype(np.float64) @ gltf_axes.T).astype(np.float32).tolist())}
     gltf_error = 0.0
     for primitive in read_glb(paths["GLTF"])[0]["primitives"]:
@@ -63,7 +64,7 @@ def measure(count, encoding, folder):
 
     raw = read_fbx_geometry(paths["UNITY"])
     box = raw["vertex"] // 8
-    unity_reference = origins[box] @ transforms.PRESETS["UNITY"].axes.T
+    unity_reference = origins[box] @ presets.PRESETS["UNITY"].axes.T
     position = raw["position"] * [-1.0, 1.0, 1.0]  # Unity's importer negates x
     colour, xy, zw = raw["BoxOffset"], raw["BoxQuatXY"], raw["BoxQuatZW"]
     half16 = lambda a: a.astype(np.float16).astype(np.float64)

@@ -36,7 +36,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 
 from boxmarch import core, scenes  # noqa: E402
-from boxmarch.export.transforms import matrix_quaternions  # noqa: E402
+from boxmarch.formats.transforms import matrix_quaternions  # noqa: E402
 
 NEAR, FAR = 0.1, 4000.0
 

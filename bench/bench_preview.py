@@ -40,12 +40,13 @@ def in_blender(args):
     import gpu
     import numpy as np
     from gpu_extras.batch import batch_for_shader
+    from mathutils import Matrix
 
     import boxmarch
-    from boxmarch import core, preview
-    from boxmarch.preview import draw, mesh_data, sources
     from bench.common import best_of, boxes_object, preview_frame
-    from mathutils import Matrix
+    from boxmarch import core, preview
+    from boxmarch.formats import shader_sources
+    from boxmarch.preview import draw, mesh_data
 
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -96,7 +97,7 @@ def in_blender(args):
     info.sampler(0, "FLOAT_2D", "boxes")
     info.fragment_out(0, "VEC4", "frag_color")
     info.vertex_source("void main() { gl_Position = vec4(pos, 0.0, 1.0); }")
-    info.fragment_source("\n".join([sources.read_glsl("decode.glsl"), sources.read_glsl("sdf.glsl"),
+    info.fragment_source("\n".join([shader_sources.read_glsl("decode.glsl"), shader_sources.read_glsl("sdf.glsl"),
                                     (HERE / "naive_fullscreen.frag.glsl").read_text()]))
     naive_shader = gpu.shader.create_from_info(info)
     triangle = batch_for_shader(naive_shader, "TRIS", {"pos": [(-1.0, -1.0), (3.0, -1.0), (-1.0, 3.0)]})
@@ -159,9 +160,9 @@ def skinned(bpy, ob, view, projection, boxed_frame, repeats):
     import numpy as np
     from mathutils import Quaternion
 
+    from bench.common import best_of
     from boxmarch import mesh_io
     from boxmarch.preview import draw, skinning
-    from bench.common import best_of
 
     scene = bpy.context.scene
     ob.boxmarch.sdf = "SPHERE"

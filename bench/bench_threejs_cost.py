@@ -146,11 +146,11 @@ def rows_for(name, scene, glb, sidecar, release):
 
 def main():
     import bpy
+    from tests.engines import threejs
 
     import boxmarch
     from bench.bench_gpu_cost import scenes_to_measure
     from bench.common import table
-    from tests.engines import threejs
 
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)

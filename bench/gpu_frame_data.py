@@ -6,7 +6,7 @@ world, SPHERE, camera inside), chain side and chain down the arm (scripts/chain_
 LINK), pile (4,000 links, seen through). Each is baked by the add-on's operator in the bpy module
 and read back through the preview's own functions: preview/mesh_data.py (CLASSIC layout's vertex
 inputs, file and octant triangle orders) and preview/draw.py (the uniform block). The shader
-sources are the preview's (preview/sources.py) behind the declarations Blender's GL backend
+sources are the preview's (formats/shader_sources.py) behind the declarations Blender's GL backend
 generates from its create-info, with and without the depth_greater declaration; the naive
 full-screen raymarch (naive_fullscreen.frag.glsl) is assembled as bench_preview.py compiles it.
 The CPU reference (core.render_boxes, every quality of QUALITIES) at REFERENCE_SIZE.
@@ -20,7 +20,7 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 
-from boxmarch.preview import sources  # noqa: E402
+from boxmarch.formats import shader_sources  # noqa: E402
 
 SCENES = ("cloud", "chain side", "chain down the arm", "pile")
 ASPECT = (16, 9)
@@ -36,7 +36,7 @@ def naive_fragment_source() -> str:
     header = "\n".join([f"#version {GL_VERSION}", "uniform mat4 clip_to_object;", "uniform vec4 march;",
                         "uniform ivec4 sizes;", "uniform sampler2D boxes;",
                         "layout(location = 0) out vec4 frag_color;", ""])
-    return header + "\n".join([sources.read_glsl("decode.glsl"), sources.read_glsl("sdf.glsl"),
+    return header + "\n".join([shader_sources.read_glsl("decode.glsl"), shader_sources.read_glsl("sdf.glsl"),
                                (HERE / "naive_fullscreen.frag.glsl").read_text()])
 
 
@@ -44,16 +44,16 @@ NAIVE_VERTEX_SOURCE = (f"#version {GL_VERSION}\nlayout(location = 0) in vec2 pos
                        "void main() { gl_Position = vec4(pos, 0.0, 1.0); }\n")
 
 
-def shader_sources(sdf: str) -> dict:
+def stage_sources(sdf: str) -> dict:
     """Every GLSL stage the harness compiles for a scene of preset ``sdf``."""
-    fragment = sources.fragment_source(sdf)
-    declared = sources.gl_declarations("frag", "CLASSIC", GL_VERSION, "GREATER") + fragment
-    return {"vertex": sources.gl_declarations("vert", "CLASSIC", GL_VERSION) + sources.vertex_source("CLASSIC"),
+    fragment = shader_sources.fragment_source(sdf)
+    declared = shader_sources.gl_declarations("frag", "CLASSIC", GL_VERSION, "GREATER") + fragment
+    return {"vertex": shader_sources.gl_declarations("vert", "CLASSIC", GL_VERSION) + shader_sources.vertex_source("CLASSIC"),
             "fragment_depth_greater": declared,
-            "fragment_undeclared": sources.gl_declarations("frag", "CLASSIC", GL_VERSION) + fragment,
+            "fragment_undeclared": shader_sources.gl_declarations("frag", "CLASSIC", GL_VERSION) + fragment,
             # diagnostic: the marched depth not written (the face's stays), so early depth testing is
             # certainly on: shows what the GPU's early test can skip (the depth it leaves is wrong)
-            "fragment_face_depth": sources.gl_declarations("frag", "CLASSIC", GL_VERSION)
+            "fragment_face_depth": shader_sources.gl_declarations("frag", "CLASSIC", GL_VERSION)
             + fragment.replace("gl_FragDepth = ", "float marched_depth = "),
             # diagnostics: the declaration under GLSL 4.50, and with the extension named
             "fragment_depth_greater_450": declared.replace(f"#version {GL_VERSION}", "#version 450 core", 1),
@@ -61,7 +61,7 @@ def shader_sources(sdf: str) -> dict:
                 f"#version {GL_VERSION}\n", f"#version {GL_VERSION}\n#extension GL_ARB_conservative_depth : enable\n", 1),
             # diagnostic: `discard` replaced by writing the cleared colour and depth (the same
             # picture in a framebuffer cleared to 0 and 1.0; not in Blender's viewport)
-            **{f"fragment_{kind}_no_discard": sources.gl_declarations("frag", "CLASSIC", GL_VERSION, depth_write)
+            **{f"fragment_{kind}_no_discard": shader_sources.gl_declarations("frag", "CLASSIC", GL_VERSION, depth_write)
                + fragment.replace("discard;", "{ gl_FragDepth = 1.0; frag_color = vec4(0.0); return; }")
                for kind, depth_write in (("depth_greater", "GREATER"), ("undeclared", None))},
             "naive_vertex": NAIVE_VERTEX_SOURCE, "naive_fragment": naive_fragment_source()}
@@ -107,7 +107,7 @@ def scene_arrays(bpy, name, scene) -> dict:
         arrays[f"reference_depth_{quality}"] = reference.depth
         if quality == 1.0:
             arrays["reference_rgba8"] = np.rint(np.clip(reference.rgba, 0, 1) * 255).astype(np.uint8)
-    arrays.update({f"source_{k}": np.array(v) for k, v in shader_sources(settings.sdf).items()})
+    arrays.update({f"source_{k}": np.array(v) for k, v in stage_sources(settings.sdf).items()})
     arrays["info"] = np.array([name, settings.sdf, str(len(baked.origins)), str(octant)])
     bpy.data.objects.remove(ob)
     return arrays

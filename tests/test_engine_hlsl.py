@@ -13,9 +13,17 @@ quaternion channels dropped (identity frame), the rig with its normal and tangen
 import numpy as np
 import pytest
 
-from boxmarch.preview import sources
-from tests.engine_scene import (UNITY, baked_scene, imported, posed_rig_boxes, rig_boxes, silhouettes, skinned_scene,
-                                unity_skinned_vertices)
+from boxmarch.formats import shader_sources
+from tests.engine_scene import (
+    UNITY,
+    baked_scene,
+    imported,
+    posed_rig_boxes,
+    rig_boxes,
+    silhouettes,
+    skinned_scene,
+    unity_skinned_vertices,
+)
 from tests.engines import Shot, coverage_mismatch, hlsl_webgl, ndc_to_pixels
 from tests.fbx_reader import read_fbx_geometry, read_fbx_skin
 
@@ -52,7 +60,7 @@ def example(tmp_path_factory):
     reason = hlsl_webgl.available()
     if reason:
         pytest.skip(reason)
-    hlsl = sources.shader_dir() / "hlsl"
+    hlsl = shader_sources.shader_dir() / "hlsl"
     text = (hlsl / "boxmarch_example.hlsl").read_text()
     assert SHIPPED_MAP in text
     path = tmp_path_factory.mktemp("hlsl") / "example.hlsl"

@@ -1,5 +1,5 @@
 """The engine-side helpers in engines/ against the one table of import settings
-(addon/boxmarch/export/import_settings.py, which the sidecar records) and the sidecar's values.
+(addon/boxmarch/formats/import_settings.py, which the sidecar records) and the sidecar's values.
 
 Unity: the AssetPostprocessor is compiled with mono's mcs against a stub of the Unity API it calls
 (tests/engines/unity_stub), never run in Unity; a misspelled Unity member must fail the compile.
@@ -17,13 +17,13 @@ from tests.engines import import_helpers
 
 
 def test_unity_postprocessor_sets_the_table_and_reads_the_sidecar_values():
-    from boxmarch.export import import_settings, sidecar, transforms
+    from boxmarch.formats import import_settings, presets, sidecar
 
     assert import_helpers.unity_settings() == import_settings.UNITY
     constants = import_helpers.unity_constants()
     assert constants == {"FormatVersion": sidecar.FORMAT_VERSION, "Preset": "UNITY",
                          "SidecarSuffix": sidecar.SIDECAR_SUFFIX, "LayoutsRead": constants["LayoutsRead"]}
-    assert sorted(constants["LayoutsRead"]) == sorted(transforms.PRESETS["UNITY"].layouts)
+    assert sorted(constants["LayoutsRead"]) == sorted(presets.PRESETS["UNITY"].layouts)
 
 
 @pytest.mark.slow
@@ -56,14 +56,14 @@ def test_unity_package_ships_the_hlsl_as_generated():
 
 
 def test_unreal_script_parses_and_sets_the_table():
-    from boxmarch.export import import_settings, sidecar, transforms
+    from boxmarch.formats import import_settings, presets, sidecar
 
     constants = import_helpers.unreal_constants()  # ast.parse of the whole script
     assert constants["IMPORT_DATA"] == import_settings.UNREAL_IMPORT
     assert constants["BUILD_SETTINGS"] == import_settings.UNREAL_BUILD
     assert constants["FORMAT_VERSION"] == sidecar.FORMAT_VERSION and constants["PRESET"] == "UNREAL"
     assert constants["SIDECAR_SUFFIX"] == sidecar.SIDECAR_SUFFIX
-    assert constants["LAYOUTS_READ"] == transforms.PRESETS["UNREAL"].layouts
+    assert constants["LAYOUTS_READ"] == presets.PRESETS["UNREAL"].layouts
 
 
 def test_unreal_script_refuses_sidecars_it_does_not_read():
@@ -96,13 +96,13 @@ def test_unreal_material_function_compiles_as_hlsl(tmp_path):
 
 
 def test_godot3_plugin_and_import_file_set_the_table():
-    from boxmarch.export import import_settings, sidecar, transforms
+    from boxmarch.formats import import_settings, presets, sidecar
 
     constants = import_helpers.godot3_constants()
     assert constants["PARAMS"] == import_settings.GODOT3
     assert constants["FORMAT_VERSION"] == sidecar.FORMAT_VERSION and constants["PRESET"] == "GODOT3"
     assert constants["SIDECAR_SUFFIX"] == sidecar.SIDECAR_SUFFIX
-    assert tuple(constants["LAYOUTS_READ"]) == transforms.PRESETS["GODOT3"].layouts
+    assert tuple(constants["LAYOUTS_READ"]) == presets.PRESETS["GODOT3"].layouts
     assert "meshes/compress=false\n" in import_settings.godot3_import_text()
 
 
@@ -113,7 +113,7 @@ def same_model(a, b):
 def test_modelled_imports_follow_the_helpers_settings():
     """The models used by the decode tests are those of the helpers' settings; changing one
     setting changes the model (or is refused as not modelled)."""
-    from boxmarch.export import import_settings
+    from boxmarch.formats import import_settings
 
     assert same_model(UNITY, unity_import(import_settings.UNITY)) and UNITY["half_float_channels"] == ()
     assert UNITY["file_frame"] is True

@@ -16,8 +16,19 @@ import numpy as np
 import pytest
 
 from tests.conftest import empty_scene
-from tests.engine_scene import (RIG_TURN_ANGLE, RIG_TURN_AXES, TO_Y_UP, axis_turn, box_of_vertex, decode_normal_frame,
-                                frame_and_size_errors, posed_rig_boxes, rig_boxes, silhouettes, skinned_scene)
+from tests.engine_scene import (
+    RIG_TURN_ANGLE,
+    RIG_TURN_AXES,
+    TO_Y_UP,
+    axis_turn,
+    box_of_vertex,
+    decode_normal_frame,
+    frame_and_size_errors,
+    posed_rig_boxes,
+    rig_boxes,
+    silhouettes,
+    skinned_scene,
+)
 from tests.engines import coverage_mismatch, godot3, threejs
 from tests.gltf_reader import node_globals, read_glb, read_skin
 

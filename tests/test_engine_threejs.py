@@ -13,8 +13,18 @@ import numpy as np
 import pytest
 
 from tests.conftest import empty_scene
-from tests.engine_scene import (MIXED_SHAPES, TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame,
-                                frame_and_size_errors, paint_shapes, per_box_agreement, rounded_box_mismatch, silhouettes)
+from tests.engine_scene import (
+    MIXED_SHAPES,
+    TO_Y_UP,
+    baked_scene,
+    box_of_vertex,
+    decode_normal_frame,
+    frame_and_size_errors,
+    paint_shapes,
+    per_box_agreement,
+    rounded_box_mismatch,
+    silhouettes,
+)
 from tests.engines import coverage_mismatch, threejs
 
 pytestmark = pytest.mark.slow  # Chromium renders

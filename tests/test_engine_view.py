@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from boxmarch import scenes
-from boxmarch.preview import sources
+from boxmarch.formats import shader_sources
 from tests.conftest import mesh_object
 from tests.helpers.glsl import compile_glsl
 
@@ -14,11 +14,11 @@ OFF_CENTRE = "float map(vec3 p)\n{\n  return length(p - vec3(0.45, 0.0, 0.0)) - 
 
 
 def test_mirrored_sources_compile(tmp_path):
-    for name, source in (("preset", sources.fragment_source("LINK", None, (-1.0, 1.0, 1.0))),
-                         ("user", sources.fragment_source("USER", OFF_CENTRE, (-1.0, 1.0, 1.0)))):
+    for name, source in (("preset", shader_sources.fragment_source("LINK", None, (-1.0, 1.0, 1.0))),
+                         ("user", shader_sources.fragment_source("USER", OFF_CENTRE, (-1.0, 1.0, 1.0)))):
         proc = compile_glsl(tmp_path, f"engine_{name}", "frag", source)
         assert proc.returncode == 0, proc.stdout + proc.stderr
-    assert sources.fragment_source("BOX", None, (1.0, 1.0, 1.0)) == sources.fragment_source("BOX")
+    assert shader_sources.fragment_source("BOX", None, (1.0, 1.0, 1.0)) == shader_sources.fragment_source("BOX")
 
 
 @pytest.mark.slow

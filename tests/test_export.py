@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from boxmarch import scenes
-from boxmarch.export import glb, transforms
+from boxmarch.formats import glb, presets, transforms
 from tests.conftest import mesh_object
 from tests.fbx_reader import read_fbx_geometry
 from tests.gltf_reader import read_glb
@@ -230,15 +230,15 @@ def test_target_quaternions_match_closed_forms():
     x, y, z, w = q.T
     gltf = HALF * np.stack([x - w, y + z, z - y, w + x], 1)
     gltf[gltf[:, 3] < 0] *= -1
-    assert np.abs(transforms.target_quaternions(q, transforms.PRESETS["GLTF"]) - gltf).max() < 1e-12
+    assert np.abs(transforms.target_quaternions(q, presets.PRESETS["GLTF"]) - gltf).max() < 1e-12
     unity, _ = unity_closed_form(q, np.zeros((500, 4)))
-    assert np.abs(transforms.target_quaternions(q, transforms.PRESETS["UNITY"]) - unity).max() < 1e-12
-    assert np.abs(transforms.target_quaternions(q, transforms.PRESETS["BLENDER"]) - q).max() < 1e-12
+    assert np.abs(transforms.target_quaternions(q, presets.PRESETS["UNITY"]) - unity).max() < 1e-12
+    assert np.abs(transforms.target_quaternions(q, presets.PRESETS["BLENDER"]) - q).max() < 1e-12
 
 
 def test_preset_rotation_is_a_quarter_turn_about_x():
     """Z-up to Y-up, (x, y, z) -> (x, z, -y), is -90 degrees about x: q = (-sqrt(1/2), 0, 0, sqrt(1/2))."""
-    q = transforms.matrix_quaternions(transforms.Z_UP_TO_Y_UP)[0]
+    q = transforms.matrix_quaternions(presets.Z_UP_TO_Y_UP)[0]
     assert np.abs(q - [-HALF, 0, 0, HALF]).max() < 1e-15
 
 
@@ -320,7 +320,7 @@ def test_patched_glb_is_tidy(blender, tmp_path, layout, channels):
 
 
 def test_glb_patch_refuses_a_foreign_index(blender, tmp_path):
-    from boxmarch.export import glb as glb_io
+    from boxmarch.formats import glb as glb_io
 
     baked_boxes(blender, count=2)
     export(blender, "GLTF", tmp_path / "t.glb")

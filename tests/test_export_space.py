@@ -11,9 +11,22 @@ import pathlib
 import numpy as np
 import pytest
 
-from tests.engine_scene import (TO_Y_UP, TRANSFORM_CASES, UNITY, baked_scene, box_of_vertex, decode_normal_frame,
-                                decode_uv_frame, frame_and_size_errors, imported, rig_boxes, skinned_scene, table_texels,
-                                transformed_rig, world_boxes)
+from tests.engine_scene import (
+    TO_Y_UP,
+    TRANSFORM_CASES,
+    UNITY,
+    baked_scene,
+    box_of_vertex,
+    decode_normal_frame,
+    decode_uv_frame,
+    frame_and_size_errors,
+    imported,
+    rig_boxes,
+    skinned_scene,
+    table_texels,
+    transformed_rig,
+    world_boxes,
+)
 from tests.fbx_reader import read_fbx_geometry
 from tests.gltf_reader import node_globals, read_glb, read_skin
 
@@ -206,7 +219,7 @@ def test_a_scale_that_shears_skinned_boxes_is_refused(blender, tmp_path, what):
 def test_frames_in_space_keeps_boxes_an_axis_scale_does_not_shear():
     """Blender-free: axis-aligned boxes under diag(1, 2, 3) stay boxes with half-extents scaled per
     axis; the same boxes turned 30 degrees about z are sheared; a mirror keeps the decode exact."""
-    from boxmarch.export import transforms
+    from boxmarch.formats import transforms
 
     rng = np.random.default_rng(3)
     f = rng.normal(size=(4, 3))
@@ -244,7 +257,7 @@ def test_engines_draw_a_turned_and_scaled_rig_where_its_boxes_are(blender, tmp_p
     silhouettes within 1 px. Negative control: the box data left in the mesh's own space (the
     mesh's half-extents, twice the world's) fails in both."""
     from boxmarch.export import boxes, scene
-    from boxmarch.preview import sources
+    from boxmarch.formats import shader_sources
     from tests.engine_scene import silhouettes
     from tests.engines import coverage_mismatch, godot3, threejs
     from tests.test_engine_skinned import godot3_import_skinned, setup_js
@@ -255,7 +268,7 @@ def test_engines_draw_a_turned_and_scaled_rig_where_its_boxes_are(blender, tmp_p
     blender.context.view_layer.update()
     centres, sizes, rotations = world_boxes(np.array(ob.matrix_world), *rig_boxes()[:3])
     camera = engine_camera(centres @ TO_Y_UP.T)
-    material = (sources.shader_dir() / "threejs" / "boxmarch.js").read_text()
+    material = (shader_sources.shader_dir() / "threejs" / "boxmarch.js").read_text()
     reasons = [reason for reason in (threejs.available(), godot3.available()) if reason]
     if reasons:
         pytest.skip("; ".join(reasons))

@@ -7,9 +7,10 @@ import numpy as np
 import pytest
 
 from boxmarch import core
-from boxmarch.preview import mesh_data, sources
+from boxmarch.formats import shader_sources
+from boxmarch.preview import mesh_data
 
-SHADERS = sources.shader_dir()
+SHADERS = shader_sources.shader_dir()
 
 SIZE = 8  # pixels; the orthographic view below maps x, y in [-1, 1] onto them: pixel centres at
 # -0.875, -0.625, ..., 0.875 (0.25 apart)
@@ -193,7 +194,7 @@ def test_preview_fragment_compiles_with_the_depth_greater_declaration(tmp_path):
     declared = blender_declarations("frag", version="450 core", depth_write="GREATER")
     path = tmp_path / "preview.frag"
     for sdf in ("LINK", "SPHERE"):
-        path.write_text(declared + sources.fragment_source(sdf))
+        path.write_text(declared + shader_sources.fragment_source(sdf))
         proc = subprocess.run([validator(), str(path)], capture_output=True, text=True)
         assert proc.returncode == 0, proc.stdout + proc.stderr
 

@@ -5,15 +5,14 @@ gl_FragDepth layout alone."""
 import subprocess
 
 import pytest
+from bench import gpu_frame_data  # noqa: E402
 
 from tests.helpers.glsl import validator
-
-from bench import gpu_frame_data  # noqa: E402
 
 
 @pytest.mark.parametrize("sdf", ["SPHERE", "LINK"])
 def test_every_stage_compiles(tmp_path, sdf):
-    stages = gpu_frame_data.shader_sources(sdf)
+    stages = gpu_frame_data.stage_sources(sdf)
     for name, source in stages.items():
         path = tmp_path / f"{name}.{'vert' if name.endswith('vertex') else 'frag'}"
         path.write_text(source)
@@ -29,6 +28,6 @@ def test_every_stage_compiles(tmp_path, sdf):
 def test_a_broken_stage_fails(tmp_path):
     """Negative control: the validator rejects the preview stage without Blender's declarations."""
     path = tmp_path / "bare.frag"
-    path.write_text("#version 430 core\n" + gpu_frame_data.sources.fragment_source("SPHERE"))
+    path.write_text("#version 430 core\n" + gpu_frame_data.shader_sources.fragment_source("SPHERE"))
     proc = subprocess.run([validator(), str(path)], capture_output=True, text=True)
     assert proc.returncode != 0

@@ -13,7 +13,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import boxmarch
-from boxmarch import cli_args, core, layouts, scenes
+from boxmarch import cli_args, core, scenes
+from boxmarch.formats import layouts
 from tests.helpers.core_reference import decoded_origins, mesh_from_polys
 
 HERE = Path(__file__).parent

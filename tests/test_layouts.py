@@ -7,8 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from boxmarch import layouts
-from boxmarch.export import sidecar
+from boxmarch.formats import layouts, sidecar
 from tests.helpers.core_reference import quat_matrix
 
 BOXES, PER_BOX = 5, 4

@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from boxmarch import core, layouts
+from boxmarch import core
+from boxmarch.formats import layouts
 from tests.helpers.blender_program import blender_env
 from tests.helpers.preview_render import BLENDERS, agreement, quaternions_of, run_check_script
 

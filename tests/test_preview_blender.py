@@ -3,8 +3,9 @@ the decoded-vector overlay (the GPU image itself is checked in tests/test_previe
 import numpy as np
 import pytest
 
+from boxmarch import core, scenes
+from boxmarch.formats import layouts
 from tests.conftest import mesh_object
-from boxmarch import core, layouts, scenes
 
 
 def baked_boxes(blender, encoding="FLOAT_COLOR", domain="POINT"):
@@ -84,7 +85,7 @@ def test_new_sdf_text_template_compiles(blender, tmp_path):
     import shutil
     import subprocess
 
-    from boxmarch.preview import sources
+    from boxmarch.formats import shader_sources
     from tests.helpers.glsl import blender_declarations
 
     ob, _, _ = baked_boxes(blender)
@@ -92,6 +93,6 @@ def test_new_sdf_text_template_compiles(blender, tmp_path):
     assert ob.boxmarch.sdf == "USER"
     text = blender.data.texts[ob.boxmarch.user_text].as_string()
     path = tmp_path / "template.frag"
-    path.write_text(blender_declarations("frag") + sources.fragment_source("USER", text))
+    path.write_text(blender_declarations("frag") + shader_sources.fragment_source("USER", text))
     proc = subprocess.run([shutil.which("glslangValidator"), str(path)], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout

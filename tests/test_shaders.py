@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from boxmarch import core, layouts
-from boxmarch.preview import sources
+from boxmarch import core
+from boxmarch.formats import layouts, shader_sources
 from tests.helpers.glsl import blender_declarations, compile_glsl, validator
 
 SHADERS = Path(__file__).resolve().parent.parent / "shaders"
@@ -20,7 +20,7 @@ ENGINE_ONLY = {"bm_uv_by_channel", "bm_quaternion_from_channels", "bm_cube_half_
 
 @pytest.mark.parametrize("layout", layouts.LAYOUTS)
 def test_vertex_stage_compiles_for_every_layout(tmp_path, layout):
-    proc = compile_glsl(tmp_path, f"preview_{layout}", "vert", sources.vertex_source(layout), layout)
+    proc = compile_glsl(tmp_path, f"preview_{layout}", "vert", shader_sources.vertex_source(layout), layout)
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
@@ -34,14 +34,14 @@ def test_vertex_inputs_are_the_layouts_channels():
     for layout in layouts.LAYOUTS:
         written = {"ch_" + name.lower(): values.shape[1] for name, values in layouts.channels(layout, data).items()
                    if name != "TABLE" and name not in layouts.PARAM_CHANNELS[layout]}
-        read = {name: int(t[-1]) for t, name in sources.VERTEX_INPUTS[layout]
+        read = {name: int(t[-1]) for t, name in shader_sources.VERTEX_INPUTS[layout]
                 if name not in ("pos", "ch_half", "ch_params", "ch_parent_origin", "ch_parent_q", "ch_parent_half")}
         assert read == written, layout
 
 
-@pytest.mark.parametrize("sdf", [*core.SDF_PRESETS, sources.PER_BOX, sources.PER_BOX_BLEND])
+@pytest.mark.parametrize("sdf", [*core.SDF_PRESETS, shader_sources.PER_BOX, shader_sources.PER_BOX_BLEND])
 def test_fragment_stage_compiles_for_every_preset(tmp_path, sdf):
-    proc = compile_glsl(tmp_path, f"preview_{sdf}", "frag", sources.fragment_source(sdf))
+    proc = compile_glsl(tmp_path, f"preview_{sdf}", "frag", shader_sources.fragment_source(sdf))
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
@@ -49,24 +49,24 @@ def test_fragment_stage_compiles_for_every_preset(tmp_path, sdf):
 def test_stages_link(tmp_path, layout):
     vert = tmp_path / "link.vert"
     frag = tmp_path / "link.frag"
-    vert.write_text(blender_declarations("vert", layout) + sources.vertex_source(layout))
-    frag.write_text(blender_declarations("frag") + sources.fragment_source("TORUS"))
+    vert.write_text(blender_declarations("vert", layout) + shader_sources.vertex_source(layout))
+    frag.write_text(blender_declarations("frag") + shader_sources.fragment_source("TORUS"))
     proc = subprocess.run([validator(), "-l", str(vert), str(frag)], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
 def test_every_glsl_file_is_compiled():
-    used = sources.vertex_source() + sources.fragment_source("BOX")
+    used = shader_sources.vertex_source() + shader_sources.fragment_source("BOX")
     for path in (SHADERS / "glsl").glob("*.glsl"):
         assert path.read_text() in used, f"{path.name} is not part of the compiled preview"
 
 
 def test_user_text_uses_library_and_errors_report_user_lines(tmp_path):
     good = "float map(vec3 p)\n{\n  return op_smooth_union(sd_sphere(p, min3(box_half)), sd_torus(p, 0.5, 0.1), 0.1);\n}"
-    proc = compile_glsl(tmp_path, "user_good", "frag", sources.fragment_source("USER", good))
+    proc = compile_glsl(tmp_path, "user_good", "frag", shader_sources.fragment_source("USER", good))
     assert proc.returncode == 0, proc.stdout + proc.stderr
     bad = "float map(vec3 p)\n{\n  float r = 1.0;\n  return lenght(p) - r;\n}"
-    proc = compile_glsl(tmp_path, "user_bad", "frag", sources.fragment_source("USER", bad))
+    proc = compile_glsl(tmp_path, "user_bad", "frag", shader_sources.fragment_source("USER", bad))
     assert proc.returncode != 0
     assert re.search(r"\b0:4\b.*lenght", proc.stdout), proc.stdout  # line 4 of the user's text
 
@@ -87,11 +87,11 @@ def test_hlsl_example_compiles(tmp_path, entry, layout):
 def test_hlsl_example_keywords_are_the_unity_shader_layouts():
     """Each keyword the example tests is one BoxmarchExample.shader declares, and the layouts are
     the UNITY preset's (a layout added to the preset needs a branch in the example)."""
-    from boxmarch.export import transforms
+    from boxmarch.formats import presets
 
     wrapper = (SHADERS / "hlsl" / "BoxmarchExample.shader").read_text()
     example = (SHADERS / "hlsl" / "boxmarch_example.hlsl").read_text()
-    assert set(HLSL_LAYOUT_KEYWORDS) == set(transforms.PRESETS["UNITY"].layouts)
+    assert set(HLSL_LAYOUT_KEYWORDS) == set(presets.PRESETS["UNITY"].layouts)
     for layout in HLSL_LAYOUT_KEYWORDS:
         assert f"_LAYOUT_{layout}" in wrapper
         assert layout == "CLASSIC" or f"defined(_LAYOUT_{layout})" in example
@@ -154,7 +154,7 @@ def test_benchmark_baseline_shader_compiles(tmp_path):
     path.write_text("\n".join([
         "#version 330 core", "uniform mat4 clip_to_object;", "uniform vec4 march;", "uniform ivec4 sizes;",
         "uniform sampler2D boxes;", "layout(location = 0) out vec4 frag_color;",
-        sources.read_glsl("decode.glsl"), sources.read_glsl("sdf.glsl"),
+        shader_sources.read_glsl("decode.glsl"), shader_sources.read_glsl("sdf.glsl"),
         (SHADERS.parent / "bench" / "naive_fullscreen.frag.glsl").read_text()]))
     proc = subprocess.run([validator(), str(path)], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout + proc.stderr

@@ -23,7 +23,7 @@ EXPORTS = [("GLTF", "NORMAL_FRAME"), ("GLTF", "UV_FRAME"), ("GLTF", "CLASSIC"), 
 
 
 def schema():
-    from boxmarch.export import sidecar
+    from boxmarch.formats import sidecar
 
     with open(sidecar.SCHEMA_PATH) as f:
         return json.load(f)
@@ -136,10 +136,11 @@ def check_against_file(bpy, path, sidecar):
 
 @pytest.mark.parametrize("preset, layout", EXPORTS)
 def test_every_sidecar_validates_and_describes_its_file(blender, tmp_path, preset, layout):
-    from boxmarch.export import scene, sidecar, transforms
+    from boxmarch.export import scene
+    from boxmarch.formats import presets, sidecar
 
     ob, centres, _sizes, _rotations = baked_scene(blender)
-    path = tmp_path / f"boxes{transforms.PRESETS[preset].extension}"
+    path = tmp_path / f"boxes{presets.PRESETS[preset].extension}"
     report = scene.export_objects(blender.context, [ob], preset, str(path), layout)
     written = json.loads((tmp_path / "boxes.boxmarch.json").read_text())
     assert report["sidecar"] == str(tmp_path / "boxes.boxmarch.json")
@@ -165,10 +166,11 @@ def test_every_sidecar_validates_and_describes_its_file(blender, tmp_path, prese
 ])
 def test_a_sidecar_that_misnames_the_file_fails_the_check(blender, tmp_path, preset, wrong):
     """Negative controls of check_against_file: each sidecar edited in one claim must fail."""
-    from boxmarch.export import scene, transforms
+    from boxmarch.export import scene
+    from boxmarch.formats import presets
 
     ob, *_ = baked_scene(blender)
-    path = tmp_path / f"boxes{transforms.PRESETS[preset].extension}"
+    path = tmp_path / f"boxes{presets.PRESETS[preset].extension}"
     scene.export_objects(blender.context, [ob], preset, str(path))
     written = json.loads((tmp_path / "boxes.boxmarch.json").read_text())
     check_against_file(blender, path, written)
@@ -180,10 +182,11 @@ def test_a_sidecar_that_misnames_the_file_fails_the_check(blender, tmp_path, pre
 
 @pytest.mark.parametrize("preset", ["GLTF", "UNITY"])
 def test_skinned_sidecar_says_so_and_describes_the_rest_pose_file(blender, tmp_path, preset):
-    from boxmarch.export import scene, transforms
+    from boxmarch.export import scene
+    from boxmarch.formats import presets
 
     ob, rig = skinned_scene(blender)
-    path = tmp_path / f"skinned{transforms.PRESETS[preset].extension}"
+    path = tmp_path / f"skinned{presets.PRESETS[preset].extension}"
     report = scene.export_objects(blender.context, [ob], preset, str(path))
     written = json.loads((tmp_path / "skinned.boxmarch.json").read_text())
     jsonschema.validate(written, schema())

@@ -51,7 +51,7 @@ def _table(headers, rows) -> str:
 
 
 def _write_json(path: str, report: dict) -> None:
-    from . import files
+    from .formats import files
 
     def write(temp):
         with open(temp, "w") as f:
@@ -230,7 +230,7 @@ def _run_step(step, objects, args) -> dict:
 def _run_steps(args, steps) -> int:
     import bpy
 
-    from . import files
+    from .blend_file import save_blend_copy
 
     start = time.perf_counter()
     # Before opening, so that nothing is loaded for a bad path; the file Blender itself opened
@@ -247,7 +247,7 @@ def _run_steps(args, steps) -> int:
             reports.append(_run_step(step, objects, args))
         for name in hidden:
             bpy.data.objects[name].hide_set(True)
-        out = files.save_blend_copy(args.out) if args.out else None
+        out = save_blend_copy(args.out) if args.out else None
     total = time.perf_counter() - start
     rows = [[r["step"], f"{r['seconds']:.3f} s", r["summary"]] for r in reports]
     rows.append(["total", f"{total:.3f} s", f"wrote {out}" if out else "no --out: the .blend was not saved"])

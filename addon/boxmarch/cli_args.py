@@ -4,7 +4,8 @@ from __future__ import annotations
 import argparse
 import os
 
-from . import core, files
+from . import core
+from .formats import files
 
 
 class InputError(Exception):
@@ -68,8 +69,8 @@ def _cleanup_options(p, command):
 
 
 def _export_options(p, required):
-    from .layouts import LAYOUTS
-    from .export.transforms import PRESETS
+    from .formats.layouts import LAYOUTS
+    from .formats.presets import PRESETS
 
     p.add_argument("--preset", choices=sorted(PRESETS), default="GLTF")
     p.add_argument("--layout", choices=sorted(LAYOUTS), default=None,

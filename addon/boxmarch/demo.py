@@ -12,10 +12,10 @@ import time
 import bpy
 import numpy as np
 
-from . import bake_job, blender_output, core, edit_mode, ensure_registered, files, mesh_io, scenes, tool_jobs
-from .export.every_engine import ENGINE_PRESETS, engine_outputs, engine_path, export_every_engine
-from .export import glb, transforms
+from . import bake_job, blend_file, blender_output, core, edit_mode, ensure_registered, mesh_io, scenes, tool_jobs
 from .export import scene as export_scene
+from .export.every_engine import ENGINE_PRESETS, engine_outputs, engine_path, export_every_engine
+from .formats import files, glb, presets, transforms
 
 DEMO_IMAGE_SIZE = (640, 360)
 MAX_COUNT = 1_000_000  # boxes: 8 million vertices, the scale of Instance on Curve's limit
@@ -102,7 +102,7 @@ def _glb_decode_error(path, objects, prepared):
     """Read ``path`` back (boxmarch.export.glb) and decode every vertex in glTF's frame with the
     shader's formula; worst distance to the baked centre of its submesh put in glTF's frame, over
     that submesh's largest half-extent."""
-    preset = transforms.PRESETS["GLTF"]
+    preset = presets.PRESETS["GLTF"]
     gltf, binary = glb.read(path)
     by_name = {ob.data.name: (ob.data, bake.result) for ob, bake in zip(objects, prepared)}
     worst = 0.0
@@ -262,7 +262,7 @@ def run_demo(count: int, seed: int, folder: str, renderer: str, progress) -> tup
 
     progress("exporting for the other engines")
     for engine in export_every_engine(bpy.context, objects, os.path.abspath(folder), "demo", ENGINE_PRESETS[1:]):
-        preset = transforms.PRESETS[engine["preset"]]
+        preset = presets.PRESETS[engine["preset"]]
         lost = engine["default_import_error"]
         written = [os.path.basename(p) for p in engine["files"]]
         rows.append([f"export {engine['preset']}", f"{engine['seconds']:.3f} s",
@@ -277,7 +277,7 @@ def run_demo(count: int, seed: int, folder: str, renderer: str, progress) -> tup
     rows.append(["preview demo.png", f"{time.perf_counter() - t:.3f} s",
                  f"{DEMO_IMAGE_SIZE[0]} x {DEMO_IMAGE_SIZE[1]}, {method}", ""])
 
-    path = files.save_blend_copy(os.path.join(folder, "demo.blend"))
+    path = blend_file.save_blend_copy(os.path.join(folder, "demo.blend"))
     rows.append(["total", f"{time.perf_counter() - start:.3f} s", f"wrote {path}", ""])
     report = {"ok": True, "command": "demo", "count": count, "blend": path, "glb": glb_path, "png": png_path,
               "preview": method, "glb_max_relative_error": worst, "rows": rows,

@@ -2,8 +2,8 @@
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
-from . import core, layouts
-from .export import transforms
+from . import core
+from .formats import layouts, presets
 
 _SDF_DESCRIPTIONS = {
     "BOX": "The submesh's own box (matches the rasterised mesh)",
@@ -60,7 +60,7 @@ class BoxmarchObjectSettings(bpy.types.PropertyGroup):
     engine: EnumProperty(
         name="Engine View", default="BLENDER", update=_redraw,
         items=[(p.name, p.label, f"The SDF in the local frame {p.label} gives each box (export preset {p.name})")
-               for p in transforms.PRESETS.values()],
+               for p in presets.PRESETS.values()],
         description="See the SDF as an export preset's engine evaluates it: Unity mirrors every local frame's x, "
                     "so a shape that is not symmetric in local x appears mirrored there (docs/EXPORT.md)")
     layout: EnumProperty(

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .layouts import quaternion_matrices
+from .formats.layouts import quaternion_matrices
 
 # Unit cube corners (x, y, z in {-0.5, 0.5}), vertex i has bits (x, y, z) = (i >> 2, i >> 1, i) & 1.
 _CORNERS = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)])

@@ -12,7 +12,7 @@
 //   them; f is the box-local vector from the fragment to the box's origin.
 //
 // boxmarch viewport preview, vertex stage: decodes one engine layout's channels
-// (addon/boxmarch/layouts.py) with the shipped decode functions (decode.glsl, before this), as
+// (addon/boxmarch/formats/layouts.py) with the shipped decode functions (decode.glsl, before this), as
 // that engine's shader does. sources.py defines BM_LAYOUT_<name> first; the create-info
 // (addon/boxmarch/preview/shader.py) declares the layout's inputs (sources.VERTEX_INPUTS: pos and
 // the channels as ch_color, ch_normal, ch_tangent, ch_uv1 .. ch_uv6, plus ch_half where the layout

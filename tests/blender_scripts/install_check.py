@@ -10,8 +10,8 @@ argv = sys.argv[sys.argv.index("--") + 1:]
 zip_path, out_path = argv[0], argv[1]
 result = {"error": None}
 try:
-    import bpy  # first: with the bpy module, addon_utils is importable only after it
     import addon_utils
+    import bpy  # first: with the bpy module, addon_utils is importable only after it
     import numpy as np
 
     if bpy.app.version >= (4, 2, 0):

@@ -7,7 +7,7 @@ import subprocess
 import sys
 
 import boxmarch.cli
-from boxmarch.export import glb
+from boxmarch.formats import glb
 
 real_write = glb.write
 

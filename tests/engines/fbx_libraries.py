@@ -165,7 +165,7 @@ def write_posed_copy(source, target, local_by_model):
     elements."""
     from io_scene_fbx import data_types, encode_bin, parse_fbx
 
-    from boxmarch.export.fbx import _writable
+    from boxmarch.formats.fbx import _writable
 
     root, version = parse_fbx.parse(str(source))
     objects = next(elem for elem in root.elems if elem.id == b"Objects")

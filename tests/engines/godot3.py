@@ -201,9 +201,9 @@ REST_FRAME = "  bm_v_axis_z = NORMAL;\n  bm_v_axis_x = TANGENT;\n  bm_v_axis_y =
 def shipped_shader(map_code=None, frame_code=None):
     """shaders/godot3/boxmarch.shader, with its map() body replaced by ``map_code`` and its
     frame lines by ``frame_code`` where given (each must be found)."""
-    from boxmarch.preview import sources
+    from boxmarch.formats import shader_sources
 
-    code = (sources.shader_dir() / "godot3" / "boxmarch.shader").read_text()
+    code = (shader_sources.shader_dir() / "godot3" / "boxmarch.shader").read_text()
     for old, new in ((SHIPPED_MAP, map_code), (SHIPPED_FRAME, frame_code)):
         if new is not None:
             if old not in code:

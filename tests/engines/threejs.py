@@ -161,9 +161,9 @@ _RENDER_JOB = """async function (gltf) {
 
 def shipped_material(release="r111"):
     """The text of the shipped material file the release loads (shaders/threejs/), as it is."""
-    from boxmarch.preview import sources
+    from boxmarch.formats import shader_sources
 
-    return (sources.shader_dir() / "threejs" / RELEASES[release].material).read_text()
+    return (shader_sources.shader_dir() / "threejs" / RELEASES[release].material).read_text()
 
 
 def _nicegui_three():

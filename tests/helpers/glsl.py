@@ -5,7 +5,7 @@ import subprocess
 
 import pytest
 
-from boxmarch.preview import sources
+from boxmarch.formats import shader_sources
 
 
 def validator():
@@ -16,7 +16,7 @@ def validator():
 
 
 # What Blender generates from the preview's create-info before our source (GL backend).
-blender_declarations = sources.gl_declarations
+blender_declarations = shader_sources.gl_declarations
 
 
 def compile_glsl(tmp_path, name, stage, source, layout="CLASSIC"):

@@ -2,8 +2,8 @@
 ``scene`` drives Blender's exporters. docs/EXPORT.md derives and measures every transform."""
 from __future__ import annotations
 
-from . import sidecar
-from .transforms import PRESETS
+from ..formats import sidecar
+from ..formats.presets import PRESETS
 
 
 def outputs_of(filepath: str, preset_name: str, layout: str | None = None) -> list:

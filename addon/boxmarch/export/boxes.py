@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import core, layouts, mesh_io
-from . import glb, transforms
+from .. import core, mesh_io
+from ..formats import glb, layouts, transforms
 
 
 class ExportInputError(ValueError):
@@ -179,7 +179,7 @@ def morph_warnings(objects, preset) -> list:
     """One line per object whose shape keys the file carries (glTF morph targets, FBX blend
     shapes): the morphs move positions only, so a morph that moves a box's vertices unevenly
     leaves its baked data behind."""
-    if preset.name == "BLENDER":
+    if preset.raw_blend:
         return []
     out = []
     for ob in objects:

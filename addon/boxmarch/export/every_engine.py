@@ -3,15 +3,16 @@ from __future__ import annotations
 
 import os
 
-from . import outputs_of, scene, transforms
+from ..formats.presets import PRESETS
+from . import outputs_of, scene
 
-ENGINE_PRESETS = ("GLTF", "GODOT3", "UNITY", "UNREAL")
+ENGINE_PRESETS = tuple(name for name, preset in PRESETS.items() if not preset.raw_blend)
 
 
 def engine_path(folder: str, stem: str, preset_name: str) -> str:
     """Where ``export_every_engine`` writes a preset's file: ``folder/STEM.glb`` for GLTF (the
     glTF file itself), ``folder/STEM_<preset>.<ext>`` for the others."""
-    preset = transforms.PRESETS[preset_name]
+    preset = PRESETS[preset_name]
     suffix = "" if preset_name == "GLTF" else f"_{preset_name.lower()}"
     return os.path.join(folder, f"{stem}{suffix}{preset.extension}")
 

@@ -1,5 +1,5 @@
 """Blender-facing half of the export presets: reads the baked layers, builds temporary copies of
-the meshes holding the target's numbers (export/transforms.py), runs Blender's FBX or glTF
+the meshes holding the target's numbers (formats/transforms.py), runs Blender's FBX or glTF
 exporter on them, and swaps the artist's meshes back. The file appears only when complete
 (written under a temporary name in the same folder, then renamed)."""
 from __future__ import annotations
@@ -11,10 +11,10 @@ import time
 import bpy
 import numpy as np
 
-from .. import edit_mode, files, layouts, mesh_io
-from . import boxes, fbx, glb, godot, import_settings, outputs_of, sidecar, transforms
+from .. import edit_mode, mesh_io
+from ..formats import fbx, files, glb, godot, import_settings, layouts, presets, sidecar, transforms
+from . import boxes, outputs_of
 from .boxes import ExportInputError, baked_layers
-
 
 # Every UV map name a layout writes (Layout.uv_names): not the artist's.
 _BOXMARCH_UV_NAMES = {name for layout in layouts.LAYOUTS.values() for name in layout.uv_names}
@@ -105,7 +105,7 @@ def _operator_kwargs(operator, wanted: dict) -> dict:
 def _run_exporter(preset, layout, path):
     if preset.extension == ".fbx":
         op = bpy.ops.export_scene.fbx
-        op(**_operator_kwargs(op, dict(  # tangent layers for export/fbx.py to overwrite with the frame
+        op(**_operator_kwargs(op, dict(  # tangent layers for formats/fbx.py to overwrite with the frame
             use_tspace=layouts.LAYOUTS[layout].skin_safe,
             filepath=path, use_selection=True, use_mesh_modifiers=False, axis_forward="-Z", axis_up="Y",
             bake_space_transform=True, apply_unit_scale=True, apply_scale_options="FBX_SCALE_ALL",
@@ -133,9 +133,9 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     """Export ``objects`` (baked meshes) with a preset (and one of its layouts; None = its
     default) to ``filepath``. Returns a report dict. Raises ExportInputError (nothing written)
     for unbaked or non-mesh objects or a layout the preset cannot carry."""
-    preset = transforms.PRESETS.get(preset_name)
+    preset = presets.PRESETS.get(preset_name)
     if preset is None:
-        raise ExportInputError(f"preset must be one of {sorted(transforms.PRESETS)}, got {preset_name!r}")
+        raise ExportInputError(f"preset must be one of {sorted(presets.PRESETS)}, got {preset_name!r}")
     if layout is not None and layout not in preset.layouts:
         raise ExportInputError(f"{preset.label} carries the layouts {', '.join(preset.layouts)}, not {layout}")
     objects = list({ob.name_full: ob for ob in objects}.values())  # each object once
@@ -147,7 +147,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     meshes = [ob.data for ob in mesh_io.one_object_per_mesh(objects)]
     for mesh in meshes:
         baked_layers(mesh)  # refuses unbaked meshes before anything is changed
-        if not mesh.polygons and preset.name != "BLENDER":
+        if not mesh.polygons and not preset.raw_blend:
             raise ExportInputError(f"mesh '{mesh.name}' has no faces (its baked layers are left from faces since "
                                    "deleted): an engine draws the boxes from faces, so the file would hold nothing")
     skins = _skins(context, objects, preset)
@@ -179,7 +179,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
 
     def write(temps):
         temp = temps[outputs[0]]
-        if preset.name == "BLENDER":
+        if preset.raw_blend:
             stats = [boxes.box_data(mesh, preset)[2] for mesh in meshes]  # the .blend holds the layers as they are
             bpy.data.libraries.write(temp, set(objects), fake_user=True, compress=False)
         else:
@@ -191,14 +191,14 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             elif table_file:
                 with open(temps[table_file], "wb") as f:
                     f.write(godot.table_bin(table))
-        if preset.name == "GODOT3":
+        if preset.writes_godot3_import:
             with open(temps[import_settings.godot3_import_path(outputs[0])], "w") as f:
                 f.write(import_settings.godot3_import_text())
         _write_sidecar(temps[sidecar.sidecar_path(outputs[0])], preset, layout, filepath, stats, skins)
         return stats
 
     stats = files.write_together(outputs, write)
-    if preset.name == "UNITY" and layouts.LAYOUTS[layout].classic_colour:
+    if preset.colour_8bit and layouts.LAYOUTS[layout].classic_colour:
         floats = [m for m in stats if m["colour"] == "FLOAT_COLOR"]
         if floats:
             warnings.append(
@@ -250,7 +250,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
 
 
 def _write_sidecar(path, preset, layout, filepath, stats, skins) -> None:
-    """Writes the sidecar (export/sidecar.py) of an export to ``path``."""
+    """Writes the sidecar (formats/sidecar.py) of an export to ``path``."""
     text = json.dumps(sidecar.describe(preset, layout, filepath, stats, _skin_summary(skins),
                                        file_channel_names(preset, layout)), indent=2, allow_nan=False)
     with open(path, "w") as f:
@@ -271,7 +271,7 @@ def _skins(context, objects, preset) -> dict:
             skin = mesh_io.read_skin(ob)
         except mesh_io.SkinError as error:
             raise ExportInputError(f"object '{ob.name}': {error}") from None
-        if skin is None or preset.name == "BLENDER":  # a .blend keeps the modifier and the rig as they are
+        if skin is None or preset.raw_blend:  # a .blend keeps the modifier and the rig as they are
             continue
         if skin.armature.name not in context.view_layer.objects:
             raise ExportInputError(f"object '{ob.name}' is skinned by '{skin.armature.name}', which is not in the "

@@ -8,7 +8,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import core, layouts
+from .. import core
+from ..formats import layouts
 from .arrays import read_positions, read_topology, read_uv, read_vertex_selection, write_uv
 from .box_layers import BoxLayerError, BoxLayers, compute_box_layers, object_parameters, write_box_layers
 

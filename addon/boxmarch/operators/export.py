@@ -8,8 +8,8 @@ import bpy
 from bpy.props import EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper
 
-from .. import layouts
-from ..export import scene, transforms
+from ..export import scene
+from ..formats import layouts, presets
 
 
 class BOXMARCH_OT_export(bpy.types.Operator, ExportHelper):
@@ -23,7 +23,7 @@ class BOXMARCH_OT_export(bpy.types.Operator, ExportHelper):
     filter_glob: StringProperty(default="*.fbx;*.glb;*.blend", options={"HIDDEN"})
     preset: EnumProperty(
         name="Engine", default="UNITY",
-        items=[(p.name, p.label, p.description) for p in transforms.PRESETS.values()])
+        items=[(p.name, p.label, p.description) for p in presets.PRESETS.values()])
     layout: EnumProperty(
         name="Layout", default="DEFAULT",
         items=[("DEFAULT", "Preset's Own", "The layout the engine's importer carries best (docs/ENGINES.md)")]
@@ -35,7 +35,7 @@ class BOXMARCH_OT_export(bpy.types.Operator, ExportHelper):
         return context.mode == "OBJECT"
 
     def check(self, _context):
-        wanted = transforms.PRESETS[self.preset].extension
+        wanted = presets.PRESETS[self.preset].extension
         root, ext = os.path.splitext(self.filepath)
         if ext.lower() != wanted:
             self.filepath = (root if ext.lower() in {".fbx", ".glb", ".blend"} else self.filepath) + wanted
@@ -70,7 +70,7 @@ def run_export(operator, context, preset, filepath, layout=None) -> bool:
     for warning in report["warnings"]:
         operator.report({"WARNING"}, warning)
     channels = sorted({tuple(m.get("uv_channels", ())) for m in report["meshes"]} - {()})
-    text = (f"Exported {len(report['objects'])} object(s) for {transforms.PRESETS[preset].label} "
+    text = (f"Exported {len(report['objects'])} object(s) for {presets.PRESETS[preset].label} "
             f"({report['layout']}) to {report['path']} in {report['seconds']:.2f} s")
     if channels:
         text += "; box data in UV channels " + ", ".join(", ".join(map(str, c)) for c in channels)
@@ -100,7 +100,7 @@ class BOXMARCH_OT_quick_export(bpy.types.Operator):
 
     def execute(self, context):
         last = context.scene.get(LAST_EXPORT)
-        if last is None or last.get("preset") not in transforms.PRESETS:
+        if last is None or last.get("preset") not in presets.PRESETS:
             self.report({"ERROR"}, "Nothing exported yet in this scene: use File > Export > Boxmarch Box Frames first")
             return {"CANCELLED"}
         layout = last.get("layout", "DEFAULT")

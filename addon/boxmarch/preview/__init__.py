@@ -206,17 +206,18 @@ def render(scene, camera_object, width, height, *, output="SHADED"):
     import bpy
     import gpu
 
-    from . import draw, sources
+    from ..formats import shader_sources
+    from . import draw
 
     width, height = int(width), int(height)
     if width <= 0 or height <= 0:
         raise ValueError(f"width and height must be positive, got {width} x {height}")
-    if output not in sources.OUTPUT_MODES:
-        raise ValueError(f"output must be one of {sources.OUTPUT_MODES}, got {output!r}")
+    if output not in shader_sources.OUTPUT_MODES:
+        raise ValueError(f"output must be one of {shader_sources.OUTPUT_MODES}, got {output!r}")
     if camera_object is None or camera_object.type != "CAMERA":
         raise ValueError("render needs a camera object")
     ensure_gpu_context()
-    mode = sources.OUTPUT_MODES.index(output)
+    mode = shader_sources.OUTPUT_MODES.index(output)
     view, projection = camera_matrices(scene, camera_object, width, height)
     perspective = camera_object.data.type != "ORTHO"
     depsgraph = bpy.context.evaluated_depsgraph_get()

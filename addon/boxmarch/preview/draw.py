@@ -10,9 +10,10 @@ import gpu
 import numpy as np
 from gpu_extras.batch import batch_for_shader
 
-from .. import layouts, mesh_io
-from ..export import transforms
-from . import mesh_data, shader as preview_shader, skinning, sources
+from .. import mesh_io
+from ..formats import layouts, presets, shader_sources
+from . import mesh_data, skinning
+from . import shader as preview_shader
 
 RAW_VECTOR_COLOR = (0.35, 0.75, 1.0, 1.0)      # light blue, as in the seed's Unity script
 ROTATED_VECTOR_COLOR = (1.0, 0.55, 0.1, 1.0)   # orange: meets at the submesh origins
@@ -276,7 +277,7 @@ def uniform_block_data(object_to_clip, object_to_view, perspective, settings, ou
 def _marching_shader(ob):
     """The object's preview shader, or None (and an error noted) when its user SDF fails."""
     settings = ob.boxmarch
-    mirror = transforms.PRESETS[settings.engine].mirror  # what the engine's local frame does
+    mirror = presets.PRESETS[settings.engine].mirror  # what the engine's local frame does
     if settings.sdf != "USER":
         errors.pop(ob.name, None)
         return preview_shader.preview_shader(settings.sdf, None, mirror, settings.layout)
@@ -321,7 +322,7 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, 
                                    tuple(ob.color[:3]) + (1.0,), frame, gpu.state.viewport_get()[3])
         ubo = gpu.types.GPUUniformBuf(block.tobytes())
         shader.bind()
-        shader.uniform_block(sources.UNIFORM_NAME, ubo)
+        shader.uniform_block(shader_sources.UNIFORM_NAME, ubo)
         drawn.march(mesh_data.view_octant(object_to_view) if FRONT_TO_BACK else None).draw(shader)
     if output_mode != 0:
         return shader is not None

@@ -1,14 +1,13 @@
 """What the preview draws from a baked mesh, read through mesh_io, turned into the channels of an
-engine layout (boxmarch/layouts.py) as the preview shader reads them."""
+engine layout (boxmarch/formats/layouts.py) as the preview shader reads them."""
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
 
-from .. import core, layouts, mesh_io
-from ..export import transforms
-
+from .. import core, mesh_io
+from ..formats import layouts, transforms
 
 NotBakedError = mesh_io.NotBakedError  # the preview's name for it (draw.py, tests)
 

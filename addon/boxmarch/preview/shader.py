@@ -9,7 +9,7 @@ import tempfile
 
 import gpu
 
-from . import sources
+from ..formats import shader_sources
 
 
 class UserSdfError(Exception):
@@ -36,19 +36,19 @@ MAX_USER_SHADERS = 8
 
 def _create_info(fragment: str, layout: str):
     iface = gpu.types.GPUStageInterfaceInfo("boxmarch_preview_interface")
-    for interpolation, type_name, name in sources.STAGE_INTERFACE:
+    for interpolation, type_name, name in shader_sources.STAGE_INTERFACE:
         getattr(iface, interpolation)(type_name, name)
     info = gpu.types.GPUShaderCreateInfo()
-    for slot, (type_name, name) in enumerate(sources.VERTEX_INPUTS[layout]):
+    for slot, (type_name, name) in enumerate(shader_sources.VERTEX_INPUTS[layout]):
         info.vertex_in(slot, type_name, name)
     info.vertex_out(iface)
-    info.typedef_source(sources.UNIFORM_STRUCT)
-    info.uniform_buf(0, sources.UNIFORM_TYPE, sources.UNIFORM_NAME)
-    for slot, type_name, name in sources.FRAGMENT_OUTPUTS:
+    info.typedef_source(shader_sources.UNIFORM_STRUCT)
+    info.uniform_buf(0, shader_sources.UNIFORM_TYPE, shader_sources.UNIFORM_NAME)
+    for slot, type_name, name in shader_sources.FRAGMENT_OUTPUTS:
         info.fragment_out(slot, type_name, name)
     if hasattr(info, "depth_write"):  # Blender 4+; 3.4 has no declaration
         info.depth_write(DEPTH_WRITE)
-    info.vertex_source(sources.vertex_source(layout))
+    info.vertex_source(shader_sources.vertex_source(layout))
     info.fragment_source(fragment)
     return info, iface
 
@@ -89,7 +89,7 @@ _DRIVER_ERROR = re.compile(r"\b\d+:(\d+)\(\d+\):\s*error:?\s*(.*)", re.I)
 
 
 def _located(line: int, message: str):
-    if line >= sources.USER_END_LINE:
+    if line >= shader_sources.USER_END_LINE:
         return f"after the end of the text: {message}", None
     return f"line {line}: {message}", line
 
@@ -130,7 +130,7 @@ def describe_compile_error(log: str, line_offset: int = 0):
 
 # Text with a syntax error on its line 3: where a log places it shows how that Blender numbers
 # the user's lines (4.5 adds the length of its own code before the fragment source; the others
-# keep the #line numbering of sources.user_map_source).
+# keep the #line numbering of shader_sources.user_map_source).
 _CALIBRATION_TEXT = "float map(vec3 p)\n{\n  return 1.0 +;\n}\n"
 _line_offsets: dict = {}
 
@@ -138,7 +138,7 @@ _line_offsets: dict = {}
 def _log_line_offset(sdf, local_mirror, layout) -> int:
     key = (sdf, local_mirror, layout)
     if key not in _line_offsets:
-        info, iface = _create_info(sources.fragment_source(sdf, _CALIBRATION_TEXT, local_mirror), layout)
+        info, iface = _create_info(shader_sources.fragment_source(sdf, _CALIBRATION_TEXT, local_mirror), layout)
         _shader, _error, log = _compile_capturing_log(info, echo=False)
         del iface
         line = _first_error(log)[1]
@@ -156,7 +156,7 @@ def preview_shader(sdf: str = "BOX", user_text: str | None = None, local_mirror=
         return _cache[key]
     if key in _failed:
         raise UserSdfError(*_failed[key])
-    info, iface = _create_info(sources.fragment_source(sdf, user_text, local_mirror), layout)
+    info, iface = _create_info(shader_sources.fragment_source(sdf, user_text, local_mirror), layout)
     shader, error, log = _compile_capturing_log(info)
     del iface  # the create-info refers to it until compiled
     if shader is None:

@@ -54,10 +54,3 @@ def write_atomically(path: str, write) -> str:
     write_together([path], lambda temps: write(temps[path]))
     return path
 
-
-def save_blend_copy(path: str) -> str:
-    """Save the open file as a copy at ``path`` (the open file keeps its own path), atomically."""
-    import bpy
-
-    return write_atomically(path, lambda temp: bpy.ops.wm.save_as_mainfile(filepath=temp, copy=True,
-                                                                           check_existing=False))

@@ -36,7 +36,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-
 QUAT_XY_UV = "BoxQuatXY"  # the bake's UV maps of the frame's quaternion (mesh_io), CLASSIC's UV1 and UV2
 QUAT_ZW_UV = "BoxQuatZW"
 _FRAME_QUATERNION = {"encoding": "quaternion_xyzw", "channels": ["UV1.x", "UV1.y", "UV2.x", "UV2.y"]}

@@ -1,7 +1,7 @@
 """What each engine's importer must be told so the box data stay float32, as one table per
 engine. Blender-free.
 
-The sidecar (export/sidecar.py) records the table of its preset's engine; the engine helpers
+Each preset (formats/presets.py) names its engine's tables, which the sidecar records; the engine helpers
 shipped in engines/ set the same values (engines/unity/.../BoxmarchModelPostprocessor.cs,
 engines/unreal/boxmarch_import.py, the ``NAME.glb.import`` written beside a GODOT3 export), and
 tests/test_engine_import_settings.py reads each helper's source and requires it to set exactly
@@ -28,10 +28,6 @@ UNREAL_IMPORT = {"convert_scene": True, "convert_scene_unit": True, "generate_li
 UNREAL_BUILD = {"use_full_precision_u_vs": True, "generate_lightmap_u_vs": False, "recompute_normals": False,
                 "recompute_tangents": False}
 
-# The engine-side helper of each preset, relative to the repository (docs/ENGINES.md).
-HELPERS = {"GODOT3": "engines/godot3/addons/boxmarch", "UNITY": "engines/unity/com.boxmarch.boxmarch",
-           "UNREAL": "engines/unreal/boxmarch_import.py", "GLTF": "shaders/threejs"}
-
 
 def godot3_import_path(filepath: str) -> str:
     """Godot 3's import settings of ``filepath``: ``NAME.glb.import`` beside it."""
@@ -43,13 +39,4 @@ def godot3_import_text() -> str:
     importer with GODOT3's parameters (the rest take Godot's defaults; Godot completes the file)."""
     params = "".join(f"{key}={str(value).lower()}\n" for key, value in GODOT3.items())
     return f'[remap]\n\nimporter="scene"\ntype="PackedScene"\n\n[params]\n\n{params}'
-
-
-def for_preset(preset_name: str, text: str) -> dict:
-    """The sidecar's ``import_settings``: the engine's settings table, the helper that applies
-    them and ``text`` (the preset's sentence for a person)."""
-    settings = {"GODOT3": {"godot3_scene_import": GODOT3},
-                "UNITY": {"unity_model_importer": UNITY},
-                "UNREAL": {"unreal_fbx_import": UNREAL_IMPORT, "unreal_mesh_build": UNREAL_BUILD}}.get(preset_name, {})
-    return {"text": text, "settings": settings, "helper": HELPERS.get(preset_name)}
 

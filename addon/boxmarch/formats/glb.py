@@ -100,7 +100,7 @@ def vertex_indices(gltf, binary, mesh) -> list:
 
 def replace_vertex_channels(gltf, binary, channels_by_mesh: dict):
     """Rewrite the meshes named in ``channels_by_mesh`` (mesh name -> {layout channel: float32
-    (Blender vertices, k)}, boxmarch/layouts.py) whose COLOR_0 holds :func:`index_colours`: each
+    (Blender vertices, k)}, boxmarch/formats/layouts.py) whose COLOR_0 holds :func:`index_colours`: each
     channel becomes a float32 accessor of the values of the file vertices' Blender vertices
     ("COLOR" -> COLOR_0, "NORMAL", "TANGENT", "UVn" -> TEXCOORD_n), and the index COLOR_0 goes
     when the layout has no colour. Returns (gltf, binary) with unused buffer views dropped.

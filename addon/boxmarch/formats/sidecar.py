@@ -13,9 +13,10 @@ import os
 
 import numpy as np
 
-from .. import layouts
-from . import import_settings, transforms
-from .godot import TABLE_WIDTH as GODOT3_TABLE_WIDTH, table_image_size
+from . import import_settings, layouts
+from .godot import TABLE_WIDTH as GODOT3_TABLE_WIDTH
+from .godot import table_image_size
+from .presets import PRESETS
 
 FORMAT_VERSION = 1
 SIDECAR_SUFFIX = ".boxmarch.json"
@@ -25,15 +26,6 @@ SCHEMA_PATH = os.path.join(os.path.dirname(os.path.abspath(__file__)), "sidecar.
 # UV0, "COLOR", "NORMAL", "TANGENT", "TABLE" = the box table texel of the vertex's index):
 # Layout.quantities; docs/ENGINES.md states the decode.
 QUANTITIES = {name: layout.quantities for name, layout in layouts.LAYOUTS.items()}
-
-# Blender's object space, the glTF / FBX files (both written right-handed Y-up in metres) and the
-# engines' object frames, in which the box data of each preset are expressed (export/transforms.py).
-_BLENDER = {"up": "+Z", "handedness": "right", "units": "metre"}
-_Y_UP = {"up": "+Y", "handedness": "right", "units": "metre"}
-DATA_FRAMES = {"GLTF": _Y_UP, "GODOT3": _Y_UP, "BLENDER": _BLENDER,
-               "UNITY": {"up": "+Y", "handedness": "left", "units": "metre"},
-               "UNREAL": {"up": "+Z", "handedness": "left", "units": "centimetre"}}
-
 
 def box_parameter_channels(layout: str) -> dict:
     """Where ``layout`` keeps each per-box parameter and the hierarchy: a vertex channel
@@ -65,7 +57,7 @@ def table_path(filepath: str, layout: str = "NORMAL_COLOR", preset_name: str = "
     ``NAME.boxes.tres`` (NORMAL_COLOR, for Godot 3), ``NAME.boxes.bin``; None for CLASSIC (no
     index) and the BLENDER preset (the .blend holds the layers themselves)."""
     table_format = layouts.layout_named(layout).table_format
-    if not table_format or preset_name == "BLENDER":
+    if not table_format or PRESETS[preset_name].raw_blend:
         return None
     return os.path.splitext(filepath)[0] + TABLE_SUFFIXES[table_format]
 
@@ -77,7 +69,7 @@ def written_beside(filepath: str, preset_name: str, layout: str) -> list[str]:
     table = table_path(filepath, layout, preset_name)
     if table:
         paths.append(table)
-    if preset_name == "GODOT3":
+    if PRESETS[preset_name].writes_godot3_import:
         paths.append(import_settings.godot3_import_path(filepath))
     return paths
 
@@ -85,13 +77,12 @@ def written_beside(filepath: str, preset_name: str, layout: str) -> list[str]:
 def data_from_file(preset) -> np.ndarray:
     """(3, 3) matrix taking positions as the file holds them to the frame the box data are
     expressed in (the engine's object frame after its importer), units included."""
-    file_from_blender = np.eye(3) if preset.extension == ".blend" else transforms.Z_UP_TO_Y_UP
-    return preset.axes @ file_from_blender.T * preset.length_scale
+    return preset.axes @ preset.file_from_blender.T * preset.length_scale
 
 
 def describe(preset, layout: str, filepath: str, stats: list, skins: dict, file_channel_names: dict) -> dict:
     """The sidecar of an export of ``stats`` (per mesh, export.boxes.box_data's) to ``filepath``
-    with ``preset`` (transforms.Preset) in ``layout``; ``skins``: {object: {"armature", "bones"}}
+    with ``preset`` (presets.Preset) in ``layout``; ``skins``: {object: {"armature", "bones"}}
     of the skinned objects; ``file_channel_names``: the name each channel has in the file ("UV1"
     -> "TEXCOORD_1" or an FBX UV map name)."""
     spec = layouts.layout_named(layout)
@@ -119,10 +110,11 @@ def describe(preset, layout: str, filepath: str, stats: list, skins: dict, file_
             "file": os.path.basename(table), "format": spec.table_format,
             "planes": layouts.TABLE_PLANE_CONTENTS, "width": table_width, "height": table_height},
         "file_channels": file_channel_names,
-        "axes": {"file": _BLENDER if preset.extension == ".blend" else _Y_UP, "data": DATA_FRAMES[preset.name],
+        "axes": {"file": preset.file_frame, "data": preset.data_frame,
                  "data_from_file": data_from_file(preset).tolist(), "length_scale": preset.length_scale,
                  "v_flipped_in_file": preset.flip_v_on_import},
-        "import_settings": import_settings.for_preset(preset.name, preset.import_settings),
+        "import_settings": {"text": preset.import_settings, "settings": preset.engine_settings,
+                            "helper": preset.helper},
         "decode_error": {"export": max((float(m["transform_error"]) for m in stats), default=0.0),
                          "default_import": max(default_errors) if default_errors else None},
     }

@@ -18,85 +18,10 @@ rotation Q, whose quaternion is Q's with the vector part v replaced by det(N) N 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from ..layouts import quaternion_matrices
-
-
-# Blender's Z-up right-handed object space to the Y-up right-handed space of glTF and of FBX
-# written with axis_forward='-Z', axis_up='Y': (x, y, z) -> (x, z, -y).
-Z_UP_TO_Y_UP = np.array([[1, 0, 0], [0, 0, 1], [0, -1, 0]], np.float64)
-# Unity's FBX importer turns the right-handed file into its left-handed frame by negating x:
-# the UNITY preset's mirror is diag(-1, 1, 1). Unreal's converts any FBX back to Blender's Z-up
-# axes, then negates y into its left-handed frame and scales metres to centimetres: whatever the
-# exporter's axis options, Unreal's object frame is (x, -y, z) * 100 of Blender's.
-
-
-@dataclass(frozen=True)
-class Preset:
-    name: str
-    label: str
-    extension: str
-    rotation: np.ndarray   # A0 (3, 3), det +1
-    mirror: np.ndarray     # diagonal of N (3,), +-1, at most one -1
-    description: str
-    layouts: tuple = ("CLASSIC",)  # layouts.py names this target can carry; the first is the default
-    length_scale: float = 1.0      # the importer's unit conversion of positions (Unreal: metres to cm)
-    flip_v_on_import: bool = False  # the importer reads v as 1 - v (Unreal's FBX importer)
-    import_settings: str = ""      # what the engine's importer must be told so the data stays float32
-    half_float_uvs: tuple = ()     # UV channels the engine stores as half floats unless told otherwise
-    godot3_compression: bool = False  # the importer's default mesh compression (Godot 3) quantizes colour and frame
-    default_import_loss: str = ""  # what the default import settings do to the data, for the report
-    import_fix: str = ""           # the import setting that keeps the data float32, in a few words
-
-    @property
-    def axes(self) -> np.ndarray:
-        """A = N A0: p' = A p."""
-        return self.mirror[:, None] * self.rotation
-
-
-PRESETS = {
-    "GLTF": Preset(
-        "GLTF", "glTF Binary", ".glb", Z_UP_TO_Y_UP, np.ones(3),
-        "glTF binary for three.js, Godot 4, Babylon: right-handed Y-up, frame in NORMAL + TANGENT",
-        layouts=("NORMAL_FRAME", "UV_FRAME", "CLASSIC"),
-        import_settings="three.js and Babylon: none. Godot 4: Mesh Compression off in the scene import "
-                        "(Godot 4 stores vertex colours as 8 bits: the default layout uses none)"),
-    "GODOT3": Preset(
-        "GODOT3", "Godot 3 (glTF + box table)", ".glb", Z_UP_TO_Y_UP, np.ones(3),
-        "glTF binary for Godot 3's importer (two UV sets): frame in NORMAL + TANGENT, offset and index in a "
-        "float colour, half-extents in a .tres float texture beside it",
-        layouts=("NORMAL_COLOR",), godot3_compression=True,
-        default_import_loss="mesh compression: 8-bit colour clamped to [0, 1], 8-bit normal and tangent",
-        import_fix="copy NAME.glb.import (written beside) with the .glb, or in the Import dock Meshes > Compress off",
-        import_settings="Import dock of the .glb: Meshes > Compress off (else colour is 8-bit and normals, "
-                        "tangents and UV2 are packed): the NAME.glb.import written beside it sets this when copied "
-                        "with it, or the boxmarch plug-in (engines/godot3) does; keep the .boxes.tres beside it and "
-                        "assign it to the shader's box_table"),
-    "UNITY": Preset(
-        "UNITY", "Unity (FBX)", ".fbx", Z_UP_TO_Y_UP, np.array([-1.0, 1.0, 1.0]),
-        "FBX for Unity's importer: left-handed Y-up object frame, box data in float UV channels "
-        "(skinned meshes: frame in NORMAL + TANGENT)",
-        layouts=("UV_FRAME", "CLASSIC", "NORMAL_FRAME"),
-        import_settings="Model import: Read/Write on (or Player > Vertex Compression: untick Tex Coord 2-7), "
-                        "Mesh Compression Off; UV_FRAME needs no vertex colour; NORMAL_FRAME (skinned meshes): Normals "
-                        "Import, Tangents Import (their frame is the box's)",
-        half_float_uvs=(2, 3, 4, 5, 6), default_import_loss="vertex compression: half-float UV2-UV6",
-        import_fix="engines/unity's postprocessor sets it, or in the model import Read/Write on"),
-    "UNREAL": Preset(
-        "UNREAL", "Unreal (FBX)", ".fbx", np.eye(3), np.array([1.0, -1.0, 1.0]),
-        "FBX for Unreal's importer: left-handed Z-up centimetres (y mirrored), V flipped, box data in float UVs",
-        layouts=("UV_FRAME",), length_scale=100.0, flip_v_on_import=True,
-        import_settings="Static mesh import: Use Full Precision UVs on (else UVs are 16-bit halves), "
-                        "Generate Lightmap UVs off (it writes into UV channel 1), Convert Scene on (default)",
-        half_float_uvs=(1, 2, 3, 4, 5, 6), default_import_loss="16-bit half-float UVs",
-        import_fix="import with engines/unreal/boxmarch_import.py, or Use Full Precision UVs on"),
-    "BLENDER": Preset(
-        "BLENDER", "Blender (raw)", ".blend", np.eye(3), np.ones(3),
-        "The selected objects in a .blend, baked data in Blender's own object space"),
-}
+from .layouts import quaternion_matrices
+from .presets import Preset
 
 
 def matrix_quaternions(m) -> np.ndarray:

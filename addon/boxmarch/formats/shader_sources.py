@@ -6,7 +6,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .. import core, layouts
+from .. import core
+from . import layouts
 
 _PACKAGE = Path(__file__).resolve().parent.parent
 
@@ -24,7 +25,7 @@ def read_glsl(name: str) -> str:
 
 
 # The create-info of the preview shader. Types are Blender's create-info type names.
-# Per engine layout (boxmarch/layouts.py): pos and the layout's per-vertex channels but those of
+# Per engine layout (boxmarch/formats/layouts.py): pos and the layout's per-vertex channels but those of
 # its box parameters (Layout.channels less Layout.param_channels), "ch_" + the channel's name in
 # lower case (COLOR -> ch_color, UV1 -> ch_uv1), as layouts.channels() writes them; ch_half:
 # per-vertex half-extents where the layout has none per vertex (CLASSIC carries only the largest,
