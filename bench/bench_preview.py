@@ -208,11 +208,11 @@ def skinned(bpy, ob, view, projection, boxed_frame, repeats):
 
     def update():
         draw.pose_changed(ob.name_full)
-        draw._drawing(ob, depsgraph)
+        draw.drawing(ob, depsgraph)
 
     pose_update = best_of(repeats, update)
     modifier = skinning.armature_modifier(ob)
-    weights = draw._posed[ob.name_full].weights
+    weights = draw.posed_state(ob.name_full).weights
     frames_only = best_of(repeats, lambda: skinning.skin_linear(weights, skinning.bone_deformations(
         ob, modifier, weights.bones, depsgraph)))
     positions_only = best_of(repeats, lambda: skinning.evaluated_positions(ob, depsgraph, len(positions)))

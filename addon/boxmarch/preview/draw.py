@@ -209,7 +209,7 @@ def _posed_drawing(ob, layout, modifier, depsgraph) -> _Drawn:
     return posed.drawn
 
 
-def _drawing(ob, depsgraph) -> _Drawn:
+def drawing(ob, depsgraph) -> _Drawn:
     """What ``ob`` draws from: posed when it has an Armature modifier, else its mesh at rest."""
     layout = ob.boxmarch.layout
     modifier = skinning.armature_modifier(ob)
@@ -303,7 +303,7 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, 
     object_to_view = np.array(view_matrix, np.float64) @ matrix_world
     object_to_clip = np.array(projection_matrix, np.float64) @ object_to_view
     try:
-        drawn = _drawing(ob, depsgraph if depsgraph is not None else bpy.context.evaluated_depsgraph_get())
+        drawn = drawing(ob, depsgraph if depsgraph is not None else bpy.context.evaluated_depsgraph_get())
     except mesh_data.NotBakedError as exc:
         errors[ob.name] = str(exc)
         return False
