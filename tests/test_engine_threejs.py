@@ -91,6 +91,65 @@ SORT_JOB = """async function (gltf) {
 }""".replace("__CAMERA__", json.dumps(WIDE)).replace("__W__", str(W)).replace("__H__", str(H))
 
 
+# The shipped material's stages as the release's three.js hands them to WebGL (the page's first
+# mesh drawn once with createBoxmarchMaterial's defaults, shaderSource recorded), the context's
+# requests for EXT_conservative_depth among them ("getExtension" in ``calls``, in order with
+# "vertex" and "fragment"), whether the context offers the extension, and on WebGL 2 what its
+# compiler (ANGLE) says of the fragment text as built and with depth_greater misspelled, on a
+# context that handed the extension out and on one that did not ('ok' or the compile log).
+STAGES_JOB = """function (gltf) {
+  var sources = [], calls = [], prototypes = [WebGLRenderingContext.prototype];
+  if (typeof WebGL2RenderingContext !== 'undefined') prototypes.push(WebGL2RenderingContext.prototype);
+  var originals = prototypes.map(function (p) { return {shaderSource: p.shaderSource, getExtension: p.getExtension}; });
+  prototypes.forEach(function (p, i) {
+    p.shaderSource = function (shader, text) {
+      sources.push(text);
+      calls.push(calls.indexOf('vertex') < 0 ? 'vertex' : 'fragment');
+      return originals[i].shaderSource.call(this, shader, text);
+    };
+    p.getExtension = function (name) {
+      if (name === 'EXT_conservative_depth') calls.push('getExtension');
+      return originals[i].getExtension.call(this, name);
+    };
+  });
+  var renderer = new THREE.WebGLRenderer({canvas: document.createElement('canvas')});
+  try {
+    renderer.setSize(64, 64, false);
+    var mesh = null;
+    gltf.scene.traverse(function (o) { if (o.isMesh && !mesh) mesh = o; });
+    useBoxmarchMaterial(THREE, mesh, createBoxmarchMaterial(THREE));
+    var camera = new THREE.PerspectiveCamera(50, 1, 0.1, 100);
+    camera.position.set(0, 0, 20);
+    var scene = new THREE.Scene();
+    scene.add(mesh);
+    renderer.render(scene, camera);
+  } finally {
+    prototypes.forEach(function (p, i) { p.shaderSource = originals[i].shaderSource; p.getExtension = originals[i].getExtension; });
+  }
+  var gl = renderer.getContext(), webgl2 = typeof WebGL2RenderingContext !== 'undefined' && gl instanceof WebGL2RenderingContext;
+  var result = {vertex: sources[0], fragment: sources[1], stages: sources.length, calls: calls, webgl2: webgl2,
+                extension: (gl.getSupportedExtensions() || []).indexOf('EXT_conservative_depth') >= 0, angle: null};
+  renderer.dispose();
+  renderer.forceContextLoss();
+  if (!webgl2) return result;
+  function compile(context, text) {
+    var shader = context.createShader(context.FRAGMENT_SHADER);
+    context.shaderSource(shader, text);
+    context.compileShader(shader);
+    var log = context.getShaderParameter(shader, context.COMPILE_STATUS) ? 'ok' : context.getShaderInfoLog(shader);
+    context.deleteShader(shader);
+    return log;
+  }
+  var misspelled = result.fragment.replace('layout(depth_greater)', 'layout(depth_greatr)');
+  var handedOut = document.createElement('canvas').getContext('webgl2'), withheld = document.createElement('canvas').getContext('webgl2');
+  result.angle = {handed_out: !!handedOut.getExtension('EXT_conservative_depth'),
+                  as_built: compile(handedOut, result.fragment), misspelled: compile(handedOut, misspelled),
+                  withheld_as_built: compile(withheld, result.fragment), withheld_misspelled: compile(withheld, misspelled)};
+  [handedOut, withheld].forEach(function (c) { c.getExtension('WEBGL_lose_context').loseContext(); });
+  return result;
+}"""
+
+
 def covered(shot):
     return shot.pixels[..., 3] > 0
 
@@ -136,7 +195,7 @@ def page(request, exported):
                                                        for k, v in out.items()})
     jobs["per-box"] = threejs.render_job(setup_js(PER_BOX_MAP), W, H, WIDE)
     jobs["loader-undeclared"] = threejs.render_job(loader_setup_js("mixed", BOX_MAP, declare_depth=False), W, H, WIDE)
-    jobs["stages"] = threejs.Job(threejs.STAGES_JOB)
+    jobs["stages"] = threejs.Job(STAGES_JOB)
     # classic.glb and future.glb are not served: a refusal that fetched the .glb would say 404 instead
     for name in ("classic", "future", "missing"):
         jobs[f"refuse-{name}"] = refusal_job(f"await loadBoxmarch(THREE, GLTFLoader, '{name}.glb', {{}});")
@@ -278,7 +337,8 @@ def glslang(tmp_path, text):
 def test_webgl2_fragment_declares_depth_greater_where_the_extension_is_handed_out(page, tmp_path):
     """The fragment text three.js r180 hands WebGL 2: #version 300 es, then only #define lines
     before the #extension line, the declaration under #ifdef GL_EXT_conservative_depth. ANGLE
-    (Chromium's compiler, on SwiftShader, which offers the extension) compiles it; with
+    (Chromium's compiler, on SwiftShader, which offers the extension; the material asked the
+    renderer's context for it before compiling) compiles it; with
     depth_greater misspelled it refuses it on a context that handed the extension out (so the
     declared branch is compiled) and compiles it on one that did not (the branch left out).
     glslangValidator compiles it as GLSL ES 3.00: Debian's glslang 12 does not know
@@ -290,6 +350,7 @@ def test_webgl2_fragment_declares_depth_greater_where_the_extension_is_handed_ou
     assert stages["stages"] == 2 and "bmEye" in stages["fragment"]
     if out["release"] == "r111":
         assert not stages["webgl2"] and "conservative_depth" not in stages["fragment"]
+        assert "getExtension" not in stages["calls"]
         return
     lines = stages["fragment"].splitlines()
     assert lines[0] == "#version 300 es"
@@ -298,6 +359,8 @@ def test_webgl2_fragment_declares_depth_greater_where_the_extension_is_handed_ou
     declared = lines.index("layout(depth_greater) out highp float gl_FragDepth;")
     assert lines[declared - 1] == "#ifdef GL_EXT_conservative_depth" and lines[declared + 1] == "#endif"
     assert stages["extension"] is True  # SwiftShader's WebGL 2 offers it: the declared branch runs here
+    # the material's onBeforeCompile asked the renderer's context for it before the stages were compiled
+    assert stages["calls"] == ["getExtension", "vertex", "fragment"], stages["calls"]
     angle = stages["angle"]
     assert angle["handed_out"] is True
     assert angle["as_built"] == "ok" and angle["withheld_as_built"] == "ok", angle

@@ -159,56 +159,6 @@ _RENDER_JOB = """async function (gltf) {
 }"""
 
 
-# The shipped material's stages as the release's three.js hands them to WebGL (the page's first
-# mesh drawn once with createBoxmarchMaterial's defaults, shaderSource recorded), whether the
-# context offers EXT_conservative_depth, and on WebGL 2 what its compiler (ANGLE) says of the
-# fragment text as built and with depth_greater misspelled, on a context that handed the extension
-# out and on one that did not ('ok' or the compile log).
-STAGES_JOB = """function (gltf) {
-  var sources = [], prototypes = [WebGLRenderingContext.prototype];
-  if (typeof WebGL2RenderingContext !== 'undefined') prototypes.push(WebGL2RenderingContext.prototype);
-  var originals = prototypes.map(function (p) { return p.shaderSource; });
-  prototypes.forEach(function (p, i) {
-    p.shaderSource = function (shader, text) { sources.push(text); return originals[i].call(this, shader, text); };
-  });
-  var renderer = new THREE.WebGLRenderer({canvas: document.createElement('canvas')});
-  try {
-    renderer.setSize(64, 64, false);
-    var mesh = null;
-    gltf.scene.traverse(function (o) { if (o.isMesh && !mesh) mesh = o; });
-    useBoxmarchMaterial(THREE, mesh, createBoxmarchMaterial(THREE));
-    var camera = new THREE.PerspectiveCamera(50, 1, 0.1, 100);
-    camera.position.set(0, 0, 20);
-    var scene = new THREE.Scene();
-    scene.add(mesh);
-    renderer.render(scene, camera);
-  } finally {
-    prototypes.forEach(function (p, i) { p.shaderSource = originals[i]; });
-  }
-  var gl = renderer.getContext(), webgl2 = typeof WebGL2RenderingContext !== 'undefined' && gl instanceof WebGL2RenderingContext;
-  var result = {vertex: sources[0], fragment: sources[1], stages: sources.length, webgl2: webgl2,
-                extension: (gl.getSupportedExtensions() || []).indexOf('EXT_conservative_depth') >= 0, angle: null};
-  renderer.dispose();
-  renderer.forceContextLoss();
-  if (!webgl2) return result;
-  function compile(context, text) {
-    var shader = context.createShader(context.FRAGMENT_SHADER);
-    context.shaderSource(shader, text);
-    context.compileShader(shader);
-    var log = context.getShaderParameter(shader, context.COMPILE_STATUS) ? 'ok' : context.getShaderInfoLog(shader);
-    context.deleteShader(shader);
-    return log;
-  }
-  var misspelled = result.fragment.replace('layout(depth_greater)', 'layout(depth_greatr)');
-  var handedOut = document.createElement('canvas').getContext('webgl2'), withheld = document.createElement('canvas').getContext('webgl2');
-  result.angle = {handed_out: !!handedOut.getExtension('EXT_conservative_depth'),
-                  as_built: compile(handedOut, result.fragment), misspelled: compile(handedOut, misspelled),
-                  withheld_as_built: compile(withheld, result.fragment), withheld_misspelled: compile(withheld, misspelled)};
-  [handedOut, withheld].forEach(function (c) { c.getExtension('WEBGL_lose_context').loseContext(); });
-  return result;
-}"""
-
-
 def shipped_material(release="r111"):
     """The text of the shipped material file the release loads (shaders/threejs/), as it is."""
     from boxmarch.preview import sources
