@@ -7,17 +7,20 @@ scene, and drawn from bench_gpu_cost's camera. Timed from render() to a 1-pixel 
 waits for the frame) on the serving process's clock less one reading's round trip (*clock ms*),
 round robin over the configurations, best of REPEATS frames each. Rows:
 
-* plain: the material as loadBoxmarch sets it (file order, quality 1);
+* plain: the material as loadBoxmarch sets it (file order, quality 1): on r180 the
+  RawShaderMaterial declaring layout(depth_greater) (EXT_conservative_depth, which SwiftShader's
+  WebGL 2 offers), on r111 the ShaderMaterial (WebGL 1 has no declaration);
 * front to back: loadBoxmarch's frontToBack (sortBoxmarchFrontToBack before each draw; the camera
   stands still, so the boxes are sorted once, before the timed frames);
-* quality 0.5: the quality knob; both: the two together.
+* quality 0.5: the quality knob; both: the two together;
+* r180 only, the ShaderMaterial without the declaration (declareDepth false), in file order and
+  front to back: what the declaration changes, same scenes, same run.
 
 Pixels changed: pixels whose colour differs from plain's by more than 1/255, as a share of the
 pixels covered in either image. *sort ms*: one sortBoxmarchFrontToBack after the eye moved (mean
 of 20).
-The material writes gl_FragDepth without a conservative-depth declaration (three.js's
-ShaderMaterial cannot put the #extension line first, docs/ENGINES.md), so the depth test runs after
-the march whatever the order: the front-to-back rows measure what the order costs there.
+On a GPU that keeps its early depth test for a declared depth write, front to back lets it reject
+the fragments of hidden boxes before their march; the rows say what SwiftShader makes of it.
 
     PYTHONPATH=addon python3 -m bench.bench_threejs_cost        # PyPI bpy for the bake and the export
 """
@@ -33,8 +36,10 @@ HERE = Path(__file__).resolve().parent
 SIZE, REPEATS = 320, 7
 SCENES = ("chain down the arm", "pile")
 MAPS = {"LINK": "return sdf_preset_link(p, box_half);"}
-CONFIGS = (("plain", 1.0, False), ("front to back", 1.0, True), ("quality 0.5", 0.5, False),
-           ("front to back + quality 0.5", 0.5, True))
+# label, quality, front to back, declareDepth (the loader's option: false gives the ShaderMaterial)
+CONFIGS = (("plain", 1.0, False, True), ("front to back", 1.0, True, True), ("quality 0.5", 0.5, False, True),
+           ("front to back + quality 0.5", 0.5, True, True), ("ShaderMaterial (undeclared)", 1.0, False, False),
+           ("ShaderMaterial, front to back", 1.0, True, False))
 
 TIMING_JOB = """async function (gltf) {
   var W = __SIZE__, H = __SIZE__, cam = __CAMERA__, configs = __CONFIGS__;
@@ -46,13 +51,14 @@ TIMING_JOB = """async function (gltf) {
   camera.position.fromArray(cam.position);
   camera.up.fromArray(cam.up);
   camera.lookAt(new THREE.Vector3().fromArray(cam.target));
-  var drawn = [];
+  var drawn = [], declared = [];
   for (var i = 0; i < configs.length; i++) {
     var loaded = await loadBoxmarch(THREE, GLTFLoader, 'model.glb', {map: __MAP__, quality: configs[i][1],
-      frontToBack: configs[i][2], maxSteps: 64, epsilon: 1e-3});
+      frontToBack: configs[i][2], declareDepth: configs[i][3], maxSteps: 64, epsilon: 1e-3});
     var scene = new THREE.Scene();
     scene.add(loaded.scene);
     drawn.push({scene: scene, mesh: loaded.meshes[0]});
+    declared.push(!!loaded.meshes[0].material.isRawShaderMaterial);
   }
   // The serving process's clock (performance.now() stands still under Chromium's virtual time
   // once the page has awaited anything); a reading costs a loopback round trip, taken off below.
@@ -92,9 +98,11 @@ TIMING_JOB = """async function (gltf) {
     sortBoxmarchFrontToBack(THREE, mesh, camera);
   }
   var sortMs = (now() - start - overhead) / 20;
+  var extension = (gl.getSupportedExtensions() || []).indexOf('EXT_conservative_depth') >= 0;
   renderer.dispose();
   renderer.forceContextLoss();
-  return {best: best, images: images, sort_ms: sortMs, boxes: mesh.userData.boxmarchBoxes.count, overhead: overhead};
+  return {best: best, images: images, sort_ms: sortMs, boxes: mesh.userData.boxmarchBoxes.count, overhead: overhead,
+          declared: declared, extension: extension};
 }"""
 
 
@@ -124,8 +132,10 @@ def rows_for(name, scene, glb, sidecar, release):
     from tests.engines import threejs
 
     _origins, _rotations, _half, sdf, (_to_clip, to_view, eye) = scene
+    # before r163 declareDepth changes nothing: the ShaderMaterial rows would repeat the others
+    configs = [c for c in CONFIGS if c[3] or int(threejs.RELEASES[release].revision) >= 163]
     parts = {"__SIZE__": str(SIZE), "__CAMERA__": json.dumps(three_camera(to_view, eye)),
-             "__CONFIGS__": json.dumps(CONFIGS), "__MAP__": json.dumps(MAPS[sdf]), "__REPEATS__": str(REPEATS),
+             "__CONFIGS__": json.dumps(configs), "__MAP__": json.dumps(MAPS[sdf]), "__REPEATS__": str(REPEATS),
              "__CLOCK__": threejs.CLOCK}
     js = TIMING_JOB
     for key, value in parts.items():
@@ -134,10 +144,11 @@ def rows_for(name, scene, glb, sidecar, release):
                            {"model.boxmarch.json": sidecar})[0]
     images = [np.frombuffer(base64.b64decode(b), np.uint8).reshape(SIZE, SIZE, 4).astype(int) for b in out["images"]]
     rows = []
-    for (label, _quality, _sort), best, image in zip(CONFIGS, out["best"], images):
+    for (label, _quality, _sort, _declare), declared, best, image in zip(configs, out["declared"], out["best"], images):
         covered = (images[0][..., 3] > 0) | (image[..., 3] > 0)
         changed = (np.abs(image - images[0])[..., :3].max(-1) > 1) & covered
-        rows.append([name, f"r{threejs.RELEASES[release].revision}", label, f"{best:.0f}",
+        depth = "depth_greater" if declared and out["extension"] else "none"
+        rows.append([name, f"r{threejs.RELEASES[release].revision}", label, depth, f"{best:.1f}",
                      f"{out['best'][0] / best:.2f}x", f"{100 * changed.sum() / max(covered.sum(), 1):.2f}%",
                      f"{100 * covered.mean():.0f}%", f"{out['sort_ms']:.1f} ({out['boxes']} boxes)",
                      f"{out['overhead']:.1f}"])
@@ -163,7 +174,7 @@ def main():
             for release in releases:
                 rows += rows_for(name, made[name], glb, sidecar, release)
     print(f"three.js on SwiftShader (headless Chromium), {SIZE} x {SIZE} px, best of {REPEATS}")
-    print(table(["scene", "three.js", "material", "frame ms", "speed-up", "pixels changed", "covered",
+    print(table(["scene", "three.js", "material", "declared", "frame ms", "speed-up", "pixels changed", "covered",
                  "sort ms", "clock ms"], rows))
 
 

@@ -2,8 +2,9 @@
 each rigidly weighted to its bone (tests/engine_scene.py), baked at rest and exported with the
 GLTF preset (NORMAL_FRAME: the frame rides in NORMAL + TANGENT, which skinning turns). The .glb
 goes unmodified into three.js's GLTFLoader as a SkinnedMesh, in r111 (WebGL 1) and r180 (WebGL 2);
-the page turns each joint 40 degrees and the shipped ShaderMaterial (``skinning: true``, which r111
-needs and r180 ignores) raymarches a box at 0.6 of each box's half-extents. The pixels must cover
+the page turns each joint 40 degrees and the shipped material (``skinning: true``, which r111 and
+r180 read; r180's is the RawShaderMaterial declaring its depth, drawing bit for bit the
+ShaderMaterial's picture) raymarches a box at 0.6 of each box's half-extents. The pixels must cover
 the posed boxes' silhouettes within 1 px, the posed boxes coming from the test's own forward
 kinematics of the rest boxes (engine_scene.posed_rig_boxes); so must the same file drawn by the
 one-call loader (loadBoxmarch). Negative control: the same render with the rest-pose frame (what
@@ -78,13 +79,28 @@ def setup_js(frame_tamper=None, angle=RIG_TURN_ANGLE):
             + " if (skinned !== 1) throw new Error(skinned + ' skinned meshes');")
 
 
-# The file as loadBoxmarch loads it from skinned.glb (and skinned.boxmarch.json), in place of the
-# page's own parse, then posed: no skinning flag given, the loader sets the material per mesh.
-LOADER_SETUP = ("scene.remove(gltf.scene);"
-                f" gltf = await loadBoxmarch(THREE, GLTFLoader, 'skinned.glb', {{map: {BOX_MAP!r},"
-                " color: new THREE.Color(1, 1, 1), maxSteps: 256}); scene.add(gltf.scene);"
-                " if (gltf.meshes.length !== 1 || !gltf.meshes[0].isSkinnedMesh) throw new Error('not one SkinnedMesh');"
-                " gltf.meshes[0].frustumCulled = false;\n" + threejs.pose_bones_js(bone_turns(), RIG_TURN_ANGLE))
+def loader_setup(declare_depth=True):
+    """The file as loadBoxmarch loads it from skinned.glb (and skinned.boxmarch.json), in place of
+    the page's own parse, then posed: no skinning flag given, the loader sets the material per mesh
+    (``declare_depth`` False: the ShaderMaterial on r163+ too)."""
+    return ("scene.remove(gltf.scene);"
+            f" gltf = await loadBoxmarch(THREE, GLTFLoader, 'skinned.glb', {{map: {BOX_MAP!r},"
+            f" color: new THREE.Color(1, 1, 1), maxSteps: 256, declareDepth: {str(declare_depth).lower()}}});"
+            " scene.add(gltf.scene);"
+            " if (gltf.meshes.length !== 1 || !gltf.meshes[0].isSkinnedMesh) throw new Error('not one SkinnedMesh');"
+            " gltf.meshes[0].frustumCulled = false;\n" + threejs.pose_bones_js(bone_turns(), RIG_TURN_ANGLE))
+
+
+# A SkinnedMesh given a material made without skinning: the error's message, or 'no error'.
+UNSKINNED_MATERIAL_JOB = """function (gltf) {
+  var mesh = null;
+  gltf.scene.traverse(function (o) { if (o.isSkinnedMesh) mesh = o; });
+  var before = mesh.material;
+  try { useBoxmarchMaterial(THREE, mesh, createBoxmarchMaterial(THREE, {})); } catch (e) {
+    return mesh.material === before ? String(e.message) : 'changed the mesh: ' + e.message;
+  }
+  return 'no error';
+}"""
 
 
 def posed_silhouettes(shot):
@@ -105,12 +121,13 @@ def shots(request, exported):
     if reason:
         pytest.skip(reason)
     glb = exported[0].read_bytes()
-    jobs = {"side": setup_js(), "top": setup_js(), "rest-frame": setup_js(REST_FRAME), "loader": LOADER_SETUP}
-    cameras = {"side": SIDE, "top": TOP, "rest-frame": SIDE, "loader": SIDE}
+    jobs = {"side": setup_js(), "top": setup_js(), "rest-frame": setup_js(REST_FRAME), "loader": loader_setup(),
+            "loader-undeclared": loader_setup(declare_depth=False)}
+    cameras = {"side": SIDE, "top": TOP, "rest-frame": SIDE, "loader": SIDE, "loader-undeclared": SIDE}
     files = {"skinned.glb": glb, "skinned.boxmarch.json": exported[0].with_suffix(".boxmarch.json").read_bytes()}
-    results = threejs.run_jobs(glb, [threejs.render_job(js, W, H, cameras[k]) for k, js in jobs.items()],
-                               threejs.shipped_material(release), release, files)
-    return dict(zip(jobs, results))
+    renders = [threejs.render_job(js, W, H, cameras[k]) for k, js in jobs.items()]
+    results = threejs.run_jobs(glb, renders + [UNSKINNED_MATERIAL_JOB], threejs.shipped_material(release), release, files)
+    return dict(zip([*jobs, "unskinned-material"], results), release=release)
 
 
 def test_skinned_export_holds_the_skin_at_rest_and_says_so(exported):
@@ -142,6 +159,19 @@ def test_threejs_raymarches_each_box_where_the_posed_bone_carries_it(shots, view
     mismatch = coverage_mismatch(covered(shot), expected)
     assert mismatch is None, mismatch
     assert covered(shot).sum() > 1500
+
+
+def test_threejs_raw_material_draws_the_shader_materials_posed_picture(shots):
+    """r180's default RawShaderMaterial (layout(depth_greater), USE_SKINNING defined itself) and
+    the ShaderMaterial (declareDepth false) draw the posed rig bit for bit alike."""
+    assert covered(shots["loader"]).sum() > 1500
+    assert np.array_equal(shots["loader-undeclared"].pixels, shots["loader"].pixels)
+
+
+def test_threejs_refuses_a_material_made_without_skinning_on_a_skinned_mesh(shots):
+    """r111 and r180 read the skinning flag: a mismatch is refused, the mesh left as it was."""
+    assert shots["unskinned-material"] == (f"boxmarch: a SkinnedMesh needs createBoxmarchMaterial(THREE, "
+                                           f"{{skinning: true}}) on three.js r{threejs.RELEASES[shots['release']].revision}")
 
 
 @pytest.mark.slow

@@ -1,13 +1,15 @@
 """Proof in real engines: the GLTF preset's .glb loaded unmodified by three.js r111 (Debian's,
 WebGL 1) and r180 (NiceGUI's ES module build, WebGL 2) GLTFLoaders in headless Chromium. The test
 decodes what three.js put in its buffers with the documented formula (docs/ENGINES.md) and checks
-it against the generating box geometry; then the shipped ShaderMaterial (shaders/threejs/,
-unmodified, the release's file) raymarches every box and the pixels must cover each box's
+it against the generating box geometry; then the shipped material (shaders/threejs/, unmodified,
+the release's file: a ShaderMaterial on r111, on r180 a RawShaderMaterial declaring its depth)
+raymarches every box and the pixels must cover each box's
 projected silhouette within 1 px. Negative controls (a channel zeroed, the frame replaced by the
 identity) must fail the same checks. The one-call loader (loadBoxmarch) draws the same file from
 its URL and sidecar, and refuses a sidecar it does not read. One Chromium page per release runs
 every render of this file (module-scoped ``page``)."""
 import json
+import subprocess
 
 import numpy as np
 import pytest
@@ -58,12 +60,15 @@ def setup_js(sdf_body, tamper=""):
             f"color: new THREE.Color(1, 1, 1), maxSteps: 256}})); }});")
 
 
-def loader_setup_js(name, sdf_body, front_to_back=False):
-    """Draws ``name``.glb as ``loadBoxmarch`` loads it (in place of the page's own parse)."""
+def loader_setup_js(name, sdf_body, front_to_back=False, declare_depth=True):
+    """Draws ``name``.glb as ``loadBoxmarch`` loads it (in place of the page's own parse);
+    ``declare_depth`` False: the ShaderMaterial without the depth declaration on r163+ too."""
     return (f"scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, '{name}.glb', "
             f"{{map: {json.dumps(sdf_body)}, color: new THREE.Color(1, 1, 1), maxSteps: 256, "
-            f"frontToBack: {json.dumps(front_to_back)}}});"
-            " scene.add(loaded.scene); if (!loaded.meshes.length) throw new Error('loadBoxmarch: no meshes');")
+            f"frontToBack: {json.dumps(front_to_back)}, declareDepth: {json.dumps(declare_depth)}}});"
+            " scene.add(loaded.scene); if (!loaded.meshes.length) throw new Error('loadBoxmarch: no meshes');"
+            " if (!!loaded.meshes[0].material.isRawShaderMaterial !== (parseInt(THREE.REVISION, 10) >= 163 && "
+            f"{json.dumps(declare_depth)})) throw new Error('not the material asked for');")
 
 
 def refusal_job(js):
@@ -94,6 +99,65 @@ SORT_JOB = """async function (gltf) {
   return {file: __f64(file), sorted: __f64(mesh.geometry.index.array),
           sorted_again: sortBoxmarchFrontToBack(THREE, mesh, camera)};
 }""".replace("__CAMERA__", json.dumps(WIDE)).replace("__W__", str(W)).replace("__H__", str(H))
+
+
+# The shipped material's stages as the release's three.js hands them to WebGL (the page's first
+# mesh drawn once with createBoxmarchMaterial's defaults, shaderSource recorded), the context's
+# requests for EXT_conservative_depth among them ("getExtension" in ``calls``, in order with
+# "vertex" and "fragment"), whether the context offers the extension, and on WebGL 2 what its
+# compiler (ANGLE) says of the fragment text as built and with depth_greater misspelled, on a
+# context that handed the extension out and on one that did not ('ok' or the compile log).
+STAGES_JOB = """function (gltf) {
+  var sources = [], calls = [], prototypes = [WebGLRenderingContext.prototype];
+  if (typeof WebGL2RenderingContext !== 'undefined') prototypes.push(WebGL2RenderingContext.prototype);
+  var originals = prototypes.map(function (p) { return {shaderSource: p.shaderSource, getExtension: p.getExtension}; });
+  prototypes.forEach(function (p, i) {
+    p.shaderSource = function (shader, text) {
+      sources.push(text);
+      calls.push(calls.indexOf('vertex') < 0 ? 'vertex' : 'fragment');
+      return originals[i].shaderSource.call(this, shader, text);
+    };
+    p.getExtension = function (name) {
+      if (name === 'EXT_conservative_depth') calls.push('getExtension');
+      return originals[i].getExtension.call(this, name);
+    };
+  });
+  var renderer = new THREE.WebGLRenderer({canvas: document.createElement('canvas')});
+  try {
+    renderer.setSize(64, 64, false);
+    var mesh = null;
+    gltf.scene.traverse(function (o) { if (o.isMesh && !mesh) mesh = o; });
+    useBoxmarchMaterial(THREE, mesh, createBoxmarchMaterial(THREE));
+    var camera = new THREE.PerspectiveCamera(50, 1, 0.1, 100);
+    camera.position.set(0, 0, 20);
+    var scene = new THREE.Scene();
+    scene.add(mesh);
+    renderer.render(scene, camera);
+  } finally {
+    prototypes.forEach(function (p, i) { p.shaderSource = originals[i].shaderSource; p.getExtension = originals[i].getExtension; });
+  }
+  var gl = renderer.getContext(), webgl2 = typeof WebGL2RenderingContext !== 'undefined' && gl instanceof WebGL2RenderingContext;
+  var result = {vertex: sources[0], fragment: sources[1], stages: sources.length, calls: calls, webgl2: webgl2,
+                extension: (gl.getSupportedExtensions() || []).indexOf('EXT_conservative_depth') >= 0, angle: null};
+  renderer.dispose();
+  renderer.forceContextLoss();
+  if (!webgl2) return result;
+  function compile(context, text) {
+    var shader = context.createShader(context.FRAGMENT_SHADER);
+    context.shaderSource(shader, text);
+    context.compileShader(shader);
+    var log = context.getShaderParameter(shader, context.COMPILE_STATUS) ? 'ok' : context.getShaderInfoLog(shader);
+    context.deleteShader(shader);
+    return log;
+  }
+  var misspelled = result.fragment.replace('layout(depth_greater)', 'layout(depth_greatr)');
+  var handedOut = document.createElement('canvas').getContext('webgl2'), withheld = document.createElement('canvas').getContext('webgl2');
+  result.angle = {handed_out: !!handedOut.getExtension('EXT_conservative_depth'),
+                  as_built: compile(handedOut, result.fragment), misspelled: compile(handedOut, misspelled),
+                  withheld_as_built: compile(withheld, result.fragment), withheld_misspelled: compile(withheld, misspelled)};
+  [handedOut, withheld].forEach(function (c) { c.getExtension('WEBGL_lose_context').loseContext(); });
+  return result;
+}"""
 
 
 def covered(shot):
@@ -140,6 +204,8 @@ def page(request, exported):
     jobs["sort"] = threejs.Job(SORT_JOB, lambda out: {k: threejs.f64(v) if isinstance(v, str) else v
                                                        for k, v in out.items()})
     jobs["per-box"] = threejs.render_job(setup_js(PER_BOX_MAP), W, H, WIDE)
+    jobs["loader-undeclared"] = threejs.render_job(loader_setup_js("mixed", BOX_MAP, declare_depth=False), W, H, WIDE)
+    jobs["stages"] = threejs.Job(STAGES_JOB)
     # classic.glb and future.glb are not served: a refusal that fetched the .glb would say 404 instead
     for name in ("classic", "future", "missing"):
         jobs[f"refuse-{name}"] = refusal_job(f"await loadBoxmarch(THREE, GLTFLoader, '{name}.glb', {{}});")
@@ -257,3 +323,61 @@ def test_load_boxmarch_refuses_a_sidecar_it_does_not_read(page):
 def test_material_refuses_a_classic_export(page):
     # CLASSIC holds TEXCOORD_1..5 (frame, then the box parameters): the first one missing is 6
     assert "no TEXCOORD_6" in page[0]["material-on-classic"]
+
+
+def test_raw_material_draws_the_shader_materials_picture(page):
+    """On r180 loadBoxmarch's default is the RawShaderMaterial declaring layout(depth_greater);
+    declareDepth false gives the ShaderMaterial: the same pixels, bit for bit (r111: both are the
+    ShaderMaterial)."""
+    out = page[0]
+    assert covered(out["loader"]).sum() > 500
+    assert np.array_equal(out["loader-undeclared"].pixels, out["loader"].pixels)
+
+
+def glslang(tmp_path, text):
+    """glslangValidator's (return code, output) for a fragment text."""
+    from tests.helpers.glsl import validator
+
+    path = tmp_path / "threejs.frag"
+    path.write_text(text)
+    proc = subprocess.run([validator(), str(path)], capture_output=True, text=True)
+    return proc.returncode, proc.stdout + proc.stderr
+
+
+def test_webgl2_fragment_declares_depth_greater_where_the_extension_is_handed_out(page, tmp_path):
+    """The fragment text three.js r180 hands WebGL 2: #version 300 es, then only #define lines
+    before the #extension line, the declaration under #ifdef GL_EXT_conservative_depth. ANGLE
+    (Chromium's compiler, on SwiftShader, which offers the extension; the material asked the
+    renderer's context for it before compiling) compiles it; with
+    depth_greater misspelled it refuses it on a context that handed the extension out (so the
+    declared branch is compiled) and compiles it on one that did not (the branch left out).
+    glslangValidator compiles it as GLSL ES 3.00: Debian's glslang 12 does not know
+    GL_EXT_conservative_depth for ES, warns and leaves the branch out (ANGLE compiled it above);
+    negative control: the declaration without its #extension line and #ifdef must fail there (no
+    depth layout in plain ES 3.00). r111 (WebGL 1): the ShaderMaterial, no #extension line."""
+    out = page[0]
+    stages = out["stages"]
+    assert stages["stages"] == 2 and "bmEye" in stages["fragment"]
+    if out["release"] == "r111":
+        assert not stages["webgl2"] and "conservative_depth" not in stages["fragment"]
+        assert "getExtension" not in stages["calls"]
+        return
+    lines = stages["fragment"].splitlines()
+    assert lines[0] == "#version 300 es"
+    extension = lines.index("#extension GL_EXT_conservative_depth : enable")
+    assert all(line.startswith("#define ") for line in lines[1:extension])
+    declared = lines.index("layout(depth_greater) out highp float gl_FragDepth;")
+    assert lines[declared - 1] == "#ifdef GL_EXT_conservative_depth" and lines[declared + 1] == "#endif"
+    assert stages["extension"] is True  # SwiftShader's WebGL 2 offers it: the declared branch runs here
+    # the material's onBeforeCompile asked the renderer's context for it before the stages were compiled
+    assert stages["calls"] == ["getExtension", "vertex", "fragment"], stages["calls"]
+    angle = stages["angle"]
+    assert angle["handed_out"] is True
+    assert angle["as_built"] == "ok" and angle["withheld_as_built"] == "ok", angle
+    assert "depth_greatr" in angle["misspelled"], angle
+    assert angle["withheld_misspelled"] == "ok", angle
+    code, log = glslang(tmp_path, stages["fragment"])
+    assert code == 0, log
+    unguarded = [line for k, line in enumerate(lines) if k not in (extension, declared - 1, declared + 1)]
+    code, log = glslang(tmp_path, "\n".join(unguarded) + "\n")
+    assert code != 0 and "depth layout qualifier" in log, log

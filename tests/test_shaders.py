@@ -169,6 +169,9 @@ OWNED_ELSEWHERE = {
     "map",  # the user's distance function
     "main", "vertex", "fragment",  # entry points: three.js's stages, Godot 3's
     "projectionMatrix", "modelViewMatrix", "normalMatrix", "tangent",  # three.js's names, declared for its stages
+    # three.js's names the raw WebGL 2 material declares as its ShaderMaterial's prefix would
+    "position", "normal", "skinIndex", "skinWeight", "pc_fragColor", "gl_FragDepth",
+    "attribute", "varying", "gl_FragColor", "gl_FragDepthEXT",
     "base_color", "march_epsilon", "max_steps", "quality",  # Godot 3 material parameters, as its inspector shows them
 }
 
@@ -188,8 +191,9 @@ def top_level_names(text: str) -> list[str]:
             names.append(struct.group(1) if struct else re.search(r"(\w+)\s*\(", statement).group(1))
             depth, statement = 1, ""
         elif ch == ";":
+            statement = re.sub(r"\blayout\s*\([^)]*\)", "", statement)  # GLSL ES 3.00 qualifiers
             words = statement.split()
-            if words and words[0] not in ("shader_type", "render_mode"):
+            if words and words[0] not in ("shader_type", "render_mode", "precision"):
                 if "(" in statement.split("=")[0].split(":")[0]:  # a prototype (after ":", a Godot hint)
                     names.append(re.search(r"(\w+)\s*\(", statement).group(1))
                 else:
@@ -202,10 +206,11 @@ def top_level_names(text: str) -> list[str]:
 
 
 def threejs_stages() -> str:
-    """The GLSL of the three.js material's own stages (template.js: the varyings, both stages and the
-    lines around the user's map()), from the JavaScript string literals that make them."""
+    """The GLSL of the three.js material's own stages (template.js: the varyings, both stages, the raw
+    material's headers and the lines around the user's map()), from the JavaScript string literals that make them."""
     template = (SHADERS / "threejs" / "template.js").read_text()
-    parts = re.findall(r"^var BOXMARCH_(?:VARYINGS|VERTEX|FRAGMENT) = \[(.*?)\]\.join", template, re.S | re.M)
+    parts = re.findall(r"^var BOXMARCH_(?:VARYINGS|VERTEX|FRAGMENT|RAW_VERTEX|RAW_FRAGMENT) = \[(.*?)\]\.join",
+                       template, re.S | re.M)
     parts.append(re.search(r"^\s*fragmentShader: (.*)$", template, re.M).group(1))
     literals = re.findall(r"'((?:[^'\\]|\\.)*)'", "\n".join(parts))
     return "\n".join(literal.replace("\\n", "\n") for literal in literals)

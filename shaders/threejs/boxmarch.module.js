@@ -11,16 +11,21 @@
 //   are TANGENT (x), cross(NORMAL, TANGENT) * tangent.w (y) and NORMAL (z) where a layout carries
 //   them; f is the box-local vector from the fragment to the box's origin.
 //
-// boxmarch for three.js: a ShaderMaterial that raymarches an SDF inside every box of a mesh
-// exported with the GLTF preset (NORMAL_FRAME layout, docs/ENGINES.md). boxmarch.js is a plain
+// boxmarch for three.js: a material that raymarches an SDF inside every box of a mesh exported
+// with the GLTF preset (NORMAL_FRAME layout, docs/ENGINES.md). boxmarch.js is a plain
 // script (also CommonJS), boxmarch.module.js the same code as an ES module; both take THREE (and
 // the GLTFLoader class) as arguments and import nothing. Run by the tests, unmodified: three.js
 // r111 with its WebGL 1 context (Debian's build, classic scripts: boxmarch.js) and r180 with its
 // WebGL 2 context (ES module: boxmarch.module.js), static and skinned meshes, in headless
-// Chromium (tests/test_engine_threejs.py, tests/test_engine_skinned.py). A SkinnedMesh needs
+// Chromium (tests/test_engine_threejs.py, tests/test_engine_skinned.py). On r163 and later
+// (WebGL 2 only) the material is a GLSL ES 3.00 RawShaderMaterial whose fragment stage declares
+// its depth never nearer than the face (layout(depth_greater), EXT_conservative_depth, where the
+// context has it), so the GPU may keep its early depth test; before r163, a ShaderMaterial (whose
+// prefix leaves no room for the #extension line) without the declaration. A SkinnedMesh needs
 // `skinning: true` on r111 (three.js before r129 compiles the skinning chunks only for such a
-// material); r129 and later skin every SkinnedMesh and have no such flag (the option is then
-// ignored). Skinning moves the normal and the tangent, which carry the frame.
+// material) and on r163 and later (the raw material declares what it uses itself); a material
+// whose flag does not match its mesh is refused by useBoxmarchMaterial. Skinning moves the normal
+// and the tangent, which carry the frame.
 //
 //   loadBoxmarch(THREE, GLTFLoader, 'model.glb', { map: 'return sd_round_box(p, box_half, 0.1 * min3(box_half));' })
 //     .then((loaded) => scene.add(loaded.scene));
@@ -61,7 +66,9 @@ function prepareBoxmarchGeometry(THREE, geometry) {
 // (shape, material, random, user) are set: 'return bm_sdf_by_id(box_params.x, p, box_half);'
 // draws each box the preset its shape id picks),
 // color (THREE.Color), maxSteps, epsilon, quality (the quality knob, 0 < q <= 1, 1 = the full
-// march: shaders/glsl/raymarch.glsl bm_quality), skinning (true for a SkinnedMesh; read before r129).
+// march: shaders/glsl/raymarch.glsl bm_quality), skinning (true for a SkinnedMesh; read before r129
+// and by the raw material), declareDepth (false: the ShaderMaterial without the depth declaration
+// on r163 and later too; the same picture).
 function createBoxmarchMaterial(THREE, options) {
   options = options || {};
   var map = options.map || 'return sd_round_box(p, box_half, 0.1 * min3(box_half));';
@@ -77,12 +84,28 @@ function createBoxmarchMaterial(THREE, options) {
     fragmentShader: BOXMARCH_DECODE + '\n' + BOXMARCH_LIBRARY + '\nfloat box_index = 0.0;\nfloat map(vec3 p)\n{\n' + map + '\n}\n' + BOXMARCH_FRAGMENT,
     side: THREE.DoubleSide
   };
+  var material;
+  if (revision >= 163 && options.declareDepth !== false) {
+    // three.js puts only #version and #define lines before a raw material's text, so its
+    // #extension line is legal; r163 and later draw on WebGL 2 only, where GLSL ES 3.00 compiles.
+    parameters.glslVersion = THREE.GLSL3;
+    parameters.vertexShader = BOXMARCH_RAW_VERTEX + '\n' + parameters.vertexShader;
+    parameters.fragmentShader = BOXMARCH_RAW_FRAGMENT + '\n' + parameters.fragmentShader;
+    if (options.skinning) parameters.defines = { USE_SKINNING: '' };
+    material = new THREE.RawShaderMaterial(parameters);
+    // WebGL compiles an extension's directives only once the context has handed it out.
+    material.onBeforeCompile = function (shader, renderer) { renderer.getContext().getExtension('EXT_conservative_depth'); };
+    material.userData.boxmarchSkinning = !!options.skinning;
+    return material;
+  }
   // r129 and later skin every SkinnedMesh and warn about an unknown `skinning` property.
   if (revision < 129) parameters.skinning = !!options.skinning;
   // gl_FragDepthEXT on a WebGL 1 context (three.js maps it to gl_FragDepth on WebGL 2); r163
   // and later are WebGL 2 only and have no such extension flag.
   if (revision < 163) parameters.extensions = { fragDepth: true };
-  return new THREE.ShaderMaterial(parameters);
+  material = new THREE.ShaderMaterial(parameters);
+  if (revision < 129) material.userData.boxmarchSkinning = !!options.skinning;
+  return material;
 }
 
 // The camera in the mesh's object space, into eye (a THREE.Vector4): its position with w = 1, or
@@ -100,7 +123,13 @@ function boxmarchObjectEye(THREE, mesh, camera, inverse, eye) {
 
 // Gives a mesh the material and keeps its object-space eye up to date before every draw; with
 // frontToBack, also draws its boxes front to back (sortBoxmarchFrontToBack before every draw).
+// Throws, changing nothing, when the material's skinning flag (where it is read) does not match the mesh.
 function useBoxmarchMaterial(THREE, mesh, material, frontToBack) {
+  var skinning = material.userData.boxmarchSkinning;
+  if (skinning !== undefined && skinning !== !!mesh.isSkinnedMesh) {
+    throw new Error('boxmarch: ' + (mesh.isSkinnedMesh ? 'a SkinnedMesh needs' : 'a mesh that is not skinned needs')
+      + ' createBoxmarchMaterial(THREE, {skinning: ' + !!mesh.isSkinnedMesh + '}) on three.js r' + THREE.REVISION);
+  }
   prepareBoxmarchGeometry(THREE, mesh.geometry);
   mesh.material = material;
   var inverse = new THREE.Matrix4();
@@ -323,13 +352,43 @@ var BOXMARCH_FRAGMENT = [
   '  vec3 local_hit = ro + rd * t;',
   '  vec3 obj_hit = bmObjPos + bm_from_local(local_hit + f, x, y, z);',
   '  vec4 clip = objectToClip * vec4(obj_hit, 1.0);',
-  // Never nearer than the rasterised face. WebGL 2's EXT_conservative_depth could declare it
-  // (keeping early depth testing), but its #extension line must precede every other token and
-  // three.js's ShaderMaterial puts its precision statements first (docs/ENGINES.md).
+  // Never nearer than the rasterised face: what the raw material's layout(depth_greater) declares.
   '  gl_FragDepthEXT = max(0.5 + 0.5 * clip.z / clip.w, gl_FragCoord.z);',
   '  vec3 n = normalize(normalMatrix * bm_from_local(bm_normal(local_hit, d, bm_normal_tap(box_half)), x, y, z));',
   '  gl_FragColor = vec4(bmColor * (0.35 + 0.65 * max(n.z, 0.0)), 1.0);',
   '}'
+].join('\n');
+
+// What three.js's ShaderMaterial puts before its stages on WebGL 2 and the raw material states
+// itself: precision, the declarations the stages use, GLSL ES 1.00 words in 3.00.
+var BOXMARCH_RAW_VERTEX = [
+  'precision highp float;',
+  'precision highp int;',
+  '#define attribute in',
+  '#define varying out',
+  'uniform mat4 modelViewMatrix;',
+  'uniform mat4 projectionMatrix;',
+  'attribute vec3 position;',
+  'attribute vec3 normal;',
+  '#ifdef USE_SKINNING',
+  'attribute vec4 skinIndex;',
+  'attribute vec4 skinWeight;',
+  '#endif'
+].join('\n');
+
+// The #extension line before any other token (ESSL 3.00); without the extension (a context that
+// lacks it, or WebGL 2 where it was not handed out) the same text compiles without the declaration.
+var BOXMARCH_RAW_FRAGMENT = [
+  '#extension GL_EXT_conservative_depth : enable',
+  'precision highp float;',
+  'precision highp int;',
+  '#ifdef GL_EXT_conservative_depth',
+  'layout(depth_greater) out highp float gl_FragDepth;',
+  '#endif',
+  '#define varying in',
+  'layout(location = 0) out highp vec4 pc_fragColor;',
+  '#define gl_FragColor pc_fragColor',
+  '#define gl_FragDepthEXT gl_FragDepth'
 ].join('\n');
 
 // The shared GLSL: shaders/glsl/decode.glsl, and sdf.glsl + raymarch.glsl.
