@@ -13,17 +13,21 @@ bytes (uint32 length), or an array f/d/l/i/b (uint32 count, encoding 0 raw or 1 
 length) of float32, float64, int64, int32 or one-byte bools. The footer: a 16-byte id, zeros to
 the next 16-byte boundary, 4 zeros, the version, 120 zeros and a fixed 16-byte magic.
 
-Values read: Python bool, int, float and bytes, arrays as NumPy (little-endian ``<f4 <f8 <i8 <i4``,
-``b`` as uint8 holding the stored bytes). Written back with their type codes, so float64 stays
-float64; an array value must cast safely to its code's dtype (float64 into ``f`` is refused).
-Arrays of more than 128 bytes are written zlib-compressed (level 1), the smaller ones raw: what
-Blender's FBX exporter does, so an array this module did not change is written back as the
-exporter wrote it. Any flaw in a file (truncation, bad magic, an unknown type code, a length that
-disagrees) raises ValueError naming it."""
+Values read: Python bool, int, float and bytes, arrays as read-only NumPy arrays (little-endian
+``<f4 <f8 <i8 <i4``, ``b`` as uint8 holding the stored bytes): to change one, put a new array in
+its place. Written back with their type codes, so float64 stays float64; an array value must cast
+safely to its code's dtype (float64 into ``f`` is refused). An array read from the file and still
+in place is written back as the file stored it, compressed or not, without compressing it again;
+a new array of more than 128 bytes is zlib-compressed (level 1), a smaller one written raw, as
+Blender's FBX exporter does. zlib runs on a few threads at once (it releases the GIL). Any flaw
+in a file (truncation, bad magic, an unknown type code, a length that disagrees) raises
+ValueError naming it."""
 from __future__ import annotations
 
+import os
 import struct
 import zlib
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -59,10 +63,12 @@ class Node:
 @dataclass
 class Document:
     """A whole file: the version, the top-level nodes and the footer's 16-byte id (kept as read:
-    the FBX SDK ties it to the file's creation time)."""
+    the FBX SDK ties it to the file's creation time). ``stored``: the arrays read, by id, with
+    their type code, encoding and stored bytes, for writing them back unchanged."""
     version: int
     nodes: list
     footer_id: bytes
+    stored: dict = field(default_factory=dict, repr=False, compare=False)
 
 
 def read(path) -> Document:
@@ -91,7 +97,40 @@ def decode(data: bytes) -> Document:
     nodes, pos = reader.records(len(MAGIC) + 4, len(data), 0, top=True)
     if len(data) - pos < 16:
         raise ValueError("truncated FBX file: the footer ends before its 16-byte id")
-    return Document(version, nodes, bytes(data[pos:pos + 16]))
+    places = [(props, k) for props in reader.with_arrays for k, v in enumerate(props) if isinstance(v, _StoredArray)]
+    stored = {}
+    for (props, k), values in zip(places, _in_threads(_StoredArray.values, [props[k] for props, k in places])):
+        stored[id(values)] = (values, props[k].kind, props[k].encoding, props[k].raw)
+        props[k] = values
+    return Document(version, nodes, bytes(data[pos:pos + 16]), stored)
+
+
+def _in_threads(function, items):
+    """[function(item) ...], run on a few threads: zlib releases the GIL while it works."""
+    if len(items) < 2:
+        return [function(item) for item in items]
+    with ThreadPoolExecutor(min(8, os.cpu_count() or 1)) as pool:
+        return list(pool.map(function, items))
+
+
+class _StoredArray:
+    """An array as the file stores it, turned into values once the whole file has been read
+    (the zlib ones several at once)."""
+
+    def __init__(self, kind, encoding, raw, expected, where):
+        self.kind, self.encoding, self.raw, self.expected, self.where = kind, encoding, raw, expected, where
+
+    def values(self):
+        if self.encoding == 0:
+            return np.frombuffer(self.raw, _ARRAYS[self.kind])
+        inflate = zlib.decompressobj()
+        try:
+            values = inflate.decompress(self.raw, self.expected)
+        except zlib.error as error:
+            raise ValueError(f"{self.where}: its zlib data is damaged ({error})") from None
+        if len(values) != self.expected or inflate.unconsumed_tail or not inflate.eof:
+            raise ValueError(f"{self.where}: its zlib data does not inflate to {self.expected} bytes")
+        return np.frombuffer(values, _ARRAYS[self.kind])
 
 
 class _Reader:
@@ -100,6 +139,7 @@ class _Reader:
         wide = version >= WIDE_VERSION
         self.header = struct.Struct("<QQQB" if wide else "<IIIB")
         self.null_length = self.header.size  # a null record: a header of zeros, name length 0 included
+        self.with_arrays = []  # the property lists holding a _StoredArray
 
     def unpack(self, fmt, pos, end, what):
         size = struct.calcsize(fmt)
@@ -148,6 +188,8 @@ class _Reader:
         if cursor != props_end:
             raise ValueError(f"FBX record '{name.decode(errors='replace')}' at byte {pos}: {count} properties "
                              f"fill {cursor - props_end + props_length} bytes, its header says {props_length}")
+        if any(isinstance(value, _StoredArray) for value in props):
+            self.with_arrays.append(props)
         node = Node(name, props, bytes(types))
         if cursor < end_offset:
             node.children, cursor = self.records(cursor, end_offset, depth + 1)
@@ -181,20 +223,11 @@ class _Reader:
         raw, pos = self.take(pos + _ARRAY_HEADER.size, stored, end, f"a '{kind.decode()}' array")
         expected = count * dtype.itemsize
         where = f"FBX record '{name.decode(errors='replace')}': a '{kind.decode()}' array of {count} values"
-        if encoding == 0:
-            if stored != expected:
-                raise ValueError(f"{where} stores {stored} bytes, not {expected}")
-            return np.frombuffer(raw, dtype).copy(), pos
-        if encoding != 1:
+        if encoding == 0 and stored != expected:
+            raise ValueError(f"{where} stores {stored} bytes, not {expected}")
+        if encoding not in (0, 1):
             raise ValueError(f"{where} has unknown encoding {encoding} (0 raw and 1 zlib are known)")
-        inflate = zlib.decompressobj()
-        try:
-            values = inflate.decompress(raw, expected)
-        except zlib.error as error:
-            raise ValueError(f"{where}: its zlib data is damaged ({error})") from None
-        if len(values) != expected or inflate.unconsumed_tail or not inflate.eof:
-            raise ValueError(f"{where}: its zlib data does not inflate to {expected} bytes")
-        return np.frombuffer(values, dtype).copy(), pos
+        return _StoredArray(kind, encoding, bytes(raw), expected, where), pos
 
 
 def encode(document: Document) -> bytes:
@@ -203,10 +236,30 @@ def encode(document: Document) -> bytes:
     if not 7000 <= document.version < 8000:
         raise ValueError(f"FBX version {document.version}: only binary FBX 7.x (7000 to 7999) is written")
     header = struct.Struct("<QQQB" if document.version >= WIDE_VERSION else "<IIIB")
+    arrays = {}  # (id(node), property index) -> (encoding, stored bytes) of every array
+    fresh = {}  # the arrays over COMPRESS_ABOVE bytes to compress (several at once)
+    stack = list(document.nodes)
+    while stack:
+        node = stack.pop()
+        stack += node.children
+        for k, (kind, value) in enumerate(zip(node.types, node.props)):
+            kind = bytes([kind])
+            if kind not in _ARRAYS:
+                continue
+            kept = document.stored.get(id(value))
+            if kept is not None and kept[0] is value and kept[1] == kind:
+                arrays[id(node), k] = kept[2:]
+            else:
+                data = _array_bytes(kind, value, node.name.decode(errors="replace"))
+                if len(data) > COMPRESS_ABOVE:
+                    fresh[id(node), k] = data
+                else:
+                    arrays[id(node), k] = (0, data)
+    arrays.update(zip(fresh, ((1, data) for data in _in_threads(_compress, list(fresh.values())))))
     chunks = [MAGIC, struct.pack("<I", document.version)]
     offset = len(MAGIC) + 4
     for node in document.nodes:
-        offset = _encode_node(node, header, chunks, offset)
+        offset = _encode_node(node, header, chunks, offset, arrays)
     chunks.append(bytes(header.size))
     offset += header.size
     if len(document.footer_id) != 16:
@@ -217,19 +270,25 @@ def encode(document: Document) -> bytes:
     return b"".join(chunks)
 
 
-def _encode_node(node: Node, header: struct.Struct, chunks: list, offset: int) -> int:
-    """Append ``node``'s record at ``offset`` to ``chunks``; return the offset after it."""
+def _compress(data):
+    return zlib.compress(data, 1)
+
+
+def _encode_node(node: Node, header: struct.Struct, chunks: list, offset: int, arrays: dict) -> int:
+    """Append ``node``'s record at ``offset`` to ``chunks``; return the offset after it.
+    ``arrays``: (encoding, stored bytes) of the arrays, by (id(node), property index)."""
     label = node.name.decode(errors="replace")
     if len(node.props) != len(node.types):
         raise ValueError(f"FBX node '{label}': {len(node.props)} properties, {len(node.types)} type codes")
     if len(node.name) > 255:
         raise ValueError(f"FBX node name '{label[:40]}...' is longer than 255 bytes")
-    props = b"".join(_encode_prop(node.types[i:i + 1], value, label) for i, value in enumerate(node.props))
+    props = b"".join(_encode_prop(node.types[k:k + 1], value, label, arrays.get((id(node), k)))
+                     for k, value in enumerate(node.props))
     at = len(chunks)
     chunks += [None, node.name, props]
     offset += header.size + len(node.name) + len(props)
     for child in node.children:
-        offset = _encode_node(child, header, chunks, offset)
+        offset = _encode_node(child, header, chunks, offset, arrays)
     if node.children or (node.null_record if node.null_record is not None else not node.props):
         chunks.append(bytes(header.size))
         offset += header.size
@@ -239,7 +298,8 @@ def _encode_node(node: Node, header: struct.Struct, chunks: list, offset: int) -
     return offset
 
 
-def _encode_prop(kind: bytes, value, label: str) -> bytes:
+def _encode_prop(kind: bytes, value, label: str, array) -> bytes:
+    """One property's bytes; ``array``: an array's (encoding, stored bytes)."""
     try:
         if kind in _SCALARS:
             return kind + struct.pack(_SCALARS[kind], value)
@@ -250,16 +310,18 @@ def _encode_prop(kind: bytes, value, label: str) -> bytes:
         raise ValueError(f"FBX node '{label}': {value!r} is no '{kind.decode()}' value ({error})") from None
     if kind not in _ARRAYS:
         raise ValueError(f"FBX node '{label}': unknown property type code {kind!r}")
+    count, (encoding, data) = np.size(value), array
+    if max(count, len(data)) >> 32:
+        raise ValueError(f"FBX node '{label}': a '{kind.decode()}' array of {count} values is past what its "
+                         f"uint32 header holds")
+    return kind + _ARRAY_HEADER.pack(count, encoding, len(data)) + data
+
+
+def _array_bytes(kind: bytes, value, label: str) -> bytes:
+    """An array property's values as the file stores them (little-endian, uncompressed)."""
     dtype = _ARRAYS[kind]
     array = np.asarray(value) if isinstance(value, np.ndarray) else np.asarray(value, dtype)
     if not np.can_cast(array.dtype, dtype, "safe"):
         raise ValueError(f"FBX node '{label}': a {array.dtype} array does not fit a '{kind.decode()}' array "
                          f"({dtype}) without loss")
-    data = np.ascontiguousarray(array.reshape(-1), dtype).tobytes()
-    encoding = int(len(data) > COMPRESS_ABOVE)
-    if encoding:
-        data = zlib.compress(data, 1)
-    if max(array.size, len(data)) >> 32:
-        raise ValueError(f"FBX node '{label}': a '{kind.decode()}' array of {array.size} values is past what its "
-                         f"uint32 header holds")
-    return kind + _ARRAY_HEADER.pack(array.size, encoding, len(data)) + data
+    return np.ascontiguousarray(array.reshape(-1), dtype).tobytes()
