@@ -1,8 +1,9 @@
 """Export benchmark inside Blender (the bpy module): each engine preset on N baked boxes.
 
-For FLOAT_COLOR and BYTE_COLOR bakes it prints the export time of every preset (best of 3), the
-time of the FBX frame patch alone (export/fbx.replace_frame on the UNITY NORMAL_FRAME file) and
-the worst decode error of the exported file, read back without Blender's importers (the .glb with
+For FLOAT_COLOR and BYTE_COLOR bakes it prints the export time of every preset (best of 3; each
+in the CLASSIC layout where it carries it, else its default), the time of the FBX frame patch
+alone (export/fbx.replace_frame on the UNITY NORMAL_FRAME file) and the worst decode error of
+the exported file, read back without Blender's importers (the .glb with
 tests/gltf_reader.py, the .fbx's raw numbers with Blender's FBX parser) and decoded with the
 shader's formula in the target's frame (glTF: as stored; Unity: x negated, as its FBX importer
 does). It then simulates what Unity stores by default (docs/EXPORT.md): vertex compression to
@@ -49,8 +50,10 @@ def measure(count, encoding, folder):
     positions = np.empty(len(ob.data.vertices) * 3, np.float32)
     ob.data.vertices.foreach_get("co", positions)
     positions = positions.reshape(-1, 3)
-    paths = {p: os.path.join(folder, f"b{count}{transforms.PRESETS[p].extension}") for p in transforms.PRESETS}
-    seconds = {p: best_of(3, lambda p=p: export_scene.export_objects(bpy.context, [ob], p, paths[p]))
+    paths = {p: os.path.join(folder, f"b{count}_{p}{transforms.PRESETS[p].extension}") for p in transforms.PRESETS}
+    # CLASSIC where a preset carries it: the layout whose decode shader_origin writes out
+    layout = {p: "CLASSIC" if "CLASSIC" in transforms.PRESETS[p].layouts else None for p in transforms.PRESETS}
+    seconds = {p: best_of(3, lambda p=p: export_scene.export_objects(bpy.context, [ob], p, paths[p], layout[p]))
                for p in transforms.PRESETS}
 
     gltf_axes = transforms.PRESETS["GLTF"].axes

@@ -164,6 +164,13 @@ def small_document():
     ], bytes(range(16)))
 
 
+def nested(depth):
+    node = fbx_container.Node(b"Leaf", [1], b"I")
+    for _ in range(depth):
+        node = fbx_container.Node(b"Box", [], b"", [node])
+    return node
+
+
 def damaged(data, old, new):
     assert data.count(old) == 1
     return data.replace(old, new)
@@ -187,6 +194,10 @@ def hostile_files():
                                  "does not inflate to 792 bytes"),
         "zlib count too large": (damaged(good, array_header, struct.pack("<III", 101, 1, len(compressed))),
                                  "does not inflate to 808 bytes"),
+        "zlib count zero": (damaged(good, array_header, struct.pack("<III", 0, 1, len(compressed))),
+                            "does not inflate to 0 bytes"),
+        "nested 70 deep": (fbx_container.encode(fbx_container.Document(7400, [nested(70)], bytes(16))),
+                           "nested more than 64 deep"),
         "zlib damaged": (damaged(good, compressed, compressed[:10] + b"\xff" * 8 + compressed[18:]), "zlib"),
         "unknown encoding": (damaged(good, array_header, struct.pack("<III", 100, 7, len(compressed))),
                              "unknown encoding 7"),

@@ -3,7 +3,7 @@ Blender: NumPy, zlib and struct only. It knows records, property types and the f
 what the nodes mean (export/fbx.py does the one patch the export needs).
 
 The layout, as the public descriptions state it (Blender's "FBX binary file format
-specification", 2013; ufbx's and Assimp's binary readers): a 27-byte header (``Kaydara FBX
+specification", 2013; the fbx-book and the fbxcel crate for the footer): a 27-byte header (``Kaydara FBX
 Binary  \\0``, 0x1A 0x00, the version as uint32), the top-level records, a null record, and a
 footer. A record: end offset (absolute), property count, property bytes (uint32 each below 7500,
 uint64 from 7500), the name (uint8 length), the properties, then optionally a nested list of
@@ -36,7 +36,7 @@ MAGIC = b"Kaydara FBX Binary  \x00\x1a\x00"
 FOOTER_MAGIC = bytes.fromhex("f85a8c6adef5d97eece90ce3758f290b")
 WIDE_VERSION = 7500  # from this version, record headers hold uint64 fields
 COMPRESS_ABOVE = 128  # bytes of array data written raw; larger arrays are zlib-compressed
-_MAX_DEPTH = 64  # files nest about 5 deep; a deeper file is refused before Python's recursion is
+_MAX_DEPTH = 64  # files nest about 5 deep; a deeper one is refused well before Python's recursion limit
 _SCALARS = {b"Y": "<h", b"C": "<?", b"I": "<i", b"F": "<f", b"D": "<d", b"L": "<q"}
 _ARRAYS = {b"f": np.dtype("<f4"), b"d": np.dtype("<f8"), b"l": np.dtype("<i8"), b"i": np.dtype("<i4"),
            b"b": np.dtype("u1")}
@@ -125,7 +125,7 @@ class _StoredArray:
             return np.frombuffer(self.raw, _ARRAYS[self.kind])
         inflate = zlib.decompressobj()
         try:
-            values = inflate.decompress(self.raw, self.expected)
+            values = inflate.decompress(self.raw, max(self.expected, 1))  # 0 would mean "no limit"
         except zlib.error as error:
             raise ValueError(f"{self.where}: its zlib data is damaged ({error})") from None
         if len(values) != self.expected or inflate.unconsumed_tail or not inflate.eof:
