@@ -1,7 +1,9 @@
 """Export benchmark inside Blender (the bpy module): each engine preset on N baked boxes.
 
-For FLOAT_COLOR and BYTE_COLOR bakes it prints the export time of every preset (best of 3) and
-the worst decode error of the exported file, read back without Blender's importers (the .glb with
+For FLOAT_COLOR and BYTE_COLOR bakes it prints the export time of every preset (best of 3; each
+in the CLASSIC layout where it carries it, else its default), the time of the FBX frame patch
+alone (formats/fbx.replace_frame on the UNITY NORMAL_FRAME file) and the worst decode error of
+the exported file, read back without Blender's importers (the .glb with
 tests/gltf_reader.py, the .fbx's raw numbers with Blender's FBX parser) and decoded with the
 shader's formula in the target's frame (glTF: as stored; Unity: x negated, as its FBX importer
 does). It then simulates what Unity stores by default (docs/EXPORT.md): vertex compression to
@@ -24,7 +26,7 @@ from tests.gltf_reader import read_glb  # noqa: E402
 import boxmarch  # noqa: E402
 from bench.common import best_of, boxes_object, table  # noqa: E402
 from boxmarch.export import scene as export_scene  # noqa: E402
-from boxmarch.formats import presets  # noqa: E402
+from boxmarch.formats import fbx, presets  # noqa: E402
 
 
 def shader_origin(position, rgba, q):
@@ -49,8 +51,10 @@ def measure(count, encoding, folder):
     positions = np.empty(len(ob.data.vertices) * 3, np.float32)
     ob.data.vertices.foreach_get("co", positions)
     positions = positions.reshape(-1, 3)
-    paths = {p: os.path.join(folder, f"b{count}{presets.PRESETS[p].extension}") for p in presets.PRESETS}
-    seconds = {p: best_of(3, lambda p=p: export_scene.export_objects(bpy.context, [ob], p, paths[p]))
+    paths = {p: os.path.join(folder, f"b{count}_{p}{presets.PRESETS[p].extension}") for p in presets.PRESETS}
+    # CLASSIC where a preset carries it: the layout whose decode shader_origin writes out
+    layout = {p: "CLASSIC" if "CLASSIC" in presets.PRESETS[p].layouts else None for p in presets.PRESETS}
+    seconds = {p: best_of(3, lambda p=p: export_scene.export_objects(bpy.context, [ob], p, paths[p], layout[p]))
                for p in presets.PRESETS}
 
     gltf_axes = presets.PRESETS["GLTF"].axes
@@ -75,7 +79,17 @@ def measure(count, encoding, folder):
         "colour fp16": worst(shader_origin(position, half16(colour), np.concatenate([xy, zw], 1)), unity_reference, half[box]),
         "colour Color32": worst(shader_origin(position, color32(colour), np.concatenate([xy, zw], 1)), unity_reference, half[box]),
     }
+    seconds["patch"] = frame_patch_seconds(ob, os.path.join(folder, f"b{count}_frame.fbx"))
     return seconds, gltf_error, unity, os.path.getsize(paths["GLTF"]), os.path.getsize(paths["UNITY"])
+
+
+def frame_patch_seconds(ob, path):
+    """Best of 3 of the FBX frame patch (formats/fbx.replace_frame: read, patch, write the whole
+    file) on the UNITY NORMAL_FRAME export, writing the file's own frame back."""
+    export_scene.export_objects(bpy.context, [ob], "UNITY", path, layout="NORMAL_FRAME")
+    raw = read_fbx_geometry(path)
+    frames = {"NORMAL": raw["normal"], "TANGENT": raw["tangent"], "BINORMAL": raw["binormal"]}
+    return best_of(3, lambda: fbx.replace_frame(path, {ob.data.name: frames}))
 
 
 def main():
@@ -87,12 +101,13 @@ def main():
             for encoding in ("FLOAT_COLOR", "BYTE_COLOR"):
                 seconds, gltf_error, unity, glb_size, fbx_size = measure(count, encoding, folder)
                 rows.append([f"{count:,}", encoding, f"{seconds['GLTF'] * 1e3:.0f}", f"{seconds['UNITY'] * 1e3:.0f}",
-                             f"{seconds['BLENDER'] * 1e3:.0f}", f"{glb_size / 1e6:.1f}", f"{fbx_size / 1e6:.1f}",
+                             f"{seconds['BLENDER'] * 1e3:.0f}", f"{seconds['patch'] * 1e3:.0f}",
+                             f"{glb_size / 1e6:.1f}", f"{fbx_size / 1e6:.1f}",
                              f"{gltf_error:.1e}", f"{unity['file']:.1e}"])
                 unity_rows.append([f"{count:,}", encoding, *(f"{unity[k]:.1e}" for k in
                                                              ("file", "TexCoord2 fp16", "colour fp16", "colour Color32"))])
     print(f"Blender {bpy.app.version_string}; decode error = worst |decoded - baked centre| / largest half-extent")
-    print(table(["boxes", "bake", "GLTF ms", "UNITY ms", "BLENDER ms", ".glb MB", ".fbx MB",
+    print(table(["boxes", "bake", "GLTF ms", "UNITY ms", "BLENDER ms", "FBX frame patch ms", ".glb MB", ".fbx MB",
                  "glTF decode (glb)", "Unity decode (fbx)"], rows))
     print()
     print("What Unity may store (simulated from the .fbx numbers):")

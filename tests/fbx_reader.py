@@ -82,3 +82,32 @@ def read_fbx_skin(path):
                                    "transform": _matrix(child(elem, b"Transform")),
                                    "transform_link": _matrix(child(elem, b"TransformLink"))}
             for uid, elem in clusters.items()}
+
+
+def tree_differences(path_a, path_b, limit=20):
+    """Where the two FBX files, each read with Blender's parser, differ: record names, type codes
+    and values (arrays by type and bytes), as up to ``limit`` lines naming the record's path."""
+    from io_scene_fbx import parse_fbx
+
+    (root_a, version_a), (root_b, version_b) = parse_fbx.parse(str(path_a)), parse_fbx.parse(str(path_b))
+    out = [] if version_a == version_b else [f"version {version_a} != {version_b}"]
+    _differences(root_a, root_b, "", out, limit)
+    return out[:limit]
+
+
+def _differences(a, b, where, out, limit):
+    where = f"{where}/{a.id.decode(errors='replace')}"
+    if a.id != b.id or bytes(a.props_type) != bytes(b.props_type):
+        out.append(f"{where}: {a.id} {bytes(a.props_type)} != {b.id} {bytes(b.props_type)}")
+        return
+    for k, (x, y) in enumerate(zip(a.props, b.props)):
+        same = (x.typecode == y.typecode and x.tobytes() == y.tobytes() if hasattr(x, "typecode")
+                else type(x) is type(y) and (x == y or repr(x) == repr(y)))  # nan
+        if not same:
+            out.append(f"{where} property {k}: {str(x)[:60]} != {str(y)[:60]}")
+    if len(a.elems) != len(b.elems):
+        out.append(f"{where}: {len(a.elems)} children != {len(b.elems)}")
+    for x, y in zip(a.elems, b.elems):
+        if len(out) >= limit:
+            return
+        _differences(x, y, where, out, limit)

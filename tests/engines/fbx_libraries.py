@@ -161,26 +161,23 @@ def write_posed_copy(source, target, local_by_model):
     """Copy the binary FBX ``source`` to ``target`` with the named Models' local transforms
     replaced ({name: 4 x 4 rotation + translation, relative to the parent}) as Lcl Translation
     and Lcl Rotation: a pose for a loader to evaluate, skin and bind pose untouched. Written with
-    Blender's FBX container code (needs ``bpy`` imported) and the export's writer of parsed
-    elements."""
-    from io_scene_fbx import data_types, encode_bin, parse_fbx
+    the export's FBX container code (boxmarch.formats.fbx_container)."""
+    from boxmarch.formats import fbx_container
 
-    from boxmarch.formats.fbx import _writable
-
-    root, version = parse_fbx.parse(str(source))
-    objects = next(elem for elem in root.elems if elem.id == b"Objects")
+    document = fbx_container.read(source)
+    objects = next(node for node in document.nodes if node.name == b"Objects")
     posed = set()
-    for model in objects.elems:
-        name = model.props[1].split(b"\x00\x01")[0].decode() if model.id == b"Model" else None
+    for model in objects.children:
+        name = model.props[1].split(b"\x00\x01")[0].decode() if model.name == b"Model" else None
         if name not in local_by_model:
             continue
         local = np.asarray(local_by_model[name], np.float64)
-        properties = next(elem for elem in model.elems if elem.id == b"Properties70")
-        properties.elems[:] = [p for p in properties.elems if p.props[0] not in (b"Lcl Translation", b"Lcl Rotation")]
+        properties = model.child(b"Properties70")
+        properties.children[:] = [p for p in properties.children
+                                  if p.props[0] not in (b"Lcl Translation", b"Lcl Rotation")]
         for label, values in ((b"Lcl Translation", local[:3, 3]), (b"Lcl Rotation", euler_xyz_degrees(local[:3, :3]))):
-            properties.elems.append(parse_fbx.FBXElem(
-                b"P", [label, label, b"", b"A", *map(float, values)],
-                bytearray([data_types.STRING] * 4 + [data_types.FLOAT64] * 3), []))
+            properties.children.append(fbx_container.Node(b"P", [label, label, b"", b"A", *map(float, values)],
+                                                          b"SSSSDDD"))
         posed.add(name)
     assert posed == set(local_by_model), f"no Model named {sorted(set(local_by_model) - posed)}"
-    encode_bin.write(str(target), _writable(root), version)
+    fbx_container.write(target, document)
