@@ -24,27 +24,26 @@ from __future__ import annotations
 import argparse
 import ctypes
 import datetime
-import json
 import os
 import pathlib
+import json
 import platform
 import subprocess
 import sys
 import time
 
-import matplotlib  # noqa: E402
 import numpy as np
+
+import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from bench import (
-    bench_gpu_cost,  # noqa: E402
-    bench_skinning,  # noqa: E402
-)
-from bench.common import best_of, reset_peak_rss, rss_bytes, table  # noqa: E402
 from boxmarch import core, scenes  # noqa: E402
 from boxmarch.formats import layouts
+from bench.common import best_of, reset_peak_rss, rss_bytes, table  # noqa: E402
+from bench import bench_gpu_cost  # noqa: E402
+from bench import bench_skinning  # noqa: E402
 
 DOCS = pathlib.Path(__file__).resolve().parents[1] / "docs"
 SIZES = [0.01, 0.1, 1.0, 10.0, 100.0, 1000.0]

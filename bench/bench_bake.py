@@ -13,12 +13,13 @@ worst decode error of what Blender stores, for FLOAT_COLOR and BYTE_COLOR.
 import sys
 import time
 
-import bpy  # noqa: E402
 import numpy as np
 
+import bpy  # noqa: E402
+
 import boxmarch  # noqa: E402
-from bench.common import best_of, boxes_object, decode_error, reset_peak_rss, rss_bytes, table  # noqa: E402
 from boxmarch import core, mesh_io  # noqa: E402
+from bench.common import best_of, boxes_object, decode_error, reset_peak_rss, rss_bytes, table  # noqa: E402
 
 
 def transfer(mesh):

@@ -13,14 +13,15 @@ SDF evaluations = 2 x calls(all) - calls(root).
 """
 import argparse
 
+import numpy as np
+
 import bpy  # noqa: E402
 import mathutils  # noqa: E402
-import numpy as np
-from scripts.chain_arm import save_side_by_side  # noqa: E402
 
 import boxmarch  # noqa: E402
-from bench.common import table  # noqa: E402
 from boxmarch import bake_job, mesh_io, preview, scenes  # noqa: E402
+from bench.common import table  # noqa: E402
+from scripts.chain_arm import save_side_by_side  # noqa: E402
 
 W, H = 640, 360
 BLEND = 0.3

@@ -7,12 +7,14 @@ Meshes: BOXES random boxes (8 vertices each) with boxmarch_shape painted per fac
 boxmarch_user per vertex (one face in a hundred boxes disagreeing)."""
 import sys
 
-import bpy  # noqa: E402
 import numpy as np
 
+import bpy  # noqa: E402
+
 import boxmarch  # noqa: E402
-from bench.common import best_of, boxes_object, table  # noqa: E402
 from boxmarch import bake_job, core, mesh_io, scenes  # noqa: E402
+from bench.common import best_of, boxes_object, table  # noqa: E402
+
 
 BONES = 32
 

@@ -28,28 +28,17 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 import bpy  # noqa: E402
+
+import boxmarch  # noqa: E402
+from boxmarch.export import scene as export_scene  # noqa: E402
+from bench.common import table  # noqa: E402
+from tests.engine_scene import (TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame,  # noqa: E402
+                                decode_uv_frame, frame_and_size_errors, imported, silhouettes, table_texels, UNITY, UNREAL)
+from tests.engines import fbx_libraries, godot3, threejs, tightest_tolerance  # noqa: E402
+from tests.fbx_reader import read_fbx_geometry  # noqa: E402
 from tests import test_engine_fbx_libraries as library_test  # noqa: E402
 from tests import test_engine_godot3 as godot_test  # noqa: E402
 from tests import test_engine_threejs as three_test  # noqa: E402
-from tests.engine_scene import (  # noqa: E402
-    TO_Y_UP,
-    UNITY,
-    UNREAL,
-    baked_scene,
-    box_of_vertex,
-    decode_normal_frame,
-    decode_uv_frame,
-    frame_and_size_errors,
-    imported,
-    silhouettes,
-    table_texels,
-)
-from tests.engines import fbx_libraries, godot3, threejs, tightest_tolerance  # noqa: E402
-from tests.fbx_reader import read_fbx_geometry  # noqa: E402
-
-import boxmarch  # noqa: E402
-from bench.common import table  # noqa: E402
-from boxmarch.export import scene as export_scene  # noqa: E402
 
 
 def fmt(x):

@@ -47,16 +47,8 @@ from pathlib import Path
 import numpy as np
 
 from bench.common import table  # noqa: E402
-from bench.gl_headless import (  # noqa: E402
-    GL,
-    counted,
-    egl_context,
-    framebuffer,
-    program,
-    read_back,
-    timed_frames,
-    timed_frames_exact,
-)
+from bench.gl_headless import (GL, counted, egl_context, framebuffer, program, read_back, timed_frames,  # noqa: E402
+                               timed_frames_exact)
 
 REFERENCE_SIZE = (960, 540)
 # (label, fragment source, triangle order, quality)

@@ -32,9 +32,8 @@ import time
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-from tests.engine_scene import axis_turn  # noqa: E402
-
 from bench.common import table  # noqa: E402
+from tests.engine_scene import axis_turn  # noqa: E402
 
 BOX_HALF = np.array([0.5, 0.3, 0.1])
 TURN = np.radians(40.0)
@@ -109,23 +108,14 @@ not, `non_rigid_boxes`, and warns).
 
 def engine_rows():
     import bpy
-    from tests import test_engine_skinned as skinned_test
-    from tests.engine_scene import (
-        TO_Y_UP,
-        UNITY,
-        box_of_vertex,
-        decode_normal_frame,
-        frame_and_size_errors,
-        posed_rig_boxes,
-        rig_boxes,
-        skinned_scene,
-        unity_skinned_decode,
-    )
-    from tests.engines import godot3, threejs, tightest_tolerance
-    from tests.fbx_reader import read_fbx_geometry, read_fbx_skin
 
     import boxmarch
     from boxmarch.export import scene as export_scene
+    from tests.engine_scene import (TO_Y_UP, UNITY, box_of_vertex, decode_normal_frame, frame_and_size_errors,
+                                    posed_rig_boxes, rig_boxes, skinned_scene, unity_skinned_decode)
+    from tests.fbx_reader import read_fbx_geometry, read_fbx_skin
+    from tests import test_engine_skinned as skinned_test
+    from tests.engines import godot3, threejs, tightest_tolerance
 
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)

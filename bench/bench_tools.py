@@ -11,12 +11,13 @@ count) for merge; a path with BOXES cube instances for instance-on-curve."""
 import sys
 import time
 
-import bpy  # noqa: E402
 import numpy as np
 
+import bpy  # noqa: E402
+
 import boxmarch  # noqa: E402
-from bench.common import table  # noqa: E402
 from boxmarch import core, mesh_io, scenes  # noqa: E402
+from bench.common import table  # noqa: E402
 
 
 def place(mesh, name="bench"):

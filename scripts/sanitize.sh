@@ -23,9 +23,10 @@ configure_and_build() {
   # A package folder beside the build: the add-on's Python files (linked) and the sanitized module.
   local pkg="$build/pkg/boxmarch"
   rm -rf "$build/pkg"
-  mkdir -p "$pkg/operators"
+  mkdir -p "$pkg/operators" "$pkg/formats"
   for f in addon/boxmarch/*.py; do ln -s "$PWD/$f" "$pkg/"; done
   for f in addon/boxmarch/operators/*.py; do ln -s "$PWD/$f" "$pkg/operators/"; done
+  for f in addon/boxmarch/formats/*; do ln -s "$PWD/$f" "$pkg/formats/"; done
   cp "$build"/_core*.so "$pkg/"
 }
 

@@ -8,10 +8,10 @@ import argparse
 import json
 import math
 import os
-import struct
 import sys
 import time
 import zlib
+import struct
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 from tests.engines import threejs  # noqa: E402

@@ -19,12 +19,12 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 import bpy  # noqa: E402
-from tests.engines import threejs  # noqa: E402
 
 import boxmarch  # noqa: E402
+from scripts import chain_arm  # noqa: E402
 from boxmarch import mesh_io  # noqa: E402
 from boxmarch.export import scene as export_scene  # noqa: E402
-from scripts import chain_arm  # noqa: E402
+from tests.engines import threejs  # noqa: E402
 from scripts.threejs_picture import write_png  # noqa: E402
 
 W, H = 640, 540

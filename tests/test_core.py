@@ -10,27 +10,10 @@ import numpy as np
 import pytest
 
 from boxmarch import core, scenes
-from tests.helpers.core_reference import (
-    FACES,
-    TIE_BAND,
-    U32,
-    assert_frames_valid,
-    axis_angles,
-    bounds_centre,
-    decode_rgba,
-    decoded_origins,
-    distinct_sizes,
-    flat_polygon,
-    half_extents_in,
-    house,
-    mesh_from_polys,
-    quat_matrix,
-    reference_frame,
-    shader_rotate,
-    similar_copy,
-    vertices_of,
-    wedge,
-)
+from tests.helpers.core_reference import (FACES, TIE_BAND, U32, assert_frames_valid, axis_angles, bounds_centre,
+                                          decode_rgba, decoded_origins, distinct_sizes, flat_polygon, half_extents_in,
+                                          house, mesh_from_polys, quat_matrix, reference_frame, shader_rotate,
+                                          similar_copy, vertices_of, wedge)
 
 
 def fan_triangles(face_starts, face_sizes, corner_verts):

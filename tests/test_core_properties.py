@@ -17,21 +17,9 @@ from hypothesis import strategies as st
 from boxmarch import _core as bindings  # the pybind11 module: its own argument checks
 from boxmarch import core, scenes
 from boxmarch.formats import layouts
-from tests.helpers.core_reference import (
-    U32,
-    assert_frames_valid,
-    bounds_centre,
-    decode_rgba,
-    decoded_origins,
-    half_extents_in,
-    house,
-    mesh_from_polys,
-    newell,
-    quat_matrix,
-    reference_frame,
-    similar_copy,
-    wedge,
-)
+from tests.helpers.core_reference import (U32, assert_frames_valid, bounds_centre, decode_rgba, decoded_origins,
+                                          half_extents_in, house, mesh_from_polys, newell, quat_matrix, reference_frame,
+                                          similar_copy, wedge)
 
 SETTINGS = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 CACHE_TOLERANCE = 1e-5  # kCacheTolerance in bake.cpp: copies may deviate by this fraction of their rms radius

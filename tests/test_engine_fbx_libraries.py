@@ -11,21 +11,9 @@ the rest frame under a pose) must fail.
 import numpy as np
 import pytest
 
-from tests.engine_scene import (
-    TO_Y_UP,
-    UNITY,
-    UNREAL,
-    baked_scene,
-    bone_motions,
-    box_of_vertex,
-    decode_normal_frame,
-    decode_uv_frame,
-    frame_and_size_errors,
-    imported,
-    posed_rig_boxes,
-    rig_boxes,
-    skinned_scene,
-)
+from tests.engine_scene import (TO_Y_UP, UNITY, UNREAL, baked_scene, bone_motions, box_of_vertex,
+                                decode_normal_frame, decode_uv_frame, frame_and_size_errors, imported, posed_rig_boxes,
+                                rig_boxes, skinned_scene)
 from tests.engines import fbx_libraries
 from tests.fbx_reader import read_fbx_geometry
 

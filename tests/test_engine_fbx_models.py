@@ -14,22 +14,9 @@ the default-settings tests name the channels stored as halves.
 import numpy as np
 import pytest
 
-from tests.engine_scene import (
-    TO_Y_UP,
-    UNITY,
-    UNREAL,
-    UV_NAMES,
-    baked_scene,
-    box_of_vertex,
-    decode_uv_frame,
-    frame_and_size_errors,
-    imported,
-    posed_rig_boxes,
-    rig_boxes,
-    rig_heads,
-    skinned_scene,
-    unity_skinned_decode,
-)
+from tests.engine_scene import (TO_Y_UP, UNITY, UNREAL, UV_NAMES, baked_scene, box_of_vertex, decode_uv_frame,
+                                frame_and_size_errors, imported, posed_rig_boxes, rig_boxes, rig_heads, skinned_scene,
+                                unity_skinned_decode)
 from tests.fbx_reader import read_fbx_geometry, read_fbx_skin
 
 pytestmark = pytest.mark.slow  # Blender's FBX exporter and importer round trips

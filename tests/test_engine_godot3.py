@@ -7,19 +7,9 @@ cover each box's projected silhouette within 1 px; a frame replaced by the ident
 import numpy as np
 import pytest
 
-from tests.engine_scene import (
-    MIXED_SHAPES,
-    TO_Y_UP,
-    baked_scene,
-    box_of_vertex,
-    decode_normal_frame,
-    frame_and_size_errors,
-    paint_shapes,
-    per_box_agreement,
-    rounded_box_mismatch,
-    silhouettes,
-    table_texels,
-)
+from tests.engine_scene import (MIXED_SHAPES, TO_Y_UP, baked_scene, box_of_vertex, decode_normal_frame,
+                                frame_and_size_errors, paint_shapes, per_box_agreement, rounded_box_mismatch, silhouettes,
+                                table_texels)
 from tests.engines import coverage_mismatch, godot3, import_helpers
 
 pytestmark = pytest.mark.slow  # Godot 3 imports and renders

@@ -14,16 +14,8 @@ import numpy as np
 import pytest
 
 from boxmarch.formats import shader_sources
-from tests.engine_scene import (
-    UNITY,
-    baked_scene,
-    imported,
-    posed_rig_boxes,
-    rig_boxes,
-    silhouettes,
-    skinned_scene,
-    unity_skinned_vertices,
-)
+from tests.engine_scene import (UNITY, baked_scene, imported, posed_rig_boxes, rig_boxes, silhouettes, skinned_scene,
+                                unity_skinned_vertices)
 from tests.engines import Shot, coverage_mismatch, hlsl_webgl, ndc_to_pixels
 from tests.fbx_reader import read_fbx_geometry, read_fbx_skin
 

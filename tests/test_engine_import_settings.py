@@ -17,7 +17,7 @@ from tests.engines import import_helpers
 
 
 def test_unity_postprocessor_sets_the_table_and_reads_the_sidecar_values():
-    from boxmarch.formats import import_settings, presets, sidecar
+    from boxmarch.formats import import_settings, sidecar, presets
 
     assert import_helpers.unity_settings() == import_settings.UNITY
     constants = import_helpers.unity_constants()
@@ -56,7 +56,7 @@ def test_unity_package_ships_the_hlsl_as_generated():
 
 
 def test_unreal_script_parses_and_sets_the_table():
-    from boxmarch.formats import import_settings, presets, sidecar
+    from boxmarch.formats import import_settings, sidecar, presets
 
     constants = import_helpers.unreal_constants()  # ast.parse of the whole script
     assert constants["IMPORT_DATA"] == import_settings.UNREAL_IMPORT
@@ -96,7 +96,7 @@ def test_unreal_material_function_compiles_as_hlsl(tmp_path):
 
 
 def test_godot3_plugin_and_import_file_set_the_table():
-    from boxmarch.formats import import_settings, presets, sidecar
+    from boxmarch.formats import import_settings, sidecar, presets
 
     constants = import_helpers.godot3_constants()
     assert constants["PARAMS"] == import_settings.GODOT3

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from boxmarch import scenes
-from boxmarch.formats import glb, presets, transforms
+from boxmarch.formats import glb, transforms, presets
 from tests.conftest import mesh_object
 from tests.fbx_reader import read_fbx_geometry
 from tests.gltf_reader import read_glb

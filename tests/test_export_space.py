@@ -11,22 +11,9 @@ import pathlib
 import numpy as np
 import pytest
 
-from tests.engine_scene import (
-    TO_Y_UP,
-    TRANSFORM_CASES,
-    UNITY,
-    baked_scene,
-    box_of_vertex,
-    decode_normal_frame,
-    decode_uv_frame,
-    frame_and_size_errors,
-    imported,
-    rig_boxes,
-    skinned_scene,
-    table_texels,
-    transformed_rig,
-    world_boxes,
-)
+from tests.engine_scene import (TO_Y_UP, TRANSFORM_CASES, UNITY, baked_scene, box_of_vertex, decode_normal_frame,
+                                decode_uv_frame, frame_and_size_errors, imported, rig_boxes, skinned_scene, table_texels,
+                                transformed_rig, world_boxes)
 from tests.fbx_reader import read_fbx_geometry
 from tests.gltf_reader import node_globals, read_glb, read_skin
 

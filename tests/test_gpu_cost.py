@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from boxmarch import core
-from boxmarch.formats import shader_sources
 from boxmarch.preview import mesh_data
+from boxmarch.formats import shader_sources
 
 SHADERS = shader_sources.shader_dir()
 

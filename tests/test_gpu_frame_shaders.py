@@ -5,9 +5,10 @@ gl_FragDepth layout alone."""
 import subprocess
 
 import pytest
-from bench import gpu_frame_data  # noqa: E402
 
 from tests.helpers.glsl import validator
+
+from bench import gpu_frame_data  # noqa: E402
 
 
 @pytest.mark.parametrize("sdf", ["SPHERE", "LINK"])

@@ -108,6 +108,7 @@ def scene_state(bpy):
 def test_skinned_exports_that_cannot_work_are_refused_and_write_nothing(blender, tmp_path, preset, layout, change,
                                                                          message):
     from boxmarch.export import scene
+
     from tests.engine_scene import skinned_scene
 
     bpy = blender

@@ -12,9 +12,9 @@ import sys
 import pytest
 
 from boxmarch.formats import files
-from tests.conftest import digest
 from tests.gltf_reader import read_glb
 from tests.helpers.blender_program import SCRIPTS, module_environment, run_module
+from tests.conftest import digest
 
 
 def last_line(proc):

@@ -7,7 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from boxmarch.formats import layouts, sidecar
+from boxmarch.formats import layouts
+from boxmarch.formats import sidecar
 from tests.helpers.core_reference import quat_matrix
 
 BOXES, PER_BOX = 5, 4

@@ -3,9 +3,9 @@ the decoded-vector overlay (the GPU image itself is checked in tests/test_previe
 import numpy as np
 import pytest
 
+from tests.conftest import mesh_object
 from boxmarch import core, scenes
 from boxmarch.formats import layouts
-from tests.conftest import mesh_object
 
 
 def baked_boxes(blender, encoding="FLOAT_COLOR", domain="POINT"):

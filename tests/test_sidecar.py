@@ -137,7 +137,7 @@ def check_against_file(bpy, path, sidecar):
 @pytest.mark.parametrize("preset, layout", EXPORTS)
 def test_every_sidecar_validates_and_describes_its_file(blender, tmp_path, preset, layout):
     from boxmarch.export import scene
-    from boxmarch.formats import presets, sidecar
+    from boxmarch.formats import sidecar, presets
 
     ob, centres, _sizes, _rotations = baked_scene(blender)
     path = tmp_path / f"boxes{presets.PRESETS[preset].extension}"

@@ -499,8 +499,9 @@ def test_tools_and_undo_in_blender_34_window(tmp_path):
     import subprocess
     from pathlib import Path
 
-    import boxmarch
     from tests.helpers.blender_program import SCRIPTS, blender_env
+
+    import boxmarch
 
     if shutil.which("xvfb-run") is None or shutil.which("blender") is None:
         pytest.fail("xvfb-run or Debian's blender is missing: run scripts/setup.sh")

@@ -22,30 +22,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .core_boxes import (  # noqa: F401 (re-exported: per-box parameters and hierarchy are part of this API)
-    HIERARCHY_RULES,
-    PARAM_NAMES,
-    box_fingerprints,
-    box_hierarchy,
-    box_random,
-    dominant_per_submesh,
-    nearest_rows,
-    parents_by_bone,
-    preset_of_shape,
-    reduce_per_submesh,
-    render_boxes_by_shape,
-)
 from .core_tools import (  # noqa: F401 (re-exported: the submesh tools are part of this API)
-    find_close_pairs,
-    find_duplicate_submeshes,
-    merge_passes,
-    merge_targets,
-    pack_uv_by_height,
-    remove_vertices,
-    select_linked_across,
-    select_linked_submeshes,
-    weld,
-)
+    find_close_pairs, find_duplicate_submeshes, merge_passes, merge_targets, pack_uv_by_height, remove_vertices,
+    select_linked_across, select_linked_submeshes, weld)
+from .core_boxes import (  # noqa: F401 (re-exported: per-box parameters and hierarchy are part of this API)
+    HIERARCHY_RULES, PARAM_NAMES, box_fingerprints, box_hierarchy, box_random, dominant_per_submesh, nearest_rows,
+    parents_by_bone, preset_of_shape, reduce_per_submesh, render_boxes_by_shape)
 from .native import _core, checked_indices, checked_int, checked_mask, row_count
 
 ORIGIN_MODES = ("BOUNDS", "MEAN")

@@ -13,9 +13,10 @@ import bpy
 import numpy as np
 
 from . import bake_job, blend_file, blender_output, core, edit_mode, ensure_registered, mesh_io, scenes, tool_jobs
-from .export import scene as export_scene
+from .formats import files
 from .export.every_engine import ENGINE_PRESETS, engine_outputs, engine_path, export_every_engine
-from .formats import files, glb, presets, transforms
+from .formats import glb, transforms, presets
+from .export import scene as export_scene
 
 DEMO_IMAGE_SIZE = (640, 360)
 MAX_COUNT = 1_000_000  # boxes: 8 million vertices, the scale of Instance on Curve's limit

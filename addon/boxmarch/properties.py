@@ -3,7 +3,8 @@ import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
 from . import core
-from .formats import layouts, presets
+from .formats import layouts
+from .formats import presets
 
 _SDF_DESCRIPTIONS = {
     "BOX": "The submesh's own box (matches the rasterised mesh)",

@@ -3,12 +3,12 @@ import textwrap
 
 import bpy
 
-from . import mesh_io
 from .formats import layouts
+from . import mesh_io
+from .preview import skinning
 from .operators import tools
 from .operators.bake import BOXMARCH_OT_bake
 from .operators.instance_on_curve import BOXMARCH_OT_add_instance_on_curve
-from .preview import skinning
 
 
 class BOXMARCH_PT_bake(bpy.types.Panel):

@@ -9,8 +9,8 @@ import traceback
 out_path = sys.argv[sys.argv.index("--") + 1]
 result = {"error": None}
 try:
-    import addon_utils
     import bpy
+    import addon_utils
 
     module_name = "bl_ext.user_default.boxmarch"
     result["enabled_at_start"] = addon_utils.check(module_name)[1]

@@ -10,8 +10,8 @@ argv = sys.argv[sys.argv.index("--") + 1:]
 zip_path, out_path = argv[0], argv[1]
 result = {"error": None}
 try:
-    import addon_utils
     import bpy  # first: with the bpy module, addon_utils is importable only after it
+    import addon_utils
     import numpy as np
 
     if bpy.app.version >= (4, 2, 0):
@@ -49,7 +49,7 @@ try:
     result["user_scripts"] = bpy.utils.user_resource("SCRIPTS")
     # The raymarch preview of the installed copy: its shaders must have travelled in the zip.
     preview = importlib.import_module(module_name + ".preview")
-    sources = importlib.import_module(module_name + ".preview.sources")
+    sources = importlib.import_module(module_name + ".formats.shader_sources")
     result["shader_dir"] = str(sources.shader_dir())
     camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
     bpy.context.scene.collection.objects.link(camera)

@@ -15,8 +15,8 @@ import mathutils  # noqa: E402
 import numpy as np  # noqa: E402
 
 import boxmarch  # noqa: E402
-from boxmarch import mesh_io, preview, scenes  # noqa: E402
 from boxmarch.formats import layouts  # noqa: E402
+from boxmarch import mesh_io, preview, scenes  # noqa: E402
 from boxmarch.preview import draw, mesh_data  # noqa: E402
 
 boxmarch.register()

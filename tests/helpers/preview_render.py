@@ -4,6 +4,7 @@ import subprocess
 import sys
 
 import numpy as np
+
 import pytest
 
 from tests.helpers.blender_program import blender_env, python_env, run_blender

@@ -5,7 +5,6 @@ import sys
 import numpy as np
 
 from boxmarch import core
-
 case = sys.argv[1]
 def outcome(fn):
     try:

@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 
 from .. import core, mesh_io
-from ..formats import glb, layouts, transforms
+from ..formats import layouts
+from ..formats import glb, transforms
 
 
 class ExportInputError(ValueError):

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import os
 
-from ..formats.presets import PRESETS
 from . import outputs_of, scene
+from ..formats.presets import PRESETS
 
 ENGINE_PRESETS = tuple(name for name, preset in PRESETS.items() if not preset.raw_blend)
 

@@ -12,9 +12,11 @@ import bpy
 import numpy as np
 
 from .. import edit_mode, mesh_io
-from ..formats import fbx, files, glb, godot, import_settings, layouts, presets, sidecar, transforms
+from ..formats import files, layouts
 from . import boxes, outputs_of
+from ..formats import fbx, glb, godot, import_settings, sidecar, transforms, presets
 from .boxes import ExportInputError, baked_layers
+
 
 # Every UV map name a layout writes (Layout.uv_names): not the artist's.
 _BOXMARCH_UV_NAMES = {name for layout in layouts.LAYOUTS.values() for name in layout.uv_names}

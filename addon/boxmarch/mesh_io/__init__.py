@@ -16,55 +16,15 @@ that adds one.
     rebuild  replace a mesh's geometry by arrays the core computed, keeping its attributes
     weights  vertex-group weights and the skin of an Armature modifier (preview, export)
 """
-from .arrays import (
-                     new_mesh,
-                     one_object_per_mesh,
-                     read_corner_edges,
-                     read_face_selection,
-                     read_hidden_vertices,
-                     read_point_values,
-                     read_positions,
-                     read_topology,
-                     read_triangles,
-                     read_uv,
-                     read_vertex_selection,
-                     remove_attributes,
-                     write_point_flags,
-                     write_selection,
-                     write_uv,
-)
-from .baked import (
-                     BAKED_UV_MAPS,
-                     FINGERPRINT_ATTRIBUTE,
-                     LAYERS_DIGEST,
-                     MAX_UV_MAPS,
-                     NEUTRAL_BYTE,
-                     NEUTRAL_FLOAT,
-                     OFFSET_ATTRIBUTE,
-                     QUAT_XY_UV,
-                     QUAT_ZW_UV,
-                     BakedLayers,
-                     BakeInputError,
-                     BakeSettings,
-                     NotBakedError,
-                     PreparedBake,
-                     modifier_warnings,
-                     prepare_bake,
-                     read_baked_layers,
-                     shape_key_warning,
-                     stored_layers_digest,
-                     stray_bake_layers,
-)
-from .box_layers import (
-                     DEPTH_LAYER,
-                     PARAM_ATTRIBUTES,
-                     PARAMS_COLOUR_ATTRIBUTE,
-                     PARAMS_LAYERS,
-                     PARENT_ATTRIBUTE,
-                     PARENT_LAYER,
-                     BoxLayerError,
-                     BoxLayers,
-                     read_box_layers,
-)
+from .arrays import (new_mesh, one_object_per_mesh, read_corner_edges, read_face_selection,
+                     read_hidden_vertices, read_point_values, read_positions, read_topology, read_triangles,
+                     read_uv, read_vertex_selection, remove_attributes, write_point_flags, write_selection,
+                     write_uv)
+from .baked import (BAKED_UV_MAPS, FINGERPRINT_ATTRIBUTE, LAYERS_DIGEST, MAX_UV_MAPS, NEUTRAL_BYTE, NEUTRAL_FLOAT,
+                    OFFSET_ATTRIBUTE, QUAT_XY_UV, QUAT_ZW_UV, BakedLayers, BakeInputError, BakeSettings,
+                    NotBakedError, PreparedBake, modifier_warnings, prepare_bake, read_baked_layers,
+                    shape_key_warning, stored_layers_digest, stray_bake_layers)
+from .box_layers import (DEPTH_LAYER, PARAM_ATTRIBUTES, PARAMS_COLOUR_ATTRIBUTE, PARAMS_LAYERS, PARENT_ATTRIBUTE,
+                         PARENT_LAYER, BoxLayerError, BoxLayers, read_box_layers)
 from .rebuild import rebuild_blocker, rebuild_welded
 from .weights import Skin, SkinError, check_skin_modifier, read_skin, read_vertex_weights

@@ -5,6 +5,7 @@ from __future__ import annotations
 import bpy
 import numpy as np
 
+
 # Attribute types the rebuild carries, with the bulk property and components per element.
 _ATTRIBUTE_LAYOUT = {
     "FLOAT": ("value", 1, np.float32), "INT": ("value", 1, np.int32), "BOOLEAN": ("value", 1, bool),

@@ -8,8 +8,9 @@ import bpy
 from bpy.props import EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper
 
+from ..formats import layouts
 from ..export import scene
-from ..formats import layouts, presets
+from ..formats import presets
 
 
 class BOXMARCH_OT_export(bpy.types.Operator, ExportHelper):

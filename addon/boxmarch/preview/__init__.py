@@ -206,8 +206,8 @@ def render(scene, camera_object, width, height, *, output="SHADED"):
     import bpy
     import gpu
 
-    from ..formats import shader_sources
     from . import draw
+    from ..formats import shader_sources
 
     width, height = int(width), int(height)
     if width <= 0 or height <= 0:

@@ -7,7 +7,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import core, mesh_io
-from ..formats import layouts, transforms
+from ..formats import layouts
+from ..formats import transforms
+
 
 NotBakedError = mesh_io.NotBakedError  # the preview's name for it (draw.py, tests)
 
