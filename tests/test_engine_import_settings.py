@@ -95,6 +95,75 @@ def test_unreal_material_function_compiles_as_hlsl(tmp_path):
         assert (proc.returncode == 0) == ok, proc.stdout + proc.stderr
 
 
+def unreal_depth_offset_expression() -> str:
+    """The expression BoxmarchDepthOffset.ush returns (its one statement, after the comments)."""
+    code = [line for line in import_helpers.UNREAL_DEPTH_OFFSET.read_text().splitlines()
+            if line.strip() and not line.lstrip().startswith("//")]
+    assert len(code) == 1 and code[0].startswith("return ") and code[0].endswith(";"), code
+    return code[0][len("return "):-1]
+
+
+def test_unreal_depth_offset_compiles_as_hlsl(tmp_path):
+    """The Custom node as Unreal wraps it (inputs as parameters); a misspelled input must fail."""
+    body = import_helpers.UNREAL_DEPTH_OFFSET.read_text()
+    wrapper = ("float boxmarch_depth_offset(float3 HitWorld, float3 PixelWorld, float3 ViewForward)\n{\n"
+               f"{body}\n}}\n"
+               "float4 main(float3 a : TEXCOORD0, float3 b : TEXCOORD1, float3 c : TEXCOORD2) : SV_Target\n{\n"
+               "  return float4(boxmarch_depth_offset(a, b, c), 0.0, 0.0, 1.0);\n}\n")
+    for name, text, ok in (("good.hlsl", wrapper, True), ("bad.hlsl", wrapper.replace("ViewForward), 0.0)", "ViewFwd), 0.0)"), False)):
+        (tmp_path / name).write_text(text)
+        proc = subprocess.run(["glslangValidator", "-D", "-V", "-e", "main", "-S", "frag", str(tmp_path / name),
+                               "-o", str(tmp_path / "out.spv")], capture_output=True, text=True, timeout=60)
+        assert (proc.returncode == 0) == ok, proc.stdout + proc.stderr
+
+
+def reversed_z_depth_error(offset_expression: str, seed: int = 0) -> tuple:
+    """Rays from a perspective camera through a sphere inside a turned box: Unreal's depth of a
+    fragment whose Pixel Depth Offset is ``offset_expression`` (HLSL's dot and max, evaluated
+    over the rays), against the device depth of the analytic ray-sphere hit. Unreal adds the
+    offset to the pixel's view-space depth w (clip w) and, reversed Z with an infinite far plane,
+    stores near / w. Returns (worst relative depth error, whether every stored depth is at most
+    the rasterised face's: SV_DepthLessEqual)."""
+    rng = np.random.default_rng(seed)
+    near = 10.0  # cm, Unreal's default near clip plane
+    turn, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    forward = turn[:, 2]
+    camera = rng.normal(size=3) * 100.0
+    centre, radius = camera + forward * 800.0 + turn[:, 0] * 150.0, 120.0
+    box_axes, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    half = np.array([1.3, 1.1, 1.6]) * radius
+    # rays towards points inside the sphere: every one of them hits it
+    inside = rng.normal(size=(4000, 3))
+    inside *= radius * rng.uniform(0.0, 0.95, size=(4000, 1)) / np.linalg.norm(inside, axis=1, keepdims=True)
+    targets = centre + inside
+    d = targets - camera
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    oc = camera - centre
+    b = d @ oc
+    t_hit = -b - np.sqrt(b * b - (oc @ oc - radius * radius))
+    # the face the ray enters the box through (slab test in the box's axes)
+    o_local, d_local = oc @ box_axes, d @ box_axes
+    t_face = np.max(np.minimum((-half - o_local) / d_local, (half - o_local) / d_local), axis=1)
+    assert np.all(t_face < t_hit) and np.all(t_face > near)
+    scope = {"HitWorld": camera + d * t_hit[:, None], "PixelWorld": camera + d * t_face[:, None],
+             "ViewForward": forward, "dot": lambda a, c: np.sum(a * c, axis=-1), "max": np.maximum}
+    offset = eval(offset_expression, {"__builtins__": {}}, scope)  # noqa: S307 (the shipped expression)
+    pixel_w = (scope["PixelWorld"] - camera) @ forward
+    stored = near / (pixel_w + offset)
+    truth = near / ((scope["HitWorld"] - camera) @ forward)
+    return float(np.max(np.abs(stored - truth) / truth)), bool(np.all(stored <= near / pixel_w))
+
+
+def test_unreal_depth_offset_gives_the_hit_depth():
+    error, conservative = reversed_z_depth_error(unreal_depth_offset_expression())
+    assert error < 1e-12 and conservative
+    # Negative control: the distance along the ray, the obvious wrong offset, misses off-centre.
+    wrong_error, _ = reversed_z_depth_error("max(dot(HitWorld - PixelWorld, (HitWorld - PixelWorld)"
+                                            " / dot(HitWorld - PixelWorld, HitWorld - PixelWorld)[..., None] ** 0.5),"
+                                            " 0.0)")
+    assert wrong_error > 1e-4, wrong_error
+
+
 def test_godot3_plugin_and_import_file_set_the_table():
     from boxmarch.formats import import_settings, sidecar, presets
 

@@ -15,6 +15,7 @@ UNITY_POSTPROCESSOR = UNITY_PACKAGE / "Editor" / "BoxmarchModelPostprocessor.cs"
 UNITY_STUB = Path(__file__).resolve().parent / "unity_stub" / "UnityApiStub.cs"
 UNREAL_SCRIPT = REPO / "engines" / "unreal" / "boxmarch_import.py"
 UNREAL_MATERIAL = REPO / "engines" / "unreal" / "BoxmarchUVFrame.ush"
+UNREAL_DEPTH_OFFSET = REPO / "engines" / "unreal" / "BoxmarchDepthOffset.ush"
 GODOT3_ADDON = REPO / "engines" / "godot3" / "addons" / "boxmarch"
 
 
