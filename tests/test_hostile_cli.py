@@ -1,7 +1,7 @@
 """Hostile inputs to the command line, round 2 (issue 21; docs/CHECKS.md lists them): a refused
 output is never written, not even with the error report; every file an export writes is an
 output; runs writing the same files at once; names of up to 255 bytes; SIGINT; arguments after
-``--``; one line and exit 2 for what used to be an internal error."""
+``--``; bad input that must end in one line and exit 2, never an internal error."""
 import json
 import os
 import shutil

@@ -1,11 +1,17 @@
 """The house rules CI enforces (CONTRIBUTING.md): ruff's lint over the Python trees, the layer
 contracts of docs/ARCHITECTURE.md (import-linter, configured in pyproject.toml) over the add-on,
-and the cpp/ style of .clang-format over the files already written in it. scripts/setup.sh
-installs the three tools; a missing tool fails here rather than skipping the check."""
+the cpp/ style of .clang-format over the files already written in it, and the docs that name the
+code (docs/ARCHITECTURE.md, CONTRIBUTING.md) naming only what exists, with the layer diagram
+equal to the contract's layers. scripts/setup.sh installs the three tools; a missing tool fails
+here rather than skipping the check."""
+import ast
+import fnmatch
 import os
+import re
 import shutil
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -85,3 +91,158 @@ def test_clang_format_catches_a_style_change(tmp_path):
     shutil.copy(ROOT / ".clang-format", tmp_path / ".clang-format")
     proc = run([clang_format(), "--dry-run", "-Werror", str(drifted)])
     assert proc.returncode != 0 and "drifted.cpp" in proc.stderr, proc.stderr
+
+
+# The docs that name the code's modules, functions and files (docs/ARCHITECTURE.md, CONTRIBUTING.md):
+# every backticked path, module.name and identifier in them must exist in the tree.
+DOCS_NAMING_THE_CODE = ["docs/ARCHITECTURE.md", "CONTRIBUTING.md"]
+PACKAGE = ROOT / "addon" / "boxmarch"
+SOURCE_SUFFIXES = (".py", ".cpp", ".h", ".glsl", ".hlsl", ".json", ".toml", ".md", ".sh", ".cs", ".shader", ".js")
+
+
+def tree_files():
+    """Every file of the tree git tracks or would add (repository-relative, "/"-separated)."""
+    proc = run(["git", "ls-files", "--cached", "--others", "--exclude-standard"])
+    assert proc.returncode == 0, proc.stderr
+    return [path for path in proc.stdout.splitlines() if (ROOT / path).is_file()]
+
+
+def module_names():
+    """{module path relative to boxmarch ("formats.layouts", "export"): names defined or imported at
+    its top level, and "Class.member" for each class's members}."""
+    modules = {}
+    for path in PACKAGE.rglob("*.py"):
+        parts = path.relative_to(PACKAGE).with_suffix("").parts
+        names = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+                names.add(node.name)
+                if isinstance(node, ast.ClassDef):
+                    names.update(f"{node.name}.{member.name}" for member in ast.walk(node)
+                                 if isinstance(member, (ast.FunctionDef, ast.ClassDef)))
+                    names.update(f"{node.name}.{item.target.id}" for item in node.body
+                                 if isinstance(item, ast.AnnAssign) and isinstance(item.target, ast.Name))
+            elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+                names.add(node.id)
+            elif isinstance(node, (ast.Import, ast.ImportFrom)):
+                names.update((alias.asname or alias.name).split(".")[0] for alias in node.names)
+        modules[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = names
+    return modules
+
+
+def stale_references(text, files, modules, identifiers):
+    """The backticked names of ``text`` (outside code blocks) that name nothing in the tree: a path
+    (relative to the repository or the package, ``...`` and ``*`` as wildcards, ``a/b.name`` a
+    module's attribute), a file name, ``module.name`` (the module by its path in the package or its
+    own name: ``layouts.channels``), or an identifier found in no source file."""
+    paths = set(files) | {str(Path(f).parent) for f in files}
+    package_paths = {p[len("addon/boxmarch/"):] for p in paths if p.startswith("addon/boxmarch/")}
+    basenames = {Path(f).name for f in files}
+    by_own_name = {}
+    for name in sorted(modules, key=lambda name: (name.count("."), name)):  # the shallowest first
+        by_own_name.setdefault(name.rsplit(".", 1)[-1], name)
+
+    def path_exists(path):
+        path = path.rstrip("/").replace("...", "**")
+        if "*" in path:
+            return any(fnmatch.fnmatch(p, path) or fnmatch.fnmatch(p, path.replace("**", "*/*"))
+                       for p in paths | package_paths)
+        return path in paths or path in package_paths
+
+    def attribute_exists(dotted):
+        parts = dotted.split(".")
+        for n in range(len(parts), 0, -1):
+            module = ".".join(parts[:n])
+            module = module if module in modules else by_own_name.get(module) if n == 1 else None
+            if module is not None:
+                rest = ".".join(parts[n:])
+                return not rest or any(fnmatch.fnmatch(name, rest) for name in modules[module])
+        return None  # not a module of the package (bpy.ops..., a class, a variable): not checked here
+
+    stale, in_code_block = [], False
+    for line in text.splitlines():
+        in_code_block ^= line.startswith("```")
+        # `bindings/bind_bake.cpp: bake_py` names the file; a command (`bash scripts/test.sh`) its
+        # words that name a path
+        quoted = [] if in_code_block else [re.sub(r":\s*\w+$", "", token.strip())
+                                           for token in re.findall(r"`([^`\n]+)`", line)]
+        words = [word for token in quoted for word in token.split()
+                 if " " not in token or "/" in word and "$" not in word]
+        for token in words:
+            first = token.split("/")[0]
+            if token.startswith("."):  # `.cpp`: a kind of file; `.clang-format`: a file
+                ok = token in paths or re.fullmatch(r"\.\w+", token) is not None
+            elif token.endswith(SOURCE_SUFFIXES) or "/" in token and (first in paths or first in package_paths):
+                if "/" not in token:
+                    ok = token in basenames
+                elif path_exists(token):
+                    ok = True
+                else:  # `export/boxes.box_data`: a module's attribute
+                    module, _, name = token.rpartition(".")
+                    ok = path_exists(module + ".py") and bool(
+                        attribute_exists(module.removeprefix("addon/boxmarch/").replace("/", ".") + "." + name))
+            elif re.fullmatch(r"[A-Za-z_]\w*(\.[A-Za-z_*]\w*\*?)+", token):
+                ok = attribute_exists(token) is not False
+            elif re.fullmatch(r"[A-Za-z_]\w*", token) and re.search(r"\w_\w|[a-z][A-Z]", token):
+                ok = token in identifiers  # a name of the code's own (snake_case or CamelCase)
+            else:
+                continue
+            if not ok:
+                stale.append(token)
+    return stale
+
+
+@pytest.fixture(scope="module")
+def code_names():
+    files = tree_files()
+    identifiers = set()
+    this_file = str(Path(__file__).resolve().relative_to(ROOT))  # it names stale names on purpose
+    for path in files:
+        if path.endswith(SOURCE_SUFFIXES) and not path.endswith(".md") and path != this_file:
+            identifiers.update(re.findall(r"[A-Za-z_]\w*", (ROOT / path).read_text(errors="replace")))
+    return files, module_names(), identifiers
+
+
+@pytest.mark.parametrize("doc", DOCS_NAMING_THE_CODE)
+def test_docs_name_only_what_exists(doc, code_names):
+    assert stale_references((ROOT / doc).read_text(), *code_names) == []
+
+
+def test_docs_check_catches_planted_stale_references(code_names):
+    """Negative control: names of modules, functions and files that do not exist are reported."""
+    planted = ["export/transforms.py", "formats/nowhere.py", "preview/sources", "transforms.PRESETS",
+               "files.save_blend_copy", "import_settings.for_preset", "export/boxes.no_such_function",
+               "read_tool_meshes", "cpp/src/nowhere.cpp"]
+    text = (ROOT / "docs/ARCHITECTURE.md").read_text() + "\n" + " ".join(f"`{name}`" for name in planted)
+    assert stale_references(text, *code_names) == planted
+
+
+def test_layer_diagram_is_the_import_linter_layers():
+    """docs/ARCHITECTURE.md's diagram lists, row by row, the modules of pyproject.toml's layers."""
+    assert diagram_layers((ROOT / "docs/ARCHITECTURE.md").read_text()) == contract_layers()
+
+
+def test_layer_diagram_check_catches_a_moved_module():
+    """Negative control: the diagram with edit_mode.py drawn in the jobs row differs from the contract."""
+    text = (ROOT / "docs/ARCHITECTURE.md").read_text()
+    moved = text.replace("  ·  edit_mode.py", "", 1).replace("bake_job.py ", "bake_job.py edit_mode.py ", 1)
+    assert moved != text and diagram_layers(moved) != contract_layers()
+
+
+def contract_layers():
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["importlinter"]["contracts"]
+    layers = next(contract["layers"] for contract in config if contract["type"] == "layers")
+    return [{name.strip() for name in layer.split(":")} for layer in layers]
+
+
+def diagram_layers(text):
+    """The package modules of each row of the first code block (a row: a line starting with its
+    layer's name, and the indented lines under it): ``name.py`` and ``name/`` of the package."""
+    block = text.split("```")[1].splitlines()[1:]
+    rows = []
+    for line in block:
+        if line[:2].strip():
+            rows.append("")
+        rows[-1] += " " + line
+    return [{"boxmarch." + name for name in re.findall(r"(?<![\w/])(\w+)(?:\.py\b|/)", row)
+             if (PACKAGE / f"{name}.py").exists() or (PACKAGE / name).is_dir()} for row in rows]

@@ -1,4 +1,4 @@
-"""Every Layout's declared facts (layouts.py) against what its encode writes: the decode of the
+"""Every Layout's declared facts (formats/layouts.py) against what its encode writes: the decode of the
 offset by its stated channels, where its quantities and box parameters ride, its channel list and
 FBX UV names, and the sidecar schema's list of layouts. Expectations come from the inputs and an
 independent quaternion rotation (tests/helpers/core_reference.py)."""

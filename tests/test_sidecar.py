@@ -29,6 +29,14 @@ def schema():
         return json.load(f)
 
 
+def test_the_schema_lists_every_preset():
+    """The schema's preset enum names exactly the presets (a preset missing there would write
+    sidecars its own schema refuses)."""
+    from boxmarch.formats import presets
+
+    assert set(schema()["properties"]["preset"]["enum"]) == set(presets.PRESETS)
+
+
 def file_channels(bpy, path, sidecar):
     """(positions (n, 3), {channel: (n, k) float64}) per vertex or corner of the file, by the
     names the sidecar gives; UV v read back as the engine reads it when the file flips it."""

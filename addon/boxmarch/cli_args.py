@@ -122,7 +122,8 @@ def build_parser(description: str, runners: dict):
 
 def run_outputs(args, steps) -> list:
     """[(option, path)] of every file a bake/cleanup/export/pipeline run writes: --out, each file
-    the export writes (export.outputs_of: the box table beside a GODOT3 file too), --json.
+    the export writes (export.outputs_of: the sidecar, box table and Godot 3 import settings beside
+    it too), --json.
     Refuses an --out that is not a .blend and a --to without the preset's extension."""
     outputs = []
     if getattr(args, "out", None):
@@ -130,7 +131,8 @@ def run_outputs(args, steps) -> list:
             raise InputError(f"--out must name a .blend file, got '{args.out}'")
         outputs.append(("--out", args.out))
     if "export" in steps and getattr(args, "to", None):
-        from .export import PRESETS, outputs_of
+        from .export import outputs_of
+        from .formats.presets import PRESETS
 
         extension = PRESETS[args.preset].extension
         if not args.to.lower().endswith(extension):

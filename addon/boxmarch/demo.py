@@ -100,7 +100,7 @@ def _bake_all(meshes, encoding, incremental):
 
 
 def _glb_decode_error(path, objects, prepared):
-    """Read ``path`` back (boxmarch.export.glb) and decode every vertex in glTF's frame with the
+    """Read ``path`` back (boxmarch.formats.glb) and decode every vertex in glTF's frame with the
     shader's formula; worst distance to the baked centre of its submesh put in glTF's frame, over
     that submesh's largest half-extent."""
     preset = presets.PRESETS["GLTF"]

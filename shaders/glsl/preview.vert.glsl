@@ -13,11 +13,11 @@
 //
 // boxmarch viewport preview, vertex stage: decodes one engine layout's channels
 // (addon/boxmarch/formats/layouts.py) with the shipped decode functions (decode.glsl, before this), as
-// that engine's shader does. sources.py defines BM_LAYOUT_<name> first; the create-info
-// (addon/boxmarch/preview/shader.py) declares the layout's inputs (sources.VERTEX_INPUTS: pos and
-// the channels as ch_color, ch_normal, ch_tangent, ch_uv1 .. ch_uv6, plus ch_half where the layout
-// carries no per-vertex half-extents, and ch_params, the box's parameters as the layout carries
-// them), the outputs (sources.STAGE_INTERFACE) and the uniform block
+// that engine's shader does. formats/shader_sources.py defines BM_LAYOUT_<name> first; the create-info
+// (addon/boxmarch/preview/shader.py) declares the layout's inputs (shader_sources.VERTEX_INPUTS: pos
+// and the channels as ch_color, ch_normal, ch_tangent, ch_uv1 .. ch_uv6, plus ch_half where the
+// layout carries no per-vertex half-extents, ch_params, the box's parameters as the layout carries
+// them, and ch_parent_*), the outputs (shader_sources.STAGE_INTERFACE) and the uniform block
 // preview (BoxmarchPreview, see preview.frag.glsl).
 void main()
 {

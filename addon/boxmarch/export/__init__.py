@@ -1,5 +1,7 @@
-"""Engine export presets. ``transforms`` and ``glb`` are Blender-free (format-facing);
-``scene`` drives Blender's exporters. docs/EXPORT.md derives and measures every transform."""
+"""The Blender-facing half of the engine export: ``scene`` drives Blender's exporters, ``boxes``
+reads a baked mesh's box data, ``every_engine`` exports once per engine preset; ``outputs_of``
+lists the files an export writes. What the files hold is the Blender-free ``formats`` package's.
+docs/EXPORT.md derives and measures every transform."""
 from __future__ import annotations
 
 from ..formats import sidecar

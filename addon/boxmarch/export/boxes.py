@@ -1,6 +1,6 @@
 """The box data of a baked mesh as a file must hold it: read through mesh_io, put in the space the
 file writes the positions in (docs/EXPORT.md, Object transforms) and in the target's frame
-(transforms.py), with the checks the export reports: stale boxes, sheared boxes, skin weight
+(formats/transforms.py), with the checks the export reports: stale boxes, sheared boxes, skin weight
 spreads, the decode measured on the written file. export/scene.py runs the exporters with it."""
 from __future__ import annotations
 

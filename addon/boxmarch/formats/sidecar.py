@@ -64,7 +64,8 @@ def table_path(filepath: str, layout: str = "NORMAL_COLOR", preset_name: str = "
 
 def written_beside(filepath: str, preset_name: str, layout: str) -> list[str]:
     """Every file an export of ``preset_name`` in ``layout`` writes besides ``filepath``: the
-    sidecar, the box table of NORMAL_COLOR, Godot 3's import settings (``NAME.glb.import``)."""
+    sidecar, the box table of a layout that has one (:func:`table_path`), Godot 3's import
+    settings (``NAME.glb.import``)."""
     paths = [sidecar_path(filepath)]
     table = table_path(filepath, layout, preset_name)
     if table:

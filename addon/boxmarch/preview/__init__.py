@@ -2,7 +2,8 @@
 
 Objects with ``ob.boxmarch.preview`` on are drawn with the preview shader (shaders/glsl): every
 fragment of a submesh decodes its box-local frame and sphere-traces the chosen SDF. See
-docs/PREVIEW.md. ``bpy`` and ``gpu`` are imported lazily so ``preview.sources`` stays Blender-free.
+docs/PREVIEW.md. ``bpy``, ``gpu`` and the drawing modules (draw, shader) are imported inside the
+functions that use them, so importing the package loads no GPU module.
 """
 from __future__ import annotations
 

@@ -62,7 +62,7 @@ def box_data_in_object_frame(baked: BakedMesh) -> layouts.BoxData:
 
 
 def layout_inputs(layout: str, baked: BakedMesh) -> dict[str, np.ndarray]:
-    """float32 per-vertex inputs of the preview shader for ``layout`` (sources.VERTEX_INPUTS):
+    """float32 per-vertex inputs of the preview shader for ``layout`` (shader_sources.VERTEX_INPUTS):
     the layout's channels as layouts.channels() writes them for export, and ch_half where the
     layout has no per-vertex half-extents (CLASSIC: the bake's, as the preview always drew them;
     NORMAL_COLOR: its box table read at each vertex's stored index, as an engine samples it)."""
