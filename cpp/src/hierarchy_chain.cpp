@@ -28,15 +28,11 @@ struct Nearest {
 };
 
 struct ChainGrid {
-    double scale = 1.0;  // grid units per object unit: a power of 2, so scaling is exact
+    double scale = 1.0;  // grid units per object unit (grid_scale)
     std::vector<double> scaled;
     Grid<double> grid;
     int64_t cells[3] = {1, 1, 1};  // cells per axis spanned by the origins
 };
-
-int64_t cell_of(const ChainGrid& c, size_t i, int d) {
-    return int64_t(std::floor((c.scaled[3 * i + d] - c.grid.origin[d]) / c.grid.cell));
-}
 
 // Reads the boxes below i in the bucket of cell (x, y, z).
 void read_cell(const ChainGrid& c, const double* origins, size_t i, int64_t x, int64_t y, int64_t z, Nearest& nearest) {
@@ -45,10 +41,24 @@ void read_cell(const ChainGrid& c, const double* origins, size_t i, int64_t x, i
         nearest.consider(origins, i, c.grid.items[m]);
 }
 
+// Distances in cells below are exact to far better than the 1e-3 cell margins (the cell of a
+// point is found with at most 2^26 cells per axis, to ~1e-8 of a cell).
 int64_t search_rings(const ChainGrid& c, const double* origins, size_t i) {
-    const int64_t at[3] = {cell_of(c, i, 0), cell_of(c, i, 1), cell_of(c, i, 2)};
+    int64_t at[3];
+    double offset[3];       // where box i lies inside its cell, 0..1 per axis
     int64_t last_ring = 0;  // the ring that covers every cell of the grid
-    for (int d = 0; d < 3; ++d) last_ring = std::max({last_ring, at[d], c.cells[d] - 1 - at[d]});
+    double edge = 1.0;      // nearest side of its cell, in cells
+    for (int d = 0; d < 3; ++d) {
+        const double u = (c.scaled[3 * i + d] - c.grid.origin[d]) / c.grid.cell, f = std::floor(u);
+        at[d] = int64_t(f);
+        offset[d] = u - f;
+        last_ring = std::max({last_ring, at[d], c.cells[d] - 1 - at[d]});
+        edge = std::min({edge, offset[d], 1.0 - offset[d]});
+    }
+    // Gap between box i and the cell `step` cells away along axis d, in cells.
+    auto gap = [&](int d, int64_t step) {
+        return step > 0 ? double(step) - offset[d] : step < 0 ? double(-step) - 1.0 + offset[d] : 0.0;
+    };
     Nearest nearest;
     double visited = 0.0;
     for (int64_t r = 0;; ++r) {
@@ -57,15 +67,17 @@ int64_t search_rings(const ChainGrid& c, const double* origins, size_t i) {
             for (size_t j = 0; j < i; ++j) nearest.consider(origins, i, j);
             return nearest.box;
         }
+        const double reach = nearest.distance * c.scale / c.grid.cell + 1e-3;  // cells farther hold nothing nearer
         for (int64_t dx = -r; dx <= r; ++dx)
             for (int64_t dy = -r; dy <= r; ++dy) {
                 const bool side = dx == -r || dx == r || dy == -r || dy == r;
+                const double gap2 = gap(0, dx) * gap(0, dx) + gap(1, dy) * gap(1, dy);
                 for (int64_t dz = -r; dz <= r; dz += side ? 1 : std::max<int64_t>(1, 2 * r))
-                    read_cell(c, origins, i, at[0] + dx, at[1] + dy, at[2] + dz, nearest);
+                    if (gap2 + gap(2, dz) * gap(2, dz) <= reach * reach)
+                        read_cell(c, origins, i, at[0] + dx, at[1] + dy, at[2] + dz, nearest);
             }
-        // Boxes outside rings 0..r are at least r cells away (less the rounding of the cell
-        // assignment, far below 1e-3 of a cell).
-        if (r >= last_ring || nearest.distance * c.scale < (double(r) - 1e-3) * c.grid.cell) return nearest.box;
+        // Boxes outside rings 0..r are at least r cells and the nearest side of i's own cell away.
+        if (r >= last_ring || nearest.distance * c.scale < (double(r) + edge - 1e-3) * c.grid.cell) return nearest.box;
     }
 }
 
@@ -76,15 +88,14 @@ int64_t search_rings(const ChainGrid& c, const double* origins, size_t i) {
 void chain_parents(int32_t* parent, const double* origins, size_t count) {
     ChainGrid c;
     std::vector<uint32_t> finite;
-    double lo = INFINITY, hi = -INFINITY;
+    double largest = 0.0;
     for (size_t i = 0; i < count; ++i) {
         const glm::dvec3 o = vec3_at(origins, i);
         if (!std::isfinite(o.x) || !std::isfinite(o.y) || !std::isfinite(o.z)) continue;
         finite.push_back(uint32_t(i));
-        lo = std::min({lo, o.x, o.y, o.z});
-        hi = std::max({hi, o.x, o.y, o.z});
+        largest = std::max({largest, std::abs(o.x), std::abs(o.y), std::abs(o.z)});
     }
-    if (hi - lo > 1e300) c.scale = 0.125;  // keeps the grid's span finite
+    c.scale = grid_scale(largest);
     c.scaled.resize(count * 3);
     for (size_t i = 0; i < count * 3; ++i) c.scaled[i] = origins[i] * c.scale;
     build_grid(c.grid, c.scaled.data(), finite, 0.0, nullptr);
@@ -93,12 +104,14 @@ void chain_parents(int32_t* parent, const double* origins, size_t count) {
         for (uint32_t i : finite) top = std::max(top, c.scaled[3 * size_t(i) + d]);
         c.cells[d] = int64_t(std::floor((top - c.grid.origin[d]) / c.grid.cell)) + 1;
     }
-    std::vector<uint8_t> is_finite(count, 0);
-    for (uint32_t i : finite) is_finite[i] = 1;
-    const size_t parts = thread_count(0, count);
+    std::fill(parent, parent + count, -1);
+    // In bucket order, so that boxes searched one after the other read the same cells.
+    const size_t n = c.grid.items.size(), parts = thread_count(0, n);
     run_parallel(parts, [&](size_t part) {
-        for (size_t i = count * part / parts; i < count * (part + 1) / parts; ++i)
-            parent[i] = is_finite[i] ? int32_t(search_rings(c, origins, i)) : -1;
+        for (size_t k = n * part / parts; k < n * (part + 1) / parts; ++k) {
+            const uint32_t i = c.grid.items[k];
+            parent[i] = int32_t(search_rings(c, origins, i));
+        }
     });
 }
 

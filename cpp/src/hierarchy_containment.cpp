@@ -74,7 +74,7 @@ struct SizeClass {
 };
 
 struct Holders {
-    double scale = 1.0;               // grid units per object unit: a power of 2, so scaling is exact
+    double scale = 1.0;               // grid units per object unit (grid_scale)
     std::vector<double> scaled;       // origins in grid units
     std::vector<SizeClass> classes;   // hashed holders
     std::vector<uint32_t> unbounded;  // holders tested against every point
@@ -86,32 +86,37 @@ struct Holders {
 // nor is held by one of finite bounds (that local coordinate is infinite or NaN).
 Holders sort_holders(const double* origins, const float* quaternions, const double* half_extents, size_t count) {
     Holders h;
-    double lo = INFINITY, hi = -INFINITY;
-    for (size_t i = 0; i < count * 3; ++i)
-        if (std::isfinite(origins[i])) lo = std::min(lo, origins[i]), hi = std::max(hi, origins[i]);
-    if (hi - lo > 1e300) h.scale = 0.125;  // keeps the grids' spans finite
+    std::vector<double> radius(count, NAN);  // NaN: holds nothing
+    double largest = 0.0;
+    for (size_t j = 0; j < count; ++j) {
+        const glm::dvec3 o = vec3_at(origins, j), b = inside_bounds(half_extents, j);
+        const float* q = quaternions + j * 4;
+        if (finite3(o)) largest = std::max({largest, std::abs(o.x), std::abs(o.y), std::abs(o.z)});
+        if (glm::any(glm::isnan(o)) || std::isnan(q[0]) || std::isnan(q[1]) || std::isnan(q[2]) || std::isnan(q[3]) ||
+            std::isnan(volume(half_extents, j)) || !(b.x >= 0.0 && b.y >= 0.0 && b.z >= 0.0))
+            continue;
+        radius[j] = holding_radius(quaternions, half_extents, j);
+        if (std::isfinite(radius[j])) largest = std::max(largest, radius[j]);
+    }
+    h.scale = grid_scale(largest);
     h.scaled.resize(count * 3);
     for (size_t i = 0; i < count * 3; ++i) h.scaled[i] = origins[i] * h.scale;
     std::map<int, size_t> class_of_exponent;
     for (size_t j = 0; j < count; ++j) {
-        const glm::dvec3 o = vec3_at(origins, j), b = inside_bounds(half_extents, j);
-        const float* q = quaternions + j * 4;
-        if (glm::any(glm::isnan(o)) || std::isnan(q[0]) || std::isnan(q[1]) || std::isnan(q[2]) || std::isnan(q[3]) ||
-            std::isnan(volume(half_extents, j)) || !(b.x >= 0.0 && b.y >= 0.0 && b.z >= 0.0))
-            continue;
-        const double radius = holding_radius(quaternions, half_extents, j) * h.scale * (1.0 + 1e-9) + 1e-300;
-        if (!std::isfinite(radius)) {
+        if (std::isnan(radius[j])) continue;
+        if (!std::isfinite(radius[j])) {
             h.unbounded.push_back(uint32_t(j));
             continue;
         }
-        if (!finite3(o)) continue;
+        if (!finite3(vec3_at(origins, j))) continue;
+        const double scaled_radius = radius[j] * h.scale * (1.0 + 1e-9) + 1e-300;
         int e;
-        std::frexp(radius, &e);
+        std::frexp(scaled_radius, &e);
         auto found = class_of_exponent.emplace(e, h.classes.size());
         if (found.second) h.classes.emplace_back();
         SizeClass& c = h.classes[found.first->second];
         c.members.push_back(uint32_t(j));
-        c.radius = std::max(c.radius, radius);
+        c.radius = std::max(c.radius, scaled_radius);
         c.largest_volume = std::max(c.largest_volume, volume(half_extents, j));
         const glm::dvec3 s = vec3_at(h.scaled.data(), j);
         c.lo = glm::min(c.lo, s);

@@ -185,6 +185,19 @@ int main() {
     for (uint32_t seed = 1; seed <= 6; ++seed) scenes.push_back(random_scene(seed, 1500, false));
     for (uint32_t seed = 1; seed <= 3; ++seed) scenes.push_back(random_scene(100 + seed, 1500, true));
     for (uint32_t seed = 1; seed <= 6; ++seed) scenes.push_back(special_scene(200 + seed));
+    // Clusters near 1e150 and -1e100 (grids scaled down by a power of 2) with a few boxes 1e120
+    // wide, and a cluster of boxes 1e-200 apart near the origin.
+    Scene wide = random_scene(300, 1200, false);
+    wide.name = "clusters 1e150 apart";
+    for (size_t i = 0; i < wide.size(); ++i) {
+        const double offsets[] = {1e150, -1e100, 0.0};
+        wide.origins[i * 3] += offsets[i % 3];
+        if (i % 3 == 2)
+            for (int k = 0; k < 3; ++k) wide.origins[i * 3 + k] *= 1e-200, wide.half_extents[i * 3 + k] *= 1e-200;
+        if (i % 97 == 0)
+            for (int k = 0; k < 3; ++k) wide.half_extents[i * 3 + k] = 1e120;
+    }
+    scenes.push_back(wide);
     Scene far{"two boxes 1e300 apart", {}, {}, {}};
     far.add(glm::dvec3(-1e300, 0, 0), glm::dvec3(1));
     far.add(glm::dvec3(1e300, 0, 0), glm::dvec3(1e301));
