@@ -34,11 +34,14 @@ struct ChainGrid {
     int64_t cells[3] = {1, 1, 1};  // cells per axis spanned by the origins
 };
 
-// Reads the boxes below i in the bucket of cell (x, y, z).
+// Reads the boxes below i in the bucket of cell (x, y, z), ascending: past a box at distance 0
+// none can come nearer or lower (boxes sharing one origin cost one read each).
 void read_cell(const ChainGrid& c, const double* origins, size_t i, int64_t x, int64_t y, int64_t z, Nearest& nearest) {
     const uint64_t b = cell_hash(x, y, z, 0) & c.grid.mask;
-    for (uint32_t m = c.grid.bucket_start[b], end = c.grid.bucket_start[b + 1]; m < end && c.grid.items[m] < i; ++m)
+    for (uint32_t m = c.grid.bucket_start[b], end = c.grid.bucket_start[b + 1]; m < end && c.grid.items[m] < i; ++m) {
+        if (nearest.distance == 0.0 && int64_t(c.grid.items[m]) > nearest.box) return;
         nearest.consider(origins, i, c.grid.items[m]);
+    }
 }
 
 // Distances in cells below are exact to far better than the 1e-3 cell margins (the cell of a

@@ -3,14 +3,16 @@
 // the holders are grouped by the size of that sphere (classes a factor of 2 apart) and each
 // class is hashed into a grid with cells as wide as its largest sphere: a point looks up at most
 // 27 cells per class, and a few huge boxes sit in a grid of their own instead of in every cell of
-// the small ones. Every candidate is then decided by the exact inside test, and the smallest
-// holder is chosen by a strict order, so the parents do not depend on how candidates are found.
+// the small ones. A cell lists its boxes smallest first, so a point tests the boxes larger than
+// itself in order up to the first that holds it. Every candidate is decided by the exact inside
+// test and the smallest holder by a strict order, so the parents do not depend on how the
+// candidates are found.
 #include "internal.h"
 #include "spatial_hash.h"
 
 #include <glm/gtc/quaternion.hpp>
 
-#include <climits>
+#include <algorithm>
 #include <cmath>
 #include <map>
 
@@ -122,7 +124,12 @@ Holders sort_holders(const double* origins, const float* quaternions, const doub
         c.lo = glm::min(c.lo, s);
         c.hi = glm::max(c.hi, s);
     }
-    for (SizeClass& c : h.classes) build_grid(c.grid, h.scaled.data(), c.members, c.radius, nullptr);
+    // Smallest first: build_grid keeps this order inside each bucket.
+    for (SizeClass& c : h.classes) {
+        std::sort(c.members.begin(), c.members.end(),
+                  [&](uint32_t a, uint32_t b) { return larger(half_extents, b, a); });
+        build_grid(c.grid, h.scaled.data(), c.members, c.radius, nullptr);
+    }
     return h;
 }
 
@@ -135,12 +142,10 @@ void containment_parents(int32_t* parent, const double* origins, const float* qu
     run_parallel(parts, [&](size_t part) {
         for (size_t i = count * part / parts; i < count * (part + 1) / parts; ++i) {
             int64_t best = -1;
-            auto consider = [&](size_t j) {
+            for (uint32_t j : h.unbounded)
                 if (j != i && larger(half_extents, j, i) && holds(origins, quaternions, half_extents, j, i) &&
                     (best < 0 || larger(half_extents, size_t(best), j)))
                     best = int64_t(j);
-            };
-            for (uint32_t j : h.unbounded) consider(j);
             const glm::dvec3 p = vec3_at(h.scaled.data(), i);
             const double v = volume(half_extents, i);
             if (finite3(p) && !std::isnan(v))
@@ -150,10 +155,20 @@ void containment_parents(int32_t* parent, const double* origins, const float* qu
                         glm::any(glm::greaterThan(p, c.hi + c.radius)))
                         continue;
                     const double at[3] = {p.x, p.y, p.z};
-                    visit_near(c.grid, at, c.radius, 0, [&](uint32_t slot) {
-                        consider(c.grid.items[slot]);
-                        return false;
-                    });
+                    uint64_t buckets[27];
+                    for (int k = 0, nb = near_buckets(c.grid, at, c.radius, 0, buckets); k < nb; ++k) {
+                        // A bucket lists its boxes smallest first: past those not larger than i
+                        // (i among them), the first that holds i is the bucket's smallest holder.
+                        const uint32_t* end = c.grid.items.data() + c.grid.bucket_start[buckets[k] + 1];
+                        const uint32_t* j =
+                                std::partition_point(c.grid.items.data() + c.grid.bucket_start[buckets[k]], end,
+                                                     [&](uint32_t box) { return !larger(half_extents, box, i); });
+                        for (; j != end && (best < 0 || larger(half_extents, size_t(best), *j)); ++j)
+                            if (holds(origins, quaternions, half_extents, *j, i)) {
+                                best = int64_t(*j);
+                                break;
+                            }
+                    }
                 }
             parent[i] = int32_t(best);
         }

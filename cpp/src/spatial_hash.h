@@ -29,7 +29,7 @@ struct Grid {
     std::vector<T> sorted_positions;     // xyz of items[k] at 3k
 };
 
-// Builds g over the points named by included (ascending). Expects finite positions and a finite
+// Builds g over the points named by included (a bucket lists its points in that order). Expects finite positions and a finite
 // radius >= 0. key (may be null) as above.
 template <class T>
 void build_grid(Grid<T>& g, const T* positions, const std::vector<uint32_t>& included, double radius,
