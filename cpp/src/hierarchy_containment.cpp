@@ -70,7 +70,7 @@ double holding_radius(const float* quaternions, const double* half_extents, size
 struct SizeClass {
     std::vector<uint32_t> members;
     double radius = 0.0;  // largest holding radius (grid units)
-    double largest_volume = -INFINITY;
+    double smallest_volume = INFINITY, largest_volume = -INFINITY;
     glm::dvec3 lo{INFINITY}, hi{-INFINITY};  // bounds of the members' origins (grid units)
     Grid<double> grid;
 };
@@ -78,7 +78,7 @@ struct SizeClass {
 struct Holders {
     double scale = 1.0;               // grid units per object unit (grid_scale)
     std::vector<double> scaled;       // origins in grid units
-    std::vector<SizeClass> classes;   // hashed holders
+    std::vector<SizeClass> classes;   // hashed holders, smallest spheres first
     std::vector<uint32_t> unbounded;  // holders tested against every point
 };
 
@@ -119,11 +119,14 @@ Holders sort_holders(const double* origins, const float* quaternions, const doub
         SizeClass& c = h.classes[found.first->second];
         c.members.push_back(uint32_t(j));
         c.radius = std::max(c.radius, scaled_radius);
+        c.smallest_volume = std::min(c.smallest_volume, volume(half_extents, j));
         c.largest_volume = std::max(c.largest_volume, volume(half_extents, j));
         const glm::dvec3 s = vec3_at(h.scaled.data(), j);
         c.lo = glm::min(c.lo, s);
         c.hi = glm::max(c.hi, s);
     }
+    std::sort(h.classes.begin(), h.classes.end(),
+              [](const SizeClass& a, const SizeClass& b) { return a.radius < b.radius; });
     // Smallest first: build_grid keeps this order inside each bucket.
     for (SizeClass& c : h.classes) {
         std::sort(c.members.begin(), c.members.end(),
@@ -150,9 +153,10 @@ void containment_parents(int32_t* parent, const double* origins, const float* qu
             const double v = volume(half_extents, i);
             if (finite3(p) && !std::isnan(v))
                 for (const SizeClass& c : h.classes) {
-                    // Classes of smaller boxes, or whose spheres all miss p, cannot hold it.
-                    if (c.largest_volume < v || glm::any(glm::lessThan(p, c.lo - c.radius)) ||
-                        glm::any(glm::greaterThan(p, c.hi + c.radius)))
+                    // Classes of smaller boxes, or whose spheres all miss p, cannot hold it; a
+                    // class of boxes all larger than the holder found cannot hold it closer.
+                    if (c.largest_volume < v || (best >= 0 && c.smallest_volume > volume(half_extents, size_t(best))) ||
+                        glm::any(glm::lessThan(p, c.lo - c.radius)) || glm::any(glm::greaterThan(p, c.hi + c.radius)))
                         continue;
                     const double at[3] = {p.x, p.y, p.z};
                     uint64_t buckets[27];
