@@ -1,8 +1,9 @@
 // Rule Chain of the box hierarchy: each box's parent is the lower-numbered box with the nearest
 // origin. All origins are hashed once into a grid whose buckets list their boxes in ascending
 // order, so the boxes below i in a bucket are a prefix of it: box i searches the cells around
-// its own in growing rings, reading only those prefixes, until the ring's inner edge lies
-// farther than the nearest box found; past that nothing nearer (or as near) is left unseen.
+// its own in growing rings, reading only those prefixes and skipping cells farther than the
+// nearest box found so far, until the ring's inner edge lies farther than that box; past that
+// nothing nearer (or as near) is left unseen.
 // When the rings would visit more cells than there are lower boxes, it reads those boxes
 // directly instead. Boxes are independent of one another, so they are searched in parallel.
 #include "internal.h"

@@ -162,7 +162,7 @@ void containment_parents(int32_t* parent, const double* origins, const float* qu
                     uint64_t buckets[27];
                     for (int k = 0, nb = near_buckets(c.grid, at, c.radius, 0, buckets); k < nb; ++k) {
                         // A bucket lists its boxes smallest first: past those not larger than i
-                        // (i among them), the first that holds i is the bucket's smallest holder.
+                        // (i too, if there), the first that holds i is the bucket's smallest holder.
                         const uint32_t* end = c.grid.items.data() + c.grid.bucket_start[buckets[k] + 1];
                         const uint32_t* j =
                                 std::partition_point(c.grid.items.data() + c.grid.bucket_start[buckets[k]], end,
