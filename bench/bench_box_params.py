@@ -4,7 +4,8 @@ job in Blender through the bpy module with painted attributes).
     python3 -m bench.bench_box_params [BOXES ...]     (default: 1000 16000)
 
 Meshes: BOXES random boxes (8 vertices each) with boxmarch_shape painted per face and
-boxmarch_user per vertex (one face in a hundred boxes disagreeing)."""
+boxmarch_user per vertex (one face in a hundred boxes disagreeing). A second table times the
+geometric hierarchy rules on BOXES boxes arranged to crowd their grids."""
 import sys
 
 import numpy as np
@@ -39,6 +40,25 @@ def core_rows(count):
     return rows
 
 
+def hierarchy_stress_rows(count):
+    """The geometric rules on scenes that crowd their grids: every box at one origin (equal
+    sizes), boxes nested like dolls (numbered in shuffled order) and small boxes along a helix."""
+    t = np.linspace(0, 50, count)
+    scenes_by_name = {
+        "equal boxes at one origin": (np.zeros((count, 3)), np.ones((count, 3))),
+        "nested boxes, shuffled": (np.zeros((count, 3)), np.repeat(
+            np.random.default_rng(1).permutation(1.0001 ** np.arange(count))[:, None], 3, 1)),
+        "boxes along a helix": (np.stack([np.cos(t), np.sin(t), t / 10], 1), np.full((count, 3), 0.01)),
+    }
+    identity = np.tile(np.float32([0, 0, 0, 1]), (count, 1))
+    rows = []
+    for name, (origins, half) in scenes_by_name.items():
+        seconds = [best_of(1, lambda rule=rule: core.box_hierarchy(origins, identity, half, rule=rule))
+                   for rule in ("CONTAINMENT", "CHAIN")]
+        rows.append((f"{count:,}", name, *seconds))
+    return rows
+
+
 def job_rows(count):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     plain = boxes_object(bpy, count, name="plain")[0].data
@@ -62,10 +82,13 @@ def job_rows(count):
 
 def main(counts):
     boxmarch.register()
-    rows = []
+    rows, stress = [], []
     for count in counts:
         rows += core_rows(count) + job_rows(count)
+        stress += hierarchy_stress_rows(count)
     print(table(["boxes", "step", "seconds"], [(b, s, f"{t:.4f}") for b, s, t in rows]))
+    print()
+    print(table(["boxes", "scene", "CONTAINMENT s", "CHAIN s"], [(b, s, f"{a:.4f}", f"{c:.4f}") for b, s, a, c in stress]))
 
 
 if __name__ == "__main__":

@@ -2,6 +2,8 @@
 expectations come from the inputs' construction, never from the code under test."""
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from boxmarch import core, scenes
 
@@ -123,3 +125,83 @@ def test_dominant_per_submesh():
     assert core.dominant_per_submesh(weights, [0, 0, 1, 1, 2], 3).tolist() == [0, 0, -1]  # 0.5 : 0.5 ties to 0
     assert core.dominant_per_submesh(weights[:2], [0, 0], 1).tolist() == [0]  # 1.2 against 0.9
     assert core.dominant_per_submesh(weights[1:2], [0], 1).tolist() == [1]
+
+
+# The geometric rules against their pairwise definitions, written here in NumPy in the contract's
+# double arithmetic (glm's quaternion rotation v + 2 (w (u x v) + u x (u x v)), u = -q.xyz),
+# on scenes drawn to tie: origins on a small lattice (shared origins, equal distances),
+# half-extents from a few values (equal volumes, nested boxes, origins on faces), quarter turns,
+# some clusters 1e6 away and a few huge boxes. tests/cpp/test_hierarchy.cpp adds NaN, infinite
+# and off-unit inputs.
+def cross(a, b):
+    return np.stack([a[..., 1] * b[..., 2] - b[..., 1] * a[..., 2], a[..., 2] * b[..., 0] - b[..., 2] * a[..., 0],
+                     a[..., 0] * b[..., 1] - b[..., 0] * a[..., 1]], -1)
+
+
+def definition_containment(origins, quaternions, half):
+    n = len(origins)
+    volume = half[:, 0] * half[:, 1] * half[:, 2]
+    parent = np.full(n, -1)
+    q = quaternions.astype(np.float64)
+    for i in range(n):
+        v = origins[i] - origins
+        u = -q[:, :3]
+        uv = cross(u, v)
+        local = v + ((uv * q[:, 3:]) + cross(u, uv)) * 2
+        bounds = half + 1e-6 * half.max(1)[:, None]
+        index = np.arange(n)
+        larger = (volume > volume[i]) | ((volume == volume[i]) & (index < i))
+        holders = np.flatnonzero(np.all(np.abs(local) <= bounds, 1) & larger & (index != i))
+        if len(holders):  # the smallest by volume, ties to the higher index (the lower one is larger)
+            smallest = holders[volume[holders] == volume[holders].min()]
+            parent[i] = smallest.max()
+    return parent
+
+
+def definition_chain(origins):
+    parent = np.full(len(origins), -1)
+    for i in range(1, len(origins)):
+        v = origins[i] - origins[:i]
+        parent[i] = np.argmin(np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2]))  # first minimum
+    return parent
+
+
+QUARTER_TURNS = np.float32([[0, 0, 0, 1], [0, 0, np.sqrt(0.5), np.sqrt(0.5)], [np.sqrt(0.5), 0, 0, np.sqrt(0.5)],
+                            [0.5, 0.5, 0.5, 0.5], [0.2, -0.4, 0.1, np.sqrt(0.79)]])
+
+
+@st.composite
+def tying_scenes(draw):
+    n = draw(st.integers(0, 60))
+    cells = st.lists(st.integers(-3, 3), min_size=3, max_size=3)
+    origins = np.array([draw(cells) for _ in range(n)], np.float64).reshape(-1, 3) * draw(st.sampled_from([0.5, 1.0]))
+    if n and draw(st.booleans()):
+        origins[draw(st.integers(0, n - 1)):] += [1e6, 0, 0]
+    sizes = st.sampled_from([0.25, 0.5, 1.0, 2.0, 4.0, 1e-4, 1e4])
+    half = np.array([[draw(sizes) for _ in range(3)] for _ in range(n)], np.float64).reshape(-1, 3)
+    turns = QUARTER_TURNS[[draw(st.integers(0, len(QUARTER_TURNS) - 1)) for _ in range(n)]].reshape(-1, 4)
+    return origins, turns, half
+
+
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(tying_scenes())
+def test_geometric_rules_give_the_parents_of_their_pairwise_definitions(scene):
+    origins, quaternions, half = scene
+    assert core.box_hierarchy(origins, quaternions, half, rule="CONTAINMENT")[0].tolist() == \
+        definition_containment(origins, quaternions, half).tolist()
+    assert core.box_hierarchy(origins, quaternions, half, rule="CHAIN")[0].tolist() == \
+        definition_chain(origins).tolist()
+
+
+def test_the_definitions_see_ties_and_nesting_and_catch_a_wrong_parent():
+    # Box 1 and 2 are equal and share box 0's origin; box 3 sits in both, on box 2's face.
+    origins = np.float64([[0, 0, 0], [0, 0, 0], [0, 0, 0], [1, 0, 0], [2, 0, 0]])
+    half = np.float64([[4, 4, 4], [1, 1, 1], [1, 1, 1], [0.5, 0.5, 0.5], [0.5, 0.5, 0.5]])
+    q = np.tile(QUARTER_TURNS[0], (5, 1))
+    containment = core.box_hierarchy(origins, q, half, rule="CONTAINMENT")[0]
+    assert containment.tolist() == definition_containment(origins, q, half).tolist() == [-1, 0, 1, 2, 0]
+    assert core.box_hierarchy(origins, q, half, rule="CHAIN")[0].tolist() == definition_chain(origins).tolist() \
+        == [-1, 0, 0, 0, 3]
+    planted = containment.copy()
+    planted[3] = 1  # a holder, but not the smallest by the order
+    assert planted.tolist() != definition_containment(origins, q, half).tolist()

@@ -1,5 +1,5 @@
 """Per-box parameters and the box hierarchy: the NumPy side of cpp/src/box_params.cpp and
-cpp/src/hierarchy.cpp (part of the core API: core.py re-exports them). docs/FORMAT.md states
+cpp/src/hierarchy*.cpp (part of the core API: core.py re-exports them). docs/FORMAT.md states
 what each value means and where each layout carries it."""
 from __future__ import annotations
 

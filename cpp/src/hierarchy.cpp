@@ -1,61 +1,12 @@
-// Box hierarchy: each box's parent (given, by containment, or along a chain) and its depth.
+// Box hierarchy: each box's parent (given, by containment, or along a chain) and its depth. The
+// geometric rules live in hierarchy_containment.cpp and hierarchy_chain.cpp.
 #include "internal.h"
 
-#include <glm/gtc/quaternion.hpp>
-
-#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace boxmarch {
-
-namespace {
-
-glm::dvec3 vec3_at(const double* a, size_t i) { return glm::dvec3(a[i * 3], a[i * 3 + 1], a[i * 3 + 2]); }
-
-// The larger of two boxes by volume, ties to the lower index: a strict order, so containment
-// parents always point to larger boxes and can form no cycle.
-bool larger(const double* half_extents, size_t a, size_t b) {
-    const glm::dvec3 ha = vec3_at(half_extents, a), hb = vec3_at(half_extents, b);
-    const double va = ha.x * ha.y * ha.z, vb = hb.x * hb.y * hb.z;
-    return va > vb || (va == vb && a < b);
-}
-
-void containment_parents(int32_t* parent, const double* origins, const float* quaternions, const double* half_extents,
-                         size_t count) {
-    for (size_t i = 0; i < count; ++i) {
-        parent[i] = -1;
-        const glm::dvec3 p = vec3_at(origins, i);
-        for (size_t j = 0; j < count; ++j) {
-            if (j == i || !larger(half_extents, j, i)) continue;
-            const float* q = quaternions + j * 4;
-            const glm::dquat to_local = glm::conjugate(glm::dquat(q[3], q[0], q[1], q[2]));
-            const glm::dvec3 local = to_local * (p - vec3_at(origins, j));
-            const glm::dvec3 h = vec3_at(half_extents, j);
-            const double slack = 1e-6 * std::max(h.x, std::max(h.y, h.z));
-            const bool inside = std::abs(local.x) <= h.x + slack && std::abs(local.y) <= h.y + slack &&
-                                std::abs(local.z) <= h.z + slack;
-            if (inside && (parent[i] < 0 || larger(half_extents, size_t(parent[i]), j))) parent[i] = int32_t(j);
-        }
-    }
-}
-
-void chain_parents(int32_t* parent, const double* origins, size_t count) {
-    for (size_t i = 0; i < count; ++i) {
-        parent[i] = -1;
-        double nearest = std::numeric_limits<double>::infinity();
-        for (size_t j = 0; j < i; ++j) {
-            const double d = glm::length(vec3_at(origins, i) - vec3_at(origins, j));
-            if (d < nearest) {
-                nearest = d;
-                parent[i] = int32_t(j);
-            }
-        }
-    }
-}
-
-}  // namespace
 
 int32_t box_hierarchy(int32_t* parent, int32_t* depth, const double* origins, const float* quaternions,
                       const double* half_extents, size_t box_count, HierarchyRule rule, const int32_t* given_parent) {

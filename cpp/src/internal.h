@@ -22,6 +22,12 @@ size_t hardware_threads(int requested);
 // caller's thread. Never lets an exception reach std::terminate.
 void run_parallel(size_t parts, const std::function<void(size_t)>& work);
 
+// hierarchy_containment.cpp, hierarchy_chain.cpp: the geometric rules of box_hierarchy (its
+// contract in boxmarch.h), writing parent[count] only.
+void containment_parents(int32_t* parent, const double* origins, const float* quaternions, const double* half_extents,
+                         size_t count);
+void chain_parents(int32_t* parent, const double* origins, size_t count);
+
 // One submesh seen through the whole mesh: its vertices (ascending), faces and edges as lists of
 // indices into the mesh's arrays. base is the position of its lowest vertex in double: every
 // computation works relative to it so far-away submeshes keep their precision.

@@ -29,11 +29,20 @@ struct Grid {
     std::vector<T> sorted_positions;     // xyz of items[k] at 3k
 };
 
-// Builds g over the points named by included (ascending). Expects finite positions and a finite
+// Builds g over the points named by included (a bucket lists its points in that order). Expects finite positions and a finite
 // radius >= 0. key (may be null) as above.
 template <class T>
 void build_grid(Grid<T>& g, const T* positions, const std::vector<uint32_t>& included, double radius,
                 const int32_t* key);
+
+// A power of 2 bringing magnitudes up to `largest` (finite) to at most 2^300, for grids over
+// double positions: build_grid multiplies cell sizes together, which must stay finite. Scaling by
+// a power of 2 is exact (but for results below 2^-1022, off by at most 2^-1074).
+inline double grid_scale(double largest) {
+    int exponent;
+    std::frexp(largest, &exponent);
+    return exponent > 300 ? std::ldexp(1.0, 300 - exponent) : 1.0;
+}
 
 inline uint64_t cell_hash(int64_t x, int64_t y, int64_t z, int32_t key) {
     uint64_t h = uint64_t(x) * 0x9E3779B97F4A7C15ull + uint64_t(y) * 0xC2B2AE3D27D4EB4Full +

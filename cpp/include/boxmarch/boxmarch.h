@@ -192,7 +192,17 @@ enum class HierarchyRule : int {
 // the other rules ignore it (may be null). Containment: box j holds box i when i's origin lies
 // within j's half-extents (plus 1e-6 of j's largest half-extent) in j's frame and j is larger
 // (volume, ties: lower index), the parent is the smallest such j. Chain: the parent of box i > 0
-// is the j < i nearest to it (ties: lowest j). Both compare every pair: O(box_count^2).
+// is the j < i nearest to it (ties: lowest j); a box with a NaN or infinite origin coordinate has
+// none and is none's. Neither rule compares every pair: Containment hashes the boxes by the
+// size of their bounding spheres (classes a factor of 2 apart), each origin looking up at most
+// 27 cells per class and testing there the boxes larger than its own, smallest first, up to the
+// first that holds it: about O(box_count * classes * log box_count), growing towards
+// O(box_count^2) only where many larger boxes' spheres reach an origin their oriented bounds do
+// not hold; boxes with infinite bounds or a quaternion far from unit length are tested against
+// every box. Chain searches a grid of the origins in rings around each box up to its nearest
+// lower box: about O(box_count) for origins spread evenly or along curves, never more than
+// O(box_count^2). Both run on all cores; the parents are those of the pairwise definitions
+// exactly, ties included, for any thread count.
 // Writes parent[box_count] (-1 for a root) and depth[box_count] (0 for a root, parent's + 1
 // otherwise). Returns the largest depth. Throws std::invalid_argument (nothing written) on a
 // given parent out of -1..box_count-1, a box its own parent or a cycle, naming the box.

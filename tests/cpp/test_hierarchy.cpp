@@ -1,0 +1,243 @@
+// C++ tests of box_hierarchy's geometric rules (cpp/src/hierarchy_containment.cpp,
+// hierarchy_chain.cpp) against the pairwise definitions written out here, loop for loop, in the
+// same double arithmetic (glm, as the contract in boxmarch.h states them): every parent must be
+// the same, ties included, on random scenes built to hit the hard cases (nested boxes, shared
+// origins, equal volumes, equal distances, sizes from 1e-4 to 1e4, far-apart clusters, NaN and
+// infinite values, quaternions off unit length). A planted wrong parent must be caught. Built
+// with BOXMARCH_TESTS=ON and run by ctest, normally and in the sanitizer build.
+#include "boxmarch/boxmarch.h"
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+using namespace boxmarch;
+
+namespace {
+
+int failures = 0;
+
+struct Scene {
+    std::string name;
+    std::vector<double> origins, half_extents;
+    std::vector<float> quaternions;
+    size_t size() const { return origins.size() / 3; }
+    void add(glm::dvec3 o, glm::dvec3 h, glm::vec4 q = glm::vec4(0, 0, 0, 1)) {
+        origins.insert(origins.end(), {o.x, o.y, o.z});
+        half_extents.insert(half_extents.end(), {h.x, h.y, h.z});
+        quaternions.insert(quaternions.end(), {q.x, q.y, q.z, q.w});
+    }
+};
+
+glm::dvec3 at(const std::vector<double>& a, size_t i) { return glm::dvec3(a[i * 3], a[i * 3 + 1], a[i * 3 + 2]); }
+
+// The definitions, pair by pair.
+bool reference_larger(const Scene& s, size_t a, size_t b) {
+    const glm::dvec3 ha = at(s.half_extents, a), hb = at(s.half_extents, b);
+    const double va = ha.x * ha.y * ha.z, vb = hb.x * hb.y * hb.z;
+    return va > vb || (va == vb && a < b);
+}
+
+std::vector<int32_t> reference_containment(const Scene& s) {
+    std::vector<int32_t> parent(s.size(), -1);
+    for (size_t i = 0; i < s.size(); ++i)
+        for (size_t j = 0; j < s.size(); ++j) {
+            if (j == i || !reference_larger(s, j, i)) continue;
+            const float* q = &s.quaternions[j * 4];
+            const glm::dquat to_local = glm::conjugate(glm::dquat(q[3], q[0], q[1], q[2]));
+            const glm::dvec3 local = to_local * (at(s.origins, i) - at(s.origins, j));
+            const glm::dvec3 h = at(s.half_extents, j);
+            const double slack = 1e-6 * std::max(h.x, std::max(h.y, h.z));
+            const bool inside = std::abs(local.x) <= h.x + slack && std::abs(local.y) <= h.y + slack &&
+                                std::abs(local.z) <= h.z + slack;
+            if (inside && (parent[i] < 0 || reference_larger(s, size_t(parent[i]), j))) parent[i] = int32_t(j);
+        }
+    return parent;
+}
+
+std::vector<int32_t> reference_chain(const Scene& s) {
+    std::vector<int32_t> parent(s.size(), -1);
+    for (size_t i = 0; i < s.size(); ++i) {
+        double nearest = std::numeric_limits<double>::infinity();
+        for (size_t j = 0; j < i; ++j) {
+            const double d = glm::length(at(s.origins, i) - at(s.origins, j));
+            if (d < nearest) nearest = d, parent[i] = int32_t(j);
+        }
+    }
+    return parent;
+}
+
+std::vector<int32_t> parents_of(const Scene& s, HierarchyRule rule) {
+    std::vector<int32_t> parent(s.size(), -7), depth(s.size(), -7);
+    box_hierarchy(parent.data(), depth.data(), s.origins.data(), s.quaternions.data(), s.half_extents.data(), s.size(),
+                  rule, nullptr);
+    return parent;
+}
+
+// Number of boxes whose parents differ; prints the first.
+size_t differences(const std::vector<int32_t>& got, const std::vector<int32_t>& want) {
+    size_t count = 0;
+    for (size_t i = 0; i < want.size(); ++i)
+        if (got[i] != want[i] && count++ == 0)
+            std::fprintf(stderr, "  box %zu: parent %d, the definition says %d\n", i, got[i], want[i]);
+    return count + (got.size() != want.size());
+}
+
+// Random boxes: sizes log-uniform over 1e-4..1e4 in clusters (some clusters 1e7 away), a few
+// with copied origins, copied or permuted half-extents (equal volumes), axis-aligned or turned,
+// and children placed inside or on the faces of earlier boxes.
+Scene random_scene(uint32_t seed, size_t count, bool lattice) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    auto pick = [&](size_t n) { return size_t(unit(rng) * double(n)) % n; };
+    Scene s;
+    s.name = "random seed " + std::to_string(seed) + (lattice ? " (lattice)" : "");
+    for (size_t i = 0; i < count; ++i) {
+        const double cluster = double(pick(4)) * (unit(rng) < 0.5 ? 1e7 : 50.0);
+        glm::dvec3 o = lattice ? glm::dvec3(double(pick(6)), double(pick(6)), double(pick(6)))
+                               : glm::dvec3(unit(rng), unit(rng), unit(rng)) * 100.0 - 50.0;
+        o.x += cluster;
+        glm::dvec3 h(std::pow(10.0, unit(rng) * 8.0 - 4.0));
+        h *= glm::dvec3(0.5 + unit(rng), 0.5 + unit(rng), 0.5 + unit(rng));
+        glm::vec4 q(0, 0, 0, 1);
+        if (unit(rng) < 0.5) {
+            const glm::dquat r =
+                    glm::normalize(glm::dquat(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5));
+            q = glm::vec4(float(r.x), float(r.y), float(r.z), float(r.w));
+        }
+        const double kind = unit(rng);
+        if (i > 0 && kind < 0.1) {
+            o = at(s.origins, pick(i));  // shared origin
+        } else if (i > 0 && kind < 0.2) {
+            const glm::dvec3 c = at(s.half_extents, pick(i));  // equal volume
+            h = unit(rng) < 0.5 ? c : glm::dvec3(c.z, c.x, c.y);
+        } else if (i > 0 && kind < 0.45) {
+            const size_t p = pick(i);  // inside an earlier box, or on its face (axis-aligned parents)
+            const glm::dvec3 ph = at(s.half_extents, p);
+            glm::dvec3 f(unit(rng) * 2 - 1, unit(rng) * 2 - 1, unit(rng) * 2 - 1);
+            if (unit(rng) < 0.3) f.x = unit(rng) < 0.5 ? -1.0 : 1.0;
+            o = at(s.origins, p) + f * ph;
+            h = ph * (unit(rng) < 0.5 ? 0.3 : 1.0);
+        }
+        if (!lattice && unit(rng) < 0.05) h = glm::dvec3(1e4 * (1 + unit(rng)));  // huge
+        s.add(o, h, q);
+    }
+    return s;
+}
+
+// Values the definitions treat specially: NaN and infinite origins and half-extents, negative
+// and zero half-extents, zero and non-unit quaternions, coordinates near the double range.
+Scene special_scene(uint32_t seed) {
+    Scene s = random_scene(seed, 300, false);
+    s.name = "special values seed " + std::to_string(seed);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+    const double values[] = {nan, inf, -inf, -1.0, 0.0, 1e305, -1e305, 1e-310};
+    for (size_t i = 0; i < s.size(); ++i) {
+        const double kind = unit(rng);
+        const size_t c = size_t(unit(rng) * 3) % 3;
+        const double v = values[size_t(unit(rng) * 8) % 8];
+        if (kind < 0.05)
+            s.origins[i * 3 + c] = v;
+        else if (kind < 0.1)
+            s.half_extents[i * 3 + c] = v;
+        else if (kind < 0.15)
+            for (int k = 0; k < 4; ++k) s.quaternions[i * 4 + k] *= float(unit(rng) * 2.0);
+        else if (kind < 0.18)
+            for (int k = 0; k < 4; ++k) s.quaternions[i * 4 + k] = 0.0f;
+        else if (kind < 0.2)
+            s.quaternions[i * 4 + c] = float(v);
+        else if (kind < 0.22)
+            for (int k = 0; k < 3; ++k) s.half_extents[i * 3 + k] = inf;
+    }
+    return s;
+}
+
+void check_scene(const Scene& s) {
+    try {
+        const size_t containment = differences(parents_of(s, HierarchyRule::Containment), reference_containment(s));
+        const size_t chain = differences(parents_of(s, HierarchyRule::Chain), reference_chain(s));
+        if (containment || chain) {
+            ++failures;
+            std::fprintf(stderr, "FAIL %s: %zu containment and %zu chain parents differ\n", s.name.c_str(), containment,
+                         chain);
+        }
+    } catch (const std::exception& e) {  // e.g. a cycle: the definitions cannot make one
+        ++failures;
+        std::fprintf(stderr, "FAIL %s: %s\n", s.name.c_str(), e.what());
+    }
+}
+
+}  // namespace
+
+int main() {
+    std::vector<Scene> scenes;
+    scenes.push_back(Scene{"no box", {}, {}, {}});
+    Scene one{"one box", {}, {}, {}};
+    one.add(glm::dvec3(1, 2, 3), glm::dvec3(1));
+    scenes.push_back(one);
+    Scene same{"equal boxes at one origin", {}, {}, {}};
+    for (int i = 0; i < 50; ++i) same.add(glm::dvec3(5, 5, 5), glm::dvec3(2, 1, 0.5));
+    scenes.push_back(same);
+    for (uint32_t seed = 1; seed <= 6; ++seed) scenes.push_back(random_scene(seed, 1500, false));
+    for (uint32_t seed = 1; seed <= 3; ++seed) scenes.push_back(random_scene(100 + seed, 1500, true));
+    for (uint32_t seed = 1; seed <= 6; ++seed) scenes.push_back(special_scene(200 + seed));
+    // Clusters near 1e150 and -1e100 (grids scaled down by a power of 2) with a few boxes 1e120
+    // wide, and a cluster of boxes 1e-200 apart near the origin.
+    Scene wide = random_scene(300, 1200, false);
+    wide.name = "clusters 1e150 apart";
+    for (size_t i = 0; i < wide.size(); ++i) {
+        const double offsets[] = {1e150, -1e100, 0.0};
+        wide.origins[i * 3] += offsets[i % 3];
+        if (i % 3 == 2)
+            for (int k = 0; k < 3; ++k) wide.origins[i * 3 + k] *= 1e-200, wide.half_extents[i * 3 + k] *= 1e-200;
+        if (i % 97 == 0)
+            for (int k = 0; k < 3; ++k) wide.half_extents[i * 3 + k] = 1e120;
+    }
+    scenes.push_back(wide);
+    // Nested dolls numbered in shuffled order, each at its own slightly moved origin, every fifth
+    // size repeated (equal volumes).
+    Scene dolls{"800 nested dolls", {}, {}, {}};
+    std::vector<int> level(800);
+    for (int k = 0; k < 800; ++k) level[k] = k;
+    std::shuffle(level.begin(), level.end(), std::mt19937(7));
+    for (int k : level) {
+        const int size_level = k % 5 == 1 ? k - 1 : k;
+        dolls.add(glm::dvec3(1e-3 * (k % 7), 0, 0), glm::dvec3(std::pow(0.99, size_level)),
+                  k % 3 ? glm::vec4(0, 0, 0, 1) : glm::vec4(0, 0, 0.6f, 0.8f));
+    }
+    scenes.push_back(dolls);
+    Scene far{"two boxes 1e300 apart", {}, {}, {}};
+    far.add(glm::dvec3(-1e300, 0, 0), glm::dvec3(1));
+    far.add(glm::dvec3(1e300, 0, 0), glm::dvec3(1e301));
+    far.add(glm::dvec3(1e300, 1, 0), glm::dvec3(1));
+    scenes.push_back(far);
+    size_t roots_held = 0;
+    for (const Scene& s : scenes) {
+        check_scene(s);
+        for (int32_t p : reference_containment(s)) roots_held += p >= 0;
+    }
+    // The scenes exercise the rules: many boxes have containment parents.
+    if (roots_held < 1000) ++failures, std::fprintf(stderr, "FAIL only %zu boxes held by another\n", roots_held);
+
+    // Negative control: the comparison catches one planted wrong parent.
+    const Scene& s = scenes[4];
+    std::vector<int32_t> planted = parents_of(s, HierarchyRule::Chain);
+    planted[700] = planted[700] == 0 ? 1 : 0;
+    if (differences(planted, reference_chain(s)) != 1)
+        ++failures, std::fprintf(stderr, "FAIL negative control\n");
+    else
+        std::printf("(the planted wrong parent above was caught, as it must be)\n");
+
+    std::printf("%zu scenes, %d failure(s)\n", scenes.size(), failures);
+    return failures ? 1 : 0;
+}
