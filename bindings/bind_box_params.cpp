@@ -1,4 +1,4 @@
-// boxmarch._core: per-box parameters and the box hierarchy.
+// boxmarch._core: per-box parameters, the box hierarchy and the nearest points it builds on.
 #include "arrays.h"
 
 namespace boxmarch::bindings {
@@ -58,6 +58,22 @@ void bind_box_params(py::module_& m) {
             py::arg("origins"), py::arg("quaternions"), py::arg("half_extents"), py::arg("rule"),
             py::arg("given_parent") = py::none(),
             "(parent int32[S], depth int32[S], deepest): see boxmarch.core.box_hierarchy.");
+
+    m.def(
+            "nearest_points",
+            [](const py::object& points, const py::object& candidates, int threads) {
+                auto p = input<double>(points, "points", -1, 3);
+                auto c = input<double>(candidates, "candidates", -1, 3);
+                py::array_t<int64_t> out = empty<int64_t>(p.shape(0));
+                {
+                    py::gil_scoped_release release;
+                    nearest_points(out.mutable_data(), p.data(), size_t(p.shape(0)), c.data(), size_t(c.shape(0)),
+                                   threads);
+                }
+                return out;
+            },
+            py::arg("points"), py::arg("candidates"), py::arg("threads") = 0,
+            "int64[N]: the row of candidates nearest each point (-1: none); see boxmarch.core.nearest_rows.");
 }
 
 }  // namespace boxmarch::bindings

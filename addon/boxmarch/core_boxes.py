@@ -55,34 +55,49 @@ def dominant_per_submesh(weights, submesh_of_vertex, submesh_count) -> np.ndarra
 
 
 def nearest_rows(points, candidates) -> np.ndarray:
-    """(n,) the row of ``candidates`` nearest each of ``points`` (ties: the lower row), in
-    chunks of about 4 M distances."""
-    points, candidates = np.asarray(points, np.float64), np.asarray(candidates, np.float64)
-    out = np.empty(len(points), np.int64)
-    chunk = max(1, (1 << 22) // max(len(candidates), 1))
-    for start in range(0, len(points), chunk):
-        d = ((points[start:start + chunk, None, :] - candidates[None, :, :]) ** 2).sum(axis=2)
-        out[start:start + chunk] = d.argmin(axis=1)
-    return out
+    """int64 (n,): the row of ``candidates`` (m, 3) nearest each of ``points`` (n, 3): the
+    smallest sum of squared coordinate differences in float64 (ties: the lower row), found on a
+    grid of the candidates (cpp/src/nearest_points.cpp). Raises ValueError on a NaN or infinite
+    coordinate, or on points without candidates."""
+    points = np.ascontiguousarray(points, np.float64)
+    candidates = np.ascontiguousarray(candidates, np.float64)
+    if not (np.all(np.isfinite(points)) and np.all(np.isfinite(candidates))):
+        raise ValueError("nearest_rows: points and candidates must have finite coordinates")
+    if len(points) and not len(candidates):
+        raise ValueError(f"nearest_rows: {len(points)} points but no candidate to be nearest to")
+    return _core.nearest_points(points, candidates)
 
 
 def parents_by_bone(box_bone, bone_parent, origins) -> np.ndarray:
     """int32 (S,): each box's parent under the BONES rule. ``box_bone`` (S,): each box's bone
     (-1: none), ``bone_parent`` (B,): each bone's parent bone (-1: a root bone). A box's parent
-    is the box of its bone's parent bone whose origin lies nearest its own (ties: the lower
-    number); a parent bone that holds no box passes to its own parent; -1 where no ancestor
-    bone holds a box."""
+    is the box of its bone's parent bone whose origin lies nearest its own (nearest_rows; ties:
+    the lower number); a parent bone that holds no box passes to its own parent; -1 where no
+    ancestor bone holds a box. Raises ValueError on a bone out of range or a cycle of bones."""
     box_bone = np.asarray(box_bone, np.int64)
     bone_parent = np.asarray(bone_parent, np.int64)
     origins = np.asarray(origins, np.float64).reshape(-1, 3)
+    bones = len(bone_parent)
+    if np.any(box_bone >= bones) or np.any(bone_parent >= bones):
+        raise ValueError(f"parents_by_bone: a bone number is not below the {bones} bones")
+    boxes_of_bone = np.bincount(box_bone[box_bone >= 0], minlength=bones)
+    # holder[b]: b's nearest ancestor bone holding a box (-1: none), one step up every ancestor
+    # without a box per pass.
+    holder = np.where(bone_parent >= 0, bone_parent, -1)
+    for _ in range(bones + 1):
+        passing = (holder >= 0) & (boxes_of_bone[np.maximum(holder, 0)] == 0)
+        if not passing.any():
+            break
+        holder[passing] = bone_parent[holder[passing]]
+    else:
+        raise ValueError("parents_by_bone: the bones' parents form a cycle")
+    # A stable sort keeps each bone's boxes ascending, so the lowest row is the lowest box.
+    order = np.argsort(box_bone, kind="stable")
+    start = np.searchsorted(box_bone[order], np.arange(bones + 1))
     parent = np.full(len(box_bone), -1, np.int32)
-    for bone in np.unique(box_bone[box_bone >= 0]):
-        up = bone_parent[bone]
-        while up >= 0 and not np.any(box_bone == up):
-            up = bone_parent[up]
-        if up < 0:
-            continue
-        children, candidates = np.flatnonzero(box_bone == bone), np.flatnonzero(box_bone == up)
+    for bone in np.flatnonzero((boxes_of_bone > 0) & (holder >= 0)):
+        up = holder[bone]
+        children, candidates = order[start[bone]:start[bone + 1]], order[start[up]:start[up + 1]]
         parent[children] = candidates[nearest_rows(origins[children], origins[candidates])]
     return parent
 
