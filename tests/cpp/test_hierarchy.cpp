@@ -1,10 +1,11 @@
 // C++ tests of box_hierarchy's geometric rules (cpp/src/hierarchy_containment.cpp,
-// hierarchy_chain.cpp) against the pairwise definitions written out here, loop for loop, in the
-// same double arithmetic (glm, as the contract in boxmarch.h states them): every parent must be
-// the same, ties included, on random scenes built to hit the hard cases (nested boxes, shared
-// origins, equal volumes, equal distances, sizes from 1e-4 to 1e4, far-apart clusters, NaN and
-// infinite values, quaternions off unit length). A planted wrong parent must be caught. Built
-// with BOXMARCH_TESTS=ON and run by ctest, normally and in the sanitizer build.
+// hierarchy_chain.cpp) and of nearest_points (nearest_points.cpp, on the same scenes) against the
+// pairwise definitions written out here, loop for loop, in the same double arithmetic (glm, as the
+// contract in boxmarch.h states them): every parent and nearest row must be the same, ties
+// included, on random scenes built to hit the hard cases (nested boxes, shared origins, equal
+// volumes, equal distances, sizes from 1e-4 to 1e4, far-apart clusters, NaN and infinite values,
+// quaternions off unit length). A planted wrong parent must be caught. Built with
+// BOXMARCH_TESTS=ON and run by ctest, normally and in the sanitizer build.
 #include "boxmarch/boxmarch.h"
 
 #include <glm/glm.hpp>
@@ -162,6 +163,52 @@ Scene special_scene(uint32_t seed) {
     return s;
 }
 
+// nearest_points: the scene's odd boxes' origins searched among its even boxes' origins, against
+// the definition in its contract (squares of the coordinates scaled so the largest finite one
+// stays below 2^300, summed in order; ties to the lowest row; non-finite: never taken, -1).
+std::vector<int64_t> reference_nearest(const std::vector<double>& points, const std::vector<double>& candidates) {
+    auto finite = [](const double* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); };
+    double largest = 0.0;
+    for (const std::vector<double>* set : {&points, &candidates})
+        for (size_t i = 0; i < set->size() / 3; ++i)
+            if (finite(&(*set)[3 * i]))
+                for (int k = 0; k < 3; ++k) largest = std::max(largest, std::abs((*set)[3 * i + k]));
+    int exponent;
+    std::frexp(largest, &exponent);
+    const double scale = exponent > 300 ? std::ldexp(1.0, 300 - exponent) : 1.0;
+    std::vector<int64_t> nearest(points.size() / 3, -1);
+    for (size_t i = 0; i < nearest.size(); ++i) {
+        double best = std::numeric_limits<double>::infinity();
+        for (size_t j = 0; j < candidates.size() / 3 && finite(&points[3 * i]); ++j) {
+            if (!finite(&candidates[3 * j])) continue;
+            double d2 = 0.0;
+            for (int k = 0; k < 3; ++k) {
+                const double d = points[3 * i + k] * scale - candidates[3 * j + k] * scale;
+                d2 += d * d;
+            }
+            if (d2 < best || nearest[i] < 0) best = d2, nearest[i] = int64_t(j);
+        }
+    }
+    return nearest;
+}
+
+void check_nearest(const Scene& s) {
+    std::vector<double> points, candidates;
+    for (size_t i = 0; i < s.origins.size(); ++i) (i / 3 % 2 ? points : candidates).push_back(s.origins[i]);
+    const std::vector<int64_t> want = reference_nearest(points, candidates);
+    for (int threads : {1, 0}) {
+        std::vector<int64_t> got(want.size(), -7);
+        nearest_points(got.data(), points.data(), want.size(), candidates.data(), candidates.size() / 3, threads);
+        for (size_t i = 0; i < want.size(); ++i)
+            if (got[i] != want[i]) {
+                ++failures;
+                std::fprintf(stderr, "FAIL %s: point %zu nearest %lld, the definition says %lld\n", s.name.c_str(), i,
+                             (long long)got[i], (long long)want[i]);
+                return;
+            }
+    }
+}
+
 void check_scene(const Scene& s) {
     try {
         const size_t containment = differences(parents_of(s, HierarchyRule::Containment), reference_containment(s));
@@ -224,6 +271,7 @@ int main() {
     size_t roots_held = 0;
     for (const Scene& s : scenes) {
         check_scene(s);
+        check_nearest(s);
         for (int32_t p : reference_containment(s)) roots_held += p >= 0;
     }
     // The scenes exercise the rules: many boxes have containment parents.

@@ -215,13 +215,14 @@ int32_t box_hierarchy(int32_t* parent, int32_t* depth, const double* origins, co
 // Reads points[point_count * 3] and candidates[candidate_count * 3] and writes nearest[point_count]:
 // for each point the candidate row at the smallest squared distance dx*dx + dy*dy + dz*dz
 // (summed in that order in double; ties: the lowest row), so the rows NumPy's argmin over those
-// sums picks. Where a coordinate's magnitude exceeds 2^300 the squares are taken of the
-// coordinates scaled down by one power of 2 (exact), where NumPy's would overflow. A candidate
-// with a NaN or infinite coordinate is never taken; a point with one, or with no such candidate,
-// gets -1. Does not compare every pair: the candidates are hashed into a grid searched in rings
-// around each point (as the Chain hierarchy rule): about O((point_count + candidate_count) *
-// log) for points near the candidates, never more than O(point_count * candidate_count). threads:
-// 0 for all cores; the rows do not depend on it.
+// sums picks. Where the largest finite coordinate's magnitude reaches 2^300, every coordinate is
+// first scaled by the power of 2 that brings it below 2^300 (exact but below 2^-1022), so no
+// square overflows where NumPy's would. A candidate with a NaN or infinite coordinate is never
+// taken; a point with one, or without such a candidate, gets -1. Does not compare every pair: the
+// candidates are hashed into a grid searched in rings around each point (as the Chain hierarchy
+// rule): about O(point_count + candidate_count) for points near candidates spread
+// evenly or along curves, never more than O(point_count * candidate_count). threads: 0 for all
+// cores; the rows do not depend on it.
 void nearest_points(int64_t* nearest, const double* points, size_t point_count, const double* candidates,
                     size_t candidate_count, int threads);
 
