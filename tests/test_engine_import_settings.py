@@ -6,14 +6,13 @@ Unity: the AssetPostprocessor is compiled with mono's mcs against a stub of the 
 Unreal: the import script is parsed (python ast), never run in Unreal; the Custom node code is
 compiled as HLSL by glslangValidator. The modelled imports of tests/engine_scene.py are built from
 the settings read here, so the decode tests of the models test what the helpers set."""
-import shutil
-import subprocess
 
 import numpy as np
 import pytest
 
 from tests.engine_scene import UNITY, UNREAL, NotModelled, unity_import, unreal_import
 from tests.engines import import_helpers
+from tests.helpers.glsl import compile_hlsl_fragment
 
 
 def test_unity_postprocessor_sets_the_table_and_reads_the_sidecar_values():
@@ -79,8 +78,6 @@ def test_unreal_script_refuses_sidecars_it_does_not_read():
 
 
 def test_unreal_material_function_compiles_as_hlsl(tmp_path):
-    if shutil.which("glslangValidator") is None:
-        pytest.skip("glslangValidator is not installed (apt-get install glslang-tools)")
     body = import_helpers.UNREAL_MATERIAL.read_text()
     inputs = ", ".join(f"float2 {n}" for n in ("QuatXY", "QuatZW", "OffsetXY", "OffsetZIndex", "HalfXY", "HalfZ"))
     # The function Unreal wraps a Custom node in: its inputs as parameters, additional outputs as out.
@@ -89,9 +86,7 @@ def test_unreal_material_function_compiles_as_hlsl(tmp_path):
                " float2 e : TEXCOORD5, float2 g : TEXCOORD6) : SV_Target\n{\n  float3 h; float i;\n"
                "  return float4(boxmarch_uv_frame(a, b, c, d, e, g, h, i) + h, i);\n}\n")
     for name, text, ok in (("good.hlsl", wrapper, True), ("bad.hlsl", wrapper.replace("q.w", "q.v"), False)):
-        (tmp_path / name).write_text(text)
-        proc = subprocess.run(["glslangValidator", "-D", "-V", "-e", "main", "-S", "frag", str(tmp_path / name),
-                               "-o", str(tmp_path / "out.spv")], capture_output=True, text=True, timeout=60)
+        proc = compile_hlsl_fragment(tmp_path, name, text)
         assert (proc.returncode == 0) == ok, proc.stdout + proc.stderr
 
 
@@ -111,9 +106,7 @@ def test_unreal_depth_offset_compiles_as_hlsl(tmp_path):
                "float4 main(float3 a : TEXCOORD0, float3 b : TEXCOORD1, float3 c : TEXCOORD2) : SV_Target\n{\n"
                "  return float4(boxmarch_depth_offset(a, b, c), 0.0, 0.0, 1.0);\n}\n")
     for name, text, ok in (("good.hlsl", wrapper, True), ("bad.hlsl", wrapper.replace("ViewForward), 0.0)", "ViewFwd), 0.0)"), False)):
-        (tmp_path / name).write_text(text)
-        proc = subprocess.run(["glslangValidator", "-D", "-V", "-e", "main", "-S", "frag", str(tmp_path / name),
-                               "-o", str(tmp_path / "out.spv")], capture_output=True, text=True, timeout=60)
+        proc = compile_hlsl_fragment(tmp_path, name, text)
         assert (proc.returncode == 0) == ok, proc.stdout + proc.stderr
 
 

@@ -1,5 +1,6 @@
-"""GLSL checks with glslangValidator: a stage is compiled with the declarations Blender's
-GPUShaderCreateInfo adds in front of it (uniform block, vertex inputs, stage interface, outputs)."""
+"""Shader checks with glslangValidator: a preview GLSL stage is compiled with the declarations
+Blender's GPUShaderCreateInfo adds in front of it (uniform block, vertex inputs, stage interface,
+outputs); an engine's HLSL is compiled as a fragment stage by glslang's HLSL front end."""
 import shutil
 import subprocess
 
@@ -23,3 +24,12 @@ def compile_glsl(tmp_path, name, stage, source, layout="CLASSIC"):
     path = tmp_path / f"{name}.{stage}"
     path.write_text(blender_declarations(stage, layout) + source)
     return subprocess.run([validator(), str(path)], capture_output=True, text=True)
+
+
+def compile_hlsl_fragment(tmp_path, name, source):
+    """glslang's HLSL front end on ``source`` as a fragment stage whose entry is ``main``, written
+    to ``tmp_path / name`` (an engine's code wrapped as the engine wraps it)."""
+    path = tmp_path / name
+    path.write_text(source)
+    return subprocess.run([validator(), "-D", "-V", "-e", "main", "-S", "frag", str(path), "-o", str(tmp_path / "out.spv")],
+                          capture_output=True, text=True, timeout=60)
