@@ -78,7 +78,7 @@ void bind_raymarch(py::module_& m) {
                const py::object& object_to_clip, const py::object& object_to_view, const py::object& base_color,
                const py::object& rgba, const py::object& depth, const py::object& normals, const py::object& steps,
                int sdf, int max_steps, float epsilon, float relaxation, float max_distance, int threads,
-               const py::object& order, bool early_depth, float quality, int normal) {
+               const py::object& order, bool early_depth, float quality, int normal, bool occluders) {
                 auto c = input<float>(origins, "origins", -1, 3);
                 auto q = input<float>(quaternions, "quaternions", c.shape(0), 4);
                 auto h = input<float>(half_extents, "half_extents", c.shape(0), 3);
@@ -115,6 +115,7 @@ void bind_raymarch(py::module_& m) {
                     plan.order = draw_order.data();
                 }
                 plan.early_depth = early_depth;
+                plan.occluders = occluders;
                 plan.quality = quality;
                 plan.normal = NormalRule(normal);
                 plan.cost = &cost;
@@ -125,6 +126,7 @@ void bind_raymarch(py::module_& m) {
                 py::dict counts;
                 counts["fragments"] = cost.fragments;
                 counts["marched_fragments"] = cost.marched_fragments;
+                counts["occluded_fragments"] = cost.occluded_fragments;
                 counts["lod_fragments"] = cost.lod_fragments;
                 counts["sdf_evaluations"] = cost.sdf_evaluations;
                 counts["hidden_fragments"] = cost.hidden_fragments;
@@ -137,6 +139,7 @@ void bind_raymarch(py::module_& m) {
             py::arg("steps"), py::kw_only(), py::arg("sdf"), py::arg("max_steps"), py::arg("epsilon"),
             py::arg("relaxation"), py::arg("max_distance"), py::arg("threads") = 0, py::arg("order") = py::none(),
             py::arg("early_depth") = false, py::arg("quality") = 1.0f, py::arg("normal") = 0,
+            py::arg("occluders") = false,
             "Raymarch boxes into caller-owned images (rgba (H*W, 4), depth (H, W), normals (H*W, 3), steps (H*W,)) "
             "in draw order `order` (None: as given); returns the frame's cost counts (RenderCost); "
             "see boxmarch.core.render_boxes.");

@@ -39,13 +39,13 @@ A_THEN_B = ([[0.0, 0.0, -2.0], [0.0, 0.0, -4.0]], [[0.5, 0.5, 0.5], [1.0, 1.0, 0
 
 def test_counts_of_two_overlapping_boxes_without_early_depth():
     cost = render(*A_THEN_B).cost
-    assert cost == {"fragments": 80, "marched_fragments": 80, "lod_fragments": 0, "sdf_evaluations": 320,
+    assert cost == {"fragments": 80, "marched_fragments": 80, "occluded_fragments": 0, "lod_fragments": 0, "sdf_evaluations": 320,
                     "hidden_fragments": 16, "hidden_evaluations": 64, "covered_pixels": 64}
 
 
 def test_early_depth_front_first_skips_the_hidden_marches():
     result = render(*A_THEN_B, early_depth=True)
-    assert result.cost == {"fragments": 80, "marched_fragments": 64, "lod_fragments": 0, "sdf_evaluations": 256,
+    assert result.cost == {"fragments": 80, "marched_fragments": 64, "occluded_fragments": 0, "lod_fragments": 0, "sdf_evaluations": 256,
                            "hidden_fragments": 0, "hidden_evaluations": 0, "covered_pixels": 64}
     # the image is the one without early depth: A's face at z = -1.5 over B's at z = -3.5
     assert np.array_equal(result.depth, render(*A_THEN_B).depth)
@@ -59,6 +59,39 @@ def test_early_depth_back_to_front_saves_nothing():
     assert result.cost["marched_fragments"] == 80
     assert result.cost["hidden_fragments"] == 16 and result.cost["hidden_evaluations"] == 64
     assert np.array_equal(result.depth, render(*A_THEN_B).depth)
+
+
+def test_occluders_return_hidden_fragments_before_the_march_in_either_order():
+    # A's occluder is A itself shrunk by 1/1000 of 0.5 (its face at z = -1.5005), in front of B's
+    # face at -3.5 on A's 16 pixels: B's fragments there return before marching, whichever box is
+    # drawn first; every fragment still runs (80), the picture is the one without occluders.
+    full = render(*A_THEN_B)
+    for order in (None, [1, 0]):
+        result = render(*A_THEN_B, occluders=True, order=order)
+        assert result.cost == {"fragments": 80, "marched_fragments": 64, "occluded_fragments": 16, "lod_fragments": 0,
+                               "sdf_evaluations": 256, "hidden_fragments": 0, "hidden_evaluations": 0,
+                               "covered_pixels": 64}
+        assert np.array_equal(result.depth, full.depth) and np.array_equal(result.rgba, full.rgba)
+
+
+def test_occluders_end_a_march_at_their_depth():
+    # P: a sphere of radius 0.5 at z = -4 in a box reaching z = -1 (pixel centres |x|, |y| <= 0.375);
+    # Q: a sphere of radius 1 at z = -3 whose first occluder box (0.825, 0.4, 0.4) - 0.001 covers the
+    # pixel (0.375, 0.375) from z = -2.599. There P's ray misses its sphere (0.53 from the axis) and
+    # would march on towards z = -7; its first step (the distance 2.546 from z = -1) passes the
+    # occluder's depth, so with occluders P spends one map() there. Q hits as before.
+    p_box = ([[0.0, 0.0, -4.0]], [[0.5, 0.5, 3.0]])
+    q_box = ([[0.0, 0.0, -3.0]], [[1.0, 1.0, 1.0]])
+    both = (p_box[0] + q_box[0], p_box[1] + q_box[1])
+    row, column = 2, 5  # pixel centre (0.375, 0.375): rows run from the top
+    p_alone, q_alone = render(*p_box, sdf="SPHERE"), render(*q_box, sdf="SPHERE")
+    full = render(*both, sdf="SPHERE")
+    assert full.steps[row, column] == p_alone.steps[row, column] + q_alone.steps[row, column]
+    assert p_alone.steps[row, column] > 1
+    bounded = render(*both, sdf="SPHERE", occluders=True)
+    assert bounded.steps[row, column] == q_alone.steps[row, column] + 1
+    assert bounded.cost["sdf_evaluations"] < full.cost["sdf_evaluations"]
+    assert np.array_equal(bounded.depth, full.depth) and np.array_equal(bounded.rgba, full.rgba)
 
 
 def test_front_to_back_orders_by_distance_or_direction():
@@ -76,7 +109,7 @@ def test_one_tap_for_a_box_under_the_quality_threshold():
     # centre's depth), then 3 normal taps. The full march: 0.2 from the face to the sphere, 2 steps.
     box = ([[0.125, 0.125, -2.0]], [[0.1, 0.1, 0.3]])
     low = render(*box, sdf="SPHERE", quality=0.25)
-    assert low.cost == {"fragments": 1, "marched_fragments": 1, "lod_fragments": 1, "sdf_evaluations": 4,
+    assert low.cost == {"fragments": 1, "marched_fragments": 1, "occluded_fragments": 0, "lod_fragments": 1, "sdf_evaluations": 4,
                         "hidden_fragments": 0, "hidden_evaluations": 0, "covered_pixels": 1}
     assert low.depth[3, 4] == pytest.approx((2.0 - 0.1) / 9.9, abs=1e-6)
     full = render(*box, sdf="SPHERE", quality=0.5)

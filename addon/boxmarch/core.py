@@ -192,8 +192,8 @@ class RenderResult:
     """Images with row 0 at the TOP: ``rgba`` (H, W, 4) float32, ``depth`` (H, W) window depth (0
     near plane, 1 far plane and background), ``normals`` (H, W, 3) object-space unit normals
     (zero where nothing was hit), ``steps`` (H, W) march steps summed over boxes; ``cost`` what a
-    GPU spends on the frame (cpp RenderCost: fragments, marched_fragments, lod_fragments,
-    sdf_evaluations, hidden_fragments, hidden_evaluations, covered_pixels)."""
+    GPU spends on the frame (cpp RenderCost: fragments, marched_fragments, occluded_fragments,
+    lod_fragments, sdf_evaluations, hidden_fragments, hidden_evaluations, covered_pixels)."""
 
     rgba: np.ndarray
     depth: np.ndarray
@@ -299,7 +299,8 @@ def boxes_from_bake(positions, offsets, vertex_quaternions, submesh_of_vertex):
 def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_view, width, height, *,
                  base_color=(0.8, 0.8, 0.8), sdf="BOX", max_steps=64, epsilon=1e-3, relaxation=1.0,
                  max_distance=1e6, background=(0.0, 0.0, 0.0, 0.0), depth=None, rgba=None,
-                 threads=0, order=None, early_depth=False, quality=1.0, normal="FORWARD") -> RenderResult:
+                 threads=0, order=None, early_depth=False, quality=1.0, normal="FORWARD",
+                 occluders=False) -> RenderResult:
     """Render boxes as the viewport preview does (docs/PREVIEW.md), on the CPU.
 
     Boxes: ``origins`` (S, 3), ``quaternions`` (S, 4), ``half_extents`` (S, 3) in object space
@@ -312,7 +313,10 @@ def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_v
     declared depth_greater keeps on a GPU); ``quality`` in (0, 1]: the preview's quality knob
     (docs/PREVIEW.md), 1 = every fragment marched in full; ``normal``, one of NORMAL_RULES: the
     shaders' forward differences (3 map() calls a hit), TETRAHEDRAL taps (4) or CENTRAL
-    differences (6, the accuracy reference; cpp NormalRule)."""
+    differences (6, the accuracy reference; cpp NormalRule). ``occluders``: the hidden-box
+    pre-pass of the shaders (docs/PREVIEW.md, "Hidden boxes"): every fragment still runs, but one
+    whose box entry lies behind the nearest conservative occluder (boxes inscribed in the preset,
+    box_params.glsl) returns before its march, and no march goes past that depth."""
     width, height = checked_int(width, "width", 1), checked_int(height, "height", 1)
     origins = np.ascontiguousarray(origins, np.float32).reshape(-1, 3)
     n = len(origins)
@@ -341,7 +345,8 @@ def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_v
                        max_steps=checked_int(max_steps, "max_steps", -2**31),
                        epsilon=float(epsilon), relaxation=float(relaxation), max_distance=float(max_distance),
                        threads=checked_int(threads, "threads", -2**31), order=order,
-                       early_depth=bool(early_depth), quality=float(quality), normal=_normal_index(normal))
+                       early_depth=bool(early_depth), quality=float(quality), normal=_normal_index(normal),
+                       occluders=bool(occluders))
     return RenderResult(rgba=rgba, depth=depth, normals=normals, steps=steps, cost=cost)
 
 

@@ -197,11 +197,61 @@ void add_band_cost(RenderCost& band, const std::vector<int32_t>& shown, const st
     std::lock_guard<std::mutex> guard(lock);
     frame.fragments += band.fragments;
     frame.marched_fragments += band.marched_fragments;
+    frame.occluded_fragments += band.occluded_fragments;
     frame.lod_fragments += band.lod_fragments;
     frame.sdf_evaluations += band.sdf_evaluations;
     frame.hidden_fragments += band.hidden_fragments;
     frame.hidden_evaluations += band.hidden_evaluations;
     frame.covered_pixels += band.covered_pixels;
+}
+
+// The box-local ray through pixel (x, y) of a W x H image: from the near plane (ro) along unit rd.
+struct PixelRay {
+    vec3 ro, rd;
+};
+PixelRay pixel_ray(const glm::dmat4& from_clip, int x, int y, int W, int H, const glm::quat& iq, vec3 c) {
+    const double nx = (x + 0.5) / W * 2.0 - 1.0, ny = 1.0 - (y + 0.5) / H * 2.0;
+    glm::dvec4 near = from_clip * glm::dvec4(nx, ny, -1.0, 1.0);
+    glm::dvec4 far = from_clip * glm::dvec4(nx, ny, 1.0, 1.0);
+    glm::dvec3 near3 = glm::dvec3(near) / near.w, far3 = glm::dvec3(far) / far.w;
+    return {iq * vec3(near3 - glm::dvec3(c)), iq * vec3(glm::normalize(far3 - near3))};
+}
+
+// The depth pre-pass of RenderPlan::occluders over rows [row_begin, row_end): per pixel, the
+// nearest window depth (1: none) of the occluder boxes of every box (bm_occluder_centre and
+// bm_occluder_half of the preset), as the rasteriser would write them; a box whose drawn box holds
+// the eye (perspective) draws none, as the shaders' pre-pass drops it.
+std::vector<float> occluder_depths(const float* origins, const float* quaternions, const float* half_extents,
+                                   size_t box_count, const std::vector<glm::ivec4>& rects, const glm::mat4& to_clip,
+                                   const glm::dmat4& from_clip, const glm::mat4& to_view, SdfPreset kind, int W, int H,
+                                   size_t row_begin, size_t row_end) {
+    std::vector<float> depth((row_end - row_begin) * size_t(W), 1.0f);
+    const bool perspective = (to_clip * glm::inverse(to_view))[2][3] != 0.0f;
+    const vec3 eye = vec3(glm::inverse(to_view) * vec4(0.0f, 0.0f, 0.0f, 1.0f));
+    const float shape = float(int(kind));
+    for (size_t b = 0; b < box_count; ++b) {
+        const glm::ivec4 r = rects[b];
+        if (r.y > int(row_end) - 1 || r.w < int(row_begin) || r.x > r.z) continue;
+        const glm::quat q(quaternions[4 * b + 3], quaternions[4 * b], quaternions[4 * b + 1], quaternions[4 * b + 2]);
+        const glm::quat iq = glm::conjugate(q);
+        const vec3 c = glm::make_vec3(origins + 3 * b), h = glm::make_vec3(half_extents + 3 * b);
+        if (perspective && glm::all(glm::lessThanEqual(glm::abs(iq * (eye - c)), h))) continue;
+        for (float k = 0.0f; k < shader::bm_occluder_count(shape); k += 1.0f) {
+            const vec3 centre = shader::bm_occluder_centre(shape, h, k), extent = shader::bm_occluder_half(shape, h, k);
+            if (shader::bm_min3(extent) <= 0.0f) continue;
+            for (int y = std::max(r.y, int(row_begin)); y <= std::min(r.w, int(row_end) - 1); ++y) {
+                for (int x = r.x; x <= r.z; ++x) {
+                    const PixelRay ray = pixel_ray(from_clip, x, y, W, H, iq, c);
+                    const vec2 span = shader::bm_box_span(ray.ro - centre, ray.rd, extent);
+                    if (span.x < 0.0f || span.y < span.x) continue;
+                    const vec4 clip = to_clip * vec4(c + q * (ray.ro + ray.rd * span.x), 1.0f);
+                    float& pixel = depth[size_t(y - int(row_begin)) * size_t(W) + size_t(x)];
+                    pixel = std::min(pixel, clip.z / clip.w * 0.5f + 0.5f);
+                }
+            }
+        }
+    }
+    return depth;
 }
 
 template <class Fn>
@@ -262,6 +312,7 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
         throw std::invalid_argument("render_boxes needs both matrices, rgba and depth");
     const int W = int(view.width), H = int(view.height);
     const glm::mat4 to_clip = glm::make_mat4(view.object_to_clip);
+    const glm::mat4 to_view = glm::make_mat4(view.object_to_view);
     const glm::dmat4 from_clip = glm::inverse(glm::dmat4(to_clip));
     const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(glm::make_mat4(view.object_to_view))));
     const vec3 base = glm::make_vec3(view.base_color);
@@ -276,6 +327,10 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
         const size_t band_start = row_begin * size_t(W);
         std::vector<int32_t> shown((row_end - row_begin) * size_t(W), -1);
         std::vector<uint8_t> covered(shown.size(), 0);
+        const std::vector<float> occluder =
+                plan.occluders ? occluder_depths(origins, quaternions, half_extents, box_count, rects, to_clip,
+                                                 from_clip, to_view, o.sdf, W, H, row_begin, row_end)
+                               : std::vector<float>();
         for (size_t drawn = 0; drawn < box_count; ++drawn) {
             const size_t b = plan.order ? plan.order[drawn] : drawn;
             const glm::ivec4 r = rects[b];
@@ -290,12 +345,8 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
             };
             for (int y = std::max(r.y, int(row_begin)); y <= std::min(r.w, int(row_end) - 1); ++y) {
                 for (int x = r.x; x <= r.z; ++x) {
-                    const double nx = (x + 0.5) / W * 2.0 - 1.0, ny = 1.0 - (y + 0.5) / H * 2.0;
-                    glm::dvec4 near = from_clip * glm::dvec4(nx, ny, -1.0, 1.0);
-                    glm::dvec4 far = from_clip * glm::dvec4(nx, ny, 1.0, 1.0);
-                    glm::dvec3 near3 = glm::dvec3(near) / near.w, far3 = glm::dvec3(far) / far.w;
-                    vec3 ro = iq * vec3(near3 - glm::dvec3(c));
-                    vec3 rd = iq * vec3(glm::normalize(far3 - near3));
+                    const PixelRay ray = pixel_ray(from_clip, x, y, W, H, iq, c);
+                    const vec3 ro = ray.ro, rd = ray.rd;
                     vec2 span = shader::bm_box_span(ro, rd, h);
                     float t0 = std::max(span.x, 0.0f);
                     if (span.y < t0) continue;
@@ -306,6 +357,19 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                     const vec3 face = ro + rd * (span.x >= 0.0f ? span.x : span.y);
                     const float face_depth = window_depth(face);
                     if (plan.early_depth && !(face_depth >= 0.0f && face_depth < images.depth[pix])) continue;
+                    const vec3 start = ro + rd * t0;
+                    float t_end = std::min(span.y - t0, o.max_distance);
+                    if (plan.occluders) {
+                        // Behind the occluders' depth: hidden (a fragment starting inside its box
+                        // marches from the eye, so only its march is bounded).
+                        const float hidden_from = shader::bm_occluder_limit(occluder[pix - band_start]);
+                        if (span.x >= 0.0f && face_depth > hidden_from) {
+                            ++cost.occluded_fragments;
+                            continue;
+                        }
+                        const vec4 c0 = to_clip * vec4(c + q * start, 1.0f), c1 = to_clip * vec4(q * rd, 0.0f);
+                        t_end = std::min(t_end, shader::bm_depth_crossing(c0, c1, 2.0f * hidden_from - 1.0f));
+                    }
                     ++cost.marched_fragments;
                     const float footprint =
                             shader::bm_pixel_size((to_clip * vec4(c + q * face, 1.0f)).w, row_y, float(H));
@@ -313,8 +377,6 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                     MarchOptions fragment = o;
                     fragment.epsilon = std::max(o.epsilon, quality.x * footprint);
                     fragment.max_steps = int(shader::bm_step_limit(box_pixels, quality.y, float(o.max_steps)));
-                    vec3 start = ro + rd * t0;
-                    const float t_end = std::min(span.y - t0, o.max_distance);
                     const bool one_tap = box_pixels < quality.z;
                     cost.lod_fragments += one_tap;
                     March m = one_tap ? bm_one_tap(o.sdf, start, rd, h, t_end, footprint)

@@ -293,6 +293,79 @@ float bm_sdf_blend_parent(float shape, vec3 p, vec3 h, vec3 parent_origin, vec4 
   vec3 in_parent = bm_rotate_vector(p - parent_origin, bm_quat_conjugate(parent_q));
   return op_smooth_union(own, bm_sdf_by_id(parent_half.w, in_parent, parent_half.xyz), k);
 }
+// How many occluder boxes shape id `shape` has (bm_sdf_by_id's numbering).
+float bm_occluder_count(float shape)
+{
+  float id = floor(shape + 0.5);
+  return id == 1.0 || id == 2.0 ? 3.0 : id == 3.0 || id == 4.0 ? 2.0 : id == 5.0 || id == 6.0 ? 4.0 : 1.0;
+}
+// Ring of a link (sd_link: the stadium of half-length `half_length` along x, radius `ring`,
+// wire radius `minor`, in the xy plane) or torus (half_length 0): k = 0, 1 the straight wires at
+// y = +-ring, k = 2, 3 the ends at x = +-(half_length + ring). Each box has half-extent a = minor / 2
+// across the wire (radial and z), so its points lie within w = sqrt(minor^2 - a^2) of the wire's
+// circle radially; along the wire it reaches e past the straight part (or either side of the
+// end), where sqrt(e^2 + (ring + a)^2) = ring + w: the farthest corner at radius ring + w, the
+// nearest at ring - a > ring - w. Inside the tube, exactly.
+vec3 bm_ring_occluder_centre(float half_length, float ring, float k)
+{
+  float side = k == 1.0 || k == 3.0 ? -1.0 : 1.0;
+  return k < 2.0 ? vec3(0.0, side * ring, 0.0) : vec3(side * (half_length + ring), 0.0, 0.0);
+}
+vec3 bm_ring_occluder_half(float half_length, float ring, float minor, float k)
+{
+  float a = 0.5 * minor;
+  float w = sqrt(max(minor * minor - a * a, 0.0));
+  float e = sqrt(max((ring + w) * (ring + w) - (ring + a) * (ring + a), 0.0));
+  return k < 2.0 ? vec3(half_length + e, a, a) : vec3(a, e, a);
+}
+// Centre of occluder box k of shape id `shape` (bm_sdf_by_id's numbering) in a box of
+// half-extents h.
+vec3 bm_occluder_centre(float shape, vec3 h, float k)
+{
+  float id = floor(shape + 0.5);
+  if (id == 5.0) {
+    float minor = min(h.z, 0.5 * min(h.x, h.y));
+    return bm_ring_occluder_centre(0.0, min(h.x, h.y) - minor, k);
+  }
+  if (id == 6.0) {
+    float thickness = min(h.z, 0.25 * min(h.x, h.y));
+    return bm_ring_occluder_centre(max(h.x - h.y, 0.0), h.y - thickness, k);
+  }
+  return vec3(0.0);
+}
+// Half-extents of occluder box k (zero: none), shrunk by the margin.
+vec3 bm_occluder_half(float shape, vec3 h, float k)
+{
+  float id = floor(shape + 0.5);
+  vec3 extent = k == 0.0 ? h : vec3(0.0);
+  if (id == 1.0) {
+    float r = bm_min3(h);
+    extent = k == 0.0 ? vec3(0.825, 0.4, 0.4) * r : k == 1.0 ? vec3(0.4, 0.825, 0.4) * r
+         : k == 2.0 ? vec3(0.4, 0.4, 0.825) * r : vec3(0.0);
+  }
+  if (id == 2.0) {
+    float r = 0.25 * bm_min3(h);
+    extent = k == 0.0 ? h - vec3(0.0, r, r) : k == 1.0 ? h - vec3(r, 0.0, r) : k == 2.0 ? h - vec3(r, r, 0.0) : vec3(0.0);
+  }
+  if (id == 3.0) {
+    float r = min(h.y, h.z);
+    float reach = max(h.x - r, 0.0) + 0.62 * r;
+    extent = k == 0.0 ? vec3(reach, 0.7 * r, 0.35 * r) : k == 1.0 ? vec3(reach, 0.35 * r, 0.7 * r) : vec3(0.0);
+  }
+  if (id == 4.0) {
+    float r = min(h.x, h.y);
+    extent = k == 0.0 ? vec3(0.866 * r, 0.5 * r, h.z) : k == 1.0 ? vec3(0.5 * r, 0.866 * r, h.z) : vec3(0.0);
+  }
+  if (id == 5.0) {
+    float minor = min(h.z, 0.5 * min(h.x, h.y));
+    extent = bm_ring_occluder_half(0.0, min(h.x, h.y) - minor, minor, k);
+  }
+  if (id == 6.0) {
+    float thickness = min(h.z, 0.25 * min(h.x, h.y));
+    extent = bm_ring_occluder_half(max(h.x - h.y, 0.0), h.y - thickness, thickness, k);
+  }
+  return max(extent - vec3(1e-3 * bm_max3(h)), vec3(0.0));
+}
 
 // Entry (x) and exit (y) distances of the ray ro + t rd with the box |p| <= h.
 vec2 bm_box_span(vec3 ro, vec3 rd, vec3 h)
@@ -332,6 +405,24 @@ float bm_step_limit(float box_pixels, float steps_per_pixel, float step_cap)
 float bm_normal_tap(vec3 h)
 {
   return 3e-4 * bm_max3(h);
+}
+// Hidden boxes (box_params.glsl, conservative occluders): the occluders' nearest window depth (0
+// near, 1 far; GL's depth range) made safe to compare with: 2^-21 farther, eight float steps at
+// the far plane. That covers the rounding of window depths near 1 (a float step there spans
+// about 1 cm at 140 units with a 0.1 near plane) and a 24-bit depth buffer's step. A fragment
+// whose box entry lies beyond this limit is hidden; a march stops at it.
+float bm_occluder_limit(float occluder_depth)
+{
+  return occluder_depth + 4.8e-7;
+}
+// Distance t along a ray whose clip-space
+// position is c0 + t c1 at which its clip depth z / w reaches ndc_z (GL: 2 x window depth - 1;
+// D3D and Vulkan: the window depth), so a march can stop at the occluders' depth: nothing
+// beyond it is visible. 1e30 where the depth does not change along the ray.
+float bm_depth_crossing(vec4 c0, vec4 c1, float ndc_z)
+{
+  float rate = c1.z - ndc_z * c1.w;
+  return abs(rate) > 1e-30 ? (ndc_z * c0.w - c0.z) / rate : 1e30;
 }
 
 

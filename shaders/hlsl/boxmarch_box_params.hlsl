@@ -74,4 +74,107 @@ float bm_sdf_blend_parent(float shape, float3 p, float3 h, float3 parent_origin,
   return op_smooth_union(own, bm_sdf_by_id(parent_half.w, in_parent, parent_half.xyz), k);
 }
 
+// ---- conservative occluders: boxes inscribed in each preset, for a depth-only pre-pass
+// A pre-pass draws every box's occluders (the box mesh pulled in by its vertex stage to each
+// occluder box: centre + v * half / h for a box-local vertex v) and keeps their nearest depth. An
+// occluder lies inside its shape, so wherever it covers a pixel the visible surface there is at
+// least as near: a fragment whose box entry lies behind that depth is hidden and need not march,
+// and no march need go past it (docs/PREVIEW.md, "Hidden boxes"). Occluders in the style of
+// conservative occluder meshes (contained in the shape, as large as cheaply possible), each shrunk
+// by 1/1000 of the box's largest half-extent so that it lies strictly inside and a surface
+// touching it keeps its own depth.
+//
+// bm_occluder_count boxes per preset (index k = 0, 1, ...; at most 4); a half-extent of zero: no
+// box at k. Every box is symmetric about the preset's own axes, so an engine's mirrored frame
+// (docs/EXPORT.md) sees the same set. Inscribed, per preset (h: the box's half-extents):
+// * box: the box itself (exact).
+// * sphere (radius r = min3(h)): three crossed boxes r(0.825, 0.4, 0.4) and their axis turns;
+//   each corner lies at 0.825^2 + 2 x 0.4^2 < 1 of r: inside.
+// * rounded box (box h - r rounded by r = min3(h) / 4): the three slabs of the box h with two
+//   axes pulled in by r; a slab's points lie within r of the inner box h - r: inside.
+// * capsule (axis x, half-length a, radius r): two crossed boxes (a + 0.62 r, 0.7 r, 0.35 r) and
+//   (a + 0.62 r, 0.35 r, 0.7 r); at |x| = a + 0.62 r the cap's section has radius
+//   0.785 r >= |(0.7, 0.35)| r = 0.783 r: inside.
+// * cylinder (radius r = min(h.x, h.y), half height h.z): boxes (0.866 r, 0.5 r, h.z) and
+//   (0.5 r, 0.866 r, h.z), corners on the circle: inside.
+// * torus and link: bm_ring_occluder_*; the torus is the link with half-length 0.
+// A draw per occluder index: the pre-pass writes depth only, so each is cheap.
+
+// How many occluder boxes shape id `shape` has (bm_sdf_by_id's numbering).
+float bm_occluder_count(float shape)
+{
+  float id = floor(shape + 0.5);
+  return id == 1.0 || id == 2.0 ? 3.0 : id == 3.0 || id == 4.0 ? 2.0 : id == 5.0 || id == 6.0 ? 4.0 : 1.0;
+}
+
+// Ring of a link (sd_link: the stadium of half-length `half_length` along x, radius `ring`,
+// wire radius `minor`, in the xy plane) or torus (half_length 0): k = 0, 1 the straight wires at
+// y = +-ring, k = 2, 3 the ends at x = +-(half_length + ring). Each box has half-extent a = minor / 2
+// across the wire (radial and z), so its points lie within w = sqrt(minor^2 - a^2) of the wire's
+// circle radially; along the wire it reaches e past the straight part (or either side of the
+// end), where sqrt(e^2 + (ring + a)^2) = ring + w: the farthest corner at radius ring + w, the
+// nearest at ring - a > ring - w. Inside the tube, exactly.
+float3 bm_ring_occluder_centre(float half_length, float ring, float k)
+{
+  float side = k == 1.0 || k == 3.0 ? -1.0 : 1.0;
+  return k < 2.0 ? float3(0.0, side * ring, 0.0) : float3(side * (half_length + ring), 0.0, 0.0);
+}
+float3 bm_ring_occluder_half(float half_length, float ring, float minor, float k)
+{
+  float a = 0.5 * minor;
+  float w = sqrt(max(minor * minor - a * a, 0.0));
+  float e = sqrt(max((ring + w) * (ring + w) - (ring + a) * (ring + a), 0.0));
+  return k < 2.0 ? float3(half_length + e, a, a) : float3(a, e, a);
+}
+
+// Centre of occluder box k of shape id `shape` (bm_sdf_by_id's numbering) in a box of
+// half-extents h.
+float3 bm_occluder_centre(float shape, float3 h, float k)
+{
+  float id = floor(shape + 0.5);
+  if (id == 5.0) {
+    float minor = min(h.z, 0.5 * min(h.x, h.y));
+    return bm_ring_occluder_centre(0.0, min(h.x, h.y) - minor, k);
+  }
+  if (id == 6.0) {
+    float thickness = min(h.z, 0.25 * min(h.x, h.y));
+    return bm_ring_occluder_centre(max(h.x - h.y, 0.0), h.y - thickness, k);
+  }
+  return float3(0.0, 0.0, 0.0);
+}
+
+// Half-extents of occluder box k (zero: none), shrunk by the margin.
+float3 bm_occluder_half(float shape, float3 h, float k)
+{
+  float id = floor(shape + 0.5);
+  float3 extent = k == 0.0 ? h : float3(0.0, 0.0, 0.0);
+  if (id == 1.0) {
+    float r = bm_min3(h);
+    extent = k == 0.0 ? float3(0.825, 0.4, 0.4) * r : k == 1.0 ? float3(0.4, 0.825, 0.4) * r
+         : k == 2.0 ? float3(0.4, 0.4, 0.825) * r : float3(0.0, 0.0, 0.0);
+  }
+  if (id == 2.0) {
+    float r = 0.25 * bm_min3(h);
+    extent = k == 0.0 ? h - float3(0.0, r, r) : k == 1.0 ? h - float3(r, 0.0, r) : k == 2.0 ? h - float3(r, r, 0.0) : float3(0.0, 0.0, 0.0);
+  }
+  if (id == 3.0) {
+    float r = min(h.y, h.z);
+    float reach = max(h.x - r, 0.0) + 0.62 * r;
+    extent = k == 0.0 ? float3(reach, 0.7 * r, 0.35 * r) : k == 1.0 ? float3(reach, 0.35 * r, 0.7 * r) : float3(0.0, 0.0, 0.0);
+  }
+  if (id == 4.0) {
+    float r = min(h.x, h.y);
+    extent = k == 0.0 ? float3(0.866 * r, 0.5 * r, h.z) : k == 1.0 ? float3(0.5 * r, 0.866 * r, h.z) : float3(0.0, 0.0, 0.0);
+  }
+  if (id == 5.0) {
+    float minor = min(h.z, 0.5 * min(h.x, h.y));
+    extent = bm_ring_occluder_half(0.0, min(h.x, h.y) - minor, minor, k);
+  }
+  if (id == 6.0) {
+    float thickness = min(h.z, 0.25 * min(h.x, h.y));
+    extent = bm_ring_occluder_half(max(h.x - h.y, 0.0), h.y - thickness, thickness, k);
+  }
+  return max(extent - ((float3)(1e-3 * bm_max3(h))), float3(0.0, 0.0, 0.0));
+}
+
 #endif

@@ -115,4 +115,24 @@ float3 bm_normal(float3 p, float d, float e)
   return len > 0.0 ? n / len : float3(0.0, 0.0, 0.0);
 }
 
+// Hidden boxes (box_params.glsl, conservative occluders): the occluders' nearest window depth (0
+// near, 1 far; GL's depth range) made safe to compare with: 2^-21 farther, eight float steps at
+// the far plane. That covers the rounding of window depths near 1 (a float step there spans
+// about 1 cm at 140 units with a 0.1 near plane) and a 24-bit depth buffer's step. A fragment
+// whose box entry lies beyond this limit is hidden; a march stops at it.
+float bm_occluder_limit(float occluder_depth)
+{
+  return occluder_depth + 4.8e-7;
+}
+
+// Distance t along a ray whose clip-space
+// position is c0 + t c1 at which its clip depth z / w reaches ndc_z (GL: 2 x window depth - 1;
+// D3D and Vulkan: the window depth), so a march can stop at the occluders' depth: nothing
+// beyond it is visible. 1e30 where the depth does not change along the ray.
+float bm_depth_crossing(float4 c0, float4 c1, float ndc_z)
+{
+  float rate = c1.z - ndc_z * c1.w;
+  return abs(rate) > 1e-30 ? (ndc_z * c0.w - c0.z) / rate : 1e30;
+}
+
 #endif

@@ -290,7 +290,10 @@ struct RenderImages {
 // marching unless the eye is inside the box, where it stands in for the front face).
 struct RenderCost {
     uint64_t fragments = 0;           // fragments rasterised
-    uint64_t marched_fragments = 0;   // fragments that ran the shader (not killed by early depth)
+    uint64_t marched_fragments = 0;   // fragments that marched (not killed by early depth, not returned
+                                      // before the march behind the occluders' depth)
+    uint64_t occluded_fragments = 0;  // fragments that returned before the march: their box entry lay
+                                      // behind the occluders' depth (RenderPlan::occluders)
     uint64_t lod_fragments = 0;       // of those, drawn by one tap (bm_one_tap) instead of a march
     uint64_t sdf_evaluations = 0;     // map() calls: march steps plus the normal taps of a hit
     uint64_t hidden_fragments = 0;    // marched fragments that are not what the pixel shows at the end
@@ -315,6 +318,10 @@ struct RenderPlan {
     bool early_depth = false;         // test the rasterised depth before marching (a declared
                                       // depth_greater/SV_DepthGreaterEqual keeps the hardware doing it)
     float quality = 1.0f;             // the quality knob, 0 < quality <= 1 (raymarch.glsl bm_quality)
+    bool occluders = false;           // a depth-only pre-pass of each box's conservative occluders
+                                      // (box_params.glsl bm_occluder_*): a fragment whose box entry lies
+                                      // behind their nearest depth returns before its march, and no
+                                      // march goes past that depth
     NormalRule normal = NormalRule::Forward;
     RenderCost* cost = nullptr;  // counts written here when not null
 };
@@ -325,7 +332,10 @@ struct RenderPlan {
 // the nearest hit wins by depth against the values already in images.depth. A hit's depth is
 // never nearer than the rasterised face's (clamped, as the shaders' declared depth_greater
 // requires). Boxes are drawn in plan.order; plan.early_depth skips the march of a fragment whose
-// rasterised depth fails the depth test; plan.quality below 1 widens the hit distance to a share
+// rasterised depth fails the depth test; plan.occluders first finds, per pixel, the nearest depth
+// of the boxes inscribed in the shapes (bm_occluder_centre/half for the preset; none for a box
+// whose drawn box holds the eye) and returns before marching from a fragment whose rasterised
+// entry lies behind it, and ends every march at it (every fragment still runs); plan.quality below 1 widens the hit distance to a share
 // of a pixel, caps a box's steps by its size on screen and draws boxes under a few pixels with one
 // map() tap (bm_quality); plan.normal picks the normal's differences. Hits are shaded with the
 // preview's Lambert + hemisphere light in view space. Reads box_count boxes; writes the covered
