@@ -5,7 +5,8 @@ the SDF library and the march.
   decode.glsl, sdf.glsl, box_params.glsl and raymarch.glsl translated into HLSL (``to_hlsl``);
 * cpp/src/shader_library.h: the functions of sdf.glsl and box_params.glsl, bm_rotate_vector and
   bm_quat_conjugate of decode.glsl, bm_box_span, bm_normal_tap, bm_quality, bm_pixel_size,
-  bm_step_limit, bm_occluder_limit and bm_depth_crossing of raymarch.glsl and bm_shade of preview.frag.glsl translated into GLM for the CPU reference
+  bm_step_limit, bm_occluder_limit and bm_depth_crossing of raymarch.glsl and bm_shade of
+  preview.frag.glsl translated into GLM for the CPU reference
   (``to_glm``; the functions that call map() stay in raymarch.cpp, around its preset switch);
 * threejs/boxmarch.js and boxmarch.module.js: threejs/template.js with decode.glsl, sdf.glsl,
   box_params.glsl and raymarch.glsl embedded as strings (three.js compiles them as they are, GLSL ES 1.00 on WebGL 1
@@ -179,8 +180,8 @@ def glm_library() -> str:
     usings = "".join(f"using glm::{v};\n" for v in ("vec2", "vec3", "vec4") if re.search(rf"\b{v}\b", body))
     return (f"// {GENERATED_BY} from shaders/glsl/sdf.glsl, box_params.glsl, decode.glsl (bm_rotate_vector,\n"
             f"// bm_quat_conjugate), raymarch.glsl (bm_box_span, bm_normal_tap, bm_quality, bm_pixel_size,\n"
-            f"// bm_step_limit, bm_occluder_limit, bm_depth_crossing) and preview.frag.glsl (bm_shade): edit those, not this file. The shaders'\n"
-            f"// functions that do not call map(), in GLM, so the CPU reference evaluates what the GPU does.\n"
+            f"// bm_step_limit, bm_occluder_limit, bm_depth_crossing) and preview.frag.glsl (bm_shade): edit those,\n"
+            f"// not this file. The shaders' functions that do not call map(), in GLM, so the CPU reference evaluates what the GPU does.\n"
             f"#pragma once\n\n#include <glm/glm.hpp>\n\nnamespace boxmarch::shader {{\n\n{usings}\n{body}\n"
             f"}}  // namespace boxmarch::shader\n")
 
