@@ -9,13 +9,19 @@ threads, which a busy machine disturbs less). Rows:
 * depth_greater: depth_write GREATER (Blender 4+ only: 3.4 has no declaration, so the row repeats
   today's there);
 * + front to back: the preview's octant index orders (draw.FRONT_TO_BACK);
+* + occluders: the hidden-box pre-pass (preview/occlusion.py, on by default), in mesh order and
+  with the octant orders: what the preview draws;
 * + quality 0.5: the quality knob.
+
+SDF evaluations per covered pixel: counted in the shader (the STEPS output: green = march steps
+plus a hit's normal taps, summed over every fragment through an additive float target), divided
+by the pixels the shaded image covers.
 
 Pixels changed: pixels whose colour differs from today's by more than 1/255, as a share of the
 pixels covered in either image.
 
-    PYTHONPATH=addon python3 -m bench.bench_preview_cost   # PyPI bpy (Blender 5.0), EGL llvmpipe here
-    blender -b --factory-startup --python bench/bench_preview_cost.py   # Debian's Blender 3.4
+    PYTHONPATH=addon python3 -m bench.bench_preview_cost [--size 480] [--scenes pile,cloud]   # PyPI bpy (Blender 5.0), EGL llvmpipe
+    blender -b --factory-startup --python bench/bench_preview_cost.py -- [--size 480]   # Debian's Blender 3.4
 """
 import sys
 import time
@@ -25,10 +31,12 @@ HERE = Path(__file__).resolve().parent
 
 SIZE, REPEATS = 480, 5
 SCENES = ("chain down the arm", "pile", "cloud")
-# (label, create-info depth_write, draw.FRONT_TO_BACK, quality)
-CONFIGS = (("today", "ANY", False, 1.0), ("depth_greater", "GREATER", False, 1.0),
-           ("depth_greater + front to back", "GREATER", True, 1.0),
-           ("depth_greater + front to back + quality 0.5", "GREATER", True, 0.5))
+# (label, create-info depth_write, draw.FRONT_TO_BACK, quality, occlusion.ENABLED)
+CONFIGS = (("today", "ANY", False, 1.0, False), ("depth_greater", "GREATER", False, 1.0, False),
+           ("depth_greater + front to back", "GREATER", True, 1.0, False),
+           ("occluders, mesh order", "GREATER", False, 1.0, True),
+           ("occluders + front to back (shipped)", "GREATER", True, 1.0, True),
+           ("depth_greater + front to back + quality 0.5", "GREATER", True, 0.5, False))
 
 
 def baked_object(bpy, name, scene):
@@ -52,7 +60,8 @@ def frame_rows(bpy, name, scene):
     import gpu
     import numpy as np
 
-    from boxmarch.preview import draw, shader
+    from boxmarch import preview
+    from boxmarch.preview import draw, occlusion, shader
     from bench.common import best_of, preview_frame
 
     ob = baked_object(bpy, name, scene)
@@ -64,16 +73,21 @@ def frame_rows(bpy, name, scene):
         return preview_frame(offscreen, ob, to_view, projection, read)
 
     def use(config):
-        shader.DEPTH_WRITE, draw.FRONT_TO_BACK, ob.boxmarch.quality = config[1:]
+        shader.DEPTH_WRITE, draw.FRONT_TO_BACK, ob.boxmarch.quality, occlusion.ENABLED = config[1:]
+
+    camera = scene_camera(bpy, to_view)
 
     # Round robin over the configurations, best of REPEATS each, so a busy machine slows them alike.
     best = {config: float("inf") for config in CONFIGS}
     best_cpu = dict(best)
-    images = {}
+    images, evaluations = {}, {}
     for config in CONFIGS:
         use(config)
         frame()  # compiles and uploads outside the timing
         images[config] = frame(read=True)
+        steps, depth = preview.render(bpy.context.scene, camera, SIZE, SIZE, output="STEPS")
+        covered = preview.render(bpy.context.scene, camera, SIZE, SIZE)[1] < 1.0
+        evaluations[config] = steps[..., 1][covered].sum() / max(covered.sum(), 1)
     for _ in range(REPEATS):
         for config in CONFIGS:
             use(config)
@@ -85,15 +99,35 @@ def frame_rows(bpy, name, scene):
     for config in CONFIGS:
         covered = (today[..., 3] > 0) | (images[config][..., 3] > 0)
         changed = (np.abs(images[config] - today).max(-1) > 1 / 255) & covered
-        rows.append([name, config[0], f"{best[config] * 1e3:.0f}", f"{best[CONFIGS[0]] / best[config]:.2f}x",
+        rows.append([name, config[0], f"{evaluations[config]:.1f}", f"{best[config] * 1e3:.0f}",
+                     f"{best[CONFIGS[0]] / best[config]:.2f}x",
                      f"{best_cpu[config] * 1e3:.0f}", f"{best_cpu[CONFIGS[0]] / best_cpu[config]:.2f}x",
                      f"{100 * changed.sum() / max(covered.sum(), 1):.2f}%"])
-    shader.DEPTH_WRITE, draw.FRONT_TO_BACK = "GREATER", True
+    shader.DEPTH_WRITE, draw.FRONT_TO_BACK, occlusion.ENABLED = "GREATER", True, True
     bpy.data.objects.remove(ob)
+    bpy.data.objects.remove(camera)
     return rows
 
 
+def scene_camera(bpy, to_view):
+    """A camera object at bench_gpu_cost's perspective camera (40 degrees, clip 0.1 to 4000) of view
+    matrix ``to_view``, for preview.render's STEPS output."""
+    import numpy as np
+    from mathutils import Matrix
+
+    from bench.bench_gpu_cost import FAR, NEAR
+
+    data = bpy.data.cameras.new("bench camera")
+    data.angle, data.clip_start, data.clip_end = np.radians(40.0), NEAR, FAR
+    camera = bpy.data.objects.new("bench camera", data)
+    bpy.context.scene.collection.objects.link(camera)
+    camera.matrix_world = Matrix(np.linalg.inv(to_view).tolist())
+    return camera
+
+
 def main():
+    import argparse
+
     import bpy
     import gpu
 
@@ -102,13 +136,20 @@ def main():
     from bench.bench_gpu_cost import scenes_to_measure
     from bench.common import table
 
+    global SIZE
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--size", type=int, default=SIZE, help="image width and height in pixels")
+    parser.add_argument("--scenes", default=",".join(SCENES), help="comma-separated scene names")
+    args = parser.parse_args(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:])
+    SIZE = args.size
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)
     preview.ensure_gpu_context()
     made = scenes_to_measure(SIZE, 8)
-    rows = [row for name in SCENES for row in frame_rows(bpy, name, made[name])]
+    rows = [row for name in args.scenes.split(",") for row in frame_rows(bpy, name, made[name])]
     print(f"Blender {bpy.app.version_string}, {gpu.platform.renderer_get()}, {SIZE} x {SIZE} px, best of {REPEATS}")
-    print(table(["scene", "preview", "frame ms", "speed-up", "CPU ms", "CPU speed-up", "pixels changed"], rows))
+    print(table(["scene", "preview", "SDF evals/px", "frame ms", "speed-up", "CPU ms", "CPU speed-up", "pixels changed"],
+                rows))
     sys.stdout.flush()
 
 

@@ -156,6 +156,23 @@ void bind_raymarch(py::module_& m) {
                 return d;
             },
             py::arg("sdf"), py::arg("points"), py::arg("half_extents"), "Distances of box-local points to a preset.");
+
+    m.def(
+            "occluder_boxes",
+            [](int sdf, const py::object& half_extents) {
+                auto h = checked<float>(half_extents, "half_extents", -1, 3);
+                const SdfPreset preset = preset_of(sdf);
+                const py::ssize_t n = h.shape(0);
+                py::array_t<float> centres({n, py::ssize_t(kMaxOccluders), py::ssize_t(3)});
+                py::array_t<float> halves({n, py::ssize_t(kMaxOccluders), py::ssize_t(3)});
+                for (py::ssize_t i = 0; i < n; ++i)
+                    for (int k = 0; k < kMaxOccluders; ++k)
+                        occluder_box(preset, h.data() + 3 * i, k, centres.mutable_data() + (i * kMaxOccluders + k) * 3,
+                                     halves.mutable_data() + (i * kMaxOccluders + k) * 3);
+                return py::make_tuple(centres, halves);
+            },
+            py::arg("sdf"), py::arg("half_extents"),
+            "The conservative occluder boxes of a preset per box: (centres, half-extents), each (N, 4, 3).");
 }
 
 }  // namespace boxmarch::bindings

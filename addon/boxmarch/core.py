@@ -262,6 +262,16 @@ def sdf_distance(sdf, points, half_extents) -> np.ndarray:
     return _core.sdf_distance(_preset_index(sdf), points, _rows3(half_extents, len(points), "half_extents"))
 
 
+def occluder_boxes(sdf, half_extents):
+    """The shaders' conservative occluders (box_params.glsl bm_occluder_*: boxes inscribed in preset
+    ``sdf``, clipped to the box, drawn by the hidden-box pre-pass) of boxes with ``half_extents``
+    ((3,) or (N, 3)): ``(centres, halves)``, float32 (N, 4, 3) box-local; a zero half-extent: no
+    box at that index."""
+    half_extents = np.ascontiguousarray(half_extents, np.float32).reshape(-1, 3)
+    _check_finite(half_extents=half_extents)
+    return _core.occluder_boxes(_preset_index(sdf), half_extents)
+
+
 def vertex_values_from_corners(corner_values, corner_verts, vertex_count) -> np.ndarray:
     """Per-vertex copy of a per-corner array (the bake writes the same quaternion to every corner
     of a vertex): the value of each vertex's last corner; vertices without corners get zeros."""

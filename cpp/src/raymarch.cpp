@@ -268,6 +268,19 @@ float sdf_distance(SdfPreset kind, const float* p, const float* h) {
     return sdf_preset(kind, glm::make_vec3(p), glm::make_vec3(h));
 }
 
+void occluder_box(SdfPreset sdf, const float* h, int k, float* centre, float* half_extent) {
+    if (int(sdf) < 0 || int(sdf) >= kSdfPresetCount)
+        throw std::invalid_argument("unknown SDF preset " + std::to_string(int(sdf)));
+    if (k < 0 || k >= kMaxOccluders)
+        throw std::invalid_argument("occluder index must be in 0..3, got " + std::to_string(k));
+    const float shape = float(int(sdf)), index = float(k);
+    const vec3 box = glm::make_vec3(h);
+    const bool drawn = index < shader::bm_occluder_count(shape);
+    const vec3 c = drawn ? shader::bm_occluder_centre(shape, box, index) : vec3(0.0f);
+    const vec3 e = drawn ? shader::bm_occluder_half(shape, box, index) : vec3(0.0f);
+    for (int i = 0; i < 3; ++i) centre[i] = c[i], half_extent[i] = e[i];
+}
+
 void raymarch(const float* origins, const float* directions, const float* half_extents, size_t ray_count,
               const MarchOptions& o, uint8_t* hit, float* positions, float* normals, int32_t* steps) {
     check_options(o);

@@ -233,8 +233,8 @@ inline vec3 bm_ring_occluder_half(float half_length, float ring, float minor, fl
 }
 
 // Centre of occluder box k of shape id `shape` (bm_sdf_by_id's numbering) in a box of
-// half-extents h.
-inline vec3 bm_occluder_centre(float shape, vec3 h, float k)
+// half-extents h, before bm_occluder_centre clips it to the box.
+inline vec3 bm_occluder_centre_unclipped(float shape, vec3 h, float k)
 {
   float id = glm::floor(shape + 0.5f);
   if (id == 5.0f) {
@@ -248,8 +248,8 @@ inline vec3 bm_occluder_centre(float shape, vec3 h, float k)
   return vec3(0.0f);
 }
 
-// Half-extents of occluder box k (zero: none), shrunk by the margin.
-inline vec3 bm_occluder_half(float shape, vec3 h, float k)
+// Half-extents of occluder box k (zero: none), before bm_occluder_half clips it to the box.
+inline vec3 bm_occluder_half_unclipped(float shape, vec3 h, float k)
 {
   float id = glm::floor(shape + 0.5f);
   vec3 extent = k == 0.0f ? h : vec3(0.0f);
@@ -279,7 +279,25 @@ inline vec3 bm_occluder_half(float shape, vec3 h, float k)
     float thickness = glm::min(h.z, 0.25f * glm::min(h.x, h.y));
     extent = bm_ring_occluder_half(glm::max(h.x - h.y, 0.0f), h.y - thickness, thickness, k);
   }
-  return glm::max(extent - vec3(1e-3f * bm_max3(h)), vec3(0.0f));
+  return extent;
+}
+
+// Occluder box k clipped to the box (a shape that reaches past its box is drawn cut by it: a
+// capsule or link box shorter than it is wide), then shrunk by the margin: its centre, and its
+// half-extents (zero: none).
+inline vec3 bm_occluder_centre(float shape, vec3 h, float k)
+{
+  vec3 centre = bm_occluder_centre_unclipped(shape, h, k);
+  vec3 extent = bm_occluder_half_unclipped(shape, h, k);
+  return 0.5f * (glm::max(centre - extent, -h) + glm::min(centre + extent, h));
+}
+
+inline vec3 bm_occluder_half(float shape, vec3 h, float k)
+{
+  vec3 centre = bm_occluder_centre_unclipped(shape, h, k);
+  vec3 extent = bm_occluder_half_unclipped(shape, h, k);
+  vec3 clipped = 0.5f * (glm::min(centre + extent, h) - glm::max(centre - extent, -h));
+  return glm::max(clipped - vec3(1e-3f * bm_max3(h)), vec3(0.0f));
 }
 
 // Entry (x) and exit (y) distances of the ray ro + t rd with the box |p| <= h.

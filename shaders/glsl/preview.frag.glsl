@@ -23,9 +23,15 @@
 // 2 steps of every fragment in red with alpha 1, for Blender's ADDITIVE blend: src * alpha + dst);
 // quality (x: the quality knob of bm_quality, y: the viewport height in pixels);
 // blend.x (the blend radius of PER_BOX_BLEND, else 0); blend.y (1: colour each box by its
-// material id).
+// material id); occlusion.x (1: the hidden-box pre-pass ran and occluder_depth holds the nearest
+// window depth of the occluders at each pixel, docs/PREVIEW.md "Hidden boxes"; 0: none),
+// occlusion.y (the pre-pass's shape id, preview.vert.glsl). With the pre-pass a fragment whose box
+// entry lies behind the occluders returns before marching (every renderer runs it: this does not
+// rest on the driver's early depth test) and no march goes past the occluders' depth. In mode 2
+// the green channel counts every map() evaluation (march steps plus a hit's 3 normal taps).
 // The written depth is never nearer than the rasterised face's (clamped): the create-info
-// declares it (depth_write GREATER, Blender 4+), which keeps early depth testing on.
+// declares it (depth_write GREATER, Blender 4+), which allows a driver to keep its early depth
+// test; NVIDIA's GL driver, Mesa llvmpipe and SwiftShader were measured not to (docs/BENCHMARKS.md).
 // Mirrored by cpp/src/raymarch.cpp (render_boxes); bm_shade is translated into it by
 // shaders/generate.py.
 
@@ -72,7 +78,9 @@ void main()
   // (from the eye).
   vec2 span = bm_box_span(ro, rd, drawn_half);
   float t_end = span.y;
-  if (!gl_FrontFacing && span.x + span.y < 0.0) {
+  vec3 march_start = obj_pos;
+  bool from_eye = !gl_FrontFacing && span.x + span.y < 0.0;
+  if (from_eye) {
     if (preview.eye.w < 0.5 || eye_distance > -span.x) {
       if (preview.mode.x == 2) {
         frag_color = vec4(0.0, 0.0, 0.0, 1.0);
@@ -82,6 +90,23 @@ void main()
     }
     ro -= rd * eye_distance;
     t_end = eye_distance;
+    march_start = preview.eye.xyz;
+  }
+
+  // Hidden boxes: behind the occluders' depth nothing is visible (a march from the eye is only
+  // bounded: its box's own entry is the eye).
+  if (preview.occlusion.x > 0.5) {
+    float hidden_from = bm_occluder_limit(texelFetch(occluder_depth, ivec2(gl_FragCoord.xy), 0).r);
+    if (!from_eye && gl_FragCoord.z > hidden_from) {
+      if (preview.mode.x == 2) {
+        frag_color = vec4(0.0, 0.0, 0.0, 1.0);
+        return;
+      }
+      discard;
+    }
+    vec4 c0 = preview.object_to_clip * vec4(march_start, 1.0);
+    vec4 c1 = preview.object_to_clip * vec4(ray_object / eye_distance, 0.0);
+    t_end = min(t_end, bm_depth_crossing(c0, c1, 2.0 * hidden_from - 1.0));
   }
 
   // The quality knob: a pixel's size at the rasterised face, the box's size on screen from it.
@@ -98,7 +123,7 @@ void main()
     ? bm_one_tap(ro, rd, min(t_end, preview.march.z), footprint, t, d)
     : bm_march(ro, rd, min(t_end, preview.march.z), max_steps, epsilon, preview.march.y, t, steps, d);
   if (preview.mode.x == 2) {
-    frag_color = vec4(float(steps), 0.0, 0.0, 1.0);
+    frag_color = vec4(float(steps), float(steps + (hit ? 3 : 0)), 0.0, 1.0);
     return;
   }
   if (!hit) {

@@ -19,6 +19,11 @@
 // layout carries no per-vertex half-extents, ch_params, the box's parameters as the layout carries
 // them, and ch_parent_*), the outputs (shader_sources.STAGE_INTERFACE) and the uniform block
 // preview (BoxmarchPreview, see preview.frag.glsl).
+// With BM_OCCLUDER_PASS defined (and sdf.glsl and box_params.glsl before it) it is the hidden-box
+// pre-pass's vertex stage: each box's vertices pulled in to its occluder box number
+// occluder_index (box_params.glsl; the shape id preview.occlusion.y, or the box's own where it is
+// negative), none where the eye is inside the drawn box (the marching stage then starts at the
+// eye, and an occluder around the eye would hide what lies in front of it).
 void main()
 {
 #if defined(BM_LAYOUT_CLASSIC) || defined(BM_LAYOUT_UV_FRAME)
@@ -62,4 +67,19 @@ void main()
   vec3 grown = pos + transpose(mat3(preview.frame)) * bm_from_local(outward, frag_axis_x, frag_axis_y, frag_axis_z);
   obj_pos = grown;
   gl_Position = preview.object_to_clip * vec4(grown, 1.0);
+#ifdef BM_OCCLUDER_PASS
+  // box-local vertex v = -f in a box of half-extents h (as baked, before the blend's growth)
+  vec3 h = frag_half - vec3(grow);
+  vec3 v = -(frag_offset + outward);
+  float shape = preview.occlusion.y < 0.0 ? ch_params.x : preview.occlusion.y;
+  vec3 extent = bm_occluder_half(shape, h, occluder_index);
+  vec3 pulled = bm_occluder_centre(shape, h, occluder_index) + v * extent / max(h, vec3(1e-30));
+  mat3 frame = mat3(preview.frame);
+  vec3 eye = bm_to_local(frame * (preview.eye.xyz - pos), frag_axis_x, frag_axis_y, frag_axis_z) + v;
+  bool eye_inside = preview.eye.w > 0.5 && bm_max3(abs(eye) - frag_half) <= 0.0;
+  vec3 moved = pos + transpose(frame) * bm_from_local(pulled - v, frag_axis_x, frag_axis_y, frag_axis_z);
+  // outside the clip volume (every vertex of the box alike): nothing drawn
+  gl_Position = eye_inside || bm_min3(extent) <= 0.0 ? vec4(2.0, 2.0, 2.0, 1.0)
+                                                     : preview.object_to_clip * vec4(moved, 1.0);
+#endif
 }

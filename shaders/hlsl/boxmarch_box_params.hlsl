@@ -84,8 +84,8 @@ float bm_sdf_blend_parent(float shape, float3 p, float3 h, float3 parent_origin,
 // by 1/1000 of the box's largest half-extent so that it lies strictly inside and a surface
 // touching it keeps its own depth.
 //
-// bm_occluder_count boxes per preset (index k = 0, 1, ...; at most 4); a half-extent of zero: no
-// box at k. Every box is symmetric about the preset's own axes, so an engine's mirrored frame
+// bm_occluder_count boxes per preset (index k = 0, 1, ...; at most 4), each clipped to the box
+// (the march never leaves it); a half-extent of zero: no box at k. Every box is symmetric about the preset's own axes, so an engine's mirrored frame
 // (docs/EXPORT.md) sees the same set. Inscribed, per preset (h: the box's half-extents):
 // * box: the box itself (exact).
 // * sphere (radius r = min3(h)): three crossed boxes r(0.825, 0.4, 0.4) and their axis turns;
@@ -128,8 +128,8 @@ float3 bm_ring_occluder_half(float half_length, float ring, float minor, float k
 }
 
 // Centre of occluder box k of shape id `shape` (bm_sdf_by_id's numbering) in a box of
-// half-extents h.
-float3 bm_occluder_centre(float shape, float3 h, float k)
+// half-extents h, before bm_occluder_centre clips it to the box.
+float3 bm_occluder_centre_unclipped(float shape, float3 h, float k)
 {
   float id = floor(shape + 0.5);
   if (id == 5.0) {
@@ -143,8 +143,8 @@ float3 bm_occluder_centre(float shape, float3 h, float k)
   return float3(0.0, 0.0, 0.0);
 }
 
-// Half-extents of occluder box k (zero: none), shrunk by the margin.
-float3 bm_occluder_half(float shape, float3 h, float k)
+// Half-extents of occluder box k (zero: none), before bm_occluder_half clips it to the box.
+float3 bm_occluder_half_unclipped(float shape, float3 h, float k)
 {
   float id = floor(shape + 0.5);
   float3 extent = k == 0.0 ? h : float3(0.0, 0.0, 0.0);
@@ -174,7 +174,24 @@ float3 bm_occluder_half(float shape, float3 h, float k)
     float thickness = min(h.z, 0.25 * min(h.x, h.y));
     extent = bm_ring_occluder_half(max(h.x - h.y, 0.0), h.y - thickness, thickness, k);
   }
-  return max(extent - ((float3)(1e-3 * bm_max3(h))), float3(0.0, 0.0, 0.0));
+  return extent;
+}
+
+// Occluder box k clipped to the box (a shape that reaches past its box is drawn cut by it: a
+// capsule or link box shorter than it is wide), then shrunk by the margin: its centre, and its
+// half-extents (zero: none).
+float3 bm_occluder_centre(float shape, float3 h, float k)
+{
+  float3 centre = bm_occluder_centre_unclipped(shape, h, k);
+  float3 extent = bm_occluder_half_unclipped(shape, h, k);
+  return 0.5 * (max(centre - extent, -h) + min(centre + extent, h));
+}
+float3 bm_occluder_half(float shape, float3 h, float k)
+{
+  float3 centre = bm_occluder_centre_unclipped(shape, h, k);
+  float3 extent = bm_occluder_half_unclipped(shape, h, k);
+  float3 clipped = 0.5 * (min(centre + extent, h) - max(centre - extent, -h));
+  return max(clipped - ((float3)(1e-3 * bm_max3(h))), float3(0.0, 0.0, 0.0));
 }
 
 #endif

@@ -65,9 +65,15 @@ UNIFORM_STRUCT = """struct BoxmarchPreview {
   ivec4 mode;
   vec4 quality;
   vec4 blend;
+  vec4 occlusion;
 };
 """
 FRAGMENT_OUTPUTS = ((0, "VEC4", "frag_color"),)
+# The hidden-box pre-pass (docs/PREVIEW.md, "Hidden boxes"): the occluders' nearest window depth,
+# which the marching stage reads per pixel, and the occluder index each pre-pass draw pulls the
+# box mesh in to.
+OCCLUDER_SAMPLER = (0, "FLOAT_2D", "occluder_depth")
+OCCLUDER_INDEX = ("FLOAT", "occluder_index")
 
 OUTPUT_MODES = ("SHADED", "NORMAL", "STEPS")
 
@@ -90,7 +96,10 @@ def gl_declarations(stage: str, layout: str = "CLASSIC", version: str = "330 cor
     direction = "out" if stage == "vert" else "in"
     lines += [f"{'flat ' if interp == 'flat' else ''}{direction} {GLSL_TYPES[t]} {name};"
               for interp, t, name in STAGE_INTERFACE]
+    if stage == "vert":
+        lines.append(f"uniform {GLSL_TYPES[OCCLUDER_INDEX[0]]} {OCCLUDER_INDEX[1]};")
     if stage == "frag":
+        lines.append(f"uniform sampler2D {OCCLUDER_SAMPLER[2]};")
         lines += [f"layout(location = {slot}) out {GLSL_TYPES[t]} {name};" for slot, t, name in FRAGMENT_OUTPUTS]
         if depth_write is not None:
             lines.append(f"layout({DEPTH_LAYOUTS[depth_write]}) out float gl_FragDepth;")
@@ -138,8 +147,15 @@ def fragment_source(sdf: str = "BOX", user_text: str | None = None, local_mirror
                       read_glsl("raymarch.glsl"), body, read_glsl("preview.frag.glsl")])
 
 
-def vertex_source(layout: str = "CLASSIC") -> str:
-    """The vertex stage as Blender compiles it: ``layout``'s decode (the shipped decode.glsl)."""
+def vertex_source(layout: str = "CLASSIC", occluder: bool = False) -> str:
+    """The vertex stage as Blender compiles it: ``layout``'s decode (the shipped decode.glsl);
+    ``occluder``: the hidden-box pre-pass's, which pulls each box in to its occluder box number
+    ``occluder_index`` of its shape (box_params.glsl)."""
     if layout not in VERTEX_INPUTS:
         raise ValueError(f"layout must be one of {tuple(VERTEX_INPUTS)}, got {layout!r}")
-    return "\n".join([f"#define BM_LAYOUT_{layout}", read_glsl("decode.glsl"), read_glsl("preview.vert.glsl")])
+    shapes = ["#define BM_OCCLUDER_PASS", read_glsl("sdf.glsl"), read_glsl("box_params.glsl")] if occluder else []
+    return "\n".join([f"#define BM_LAYOUT_{layout}", read_glsl("decode.glsl"), *shapes, read_glsl("preview.vert.glsl")])
+
+
+# The pre-pass writes depth only; a colour output is declared as every create-info has one.
+OCCLUDER_FRAGMENT_SOURCE = "void main()\n{\n  frag_color = vec4(0.0);\n}\n"

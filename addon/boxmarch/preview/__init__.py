@@ -120,7 +120,7 @@ def register():
 def unregister():
     import bpy
 
-    from . import draw, shader
+    from . import draw, occlusion, shader
 
     global _handler
     if _handler is not None:
@@ -131,6 +131,7 @@ def unregister():
         if function in handlers:
             handlers.remove(function)
     draw.forget()
+    occlusion.forget()
     shader.clear_cache()
 
 

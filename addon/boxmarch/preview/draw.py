@@ -12,7 +12,7 @@ from gpu_extras.batch import batch_for_shader
 
 from .. import mesh_io
 from ..formats import layouts, presets, shader_sources
-from . import mesh_data, skinning
+from . import mesh_data, occlusion, skinning
 from . import shader as preview_shader
 
 RAW_VECTOR_COLOR = (0.35, 0.75, 1.0, 1.0)      # light blue, as in the seed's Unity script
@@ -244,11 +244,13 @@ def object_frame(ob) -> np.ndarray:
 
 
 def uniform_block_data(object_to_clip, object_to_view, perspective, settings, output_mode=0,
-                       base_color=(0.8, 0.8, 0.8, 1.0), frame=None, viewport_height=1080) -> np.ndarray:
-    """The BoxmarchPreview block (shaders/glsl/preview.frag.glsl) as std140 float32 words."""
+                       base_color=(0.8, 0.8, 0.8, 1.0), frame=None, viewport_height=1080,
+                       occluders=False) -> np.ndarray:
+    """The BoxmarchPreview block (shaders/glsl/preview.frag.glsl) as std140 float32 words;
+    ``occluders``: the hidden-box pre-pass runs before the march (occlusion.py)."""
     object_to_clip = np.asarray(object_to_clip, np.float64)
     object_to_view = np.asarray(object_to_view, np.float64)
-    data = np.zeros(72, np.float32)
+    data = np.zeros(76, np.float32)
     data[0:16] = object_to_clip.T.ravel()   # GLSL matrices are column-major
     normal = np.eye(4)
     normal[:3, :3] = np.linalg.inv(object_to_view[:3, :3]).T
@@ -271,6 +273,7 @@ def uniform_block_data(object_to_clip, object_to_view, perspective, settings, ou
     data[64:66] = settings.quality, viewport_height
     data[68] = settings.blend_radius if settings.sdf == "PER_BOX_BLEND" else 0.0
     data[69] = float(settings.colour_by_material)
+    data[72:74] = float(occluders), occlusion.shape_id(settings.sdf)
     return data
 
 
@@ -318,12 +321,18 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, 
         errors[ob.name] = str(exc)
         shader = None
     if shader is not None:
+        viewport = gpu.state.viewport_get()
+        occluders = occlusion.occluder_count(settings.sdf)
         block = uniform_block_data(object_to_clip, object_to_view, perspective, settings, output_mode,
-                                   tuple(ob.color[:3]) + (1.0,), frame, gpu.state.viewport_get()[3])
+                                   tuple(ob.color[:3]) + (1.0,), frame, viewport[3], occluders > 0)
         ubo = gpu.types.GPUUniformBuf(block.tobytes())
+        batch = drawn.march(mesh_data.view_octant(object_to_view) if FRONT_TO_BACK else None)
+        depth = (occlusion.draw_occluders(batch, settings.layout, ubo, occluders, viewport[2], viewport[3])
+                 if occluders else occlusion.no_depth())
         shader.bind()
         shader.uniform_block(shader_sources.UNIFORM_NAME, ubo)
-        drawn.march(mesh_data.view_octant(object_to_view) if FRONT_TO_BACK else None).draw(shader)
+        shader.uniform_sampler(shader_sources.OCCLUDER_SAMPLER[2], depth)
+        batch.draw(shader)
     if output_mode != 0:
         return shader is not None
     lines = uniform_shader()

@@ -34,7 +34,9 @@ _failed: dict = {}
 MAX_USER_SHADERS = 8
 
 
-def _create_info(fragment: str, layout: str):
+def _create_info(fragment: str, layout: str, occluder: bool = False):
+    """The create-info of the marching shader, or with ``occluder`` of the hidden-box pre-pass
+    (the same inputs and block; the box mesh pulled in to an occluder box, depth only)."""
     iface = gpu.types.GPUStageInterfaceInfo("boxmarch_preview_interface")
     for interpolation, type_name, name in shader_sources.STAGE_INTERFACE:
         getattr(iface, interpolation)(type_name, name)
@@ -46,9 +48,13 @@ def _create_info(fragment: str, layout: str):
     info.uniform_buf(0, shader_sources.UNIFORM_TYPE, shader_sources.UNIFORM_NAME)
     for slot, type_name, name in shader_sources.FRAGMENT_OUTPUTS:
         info.fragment_out(slot, type_name, name)
-    if hasattr(info, "depth_write"):  # Blender 4+; 3.4 has no declaration
-        info.depth_write(DEPTH_WRITE)
-    info.vertex_source(shader_sources.vertex_source(layout))
+    if occluder:
+        info.push_constant(*shader_sources.OCCLUDER_INDEX)
+    else:
+        info.sampler(*shader_sources.OCCLUDER_SAMPLER)
+        if hasattr(info, "depth_write"):  # Blender 4+; 3.4 has no declaration
+            info.depth_write(DEPTH_WRITE)
+    info.vertex_source(shader_sources.vertex_source(layout, occluder))
     info.fragment_source(fragment)
     return info, iface
 
@@ -170,6 +176,19 @@ def preview_shader(sdf: str = "BOX", user_text: str | None = None, local_mirror=
             del _cache[old]
     _cache[key] = shader
     return shader
+
+
+def occluder_shader(layout: str = "CLASSIC"):
+    """The compiled pre-pass shader of the hidden-box cut for engine ``layout``'s channels."""
+    key = ("OCCLUDER", None, None, layout, None)
+    if key not in _cache:
+        info, iface = _create_info(shader_sources.OCCLUDER_FRAGMENT_SOURCE, layout, occluder=True)
+        shader, error, log = _compile_capturing_log(info)
+        del iface
+        if shader is None:
+            raise RuntimeError(f"boxmarch occluder shader failed to compile: {error}\n{log}")
+        _cache[key] = shader
+    return _cache[key]
 
 
 def clear_cache():

@@ -256,6 +256,13 @@ struct MarchOptions {
 // Distance from box-local point p[3] to preset `sdf` of a box with half-extents h[3].
 float sdf_distance(SdfPreset sdf, const float* p, const float* h);
 
+// The shaders' conservative occluders (box_params.glsl bm_occluder_centre/half): box k (0 <= k <
+// kMaxOccluders) inscribed in preset `sdf` drawn in a box of half-extents h[3], clipped to that box.
+// Writes its box-local centre[3] and half_extent[3] (all zero: no box at k). Throws
+// std::invalid_argument on an unknown preset or k out of range.
+constexpr int kMaxOccluders = 4;
+void occluder_box(SdfPreset sdf, const float* h, int k, float* centre, float* half_extent);
+
 // Sphere-traces ray_count box-local rays, each inside its own box.
 // Reads origins, directions (need not be unit; normalised here) and half_extents, each
 // ray_count * 3. A ray marches from where it enters its box (its origin when inside) until it

@@ -320,8 +320,8 @@ vec3 bm_ring_occluder_half(float half_length, float ring, float minor, float k)
   return k < 2.0 ? vec3(half_length + e, a, a) : vec3(a, e, a);
 }
 // Centre of occluder box k of shape id `shape` (bm_sdf_by_id's numbering) in a box of
-// half-extents h.
-vec3 bm_occluder_centre(float shape, vec3 h, float k)
+// half-extents h, before bm_occluder_centre clips it to the box.
+vec3 bm_occluder_centre_unclipped(float shape, vec3 h, float k)
 {
   float id = floor(shape + 0.5);
   if (id == 5.0) {
@@ -334,8 +334,8 @@ vec3 bm_occluder_centre(float shape, vec3 h, float k)
   }
   return vec3(0.0);
 }
-// Half-extents of occluder box k (zero: none), shrunk by the margin.
-vec3 bm_occluder_half(float shape, vec3 h, float k)
+// Half-extents of occluder box k (zero: none), before bm_occluder_half clips it to the box.
+vec3 bm_occluder_half_unclipped(float shape, vec3 h, float k)
 {
   float id = floor(shape + 0.5);
   vec3 extent = k == 0.0 ? h : vec3(0.0);
@@ -365,7 +365,23 @@ vec3 bm_occluder_half(float shape, vec3 h, float k)
     float thickness = min(h.z, 0.25 * min(h.x, h.y));
     extent = bm_ring_occluder_half(max(h.x - h.y, 0.0), h.y - thickness, thickness, k);
   }
-  return max(extent - vec3(1e-3 * bm_max3(h)), vec3(0.0));
+  return extent;
+}
+// Occluder box k clipped to the box (a shape that reaches past its box is drawn cut by it: a
+// capsule or link box shorter than it is wide), then shrunk by the margin: its centre, and its
+// half-extents (zero: none).
+vec3 bm_occluder_centre(float shape, vec3 h, float k)
+{
+  vec3 centre = bm_occluder_centre_unclipped(shape, h, k);
+  vec3 extent = bm_occluder_half_unclipped(shape, h, k);
+  return 0.5 * (max(centre - extent, -h) + min(centre + extent, h));
+}
+vec3 bm_occluder_half(float shape, vec3 h, float k)
+{
+  vec3 centre = bm_occluder_centre_unclipped(shape, h, k);
+  vec3 extent = bm_occluder_half_unclipped(shape, h, k);
+  vec3 clipped = 0.5 * (min(centre + extent, h) - max(centre - extent, -h));
+  return max(clipped - vec3(1e-3 * bm_max3(h)), vec3(0.0));
 }
 
 // Entry (x) and exit (y) distances of the ray ro + t rd with the box |p| <= h.

@@ -1,0 +1,61 @@
+"""Run in a Blender (Debian's 3.4 program in the background, or the bpy module): a dense pile of
+links drawn by the viewport preview offscreen with and without the hidden-box pre-pass
+(preview/occlusion.py): the shaded images and the STEPS output (green: SDF evaluations of every
+fragment, summed per pixel through an additive float target), with the pile's ground truth.
+
+Usage: blender --background --factory-startup --python preview_occluder_check.py -- PACKAGE_PARENT OUT.npz
+"""
+import os
+import sys
+
+argv = sys.argv[sys.argv.index("--") + 1:]
+sys.path.insert(0, argv[0])
+out_path = argv[1]
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+
+import boxmarch  # noqa: E402
+from boxmarch import mesh_io, preview, scenes  # noqa: E402
+from boxmarch.preview import occlusion  # noqa: E402
+
+boxmarch.register()
+bpy.ops.wm.read_factory_settings(use_empty=True)
+scene = bpy.context.scene
+W, H = 200, 150
+LINK = np.array([0.46, 0.23, 0.06])  # scripts/chain_arm.py's link: length, width, wire thickness
+
+# 600 links heaped at random in a 1.6-unit cube, seen through from 3.5 units away.
+rng = np.random.default_rng(5)
+centres = rng.uniform(-0.8, 0.8, (600, 3))
+rotations = scenes.random_rotations(600, rng)
+positions, _edges, face_starts, face_sizes, corner_verts = scenes.box_arrays(centres, np.tile(LINK, (600, 1)),
+                                                                              rotations)
+pile = bpy.data.objects.new("pile", mesh_io.new_mesh("pile", positions, face_starts, face_sizes, corner_verts))
+scene.collection.objects.link(pile)
+bpy.context.view_layer.objects.active = pile
+pile.select_set(True)
+assert bpy.ops.boxmarch.bake(sort_axes_by_extent=True) == {"FINISHED"}  # local x along each link
+pile.boxmarch.preview = True
+pile.boxmarch.sdf = "LINK"
+
+camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+scene.collection.objects.link(camera)
+camera.location = (0.4, -3.5, 0.6)
+camera.rotation_euler = (-camera.location).to_track_quat("-Z", "Y").to_euler()
+camera.data.clip_start, camera.data.clip_end = 0.1, 100.0
+scene.camera = camera
+bpy.context.view_layer.update()
+
+result = {"centres": centres, "rotations": rotations, "link": LINK, "matrix_world": np.array(pile.matrix_world)}
+result["view"], result["projection"] = preview.camera_matrices(scene, camera, W, H)
+for enabled in (True, False):
+    occlusion.ENABLED = enabled
+    name = "ON" if enabled else "OFF"
+    result[f"{name}_rgba"], result[f"{name}_depth"] = preview.render(scene, camera, W, H)
+    result[f"{name}_steps"] = preview.render(scene, camera, W, H, output="STEPS")[0]
+occlusion.ENABLED = True
+
+np.savez_compressed(out_path, **result)
+sys.stdout.flush()
+os._exit(0)  # PyPI's bpy 4.2/4.5 crash at exit once an add-on registered classes (docs/PLATFORMS.md)

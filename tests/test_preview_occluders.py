@@ -1,0 +1,60 @@
+"""The preview's hidden-box pre-pass (preview/occlusion.py) on a dense pile of links, in Debian's
+Blender 3.4 program and the bpy 5.0 module (Mesa llvmpipe here): the picture is the one without
+the pre-pass pixel for pixel and matches the CPU reference (core.render_boxes, from the links'
+known centres and rotations), and the SDF evaluations counted in the shader fall as the CPU
+reference's cost model counts them (its own pre-pass, computed from the same ground truth)."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from boxmarch import core
+from tests.helpers.preview_render import BLENDERS, agreement, quaternions_of, run_check_script
+
+SCRIPT = Path(__file__).parent / "blender_scripts" / "preview_occluder_check.py"
+
+pytestmark = pytest.mark.slow  # each Blender renders the pile in a subprocess
+
+
+@pytest.fixture(scope="module", params=BLENDERS)
+def rendered(request, package_parent, tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("occluders")
+    return run_check_script(request.param, SCRIPT, package_parent, tmp / "occluders.npz", tmp)
+
+
+def reference(r, occluders):
+    height, width = r["ON_depth"].shape
+    model, view, projection = r["matrix_world"], r["view"], r["projection"]
+    half = np.tile(r["link"] / 2, (len(r["centres"]), 1))
+    # the bake's sort_axes_by_extent puts local x along the link's length, as the boxes are built
+    return core.render_boxes(r["centres"], quaternions_of(r["rotations"]), half, projection @ view @ model,
+                             view @ model, width, height, sdf="LINK", occluders=occluders)
+
+
+def evaluations_per_covered_pixel(steps, depth):
+    covered = depth < 1.0
+    return steps[..., 1][covered].sum() / covered.sum()
+
+
+def test_pre_pass_changes_no_pixel(rendered):
+    assert (rendered["ON_depth"] < 1.0).mean() > 0.3  # the pile fills the view
+    assert np.array_equal(rendered["ON_rgba"], rendered["OFF_rgba"])
+    assert np.array_equal(rendered["ON_depth"], rendered["OFF_depth"])
+
+
+def test_pre_pass_picture_matches_cpu_reference(rendered):
+    ref = reference(rendered, occluders=False)
+    coverage, depth_p999 = agreement(rendered["ON_depth"], ref)
+    assert coverage >= 0.99 and depth_p999 <= 2e-6
+
+
+def test_pre_pass_cuts_evaluations_as_the_cost_model_counts(rendered):
+    on = evaluations_per_covered_pixel(rendered["ON_steps"], rendered["ON_depth"])
+    off = evaluations_per_covered_pixel(rendered["OFF_steps"], rendered["OFF_depth"])
+    model_on, model_off = (reference(rendered, occluders).cost for occluders in (True, False))
+    per_pixel = lambda cost: cost["sdf_evaluations"] / cost["covered_pixels"]  # noqa: E731
+    # negative control: without the pre-pass the shader counts what the model counts with every
+    # fragment marching
+    assert off == pytest.approx(per_pixel(model_off), rel=0.1)
+    assert on == pytest.approx(per_pixel(model_on), rel=0.1)
+    assert on <= 35 and off >= 3 * on
