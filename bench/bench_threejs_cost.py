@@ -7,14 +7,22 @@ scene, and drawn from bench_gpu_cost's camera. Timed from render() to a 1-pixel 
 waits for the frame) on the serving process's clock less one reading's round trip (*clock ms*),
 round robin over the configurations, best of REPEATS frames each. Rows:
 
-* plain: the material as loadBoxmarch sets it (file order, quality 1): on r180 the
-  RawShaderMaterial declaring layout(depth_greater) (EXT_conservative_depth, which SwiftShader's
-  WebGL 2 offers), on r111 the ShaderMaterial (WebGL 1 has no declaration);
+* no pre-pass: the material without the hidden-box pre-pass (``occluders: false``; file order,
+  quality 1): on r180 the RawShaderMaterial declaring layout(depth_greater)
+  (EXT_conservative_depth, which SwiftShader's WebGL 2 offers), on r111 the ShaderMaterial (WebGL 1
+  has no declaration): the material as it was before the pre-pass;
+* pre-pass: what loadBoxmarch sets up by default (useBoxmarchOccluders: the links' inscribed
+  boxes drawn depth-only into a target each frame, the march returning behind them);
 * front to back: loadBoxmarch's frontToBack (sortBoxmarchFrontToBack before each draw; the camera
-  stands still, so the boxes are sorted once, before the timed frames);
-* quality 0.5: the quality knob; both: the two together;
-* r180 only, the ShaderMaterial without the declaration (declareDepth false), in file order and
-  front to back: what the declaration changes, same scenes, same run.
+  stands still, so the boxes are sorted once, before the timed frames), without and with the
+  pre-pass;
+* quality 0.5: the quality knob, without the pre-pass;
+* r180 only, the ShaderMaterial without the declaration (declareDepth false), without the
+  pre-pass: what the declaration changes, same scenes, same run.
+
+SDF evaluations per covered pixel: counted in the shader (tests/engines/threejs.py count_job: every
+fragment's march steps plus a hit's normal taps, summed through an additive float target) over the
+pixels the shaded image covers, in a second page of the same configurations.
 
 Pixels changed: pixels whose colour differs from plain's by more than 1/255, as a share of the
 pixels covered in either image. *sort ms*: one sortBoxmarchFrontToBack after the eye moved (mean
@@ -36,10 +44,12 @@ HERE = Path(__file__).resolve().parent
 SIZE, REPEATS = 320, 7
 SCENES = ("chain down the arm", "pile")
 MAPS = {"LINK": "return sdf_preset_link(p, box_half);"}
-# label, quality, front to back, declareDepth (the loader's option: false gives the ShaderMaterial)
-CONFIGS = (("plain", 1.0, False, True), ("front to back", 1.0, True, True), ("quality 0.5", 0.5, False, True),
-           ("front to back + quality 0.5", 0.5, True, True), ("ShaderMaterial (undeclared)", 1.0, False, False),
-           ("ShaderMaterial, front to back", 1.0, True, False))
+# label, quality, front to back, declareDepth (the loader's option: false gives the ShaderMaterial),
+# the hidden-box pre-pass (loadBoxmarch's default; false: occluders: false)
+CONFIGS = (("no pre-pass", 1.0, False, True, False), ("pre-pass (loadBoxmarch default)", 1.0, False, True, True),
+           ("front to back, no pre-pass", 1.0, True, True, False), ("pre-pass + front to back", 1.0, True, True, True),
+           ("quality 0.5, no pre-pass", 0.5, False, True, False),
+           ("ShaderMaterial (undeclared), no pre-pass", 1.0, False, False, False))
 
 TIMING_JOB = """async function (gltf) {
   var W = __SIZE__, H = __SIZE__, cam = __CAMERA__, configs = __CONFIGS__;
@@ -54,7 +64,8 @@ TIMING_JOB = """async function (gltf) {
   var drawn = [], declared = [];
   for (var i = 0; i < configs.length; i++) {
     var loaded = await loadBoxmarch(THREE, GLTFLoader, 'model.glb', {map: __MAP__, quality: configs[i][1],
-      frontToBack: configs[i][2], declareDepth: configs[i][3], maxSteps: 64, epsilon: 1e-3});
+      frontToBack: configs[i][2], declareDepth: configs[i][3], occluders: configs[i][4] ? undefined : false,
+      maxSteps: 64, epsilon: 1e-3});
     var scene = new THREE.Scene();
     scene.add(loaded.scene);
     drawn.push({scene: scene, mesh: loaded.meshes[0]});
@@ -92,7 +103,7 @@ TIMING_JOB = """async function (gltf) {
   for (var r = 0; r < __REPEATS__; r++) {
     for (k = 0; k < drawn.length; k++) best[k] = Math.min(best[k], frame(k));
   }
-  var mesh = drawn[1].mesh, start = now();
+  var mesh = drawn[2].mesh, start = now();  // front to back
   for (var s = 0; s < 20; s++) {
     mesh.userData.boxmarchBoxes.eye = null;  // as if the camera had moved
     sortBoxmarchFrontToBack(THREE, mesh, camera);
@@ -113,6 +124,17 @@ def three_camera(to_view, eye):
     forward = -np.asarray(to_view)[2, :3]
     return {"position": (TO_Y_UP @ eye[:3]).tolist(), "target": (TO_Y_UP @ (eye[:3] + forward)).tolist(),
             "up": (TO_Y_UP @ [0.0, 0.0, 1.0]).tolist(), "fov": 40.0, "near": 0.1, "far": 4000.0}
+
+
+def counting_setup(sdf, config):
+    """count_job's setup: the export loaded as TIMING_JOB loads it for ``config``."""
+    _label, quality, front_to_back, declare, occluders = config
+    options = {"map": MAPS[sdf], "quality": quality, "frontToBack": front_to_back, "declareDepth": declare,
+               "maxSteps": 64, "epsilon": 1e-3}
+    if not occluders:
+        options["occluders"] = False
+    return (f"scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, 'model.glb', "
+            f"{json.dumps(options)}); scene.add(loaded.scene);")
 
 
 def exported_glb(bpy, name, scene, folder):
@@ -142,13 +164,18 @@ def rows_for(name, scene, glb, sidecar, release):
         js = js.replace(key, value)
     out = threejs.run_jobs(glb, [js], threejs.shipped_material(release), release,
                            {"model.boxmarch.json": sidecar})[0]
+    counted = threejs.run_jobs(glb, [threejs.count_job(counting_setup(sdf, config), SIZE, SIZE, three_camera(to_view, eye))
+                                     for config in configs],
+                               threejs.shipped_material(release), release, {"model.boxmarch.json": sidecar})
     images = [np.frombuffer(base64.b64decode(b), np.uint8).reshape(SIZE, SIZE, 4).astype(int) for b in out["images"]]
     rows = []
-    for (label, _quality, _sort, _declare), declared, best, image in zip(configs, out["declared"], out["best"], images):
+    for (label, *_), declared, best, image, (shot, evaluations) in zip(configs, out["declared"], out["best"], images,
+                                                                         counted):
         covered = (images[0][..., 3] > 0) | (image[..., 3] > 0)
         changed = (np.abs(image - images[0])[..., :3].max(-1) > 1) & covered
         depth = "depth_greater" if declared and out["extension"] else "none"
-        rows.append([name, f"r{threejs.RELEASES[release].revision}", label, depth, f"{best:.1f}",
+        per_pixel = evaluations.sum() / max((shot.pixels[..., 3] > 0).sum(), 1)
+        rows.append([name, f"r{threejs.RELEASES[release].revision}", label, depth, f"{per_pixel:.1f}", f"{best:.1f}",
                      f"{out['best'][0] / best:.2f}x", f"{100 * changed.sum() / max(covered.sum(), 1):.2f}%",
                      f"{100 * covered.mean():.0f}%", f"{out['sort_ms']:.1f} ({out['boxes']} boxes)",
                      f"{out['overhead']:.1f}"])
@@ -174,7 +201,7 @@ def main():
             for release in releases:
                 rows += rows_for(name, made[name], glb, sidecar, release)
     print(f"three.js on SwiftShader (headless Chromium), {SIZE} x {SIZE} px, best of {REPEATS}")
-    print(table(["scene", "three.js", "material", "declared", "frame ms", "speed-up", "pixels changed", "covered",
+    print(table(["scene", "three.js", "material", "declared", "SDF evals/px", "frame ms", "speed-up", "pixels changed", "covered",
                  "sort ms", "clock ms"], rows))
 
 

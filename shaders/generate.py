@@ -192,7 +192,8 @@ def threejs(module: bool) -> str:
     text = text.replace("/*@LIBRARY@*/''", json.dumps(pasted("sdf.glsl") + "\n" + pasted("box_params.glsl") + "\n"
                                                     + pasted("raymarch.glsl")))
     exports = ("loadBoxmarch, checkBoxmarchSidecar, createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, "
-               "boxmarchTexcoordName, sortBoxmarchFrontToBack")
+               "boxmarchTexcoordName, sortBoxmarchFrontToBack, useBoxmarchOccluders, boxmarchOccluderShape, "
+               "createBoxmarchOccluderMaterial")
     if module:
         return text + f"\nexport {{ {exports} }};\n"
     return text + f"\nif (typeof module !== 'undefined') {{\n  module.exports = {{ {exports} }};\n}}\n"

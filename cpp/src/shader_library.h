@@ -354,14 +354,17 @@ inline float bm_occluder_limit(float occluder_depth)
   return occluder_depth + 4.8e-7f;
 }
 
-// Distance t along a ray whose clip-space
-// position is c0 + t c1 at which its clip depth z / w reaches ndc_z (GL: 2 x window depth - 1;
-// D3D and Vulkan: the window depth), so a march can stop at the occluders' depth: nothing
-// beyond it is visible. 1e30 where the depth does not change along the ray.
+// Distance t along a ray whose clip-space position is c0 + t c1 at which its clip depth z / w
+// reaches ndc_z (GL: 2 x window depth - 1; D3D and Vulkan: the window depth), so a march can
+// stop at the occluders' depth: nothing beyond it is visible. 1e30 (no bound) where the ray does
+// not reach that depth ahead of it: a depth that does not change along the ray, or one past what
+// the projection reaches (an empty pixel's depth 1 plus bm_occluder_limit's margin lies beyond the
+// far plane, whose depth a perspective ray only approaches).
 inline float bm_depth_crossing(vec4 c0, vec4 c1, float ndc_z)
 {
   float rate = c1.z - ndc_z * c1.w;
-  return glm::abs(rate) > 1e-30f ? (ndc_z * c0.w - c0.z) / rate : 1e30f;
+  float t = glm::abs(rate) > 1e-30f ? (ndc_z * c0.w - c0.z) / rate : -1.0f;
+  return t >= 0.0f ? t : 1e30f;
 }
 
 // Lambert from a light fixed in view space plus a sky/ground hemisphere, like the viewport's

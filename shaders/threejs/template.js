@@ -78,7 +78,10 @@ function createBoxmarchMaterial(THREE, options) {
       bmEye: { value: new THREE.Vector4(0, 0, 0, 1) },
       bmColor: { value: options.color || new THREE.Color(0.8, 0.8, 0.8) },
       bmMarch: { value: new THREE.Vector4(options.epsilon || 1e-4, options.maxSteps || 96, 0, 0) },
-      bmQuality: { value: new THREE.Vector2(options.quality || 1, 1) }  // x: the knob, y: viewport height (px)
+      bmQuality: { value: new THREE.Vector2(options.quality || 1, 1) },  // x: the knob, y: viewport height (px)
+      // x: 1 where useBoxmarchOccluders drew the hidden-box pre-pass for this draw; yz: 1 / its size (px)
+      bmOcclusion: { value: new THREE.Vector4(0, 0, 0, 0) },
+      bmOccluderDepth: { value: null }
     },
     vertexShader: BOXMARCH_DECODE + '\n' + BOXMARCH_VERTEX,
     fragmentShader: BOXMARCH_DECODE + '\n' + BOXMARCH_LIBRARY + '\nfloat box_index = 0.0;\nfloat map(vec3 p)\n{\n' + map + '\n}\n' + BOXMARCH_FRAGMENT,
@@ -218,6 +221,96 @@ function sortBoxmarchFrontToBack(THREE, mesh, camera) {
   return true;
 }
 
+// Hidden boxes (docs/ENGINES.md, three.js): a depth pre-pass of each box's conservative
+// occluders (shaders/glsl/box_params.glsl: boxes inscribed in the shape, so the visible surface
+// is at least as near wherever they cover a pixel), drawn by the same geometry with its vertices
+// pulled in to those boxes, into a render target the size of the drawing buffer (the depth packed
+// into RGBA bytes: WebGL 1 has no float depth texture, and r111's UnsignedIntType depth texture is
+// 16-bit on WebGL 2). The marching material then returns before marching wherever a fragment's box
+// entry lies behind that depth, and ends every march at it: every renderer runs those fragments
+// (SwiftShader, llvmpipe and NVIDIA's GL driver run every fragment of a shader that writes its
+// depth), so the saving does not rest on the driver's early depth test.
+
+// The occluder shape id that options.map draws (bm_sdf_by_id's numbering), -1 for each box's own
+// shape id (bm_sdf_by_id(box_params.x, ...)), or null: none (a map() of the user's own, whose
+// inside nothing here knows). options.occluders overrides: a preset name (BOX, SPHERE,
+// ROUNDED_BOX, CAPSULE, CYLINDER, TORUS, LINK; any shape containing that preset's shape in the
+// same box), 'PER_BOX', or false.
+function boxmarchOccluderShape(options) {
+  var presets = ['BOX', 'SPHERE', 'ROUNDED_BOX', 'CAPSULE', 'CYLINDER', 'TORUS', 'LINK'];
+  var chosen = options && options.occluders;
+  if (chosen === false) return null;
+  if (typeof chosen === 'string') {
+    if (chosen === 'PER_BOX') return -1;
+    if (presets.indexOf(chosen) < 0) throw new Error('boxmarch: occluders must be one of ' + presets.join(', ') + ', PER_BOX or false');
+    return presets.indexOf(chosen);
+  }
+  var map = String(options && options.map || '').replace(/\s+/g, '');
+  // the default map, a rounded box of radius 0.1 x min3: it holds ROUNDED_BOX's (radius 0.25 x min3)
+  if (!map) return presets.indexOf('ROUNDED_BOX');
+  if (map === 'returnbm_sdf_by_id(box_params.x,p,box_half);') return -1;
+  var preset = /^returnsdf_preset_(\w+)\(p,box_half\);$/.exec(map);
+  return preset && presets.indexOf(preset[1].toUpperCase()) >= 0 ? presets.indexOf(preset[1].toUpperCase()) : null;
+}
+
+// The pre-pass material: occluder box number bmOccluder.x of shape id bmOccluder.y (< 0: each
+// box's own), none for a box holding the eye (its march starts at the eye); writes its window
+// depth packed into RGBA.
+function createBoxmarchOccluderMaterial(THREE, index, shape) {
+  return new THREE.ShaderMaterial({
+    uniforms: { bmEye: { value: new THREE.Vector4(0, 0, 0, 1) }, bmOccluder: { value: new THREE.Vector2(index, shape) } },
+    vertexShader: BOXMARCH_DECODE + '\n' + BOXMARCH_LIBRARY + '\n' + BOXMARCH_OCCLUDER_VERTEX,
+    fragmentShader: BOXMARCH_DEPTH_PACKING + '\nvoid main() {\n  gl_FragColor = bm_pack_depth(gl_FragCoord.z);\n}\n',
+    side: THREE.DoubleSide
+  });
+}
+
+// Sets up the hidden-box pre-pass of mesh (given useBoxmarchMaterial's material) for occluder
+// shape id `shape` (boxmarchOccluderShape; null: none): before each draw of mesh, its occluders
+// are rendered into their own target, as three.js's Reflector renders its view from the mesh's
+// onBeforeRender, and the material reads them. A SkinnedMesh keeps marching every fragment (the
+// pre-pass draws the geometry at rest). Returns the pre-pass ({target, scene}), or null.
+function useBoxmarchOccluders(THREE, mesh, shape) {
+  if (shape === null || shape === undefined || mesh.isSkinnedMesh) return null;
+  // Four draws, box_params.glsl's most (an index a shape lacks draws nothing: its vertices leave the view).
+  var material = mesh.material, count = 4;
+  var target = new THREE.WebGLRenderTarget(1, 1, { minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
+    depthBuffer: true, stencilBuffer: false });
+  var scene = new THREE.Scene(), size = new THREE.Vector2(), clear = new THREE.Color(), white = new THREE.Color(1, 1, 1);
+  for (var k = 0; k < count; k++) {
+    var occluder = new THREE.Mesh(mesh.geometry, createBoxmarchOccluderMaterial(THREE, k, shape));
+    occluder.matrixAutoUpdate = false;  // its matrix is mesh's world matrix, copied before each draw
+    occluder.frustumCulled = false;
+    scene.add(occluder);
+  }
+  var marching = mesh.onBeforeRender;
+  mesh.onBeforeRender = function (renderer, parentScene, camera, geometry, drawnMaterial, group) {
+    marching.call(mesh, renderer, parentScene, camera, geometry, drawnMaterial, group);
+    var previous = renderer.getRenderTarget();
+    if (previous) size.set(previous.width, previous.height);
+    else renderer.getDrawingBufferSize(size);
+    if (target.width !== size.x || target.height !== size.y) target.setSize(size.x, size.y);
+    scene.children.forEach(function (occluder) {
+      occluder.matrix.copy(mesh.matrixWorld);
+      occluder.matrixWorldNeedsUpdate = true;
+      occluder.material.uniforms.bmEye.value.copy(material.uniforms.bmEye.value);
+    });
+    var alpha = renderer.getClearAlpha(), autoClear = renderer.autoClear;
+    clear.copy(renderer.getClearColor(clear));  // r111 returns its own colour and takes no argument
+    renderer.setRenderTarget(target);
+    renderer.setClearColor(white, 1);
+    renderer.autoClear = true;
+    renderer.render(scene, camera);
+    renderer.setRenderTarget(previous);
+    renderer.setClearColor(clear, alpha);
+    renderer.autoClear = autoClear;
+    material.uniforms.bmOccluderDepth.value = target.texture;
+    material.uniforms.bmOcclusion.value.set(1, 1 / size.x, 1 / size.y, 0);
+  };
+  mesh.userData.boxmarchOccluders = { target: target, scene: scene };
+  return mesh.userData.boxmarchOccluders;
+}
+
 // The export's sidecar (NAME.boxmarch.json beside NAME.glb) format and the layout this material reads.
 var BOXMARCH_FORMAT_VERSION = 1;
 var BOXMARCH_LAYOUT = 'NORMAL_FRAME';
@@ -237,7 +330,9 @@ function checkBoxmarchSidecar(sidecar, name) {
 
 // Loads the .glb at url (NAME.glb) after its sidecar NAME.boxmarch.json and gives every mesh,
 // skinned or not, its own material (options: those of createBoxmarchMaterial, skinning set per
-// mesh, and frontToBack: draw each mesh's boxes front to back, useBoxmarchMaterial). GLTFLoader: the class (THREE.GLTFLoader in r111's examples/js, imported from
+// mesh, frontToBack: draw each mesh's boxes front to back, useBoxmarchMaterial; occluders: the
+// hidden-box pre-pass of each static mesh, useBoxmarchOccluders, on by default where the map is
+// a preset's or the default one, boxmarchOccluderShape). GLTFLoader: the class (THREE.GLTFLoader in r111's examples/js, imported from
 // three/addons later). Resolves to { scene, meshes, gltf, sidecar }; rejects with the reason,
 // before the .glb is fetched, when the sidecar is missing or describes a file the material does
 // not read.
@@ -257,10 +352,22 @@ function loadBoxmarch(THREE, GLTFLoader, url, options) {
     meshes.forEach(function (mesh) {
       var settings = Object.assign({}, options, { skinning: !!mesh.isSkinnedMesh });
       useBoxmarchMaterial(THREE, mesh, createBoxmarchMaterial(THREE, settings), !!(options && options.frontToBack));
+      useBoxmarchOccluders(THREE, mesh, boxmarchOccluderShape(options));
     });
     return { scene: loaded.gltf.scene, meshes: meshes, gltf: loaded.gltf, sidecar: loaded.sidecar };
   });
 }
+
+// A window depth in [0, 1) in RGBA bytes and back (the pre-pass clears to white: about 1.004, none).
+var BOXMARCH_DEPTH_PACKING = [
+  'vec4 bm_pack_depth(float depth) {',
+  '  vec4 bytes = fract(depth * vec4(1.0, 255.0, 65025.0, 16581375.0));',
+  '  return bytes - bytes.yzww * vec4(1.0 / 255.0, 1.0 / 255.0, 1.0 / 255.0, 0.0);',
+  '}',
+  'float bm_unpack_depth(vec4 bytes) {',
+  '  return dot(bytes, vec4(1.0, 1.0 / 255.0, 1.0 / 65025.0, 1.0 / 16581375.0));',
+  '}'
+].join('\n');
 
 // The vertex stage's outputs, the fragment stage's inputs.
 var BOXMARCH_VARYINGS = [
@@ -316,7 +423,10 @@ var BOXMARCH_FRAGMENT = [
   'uniform vec3 bmColor;',
   'uniform vec4 bmMarch;',
   'uniform vec2 bmQuality;',
+  'uniform vec4 bmOcclusion;',
+  'uniform sampler2D bmOccluderDepth;',
   BOXMARCH_VARYINGS,
+  BOXMARCH_DEPTH_PACKING,
   'void main() {',
   '  vec3 z = normalize(bmAxisZ);',
   '  vec3 x = normalize(bmAxisX);',
@@ -332,13 +442,22 @@ var BOXMARCH_FRAGMENT = [
   '  vec2 span = bm_box_span(ro, rd, box_half);',
   '  float t_end = span.y;',
   // A fragment of the far side only marches when the eye is inside the box (the preview's rule).
-  '  if (!gl_FrontFacing && span.x + span.y < 0.0) {',
+  '  bool fromEye = !gl_FrontFacing && span.x + span.y < 0.0;',
+  '  if (fromEye) {',
   '    if (bmEye.w < 0.5 || eye_distance > -span.x) discard;',
   '    ro -= rd * eye_distance;',
   '    t_end = eye_distance;',
   '  }',
-  // The quality knob (as the Blender preview applies it): a pixel's size at the face, the box's size on screen.
   '  mat4 objectToClip = projectionMatrix * modelViewMatrix;',
+  // Hidden boxes (useBoxmarchOccluders): behind the occluders' depth nothing is visible; a march
+  // from the eye is only bounded (its box's own entry is the eye).
+  '  if (bmOcclusion.x > 0.5) {',
+  '    float hidden = bm_occluder_limit(bm_unpack_depth(texture2D(bmOccluderDepth, gl_FragCoord.xy * bmOcclusion.yz)));',
+  '    if (!fromEye && gl_FragCoord.z > hidden) discard;',
+  '    vec4 c0 = objectToClip * vec4(fromEye ? bmEye.xyz : bmObjPos, 1.0);',
+  '    t_end = min(t_end, bm_depth_crossing(c0, objectToClip * vec4(ray / eye_distance, 0.0), 2.0 * hidden - 1.0));',
+  '  }',
+  // The quality knob (as the Blender preview applies it): a pixel's size at the face, the box's size on screen.
   '  vec3 knob = bm_quality(bmQuality.x);',
   '  float footprint = bm_pixel_size(1.0 / gl_FragCoord.w, length(vec3(objectToClip[0][1], objectToClip[1][1], objectToClip[2][1])), bmQuality.y);',
   '  float boxPixels = 2.0 * max3(box_half) / footprint;',
@@ -356,6 +475,36 @@ var BOXMARCH_FRAGMENT = [
   '  gl_FragDepthEXT = max(0.5 + 0.5 * clip.z / clip.w, gl_FragCoord.z);',
   '  vec3 n = normalize(normalMatrix * bm_from_local(bm_normal(local_hit, d, bm_normal_tap(box_half)), x, y, z));',
   '  gl_FragColor = vec4(bmColor * (0.35 + 0.65 * max(n.z, 0.0)), 1.0);',
+  '}'
+].join('\n');
+
+// The pre-pass's vertex stage (createBoxmarchOccluderMaterial): the box's vertex v = -f moved to
+// centre + v * extent / h of its occluder box (box_params.glsl), as the Blender preview's does.
+var BOXMARCH_OCCLUDER_VERTEX = [
+  'float map(vec3 p) { return 1.0; }',  // the library's march needs one; the pre-pass marches nothing
+  'attribute vec4 tangent;',
+  'attribute vec2 bmOffsetXY;',
+  'attribute vec2 bmOffsetZIndex;',
+  'attribute vec2 bmHalfXY;',
+  'attribute vec2 bmHalfZ;',
+  'attribute vec2 bmShapeMaterial;',
+  'attribute vec2 bmRandomUser;',
+  'uniform vec4 bmEye;',
+  'uniform vec2 bmOccluder;',
+  'void main() {',
+  '  vec3 z = normalize(normal);',
+  '  vec3 x = normalize(tangent.xyz);',
+  '  vec3 y = normalize(bm_axis_y(normal, tangent));',
+  '  vec3 v = -bm_offset(bmOffsetXY, bmOffsetZIndex);',
+  '  vec3 h = bm_half_extents(bmHalfXY, bmHalfZ);',
+  '  float shape = bmOccluder.y < 0.0 ? bm_box_params(bmShapeMaterial, bmRandomUser).x : bmOccluder.y;',
+  '  vec3 extent = bm_occluder_half(shape, h, bmOccluder.x);',
+  '  vec3 pulled = bm_occluder_centre(shape, h, bmOccluder.x) + v * extent / max(h, vec3(1e-30));',
+  '  vec3 eye = bm_to_local(bmEye.xyz - position, x, y, z) + v;',
+  '  bool eyeInside = bmEye.w > 0.5 && max3(abs(eye) - h) <= 0.0;',
+  '  vec3 moved = position + bm_from_local(pulled - v, x, y, z);',
+  '  gl_Position = eyeInside || min3(extent) <= 0.0 ? vec4(2.0, 2.0, 2.0, 1.0)',
+  '    : projectionMatrix * modelViewMatrix * vec4(moved, 1.0);',
   '}'
 ].join('\n');
 
@@ -388,7 +537,8 @@ var BOXMARCH_RAW_FRAGMENT = [
   '#define varying in',
   'layout(location = 0) out highp vec4 pc_fragColor;',
   '#define gl_FragColor pc_fragColor',
-  '#define gl_FragDepthEXT gl_FragDepth'
+  '#define gl_FragDepthEXT gl_FragDepth',
+  '#define texture2D texture'
 ].join('\n');
 
 // The shared GLSL: shaders/glsl/decode.glsl, and sdf.glsl + raymarch.glsl.

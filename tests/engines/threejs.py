@@ -152,11 +152,41 @@ _RENDER_JOB = """async function (gltf) {
   renderer.render(scene, camera);
   var gl = renderer.getContext(), px = new Uint8Array(W * H * 4);
   gl.readPixels(0, 0, W, H, gl.RGBA, gl.UNSIGNED_BYTE, px);
+  var extra = await (async function (THREE, renderer, scene, camera, W, H) {
+    __AFTER__
+  })(THREE, renderer, scene, camera, W, H);
   renderer.dispose();
   renderer.forceContextLoss();  // one page renders many times: give each context back
-  return {pixels: __b64(px), view: __f64(camera.matrixWorldInverse.elements),
-          projection: __f64(camera.projectionMatrix.elements)};
+  return Object.assign({pixels: __b64(px), view: __f64(camera.matrixWorldInverse.elements),
+                        projection: __f64(camera.projectionMatrix.elements)}, extra || {});
 }"""
+
+# Counts the SDF evaluations of every fragment (march steps plus a hit's 3 normal taps), as the
+# Blender preview's STEPS output does: the shipped marching material's line that discards a miss
+# becomes one that writes the count, drawn with additive blending into a float target, no depth
+# test; the rest of the material (the hidden-box pre-pass's returns among it) runs as shipped.
+_COUNT_AFTER = """var marching = [];
+    scene.traverse(function (o) { if (o.isMesh && o.material.uniforms && o.material.uniforms.bmMarch) marching.push(o.material); });
+    marching.forEach(function (m) {
+      var text = m.fragmentShader.replace('  if (!hit) discard;', '  gl_FragColor = vec4(float(steps + (hit ? 3 : 0)), 0.0, 0.0, 1.0);\\n  return;');
+      if (text === m.fragmentShader) throw new Error('counting: no march in the material');
+      m.fragmentShader = text;
+      m.blending = THREE.AdditiveBlending;
+      m.transparent = true;
+      m.depthTest = false;
+      m.depthWrite = false;
+      m.needsUpdate = true;
+    });
+    var gl = renderer.getContext();
+    ['EXT_color_buffer_float', 'EXT_float_blend', 'OES_texture_float', 'WEBGL_color_buffer_float'].forEach(function (e) { gl.getExtension(e); });
+    var target = new THREE.WebGLRenderTarget(W, H, {type: THREE.FloatType, minFilter: THREE.NearestFilter,
+                                                    magFilter: THREE.NearestFilter});
+    renderer.setRenderTarget(target);
+    renderer.render(scene, camera);
+    var counts = new Float32Array(W * H * 4);
+    renderer.readRenderTargetPixels(target, 0, 0, W, H, counts);
+    renderer.setRenderTarget(null);
+    return {counts: __f64(counts)};"""
 
 
 def shipped_material(release="r111"):
@@ -310,7 +340,7 @@ def load_attributes(glb_bytes, release="r111"):
     return run_jobs(glb_bytes, [load_job()], release=release)[0]
 
 
-def render_job(setup_js, width, height, camera):
+def render_job(setup_js, width, height, camera, after_js="return {};"):
     """:class:`Job` rendering the loaded .glb once (WebGL 1 for r111, WebGL 2 for r180; SwiftShader);
     its result is a :class:`Shot`.
 
@@ -321,10 +351,12 @@ def render_job(setup_js, width, height, camera):
     PerspectiveCamera or ``{"ortho": half_height, ...}`` for an OrthographicCamera with the
     image's aspect; optional ``near`` (0.1) and ``far`` (1000). The clear colour is (0, 0, 0, 0).
     ``Shot.view`` is ``camera.matrixWorldInverse`` and ``Shot.to_pixels`` comes from
-    ``camera.projectionMatrix``, both as three.js computed them.
+    ``camera.projectionMatrix``, both as three.js computed them. ``after_js``: the body of an
+    async function of ``THREE``, ``renderer``, ``scene``, ``camera``, ``W`` and ``H`` run after
+    the render; what it returns joins the job's raw result (see :func:`count_job`).
     """
     js = (_RENDER_JOB.replace("__W__", str(int(width))).replace("__H__", str(int(height)))
-          .replace("__CAMERA__", json.dumps(camera)).replace("__SETUP__", setup_js))
+          .replace("__CAMERA__", json.dumps(camera)).replace("__SETUP__", setup_js).replace("__AFTER__", after_js))
 
     def shot(out):
         pixels = np.frombuffer(base64.b64decode(out["pixels"]), dtype=np.uint8)
@@ -334,6 +366,19 @@ def render_job(setup_js, width, height, camera):
         return Shot(pixels, view, ndc_to_pixels(width, height) @ projection @ view)
 
     return Job(js, shot)
+
+
+def count_job(setup_js, width, height, camera):
+    """:class:`Job` rendering as :func:`render_job` does, then counting the SDF evaluations of
+    every fragment of the shipped marching material (_COUNT_AFTER); its result is ``(Shot,
+    evaluations)``, evaluations a (height, width) float array, row 0 at the top."""
+    job = render_job(setup_js, width, height, camera, _COUNT_AFTER)
+
+    def parse(out):
+        counts = f64(out["counts"]).reshape(height, width, 4)[::-1, :, 0].copy()
+        return job.parse(out), counts
+
+    return Job(job.js, parse)
 
 
 def render(glb_bytes, material_js, setup_js, width, height, camera, release="r111"):

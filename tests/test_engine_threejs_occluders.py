@@ -1,0 +1,90 @@
+"""The hidden-box pre-pass of the shipped three.js material (useBoxmarchOccluders, set up by
+loadBoxmarch) in three.js r111 (WebGL 1) and r180 (WebGL 2) on SwiftShader, on a dense pile of
+links exported with the GLTF preset: the picture is the one without the pre-pass, pixel for
+pixel, and covers what the CPU reference covers; the SDF evaluations of every fragment (counted
+in the shader, tests/engines/threejs.py count_job) fall as the CPU reference's cost model counts
+them (core.render_boxes, from the links' known centres and rotations, with and without its own
+pre-pass); without the pre-pass the count is today's (the negative control)."""
+import json
+
+import numpy as np
+import pytest
+
+from boxmarch import core, scenes
+from tests.conftest import empty_scene, mesh_object
+from tests.engine_scene import TO_Y_UP
+from tests.engines import perspective, threejs
+from tests.helpers.preview_render import quaternions_of
+
+pytestmark = pytest.mark.slow  # Chromium renders
+
+W, H = 200, 150
+LINK = np.array([0.46, 0.23, 0.06])  # scripts/chain_arm.py's link: length, width, wire thickness
+LINK_MAP = "return sdf_preset_link(p, box_half);"
+# Blender's (0.4, -3.5, 0.6) looking at the pile's centre, in glTF's frame (x, z, -y)
+CAMERA = {"position": [0.4, 0.6, 3.5], "target": [0.0, 0.0, 0.0], "fov": 40, "near": 0.1, "far": 100}
+
+
+@pytest.fixture(scope="module")
+def pile(bpy_module, tmp_path_factory):
+    """600 links heaped at random in a 1.6-unit cube, baked (local x along each link) and exported."""
+    blender = empty_scene(bpy_module)
+    rng = np.random.default_rng(5)
+    centres = rng.uniform(-0.8, 0.8, (600, 3))
+    rotations = scenes.random_rotations(600, rng)
+    mesh_object(blender, "pile", *scenes.box_arrays(centres, np.tile(LINK, (600, 1)), rotations))
+    assert blender.ops.boxmarch.bake(sort_axes_by_extent=True) == {"FINISHED"}
+    path = tmp_path_factory.mktemp("occluders") / "pile.glb"
+    assert blender.ops.boxmarch.export(filepath=str(path), preset="GLTF") == {"FINISHED"}
+    return path.read_bytes(), path.with_suffix(".boxmarch.json").read_bytes(), centres, rotations
+
+
+def loader_js(occluders):
+    options = {"map": LINK_MAP, "maxSteps": 64, "epsilon": 1e-3}
+    if not occluders:
+        options["occluders"] = False
+    return ("scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, 'pile.glb', "
+            f"{json.dumps(options)}); scene.add(loaded.scene);"
+            f" if (!loaded.meshes[0].userData.boxmarchOccluders !== {json.dumps(not occluders)})"
+            " throw new Error('not the pre-pass asked for');")
+
+
+@pytest.fixture(scope="module", params=sorted(threejs.RELEASES))
+def counted(request, pile):
+    release = request.param
+    reason = threejs.available(release)
+    if reason:
+        pytest.skip(reason)
+    glb, sidecar, centres, rotations = pile
+    jobs = [threejs.count_job(loader_js(occluders), W, H, CAMERA) for occluders in (True, False)]
+    results = threejs.run_jobs(glb, jobs, threejs.shipped_material(release), release,
+                               {"pile.glb": glb, "pile.boxmarch.json": sidecar})
+    return dict(zip(("on", "off"), results)), centres, rotations
+
+
+def model(shot, centres, rotations, occluders):
+    """The CPU reference in glTF's frame, through three.js's view matrix and the GL projection."""
+    to_clip = perspective(CAMERA, W / H) @ shot.view
+    return core.render_boxes(centres @ TO_Y_UP.T, quaternions_of(TO_Y_UP @ rotations), LINK / 2, to_clip, shot.view,
+                             W, H, sdf="LINK", max_steps=64, epsilon=1e-3, occluders=occluders)
+
+
+def test_pre_pass_changes_no_pixel_and_covers_what_the_reference_covers(counted):
+    out, centres, rotations = counted
+    (on, _), (off, _) = out["on"], out["off"]
+    assert np.array_equal(on.pixels, off.pixels)
+    covered = on.pixels[..., 3] > 0
+    reference = model(on, centres, rotations, False).depth < 1.0
+    assert covered.mean() > 0.3 and (covered == reference).mean() >= 0.99
+
+
+def test_pre_pass_cuts_evaluations_as_the_cost_model_counts(counted):
+    out, centres, rotations = counted
+    total = {name: out[name][1].sum() for name in ("on", "off")}
+    shot = out["on"][0]
+    model_on, model_off = (model(shot, centres, rotations, occluders).cost for occluders in (True, False))
+    # negative control: without the pre-pass every fragment marches, as the model counts it
+    assert total["off"] == pytest.approx(model_off["sdf_evaluations"], rel=0.05)
+    assert total["on"] == pytest.approx(model_on["sdf_evaluations"], rel=0.05)
+    per_covered_pixel = total["on"] / (shot.pixels[..., 3] > 0).sum()
+    assert per_covered_pixel <= 35 and total["off"] >= 3 * total["on"]
