@@ -168,7 +168,8 @@ _RENDER_JOB = """async function (gltf) {
 _COUNT_AFTER = """var marching = [];
     scene.traverse(function (o) { if (o.isMesh && o.material.uniforms && o.material.uniforms.bmMarch) marching.push(o.material); });
     marching.forEach(function (m) {
-      var text = m.fragmentShader.replace('  if (!hit) discard;', '  gl_FragColor = vec4(float(steps + (hit ? 3 : 0)), 0.0, 0.0, 1.0);\\n  return;');
+      var count = '  gl_FragColor = vec4(float(steps + (hit ? 3 : 0)), 0.0, 0.0, 1.0);\\n  return;';
+      var text = m.fragmentShader.replace('  if (!hit) discard;', count);
       if (text === m.fragmentShader) throw new Error('counting: no march in the material');
       m.fragmentShader = text;
       m.blending = THREE.AdditiveBlending;
@@ -178,7 +179,8 @@ _COUNT_AFTER = """var marching = [];
       m.needsUpdate = true;
     });
     var gl = renderer.getContext();
-    ['EXT_color_buffer_float', 'EXT_float_blend', 'OES_texture_float', 'WEBGL_color_buffer_float'].forEach(function (e) { gl.getExtension(e); });
+    ['EXT_color_buffer_float', 'EXT_float_blend', 'OES_texture_float', 'WEBGL_color_buffer_float']
+      .forEach(function (e) { gl.getExtension(e); });
     var target = new THREE.WebGLRenderTarget(W, H, {type: THREE.FloatType, minFilter: THREE.NearestFilter,
                                                     magFilter: THREE.NearestFilter});
     renderer.setRenderTarget(target);
