@@ -47,6 +47,18 @@ def test_presets_read_the_box_axes_by_extent(sdf):
         np.testing.assert_allclose(permuted, sorted_distance, atol=1e-6, err_msg=f"{sdf} axes {order}")
 
 
+def test_near_equal_extents_keep_their_axis_order():
+    """Two sides within 0.1% of each other count as equal and keep the order x, y, z, so boxes of
+    one shape baked with float noise read their axes alike: a 1 x 0.6 x 0.6 link box (long side
+    along local z) puts its ring across the first of the tied axes, local x, either way round the
+    noise falls (the ring's outer edge at x = 0.3 or 0.3002 is on the surface; its wire's side,
+    along y, is not)."""
+    for h in ([0.3, 0.3002, 0.5], [0.3002, 0.3, 0.5]):
+        points = np.array([[h[0], 0.0, 0.0], [0.0, h[1], 0.0]], np.float32)
+        d = core.sdf_distance("LINK", points, np.array(h))
+        assert d[0] == pytest.approx(0.0, abs=1e-6) and d[1] > 0.1, (h, d)
+
+
 def test_cylinder_stands_along_a_rod_and_across_a_disc():
     """Closed forms: a rod's cylinder runs along its long axis, a disc's along its short one."""
     cases = [([1.0, 0.2, 0.2], [1.3, 0.0, 0.0], 0.3), ([0.2, 1.0, 0.2], [0.0, 0.0, 0.5], 0.3),
