@@ -5,8 +5,11 @@ every default and exported with the GLTF preset's defaults, loaded unmodified by
 headless Chromium, posed by the same bones and raymarched by the shipped material: every box a
 chain link (sdf_preset_link), one draw call; the flesh drawn by three.js as a capsule per bone.
 
-Usage: PYTHONPATH=addon python3 -m scripts.idea_picture [OUT.png]
+Usage: PYTHONPATH=addon python3 -m scripts.idea_picture [--out FOLDER]   (writes FOLDER/idea.png; default docs/)
+About 25 s on a 2-core machine (most of it three.js on SwiftShader); skipped, with a line saying why,
+where Chromium or three.js r111 is missing.
 """
+import argparse
 import math
 import os
 import sys
@@ -97,7 +100,9 @@ def setup_js():
 
 
 def main():
-    out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "docs", "idea.png")
+    parser = argparse.ArgumentParser(description="Writes idea.png: the box mesh in Blender beside the links three.js draws")
+    parser.add_argument("--out", default=os.path.join(ROOT, "docs"), help="folder to write idea.png into (default docs/)")
+    out = os.path.join(parser.parse_args().out, "idea.png")
     reason = threejs.available()
     if reason:
         print(f"idea_picture: skipped, {reason}")
