@@ -9,8 +9,9 @@ from pathlib import Path
 import pytest
 
 SHADERS = Path(__file__).resolve().parent.parent / "shaders"
-EXPORTS = ["boxmarchTexcoordName", "checkBoxmarchSidecar", "createBoxmarchMaterial", "loadBoxmarch", "prepareBoxmarchGeometry",
-           "sortBoxmarchFrontToBack", "useBoxmarchMaterial"]
+EXPORTS = ["boxmarchOccluderShape", "boxmarchTexcoordName", "checkBoxmarchSidecar", "createBoxmarchMaterial",
+           "createBoxmarchOccluderMaterial", "loadBoxmarch", "prepareBoxmarchGeometry", "sortBoxmarchFrontToBack",
+           "useBoxmarchMaterial", "useBoxmarchOccluders"]
 
 
 def test_generated_engine_shaders_are_up_to_date():

@@ -171,7 +171,7 @@ OWNED_ELSEWHERE = {
     "projectionMatrix", "modelViewMatrix", "normalMatrix", "tangent",  # three.js's names, declared for its stages
     # three.js's names the raw WebGL 2 material declares as its ShaderMaterial's prefix would
     "position", "normal", "skinIndex", "skinWeight", "pc_fragColor", "gl_FragDepth",
-    "attribute", "varying", "gl_FragColor", "gl_FragDepthEXT",
+    "attribute", "varying", "gl_FragColor", "gl_FragDepthEXT", "texture2D",
     "base_color", "march_epsilon", "max_steps", "quality",  # Godot 3 material parameters, as its inspector shows them
 }
 

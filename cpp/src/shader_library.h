@@ -111,7 +111,30 @@ inline vec3 op_repeat_limited(vec3 p, vec3 spacing, vec3 limit)
   return p - spacing * glm::clamp(glm::floor(p / spacing + 0.5f), -limit, limit);
 }
 
-// ---- presets of the preview's SDF menu, sized by the box
+// v with its components in the order that sorts h from the largest to the smallest: called with
+// v = p it gives the point, with v = h the sorted half-extents. A later axis moves ahead only when
+// its extent is more than 0.1% larger (the bake's tie band), so near-equal extents keep the order
+// x, y, z and all boxes of one shape read their axes alike. The order depends on h alone, one
+// permutation per box, so a preset that is exact on the sorted axes stays exact.
+inline vec3 bm_by_extent(vec3 v, vec3 h)
+{
+  vec3 s = h;
+  vec3 r = v;
+  if (s.y > 1.001f * s.x) {
+    s = vec3(s.y, s.x, s.z);
+    r = vec3(r.y, r.x, r.z);
+  }
+  if (s.z > 1.001f * s.y) {
+    s = vec3(s.x, s.z, s.y);
+    r = vec3(r.x, r.z, r.y);
+  }
+  if (s.y > 1.001f * s.x) {
+    s = vec3(s.y, s.x, s.z);
+    r = vec3(r.y, r.x, r.z);
+  }
+  return r;
+}
+
 // Exact.
 inline float sdf_preset_box(vec3 p, vec3 h) { return sd_box(p, h); }
 
@@ -121,29 +144,46 @@ inline float sdf_preset_sphere(vec3 p, vec3 h) { return sd_sphere(p, bm_min3(h))
 // Exact.
 inline float sdf_preset_rounded_box(vec3 p, vec3 h) { return sd_round_box(p, h, 0.25f * bm_min3(h)); }
 
-// Exact.
+// Exact. Along the box's longest axis, radius its smallest half-extent.
 inline float sdf_preset_capsule(vec3 p, vec3 h)
 {
-  float r = glm::min(h.y, h.z);
-  float a = glm::max(h.x - r, 0.0f);
-  return sd_capsule(p, vec3(-a, 0.0f, 0.0f), vec3(a, 0.0f, 0.0f), r);
+  vec3 q = bm_by_extent(p, h);
+  vec3 s = bm_by_extent(h, h);
+  float r = glm::min(s.y, s.z);
+  float a = glm::max(s.x - r, 0.0f);
+  return sd_capsule(q, vec3(-a, 0.0f, 0.0f), vec3(a, 0.0f, 0.0f), r);
 }
 
-// Exact.
-inline float sdf_preset_cylinder(vec3 p, vec3 h) { return sd_cylinder(p, glm::min(h.x, h.y), h.z); }
+// Exact. Along the box's longest axis where that holds the larger cylinder (a rod: longest x
+// smallest > middle^2), else along its shortest axis (a disc); a cube's stands along local z.
+inline float sdf_preset_cylinder(vec3 p, vec3 h)
+{
+  vec3 q = bm_by_extent(p, h);
+  vec3 s = bm_by_extent(h, h);
+  if (s.x * s.z > s.y * s.y) {
+    q = vec3(q.y, q.z, q.x);
+    s = vec3(s.y, s.z, s.x);
+  }
+  return sd_cylinder(q, glm::min(s.x, s.y), s.z);
+}
 
-// Exact.
+// Exact. Around the box's shortest axis, as wide as its middle half-extent.
 inline float sdf_preset_torus(vec3 p, vec3 h)
 {
-  float minor = glm::min(h.z, 0.5f * glm::min(h.x, h.y));
-  return sd_torus(p, glm::min(h.x, h.y) - minor, minor);
+  vec3 q = bm_by_extent(p, h);
+  vec3 s = bm_by_extent(h, h);
+  float minor = glm::min(s.z, 0.5f * glm::min(s.x, s.y));
+  return sd_torus(q, glm::min(s.x, s.y) - minor, minor);
 }
 
-// Exact.
+// Exact. Stretched along the box's longest axis, the ring across its middle one, the thickness
+// along its shortest.
 inline float sdf_preset_link(vec3 p, vec3 h)
 {
-  float thickness = glm::min(h.z, 0.25f * glm::min(h.x, h.y));
-  return sd_link(vec3(p.y, p.x, p.z), glm::max(h.x - h.y, 0.0f), h.y - thickness, thickness);
+  vec3 q = bm_by_extent(p, h);
+  vec3 s = bm_by_extent(h, h);
+  float thickness = glm::min(s.z, 0.25f * glm::min(s.x, s.y));
+  return sd_link(vec3(q.y, q.x, q.z), glm::max(s.x - s.y, 0.0f), s.y - thickness, thickness);
 }
 
 // q v q* for a unit quaternion q; bm_rotate_vector(v, bm_quat_conjugate(q)) is the inverse
@@ -232,54 +272,77 @@ inline vec3 bm_ring_occluder_half(float half_length, float ring, float minor, fl
   return k < 2.0f ? vec3(half_length + e, a, a) : vec3(a, e, a);
 }
 
-// Centre of occluder box k of shape id `shape` (bm_sdf_by_id's numbering) in a box of
-// half-extents h, before bm_occluder_centre clips it to the box.
-inline vec3 bm_occluder_centre_unclipped(float shape, vec3 h, float k)
+// v in the box's own axis order from the order bm_by_extent sorts h into (its inverse: the same
+// swaps, decided alike, undone in reverse).
+inline vec3 bm_from_extent(vec3 v, vec3 h)
 {
-  float id = glm::floor(shape + 0.5f);
-  if (id == 5.0f) {
-    float minor = glm::min(h.z, 0.5f * glm::min(h.x, h.y));
-    return bm_ring_occluder_centre(0.0f, glm::min(h.x, h.y) - minor, k);
+  vec3 s = h;
+  bool first = s.y > 1.001f * s.x;
+  if (first) {
+    s = vec3(s.y, s.x, s.z);
   }
-  if (id == 6.0f) {
-    float thickness = glm::min(h.z, 0.25f * glm::min(h.x, h.y));
-    return bm_ring_occluder_centre(glm::max(h.x - h.y, 0.0f), h.y - thickness, k);
+  bool second = s.z > 1.001f * s.y;
+  if (second) {
+    s = vec3(s.x, s.z, s.y);
   }
-  return vec3(0.0f);
+  bool third = s.y > 1.001f * s.x;
+  vec3 r = v;
+  if (third) {
+    r = vec3(r.y, r.x, r.z);
+  }
+  if (second) {
+    r = vec3(r.x, r.z, r.y);
+  }
+  if (first) {
+    r = vec3(r.y, r.x, r.z);
+  }
+  return r;
 }
 
-// Half-extents of occluder box k (zero: none), before bm_occluder_half clips it to the box.
-inline vec3 bm_occluder_half_unclipped(float shape, vec3 h, float k)
+// Centre (centre true) or half-extents of occluder box k of shape id `shape` (bm_sdf_by_id's
+// numbering) in a box of half-extents h, in the preset's own frame (sdf.glsl: the capsule,
+// cylinder, torus and link read the axes by extent, bm_by_extent) mapped back to the box's axes,
+// before bm_occluder_centre and bm_occluder_half clip it to the box.
+inline vec3 bm_occluder_unclipped(float shape, vec3 h, float k, bool centre)
 {
   float id = glm::floor(shape + 0.5f);
+  vec3 s = bm_by_extent(h, h);
+  vec3 at = vec3(0.0f);
   vec3 extent = k == 0.0f ? h : vec3(0.0f);
   if (id == 1.0f) {
     float r = bm_min3(h);
     extent = k == 0.0f ? vec3(0.825f, 0.4f, 0.4f) * r : k == 1.0f ? vec3(0.4f, 0.825f, 0.4f) * r
-         : k == 2.0f ? vec3(0.4f, 0.4f, 0.825f) * r : vec3(0.0f);
+           : k == 2.0f ? vec3(0.4f, 0.4f, 0.825f) * r : vec3(0.0f);
   }
   if (id == 2.0f) {
     float r = 0.25f * bm_min3(h);
     extent = k == 0.0f ? h - vec3(0.0f, r, r) : k == 1.0f ? h - vec3(r, 0.0f, r) : k == 2.0f ? h - vec3(r, r, 0.0f) : vec3(0.0f);
   }
   if (id == 3.0f) {
-    float r = glm::min(h.y, h.z);
-    float reach = glm::max(h.x - r, 0.0f) + 0.62f * r;
+    float r = glm::min(s.y, s.z);
+    float reach = glm::max(s.x - r, 0.0f) + 0.62f * r;
     extent = k == 0.0f ? vec3(reach, 0.7f * r, 0.35f * r) : k == 1.0f ? vec3(reach, 0.35f * r, 0.7f * r) : vec3(0.0f);
+    extent = bm_from_extent(extent, h);
   }
   if (id == 4.0f) {
-    float r = glm::min(h.x, h.y);
-    extent = k == 0.0f ? vec3(0.866f * r, 0.5f * r, h.z) : k == 1.0f ? vec3(0.5f * r, 0.866f * r, h.z) : vec3(0.0f);
+    // sdf_preset_cylinder: along the sorted x (q.yzx) for a rod, else along the sorted z
+    bool rod = s.x * s.z > s.y * s.y;
+    vec3 c = rod ? vec3(s.y, s.z, s.x) : s;
+    float r = glm::min(c.x, c.y);
+    extent = k == 0.0f ? vec3(0.866f * r, 0.5f * r, c.z) : k == 1.0f ? vec3(0.5f * r, 0.866f * r, c.z) : vec3(0.0f);
+    extent = bm_from_extent(rod ? vec3(extent.z, extent.x, extent.y) : extent, h);
   }
   if (id == 5.0f) {
-    float minor = glm::min(h.z, 0.5f * glm::min(h.x, h.y));
-    extent = bm_ring_occluder_half(0.0f, glm::min(h.x, h.y) - minor, minor, k);
+    float minor = glm::min(s.z, 0.5f * glm::min(s.x, s.y));
+    at = bm_from_extent(bm_ring_occluder_centre(0.0f, glm::min(s.x, s.y) - minor, k), h);
+    extent = bm_from_extent(bm_ring_occluder_half(0.0f, glm::min(s.x, s.y) - minor, minor, k), h);
   }
   if (id == 6.0f) {
-    float thickness = glm::min(h.z, 0.25f * glm::min(h.x, h.y));
-    extent = bm_ring_occluder_half(glm::max(h.x - h.y, 0.0f), h.y - thickness, thickness, k);
+    float thickness = glm::min(s.z, 0.25f * glm::min(s.x, s.y));
+    at = bm_from_extent(bm_ring_occluder_centre(glm::max(s.x - s.y, 0.0f), s.y - thickness, k), h);
+    extent = bm_from_extent(bm_ring_occluder_half(glm::max(s.x - s.y, 0.0f), s.y - thickness, thickness, k), h);
   }
-  return extent;
+  return centre ? at : extent;
 }
 
 // Occluder box k clipped to the box (a shape that reaches past its box is drawn cut by it: a
@@ -287,15 +350,15 @@ inline vec3 bm_occluder_half_unclipped(float shape, vec3 h, float k)
 // half-extents (zero: none).
 inline vec3 bm_occluder_centre(float shape, vec3 h, float k)
 {
-  vec3 centre = bm_occluder_centre_unclipped(shape, h, k);
-  vec3 extent = bm_occluder_half_unclipped(shape, h, k);
+  vec3 centre = bm_occluder_unclipped(shape, h, k, true);
+  vec3 extent = bm_occluder_unclipped(shape, h, k, false);
   return 0.5f * (glm::max(centre - extent, -h) + glm::min(centre + extent, h));
 }
 
 inline vec3 bm_occluder_half(float shape, vec3 h, float k)
 {
-  vec3 centre = bm_occluder_centre_unclipped(shape, h, k);
-  vec3 extent = bm_occluder_half_unclipped(shape, h, k);
+  vec3 centre = bm_occluder_unclipped(shape, h, k, true);
+  vec3 extent = bm_occluder_unclipped(shape, h, k, false);
   vec3 clipped = 0.5f * (glm::min(centre + extent, h) - glm::max(centre - extent, -h));
   return glm::max(clipped - vec3(1e-3f * bm_max3(h)), vec3(0.0f));
 }

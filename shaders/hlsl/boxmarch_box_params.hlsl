@@ -92,6 +92,8 @@ float bm_sdf_blend_parent(float shape, float3 p, float3 h, float3 parent_origin,
 //   each corner lies at 0.825^2 + 2 x 0.4^2 < 1 of r: inside.
 // * rounded box (box h - r rounded by r = min3(h) / 4): the three slabs of the box h with two
 //   axes pulled in by r; a slab's points lie within r of the inner box h - r: inside.
+// The capsule, cylinder, torus and link are placed in the preset's own frame (the box's axes sorted
+// by extent, as sdf.glsl's presets read them) and mapped back.
 // * capsule (axis x, half-length a, radius r): two crossed boxes (a + 0.62 r, 0.7 r, 0.35 r) and
 //   (a + 0.62 r, 0.35 r, 0.7 r); at |x| = a + 0.62 r the cap's section has radius
 //   0.785 r >= |(0.7, 0.35)| r = 0.783 r: inside.
@@ -127,54 +129,77 @@ float3 bm_ring_occluder_half(float half_length, float ring, float minor, float k
   return k < 2.0 ? float3(half_length + e, a, a) : float3(a, e, a);
 }
 
-// Centre of occluder box k of shape id `shape` (bm_sdf_by_id's numbering) in a box of
-// half-extents h, before bm_occluder_centre clips it to the box.
-float3 bm_occluder_centre_unclipped(float shape, float3 h, float k)
+// v in the box's own axis order from the order bm_by_extent sorts h into (its inverse: the same
+// swaps, decided alike, undone in reverse).
+float3 bm_from_extent(float3 v, float3 h)
 {
-  float id = floor(shape + 0.5);
-  if (id == 5.0) {
-    float minor = min(h.z, 0.5 * min(h.x, h.y));
-    return bm_ring_occluder_centre(0.0, min(h.x, h.y) - minor, k);
+  float3 s = h;
+  bool first = s.y > 1.001 * s.x;
+  if (first) {
+    s = s.yxz;
   }
-  if (id == 6.0) {
-    float thickness = min(h.z, 0.25 * min(h.x, h.y));
-    return bm_ring_occluder_centre(max(h.x - h.y, 0.0), h.y - thickness, k);
+  bool second = s.z > 1.001 * s.y;
+  if (second) {
+    s = s.xzy;
   }
-  return float3(0.0, 0.0, 0.0);
+  bool third = s.y > 1.001 * s.x;
+  float3 r = v;
+  if (third) {
+    r = r.yxz;
+  }
+  if (second) {
+    r = r.xzy;
+  }
+  if (first) {
+    r = r.yxz;
+  }
+  return r;
 }
 
-// Half-extents of occluder box k (zero: none), before bm_occluder_half clips it to the box.
-float3 bm_occluder_half_unclipped(float shape, float3 h, float k)
+// Centre (centre true) or half-extents of occluder box k of shape id `shape` (bm_sdf_by_id's
+// numbering) in a box of half-extents h, in the preset's own frame (sdf.glsl: the capsule,
+// cylinder, torus and link read the axes by extent, bm_by_extent) mapped back to the box's axes,
+// before bm_occluder_centre and bm_occluder_half clip it to the box.
+float3 bm_occluder_unclipped(float shape, float3 h, float k, bool centre)
 {
   float id = floor(shape + 0.5);
+  float3 s = bm_by_extent(h, h);
+  float3 at = float3(0.0, 0.0, 0.0);
   float3 extent = k == 0.0 ? h : float3(0.0, 0.0, 0.0);
   if (id == 1.0) {
     float r = bm_min3(h);
     extent = k == 0.0 ? float3(0.825, 0.4, 0.4) * r : k == 1.0 ? float3(0.4, 0.825, 0.4) * r
-         : k == 2.0 ? float3(0.4, 0.4, 0.825) * r : float3(0.0, 0.0, 0.0);
+           : k == 2.0 ? float3(0.4, 0.4, 0.825) * r : float3(0.0, 0.0, 0.0);
   }
   if (id == 2.0) {
     float r = 0.25 * bm_min3(h);
     extent = k == 0.0 ? h - float3(0.0, r, r) : k == 1.0 ? h - float3(r, 0.0, r) : k == 2.0 ? h - float3(r, r, 0.0) : float3(0.0, 0.0, 0.0);
   }
   if (id == 3.0) {
-    float r = min(h.y, h.z);
-    float reach = max(h.x - r, 0.0) + 0.62 * r;
+    float r = min(s.y, s.z);
+    float reach = max(s.x - r, 0.0) + 0.62 * r;
     extent = k == 0.0 ? float3(reach, 0.7 * r, 0.35 * r) : k == 1.0 ? float3(reach, 0.35 * r, 0.7 * r) : float3(0.0, 0.0, 0.0);
+    extent = bm_from_extent(extent, h);
   }
   if (id == 4.0) {
-    float r = min(h.x, h.y);
-    extent = k == 0.0 ? float3(0.866 * r, 0.5 * r, h.z) : k == 1.0 ? float3(0.5 * r, 0.866 * r, h.z) : float3(0.0, 0.0, 0.0);
+    // sdf_preset_cylinder: along the sorted x (q.yzx) for a rod, else along the sorted z
+    bool rod = s.x * s.z > s.y * s.y;
+    float3 c = rod ? s.yzx : s;
+    float r = min(c.x, c.y);
+    extent = k == 0.0 ? float3(0.866 * r, 0.5 * r, c.z) : k == 1.0 ? float3(0.5 * r, 0.866 * r, c.z) : float3(0.0, 0.0, 0.0);
+    extent = bm_from_extent(rod ? extent.zxy : extent, h);
   }
   if (id == 5.0) {
-    float minor = min(h.z, 0.5 * min(h.x, h.y));
-    extent = bm_ring_occluder_half(0.0, min(h.x, h.y) - minor, minor, k);
+    float minor = min(s.z, 0.5 * min(s.x, s.y));
+    at = bm_from_extent(bm_ring_occluder_centre(0.0, min(s.x, s.y) - minor, k), h);
+    extent = bm_from_extent(bm_ring_occluder_half(0.0, min(s.x, s.y) - minor, minor, k), h);
   }
   if (id == 6.0) {
-    float thickness = min(h.z, 0.25 * min(h.x, h.y));
-    extent = bm_ring_occluder_half(max(h.x - h.y, 0.0), h.y - thickness, thickness, k);
+    float thickness = min(s.z, 0.25 * min(s.x, s.y));
+    at = bm_from_extent(bm_ring_occluder_centre(max(s.x - s.y, 0.0), s.y - thickness, k), h);
+    extent = bm_from_extent(bm_ring_occluder_half(max(s.x - s.y, 0.0), s.y - thickness, thickness, k), h);
   }
-  return extent;
+  return centre ? at : extent;
 }
 
 // Occluder box k clipped to the box (a shape that reaches past its box is drawn cut by it: a
@@ -182,14 +207,14 @@ float3 bm_occluder_half_unclipped(float shape, float3 h, float k)
 // half-extents (zero: none).
 float3 bm_occluder_centre(float shape, float3 h, float k)
 {
-  float3 centre = bm_occluder_centre_unclipped(shape, h, k);
-  float3 extent = bm_occluder_half_unclipped(shape, h, k);
+  float3 centre = bm_occluder_unclipped(shape, h, k, true);
+  float3 extent = bm_occluder_unclipped(shape, h, k, false);
   return 0.5 * (max(centre - extent, -h) + min(centre + extent, h));
 }
 float3 bm_occluder_half(float shape, float3 h, float k)
 {
-  float3 centre = bm_occluder_centre_unclipped(shape, h, k);
-  float3 extent = bm_occluder_half_unclipped(shape, h, k);
+  float3 centre = bm_occluder_unclipped(shape, h, k, true);
+  float3 extent = bm_occluder_unclipped(shape, h, k, false);
   float3 clipped = 0.5 * (min(centre + extent, h) - max(centre - extent, -h));
   return max(clipped - ((float3)(1e-3 * bm_max3(h))), float3(0.0, 0.0, 0.0));
 }

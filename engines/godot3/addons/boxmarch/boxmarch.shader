@@ -223,33 +223,72 @@ vec3 op_repeat_limited(vec3 p, vec3 spacing, vec3 limit)
 {
   return p - spacing * clamp(floor(p / spacing + 0.5), -limit, limit);
 }
-// ---- presets of the preview's SDF menu, sized by the box
+// v with its components in the order that sorts h from the largest to the smallest: called with
+// v = p it gives the point, with v = h the sorted half-extents. A later axis moves ahead only when
+// its extent is more than 0.1% larger (the bake's tie band), so near-equal extents keep the order
+// x, y, z and all boxes of one shape read their axes alike. The order depends on h alone, one
+// permutation per box, so a preset that is exact on the sorted axes stays exact.
+vec3 bm_by_extent(vec3 v, vec3 h)
+{
+  vec3 s = h;
+  vec3 r = v;
+  if (s.y > 1.001 * s.x) {
+    s = s.yxz;
+    r = r.yxz;
+  }
+  if (s.z > 1.001 * s.y) {
+    s = s.xzy;
+    r = r.xzy;
+  }
+  if (s.y > 1.001 * s.x) {
+    s = s.yxz;
+    r = r.yxz;
+  }
+  return r;
+}
 // Exact.
 float sdf_preset_box(vec3 p, vec3 h) { return sd_box(p, h); }
 // Exact.
 float sdf_preset_sphere(vec3 p, vec3 h) { return sd_sphere(p, bm_min3(h)); }
 // Exact.
 float sdf_preset_rounded_box(vec3 p, vec3 h) { return sd_round_box(p, h, 0.25 * bm_min3(h)); }
-// Exact.
+// Exact. Along the box's longest axis, radius its smallest half-extent.
 float sdf_preset_capsule(vec3 p, vec3 h)
 {
-  float r = min(h.y, h.z);
-  float a = max(h.x - r, 0.0);
-  return sd_capsule(p, vec3(-a, 0.0, 0.0), vec3(a, 0.0, 0.0), r);
+  vec3 q = bm_by_extent(p, h);
+  vec3 s = bm_by_extent(h, h);
+  float r = min(s.y, s.z);
+  float a = max(s.x - r, 0.0);
+  return sd_capsule(q, vec3(-a, 0.0, 0.0), vec3(a, 0.0, 0.0), r);
 }
-// Exact.
-float sdf_preset_cylinder(vec3 p, vec3 h) { return sd_cylinder(p, min(h.x, h.y), h.z); }
-// Exact.
+// Exact. Along the box's longest axis where that holds the larger cylinder (a rod: longest x
+// smallest > middle^2), else along its shortest axis (a disc); a cube's stands along local z.
+float sdf_preset_cylinder(vec3 p, vec3 h)
+{
+  vec3 q = bm_by_extent(p, h);
+  vec3 s = bm_by_extent(h, h);
+  if (s.x * s.z > s.y * s.y) {
+    q = q.yzx;
+    s = s.yzx;
+  }
+  return sd_cylinder(q, min(s.x, s.y), s.z);
+}
+// Exact. Around the box's shortest axis, as wide as its middle half-extent.
 float sdf_preset_torus(vec3 p, vec3 h)
 {
-  float minor = min(h.z, 0.5 * min(h.x, h.y));
-  return sd_torus(p, min(h.x, h.y) - minor, minor);
+  vec3 q = bm_by_extent(p, h);
+  vec3 s = bm_by_extent(h, h);
+  float minor = min(s.z, 0.5 * min(s.x, s.y));
+  return sd_torus(q, min(s.x, s.y) - minor, minor);
 }
-// Exact.
+// Exact. Stretched along the box's longest axis, the ring across its middle one, the thickness
+// along its shortest.
 float sdf_preset_link(vec3 p, vec3 h)
 {
-  float thickness = min(h.z, 0.25 * min(h.x, h.y));
-  return sd_link(p.yxz, max(h.x - h.y, 0.0), h.y - thickness, thickness);
+  vec3 q = bm_by_extent(p, h);
+  vec3 s = bm_by_extent(h, h);
+  float thickness = min(s.z, 0.25 * min(s.x, s.y));
+  return sd_link(q.yxz, max(s.x - s.y, 0.0), s.y - thickness, thickness);
 }
 // The SDF preset a shape id picks, sized by the box's half-extents h: the id rounded to the
 // nearest whole number indexes the presets in the preview's menu order (0 box, 1 sphere,
@@ -319,67 +358,90 @@ vec3 bm_ring_occluder_half(float half_length, float ring, float minor, float k)
   float e = sqrt(max((ring + w) * (ring + w) - (ring + a) * (ring + a), 0.0));
   return k < 2.0 ? vec3(half_length + e, a, a) : vec3(a, e, a);
 }
-// Centre of occluder box k of shape id `shape` (bm_sdf_by_id's numbering) in a box of
-// half-extents h, before bm_occluder_centre clips it to the box.
-vec3 bm_occluder_centre_unclipped(float shape, vec3 h, float k)
+// v in the box's own axis order from the order bm_by_extent sorts h into (its inverse: the same
+// swaps, decided alike, undone in reverse).
+vec3 bm_from_extent(vec3 v, vec3 h)
 {
-  float id = floor(shape + 0.5);
-  if (id == 5.0) {
-    float minor = min(h.z, 0.5 * min(h.x, h.y));
-    return bm_ring_occluder_centre(0.0, min(h.x, h.y) - minor, k);
+  vec3 s = h;
+  bool first = s.y > 1.001 * s.x;
+  if (first) {
+    s = s.yxz;
   }
-  if (id == 6.0) {
-    float thickness = min(h.z, 0.25 * min(h.x, h.y));
-    return bm_ring_occluder_centre(max(h.x - h.y, 0.0), h.y - thickness, k);
+  bool second = s.z > 1.001 * s.y;
+  if (second) {
+    s = s.xzy;
   }
-  return vec3(0.0);
+  bool third = s.y > 1.001 * s.x;
+  vec3 r = v;
+  if (third) {
+    r = r.yxz;
+  }
+  if (second) {
+    r = r.xzy;
+  }
+  if (first) {
+    r = r.yxz;
+  }
+  return r;
 }
-// Half-extents of occluder box k (zero: none), before bm_occluder_half clips it to the box.
-vec3 bm_occluder_half_unclipped(float shape, vec3 h, float k)
+// Centre (centre true) or half-extents of occluder box k of shape id `shape` (bm_sdf_by_id's
+// numbering) in a box of half-extents h, in the preset's own frame (sdf.glsl: the capsule,
+// cylinder, torus and link read the axes by extent, bm_by_extent) mapped back to the box's axes,
+// before bm_occluder_centre and bm_occluder_half clip it to the box.
+vec3 bm_occluder_unclipped(float shape, vec3 h, float k, bool centre)
 {
   float id = floor(shape + 0.5);
+  vec3 s = bm_by_extent(h, h);
+  vec3 at = vec3(0.0);
   vec3 extent = k == 0.0 ? h : vec3(0.0);
   if (id == 1.0) {
     float r = bm_min3(h);
     extent = k == 0.0 ? vec3(0.825, 0.4, 0.4) * r : k == 1.0 ? vec3(0.4, 0.825, 0.4) * r
-         : k == 2.0 ? vec3(0.4, 0.4, 0.825) * r : vec3(0.0);
+           : k == 2.0 ? vec3(0.4, 0.4, 0.825) * r : vec3(0.0);
   }
   if (id == 2.0) {
     float r = 0.25 * bm_min3(h);
     extent = k == 0.0 ? h - vec3(0.0, r, r) : k == 1.0 ? h - vec3(r, 0.0, r) : k == 2.0 ? h - vec3(r, r, 0.0) : vec3(0.0);
   }
   if (id == 3.0) {
-    float r = min(h.y, h.z);
-    float reach = max(h.x - r, 0.0) + 0.62 * r;
+    float r = min(s.y, s.z);
+    float reach = max(s.x - r, 0.0) + 0.62 * r;
     extent = k == 0.0 ? vec3(reach, 0.7 * r, 0.35 * r) : k == 1.0 ? vec3(reach, 0.35 * r, 0.7 * r) : vec3(0.0);
+    extent = bm_from_extent(extent, h);
   }
   if (id == 4.0) {
-    float r = min(h.x, h.y);
-    extent = k == 0.0 ? vec3(0.866 * r, 0.5 * r, h.z) : k == 1.0 ? vec3(0.5 * r, 0.866 * r, h.z) : vec3(0.0);
+    // sdf_preset_cylinder: along the sorted x (q.yzx) for a rod, else along the sorted z
+    bool rod = s.x * s.z > s.y * s.y;
+    vec3 c = rod ? s.yzx : s;
+    float r = min(c.x, c.y);
+    extent = k == 0.0 ? vec3(0.866 * r, 0.5 * r, c.z) : k == 1.0 ? vec3(0.5 * r, 0.866 * r, c.z) : vec3(0.0);
+    extent = bm_from_extent(rod ? extent.zxy : extent, h);
   }
   if (id == 5.0) {
-    float minor = min(h.z, 0.5 * min(h.x, h.y));
-    extent = bm_ring_occluder_half(0.0, min(h.x, h.y) - minor, minor, k);
+    float minor = min(s.z, 0.5 * min(s.x, s.y));
+    at = bm_from_extent(bm_ring_occluder_centre(0.0, min(s.x, s.y) - minor, k), h);
+    extent = bm_from_extent(bm_ring_occluder_half(0.0, min(s.x, s.y) - minor, minor, k), h);
   }
   if (id == 6.0) {
-    float thickness = min(h.z, 0.25 * min(h.x, h.y));
-    extent = bm_ring_occluder_half(max(h.x - h.y, 0.0), h.y - thickness, thickness, k);
+    float thickness = min(s.z, 0.25 * min(s.x, s.y));
+    at = bm_from_extent(bm_ring_occluder_centre(max(s.x - s.y, 0.0), s.y - thickness, k), h);
+    extent = bm_from_extent(bm_ring_occluder_half(max(s.x - s.y, 0.0), s.y - thickness, thickness, k), h);
   }
-  return extent;
+  return centre ? at : extent;
 }
 // Occluder box k clipped to the box (a shape that reaches past its box is drawn cut by it: a
 // capsule or link box shorter than it is wide), then shrunk by the margin: its centre, and its
 // half-extents (zero: none).
 vec3 bm_occluder_centre(float shape, vec3 h, float k)
 {
-  vec3 centre = bm_occluder_centre_unclipped(shape, h, k);
-  vec3 extent = bm_occluder_half_unclipped(shape, h, k);
+  vec3 centre = bm_occluder_unclipped(shape, h, k, true);
+  vec3 extent = bm_occluder_unclipped(shape, h, k, false);
   return 0.5 * (max(centre - extent, -h) + min(centre + extent, h));
 }
 vec3 bm_occluder_half(float shape, vec3 h, float k)
 {
-  vec3 centre = bm_occluder_centre_unclipped(shape, h, k);
-  vec3 extent = bm_occluder_half_unclipped(shape, h, k);
+  vec3 centre = bm_occluder_unclipped(shape, h, k, true);
+  vec3 extent = bm_occluder_unclipped(shape, h, k, false);
   vec3 clipped = 0.5 * (min(centre + extent, h) - max(centre - extent, -h));
   return max(clipped - vec3(1e-3 * bm_max3(h)), vec3(0.0));
 }
