@@ -12,7 +12,10 @@ plus the normal taps of a hit) and how many of those end up hidden. Each techniq
 * + octant order: one index order per view octant, boxes sorted along the octant's diagonal (what
   the preview ships); + front to back: sorted by distance to the eye each frame;
 * + quality q: bm_quality(q) (hit distance a share of a pixel, a step limit by size on screen,
-  one tap under a few pixels).
+  one tap under a few pixels);
+* occluders: the hidden-box pre-pass the preview and three.js ship (every fragment runs, as on
+  the renderers measured; one whose box entry lies behind the nearest conservative occluder
+  returns before marching, and no march goes past it), in file order.
 
 Error against the full-quality render (file order, quality 1, the normal from central
 differences, second order in the tap): pixels changed (coverage differs or a colour channel moves
@@ -127,7 +130,7 @@ def rows_for(name, scene, size, qualities):
              ("early depth", {"early_depth": True}), ("early depth + octant order", octant),
              ("early depth + front to back", {"early_depth": True, "order": sorted_order}),
              ("4-tap, early depth + octant", {**octant, "normal": "TETRAHEDRAL"}),
-             ("quality 0.5 alone", {"quality": 0.5})]
+             ("quality 0.5 alone", {"quality": 0.5}), ("occluders (every fragment runs)", {"occluders": True})]
     plans += [(f"octant order + quality {q}", {**octant, "quality": q}) for q in qualities]
     reference = render(normal="CENTRAL")
     rows, today = [], None
