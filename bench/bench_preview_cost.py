@@ -6,12 +6,12 @@ read-back (best of REPEATS frames, wall time and the process's CPU time over all
 threads, which a busy machine disturbs less). Rows:
 
 * today: depth written undeclared (create-info depth_write ANY), boxes in mesh order, quality 1;
-* depth_greater: depth_write GREATER (Blender 4+ only: 3.4 has no declaration, so the row repeats
-  today's there);
-* + front to back: the preview's octant index orders (draw.FRONT_TO_BACK);
-* + occluders: the hidden-box pre-pass (preview/occlusion.py, on by default), in mesh order and
-  with the octant orders: what the preview draws;
-* + quality 0.5: the quality knob.
+* depth_greater + front to back: depth_write GREATER (Blender 4+ only: 3.4 has no declaration)
+  and the preview's octant index orders (draw.FRONT_TO_BACK);
+* + occluders: the hidden-box pre-pass (preview/occlusion.py);
+* + back faces culled: draw.CULL_BACK_FACES (closed, outward-wound boxes drawn with their far side
+  culled, the boxes holding the eye again with both sides);
+* + occluders + back faces culled: what the preview draws by default; + quality 0.5: the knob.
 
 SDF evaluations per covered pixel: counted in the shader (the STEPS output: green = march steps
 plus a hit's normal taps, summed over every fragment through an additive float target), divided
@@ -31,12 +31,13 @@ HERE = Path(__file__).resolve().parent
 
 SIZE, REPEATS = 480, 5
 SCENES = ("chain down the arm", "pile", "cloud")
-# (label, create-info depth_write, draw.FRONT_TO_BACK, quality, occlusion.ENABLED)
-CONFIGS = (("today", "ANY", False, 1.0, False), ("depth_greater", "GREATER", False, 1.0, False),
-           ("depth_greater + front to back", "GREATER", True, 1.0, False),
-           ("occluders, mesh order", "GREATER", False, 1.0, True),
-           ("occluders + front to back (shipped)", "GREATER", True, 1.0, True),
-           ("depth_greater + front to back + quality 0.5", "GREATER", True, 0.5, False))
+# (label, create-info depth_write, draw.FRONT_TO_BACK, quality, occlusion.ENABLED, draw.CULL_BACK_FACES)
+CONFIGS = (("today", "ANY", False, 1.0, False, False),
+           ("depth_greater + front to back", "GREATER", True, 1.0, False, False),
+           ("+ occluders", "GREATER", True, 1.0, True, False),
+           ("+ back faces culled", "GREATER", True, 1.0, False, True),
+           ("+ occluders + back faces culled (shipped)", "GREATER", True, 1.0, True, True),
+           ("shipped + quality 0.5", "GREATER", True, 0.5, True, True))
 
 
 def baked_object(bpy, name, scene):
@@ -73,7 +74,8 @@ def frame_rows(bpy, name, scene):
         return preview_frame(offscreen, ob, to_view, projection, read)
 
     def use(config):
-        shader.DEPTH_WRITE, draw.FRONT_TO_BACK, ob.boxmarch.quality, occlusion.ENABLED = config[1:]
+        (shader.DEPTH_WRITE, draw.FRONT_TO_BACK, ob.boxmarch.quality, occlusion.ENABLED,
+         draw.CULL_BACK_FACES) = config[1:]
 
     camera = scene_camera(bpy, to_view)
 
@@ -103,7 +105,7 @@ def frame_rows(bpy, name, scene):
                      f"{best[CONFIGS[0]] / best[config]:.2f}x",
                      f"{best_cpu[config] * 1e3:.0f}", f"{best_cpu[CONFIGS[0]] / best_cpu[config]:.2f}x",
                      f"{100 * changed.sum() / max(covered.sum(), 1):.2f}%"])
-    shader.DEPTH_WRITE, draw.FRONT_TO_BACK, occlusion.ENABLED = "GREATER", True, True
+    shader.DEPTH_WRITE, draw.FRONT_TO_BACK, occlusion.ENABLED, draw.CULL_BACK_FACES = "GREATER", True, True, True
     bpy.data.objects.remove(ob)
     bpy.data.objects.remove(camera)
     return rows

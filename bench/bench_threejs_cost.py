@@ -22,7 +22,7 @@ round robin over the configurations, best of REPEATS frames each. Rows:
 
 SDF evaluations per covered pixel: counted in the shader (tests/engines/threejs.py count_job: every
 fragment's march steps plus a hit's normal taps, summed through an additive float target) over the
-pixels the shaded image covers, in a second page of the same configurations.
+pixels the shaded image covers, one page per configuration after the timed page.
 
 Pixels changed: pixels whose colour differs from plain's by more than 1/255, as a share of the
 pixels covered in either image. *sort ms*: one sortBoxmarchFrontToBack after the eye moved (mean
@@ -164,9 +164,10 @@ def rows_for(name, scene, glb, sidecar, release):
         js = js.replace(key, value)
     out = threejs.run_jobs(glb, [js], threejs.shipped_material(release), release,
                            {"model.boxmarch.json": sidecar})[0]
-    counted = threejs.run_jobs(glb, [threejs.count_job(counting_setup(sdf, config), SIZE, SIZE, three_camera(to_view, eye))
-                                     for config in configs],
-                               threejs.shipped_material(release), release, {"model.boxmarch.json": sidecar})
+    # one page per count: a page of them all outlasts the harness's time limit on the pile
+    counted = [threejs.run_jobs(glb, [threejs.count_job(counting_setup(sdf, config), SIZE, SIZE, three_camera(to_view, eye))],
+                                threejs.shipped_material(release), release, {"model.boxmarch.json": sidecar})[0]
+               for config in configs]
     images = [np.frombuffer(base64.b64decode(b), np.uint8).reshape(SIZE, SIZE, 4).astype(int) for b in out["images"]]
     rows = []
     for (label, *_), declared, best, image, (shot, evaluations) in zip(configs, out["declared"], out["best"], images,
@@ -192,6 +193,7 @@ def main():
 
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)
+    threejs.TIMEOUT_S = 600  # a page times every configuration of a 4,000-link pile: minutes on SwiftShader
     made = scenes_to_measure(SIZE, 8)
     releases = [r for r in ("r180", "r111") if threejs.available(r) is None]
     rows = []

@@ -284,3 +284,23 @@ def test_webgl2_conservative_depth_needs_its_extension_line_first():
     assert result["extension"] is True
     assert result["first"] == "ok", result["first"]
     assert "before any non-preprocessor tokens" in result["after_precision"], result["after_precision"]
+
+
+def test_closed_outward_accepts_only_closed_boxes_wound_outward():
+    # The preview culls back faces only for such meshes (preview/draw.py CULL_BACK_FACES).
+    from boxmarch import scenes
+
+    rng = np.random.default_rng(2)
+    positions, _edges, face_starts, _sizes, corner_verts = scenes.box_arrays(
+        rng.uniform(-5, 5, (4, 3)), rng.uniform(0.2, 1.0, (4, 3)), scenes.random_rotations(4, rng))
+    quads = corner_verts.reshape(-1, 4)
+    triangles = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    box = np.repeat(np.arange(4), 8)
+    origins = np.array([positions[box == b].mean(axis=0) for b in range(4)])
+    assert mesh_data.closed_outward(positions, triangles, origins, box)
+    assert not mesh_data.closed_outward(positions, triangles[:, ::-1], origins, box)  # wound inward
+    assert not mesh_data.closed_outward(positions, triangles[1:], origins, box)  # one triangle missing: open
+    one_inward = triangles.copy()
+    turned = box[triangles[:, 0]] == 2
+    one_inward[turned] = triangles[turned][:, ::-1]
+    assert not mesh_data.closed_outward(positions, one_inward, origins, box)

@@ -24,6 +24,9 @@
 // occluder_index (box_params.glsl; the shape id preview.occlusion.y, or the box's own where it is
 // negative), none where the eye is inside the drawn box (the marching stage then starts at the
 // eye, and an occluder around the eye would hide what lies in front of it).
+// preview.occlusion.z picks boxes by whether they hold the eye: the preview culls the back faces
+// of closed, outward-wound boxes (the far side, hidden by the box's own front) and draws the few
+// boxes holding the eye with both sides in a second draw (preview/draw.py).
 void main()
 {
 #if defined(BM_LAYOUT_CLASSIC) || defined(BM_LAYOUT_UV_FRAME)
@@ -64,19 +67,27 @@ void main()
   frag_parent_origin = vec4(ch_parent_origin.xyz, preview.blend.x);
   frag_parent_q = ch_parent_q;
   frag_parent_half = ch_parent_half;
-  vec3 grown = pos + transpose(mat3(preview.frame)) * bm_from_local(outward, frag_axis_x, frag_axis_y, frag_axis_z);
+  mat3 frame = mat3(preview.frame);
+  vec3 grown = pos + transpose(frame) * bm_from_local(outward, frag_axis_x, frag_axis_y, frag_axis_z);
   obj_pos = grown;
   gl_Position = preview.object_to_clip * vec4(grown, 1.0);
-#ifdef BM_OCCLUDER_PASS
-  // box-local vertex v = -f in a box of half-extents h (as baked, before the blend's growth)
-  vec3 h = frag_half - vec3(grow);
+  // Whether the eye is inside the box as drawn (perspective views): the box-local vertex is
+  // v = -f before the growth, the eye's box-local position the vertex's plus the eye's offset.
   vec3 v = -(frag_offset + outward);
+  vec3 eye = bm_to_local(frame * (preview.eye.xyz - pos), frag_axis_x, frag_axis_y, frag_axis_z) + v;
+  vec3 beyond = abs(eye) - frag_half;
+  bool eye_inside = preview.eye.w > 0.5 && max(beyond.x, max(beyond.y, beyond.z)) <= 0.0;
+  // preview.occlusion.z: 1 draws only the boxes not holding the eye (their back faces culled),
+  // 2 only those holding it (both sides); a box left out lies outside the clip volume.
+  if ((preview.occlusion.z == 1.0 && eye_inside) || (preview.occlusion.z == 2.0 && !eye_inside)) {
+    gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
+  }
+#ifdef BM_OCCLUDER_PASS
+  // box-local vertex v in a box of half-extents h (as baked, before the blend's growth)
+  vec3 h = frag_half - vec3(grow);
   float shape = preview.occlusion.y < 0.0 ? ch_params.x : preview.occlusion.y;
   vec3 extent = bm_occluder_half(shape, h, occluder_index);
   vec3 pulled = bm_occluder_centre(shape, h, occluder_index) + v * extent / max(h, vec3(1e-30));
-  mat3 frame = mat3(preview.frame);
-  vec3 eye = bm_to_local(frame * (preview.eye.xyz - pos), frag_axis_x, frag_axis_y, frag_axis_z) + v;
-  bool eye_inside = preview.eye.w > 0.5 && bm_max3(abs(eye) - frag_half) <= 0.0;
   vec3 moved = pos + transpose(frame) * bm_from_local(pulled - v, frag_axis_x, frag_axis_y, frag_axis_z);
   // outside the clip volume (every vertex of the box alike): nothing drawn
   gl_Position = eye_inside || bm_min3(extent) <= 0.0 ? vec4(2.0, 2.0, 2.0, 1.0)

@@ -100,6 +100,7 @@ class _Drawn:
     positions: np.ndarray         # float32 (N, 3) as drawn
     offsets: np.ndarray           # float64 (N, 3) f, box-local
     frame: Callable               # () -> float64 (N, 3, 3) the frame the layout decodes to (unit columns)
+    outward: bool = False         # every box closed and wound outward: back faces may be culled
     vectors: tuple | None = None  # the overlay's two line batches, made when first shown
     marches: dict = field(default_factory=dict)  # octant -> GPUBatch of the preview shader
 
@@ -156,7 +157,7 @@ def _batches(pose_inputs: dict, mesh: _Mesh, positions, offsets, frame) -> _Draw
     moving = _vertex_buffer(pose_inputs)
     outline = gpu.types.GPUBatch(type="LINES", buf=moving, elem=mesh.edges)
     return _Drawn(moving=moving, static=mesh.static, triangles=mesh.triangles, outline=outline,
-                  positions=positions, offsets=offsets, frame=frame)
+                  positions=positions, offsets=offsets, frame=frame, outward=mesh.baked.outward)
 
 
 def _normalised(vectors):
@@ -297,6 +298,30 @@ def _marching_shader(ob):
     return shader
 
 
+# Cull the back faces of boxes that are closed and wound outward (mesh_data.closed_outward): a
+# box's far side is hidden by its own front unless the eye is inside it, so the boxes holding the
+# eye are drawn again with both sides. False draws every face (the benchmarks compare the two).
+CULL_BACK_FACES = True
+
+
+def _draw_sides(shader, batch, block, ubo, cull, perspective, mirrored):
+    """Draws the marching batch: every face, or with ``cull`` the boxes not holding the eye with
+    their back faces culled (front faces when the object's matrix mirrors) and, in a perspective
+    view, the boxes holding it with both sides (preview.vert.glsl, occlusion.z)."""
+    if not cull:
+        shader.uniform_block(shader_sources.UNIFORM_NAME, ubo)
+        batch.draw(shader)
+        return
+    for selection in (1.0, 2.0) if perspective else (1.0,):
+        chosen = block.copy()
+        chosen[74] = selection
+        selected = gpu.types.GPUUniformBuf(chosen.tobytes())  # held until drawn: freeing it unbinds it
+        shader.uniform_block(shader_sources.UNIFORM_NAME, selected)
+        gpu.state.face_culling_set(("FRONT" if mirrored else "BACK") if selection == 1.0 else "NONE")
+        batch.draw(shader)
+    gpu.state.face_culling_set("NONE")
+
+
 def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, depsgraph=None):
     """Draws one previewed object into the bound framebuffer (depth test on). Returns False when
     it only drew its outline (not baked, or the user SDF did not compile). ``depsgraph``: the
@@ -330,9 +355,9 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, 
         depth = (occlusion.draw_occluders(batch, settings.layout, ubo, occluders, viewport[2], viewport[3])
                  if occluders else occlusion.no_depth())
         shader.bind()
-        shader.uniform_block(shader_sources.UNIFORM_NAME, ubo)
         shader.uniform_sampler(shader_sources.OCCLUDER_SAMPLER[2], depth)
-        batch.draw(shader)
+        _draw_sides(shader, batch, block, ubo, drawn.outward and CULL_BACK_FACES, perspective,
+                    np.linalg.det(object_to_view[:3, :3]) < 0.0)
     if output_mode != 0:
         return shader is not None
     lines = uniform_shader()

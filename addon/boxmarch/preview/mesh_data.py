@@ -27,6 +27,7 @@ class BakedMesh:
     box_half_extents: np.ndarray  # float32 (S, 3)
     submesh_of_vertex: np.ndarray  # int32 (N,) the box number of each vertex
     box_layers: mesh_io.BoxLayers | None = None  # per-box parameters and parents (None: baked without)
+    outward: bool = False        # every box closed and wound outward (closed_outward)
 
 
 def read_baked(mesh) -> BakedMesh:
@@ -39,12 +40,32 @@ def read_baked(mesh) -> BakedMesh:
     if n and np.any(colour[:, 3] <= 0):
         raise NotBakedError(f"mesh '{mesh.name}' has BoxOffset alpha 0: bake it again")
     submesh_of_vertex, count = core.find_submeshes(positions, edges, face_starts, face_sizes, corner_verts)
+    triangles = mesh_io.read_triangles(mesh)
     origins, box_q, box_half = core.boxes_from_bake(positions, colour, quaternions, submesh_of_vertex)
     return BakedMesh(positions=positions, offsets=colour, quaternions=quaternions,
-                     half_extents=box_half[submesh_of_vertex], triangles=mesh_io.read_triangles(mesh), edges=edges,
+                     half_extents=box_half[submesh_of_vertex], triangles=triangles, edges=edges,
                      origins=origins, box_quaternions=box_q, box_half_extents=box_half,
                      submesh_of_vertex=submesh_of_vertex,
-                     box_layers=mesh_io.read_box_layers(mesh, submesh_of_vertex, count))
+                     box_layers=mesh_io.read_box_layers(mesh, submesh_of_vertex, count),
+                     outward=closed_outward(positions, triangles, origins, submesh_of_vertex))
+
+
+def closed_outward(positions, triangles, origins, submesh_of_vertex) -> bool:
+    """Whether every box's triangles close it and face outward: each directed edge once and its
+    reverse once (closed, consistently wound), and each box's signed volume about its origin
+    positive. Then a box's back faces are its far side, and the preview may cull them."""
+    triangles = np.asarray(triangles, np.int64)
+    if not len(triangles):
+        return False
+    directed = np.stack([triangles, np.roll(triangles, -1, axis=1)], -1).reshape(-1, 2)
+    key = directed[:, 0] * len(positions) + directed[:, 1]
+    reverse = directed[:, 1] * len(positions) + directed[:, 0]
+    if len(np.unique(key)) != len(key) or not np.all(np.isin(reverse, key)):
+        return False
+    box = submesh_of_vertex[triangles[:, 0]]
+    a, b, c = (positions[triangles[:, k]].astype(np.float64) - origins[box] for k in range(3))
+    volume = np.bincount(box, np.einsum("ij,ij->i", a, np.cross(b, c)), minlength=len(origins))
+    return bool(np.all(volume > 0.0))
 
 
 def box_data_in_object_frame(baked: BakedMesh) -> layouts.BoxData:
