@@ -235,11 +235,13 @@ function sortBoxmarchFrontToBack(THREE, mesh, camera) {
 // shape id (bm_sdf_by_id(box_params.x, ...)), or null: none (a map() of the user's own, whose
 // inside nothing here knows). options.occluders overrides: a preset name (BOX, SPHERE,
 // ROUNDED_BOX, CAPSULE, CYLINDER, TORUS, LINK; any shape containing that preset's shape in the
-// same box), 'PER_BOX', or false.
+// same box), 'PER_BOX', or false. None below full quality (options.quality < 1).
 function boxmarchOccluderShape(options) {
   var presets = ['BOX', 'SPHERE', 'ROUNDED_BOX', 'CAPSULE', 'CYLINDER', 'TORUS', 'LINK'];
   var chosen = options && options.occluders;
-  if (chosen === false) return null;
+  // below full quality the knob's one-tap boxes stand at their centre's depth, which may lie
+  // behind their own occluders: no pre-pass there
+  if (chosen === false || (options && options.quality && options.quality < 1)) return null;
   if (typeof chosen === 'string') {
     if (chosen === 'PER_BOX') return -1;
     if (presets.indexOf(chosen) < 0) throw new Error('boxmarch: occluders must be one of ' + presets.join(', ') + ', PER_BOX or false');

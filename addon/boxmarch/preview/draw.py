@@ -347,7 +347,7 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, 
         shader = None
     if shader is not None:
         viewport = gpu.state.viewport_get()
-        occluders = occlusion.occluder_count(settings.sdf)
+        occluders = occlusion.occluder_count(settings.sdf, settings.quality)
         block = uniform_block_data(object_to_clip, object_to_view, perspective, settings, output_mode,
                                    tuple(ob.color[:3]) + (1.0,), frame, viewport[3], occluders > 0)
         ubo = gpu.types.GPUUniformBuf(block.tobytes())

@@ -21,11 +21,13 @@ _targets: dict = {}  # (width, height) -> (depth texture, framebuffer): one size
 _unused: list = []   # a 1 x 1 depth texture bound where no pre-pass ran (the shader reads none)
 
 
-def occluder_count(sdf: str) -> int:
+def occluder_count(sdf: str, quality: float = 1.0) -> int:
     """How many pre-pass draws an object of preview shape ``sdf`` makes (0: no pre-pass): the
     preset's occluder boxes (box_params.glsl), all core.occluder_boxes indices for the per-box
-    shapes (each box's shape id picks its own), none for a user map()."""
-    if not ENABLED or sdf not in core.SDF_PRESETS + (shader_sources.PER_BOX, shader_sources.PER_BOX_BLEND):
+    shapes (each box's shape id picks its own), none for a user map(), and none below full
+    ``quality``: the knob's one-tap boxes stand at their centre's depth, which may lie behind
+    their own occluders, so the pre-pass would change the knob's picture."""
+    if not ENABLED or quality < 1.0 or sdf not in core.SDF_PRESETS + (shader_sources.PER_BOX, shader_sources.PER_BOX_BLEND):
         return 0
     if sdf not in core.SDF_PRESETS:
         return core.occluder_boxes("BOX", (1.0, 1.0, 1.0))[0].shape[1]
