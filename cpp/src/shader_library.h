@@ -247,8 +247,18 @@ inline float bm_sdf_blend_parent(float shape, vec3 p, vec3 h, vec3 parent_origin
 // How many occluder boxes shape id `shape` has (bm_sdf_by_id's numbering).
 inline float bm_occluder_count(float shape)
 {
+  // if chains, not nested ?: (Godot 3's shading language refuses a ?: inside a ?:)
   float id = glm::floor(shape + 0.5f);
-  return id == 1.0f || id == 2.0f ? 3.0f : id == 3.0f || id == 4.0f ? 2.0f : id == 5.0f || id == 6.0f ? 4.0f : 1.0f;
+  if (id == 1.0f || id == 2.0f) {
+    return 3.0f;
+  }
+  if (id == 3.0f || id == 4.0f) {
+    return 2.0f;
+  }
+  if (id == 5.0f || id == 6.0f) {
+    return 4.0f;
+  }
+  return 1.0f;
 }
 
 // Ring of a link (sd_link: the stadium of half-length `half_length` along x, radius `ring`,
@@ -260,7 +270,7 @@ inline float bm_occluder_count(float shape)
 // nearest at ring - a > ring - w. Inside the tube, exactly.
 inline vec3 bm_ring_occluder_centre(float half_length, float ring, float k)
 {
-  float side = k == 1.0f || k == 3.0f ? -1.0f : 1.0f;
+  float side = (k == 1.0f || k == 3.0f) ? -1.0f : 1.0f;
   return k < 2.0f ? vec3(0.0f, side * ring, 0.0f) : vec3(side * (half_length + ring), 0.0f, 0.0f);
 }
 
@@ -309,28 +319,33 @@ inline vec3 bm_occluder_unclipped(float shape, vec3 h, float k, bool centre)
   vec3 s = bm_by_extent(h, h);
   vec3 at = vec3(0.0f);
   vec3 extent = k == 0.0f ? h : vec3(0.0f);
+  // the k-th of a preset's boxes by its axis lengths: (long, short, short) turned so the long one
+  // lies along axis k (sphere, rounded box), or the first two of them (capsule, cylinder)
+  vec3 turned = k == 1.0f ? vec3(0.0f, 1.0f, 0.0f) : vec3(1.0f, 0.0f, 0.0f);
+  if (k == 2.0f) {
+    turned = vec3(0.0f, 0.0f, 1.0f);
+  }
   if (id == 1.0f) {
     float r = bm_min3(h);
-    extent = k == 0.0f ? vec3(0.825f, 0.4f, 0.4f) * r : k == 1.0f ? vec3(0.4f, 0.825f, 0.4f) * r
-           : k == 2.0f ? vec3(0.4f, 0.4f, 0.825f) * r : vec3(0.0f);
+    extent = k < 3.0f ? r * (vec3(0.4f) + 0.425f * turned) : vec3(0.0f);
   }
   if (id == 2.0f) {
     float r = 0.25f * bm_min3(h);
-    extent = k == 0.0f ? h - vec3(0.0f, r, r) : k == 1.0f ? h - vec3(r, 0.0f, r) : k == 2.0f ? h - vec3(r, r, 0.0f) : vec3(0.0f);
+    extent = k < 3.0f ? h - r * (vec3(1.0f) - turned) : vec3(0.0f);
   }
   if (id == 3.0f) {
     float r = glm::min(s.y, s.z);
     float reach = glm::max(s.x - r, 0.0f) + 0.62f * r;
-    extent = k == 0.0f ? vec3(reach, 0.7f * r, 0.35f * r) : k == 1.0f ? vec3(reach, 0.35f * r, 0.7f * r) : vec3(0.0f);
-    extent = bm_from_extent(extent, h);
+    extent = k == 0.0f ? vec3(reach, 0.7f * r, 0.35f * r) : vec3(reach, 0.35f * r, 0.7f * r);
+    extent = k < 2.0f ? bm_from_extent(extent, h) : vec3(0.0f);
   }
   if (id == 4.0f) {
     // sdf_preset_cylinder: along the sorted x (q.yzx) for a rod, else along the sorted z
     bool rod = s.x * s.z > s.y * s.y;
     vec3 c = rod ? vec3(s.y, s.z, s.x) : s;
     float r = glm::min(c.x, c.y);
-    extent = k == 0.0f ? vec3(0.866f * r, 0.5f * r, c.z) : k == 1.0f ? vec3(0.5f * r, 0.866f * r, c.z) : vec3(0.0f);
-    extent = bm_from_extent(rod ? vec3(extent.z, extent.x, extent.y) : extent, h);
+    extent = k == 0.0f ? vec3(0.866f * r, 0.5f * r, c.z) : vec3(0.5f * r, 0.866f * r, c.z);
+    extent = k < 2.0f ? bm_from_extent(rod ? vec3(extent.z, extent.x, extent.y) : extent, h) : vec3(0.0f);
   }
   if (id == 5.0f) {
     float minor = glm::min(s.z, 0.5f * glm::min(s.x, s.y));

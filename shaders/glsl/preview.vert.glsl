@@ -90,7 +90,7 @@ void main()
   vec3 pulled = bm_occluder_centre(shape, h, occluder_index) + v * extent / max(h, vec3(1e-30));
   vec3 moved = pos + transpose(frame) * bm_from_local(pulled - v, frag_axis_x, frag_axis_y, frag_axis_z);
   // outside the clip volume (every vertex of the box alike): nothing drawn
-  gl_Position = eye_inside || bm_min3(extent) <= 0.0 ? vec4(2.0, 2.0, 2.0, 1.0)
+  gl_Position = (eye_inside || bm_min3(extent) <= 0.0) ? vec4(2.0, 2.0, 2.0, 1.0)
                                                      : preview.object_to_clip * vec4(moved, 1.0);
 #endif
 }

@@ -335,8 +335,18 @@ float bm_sdf_blend_parent(float shape, vec3 p, vec3 h, vec3 parent_origin, vec4 
 // How many occluder boxes shape id `shape` has (bm_sdf_by_id's numbering).
 float bm_occluder_count(float shape)
 {
+  // if chains, not nested ?: (Godot 3's shading language refuses a ?: inside a ?:)
   float id = floor(shape + 0.5);
-  return id == 1.0 || id == 2.0 ? 3.0 : id == 3.0 || id == 4.0 ? 2.0 : id == 5.0 || id == 6.0 ? 4.0 : 1.0;
+  if (id == 1.0 || id == 2.0) {
+    return 3.0;
+  }
+  if (id == 3.0 || id == 4.0) {
+    return 2.0;
+  }
+  if (id == 5.0 || id == 6.0) {
+    return 4.0;
+  }
+  return 1.0;
 }
 // Ring of a link (sd_link: the stadium of half-length `half_length` along x, radius `ring`,
 // wire radius `minor`, in the xy plane) or torus (half_length 0): k = 0, 1 the straight wires at
@@ -347,7 +357,7 @@ float bm_occluder_count(float shape)
 // nearest at ring - a > ring - w. Inside the tube, exactly.
 vec3 bm_ring_occluder_centre(float half_length, float ring, float k)
 {
-  float side = k == 1.0 || k == 3.0 ? -1.0 : 1.0;
+  float side = (k == 1.0 || k == 3.0) ? -1.0 : 1.0;
   return k < 2.0 ? vec3(0.0, side * ring, 0.0) : vec3(side * (half_length + ring), 0.0, 0.0);
 }
 vec3 bm_ring_occluder_half(float half_length, float ring, float minor, float k)
@@ -393,28 +403,33 @@ vec3 bm_occluder_unclipped(float shape, vec3 h, float k, bool centre)
   vec3 s = bm_by_extent(h, h);
   vec3 at = vec3(0.0);
   vec3 extent = k == 0.0 ? h : vec3(0.0);
+  // the k-th of a preset's boxes by its axis lengths: (long, short, short) turned so the long one
+  // lies along axis k (sphere, rounded box), or the first two of them (capsule, cylinder)
+  vec3 turned = k == 1.0 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
+  if (k == 2.0) {
+    turned = vec3(0.0, 0.0, 1.0);
+  }
   if (id == 1.0) {
     float r = bm_min3(h);
-    extent = k == 0.0 ? vec3(0.825, 0.4, 0.4) * r : k == 1.0 ? vec3(0.4, 0.825, 0.4) * r
-           : k == 2.0 ? vec3(0.4, 0.4, 0.825) * r : vec3(0.0);
+    extent = k < 3.0 ? r * (vec3(0.4) + 0.425 * turned) : vec3(0.0);
   }
   if (id == 2.0) {
     float r = 0.25 * bm_min3(h);
-    extent = k == 0.0 ? h - vec3(0.0, r, r) : k == 1.0 ? h - vec3(r, 0.0, r) : k == 2.0 ? h - vec3(r, r, 0.0) : vec3(0.0);
+    extent = k < 3.0 ? h - r * (vec3(1.0) - turned) : vec3(0.0);
   }
   if (id == 3.0) {
     float r = min(s.y, s.z);
     float reach = max(s.x - r, 0.0) + 0.62 * r;
-    extent = k == 0.0 ? vec3(reach, 0.7 * r, 0.35 * r) : k == 1.0 ? vec3(reach, 0.35 * r, 0.7 * r) : vec3(0.0);
-    extent = bm_from_extent(extent, h);
+    extent = k == 0.0 ? vec3(reach, 0.7 * r, 0.35 * r) : vec3(reach, 0.35 * r, 0.7 * r);
+    extent = k < 2.0 ? bm_from_extent(extent, h) : vec3(0.0);
   }
   if (id == 4.0) {
     // sdf_preset_cylinder: along the sorted x (q.yzx) for a rod, else along the sorted z
     bool rod = s.x * s.z > s.y * s.y;
     vec3 c = rod ? s.yzx : s;
     float r = min(c.x, c.y);
-    extent = k == 0.0 ? vec3(0.866 * r, 0.5 * r, c.z) : k == 1.0 ? vec3(0.5 * r, 0.866 * r, c.z) : vec3(0.0);
-    extent = bm_from_extent(rod ? extent.zxy : extent, h);
+    extent = k == 0.0 ? vec3(0.866 * r, 0.5 * r, c.z) : vec3(0.5 * r, 0.866 * r, c.z);
+    extent = k < 2.0 ? bm_from_extent(rod ? extent.zxy : extent, h) : vec3(0.0);
   }
   if (id == 5.0) {
     float minor = min(s.z, 0.5 * min(s.x, s.y));
