@@ -10,9 +10,10 @@ APT_PACKAGES=(blender python3-numpy libglm-dev libnanoflann-dev glslang-tools xv
               libgl1-mesa-dri libegl1 libegl-mesa0  # Mesa llvmpipe: the preview's GPU tests without a GPU
               cmake clang-14 libclang-rt-14-dev  # sanitizer build and libFuzzer target
               chromium libjs-three godot3 godot3-server fonts-liberation  # tests/engines: three.js r111 in headless Chromium, Godot 3 (under the xvfb above)
+              nodejs  # tests/test_engine_shaders.py: the three.js material loads as a script and as a module
               spirv-cross  # tests/engines/hlsl_webgl.py: the Unity HLSL, compiled to SPIR-V, drawn by WebGL 2
               assimp-utils  # tests/engines/fbx_libraries.py: Assimp reads the FBX exports
-              mono-mcs  # tests/test_engine_import_settings.py: the Unity postprocessor compiled against a stub of Unity's API
+              mono-mcs mono-runtime  # tests/test_engine_import_settings.py: the Unity postprocessor compiled against a stub of Unity's API and run under mono
               clang-format-14  # tests/test_house.py: the cpp/ style check
               shellcheck)  # actionlint checks the workflows' run: scripts with it (tests/test_workflows.py)
 missing=()

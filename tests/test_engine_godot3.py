@@ -11,6 +11,7 @@ from tests.engine_scene import (MIXED_SHAPES, TO_Y_UP, baked_scene, box_of_verte
                                 frame_and_size_errors, paint_shapes, per_box_agreement, rounded_box_mismatch, silhouettes,
                                 table_texels)
 from tests.engines import coverage_mismatch, godot3, import_helpers
+from tests.helpers.tools import need
 
 pytestmark = pytest.mark.slow  # Godot 3 imports and renders
 
@@ -21,9 +22,7 @@ INNER = 0.6
 
 @pytest.fixture
 def imported(blender, tmp_path):
-    reason = godot3.available()
-    if reason:
-        pytest.skip(reason)
+    need(godot3.available())
     ob, centres, sizes, rotations = baked_scene(blender)
     boxes = paint_shapes(blender, ob, MIXED_SHAPES)
     path = tmp_path / "mixed.glb"
@@ -129,9 +128,7 @@ def test_godot3_draws_the_shape_each_box_id_picks(imported):
 def test_godot3_default_compression_error_is_what_the_report_states(blender, tmp_path):
     """Godot's default import (mesh compression on) quantizes the colour to clamped 8 bits and the
     frame to 8-bit snorm: the decode breaks, and the export report says by how much."""
-    reason = godot3.available()
-    if reason:
-        pytest.skip(reason)
+    need(godot3.available())
     from boxmarch.export import scene as export_scene
 
     ob, centres, sizes, rotations = baked_scene(blender)
@@ -164,9 +161,7 @@ def test_godot3_export_folder_copied_alone_imports_float_exact(blender, tmp_path
     """The GODOT3 export's folder copied as it is into a fresh project: Godot honours the
     NAME.glb.import written beside the .glb (compression off) and the decode is float-exact. The
     same folder without that file gets Godot's default import, which misses by over 0.1."""
-    reason = godot3.available()
-    if reason:
-        pytest.skip(reason)
+    need(godot3.available())
     from boxmarch.export import scene as export_scene
 
     ob, centres, sizes, rotations = baked_scene(blender)
@@ -193,9 +188,7 @@ def test_godot3_plugin_imports_boxmarch_glbs_float_exact_and_refuses_other_layou
     has it imported again) and a GLTF export (NORMAL_FRAME: its UV3-4 do not survive Godot 3's
     importer), both with their sidecars: the first decodes float-exact, the second is reported
     by name and layout and left as Godot imported it."""
-    reason = godot3.available()
-    if reason:
-        pytest.skip(reason)
+    need(godot3.available())
     from boxmarch.export import scene as export_scene
 
     ob, centres, sizes, rotations = baked_scene(blender)

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from tests.helpers.tools import need
 
 SHADERS = Path(__file__).resolve().parent.parent / "shaders"
 EXPORTS = ["boxmarchTexcoordName", "checkBoxmarchSidecar", "createBoxmarchMaterial", "loadBoxmarch", "prepareBoxmarchGeometry",
@@ -79,8 +80,7 @@ def test_generator_refuses_a_builtin_it_cannot_translate(tmp_path, builtin):
     ("boxmarch.module.js", "const m = await import('file://' + process.argv[1]);")])
 def test_threejs_material_loads_as_script_and_module(name, loader):
     node = shutil.which("node") or shutil.which("nodejs")
-    if node is None:
-        pytest.skip("node is not installed")
+    need(None if node else "node is not installed (apt-get install nodejs)")
     script = f"(async () => {{ {loader} console.log(Object.keys(m).sort().join(',')); }})();"
     proc = subprocess.run([node, "-e", script, str(SHADERS / "threejs" / name)], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr

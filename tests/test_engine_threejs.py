@@ -28,6 +28,7 @@ from tests.engine_scene import (
     silhouettes,
 )
 from tests.engines import coverage_mismatch, threejs
+from tests.helpers.tools import need
 
 pytestmark = pytest.mark.slow  # Chromium renders
 
@@ -183,9 +184,7 @@ def page(request, exported):
     """One page per release: {"release", "meshes", (map, camera name) -> Shot, tamper name -> Shot,
     "loader" -> Shot, refusal name -> message}, and the scene's boxes."""
     release = request.param
-    reason = threejs.available(release)
-    if reason:
-        pytest.skip(reason)
+    need(threejs.available(release))
     files, centres, sizes, rotations = exported
     glb = files["NORMAL_FRAME"]
     served = {"mixed.glb": glb, "mixed.boxmarch.json": files["NORMAL_FRAME", "sidecar"],

@@ -6,6 +6,7 @@ sidecar's encodings and axes, written out here from docs/FORMAT.md, and must giv
 every vertex inside its box's half-extents. A sidecar naming a wrong channel fails these checks
 (the negative controls below swap two channels)."""
 import copy
+import importlib.util
 import json
 
 import numpy as np
@@ -14,8 +15,15 @@ import pytest
 from tests.engine_scene import baked_scene, rotate, skinned_scene, table_texels
 from tests.fbx_reader import read_fbx_geometry
 from tests.gltf_reader import read_glb
+from tests.helpers.tools import need
 
-jsonschema = pytest.importorskip("jsonschema")
+
+@pytest.fixture(scope="module")
+def jsonschema():
+    need(None if importlib.util.find_spec("jsonschema") else "jsonschema is not installed (pip install jsonschema)")
+    import jsonschema
+
+    return jsonschema
 
 EXPORTS = [("GLTF", "NORMAL_FRAME"), ("GLTF", "UV_FRAME"), ("GLTF", "CLASSIC"), ("GODOT3", "NORMAL_COLOR"),
            ("UNITY", "UV_FRAME"), ("UNITY", "CLASSIC"), ("UNITY", "NORMAL_FRAME"), ("UNREAL", "UV_FRAME"),
@@ -143,7 +151,7 @@ def check_against_file(bpy, path, sidecar):
 
 
 @pytest.mark.parametrize("preset, layout", EXPORTS)
-def test_every_sidecar_validates_and_describes_its_file(blender, tmp_path, preset, layout):
+def test_every_sidecar_validates_and_describes_its_file(blender, jsonschema, tmp_path, preset, layout):
     from boxmarch.export import scene
     from boxmarch.formats import sidecar, presets
 
@@ -189,7 +197,7 @@ def test_a_sidecar_that_misnames_the_file_fails_the_check(blender, tmp_path, pre
 
 
 @pytest.mark.parametrize("preset", ["GLTF", "UNITY"])
-def test_skinned_sidecar_says_so_and_describes_the_rest_pose_file(blender, tmp_path, preset):
+def test_skinned_sidecar_says_so_and_describes_the_rest_pose_file(blender, jsonschema, tmp_path, preset):
     from boxmarch.export import scene
     from boxmarch.formats import presets
 
@@ -203,7 +211,7 @@ def test_skinned_sidecar_says_so_and_describes_the_rest_pose_file(blender, tmp_p
     check_against_file(blender, path, written)
 
 
-def test_schema_refuses_a_sidecar_without_an_agreed_key_or_with_a_wrong_type(blender, tmp_path):
+def test_schema_refuses_a_sidecar_without_an_agreed_key_or_with_a_wrong_type(blender, jsonschema, tmp_path):
     from boxmarch.export import scene
 
     ob, *_ = baked_scene(blender)
