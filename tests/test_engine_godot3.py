@@ -89,6 +89,39 @@ def test_godot3_renders_each_box_at_its_own_size_and_the_negative_control_fails(
     assert coverage_mismatch(knob.pixels[..., :3].max(axis=2) > 20, expected) is None
 
 
+SHIPPED_ALBEDO = "  ALBEDO = base_color.rgb * (0.35 + 0.65 * max(n.z, 0.0));"
+
+
+def marched_steps(project, uniforms):
+    """(H, W) map() evaluations per pixel Godot ran (0 where nothing was drawn): the shipped
+    shader with its colour replaced by its step count / 255, which Godot writes sRGB-encoded."""
+    code = shader()
+    assert SHIPPED_ALBEDO in code
+    shot = godot3.render(project, code.replace(SHIPPED_ALBEDO, "  ALBEDO = vec3(float(steps) / 255.0);"), width=W,
+                         height=H, camera=WIDE, uniforms=uniforms)
+    encoded = shot.pixels[..., 0].astype(np.float64) / 255.0
+    linear = np.where(encoded <= 0.04045, encoded / 12.92, ((encoded + 0.055) / 1.055) ** 2.4)
+    return np.rint(linear * 255.0)
+
+
+def test_godot3_quality_knob_cuts_the_marching_steps(imported):
+    """The quality knob measured in Godot: at 0.5 the boxes take fewer map() evaluations than at
+    1 (the full march), in total and in no pixel more. Negative control: the knob under a
+    misspelled uniform name (Godot ignores it) leaves the steps as they were, and is caught."""
+    project, _table, _centres, _sizes, _rotations, _boxes = imported
+    uniforms = {"box_table": "res://model.boxes.tres", "max_steps": 256}
+    full = marched_steps(project, uniforms)
+    knob = marched_steps(project, {**uniforms, "quality": 0.5})
+    ignored = marched_steps(project, {**uniforms, "qualty": 0.5})
+    drawn = (full > 0) & (knob > 0)
+    assert drawn.sum() > 500
+    print(f"map() evaluations over {drawn.sum()} pixels: {full[drawn].sum():.0f} at quality 1, "
+          f"{knob[drawn].sum():.0f} at 0.5, {ignored[drawn].sum():.0f} under a misspelled name")
+    assert knob[drawn].sum() < 0.8 * full[drawn].sum()
+    assert np.all(knob[drawn] <= full[drawn] + 2)  # 8-bit sRGB: 2 steps of rounding near 255
+    assert not ignored[drawn].sum() < 0.8 * full[drawn].sum()
+
+
 def test_godot3_shipped_shader_raymarches_a_rounded_box_of_each_box_own_size(imported):
     """The shipped shader as it is (sd_round_box of the box's own half-extents, radius 0.1 x the
     smallest): every covered pixel within 1 px of its box, every pixel of the box's core covered;
