@@ -45,11 +45,11 @@ def test_unity_postprocessor_run_as_unity_calls_it_sets_the_table_and_refuses_ba
     assert import_helpers.unity_settings() == import_settings.UNITY
 
 
-# One-line changes of the postprocessor that its run must catch: each compiles, and each leaves a
-# case of the run wrong (what Unity would do with it).
+# One-line changes of the package's Editor sources that its run must catch: each compiles, and
+# each leaves a case of the run wrong (what Unity would do with it).
 UNITY_MUTATIONS = {
     "importer == null inverted: no setting ever applied": (r"importer\s*==\s*null", "importer != null"),
-    "preset check inverted: UNITY refused, other presets set": (r"\.preset\s*!=\s*Preset", ".preset == Preset"),
+    "preset check inverted: UNITY refused, other presets set": (r"!=(\s*)([Pp]reset)\b", r"==\1\2"),
     "OnPreprocessModel misspelled: Unity never calls it": (r"\bOnPreprocessModel\b", "OnPreProcessModel"),
     "refusal not returned: a bad sidecar's model is set": (r"(LogError\([^;]*;)\s*return;", r"\1"),
 }
@@ -61,9 +61,11 @@ def test_unity_postprocessor_run_catches_each_mutation(mutation):
     from boxmarch.formats import import_settings
 
     pattern, replacement = UNITY_MUTATIONS[mutation]
-    source = import_helpers.UNITY_POSTPROCESSOR.read_text()
-    mutated, count = re.subn(pattern, replacement, source)
-    assert count >= 1, f"{mutation}: the pattern is no longer in the source"
+    mutated, count = {}, 0
+    for name, text in import_helpers.unity_editor_sources().items():
+        mutated[name], found = re.subn(pattern, replacement, text, count=1)
+        count += found
+    assert count == 1, f"{mutation}: the pattern is in {count} places of the Editor sources, not one"
     assert import_helpers.unity_import_faults(import_helpers.unity_import_run(mutated), import_settings.UNITY) != []
 
 
@@ -162,7 +164,8 @@ def test_unreal_script_run_imports_nothing_for_a_refused_sidecar():
 
     for changes in ({"preset": "UNITY"}, {"layout": "NORMAL_FRAME"}, {"format_version": sidecar.FORMAT_VERSION + 1}):
         session, result = import_helpers.unreal_import_run(sidecar=import_helpers.unreal_sidecar(**changes))
-        assert isinstance(result, ValueError) and "model.fbx" in str(result), (changes, result)
+        # one line naming the model or its sidecar
+        assert isinstance(result, ValueError) and re.search(r"model\.(fbx|boxmarch\.json)", str(result)), (changes, result)
         assert session.tasks == [] and session.saved == {}
 
 

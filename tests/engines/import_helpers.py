@@ -15,6 +15,7 @@ REPO = Path(__file__).resolve().parents[2]
 UNITY_PACKAGE = REPO / "engines" / "unity" / "com.boxmarch.boxmarch"
 UNITY_POSTPROCESSOR = UNITY_PACKAGE / "Editor" / "BoxmarchModelPostprocessor.cs"
 UNITY_STUB = Path(__file__).resolve().parent / "unity_stub" / "UnityApiStub.cs"
+UNITY_STUB_SOURCES = (UNITY_STUB, UNITY_STUB.parent / "UnityJsonUtility.cs")
 UNITY_HARNESS = UNITY_STUB.parent / "UnityImportHarness.cs"
 UNREAL_SCRIPT = REPO / "engines" / "unreal" / "boxmarch_import.py"
 UNREAL_MATERIAL = REPO / "engines" / "unreal" / "BoxmarchUVFrame.ush"
@@ -29,67 +30,65 @@ def need_mono():
     need(None if shutil.which("mcs") and shutil.which("mono") else "mcs or mono is missing (apt-get install mono-mcs)")
 
 
-@functools.lru_cache(maxsize=None)
-def _unity_editor_stub(stub_text: str, harness_text: str) -> Path:
-    """UnityEditorStub.exe: the API stub and the import harness, built once per process."""
+def unity_editor_sources() -> dict:
+    """{file name: text} of the package's Editor sources as shipped."""
+    return {path.name: path.read_text() for path in sorted(UNITY_POSTPROCESSOR.parent.glob("*.cs"))}
+
+
+def compile_unity(source: str, out_dir, extra=(), target="library", others=None) -> subprocess.CompletedProcess:
+    """mcs run on the stub of Unity's API, the package's other Editor sources (``others``:
+    {file name: text} in their place), ``source`` (a postprocessor's text) and ``extra`` source
+    paths, warnings as errors, into one assembly ``out_dir``/boxmarch.dll (or .exe for
+    ``target`` "exe")."""
     need_mono()
-    folder = Path(tempfile.mkdtemp(prefix="boxmarch-unity-stub-"))
-    for name, text in (("UnityApiStub.cs", stub_text), ("UnityImportHarness.cs", harness_text)):
-        (folder / name).write_text(text)
-    built = subprocess.run(["mcs", "-target:exe", "-warnaserror+", f"-out:{folder / 'UnityEditorStub.exe'}",
-                            str(folder / "UnityApiStub.cs"), str(folder / "UnityImportHarness.cs")],
-                           capture_output=True, text=True, timeout=120)
-    assert built.returncode == 0, built.stdout + built.stderr
-    return folder / "UnityEditorStub.exe"
+    texts = dict(unity_editor_sources() if others is None else others, **{UNITY_POSTPROCESSOR.name: source})
+    paths = []
+    for name, text in texts.items():
+        paths.append(Path(out_dir) / name)
+        paths[-1].write_text(text)
+    out = Path(out_dir) / f"boxmarch.{'dll' if target == 'library' else 'exe'}"
+    return subprocess.run(["mcs", f"-target:{target}", "-warnaserror+", f"-out:{out}", *map(str, UNITY_STUB_SOURCES),
+                           *map(str, paths), *map(str, extra)], capture_output=True, text=True, timeout=120)
 
 
-def unity_editor_stub() -> Path:
-    return _unity_editor_stub(UNITY_STUB.read_text(), UNITY_HARNESS.read_text())
-
-
-def compile_unity(source: str, out_dir) -> subprocess.CompletedProcess:
-    """mcs run on ``source`` (a postprocessor's text) as an Editor assembly ``out_dir/boxmarch.dll``
-    referencing the stub of Unity's API, warnings as errors."""
-    path = Path(out_dir) / "BoxmarchModelPostprocessor.cs"
-    path.write_text(source)
-    return subprocess.run(["mcs", "-target:library", "-warnaserror+", f"-r:{unity_editor_stub()}",
-                           f"-out:{Path(out_dir) / 'boxmarch.dll'}", str(path)], capture_output=True, text=True,
-                          timeout=120)
-
-
-def _run_harness(editor: Path, project: Path, args) -> list:
-    ran = subprocess.run(["mono", str(unity_editor_stub()), str(editor), *args], cwd=project, capture_output=True,
-                         text=True, timeout=120)
+def _run_harness(harness: Path, project: Path, args) -> list:
+    ran = subprocess.run(["mono", str(harness), *args], cwd=project, capture_output=True, text=True, timeout=120)
     assert ran.returncode == 0, ran.stdout + ran.stderr
     return [line.split("\t") for line in ran.stdout.splitlines()]
 
 
-def run_unity_import(editor: Path, project: Path, assets) -> dict:
-    """{asset: {"set": [(property, C# value)] in the order set, "logged": [message]}} of the Editor
-    assembly ``editor``'s postprocessors run by the harness on each project-relative asset path
-    of ``project`` (tests/engines/unity_stub/UnityImportHarness.cs)."""
+def run_unity_import(harness: Path, project: Path, assets) -> dict:
+    """{asset: {"set": [(property, C# value)] in the order set, "logged": [message]}} of the
+    package's postprocessors run by ``harness`` (:func:`unity_harness`) on each project-relative
+    asset path of ``project`` (tests/engines/unity_stub/UnityImportHarness.cs)."""
     out = {}
-    for asset, _set, assigned, _logged, logged in _run_harness(editor, project, assets):
+    for asset, _set, assigned, _logged, logged in _run_harness(harness, project, assets):
         out[asset] = {"set": [tuple(pair.split("=", 1)) for pair in assigned.split(";") if pair],
                       "logged": [message for message in logged.split("|") if message]}
     return out
 
 
-def unity_constants(editor: Path | None = None) -> dict:
+def unity_constants() -> dict:
     """The postprocessor's public constants and static readonly fields (FormatVersion, Preset,
     SidecarSuffix, LayoutsRead) as the compiled assembly holds them, read by reflection."""
-    if editor is None:
-        editor = _compiled_unity(UNITY_POSTPROCESSOR.read_text())
-    lines = _run_harness(editor, editor.parent, ["--constants"])
+    harness = unity_harness()
+    lines = _run_harness(harness, harness.parent, ["--constants"])
     return {name: tuple(v) if isinstance(v := json.loads(value), list) else v for name, value in lines}
 
 
+def unity_harness(sources: dict | None = None) -> Path:
+    """boxmarch.exe: the package's Editor ``sources`` ({file name: text}; None: as shipped), the
+    stub and the import harness (AssertionError when they do not compile)."""
+    return _unity_harness(tuple(sorted((unity_editor_sources() if sources is None else sources).items())))
+
+
 @functools.lru_cache(maxsize=None)
-def _compiled_unity(source: str) -> Path:
+def _unity_harness(sources: tuple) -> Path:
     folder = Path(tempfile.mkdtemp(prefix="boxmarch-unity-"))
-    built = compile_unity(source, folder)
+    texts = dict(sources)
+    built = compile_unity(texts.pop(UNITY_POSTPROCESSOR.name), folder, [UNITY_HARNESS], target="exe", others=texts)
     assert built.returncode == 0, built.stdout + built.stderr
-    return folder / "boxmarch.dll"
+    return folder / "boxmarch.exe"
 
 
 # The sidecars of the import cases: a boxmarch UNITY export's (written by formats/sidecar.py) and
@@ -121,18 +120,18 @@ def unity_import_cases() -> dict:
     return cases
 
 
-def unity_import_run(source=None) -> dict:
-    """The harness's run (:func:`run_unity_import`) of the postprocessor ``source`` (None: the
-    shipped one) on :func:`unity_import_cases`, each model Assets/NAME.fbx with its sidecar
-    beside it. Raises AssertionError when the source does not compile."""
-    editor = _compiled_unity(UNITY_POSTPROCESSOR.read_text() if source is None else source)
+def unity_import_run(sources=None) -> dict:
+    """The harness's run (:func:`run_unity_import`) of the package's Editor ``sources`` ({file
+    name: text}; None: as shipped) on :func:`unity_import_cases`, each model Assets/NAME.fbx with
+    its sidecar beside it. Raises AssertionError when the sources do not compile."""
+    harness = unity_harness(sources)
     project = Path(tempfile.mkdtemp(prefix="boxmarch-unity-project-"))
     (project / "Assets").mkdir()
     for name, text in unity_import_cases().items():
         (project / "Assets" / f"{name}.fbx").write_bytes(b"")
         if text is not None:
             (project / "Assets" / f"{name}.boxmarch.json").write_text(text)
-    ran = run_unity_import(editor, project, [f"Assets/{name}.fbx" for name in unity_import_cases()])
+    ran = run_unity_import(harness, project, [f"Assets/{name}.fbx" for name in unity_import_cases()])
     shutil.rmtree(project)
     return {asset[len("Assets/"):-len(".fbx")]: result for asset, result in ran.items()}
 
@@ -140,7 +139,7 @@ def unity_import_run(source=None) -> dict:
 def unity_import_faults(run: dict, table: dict) -> list:
     """What a run of :func:`unity_import_run` does against the package's contract: every boxmarch
     model gets exactly ``table`` (each property once) and no message; a foreign model neither;
-    every refused sidecar nothing set and one error naming the model and its sidecar."""
+    every refused sidecar nothing set and one error naming the sidecar."""
     faults = []
     for name, result in run.items():
         if name.startswith("boxmarch_") and (sorted(result["set"]) != sorted(table.items()) or result["logged"]):
@@ -149,7 +148,7 @@ def unity_import_faults(run: dict, table: dict) -> list:
             faults.append(f"{name}: set {result['set']}, logged {result['logged']}")
         if name.startswith("refused_"):
             errors = [m for m in result["logged"] if m.startswith("error: ")]
-            named = len(errors) == 1 and f"Assets/{name}.fbx" in errors[0] and f"Assets/{name}.boxmarch.json" in errors[0]
+            named = len(errors) == 1 and f"Assets/{name}.boxmarch.json" in errors[0]
             if result["set"] or not named or len(result["logged"]) != 1:
                 faults.append(f"{name}: set {result['set']}, logged {result['logged']}")
     return faults

@@ -1,13 +1,14 @@
-// Runs an Editor assembly's AssetPostprocessors on model files the way Unity's import pipeline
-// calls them (docs.unity3d.com, AssetPostprocessor): every non-abstract subclass found in the
-// assembly, in GetPostprocessOrder order, is constructed, given the asset's project-relative
-// assetPath and a ModelImporter, and its OnPreprocessModel message is invoked BY NAME through
-// reflection (any accessibility, no arguments), as Unity sends messages. Built with
-// UnityApiStub.cs into one executable (tests/engines/import_helpers.py):
+// Runs the package's AssetPostprocessors on model files the way Unity's import pipeline calls
+// them (docs.unity3d.com, AssetPostprocessor): every non-abstract subclass, in GetPostprocessOrder
+// order, is constructed, given the asset's project-relative assetPath and a ModelImporter, and its
+// OnPreprocessModel message is invoked BY NAME through reflection (any accessibility, no
+// arguments), as Unity sends messages; an exception it throws is logged, as Unity logs it. Built
+// with the stub and the package's Editor sources into one executable
+// (tests/engines/import_helpers.py):
 //
-//   mono UnityEditorStub.exe Editor.dll Assets/a.fbx ...   (run in the project folder)
+//   mono boxmarch.exe Assets/a.fbx ...   (run in the project folder)
 //     one line per asset: asset <TAB> set <TAB> property=value;... <TAB> logged <TAB> message|...
-//   mono UnityEditorStub.exe Editor.dll --constants
+//   mono boxmarch.exe --constants
 //     one line per public constant or static readonly field of the postprocessors: name <TAB> value
 using System;
 using System.Collections;
@@ -45,8 +46,8 @@ namespace BoxmarchTests
 
         public static int Main(string[] args)
         {
-            Assembly editor = Assembly.LoadFrom(args[0]);
-            if (args.Length == 2 && args[1] == "--constants")
+            Assembly editor = Assembly.GetExecutingAssembly();
+            if (args.Length == 1 && args[0] == "--constants")
             {
                 foreach (Type type in Postprocessors(editor))
                     foreach (FieldInfo field in type.GetFields(BindingFlags.Public | BindingFlags.Static))
@@ -54,7 +55,7 @@ namespace BoxmarchTests
                             Console.WriteLine(field.Name + "\t" + Written(field.GetValue(null)));
                 return 0;
             }
-            foreach (string asset in args.Skip(1))
+            foreach (string asset in args)
             {
                 var importer = new ModelImporter { assetPath = asset };
                 UnityEngine.Debug.Logged.Clear();
