@@ -3,6 +3,7 @@ and the sidecar values it accepts. The modelled Unity and Unreal imports (tests/
 are built from what these return, so a test of the model tests what the helper sets.
 Blender-free; the Unity script is compiled with mono's mcs against tests/engines/unity_stub."""
 import ast
+import atexit
 import functools
 import json
 import re
@@ -85,6 +86,7 @@ def unity_harness(sources: dict | None = None) -> Path:
 @functools.lru_cache(maxsize=None)
 def _unity_harness(sources: tuple) -> Path:
     folder = Path(tempfile.mkdtemp(prefix="boxmarch-unity-"))
+    atexit.register(shutil.rmtree, folder, True)
     texts = dict(sources)
     built = compile_unity(texts.pop(UNITY_POSTPROCESSOR.name), folder, [UNITY_HARNESS], target="exe", others=texts)
     assert built.returncode == 0, built.stdout + built.stderr
