@@ -153,7 +153,7 @@ def test_module_bake_export_pipeline_on_a_file(boxes_blend_34, tmp_path):
     # The result table (its import note the longest cell) fits a terminal; the default import's
     # cost is that note, not a warning.
     assert max(map(len, proc.stdout.splitlines())) <= 100 and "half-float" in proc.stdout, proc.stdout
-    assert "WARNING" not in proc.stderr, proc.stderr
+    assert "[boxmarch] WARNING:" not in proc.stderr, proc.stderr
 
 
 @pytest.mark.bpy

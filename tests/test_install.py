@@ -101,7 +101,7 @@ def install_into_bpy(extension, tmp_path):
 def test_extension_installs_into_clean_blender_4_2_or_later_and_bakes(packages, tmp_path):
     install_into_bpy(packages["extension"], tmp_path)
     # A new session does not read the preferences (the bpy module starts from factory settings):
-    # README's addon_enable line enables the installed copy there.
+    # docs/OVERVIEW.md's addon_enable line enables the installed copy there.
     result = run_in_bpy("enable_check.py", tmp_path, tmp_path / "enable.json")
     assert result["error"] is None, result["error"]
     assert not result["enabled_at_start"] and result["enabled"] and result["operator_registered"]

@@ -17,7 +17,7 @@ try:
     import numpy as np
 
     if bpy.app.version >= (4, 2, 0):
-        from scripts.install_extension import install  # the README's scripted install
+        from scripts.install_extension import install  # docs/GETTING_STARTED.md's scripted install
 
         module_name = install(zip_path)
     else:
