@@ -178,7 +178,7 @@ def step_bake(objects, args) -> dict:
         raise InputError(f"nothing baked: {error}") from None
     seconds = time.perf_counter() - start
     reports = [bake.report for bake in prepared]
-    warnings = mesh_io.modifier_warnings(objects)
+    warnings = mesh_io.modifier_warnings(objects) + bake_job.not_box_warnings(reports)
     for warning in warnings:
         _progress(f"WARNING: {warning}")
     totals = bake_job.report_totals(reports)
