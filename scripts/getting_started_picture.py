@@ -1,7 +1,7 @@
 """docs/GETTING_STARTED.md's chain, end to end and headless, as the page tells it: one cube sized
 as a link, an Array modifier whose offset object (an empty) moves each copy along and turns it a
 quarter turn, the modifier applied (chain.blend); then the page's command line, `python3 -m
-boxmarch pipeline chain.blend --steps bake,export --sort-axes-by-extent --preset GLTF --to
+boxmarch pipeline chain.blend --steps bake,export --preset GLTF --to
 chain.glb` (and the same with --preset GODOT3); then each file drawn with every box a chain link:
 chain.glb by the shipped three.js material (r111 in headless Chromium), written to
 docs/getting_started_chain.png, and the GODOT3 export as engines/godot3/README.md sets it up
@@ -60,7 +60,7 @@ def make_chain(path):
 def export(blend, preset, path, folder):
     """The page's command line: bake ``blend`` and export it with ``preset`` to ``path``."""
     subprocess.run([sys.executable, "-m", "boxmarch", "pipeline", blend, "--steps", "bake,export",
-                    "--sort-axes-by-extent", "--preset", preset, "--to", path], check=True, cwd=folder)
+                    "--preset", preset, "--to", path], check=True, cwd=folder)
 
 
 def main():

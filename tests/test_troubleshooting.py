@@ -8,7 +8,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 ADDON = ROOT / "addon" / "boxmarch"
 SOURCES = [*sorted((ADDON / "export").glob("*.py")), ADDON / "operators" / "export.py",
-           ADDON / "mesh_io" / "baked.py", ADDON / "mesh_io" / "weights.py"]
+           ADDON / "mesh_io" / "baked.py", ADDON / "mesh_io" / "weights.py", ADDON / "bake_job.py"]
 PAGE = ROOT / "docs" / "TROUBLESHOOTING.md"
 SHORTEST_FRAGMENT = 8  # characters: shorter literal pieces ("object '", ": ") say nothing alone
 
