@@ -11,6 +11,7 @@ import sys
 
 import pytest
 
+from boxmarch.cli import TERMINATING_SIGNALS
 from boxmarch.formats import files
 from tests.gltf_reader import read_glb
 from tests.helpers.blender_program import SCRIPTS, module_environment, run_module
@@ -122,15 +123,19 @@ def test_a_name_longer_than_255_bytes_is_refused(baked_blend, tmp_path):
     assert os.listdir(tmp_path) == ["world.blend"]
 
 
+@pytest.mark.parametrize("name", [signal.Signals(signum).name for signum in TERMINATING_SIGNALS])
 @pytest.mark.slow
-def test_sigint_during_the_fbx_export_exits_130_and_leaves_no_file(baked_blend, tmp_path):
-    r = subprocess.run([sys.executable, str(SCRIPTS / "interrupted_fbx_export.py"), "export", str(baked_blend),
+def test_a_terminating_signal_during_the_fbx_export_leaves_no_file(baked_blend, tmp_path, name):
+    """Each signal that would end the process (Ctrl-C, a closed terminal, a service manager's
+    stop, ...) exits 128 + its number, with no temporary file left and the report written."""
+    r = subprocess.run([sys.executable, str(SCRIPTS / "interrupted_fbx_export.py"), name, "export", str(baked_blend),
                         "--preset", "UNITY", "--to", "w.fbx", "--json", "r.json"], cwd=tmp_path,
                        env=module_environment(tmp_path), capture_output=True, text=True, timeout=240)
-    assert r.returncode == 128 + signal.SIGINT, r.stderr
-    assert last_line(r).startswith("boxmarch: interrupted:") and "Traceback" not in last_line(r), r.stderr
+    code = 128 + getattr(signal, name)
+    assert r.returncode == code, r.stderr
+    assert last_line(r).startswith(f"boxmarch: interrupted: stopped by {name},"), r.stderr
     assert sorted(os.listdir(tmp_path)) == ["r.json", "world.blend"]
-    assert json.loads((tmp_path / "r.json").read_text())["exit_code"] == 130
+    assert json.loads((tmp_path / "r.json").read_text())["exit_code"] == code
 
 
 @pytest.mark.slow

@@ -10,7 +10,8 @@ objects named with --objects, or on every mesh object of the file. --out writes 
 new .blend, --json a machine-readable report; both appear only complete (written under a
 temporary name, then renamed). Progress goes to stderr, the result table to stdout (Blender's
 own prints are held back). Exit codes: 0 success, 2 bad arguments or input (one line saying why),
-130 interrupted, 1 internal error. docs/CLI.md has the reference.
+128 + the signal's number when a signal stopped it (130 for Ctrl-C, 143 for SIGTERM), 1 internal
+error. docs/CLI.md has the reference.
 
 This module only parses, checks and reports: every step runs the same job function as the
 add-on's operator (bake_job.bake_meshes, tool_jobs.run_tool, export.scene.export_objects).
@@ -55,7 +56,7 @@ def _write_json(path: str, report: dict) -> None:
 
     def write(temp):
         with open(temp, "w") as f:
-            json.dump(report, f, indent=2, default=float)
+            json.dump(report, f, indent=2, default=float, allow_nan=False)
     files.write_atomically(path, write)
 
 
@@ -314,31 +315,53 @@ def _blender_stdout_held_back():
     return blender_output.stdout_held_back(lambda line: _progress(f"Blender: {line}"))
 
 
+# Signals that end a process unless handled, sent from outside (a terminal closing, a job
+# control, a service manager, a CPU-time limit): each stops the run as Ctrl-C does, with every
+# temporary file removed. Synchronous faults (SIGSEGV, SIGBUS, ...) and SIGKILL cannot be handled.
+TERMINATING_SIGNALS = tuple(getattr(signal, name) for name in (
+    "SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT", "SIGUSR1", "SIGUSR2", "SIGALRM", "SIGVTALRM", "SIGPROF",
+    "SIGXCPU", "SIGPWR", "SIGIO") if hasattr(signal, name))
+
+
 @contextlib.contextmanager
 def _interrupts_recorded(interrupts: list):
-    """While the body runs, a SIGINT is recorded in ``interrupts`` (and raises KeyboardInterrupt
-    as Python's own handler does): Blender's operators turn an exception inside them into a
-    RuntimeError, which must still end the run as interrupted."""
-    def on_interrupt(signum, _frame):
+    """While the body runs, a terminating signal (TERMINATING_SIGNALS) is recorded in
+    ``interrupts`` and raises KeyboardInterrupt, as Python's own SIGINT handler does: Blender's
+    operators turn an exception inside them into a RuntimeError, which must still end the run as
+    interrupted. A file-size limit (SIGXFSZ, which would end the process with the temporary file
+    left) is ignored meanwhile, so the write fails with an error the writers clean up after."""
+    def on_signal(signum, _frame):
         interrupts.append(signum)
         raise KeyboardInterrupt
 
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.signal(signal.SIGINT, on_interrupt)
+    previous = {signum: signal.signal(signum, on_signal) for signum in TERMINATING_SIGNALS}
+    if hasattr(signal, "SIGXFSZ"):
+        previous[signal.SIGXFSZ] = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
     try:
         yield
     finally:
         # None: the Blender program's own C handler, which Python cannot put back; the default
-        # (end the process) is what a background Blender does on SIGINT.
-        signal.signal(signal.SIGINT, signal.SIG_DFL if previous is None else previous)
+        # (end the process) is what a background Blender does on such a signal.
+        for signum, handler in previous.items():
+            signal.signal(signum, signal.SIG_DFL if handler is None else handler)
+
+
+def _interrupted_code(interrupts) -> tuple[int, str]:
+    """(exit code, message) of a run stopped by the signal ``interrupts[0]`` (Ctrl-C where none
+    was recorded: a KeyboardInterrupt outside the handler): 128 + the signal's number, as a
+    shell reports a process the signal ended."""
+    signum = interrupts[0] if interrupts else signal.SIGINT
+    return 128 + signum, (f"boxmarch: interrupted: stopped by {signal.Signals(signum).name}, each output is either "
+                          "complete or not written (no partial file is left)")
 
 
 def run(argv=None) -> int:
-    """Run one command; returns the exit code (0; 2 bad input; 130 interrupted; 1 internal
-    error). ``argv`` None: the process's arguments; inside the Blender program those after
-    its first ``--`` (Blender's own come before it)."""
+    """Run one command; returns the exit code (0; 2 bad input; 128 + the signal's number when
+    stopped by one, 130 for Ctrl-C; 1 internal error). ``argv`` None: the process's arguments;
+    inside the Blender program those after its first ``--`` (Blender's own come before it)."""
     if argv is None:
         argv = sys.argv[1:]
         if _in_blender_program():
@@ -355,8 +378,7 @@ def run(argv=None) -> int:
             return args.run(args)
     except (Exception, KeyboardInterrupt) as error:
         if interrupts or isinstance(error, KeyboardInterrupt):
-            code, message = 130, ("boxmarch: interrupted: stopped, each output is either complete or not written "
-                                  "(no partial file is left)")
+            code, message = _interrupted_code(interrupts)
         elif isinstance(error, InputError):
             code, message = 2, f"boxmarch: error: {error}"
         else:  # internal error: one line, exit 1

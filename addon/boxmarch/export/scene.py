@@ -13,7 +13,7 @@ import numpy as np
 
 from .. import edit_mode, mesh_io
 from ..formats import files, layouts
-from . import boxes, outputs_of
+from . import boxes, outputs_of, path_problem
 from ..formats import fbx, glb, godot, import_settings, sidecar, transforms, presets
 from .boxes import ExportInputError, baked_layers
 
@@ -138,6 +138,9 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     preset = presets.PRESETS.get(preset_name)
     if preset is None:
         raise ExportInputError(f"preset must be one of {sorted(presets.PRESETS)}, got {preset_name!r}")
+    problem = path_problem(filepath, preset.name)
+    if problem:
+        raise ExportInputError(problem)
     if layout is not None and layout not in preset.layouts:
         raise ExportInputError(f"{preset.label} carries the layouts {', '.join(preset.layouts)}, not {layout}")
     objects = list({ob.name_full: ob for ob in objects}.values())  # each object once
@@ -188,14 +191,11 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             stats, table, notes = _export_with_copies(context, objects, meshes, preset, layout, temp, skins)
             warnings.extend(notes)
             if table_file and layouts.LAYOUTS[layout].table_format == "godot3_tres":
-                with open(temps[table_file], "w") as f:
-                    f.write(godot.image_texture_tres(table))
+                godot.write_image_texture_tres(temps[table_file], table)
             elif table_file:
-                with open(temps[table_file], "wb") as f:
-                    f.write(godot.table_bin(table))
+                files.write_bytes(temps[table_file], godot.table_bin(table))
         if preset.writes_godot3_import:
-            with open(temps[import_settings.godot3_import_path(outputs[0])], "w") as f:
-                f.write(import_settings.godot3_import_text())
+            files.write_bytes(temps[import_settings.godot3_import_path(outputs[0])], import_settings.godot3_import_text())
         _write_sidecar(temps[sidecar.sidecar_path(outputs[0])], preset, layout, filepath, stats, skins)
         return stats
 
@@ -234,6 +234,10 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': {m['stale_boxes']} of {m['boxes']} boxes changed shape since the bake, "
                             "so the file's offsets and frames are stale and decode off: run Bake Box Frames again, "
                             "then export")
+        if m.get("stale_parents"):
+            warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': {m['stale_parents']} of {m['boxes']} boxes "
+                            "name parents that no box holds since the bake (boxes deleted or added, meshes joined): "
+                            "the file makes them roots: run Bake Box Frames again for their parents, then export")
     default_errors = [m["default_import_error"] for m in stats if "default_import_error" in m]
     if default_errors:
         warnings.append(f"with {preset.label}'s default import settings ({preset.default_import_loss}) the decode error is "
@@ -248,15 +252,15 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             "objects": [ob.name for ob in objects], "meshes": stats, "seconds": time.perf_counter() - start,
             "warnings": warnings, "import_settings": preset.import_settings,
             "transform_error": max((s["transform_error"] for s in stats), default=0.0),
-            "stale_boxes": sum(s.get("stale_boxes", 0) for s in stats)}
+            "stale_boxes": sum(s.get("stale_boxes", 0) for s in stats),
+            "stale_parents": sum(s.get("stale_parents", 0) for s in stats)}
 
 
 def _write_sidecar(path, preset, layout, filepath, stats, skins) -> None:
     """Writes the sidecar (formats/sidecar.py) of an export to ``path``."""
     text = json.dumps(sidecar.describe(preset, layout, filepath, stats, _skin_summary(skins),
                                        file_channel_names(preset, layout)), indent=2, allow_nan=False)
-    with open(path, "w") as f:
-        f.write(text + "\n")
+    files.write_bytes(path, text + "\n")
 
 
 def _skin_summary(skins) -> dict:

@@ -32,6 +32,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import files
+
 MAGIC = b"Kaydara FBX Binary  \x00\x1a\x00"
 FOOTER_MAGIC = bytes.fromhex("f85a8c6adef5d97eece90ce3758f290b")
 WIDE_VERSION = 7500  # from this version, record headers hold uint64 fields
@@ -77,10 +79,11 @@ def read(path) -> Document:
 
 
 def write(path, document: Document) -> None:
-    """Write ``document`` to ``path`` in one write, once every byte of it is encoded."""
+    """Write ``document`` to ``path`` once every byte of it is encoded, atomically
+    (files.write_atomically: a failed write, a full disk or a file-size limit, leaves ``path`` as
+    it was)."""
     data = encode(document)
-    with open(path, "wb") as f:
-        f.write(data)
+    files.write_atomically(path, lambda temp: files.write_bytes(temp, data))
 
 
 def decode(data: bytes) -> Document:

@@ -54,3 +54,10 @@ def write_atomically(path: str, write) -> str:
     write_together([path], lambda temps: write(temps[path]))
     return path
 
+
+
+def write_bytes(path: str, data) -> None:
+    """Write ``data`` (bytes or str) to ``path`` in place: the body of a write_atomically or
+    write_together callback, given its temporary path."""
+    with open(path, "wb" if isinstance(data, (bytes, bytearray, memoryview)) else "w") as f:
+        f.write(data)
