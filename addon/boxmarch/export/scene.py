@@ -328,12 +328,15 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
             ob = owner_of_mesh[mesh.as_pointer()]
             data, corner_verts, mesh_stats, origins = box_data[mesh.as_pointer()]
             copy, channels = _target_copy(mesh, preset, layout, data, corner_verts, mesh_stats, skins.get(ob.name))
+            copies[mesh.as_pointer()] = copy  # removed in the finally below, whatever happens next
             if "TABLE" in channels:
                 tables.append(channels.pop("TABLE"))
             name = mesh.name
-            mesh.name = name + ".boxmarch-original"
+            if mesh.library is None:  # a linked mesh cannot be renamed, nor does its copy need it:
+                mesh.name = name + ".boxmarch-original"  # the copy is local, a name of its own
+                originals[name] = mesh
             copy.name = name  # the file names the mesh as the artist did
-            copies[mesh.as_pointer()], originals[name] = copy, mesh
+            name = copy.name  # (a local mesh of a linked one's name keeps it: the copy then gets another)
             file_channels[name], file_corners[name] = channels, corner_verts
             truths[name] = (origins, mesh_stats)
             stats.append(mesh_stats)
