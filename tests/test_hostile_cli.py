@@ -11,7 +11,6 @@ import sys
 
 import pytest
 
-from boxmarch.cli import TERMINATING_SIGNALS
 from boxmarch.formats import files
 from tests.gltf_reader import read_glb
 from tests.helpers.blender_program import SCRIPTS, module_environment, run_module
@@ -123,7 +122,18 @@ def test_a_name_longer_than_255_bytes_is_refused(baked_blend, tmp_path):
     assert os.listdir(tmp_path) == ["world.blend"]
 
 
-@pytest.mark.parametrize("name", [signal.Signals(signum).name for signum in TERMINATING_SIGNALS])
+# Signals that end a process unless handled, which someone else sends (docs/CLI.md).
+TERMINATING = ["SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT", "SIGUSR1", "SIGUSR2", "SIGALRM", "SIGVTALRM", "SIGPROF",
+               "SIGXCPU", "SIGPWR", "SIGIO"]
+
+
+def test_the_command_line_handles_every_terminating_signal():
+    from boxmarch.cli import TERMINATING_SIGNALS
+
+    assert sorted(signal.Signals(s).name for s in TERMINATING_SIGNALS) == sorted(TERMINATING)
+
+
+@pytest.mark.parametrize("name", TERMINATING)
 @pytest.mark.slow
 def test_a_terminating_signal_during_the_fbx_export_leaves_no_file(baked_blend, tmp_path, name):
     """Each signal that would end the process (Ctrl-C, a closed terminal, a service manager's

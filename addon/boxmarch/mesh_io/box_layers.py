@@ -90,10 +90,6 @@ def _reduce(mesh, name, submesh_of_vertex, count, face_starts, corner_verts, dis
     if read is None:
         return None
     values, domain = read
-    if not np.isfinite(values).all():  # a FLOAT attribute may hold them: the files must not
-        bad = np.flatnonzero(~np.isfinite(values).all(axis=1))
-        raise BoxLayerError(f"mesh '{mesh.name}': attribute '{name}' holds {values[bad[0]].tolist()} at "
-                            f"{domain.lower()} {int(bad[0])} ({len(bad)} not finite in all): give finite numbers")
     whole = values.dtype == np.int32
     if whole:  # each int32 as its two 16-bit halves, both exact in float32: the same majority, every bit kept
         values = np.concatenate([values >> 16, values & 0xFFFF], 1).astype(np.float32)
