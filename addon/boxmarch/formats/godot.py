@@ -66,18 +66,31 @@ def write_image_texture_tres(path, table) -> None:
                 f'[resource]\nflags = 0\nimage = SubResource( 1 )\nsize = Vector2( {width}, {height} )\n'.encode())
 
 
-# Each byte value's text and separator, "0, " .. "255, ", left-aligned in 5 bytes, and which of
-# the 5 it uses: _decimal_list gathers the rows of a chunk's bytes and keeps the used ones.
+# Each byte value's text and separator, "0, " .. "255, ", left-aligned in 5 bytes (zeros after);
+# and each pair of bytes' texts one after the other in 10: _decimal_list gathers the rows of a
+# chunk's byte pairs and keeps the non-zero bytes (half as many rows as bytes: faster).
 _BYTE_TEXT = np.array([list(f"{v}, ".encode().ljust(5, b"\0")) for v in range(256)], np.uint8)
-_BYTE_TEXT_USED = _BYTE_TEXT != 0
+
+
+def _pair_text() -> np.ndarray:
+    pairs = np.zeros((256, 256, 10), np.uint8)
+    pairs[:, :, :5] = _BYTE_TEXT[:, None, :]
+    for length in (3, 4, 5):  # the first text's length: the second follows it
+        pairs[(_BYTE_TEXT != 0).sum(axis=1) == length, :, length:length + 5] = _BYTE_TEXT
+    return pairs.reshape(65536, 10)
+
+
+_PAIR_TEXT = _pair_text()
 
 
 def _decimal_list(values, last: bool) -> bytes:
     """ASCII of the bytes ``values`` as decimal numbers, each followed by ", " but the very last
     (``last``: this chunk ends the list): what ", ".join(map(str, values)) gives, without a
     Python string per byte."""
-    text = _BYTE_TEXT[values][_BYTE_TEXT_USED[values]]
-    return text[:-2].tobytes() if last and len(text) else text.tobytes()
+    even = len(values) - len(values) % 2
+    rows = [_PAIR_TEXT[values[:even].view(">u2")], _BYTE_TEXT[values[even:]]]
+    text = b"".join(row[row != 0].tobytes() for row in rows)
+    return text[:-2] if last else text
 
 
 def table_bin(table) -> bytes:
