@@ -383,6 +383,19 @@ def test_deleting_a_box_of_a_baked_chain_keeps_the_others_parents(blender, tmp_p
     assert any("1 of 5 boxes name parents that no box holds since the bake" in w for w in report["warnings"])
 
 
+def test_removing_a_duplicate_box_after_a_chain_bake_keeps_every_parent(blender, tmp_path):
+    """Keys 0, 1, 1, 2, 3 (box 2 a copy of box 1), CHAIN; Delete Duplicate Submeshes removes one
+    copy without a re-bake: the boxes after it keep their parents under the new numbers."""
+    ob = _row(blender, "Chain", [0, 1, 1, 2, 3])
+    assert blender.ops.boxmarch.bake(hierarchy="CHAIN") == {"FINISHED"}
+    assert blender.ops.boxmarch.dedup_submeshes() == {"FINISHED"}
+    report, boxes = _export_parents(blender, tmp_path, [ob])
+    index = {key: row[0] for key, row in boxes.items()}
+    assert {key: row[1:] for key, row in boxes.items()} == {0: (-1, 0), 1: (index[0], 1), 2: (index[1], 2),
+                                                            3: (index[2], 3)}
+    assert report["stale_parents"] == 0 and not any("parents" in w for w in report["warnings"])
+
+
 def test_joining_two_baked_objects_writes_no_parent_of_the_other_mesh(blender, tmp_path):
     a = _row(blender, "A", [0, 1, 2])
     _row(blender, "B", [10, 11, 12])
