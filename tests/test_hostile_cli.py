@@ -128,7 +128,7 @@ TERMINATING = ["SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT", "SIGUSR1", "SIGUSR2", "
 
 
 def test_the_command_line_handles_every_terminating_signal():
-    from boxmarch.cli import TERMINATING_SIGNALS
+    from boxmarch.formats.files import TERMINATING_SIGNALS
 
     assert sorted(signal.Signals(s).name for s in TERMINATING_SIGNALS) == sorted(TERMINATING)
 

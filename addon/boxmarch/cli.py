@@ -18,17 +18,16 @@ add-on's operator (bake_job.bake_meshes, tool_jobs.run_tool, export.scene.export
 """
 from __future__ import annotations
 
-import contextlib
 import json
 import math
 import os
 import signal
 import sys
-import threading
 import time
 
 from . import ensure_registered
 from .cli_args import InputError, build_parser, check_outputs, run_outputs
+from .formats import files
 
 PIPELINE_STEPS = ("dedup", "merge", "bake", "pack-uv", "export")
 # The tool each cleanup command runs (a tool_jobs class name), its operator (whose properties
@@ -52,8 +51,6 @@ def _table(headers, rows) -> str:
 
 
 def _write_json(path: str, report: dict) -> None:
-    from .formats import files
-
     def write(temp):
         with open(temp, "w") as f:
             json.dump(report, f, indent=2, default=float, allow_nan=False)
@@ -315,40 +312,6 @@ def _blender_stdout_held_back():
     return blender_output.stdout_held_back(lambda line: _progress(f"Blender: {line}"))
 
 
-# Signals that end a process unless handled, sent from outside (a terminal closing, a job
-# control, a service manager, a CPU-time limit): each stops the run as Ctrl-C does, with every
-# temporary file removed. Synchronous faults (SIGSEGV, SIGBUS, ...) and SIGKILL cannot be handled.
-TERMINATING_SIGNALS = tuple(getattr(signal, name) for name in (
-    "SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT", "SIGUSR1", "SIGUSR2", "SIGALRM", "SIGVTALRM", "SIGPROF",
-    "SIGXCPU", "SIGPWR", "SIGIO") if hasattr(signal, name))
-
-
-@contextlib.contextmanager
-def _interrupts_recorded(interrupts: list):
-    """While the body runs, a terminating signal (TERMINATING_SIGNALS) is recorded in
-    ``interrupts`` and raises KeyboardInterrupt, as Python's own SIGINT handler does: Blender's
-    operators turn an exception inside them into a RuntimeError, which must still end the run as
-    interrupted. A file-size limit (SIGXFSZ, which would end the process with the temporary file
-    left) is ignored meanwhile, so the write fails with an error the writers clean up after."""
-    def on_signal(signum, _frame):
-        interrupts.append(signum)
-        raise KeyboardInterrupt
-
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = {signum: signal.signal(signum, on_signal) for signum in TERMINATING_SIGNALS}
-    if hasattr(signal, "SIGXFSZ"):
-        previous[signal.SIGXFSZ] = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        # None: the Blender program's own C handler, which Python cannot put back; the default
-        # (end the process) is what a background Blender does on such a signal.
-        for signum, handler in previous.items():
-            signal.signal(signum, signal.SIG_DFL if handler is None else handler)
-
-
 def _interrupted_code(interrupts) -> tuple[int, str]:
     """(exit code, message) of a run stopped by the signal ``interrupts[0]`` (Ctrl-C where none
     was recorded: a KeyboardInterrupt outside the handler): 128 + the signal's number, as a
@@ -368,7 +331,7 @@ def run(argv=None) -> int:
             argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     args, interrupts = None, []
     try:
-        with _interrupts_recorded(interrupts):
+        with files.interrupts_recorded(interrupts):
             try:
                 runners = {"bake": cmd_bake, "dedup": cmd_cleanup, "merge": cmd_cleanup, "pack-uv": cmd_cleanup,
                            "export": cmd_export, "pipeline": cmd_pipeline, "demo": cmd_demo}
