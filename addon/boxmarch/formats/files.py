@@ -82,9 +82,7 @@ def interrupts_recorded(interrupts: list):
     """While the body runs (in the main thread), a terminating signal (TERMINATING_SIGNALS) is
     appended to ``interrupts`` and raises KeyboardInterrupt, as Python's own SIGINT handler does,
     so write_together removes its temporary files; Blender's operators turn an exception inside
-    them into a RuntimeError, and ``interrupts`` still tells the caller the run was stopped. A
-    file-size limit (SIGXFSZ, which would end the process with a temporary file left) is ignored
-    meanwhile, so the write fails with an error the writers clean up after."""
+    them into a RuntimeError, and ``interrupts`` still tells the caller the run was stopped."""
     def on_signal(signum, _frame):
         interrupts.append(signum)
         raise KeyboardInterrupt
@@ -93,8 +91,6 @@ def interrupts_recorded(interrupts: list):
         yield
         return
     previous = {signum: signal.signal(signum, on_signal) for signum in TERMINATING_SIGNALS}
-    if hasattr(signal, "SIGXFSZ"):
-        previous[signal.SIGXFSZ] = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
     try:
         yield
     finally:
