@@ -383,6 +383,21 @@ def test_deleting_a_box_of_a_baked_chain_keeps_the_others_parents(blender, tmp_p
     assert any("1 of 5 boxes name parents that no box holds since the bake" in w for w in report["warnings"])
 
 
+def test_a_bake_without_box_numbers_writes_no_self_parent_after_a_deletion(blender, tmp_path):
+    """A bake that stored no box numbers (.boxmarch_box, before they were stored): the deletion
+    above leaves boxes naming themselves, found by their stored depths; they become roots."""
+    ob = _row(blender, "Chain", range(6))
+    assert blender.ops.boxmarch.bake(hierarchy="CHAIN") == {"FINISHED"}
+    numbers = ob.data.attributes.get(".boxmarch_box")
+    if numbers is not None:
+        ob.data.attributes.remove(numbers)
+    _delete_box(ob.data, 2)
+    report, boxes = _export_parents(blender, tmp_path, [ob])
+    assert {key: row[1:] for key, row in boxes.items()} == {0: (-1, 0), 1: (boxes[0][0], 1), 3: (-1, 0),
+                                                            4: (-1, 0), 5: (-1, 0)}
+    assert report["stale_parents"] == 3
+
+
 def test_removing_a_duplicate_box_after_a_chain_bake_keeps_every_parent(blender, tmp_path):
     """Keys 0, 1, 1, 2, 3 (box 2 a copy of box 1), CHAIN; Delete Duplicate Submeshes removes one
     copy without a re-bake: the boxes after it keep their parents under the new numbers."""
