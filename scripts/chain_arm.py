@@ -12,30 +12,33 @@ LINK = np.array([0.46, 0.23, 0.06])    # link length, width, wire thickness
 BONE_TURN = math.radians(40.0)         # the pose: each joint bent this much about x
 
 
-def chain_geometry():
-    """(centres, rotations) of the links: along the helix, spaced at 0.78 of their length, each
-    turned 90 degrees about its own axis from the last (a chain); rotation columns: local x
-    (along the link), y, z."""
-    climb = ARM / (2 * math.pi * TURNS)
-    step = 0.78 * LINK[0] / math.hypot(RADIUS, climb)
+def chain_geometry(radius=RADIUS, turns=TURNS, link=LINK):
+    """(centres, rotations) of the links (length, width, thickness ``link``): along a helix of
+    ``radius`` and ``turns`` turns, spaced at 0.78 of their length, each turned 90 degrees about
+    its own axis from the last (a chain); rotation columns: along the link, across it, its
+    thickness (which the default bake need not make local x, y, z: the presets read the box's
+    axes by extent)."""
+    climb = ARM / (2 * math.pi * turns)
+    step = 0.78 * link[0] / math.hypot(radius, climb)
     t = step * np.arange(int(2 * math.pi * TURNS / step)) + 0.2
     t = t[climb * t < ARM - 0.2]
-    centres = np.column_stack([RADIUS * np.cos(t), RADIUS * np.sin(t), climb * t])
-    tangent = np.column_stack([-RADIUS * np.sin(t), RADIUS * np.cos(t), np.full(len(t), climb)])
+    centres = np.column_stack([radius * np.cos(t), radius * np.sin(t), climb * t])
+    tangent = np.column_stack([-radius * np.sin(t), radius * np.cos(t), np.full(len(t), climb)])
     tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
     radial = np.column_stack([np.cos(t), np.sin(t), np.zeros(len(t))])
     across = np.where((np.arange(len(t)) % 2)[:, None] == 0, radial, np.cross(tangent, radial))
     return centres, np.stack([tangent, np.cross(across, tangent), across], axis=2)
 
 
-def build(bpy, scene):
-    """The baked chain object (Armature modifier on the arm) and the arm, both at the origin.
-    Returns (chain object, arm object, link count)."""
+def build(bpy, scene, radius=RADIUS, turns=TURNS, link=LINK):
+    """The chain object (Armature modifier on the arm), baked with every default, and the arm, both
+    at the origin; the chain as chain_geometry makes it. Returns (chain object, arm object, link
+    count)."""
     from boxmarch import mesh_io, scenes
 
-    centres, rotations = chain_geometry()
+    centres, rotations = chain_geometry(radius, turns, link)
     positions, _edges, face_starts, face_sizes, corner_verts = scenes.box_arrays(
-        centres, np.tile(LINK, (len(centres), 1)), rotations)
+        centres, np.tile(link, (len(centres), 1)), rotations)
     chain = bpy.data.objects.new("chain", mesh_io.new_mesh("chain", positions, face_starts, face_sizes, corner_verts))
     scene.collection.objects.link(chain)
     chain.color = (0.85, 0.65, 0.3, 1.0)
@@ -59,7 +62,7 @@ def build(bpy, scene):
     for ob in scene.objects:
         ob.select_set(ob == chain)
     bpy.context.view_layer.objects.active = chain
-    assert bpy.ops.boxmarch.bake(sort_axes_by_extent=True) == {"FINISHED"}
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
     return chain, rig, len(centres)
 
 

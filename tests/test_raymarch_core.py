@@ -1,4 +1,6 @@
 """The CPU reference raymarcher (boxmarch.core.raymarch / render_boxes) against closed forms."""
+import itertools
+
 import numpy as np
 import pytest
 
@@ -28,6 +30,42 @@ def test_link_fills_its_box():
     d = core.sdf_distance("LINK", p, h)
     assert np.allclose(d[:2], 0.0, atol=1e-6)
     assert d[2] == pytest.approx(0.0, abs=1e-6)  # on the tube: ring 0.375, thickness 0.125
+
+
+@pytest.mark.parametrize("sdf", ["CAPSULE", "CYLINDER", "TORUS", "LINK", "BOX", "SPHERE", "ROUNDED_BOX"])
+def test_presets_read_the_box_axes_by_extent(sdf):
+    """A preset draws the same shape whichever local axis holds which extent: the distance at p in
+    a box of half-extents h equals the distance at p's components permuted with h's, for all six
+    orders (so a default bake, whose axis order is the frame's, draws what a sorted bake draws)."""
+    rng = np.random.default_rng(29)
+    h = np.array([1.0, 0.6, 0.2])
+    p = rng.uniform(-1.2, 1.2, (500, 3)).astype(np.float32)
+    sorted_distance = core.sdf_distance(sdf, p, h)
+    for order in itertools.permutations(range(3)):
+        order = list(order)
+        permuted = core.sdf_distance(sdf, np.ascontiguousarray(p[:, order]), h[order])
+        np.testing.assert_allclose(permuted, sorted_distance, atol=1e-6, err_msg=f"{sdf} axes {order}")
+
+
+def test_near_equal_extents_keep_their_axis_order():
+    """Two sides within 0.1% of each other count as equal and keep the order x, y, z, so boxes of
+    one shape baked with float noise read their axes alike: a 1 x 0.6 x 0.6 link box (long side
+    along local z) puts its ring across the first of the tied axes, local x, either way round the
+    noise falls (the ring's outer edge at x = 0.3 or 0.3002 is on the surface; its wire's side,
+    along y, is not)."""
+    for h in ([0.3, 0.3002, 0.5], [0.3002, 0.3, 0.5]):
+        points = np.array([[h[0], 0.0, 0.0], [0.0, h[1], 0.0]], np.float32)
+        d = core.sdf_distance("LINK", points, np.array(h))
+        assert d[0] == pytest.approx(0.0, abs=1e-6) and d[1] > 0.1, (h, d)
+
+
+def test_cylinder_stands_along_a_rod_and_across_a_disc():
+    """Closed forms: a rod's cylinder runs along its long axis, a disc's along its short one."""
+    cases = [([1.0, 0.2, 0.2], [1.3, 0.0, 0.0], 0.3), ([0.2, 1.0, 0.2], [0.0, 0.0, 0.5], 0.3),
+             ([1.0, 1.0, 0.1], [0.0, 0.0, 0.5], 0.4), ([0.1, 1.0, 1.0], [0.0, 1.2, 0.0], 0.2)]
+    for h, point, distance in cases:
+        d = core.sdf_distance("CYLINDER", np.array([point], np.float32), np.array(h))
+        assert d[0] == pytest.approx(distance, abs=1e-6), (h, point)
 
 
 def test_sphere_hits_match_ray_sphere_intersection():

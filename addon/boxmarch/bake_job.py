@@ -33,3 +33,19 @@ def report_totals(reports) -> dict:
     totals = {key: sum(r[key] for r in reports) for key in REPORT_TOTALS}
     totals["max_relative_error"] = max(r["max_relative_error"] for r in reports)
     return totals
+
+
+def not_box_warnings(reports) -> list[str]:
+    """One warning per baked mesh holding pieces that do not look like boxes (core.not_boxes):
+    each piece is drawn as one box holding one shape, so a modelled shape baked as it is draws
+    clipped to its own faces, and a shape made of loose pieces draws a fragment per piece."""
+    warnings = []
+    for r in reports:
+        example = r.get("not_box_example")
+        if example:
+            warnings.append(
+                f"mesh '{r['mesh']}': {r['not_boxes']:,} of its {r['submeshes']:,} pieces do not look like boxes "
+                f"(piece {example['submesh']}: {example['vertices']:,} vertices, {example['off_box']:.0%} of them "
+                "inside its bounding box, off its faces): each piece is drawn as one box holding one shape, so "
+                "model one box per shape, sized like the shape (docs/PREVIEW.md)")
+    return warnings

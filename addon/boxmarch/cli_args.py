@@ -90,10 +90,11 @@ def _export_options(p, required):
     p.add_argument("--to", required=required, metavar="PATH", help="file to export (.fbx, .glb or .blend)")
 
 
-def build_parser(description: str, runners: dict):
+def build_parser(description: str, runners: dict, version: str):
     """The parser of every command; ``runners`` = {command: the function that runs it}, set as
-    the parsed arguments' ``run``."""
+    the parsed arguments' ``run``; ``version``: what --version prints."""
     parser = _Parser(prog="boxmarch", description=description)
+    parser.add_argument("--version", action="version", version=version)
     commands = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     p = commands.add_parser("bake", help="bake box frames")
     _target_options(p)

@@ -27,7 +27,7 @@ from .core_tools import (  # noqa: F401 (re-exported: the submesh tools are part
     select_linked_across, select_linked_submeshes, weld)
 from .core_boxes import (  # noqa: F401 (re-exported: per-box parameters and hierarchy are part of this API)
     HIERARCHY_RULES, PARAM_NAMES, box_fingerprints, box_hierarchy, box_random, dominant_per_submesh, nearest_rows,
-    parents_by_bone, preset_of_shape, reduce_per_submesh, render_boxes_by_shape)
+    not_boxes, parents_by_bone, preset_of_shape, reduce_per_submesh, render_boxes_by_shape)
 from .native import _core, checked_indices, checked_int, checked_mask, row_count
 
 ORIGIN_MODES = ("BOUNDS", "MEAN")

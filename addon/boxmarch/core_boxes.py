@@ -14,6 +14,42 @@ HIERARCHY_RULES = ("ATTRIBUTE", "CONTAINMENT", "CHAIN", "BONES")
 _RULE_CODES = {"ATTRIBUTE": 0, "CONTAINMENT": 1, "CHAIN": 2, "BONES": 0}
 
 
+# A vertex lies on its box when it is within this share of the box's size along a local axis of
+# one of the two faces across that axis; a piece with more vertices than a box's 8 and more than
+# NOT_BOX_SHARE of them off its box does not look like a box (the bake warns).
+ON_BOX_TOLERANCE = 0.05
+NOT_BOX_SHARE = 0.25
+
+
+def not_boxes(positions, submesh_of_vertex, quaternions):
+    """(not_box bool (S,), off_box float64 (S,)): per submesh of more than 8 vertices, the share of
+    its vertices off its box (the bounds of its vertices in its baked frame, ``quaternions`` (S, 4)
+    x, y, z, w; 0 for a submesh of 8 vertices or fewer, which is never reported) and whether more
+    than NOT_BOX_SHARE of them are. A box has none off, its faces cut into a grid or not, as has a
+    box with one-segment bevels; a modelled torus, sphere or chain link has most of its vertices
+    inside its bounding box. Costs nothing on meshes of 8-vertex boxes."""
+    from .core import rotate_vector
+
+    sub = np.asarray(submesh_of_vertex, np.int64)
+    q = np.asarray(quaternions, np.float64).reshape(-1, 4)
+    counts = np.bincount(sub, minlength=len(q))
+    off = np.zeros(len(q))
+    checked = np.flatnonzero((counts > 8)[sub])
+    if len(checked):
+        sub = sub[checked]
+        local = rotate_vector(np.asarray(positions, np.float64)[checked], q[sub] * (-1.0, -1.0, -1.0, 1.0))
+        order = np.argsort(sub, kind="stable")
+        grouped = sub[order]
+        starts = np.flatnonzero(np.r_[True, grouped[1:] != grouped[:-1]])
+        lo, hi = np.zeros((len(q), 3)), np.zeros((len(q), 3))
+        lo[grouped[starts]] = np.minimum.reduceat(local[order], starts)
+        hi[grouped[starts]] = np.maximum.reduceat(local[order], starts)
+        tolerance = ON_BOX_TOLERANCE * (hi - lo)[sub]
+        on_box = ((local - lo[sub] <= tolerance) | (hi[sub] - local <= tolerance)).any(axis=1)
+        off = np.bincount(sub, weights=~on_box, minlength=len(q)) / np.maximum(counts, 1)
+    return off > NOT_BOX_SHARE, off
+
+
 def reduce_per_submesh(values, submesh_of_element, submesh_count):
     """One value tuple per submesh from per-element ``values`` ((E,) or (E, k), k <= 4) and
     ``submesh_of_element`` (E,): the tuple most of the submesh's elements hold (ties: the one of

@@ -10,10 +10,10 @@ _SDF_DESCRIPTIONS = {
     "BOX": "The submesh's own box (matches the rasterised mesh)",
     "SPHERE": "Largest sphere inside the box, centred at its origin",
     "ROUNDED_BOX": "The box with edges rounded by a quarter of its smallest half-extent",
-    "CAPSULE": "Capsule along local X, as thick as the box allows",
-    "CYLINDER": "Cylinder along local Z filling the box",
-    "TORUS": "Ring around local Z filling the box's XY extent",
-    "LINK": "Chain link stretched along local X, thickness along Z (bake with Sort Axes by Extent)",
+    "CAPSULE": "Capsule along the box's longest side, as thick as the box allows",
+    "CYLINDER": "Cylinder filling the box: along its longest side for a rod, across its shortest for a disc",
+    "TORUS": "Ring around the box's shortest side, as wide as its middle one",
+    "LINK": "Chain link along the box's longest side, ring across its middle one, wire along its shortest",
 }
 SDF_ITEMS = [(name, name.replace("_", " ").title(), _SDF_DESCRIPTIONS[name], i)
              for i, name in enumerate(core.SDF_PRESETS)]

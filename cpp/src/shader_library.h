@@ -111,7 +111,30 @@ inline vec3 op_repeat_limited(vec3 p, vec3 spacing, vec3 limit)
   return p - spacing * glm::clamp(glm::floor(p / spacing + 0.5f), -limit, limit);
 }
 
-// ---- presets of the preview's SDF menu, sized by the box
+// v with its components in the order that sorts h from the largest to the smallest: called with
+// v = p it gives the point, with v = h the sorted half-extents. A later axis moves ahead only when
+// its extent is more than 0.1% larger (the bake's tie band), so near-equal extents keep the order
+// x, y, z and all boxes of one shape read their axes alike. The order depends on h alone, one
+// permutation per box, so a preset that is exact on the sorted axes stays exact.
+inline vec3 bm_by_extent(vec3 v, vec3 h)
+{
+  vec3 s = h;
+  vec3 r = v;
+  if (s.y > 1.001f * s.x) {
+    s = vec3(s.y, s.x, s.z);
+    r = vec3(r.y, r.x, r.z);
+  }
+  if (s.z > 1.001f * s.y) {
+    s = vec3(s.x, s.z, s.y);
+    r = vec3(r.x, r.z, r.y);
+  }
+  if (s.y > 1.001f * s.x) {
+    s = vec3(s.y, s.x, s.z);
+    r = vec3(r.y, r.x, r.z);
+  }
+  return r;
+}
+
 // Exact.
 inline float sdf_preset_box(vec3 p, vec3 h) { return sd_box(p, h); }
 
@@ -121,29 +144,46 @@ inline float sdf_preset_sphere(vec3 p, vec3 h) { return sd_sphere(p, bm_min3(h))
 // Exact.
 inline float sdf_preset_rounded_box(vec3 p, vec3 h) { return sd_round_box(p, h, 0.25f * bm_min3(h)); }
 
-// Exact.
+// Exact. Along the box's longest axis, radius its smallest half-extent.
 inline float sdf_preset_capsule(vec3 p, vec3 h)
 {
-  float r = glm::min(h.y, h.z);
-  float a = glm::max(h.x - r, 0.0f);
-  return sd_capsule(p, vec3(-a, 0.0f, 0.0f), vec3(a, 0.0f, 0.0f), r);
+  vec3 q = bm_by_extent(p, h);
+  vec3 s = bm_by_extent(h, h);
+  float r = glm::min(s.y, s.z);
+  float a = glm::max(s.x - r, 0.0f);
+  return sd_capsule(q, vec3(-a, 0.0f, 0.0f), vec3(a, 0.0f, 0.0f), r);
 }
 
-// Exact.
-inline float sdf_preset_cylinder(vec3 p, vec3 h) { return sd_cylinder(p, glm::min(h.x, h.y), h.z); }
+// Exact. Along the box's longest axis where that holds the larger cylinder (a rod: longest x
+// smallest > middle^2), else along its shortest axis (a disc); a cube's stands along local z.
+inline float sdf_preset_cylinder(vec3 p, vec3 h)
+{
+  vec3 q = bm_by_extent(p, h);
+  vec3 s = bm_by_extent(h, h);
+  if (s.x * s.z > s.y * s.y) {
+    q = vec3(q.y, q.z, q.x);
+    s = vec3(s.y, s.z, s.x);
+  }
+  return sd_cylinder(q, glm::min(s.x, s.y), s.z);
+}
 
-// Exact.
+// Exact. Around the box's shortest axis, as wide as its middle half-extent.
 inline float sdf_preset_torus(vec3 p, vec3 h)
 {
-  float minor = glm::min(h.z, 0.5f * glm::min(h.x, h.y));
-  return sd_torus(p, glm::min(h.x, h.y) - minor, minor);
+  vec3 q = bm_by_extent(p, h);
+  vec3 s = bm_by_extent(h, h);
+  float minor = glm::min(s.z, 0.5f * glm::min(s.x, s.y));
+  return sd_torus(q, glm::min(s.x, s.y) - minor, minor);
 }
 
-// Exact.
+// Exact. Stretched along the box's longest axis, the ring across its middle one, the thickness
+// along its shortest.
 inline float sdf_preset_link(vec3 p, vec3 h)
 {
-  float thickness = glm::min(h.z, 0.25f * glm::min(h.x, h.y));
-  return sd_link(vec3(p.y, p.x, p.z), glm::max(h.x - h.y, 0.0f), h.y - thickness, thickness);
+  vec3 q = bm_by_extent(p, h);
+  vec3 s = bm_by_extent(h, h);
+  float thickness = glm::min(s.z, 0.25f * glm::min(s.x, s.y));
+  return sd_link(vec3(q.y, q.x, q.z), glm::max(s.x - s.y, 0.0f), s.y - thickness, thickness);
 }
 
 // q v q* for a unit quaternion q; bm_rotate_vector(v, bm_quat_conjugate(q)) is the inverse

@@ -222,33 +222,72 @@ vec3 op_repeat_limited(vec3 p, vec3 spacing, vec3 limit)
 {
   return p - spacing * clamp(floor(p / spacing + 0.5), -limit, limit);
 }
-// ---- presets of the preview's SDF menu, sized by the box
+// v with its components in the order that sorts h from the largest to the smallest: called with
+// v = p it gives the point, with v = h the sorted half-extents. A later axis moves ahead only when
+// its extent is more than 0.1% larger (the bake's tie band), so near-equal extents keep the order
+// x, y, z and all boxes of one shape read their axes alike. The order depends on h alone, one
+// permutation per box, so a preset that is exact on the sorted axes stays exact.
+vec3 bm_by_extent(vec3 v, vec3 h)
+{
+  vec3 s = h;
+  vec3 r = v;
+  if (s.y > 1.001 * s.x) {
+    s = s.yxz;
+    r = r.yxz;
+  }
+  if (s.z > 1.001 * s.y) {
+    s = s.xzy;
+    r = r.xzy;
+  }
+  if (s.y > 1.001 * s.x) {
+    s = s.yxz;
+    r = r.yxz;
+  }
+  return r;
+}
 // Exact.
 float sdf_preset_box(vec3 p, vec3 h) { return sd_box(p, h); }
 // Exact.
 float sdf_preset_sphere(vec3 p, vec3 h) { return sd_sphere(p, bm_min3(h)); }
 // Exact.
 float sdf_preset_rounded_box(vec3 p, vec3 h) { return sd_round_box(p, h, 0.25 * bm_min3(h)); }
-// Exact.
+// Exact. Along the box's longest axis, radius its smallest half-extent.
 float sdf_preset_capsule(vec3 p, vec3 h)
 {
-  float r = min(h.y, h.z);
-  float a = max(h.x - r, 0.0);
-  return sd_capsule(p, vec3(-a, 0.0, 0.0), vec3(a, 0.0, 0.0), r);
+  vec3 q = bm_by_extent(p, h);
+  vec3 s = bm_by_extent(h, h);
+  float r = min(s.y, s.z);
+  float a = max(s.x - r, 0.0);
+  return sd_capsule(q, vec3(-a, 0.0, 0.0), vec3(a, 0.0, 0.0), r);
 }
-// Exact.
-float sdf_preset_cylinder(vec3 p, vec3 h) { return sd_cylinder(p, min(h.x, h.y), h.z); }
-// Exact.
+// Exact. Along the box's longest axis where that holds the larger cylinder (a rod: longest x
+// smallest > middle^2), else along its shortest axis (a disc); a cube's stands along local z.
+float sdf_preset_cylinder(vec3 p, vec3 h)
+{
+  vec3 q = bm_by_extent(p, h);
+  vec3 s = bm_by_extent(h, h);
+  if (s.x * s.z > s.y * s.y) {
+    q = q.yzx;
+    s = s.yzx;
+  }
+  return sd_cylinder(q, min(s.x, s.y), s.z);
+}
+// Exact. Around the box's shortest axis, as wide as its middle half-extent.
 float sdf_preset_torus(vec3 p, vec3 h)
 {
-  float minor = min(h.z, 0.5 * min(h.x, h.y));
-  return sd_torus(p, min(h.x, h.y) - minor, minor);
+  vec3 q = bm_by_extent(p, h);
+  vec3 s = bm_by_extent(h, h);
+  float minor = min(s.z, 0.5 * min(s.x, s.y));
+  return sd_torus(q, min(s.x, s.y) - minor, minor);
 }
-// Exact.
+// Exact. Stretched along the box's longest axis, the ring across its middle one, the thickness
+// along its shortest.
 float sdf_preset_link(vec3 p, vec3 h)
 {
-  float thickness = min(h.z, 0.25 * min(h.x, h.y));
-  return sd_link(p.yxz, max(h.x - h.y, 0.0), h.y - thickness, thickness);
+  vec3 q = bm_by_extent(p, h);
+  vec3 s = bm_by_extent(h, h);
+  float thickness = min(s.z, 0.25 * min(s.x, s.y));
+  return sd_link(q.yxz, max(s.x - s.y, 0.0), s.y - thickness, thickness);
 }
 // The SDF preset a shape id picks, sized by the box's half-extents h: the id rounded to the
 // nearest whole number indexes the presets in the preview's menu order (0 box, 1 sphere,

@@ -70,14 +70,19 @@ def _grow(mask, n):
     return mask
 
 
-def coverage_errors(covered, polygons, tol: int = 1):
-    """(stray, missing) (H, W) boolean masks: covered pixels farther than ``tol`` px from every
-    convex pixel-space polygon, and uncovered pixels deeper than ``tol`` px inside one."""
-    covered = np.asarray(covered, dtype=bool)
-    expected = np.zeros_like(covered)
-    for poly in polygons:
-        expected |= polygon_mask(covered.shape, poly)
+def mask_errors(covered, expected, tol: int = 1):
+    """(stray, missing) (H, W) boolean masks: ``covered`` pixels farther than ``tol`` px from
+    every ``expected`` pixel, and uncovered pixels deeper than ``tol`` px inside ``expected``."""
+    covered, expected = np.asarray(covered, dtype=bool), np.asarray(expected, dtype=bool)
     return covered & ~_grow(expected, tol), ~covered & ~_grow(~expected, tol)
+
+
+def coverage_errors(covered, polygons, tol: int = 1):
+    """:func:`mask_errors` against the union of convex pixel-space ``polygons``."""
+    expected = np.zeros(np.shape(covered), dtype=bool)
+    for poly in polygons:
+        expected |= polygon_mask(expected.shape, poly)
+    return mask_errors(covered, expected, tol)
 
 
 def coverage_mismatch(covered, polygons, tol: int = 1) -> Optional[str]:
@@ -87,7 +92,15 @@ def coverage_mismatch(covered, polygons, tol: int = 1) -> Optional[str]:
     Every covered pixel must lie within ``tol`` px of a polygon, and every pixel deeper than
     ``tol`` px inside one must be covered, so a shape drawn ``tol + 1`` px off fails.
     """
-    stray, missing = coverage_errors(covered, polygons, tol)
+    return _mismatch_message(*coverage_errors(covered, polygons, tol))
+
+
+def mask_mismatch(covered, expected, tol: int = 1) -> Optional[str]:
+    """:func:`coverage_mismatch` against an expected (H, W) boolean mask (a reference render)."""
+    return _mismatch_message(*mask_errors(covered, expected, tol))
+
+
+def _mismatch_message(stray, missing) -> Optional[str]:
     if not stray.any() and not missing.any():
         return None
     msg = []

@@ -238,10 +238,10 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': {m['stale_parents']} of {m['boxes']} boxes "
                             "name parents that no box holds since the bake (boxes deleted or added, meshes joined): "
                             "the file makes them roots: run Bake Box Frames again for their parents, then export")
+    # What the engine's default import would cost is not a warning: the export wrote what sets the
+    # import (NAME.glb.import for Godot 3; the sidecar the Unity and Unreal helpers read), and
+    # import_note says it once.
     default_errors = [m["default_import_error"] for m in stats if "default_import_error" in m]
-    if default_errors:
-        warnings.append(f"with {preset.label}'s default import settings ({preset.default_import_loss}) the decode error is "
-                        f"{max(default_errors):.1e} of the half-extent, not float32's: {preset.import_settings}")
     return {"preset": preset.name, "layout": layout, "path": os.path.abspath(filepath),
             "skinned": _skin_summary(skins),
             "default_import_error": max(default_errors) if default_errors else None,
@@ -254,6 +254,17 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             "transform_error": max((s["transform_error"] for s in stats), default=0.0),
             "stale_boxes": sum(s.get("stale_boxes", 0) for s in stats),
             "stale_parents": sum(s.get("stale_parents", 0) for s in stats)}
+
+
+def import_note(report) -> str:
+    """The import settings an export needs, and what the engine's default import would cost when
+    it differs: one line for the operator's report and the command line's table."""
+    preset = presets.PRESETS[report["preset"]]
+    note = preset.import_settings
+    if report["default_import_error"]:
+        note += (f" (the default import, {preset.default_import_loss}, would leave a decode error of "
+                 f"{report['default_import_error']:.1e} of the half-extent)")
+    return note
 
 
 def _write_sidecar(path, preset, layout, filepath, stats, skins) -> None:

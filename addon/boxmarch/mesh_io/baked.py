@@ -342,8 +342,14 @@ def prepare_bake(mesh, settings: BakeSettings, selected_only: bool = False) -> P
             settings.hierarchy, settings.random_seed, object_parameters(mesh))
     except BoxLayerError as error:
         raise BakeInputError(str(error)) from None
+    not_box, off_box = core.not_boxes(positions, result.submesh_of_vertex, result.quaternions)
+    not_box &= result.written.view(bool)  # the frames of the submeshes baked now
+    example = int(np.argmax(not_box))
     report = {
         "mesh": mesh.name, "submeshes": result.submesh_count, "baked": result.baked,
+        "not_boxes": int(not_box.sum()),
+        "not_box_example": {"submesh": example, "vertices": int(np.count_nonzero(result.submesh_of_vertex == example)),
+                            "off_box": float(off_box[example])} if not_box.any() else None,
         "cache_hits": result.cache_hits, "unchanged": result.unchanged,
         "not_selected": result.not_selected, "degenerate": result.degenerate,
         "max_error": result.max_error, "max_relative_error": result.max_relative_error,

@@ -119,7 +119,7 @@ class BOXMARCH_OT_bake(bpy.types.Operator):
         finally:
             wm.progress_end()
         text = summary([bake.report for bake in prepared], time.perf_counter() - start)
-        warnings = mesh_io.modifier_warnings(objects)
+        warnings = mesh_io.modifier_warnings(objects) + bake_job.not_box_warnings([bake.report for bake in prepared])
         if warnings:
             self.report({"WARNING"}, text + ". WARNING: " + " ".join(warnings))
         else:
