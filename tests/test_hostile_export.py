@@ -27,7 +27,7 @@ SPACING = 1.5  # boxes of side 1 at x = SPACING * key: the key names a box in an
 
 def parser():
     return cli_args.build_parser("", dict.fromkeys(("bake", "dedup", "merge", "pack-uv", "export", "pipeline",
-                                                      "demo")))
+                                                      "demo")), "boxmarch")
 
 
 # --- one random-seed range ------------------------------------------------------------------
