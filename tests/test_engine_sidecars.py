@@ -34,11 +34,11 @@ def written_cases(folder, preset, layout):
 # --- three.js ---------------------------------------------------------------------------------
 
 def loader_job(url, options="{}"):
-    """loadBoxmarch's refusal of ``url`` (a message starting "boxmarch: "), else null: the
-    sidecar was read and the .glb, which no case serves, failed to load."""
+    """The message loadBoxmarch(``url``) rejects with; null when it is the .glb's failure to load
+    ("boxmarch: URL: GLTFLoader did not load it", no case serves a .glb): the sidecar was read."""
     return ("async function () { try { await loadBoxmarch(THREE, GLTFLoader, " + json.dumps(url) + ", " + options
             + "); return 'loaded'; } catch (e) { var m = String(e && e.message || e);"
-            " return m.indexOf('boxmarch: ') === 0 ? m : null; } }")
+            " return m.indexOf('boxmarch: ' + " + json.dumps(url) + " + ': GLTFLoader did not load it (') === 0 ? null : m; } }")
 
 
 # createBoxmarchMaterial's options: refused (words of the message) or drawn as given (None).

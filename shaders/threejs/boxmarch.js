@@ -336,6 +336,13 @@ function boxmarchSidecarUrl(url) {
   return path.replace(/\.glb$/i, '') + '.boxmarch.json' + (query < 0 ? '' : text.slice(query));
 }
 
+// GLTFLoader's failure to load url as one line naming it: r111 hands over the request's
+// ProgressEvent, later releases an Error.
+function boxmarchLoadError(url, e) {
+  var why = e && e.message ? e.message : e && e.target && e.target.status ? 'HTTP ' + e.target.status : String(e);
+  return new Error('boxmarch: ' + url + ': GLTFLoader did not load it (' + why + ')');
+}
+
 // Loads the .glb at url (NAME.glb) after its sidecar NAME.boxmarch.json and gives every mesh,
 // skinned or not, its own material (options: those of createBoxmarchMaterial, skinning set per
 // mesh, and frontToBack: draw each mesh's boxes front to back, useBoxmarchMaterial). GLTFLoader: the class (THREE.GLTFLoader in r111's examples/js, imported from
@@ -353,7 +360,9 @@ function loadBoxmarch(THREE, GLTFLoader, url, options) {
   }).then(function (bytes) {
     var sidecar = parseBoxmarchSidecar(bytes, sidecarUrl);
     return new Promise(function (resolve, reject) {
-      new GLTFLoader().load(url, function (gltf) { resolve({ gltf: gltf, sidecar: sidecar }); }, undefined, reject);
+      new GLTFLoader().load(url, function (gltf) { resolve({ gltf: gltf, sidecar: sidecar }); }, undefined, function (e) {
+        reject(boxmarchLoadError(url, e));
+      });
     });
   }).then(function (loaded) {
     var meshes = [];
