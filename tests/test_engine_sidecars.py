@@ -22,6 +22,12 @@ from tests.helpers import hostile_sidecars
 pytestmark = pytest.mark.slow  # Chromium, Godot, mono
 
 
+def require(reason):
+    """Fails (never skips) when a runtime is missing: each is installed by scripts/setup.sh."""
+    if reason:
+        pytest.fail(f"{reason}: run scripts/setup.sh")
+
+
 def written_cases(folder, preset, layout):
     """Writes the table's sidecars into ``folder`` as cNN.boxmarch.json; {case: stem}."""
     stems = {}
@@ -76,9 +82,7 @@ def threejs_page(request, tmp_path_factory):
     """One Chromium page per release: every table sidecar through loadBoxmarch, the URL forms,
     the material options."""
     release = request.param
-    reason = threejs.available(release)
-    if reason:
-        pytest.fail(reason)
+    require(threejs.available(release))
     folder = tmp_path_factory.mktemp("threejs-sidecars")
     stems = written_cases(folder, "GLTF", "NORMAL_FRAME")
     served = {path.name: path.read_bytes() for path in folder.iterdir()}
@@ -127,9 +131,7 @@ def godot_project(folder, files=None):
 
 
 def test_godot3_plugin_refuses_each_hostile_sidecar(tmp_path):
-    reason = godot3.available()
-    if reason:
-        pytest.fail(reason)
+    require(godot3.available())
     project = godot_project(tmp_path)
     stems = written_cases(tmp_path, "GODOT3", "NORMAL_COLOR")
     out = godot3.plugin_refusals(project, [f"res://{stem}.glb" for stem in stems.values()])
@@ -144,9 +146,7 @@ def test_godot3_editor_reports_a_hostile_sidecar_and_sets_up_the_model_after_it(
     name, the second gets mesh compression off, and the editor is still running 3 s later.
     Before: 100,000 nested brackets crashed the editor; a null format_version stopped the
     plug-in's check at a script error, so b.glb kept Godot's compressed import."""
-    reason = godot3.available()
-    if reason:
-        pytest.fail(reason)
+    require(godot3.available())
     cases = hostile_sidecars.cases("GODOT3", "NORMAL_COLOR")
     files = {"a.boxmarch.json": cases[hostile][0], "a.glb": b"", "b.boxmarch.json": cases["valid"][0], "b.glb": b""}
     project = godot_project(tmp_path, files)
@@ -166,9 +166,7 @@ def test_godot3_editor_reports_a_hostile_sidecar_and_sets_up_the_model_after_it(
 # --- Unity ------------------------------------------------------------------------------------
 
 def test_unity_postprocessor_refuses_each_hostile_sidecar(tmp_path):
-    reason = import_helpers.mcs_missing() or (None if shutil.which("mono") else "mono is not installed (apt-get install mono-runtime)")
-    if reason:
-        pytest.fail(reason)
+    require(import_helpers.mcs_missing() or (None if shutil.which("mono") else "mono is not installed (apt-get install mono-mcs)"))
     built = import_helpers.compile_unity(import_helpers.UNITY_POSTPROCESSOR.read_text(), tmp_path,
                                          [import_helpers.UNITY_STUB.parent / "SidecarRefusals.cs"], target="exe")
     assert built.returncode == 0, built.stdout + built.stderr
