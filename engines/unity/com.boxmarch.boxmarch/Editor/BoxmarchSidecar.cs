@@ -2,8 +2,8 @@
 // "How a helper reads the sidecar"): at most MaxBytes, UTF-8, brackets nested at most MaxDepth
 // deep (counted before anything is parsed), strict JSON (RFC 8259: no NaN, no comments, nothing
 // after the value), an object whose format_version, preset, layout, skinned and box_count have the
-// schema's types and values the helper reads. Unity's JsonUtility is not used: it fills an int
-// field from null, 1.5 or "1" without a word.
+// schema's types and values the helper reads. Unity's JsonUtility is not used: it reads into typed
+// fields (an int format_version), where the type the file gave a value is no longer seen.
 using System;
 using System.Collections.Generic;
 using System.Globalization;
