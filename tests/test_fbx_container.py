@@ -211,6 +211,7 @@ def hostile_files():
     """{what: (bytes, words the ValueError must hold)}."""
     good = fbx_container.encode(small_document())
     header_extension = with_header_extension()
+    long_name = fbx_container.encode(fbx_container.Document(7400, [fbx_container.Node(b"A" * 200, [7], b"I")], bytes(16)))
     wide = fbx_container.encode(fbx_container.Document(7500, fbx_container.decode(header_extension).nodes, bytes(16)))
     compressed = zlib.compress(np.arange(100, dtype=np.float64).tobytes(), 1)
     array_header = struct.pack("<III", 100, 1, len(compressed))
@@ -240,6 +241,9 @@ def hostile_files():
         "7400 header over 7.5 records": (wide[:23] + struct.pack("<I", 7400) + wide[27:],
                                          "version 7400 does not match"),
         "binary record name": (damaged(good, b"Empty", b"Em\x00\xffy"), "not a record name"),
+        "unknown type code in a record named by 200 characters": (damaged(long_name, b"I" + struct.pack("<i", 7),
+                                                                          b"Q" + struct.pack("<i", 7)),
+                                                                  "'A{40}...': unknown property type code 'Q'"),
         # 8 GiB declared from about 1 KiB of zlib data: refused before anything is allocated
         "zlib count past 1032:1": (one_array_file(1 << 30, 1, zlib.compress(bytes(1 << 20), 9)),
                                    "more than zlib inflates to"),

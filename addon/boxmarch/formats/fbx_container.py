@@ -209,7 +209,7 @@ class _Reader:
                              f"ASCII){self.mismatch}")
         props_end = cursor + props_length
         if props_end > end_offset:
-            raise ValueError(f"FBX record '{name.decode()}' at byte {pos}: its {props_length} "
+            raise ValueError(f"FBX record '{_label(name)}' at byte {pos}: its {props_length} "
                              f"property bytes run past its end at byte {end_offset}")
         props, types = [], bytearray()
         for _ in range(count):
@@ -217,7 +217,7 @@ class _Reader:
             props.append(value)
             types += kind
         if cursor != props_end:
-            raise ValueError(f"FBX record '{name.decode()}' at byte {pos}: {count} properties "
+            raise ValueError(f"FBX record '{_label(name)}' at byte {pos}: {count} properties "
                              f"fill {cursor - props_end + props_length} bytes, its header says {props_length}")
         if any(isinstance(value, _StoredArray) for value in props):
             self.with_arrays.append(props)
@@ -226,7 +226,7 @@ class _Reader:
             node.children, cursor = self.records(cursor, end_offset, depth + 1)
             node.null_record = True
             if cursor != end_offset:
-                raise ValueError(f"FBX record '{name.decode()}' at byte {pos}: its nested list "
+                raise ValueError(f"FBX record '{_label(name)}' at byte {pos}: its nested list "
                                  f"ends at byte {cursor}, its header says {end_offset}")
         else:
             node.null_record = False
@@ -245,7 +245,7 @@ class _Reader:
         if kind in _ARRAYS:
             return kind, *self.array(kind, pos, end, name)
         label = repr(kind)[1:]
-        raise ValueError(f"FBX record '{name.decode()}': unknown property type code {label} "
+        raise ValueError(f"FBX record '{_label(name)}': unknown property type code {label} "
                          f"at byte {pos - 1}")
 
     def array(self, kind, pos, end, name):
@@ -253,7 +253,7 @@ class _Reader:
         count, encoding, stored = self.unpack(_ARRAY_HEADER.format, pos, end, f"a '{kind.decode()}' array header")
         raw, pos = self.take(pos + _ARRAY_HEADER.size, stored, end, f"a '{kind.decode()}' array")
         expected = count * dtype.itemsize
-        where = f"FBX record '{name.decode()}': a '{kind.decode()}' array of {count} values"
+        where = f"FBX record '{_label(name)}': a '{kind.decode()}' array of {count} values"
         if encoding == 0 and stored != expected:
             raise ValueError(f"{where} stores {stored} bytes, not {expected}")
         if encoding not in (0, 1):
@@ -264,6 +264,11 @@ class _Reader:
 def _is_record_name(name: bytes) -> bool:
     """Record names are identifiers (``Objects``, ``LayerElementUV``): printable ASCII."""
     return name.isascii() and name.decode().isprintable()
+
+
+def _label(name: bytes) -> str:
+    """A record name (checked by _is_record_name) for a message: its first 40 characters."""
+    return name.decode() if len(name) <= 40 else name[:40].decode() + "..."
 
 
 def encode(document: Document) -> bytes:
