@@ -291,14 +291,17 @@ function checkBoxmarchSidecar(sidecar, name) {
   return sidecar;
 }
 
+// The refusal of a sidecar (name) over BOXMARCH_SIDECAR_MAX_BYTES, by its body or its declared length.
+function boxmarchSidecarTooLarge(name) {
+  return new Error('boxmarch: ' + name + ': larger than ' + BOXMARCH_SIDECAR_MAX_BYTES + ' bytes, not a boxmarch sidecar');
+}
+
 // The sidecar of a sidecar file's bytes (an ArrayBuffer), checked (checkBoxmarchSidecar); throws
 // one line naming the file (name) when it is larger than BOXMARCH_SIDECAR_MAX_BYTES, not UTF-8,
 // nested deeper than BOXMARCH_SIDECAR_MAX_DEPTH brackets (counted before any parser runs) or not JSON.
 function parseBoxmarchSidecar(bytes, name) {
   function refuse(why) { throw new Error('boxmarch: ' + name + ': ' + why); }
-  if (bytes.byteLength > BOXMARCH_SIDECAR_MAX_BYTES) {
-    refuse('larger than ' + BOXMARCH_SIDECAR_MAX_BYTES + ' bytes, not a boxmarch sidecar');
-  }
+  if (bytes.byteLength > BOXMARCH_SIDECAR_MAX_BYTES) throw boxmarchSidecarTooLarge(name);
   var text = null, data = new Uint8Array(bytes), depth = 0, inString = false, escaped = false;
   try {
     text = new TextDecoder('utf-8', { fatal: true, ignoreBOM: true }).decode(data);
@@ -356,6 +359,8 @@ function loadBoxmarch(THREE, GLTFLoader, url, options) {
     return fetch(sidecarUrl).catch(function (e) { throw new Error('boxmarch: ' + sidecarUrl + ': cannot be fetched (' + e.message + ')'); });
   }).then(function (response) {
     if (!response.ok) throw new Error('boxmarch: no ' + sidecarUrl + ' (HTTP ' + response.status + '): the export writes it beside the .glb');
+    // a declared length over the limit is refused before the body is read (parseBoxmarchSidecar checks the body too)
+    if (Number(response.headers.get('Content-Length')) > BOXMARCH_SIDECAR_MAX_BYTES) throw boxmarchSidecarTooLarge(sidecarUrl);
     return response.arrayBuffer();
   }).then(function (bytes) {
     var sidecar = parseBoxmarchSidecar(bytes, sidecarUrl);
