@@ -64,8 +64,9 @@ def cases(preset, layout):
                       "not UTF-8 text"),
         "100,000 nested brackets": (b"[" * 100_000 + b"]" * 100_000, f"nested more than {MAX_DEPTH} deep"),
         "100,000 nested objects": (b'{"a":' * 100_000 + b"1" + b"}" * 100_000, f"nested more than {MAX_DEPTH} deep"),
-        "33 nested in a valid sidecar": (text[:-1].encode() + b', "extra": ' + b"[" * 32 + b"]" * 32 + b"}",
-                                         f"nested more than {MAX_DEPTH} deep"),
+        "32 deep in a valid sidecar": (text[:-1].encode() + b', "extra": ' + b"[" * 31 + b"]" * 31 + b"}", None),
+        "33 deep in a valid sidecar": (text[:-1].encode() + b', "extra": ' + b"[" * 32 + b"]" * 32 + b"}",
+                                       f"nested more than {MAX_DEPTH} deep"),
         "brackets inside a string are text": (with_value("file", "[[[[" * 20 + '"\\' + "{" * 40), None),
         "larger than 16 MiB": (text[:-1].encode() + b" " * MAX_BYTES + b"}", f"larger than {MAX_BYTES} bytes"),
     }
