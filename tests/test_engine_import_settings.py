@@ -74,7 +74,7 @@ def test_unreal_script_refuses_sidecars_it_does_not_read():
     assert refusal(good) is None
     assert "UNREAL preset" in refusal(dict(good, preset="UNITY"))
     assert "NORMAL_FRAME" in refusal(dict(good, layout="NORMAL_FRAME"))
-    assert "format version 2" in refusal(dict(good, format_version=2))
+    assert "format_version must be 1 (the format this script reads), not 2" in refusal(dict(good, format_version=2))
 
 
 def test_unreal_material_function_compiles_as_hlsl(tmp_path):

@@ -9,7 +9,8 @@ from pathlib import Path
 import pytest
 
 SHADERS = Path(__file__).resolve().parent.parent / "shaders"
-EXPORTS = ["boxmarchTexcoordName", "checkBoxmarchSidecar", "createBoxmarchMaterial", "loadBoxmarch", "prepareBoxmarchGeometry",
+EXPORTS = ["boxmarchSidecarUrl", "boxmarchTexcoordName", "checkBoxmarchOptions", "checkBoxmarchSidecar",
+           "createBoxmarchMaterial", "loadBoxmarch", "parseBoxmarchSidecar", "prepareBoxmarchGeometry",
            "sortBoxmarchFrontToBack", "useBoxmarchMaterial"]
 
 

@@ -34,12 +34,15 @@ def unity_constants() -> dict:
     return out
 
 
-def compile_unity(source: str, out_dir) -> subprocess.CompletedProcess:
-    """mcs run on the stub and ``source`` (a postprocessor's text), warnings as errors."""
+def compile_unity(source: str, out_dir, extra=(), target="library") -> subprocess.CompletedProcess:
+    """mcs run on the stub, the package's other Editor sources and ``source`` (a postprocessor's
+    text), and ``extra`` source paths, warnings as errors, into ``out_dir``/boxmarch.dll (or .exe)."""
     path = Path(out_dir) / "BoxmarchModelPostprocessor.cs"
     path.write_text(source)
-    return subprocess.run(["mcs", "-target:library", "-warnaserror+", f"-out:{Path(out_dir) / 'boxmarch.dll'}",
-                           str(UNITY_STUB), str(path)], capture_output=True, text=True, timeout=60)
+    others = sorted(p for p in (UNITY_PACKAGE / "Editor").glob("*.cs") if p.name != path.name)
+    out = Path(out_dir) / f"boxmarch.{'dll' if target == 'library' else 'exe'}"
+    return subprocess.run(["mcs", f"-target:{target}", "-warnaserror+", f"-out:{out}", str(UNITY_STUB),
+                           *map(str, others), str(path), *map(str, extra)], capture_output=True, text=True, timeout=60)
 
 
 def mcs_missing():

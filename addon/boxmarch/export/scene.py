@@ -122,13 +122,24 @@ def _run_exporter(preset, layout, path):
 
 
 def file_channel_names(preset, layout) -> dict:
-    """The name each channel of ``layout`` has in the file ``preset`` writes: glTF attributes,
-    FBX UV maps and layers, the .blend's own attribute and UV map names."""
-    used = sorted({c.split(".")[0] for q in sidecar.QUANTITIES[layout].values() for c in q["channels"]} - {"TABLE"})
+    """The name each channel ``layout`` writes (Layout.channels: the quantities' and the box
+    parameters') has in the file ``preset`` writes: glTF attributes, FBX UV maps and layers, the
+    .blend's own attribute and UV map names."""
+    used = layouts.LAYOUTS[layout].channels
     if preset.extension == ".glb":
         return {c: f"TEXCOORD_{c[2:]}" if c.startswith("UV") else "COLOR_0" if c == "COLOR" else c for c in used}
     fbx_layers = {"COLOR": mesh_io.OFFSET_ATTRIBUTE, "NORMAL": "LayerElementNormal", "TANGENT": "LayerElementTangent"}
-    return {c: uv_name(layout, c) if c.startswith("UV") else fbx_layers[c] for c in used}
+    names = {c: uv_name(layout, c) if c.startswith("UV") else fbx_layers[c] for c in used}
+    if preset.raw_blend:  # the .blend keeps the box values in the bake's own point attributes, not UV maps
+        names.update({channel: _BLEND_PARAM_ATTRIBUTES[pair] for channel, pair in
+                      layouts.LAYOUTS[layout].param_channels.items()})
+    return names
+
+
+# The bake's stored attributes of each pair of box values (mesh_io.box_layers), as a .blend's
+# sidecar names them: a FLOAT2 attribute, or two INT ones joined by "+" (x, then y).
+_BLEND_PARAM_ATTRIBUTES = {("shape", "material"): mesh_io.PARAMS_LAYERS[0], ("random", "user"): mesh_io.PARAMS_LAYERS[1],
+                           ("parent", "depth"): f"{mesh_io.PARENT_LAYER}+{mesh_io.DEPTH_LAYER}"}
 
 
 def export_objects(context, objects, preset_name: str, filepath: str, layout: str | None = None) -> dict:

@@ -15,11 +15,6 @@ namespace UnityEngine
         public static void LogError(object message) { }
         public static void LogError(object message, Object context) { }
     }
-
-    public static class JsonUtility
-    {
-        public static T FromJson<T>(string json) { throw new NotImplementedException("stub of Unity's JsonUtility"); }
-    }
 }
 
 namespace UnityEditor
