@@ -235,5 +235,6 @@ def test_godot3_plugin_imports_boxmarch_glbs_float_exact_and_refuses_other_layou
     (surface,) = godot3.dump_arrays(project, "res://models/mixed.glb")
     assert_decodes_to_the_boxes(surface, (godot / "mixed.boxes.tres").read_text(), centres, sizes, rotations)
     assert "boxmarch: re-importing res://models/mixed.glb with mesh compression off" in log
-    assert "boxmarch: res://other/other.glb: layout NORMAL_FRAME (preset GLTF) is not read by Godot 3" in log, log
+    assert ('boxmarch: res://other/other.boxmarch.json: preset must be "GODOT3", not "GLTF" (layout "NORMAL_FRAME"): '
+            "Godot 3 keeps two UV sets only" in log), log
     assert "meshes/compress=true" in (tmp_path / "project" / "other" / "other.glb.import").read_text()

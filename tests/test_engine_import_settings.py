@@ -37,7 +37,7 @@ def test_unity_postprocessor_run_as_unity_calls_it_sets_the_table_and_refuses_ba
     sends it (tests/engines/unity_stub/UnityImportHarness.cs): a boxmarch UNITY export in each
     layout gets exactly the table; a model without a sidecar nothing and no message; a sidecar
     that is not JSON, not an object, empty, of version 2, of another preset or of a layout the
-    package does not read: nothing set and one error naming the model and its sidecar."""
+    package does not read: nothing set and one error naming the sidecar."""
     from boxmarch.formats import import_settings
 
     run = import_helpers.unity_import_run()
@@ -116,7 +116,7 @@ def test_unreal_script_refuses_sidecars_it_does_not_read():
     assert refusal(good) is None
     assert "UNREAL preset" in refusal(dict(good, preset="UNITY"))
     assert "NORMAL_FRAME" in refusal(dict(good, layout="NORMAL_FRAME"))
-    assert "format version 2" in refusal(dict(good, format_version=2))
+    assert "format_version must be 1 (the format this script reads), not 2" in refusal(dict(good, format_version=2))
 
 
 # What docs/ENGINES.md's Unreal row says Unreal must be told, phrase by phrase, in the part naming

@@ -10,7 +10,8 @@ import pytest
 from tests.helpers.tools import need
 
 SHADERS = Path(__file__).resolve().parent.parent / "shaders"
-EXPORTS = ["boxmarchTexcoordName", "checkBoxmarchSidecar", "createBoxmarchMaterial", "loadBoxmarch", "prepareBoxmarchGeometry",
+EXPORTS = ["boxmarchSidecarUrl", "boxmarchTexcoordName", "checkBoxmarchOptions", "checkBoxmarchSidecar",
+           "createBoxmarchMaterial", "loadBoxmarch", "parseBoxmarchSidecar", "prepareBoxmarchGeometry",
            "sortBoxmarchFrontToBack", "useBoxmarchMaterial"]
 
 

@@ -14,6 +14,7 @@ import pytest
 from tests.engine_scene import baked_scene, box_corners, rotate, skinned_scene, table_texels
 from tests.fbx_reader import read_fbx_geometry
 from tests.gltf_reader import read_glb
+from tests.helpers.sidecar_files import file_channels, values
 from tests.helpers.tools import need
 
 
@@ -44,55 +45,6 @@ def test_the_schema_lists_every_preset():
     from boxmarch.formats import presets
 
     assert set(schema()["properties"]["preset"]["enum"]) == set(presets.PRESETS)
-
-
-def file_channels(bpy, path, sidecar):
-    """(positions (n, 3), {channel: (n, k) float64}) per vertex or corner of the file, by the
-    names the sidecar gives; UV v read back as the engine reads it when the file flips it."""
-    names = sidecar["file_channels"]
-    if path.suffix == ".glb":
-        (mesh,) = read_glb(path)
-        prims = mesh["primitives"]
-        cat = lambda key: np.concatenate([p[key] for p in prims])
-        out = {channel: cat(name) for channel, name in names.items()}
-        positions = cat("POSITION")
-    elif path.suffix == ".fbx":
-        raw = read_fbx_geometry(path)
-        layers = {"LayerElementNormal": "normal", "LayerElementTangent": "tangent"}
-        out = {channel: raw[layers.get(name, name)] for channel, name in names.items()}
-        if "TANGENT" in out:  # FBX keeps the bitangent as its own layer
-            out["BINORMAL"] = raw["binormal"]
-        positions = raw["position"]
-    else:
-        with bpy.data.libraries.load(str(path)) as (src, dst):
-            dst.meshes = list(src.meshes)
-        (mesh,) = dst.meshes
-        corner_vertex = np.empty(len(mesh.loops), np.int32)
-        mesh.loops.foreach_get("vertex_index", corner_vertex)
-        co = np.empty(len(mesh.vertices) * 3, np.float32)
-        mesh.vertices.foreach_get("co", co)
-        positions = co.reshape(-1, 3)[corner_vertex].astype(np.float64)
-        out = {}
-        for channel, name in names.items():
-            if channel == "COLOR":
-                colour = np.empty(len(mesh.vertices) * 4, np.float32)
-                mesh.color_attributes[name].data.foreach_get("color", colour)
-                out[channel] = colour.reshape(-1, 4)[corner_vertex].astype(np.float64)
-            else:
-                uv = np.empty(len(mesh.loops) * 2, np.float32)
-                mesh.uv_layers[name].data.foreach_get("uv", uv)
-                out[channel] = uv.reshape(-1, 2).astype(np.float64)
-    if sidecar["axes"]["v_flipped_in_file"]:
-        for channel in out:
-            if channel.startswith("UV"):
-                out[channel][:, 1] = 1.0 - out[channel][:, 1]
-    return positions, out
-
-
-def values(channels, specs):
-    """(n, len(specs)) of channel components named like "UV3.x", "COLOR.a", "TABLE.r"."""
-    component = {"x": 0, "y": 1, "r": 0, "g": 1, "b": 2, "a": 3}
-    return np.stack([channels[s.split(".")[0]][:, component[s.split(".")[1]]] for s in specs], 1)
 
 
 def decode(positions, channels, sidecar, table=None):

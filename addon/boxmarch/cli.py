@@ -11,25 +11,25 @@ new .blend, --json a machine-readable report; both appear only complete (written
 temporary name, then renamed). Progress goes to stderr, the result table to stdout (Blender's
 own prints are held back), at most TABLE_WIDTH characters wide. Exit codes: 0 success, 2 bad
 arguments or input (one line saying why), 3 no bpy module in this Python (the line says what to
-install), 130 interrupted, 1 internal error. docs/CLI.md has the reference.
+install), 128 + the signal's number when a signal stopped it (130 for Ctrl-C, 143 for SIGTERM),
+1 internal error. docs/CLI.md has the reference.
 
 This module only parses, checks and reports: every step runs the same job function as the
 add-on's operator (bake_job.bake_meshes, tool_jobs.run_tool, export.scene.export_objects).
 """
 from __future__ import annotations
 
-import contextlib
 import json
 import math
 import os
 import signal
 import sys
 import textwrap
-import threading
 import time
 
 from . import ensure_registered
 from .cli_args import InputError, build_parser, check_outputs, run_outputs
+from .formats import files
 
 PIPELINE_STEPS = ("dedup", "merge", "bake", "pack-uv", "export")
 # The tool each cleanup command runs (a tool_jobs class name), its operator (whose properties
@@ -72,11 +72,9 @@ def _table(headers, rows, width=TABLE_WIDTH) -> str:
 
 
 def _write_json(path: str, report: dict) -> None:
-    from .formats import files
-
     def write(temp):
         with open(temp, "w") as f:
-            json.dump(report, f, indent=2, default=float)
+            json.dump(report, f, indent=2, default=float, allow_nan=False)
     files.write_atomically(path, write)
 
 
@@ -336,38 +334,27 @@ def _blender_stdout_held_back():
     return blender_output.stdout_held_back(lambda line: _progress(f"Blender: {line}"))
 
 
-@contextlib.contextmanager
-def _interrupts_recorded(interrupts: list):
-    """While the body runs, a SIGINT is recorded in ``interrupts`` (and raises KeyboardInterrupt
-    as Python's own handler does): Blender's operators turn an exception inside them into a
-    RuntimeError, which must still end the run as interrupted."""
-    def on_interrupt(signum, _frame):
-        interrupts.append(signum)
-        raise KeyboardInterrupt
-
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.signal(signal.SIGINT, on_interrupt)
-    try:
-        yield
-    finally:
-        # None: the Blender program's own C handler, which Python cannot put back; the default
-        # (end the process) is what a background Blender does on SIGINT.
-        signal.signal(signal.SIGINT, signal.SIG_DFL if previous is None else previous)
+def _interrupted_code(interrupts) -> tuple[int, str]:
+    """(exit code, message) of a run stopped by the signal ``interrupts[0]`` (Ctrl-C where none
+    was recorded: a KeyboardInterrupt outside the handler): 128 + the signal's number, as a
+    shell reports a process the signal ended."""
+    signum = interrupts[0] if interrupts else signal.SIGINT
+    return 128 + signum, (f"boxmarch: interrupted: stopped by {signal.Signals(signum).name}, each output is either "
+                          "complete or not written (no partial file is left)")
 
 
 def run(argv=None) -> int:
-    """Run one command; returns the exit code (0; 2 bad input; 3 no bpy module; 130 interrupted;
-    1 internal error). ``argv`` None: the process's arguments; inside the Blender program those after
-    its first ``--`` (Blender's own come before it)."""
+    """Run one command; returns the exit code (0; 2 bad input; 3 no bpy module; 128 + the
+    signal's number when stopped by one, 130 for Ctrl-C; 1 internal error). ``argv`` None: the
+    process's arguments; inside the Blender program those after its first ``--`` (Blender's own
+    come before it)."""
     if argv is None:
         argv = sys.argv[1:]
         if _in_blender_program():
             argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     args, interrupts = None, []
     try:
-        with _interrupts_recorded(interrupts):
+        with files.interrupts_recorded(interrupts):
             try:
                 runners = {"bake": cmd_bake, "dedup": cmd_cleanup, "merge": cmd_cleanup, "pack-uv": cmd_cleanup,
                            "export": cmd_export, "pipeline": cmd_pipeline, "demo": cmd_demo}
@@ -377,8 +364,7 @@ def run(argv=None) -> int:
             return args.run(args)
     except (Exception, KeyboardInterrupt) as error:
         if interrupts or isinstance(error, KeyboardInterrupt):
-            code, message = 130, ("boxmarch: interrupted: stopped, each output is either complete or not written "
-                                  "(no partial file is left)")
+            code, message = _interrupted_code(interrupts)
         elif isinstance(error, InputError):
             code, message = 2, f"boxmarch: error: {error}"
         elif isinstance(error, ModuleNotFoundError) and error.name == "bpy":

@@ -62,14 +62,45 @@ function prepareBoxmarchGeometry(THREE, geometry) {
   return geometry;
 }
 
+// The ranges of createBoxmarchMaterial's numeric options: those of the Blender preview's matching
+// properties (addon/boxmarch/properties.py: max_steps, epsilon, quality), whole: integers only.
+var BOXMARCH_OPTION_RANGES = {
+  maxSteps: { min: 1, max: 512, whole: true },
+  epsilon: { min: 1e-7, max: 1, whole: false },
+  quality: { min: 0.05, max: 1, whole: false }
+};
+
+// Throws, one line naming the option, for createBoxmarchMaterial options it would not draw as
+// given: a number outside BOXMARCH_OPTION_RANGES (or not a number), a map that is not a non-empty
+// string. An option left undefined takes its default.
+function checkBoxmarchOptions(options) {
+  if (options === undefined || options === null) return;
+  if (typeof options !== 'object') throw new Error('boxmarch: the material options must be an object, not ' + typeof options);
+  Object.keys(BOXMARCH_OPTION_RANGES).forEach(function (key) {
+    var value = options[key], range = BOXMARCH_OPTION_RANGES[key];
+    if (value === undefined) return;
+    if (typeof value !== 'number' || !(value >= range.min && value <= range.max) || (range.whole && !Number.isInteger(value))) {
+      throw new Error('boxmarch: option ' + key + ' must be ' + (range.whole ? 'a whole number' : 'a number') + ' from '
+        + range.min + ' to ' + range.max + ' (the Blender preview\'s range), not '
+        + (typeof value === 'string' ? JSON.stringify(value) : String(value)));
+    }
+  });
+  if (options.map !== undefined && (typeof options.map !== 'string' || !options.map.trim())) {
+    throw new Error('boxmarch: option map must be the GLSL body of float map(vec3 p), not '
+      + (typeof options.map === 'string' ? 'an empty string' : typeof options.map));
+  }
+}
+
 // options: map (GLSL body of float map(vec3 p), box-local; box_half, box_index and box_params
 // (shape, material, random, user) are set: 'return bm_sdf_by_id(box_params.x, p, box_half);'
 // draws each box the preset its shape id picks),
-// color (THREE.Color), maxSteps, epsilon, quality (the quality knob, 0 < q <= 1, 1 = the full
-// march: shaders/glsl/raymarch.glsl bm_quality), skinning (true for a SkinnedMesh; read before r129
-// and by the raw material), declareDepth (false: the ShaderMaterial without the depth declaration
-// on r163 and later too; the same picture).
+// color (THREE.Color), maxSteps (1..512, default 96), epsilon (1e-7..1, default 1e-4), quality (the
+// quality knob, 0.05..1, 1 = the full march: shaders/glsl/raymarch.glsl bm_quality), skinning (true
+// for a SkinnedMesh; read before r129 and by the raw material), declareDepth (false: the
+// ShaderMaterial without the depth declaration on r163 and later too; the same picture). Throws
+// for options out of range (checkBoxmarchOptions).
 function createBoxmarchMaterial(THREE, options) {
+  checkBoxmarchOptions(options);
   options = options || {};
   var map = options.map || 'return sd_round_box(p, box_half, 0.1 * min3(box_half));';
   var revision = parseInt(THREE.REVISION, 10);
@@ -218,38 +249,125 @@ function sortBoxmarchFrontToBack(THREE, mesh, camera) {
   return true;
 }
 
-// The export's sidecar (NAME.boxmarch.json beside NAME.glb) format and the layout this material reads.
+// The export's sidecar (NAME.boxmarch.json beside NAME.glb): the format, preset and layout this
+// material reads, and the limits every boxmarch helper applies before parsing one (docs/FORMAT.md).
 var BOXMARCH_FORMAT_VERSION = 1;
+var BOXMARCH_PRESET = 'GLTF';
 var BOXMARCH_LAYOUT = 'NORMAL_FRAME';
+var BOXMARCH_SIDECAR_MAX_BYTES = 16777216;
+var BOXMARCH_SIDECAR_MAX_DEPTH = 32;
 
-// Throws, saying why, unless the sidecar object describes a file this material reads.
-function checkBoxmarchSidecar(sidecar, name) {
-  if (!sidecar || sidecar.format_version !== BOXMARCH_FORMAT_VERSION) {
-    throw new Error('boxmarch: ' + name + ' has format_version ' + JSON.stringify(sidecar && sidecar.format_version)
-      + '; this material reads format_version ' + BOXMARCH_FORMAT_VERSION);
+// Why the parsed sidecar does not describe a file this material reads, or '' when it does: the
+// checks every boxmarch helper makes, in the same order (docs/FORMAT.md).
+function boxmarchSidecarRefusal(sidecar) {
+  if (sidecar === null || typeof sidecar !== 'object' || Array.isArray(sidecar)) return 'not a JSON object';
+  function shown(key) {  // the value as JSON, cut to 40 characters
+    var text = Object.prototype.hasOwnProperty.call(sidecar, key) ? JSON.stringify(sidecar[key]) : 'missing';
+    return text.length <= 40 ? text : text.slice(0, 40) + '...';
+  }
+  var count = sidecar.box_count;
+  if (typeof sidecar.format_version !== 'number' || sidecar.format_version !== BOXMARCH_FORMAT_VERSION) {
+    return 'format_version must be ' + BOXMARCH_FORMAT_VERSION + ' (the format this material reads), not ' + shown('format_version');
+  }
+  if (sidecar.preset !== BOXMARCH_PRESET) {
+    return 'preset must be "' + BOXMARCH_PRESET + '", not ' + shown('preset') + ': export with the GLTF preset';
   }
   if (sidecar.layout !== BOXMARCH_LAYOUT) {
-    throw new Error('boxmarch: ' + name + ' has layout ' + JSON.stringify(sidecar.layout) + '; this material reads '
-      + BOXMARCH_LAYOUT + ' (export with the GLTF preset and its default layout)');
+    return 'layout must be one of ' + BOXMARCH_LAYOUT + ' (what this material reads), not ' + shown('layout')
+      + ': export with the GLTF preset and its default layout';
   }
+  if (typeof sidecar.skinned !== 'boolean') return 'skinned must be true or false, not ' + shown('skinned');
+  if (typeof count !== 'number' || !Number.isInteger(count) || count < 0 || count > 2147483647) {
+    return 'box_count must be a whole number from 0 to 2147483647, not ' + shown('box_count');
+  }
+  return '';
+}
+
+// Throws, saying why and naming the sidecar (name), unless the sidecar object describes a file
+// this material reads; returns it.
+function checkBoxmarchSidecar(sidecar, name) {
+  var refusal = boxmarchSidecarRefusal(sidecar);
+  if (refusal) throw new Error('boxmarch: ' + name + ': ' + refusal);
   return sidecar;
+}
+
+// The refusal of a sidecar (name) over BOXMARCH_SIDECAR_MAX_BYTES, by its body or its declared length.
+function boxmarchSidecarTooLarge(name) {
+  return new Error('boxmarch: ' + name + ': larger than ' + BOXMARCH_SIDECAR_MAX_BYTES + ' bytes, not a boxmarch sidecar');
+}
+
+// The sidecar of a sidecar file's bytes (an ArrayBuffer), checked (checkBoxmarchSidecar); throws
+// one line naming the file (name) when it is larger than BOXMARCH_SIDECAR_MAX_BYTES, not UTF-8,
+// nested deeper than BOXMARCH_SIDECAR_MAX_DEPTH brackets (counted before any parser runs) or not JSON.
+function parseBoxmarchSidecar(bytes, name) {
+  function refuse(why) { throw new Error('boxmarch: ' + name + ': ' + why); }
+  if (bytes.byteLength > BOXMARCH_SIDECAR_MAX_BYTES) throw boxmarchSidecarTooLarge(name);
+  var text = null, data = new Uint8Array(bytes), depth = 0, inString = false, escaped = false;
+  try {
+    text = new TextDecoder('utf-8', { fatal: true, ignoreBOM: true }).decode(data);
+  } catch (e) {
+    refuse('not UTF-8 text');
+  }
+  for (var i = 0; i < data.length; i++) {
+    var c = data[i];
+    if (inString) {
+      if (escaped) escaped = false;
+      else if (c === 0x5C) escaped = true;
+      else if (c === 0x22) inString = false;
+    } else if (c === 0x22) {
+      inString = true;
+    } else if (c === 0x5B || c === 0x7B) {
+      if (++depth > BOXMARCH_SIDECAR_MAX_DEPTH) refuse('brackets nested more than ' + BOXMARCH_SIDECAR_MAX_DEPTH + ' deep');
+    } else if (c === 0x5D || c === 0x7D) {
+      depth--;
+    }
+  }
+  var sidecar;
+  try {
+    sidecar = JSON.parse(text);
+  } catch (e) {
+    refuse('not JSON (' + e.message + ')');
+  }
+  return checkBoxmarchSidecar(sidecar, name);
+}
+
+// The sidecar's URL for a model's: NAME.boxmarch.json beside NAME.glb, with the model URL's query
+// (a cache-busting ?v=2 applies to both) and without its fragment (#..., never sent to a server).
+function boxmarchSidecarUrl(url) {
+  var text = String(url).split('#')[0], query = text.indexOf('?');
+  var path = query < 0 ? text : text.slice(0, query);
+  return path.replace(/\.glb$/i, '') + '.boxmarch.json' + (query < 0 ? '' : text.slice(query));
+}
+
+// GLTFLoader's failure to load url as one line naming it: r111 hands over the request's
+// ProgressEvent, later releases an Error.
+function boxmarchLoadError(url, e) {
+  var why = e && e.message ? e.message : e && e.target && e.target.status ? 'HTTP ' + e.target.status : String(e);
+  return new Error('boxmarch: ' + url + ': GLTFLoader did not load it (' + why + ')');
 }
 
 // Loads the .glb at url (NAME.glb) after its sidecar NAME.boxmarch.json and gives every mesh,
 // skinned or not, its own material (options: those of createBoxmarchMaterial, skinning set per
 // mesh, and frontToBack: draw each mesh's boxes front to back, useBoxmarchMaterial). GLTFLoader: the class (THREE.GLTFLoader in r111's examples/js, imported from
 // three/addons later). Resolves to { scene, meshes, gltf, sidecar }; rejects with the reason,
-// before the .glb is fetched, when the sidecar is missing or describes a file the material does
-// not read.
+// before the .glb is fetched, when an option is out of range, or the sidecar is missing or is not
+// one the material reads (parseBoxmarchSidecar).
 function loadBoxmarch(THREE, GLTFLoader, url, options) {
-  var sidecarUrl = String(url).replace(/\.glb$/i, '') + '.boxmarch.json';
-  return fetch(sidecarUrl).then(function (response) {
+  var sidecarUrl = boxmarchSidecarUrl(url);
+  return Promise.resolve().then(function () {
+    checkBoxmarchOptions(options);
+    return fetch(sidecarUrl).catch(function (e) { throw new Error('boxmarch: ' + sidecarUrl + ': cannot be fetched (' + e.message + ')'); });
+  }).then(function (response) {
     if (!response.ok) throw new Error('boxmarch: no ' + sidecarUrl + ' (HTTP ' + response.status + '): the export writes it beside the .glb');
-    return response.json();
-  }).then(function (sidecar) {
-    checkBoxmarchSidecar(sidecar, sidecarUrl);
+    // a declared length over the limit is refused before the body is read (parseBoxmarchSidecar checks the body too)
+    if (Number(response.headers.get('Content-Length')) > BOXMARCH_SIDECAR_MAX_BYTES) throw boxmarchSidecarTooLarge(sidecarUrl);
+    return response.arrayBuffer();
+  }).then(function (bytes) {
+    var sidecar = parseBoxmarchSidecar(bytes, sidecarUrl);
     return new Promise(function (resolve, reject) {
-      new GLTFLoader().load(url, function (gltf) { resolve({ gltf: gltf, sidecar: sidecar }); }, undefined, reject);
+      new GLTFLoader().load(url, function (gltf) { resolve({ gltf: gltf, sidecar: sidecar }); }, undefined, function (e) {
+        reject(boxmarchLoadError(url, e));
+      });
     });
   }).then(function (loaded) {
     var meshes = [];
@@ -396,5 +514,5 @@ var BOXMARCH_DECODE = "// boxmarch decode: recover a fragment's box-local frame 
 var BOXMARCH_LIBRARY = "// boxmarch SDF library. `box_half` holds the box's half-extents (a 1 x 0.6 x 0.2 box has\n// box_half = (0.5, 0.3, 0.1)), so shapes can be sized without typing numbers. Exactness of an op_\n// assumes exact inputs. shaders/generate.py translates it into HLSL and into GLM for the CPU\n// reference (cpp/src).\n\n// Half-extents of the box being marched; set by the raymarcher before map() is called.\nvec3 box_half = vec3(0.0);\n\n// The smallest and the largest component.\nfloat bm_min3(vec3 v) { return min(v.x, min(v.y, v.z)); }\nfloat bm_max3(vec3 v) { return max(v.x, max(v.y, v.z)); }\n// min3 and max3: the same, under the names map() texts use.\nfloat min3(vec3 v) { return bm_min3(v); }\nfloat max3(vec3 v) { return bm_max3(v); }\n\n// ---- primitives, centred at the origin\n// Exact.\nfloat sd_sphere(vec3 p, float r) { return length(p) - r; }\n\n// Exact. Half-extents b.\nfloat sd_box(vec3 p, vec3 b)\n{\n  vec3 q = abs(p) - b;\n  return length(max(q, vec3(0.0))) + min(bm_max3(q), 0.0);\n}\n\n// Exact for r <= min3(b): the box b with its edges rounded by r (outer size b).\nfloat sd_round_box(vec3 p, vec3 b, float r) { return sd_box(p, b - vec3(r)) - r; }\n\n// Exact. Segment a-b with radius r.\nfloat sd_capsule(vec3 p, vec3 a, vec3 b, float r)\n{\n  vec3 pa = p - a;\n  vec3 ba = b - a;\n  float h = clamp(dot(pa, ba) / max(dot(ba, ba), 1e-20), 0.0, 1.0);\n  return length(pa - ba * h) - r;\n}\n\n// Exact. Capped, axis z.\nfloat sd_cylinder(vec3 p, float r, float half_height)\n{\n  vec2 d = abs(vec2(length(p.xy), p.z)) - vec2(r, half_height);\n  return min(max(d.x, d.y), 0.0) + length(max(d, vec2(0.0)));\n}\n\n// Exact. Around axis z.\nfloat sd_torus(vec3 p, float major, float minor)\n{\n  vec2 q = vec2(length(p.xy) - major, p.z);\n  return length(q) - minor;\n}\n\n// Exact. Chain link: a ring of radius `ring` in the xy plane stretched by half_length along y.\nfloat sd_link(vec3 p, float half_length, float ring, float thickness)\n{\n  vec3 q = vec3(p.x, max(abs(p.y) - half_length, 0.0), p.z);\n  return length(vec2(length(q.xy) - ring, q.z)) - thickness;\n}\n\n// Exact for a unit normal n. Plane with normal n, offset along n.\nfloat sd_plane(vec3 p, vec3 n, float offset) { return dot(p, n) + offset; }\n\n// ---- combinations of two distances\n// Exact outside both shapes, a bound inside.\nfloat op_union(float a, float b) { return min(a, b); }\n// A bound outside the result, exact inside. a minus b.\nfloat op_subtract(float a, float b) { return max(a, -b); }\n// A bound outside the result, exact inside.\nfloat op_intersect(float a, float b) { return max(a, b); }\n\n// Smooth versions: k is the blend radius (box-local units).\n// A bound; equals op_union where |a - b| >= k.\nfloat op_smooth_union(float a, float b, float k)\n{\n  float h = clamp(0.5 + 0.5 * (b - a) / k, 0.0, 1.0);\n  return mix(b, a, h) - k * h * (1.0 - h);\n}\n// A bound; equals op_intersect where |a - b| >= k.\nfloat op_smooth_intersect(float a, float b, float k) { return -op_smooth_union(-a, -b, k); }\n// A bound; equals op_subtract where |a + b| >= k.\nfloat op_smooth_subtract(float a, float b, float k) { return op_smooth_intersect(a, -b, k); }\n\n// ---- modifiers\n// The shape grown by r: exact outside, a bound inside.\nfloat op_round(float d, float r) { return d - r; }\n// A shell of half-thickness `thickness` around the surface: exact outside the shell, a bound\n// inside it.\nfloat op_onion(float d, float thickness) { return abs(d) - thickness; }\n\n// Finite repetition: copies every `spacing`, `limit` copies each side of the centre per axis.\n// Moves p (returns no distance): a shape evaluated at the result stays exact when it is\n// mirror-symmetric in each axis and fits its cell (half of `spacing` each side); otherwise it can\n// overestimate (neither exact nor a bound: march with relaxation below 1).\n// floor(x + 0.5), not round(): GLSL ES 1.00 (WebGL 1) has no round().\nvec3 op_repeat_limited(vec3 p, vec3 spacing, vec3 limit)\n{\n  return p - spacing * clamp(floor(p / spacing + 0.5), -limit, limit);\n}\n\n// ---- presets of the preview's SDF menu, sized by the box\n// A preset with a preferred axis (capsule, cylinder, torus, link) reads the box's axes by extent,\n// not by name, so it fits its box whatever order the bake gave the axes (no bake option needed).\n\n// v with its components in the order that sorts h from the largest to the smallest: called with\n// v = p it gives the point, with v = h the sorted half-extents. A later axis moves ahead only when\n// its extent is more than 0.1% larger (the bake's tie band), so near-equal extents keep the order\n// x, y, z and all boxes of one shape read their axes alike. The order depends on h alone, one\n// permutation per box, so a preset that is exact on the sorted axes stays exact.\nvec3 bm_by_extent(vec3 v, vec3 h)\n{\n  vec3 s = h;\n  vec3 r = v;\n  if (s.y > 1.001 * s.x) {\n    s = s.yxz;\n    r = r.yxz;\n  }\n  if (s.z > 1.001 * s.y) {\n    s = s.xzy;\n    r = r.xzy;\n  }\n  if (s.y > 1.001 * s.x) {\n    s = s.yxz;\n    r = r.yxz;\n  }\n  return r;\n}\n\n// Exact.\nfloat sdf_preset_box(vec3 p, vec3 h) { return sd_box(p, h); }\n// Exact.\nfloat sdf_preset_sphere(vec3 p, vec3 h) { return sd_sphere(p, bm_min3(h)); }\n// Exact.\nfloat sdf_preset_rounded_box(vec3 p, vec3 h) { return sd_round_box(p, h, 0.25 * bm_min3(h)); }\n// Exact. Along the box's longest axis, radius its smallest half-extent.\nfloat sdf_preset_capsule(vec3 p, vec3 h)\n{\n  vec3 q = bm_by_extent(p, h);\n  vec3 s = bm_by_extent(h, h);\n  float r = min(s.y, s.z);\n  float a = max(s.x - r, 0.0);\n  return sd_capsule(q, vec3(-a, 0.0, 0.0), vec3(a, 0.0, 0.0), r);\n}\n// Exact. Along the box's longest axis where that holds the larger cylinder (a rod: longest x\n// smallest > middle^2), else along its shortest axis (a disc); a cube's stands along local z.\nfloat sdf_preset_cylinder(vec3 p, vec3 h)\n{\n  vec3 q = bm_by_extent(p, h);\n  vec3 s = bm_by_extent(h, h);\n  if (s.x * s.z > s.y * s.y) {\n    q = q.yzx;\n    s = s.yzx;\n  }\n  return sd_cylinder(q, min(s.x, s.y), s.z);\n}\n// Exact. Around the box's shortest axis, as wide as its middle half-extent.\nfloat sdf_preset_torus(vec3 p, vec3 h)\n{\n  vec3 q = bm_by_extent(p, h);\n  vec3 s = bm_by_extent(h, h);\n  float minor = min(s.z, 0.5 * min(s.x, s.y));\n  return sd_torus(q, min(s.x, s.y) - minor, minor);\n}\n// Exact. Stretched along the box's longest axis, the ring across its middle one, the thickness\n// along its shortest.\nfloat sdf_preset_link(vec3 p, vec3 h)\n{\n  vec3 q = bm_by_extent(p, h);\n  vec3 s = bm_by_extent(h, h);\n  float thickness = min(s.z, 0.25 * min(s.x, s.y));\n  return sd_link(q.yxz, max(s.x - s.y, 0.0), s.y - thickness, thickness);\n}\n\n// boxmarch per-box shapes: the parameters of the box being marched (decoded by decode.glsl's\n// bm_box_params) and the per-box shape switch. Needs decode.glsl and sdf.glsl before it.\n// shaders/generate.py translates it into every engine's language and\n// into GLM for the CPU reference.\n\n// Parameters of the box being marched (shape, material, random, user); set by the raymarcher\n// before map() is called, as box_half is (the preview's PER_BOX map() reads box_params.x).\nvec4 box_params = vec4(0.0);\n// The parent box, in this box's local coordinates: its origin (xyz) and the blend radius (w),\n// its frame as a quaternion, its half-extents (xyz; x < 0: no parent) and its shape id (w).\nvec4 box_parent_origin = vec4(0.0);\nvec4 box_parent_q = vec4(0.0, 0.0, 0.0, 1.0);\nvec4 box_parent_half = vec4(-1.0);\n\n// The SDF preset a shape id picks, sized by the box's half-extents h: the id rounded to the\n// nearest whole number indexes the presets in the preview's menu order (0 box, 1 sphere,\n// 2 rounded box, 3 capsule, 4 cylinder, 5 torus, 6 link); any other id draws the box. Exact\n// (each preset is).\nfloat bm_sdf_by_id(float shape, vec3 p, vec3 h)\n{\n  float id = floor(shape + 0.5);\n  if (id == 1.0) {\n    return sdf_preset_sphere(p, h);\n  }\n  if (id == 2.0) {\n    return sdf_preset_rounded_box(p, h);\n  }\n  if (id == 3.0) {\n    return sdf_preset_capsule(p, h);\n  }\n  if (id == 4.0) {\n    return sdf_preset_cylinder(p, h);\n  }\n  if (id == 5.0) {\n    return sdf_preset_torus(p, h);\n  }\n  if (id == 6.0) {\n    return sdf_preset_link(p, h);\n  }\n  return sdf_preset_box(p, h);\n}\n\n// This box's shape (its shape id, sized by h) blended into its parent's across their boundary:\n// the parent's shape evaluated in the parent's frame (parent_origin: its origin in this box's\n// local coordinates; parent_q: its frame relative to this box's; parent_half.xyz its\n// half-extents, parent_half.w its shape id; parent_half.x < 0: no parent), joined by\n// op_smooth_union with blend radius k (k <= 0: the own shape). A bound. Two SDF evaluations\n// with a parent, one without; the fillet lies within k of this box's shape, so the box it is\n// drawn in must be grown by k.\nfloat bm_sdf_blend_parent(float shape, vec3 p, vec3 h, vec3 parent_origin, vec4 parent_q, vec4 parent_half, float k)\n{\n  float own = bm_sdf_by_id(shape, p, h);\n  if (k <= 0.0 || parent_half.x < 0.0) {\n    return own;\n  }\n  vec3 in_parent = bm_rotate_vector(p - parent_origin, bm_quat_conjugate(parent_q));\n  return op_smooth_union(own, bm_sdf_by_id(parent_half.w, in_parent, parent_half.xyz), k);\n}\n\n// boxmarch raymarcher: sphere tracing inside one box, box-local coordinates.\n// Needs decode.glsl and sdf.glsl before it and a `float map(vec3 p)` after it.\n// shaders/generate.py translates it into HLSL, and bm_box_span and bm_normal_tap into GLM for the\n// CPU reference (cpp/src/raymarch.cpp writes bm_march and bm_normal around its preset switch).\n\nfloat map(vec3 p);\n\n// Entry (x) and exit (y) distances of the ray ro + t rd with the box |p| <= h.\nvec2 bm_box_span(vec3 ro, vec3 rd, vec3 h)\n{\n  vec3 s = vec3(rd.x < 0.0 ? -1.0 : 1.0, rd.y < 0.0 ? -1.0 : 1.0, rd.z < 0.0 ? -1.0 : 1.0);\n  vec3 inv = 1.0 / max(abs(rd), vec3(1e-12));\n  vec3 t_near = (-h - s * ro) * inv;\n  vec3 t_far = (h - s * ro) * inv;\n  return vec2(bm_max3(t_near), bm_min3(t_far));\n}\n\n// Sphere-traces map() from ro along unit rd until a distance falls below epsilon (true), the ray\n// passes t_end or step_limit evaluations (at most 512) are spent (false). t: distance travelled;\n// steps: map() evaluations; d: the last map() value (at a hit, the hit's own distance, which\n// bm_normal reuses). The loop's bound is a constant, as GLSL ES 1.00 (WebGL 1) requires.\nbool bm_march(vec3 ro, vec3 rd, float t_end, int step_limit, float epsilon, float relaxation,\n              out float t, out int steps, out float d)\n{\n  t = 0.0;\n  steps = step_limit;\n  d = 0.0;\n  for (int i = 0; i < 512; ++i) {\n    if (i >= step_limit) {\n      break;\n    }\n    d = map(ro + rd * t);\n    if (d < epsilon) {\n      steps = i + 1;\n      return true;\n    }\n    t += relaxation * d;\n    if (t > t_end) {\n      steps = i + 1;\n      return false;\n    }\n  }\n  return false;\n}\n\n// Level of detail for a box a few pixels wide: one map() evaluation where the ray passes nearest\n// the box's centre (within its span) stands for the march; a hit when that point lies within half\n// a pixel (footprint, box-local units) of the surface or inside. t: that point's distance along\n// the ray; d: its map() value (for bm_normal).\nbool bm_one_tap(vec3 ro, vec3 rd, float t_end, float footprint, out float t, out float d)\n{\n  t = clamp(-dot(ro, rd), 0.0, t_end);\n  d = map(ro + rd * t);\n  return d < 0.5 * footprint;\n}\n\n// The quality knob q (0 < q <= 1) as the three settings it stands for. x: hit distance as a share\n// of a pixel's footprint (the march stops that close to the surface when that is more than the\n// epsilon); y: steps allowed per pixel of the box's size on screen (bm_step_limit); z: size on\n// screen in pixels under which a box takes one tap (bm_one_tap). q = 1 leaves the march as the\n// epsilon and step limit set it.\nvec3 bm_quality(float q)\n{\n  float loss = 1.0 - clamp(q, 0.0, 1.0);\n  return vec3(0.5 * loss * loss, 8.0 / max(loss, 1e-9), 4.0 * loss);\n}\n\n// Size of one pixel, in object units, at a point whose clip-space w is clip_w: row_y = length of\n// the object-to-clip matrix's y row (xyz), height = viewport height in pixels. Perspective and\n// orthographic alike (w = 1 there).\nfloat bm_pixel_size(float clip_w, float row_y, float height)\n{\n  return 2.0 * clip_w / (height * row_y);\n}\n\n// Step limit of a box box_pixels wide on screen: steps_per_pixel per pixel, at least 16, at most\n// step_cap (a float holding a whole number).\nfloat bm_step_limit(float box_pixels, float steps_per_pixel, float step_cap)\n{\n  return min(step_cap, max(16.0, floor(steps_per_pixel * box_pixels)));\n}\n\n// Tap distance of bm_normal, 3/10,000 of the box: a forward difference errs by about half the tap\n// times the surface's curvature, and closer taps lose the gradient in float rounding (measured in\n// docs/ACCURACY.md, \"GPU cost against error\": the normal error column).\nfloat bm_normal_tap(vec3 h)\n{\n  return 3e-4 * bm_max3(h);\n}\n\n// Unit SDF gradient at p from forward differences: d = map(p), which the march has already\n// computed (bm_march's d), so the normal costs three map() calls; taps at distance e.\nvec3 bm_normal(vec3 p, float d, float e)\n{\n  vec3 n = vec3(map(p + vec3(e, 0.0, 0.0)), map(p + vec3(0.0, e, 0.0)), map(p + vec3(0.0, 0.0, e))) - d;\n  float len = length(n);\n  return len > 0.0 ? n / len : vec3(0.0);\n}\n";
 
 if (typeof module !== 'undefined') {
-  module.exports = { loadBoxmarch, checkBoxmarchSidecar, createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, boxmarchTexcoordName, sortBoxmarchFrontToBack };
+  module.exports = { loadBoxmarch, checkBoxmarchSidecar, parseBoxmarchSidecar, boxmarchSidecarUrl, checkBoxmarchOptions, createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, boxmarchTexcoordName, sortBoxmarchFrontToBack };
 }

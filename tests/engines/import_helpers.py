@@ -16,7 +16,6 @@ REPO = Path(__file__).resolve().parents[2]
 UNITY_PACKAGE = REPO / "engines" / "unity" / "com.boxmarch.boxmarch"
 UNITY_POSTPROCESSOR = UNITY_PACKAGE / "Editor" / "BoxmarchModelPostprocessor.cs"
 UNITY_STUB = Path(__file__).resolve().parent / "unity_stub" / "UnityApiStub.cs"
-UNITY_STUB_SOURCES = (UNITY_STUB, UNITY_STUB.parent / "UnityJsonUtility.cs")
 UNITY_HARNESS = UNITY_STUB.parent / "UnityImportHarness.cs"
 UNREAL_SCRIPT = REPO / "engines" / "unreal" / "boxmarch_import.py"
 UNREAL_MATERIAL = REPO / "engines" / "unreal" / "BoxmarchUVFrame.ush"
@@ -48,7 +47,7 @@ def compile_unity(source: str, out_dir, extra=(), target="library", others=None)
         paths.append(Path(out_dir) / name)
         paths[-1].write_text(text)
     out = Path(out_dir) / f"boxmarch.{'dll' if target == 'library' else 'exe'}"
-    return subprocess.run(["mcs", f"-target:{target}", "-warnaserror+", f"-out:{out}", *map(str, UNITY_STUB_SOURCES),
+    return subprocess.run(["mcs", f"-target:{target}", "-warnaserror+", f"-out:{out}", str(UNITY_STUB),
                            *map(str, paths), *map(str, extra)], capture_output=True, text=True, timeout=120)
 
 

@@ -1,9 +1,9 @@
 // The part of Unity's API that engines/unity/com.boxmarch.boxmarch/Editor calls, declared with
 // Unity's names and types (docs.unity3d.com ScriptReference). The package is compiled with it
-// (and UnityJsonUtility.cs) by mono's mcs and run under mono by UnityImportHarness.cs
-// (tests/engines/import_helpers.py), never in Unity. What it does is modelled, and only as far as
-// the tests need: ModelImporter records every property set on it (Recorded), in order;
-// Debug.Log/LogError record their messages (Logged).
+// by mono's mcs and run under mono by UnityImportHarness.cs (tests/engines/import_helpers.py)
+// and SidecarRefusals.cs (tests/test_engine_sidecars.py), never in Unity. What it does is
+// modelled, and only as far as the tests need: ModelImporter records every property set on it
+// (Recorded), in order; Debug.Log/LogError record their messages (Logged).
 using System;
 using System.Collections.Generic;
 
