@@ -34,7 +34,7 @@ MAX_SIDECAR_DEPTH = 32
 
 def _shown(sidecar, key):
     """The value at ``key`` as JSON, cut to 40 characters, or "missing"."""
-    text = json.dumps(sidecar[key]) if key in sidecar else "missing"
+    text = json.dumps(sidecar[key], allow_nan=False) if key in sidecar else "missing"
     return text if len(text) <= 40 else text[:40] + "..."
 
 
