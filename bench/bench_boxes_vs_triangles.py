@@ -161,7 +161,7 @@ def mesh_row(label, error, n, m):
 
 
 MESH_HEADERS = ["where", "1 px (1e-3 units)", "tube x path segments", "chord error formula (1e-3)",
-                "measured max |SDF| (1e-3)", "triangles per link", "vertices", "vertex bytes", "index bytes"]
+                "measured max abs SDF (1e-3)", "triangles per link", "vertices", "vertex bytes", "index bytes"]
 
 
 TRIANGLE_VERTEX = """
