@@ -218,7 +218,7 @@ def timed_rows(bpy, count):
 
     scene = chain_rows(count)
     to_clip, to_view, eye = scene[4]
-    nearest = float(eye[2]) - HALF[2]
+    nearest = float(eye[2]) - HALF[1]  # the links lie in z = 0, the turned ones upright
     n, m = fewest_triangles(pixel_width(nearest, SIZE[1]))
     positions, normals, triangles = chain_mesh(scene, n, m)
     shader = triangle_shader()
