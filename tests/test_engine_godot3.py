@@ -83,7 +83,7 @@ def test_godot3_renders_each_box_at_its_own_size_and_the_negative_control_fails(
     assert covered.sum() > 500
     wrong = godot3.render(project, shader(godot3.IDENTITY_FRAME), width=W, height=H, camera=WIDE, uniforms=uniforms)
     assert coverage_mismatch(wrong.pixels[..., :3].max(axis=2) > 20, expected) is not None
-    # the quality knob at 0.5 (hit distance an eighth of a pixel, steps by size on screen): the
+    # the quality knob at 0.5 (secant steps within a quarter of a pixel, steps by size on screen): the
     # same silhouettes within 1 px
     knob = godot3.render(project, shader(), width=W, height=H, camera=WIDE, uniforms={**uniforms, "quality": 0.5})
     assert coverage_mismatch(knob.pixels[..., :3].max(axis=2) > 20, expected) is None

@@ -325,9 +325,9 @@ struct RenderPlan {
 // the nearest hit wins by depth against the values already in images.depth. A hit's depth is
 // never nearer than the rasterised face's (clamped, as the shaders' declared depth_greater
 // requires). Boxes are drawn in plan.order; plan.early_depth skips the march of a fragment whose
-// rasterised depth fails the depth test; plan.quality below 1 widens the hit distance to a share
-// of a pixel, caps a box's steps by its size on screen and draws boxes under a few pixels with one
-// map() tap (bm_quality); plan.normal picks the normal's differences. Hits are shaded with the
+// rasterised depth fails the depth test; plan.quality below 1 takes secant steps within a share of
+// a pixel of the surface (the hit distance stays options.epsilon), caps a box's steps by its size
+// on screen and draws boxes under a few pixels with one map() tap (bm_quality); plan.normal picks the normal's differences. Hits are shaded with the
 // preview's Lambert + hemisphere light in view space. Reads box_count boxes; writes the covered
 // pixels of images and, if plan.cost is set, the counts. Throws std::invalid_argument on bad options (see raymarch), a quality outside (0, 1], an
 // unknown normal rule or an order that is not a permutation of the boxes.
