@@ -421,7 +421,7 @@ def scaling_child(n, tool):
         w0, c0 = time.perf_counter(), time.process_time()
         run()
         wall, cpu = min(wall, time.perf_counter() - w0), min(cpu, time.process_time() - c0)
-    print(json.dumps(dict(n=n, wall=wall, cpu=cpu, peak=peak, inputs=sum(a.nbytes for a in arrays))))
+    print(json.dumps(dict(n=n, wall=wall, cpu=cpu, peak=peak, inputs=sum(a.nbytes for a in arrays)), allow_nan=False))
 
 
 def scaling(counts):

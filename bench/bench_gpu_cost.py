@@ -11,7 +11,7 @@ plus the normal taps of a hit) and how many of those end up hidden. Each techniq
 * early depth: the rasterised depth tested before the march (depth_greater declared);
 * + octant order: one index order per view octant, boxes sorted along the octant's diagonal (what
   the preview ships); + front to back: sorted by distance to the eye each frame;
-* + quality q: bm_quality(q) (hit distance a share of a pixel, a step limit by size on screen,
+* + quality q: bm_quality(q) (secant steps within a share of a pixel, a step limit by size on screen,
   one tap under a few pixels);
 * occluders: the hidden-box pre-pass the preview and three.js ship (every fragment runs, as on
   the renderers measured; one whose box entry lies behind the nearest conservative occluder
@@ -199,9 +199,10 @@ and at 1/29 of a link's wire radius stand 1.2 degrees from the reference (99th p
 enough to move a colour channel by more than 1/255 on a third of the links' pixels; the 3-tap
 normal stands 0.07 degrees away (`tests/test_gpu_cost.py` holds it within 0.2 degree of a
 sphere's true normal). Together: 3.2x down the chain, 6.9x through the pile, 42x for a million
-boxes, at no pixel changed. The quality knob then trades exactness for the rest: its pixel-sized
-hit distance moves hits on features under a few pixels across (thin link wire, small spheres),
-and most of its changed pixels are shading, not coverage.
+boxes, at no pixel changed. The quality knob then trades exactness for the rest: its secant
+steps near a surface keep the silhouette (coverage changes only where boxes under a few pixels
+take one tap) and land nearer the exact surface than this epsilon's full march, so most of its
+changed pixels are shading on the links' thin wire (docs/BENCHMARKS.md, *The quality knob*).
 """
 
 

@@ -298,11 +298,11 @@ def main():
                                   "checks": checks}
         print(f"{name}: done", flush=True)
         if args.json:
-            args.json.write_text(json.dumps(result, indent=1))
+            args.json.write_text(json.dumps(result, indent=1, allow_nan=False))
         if name == "cloud" and args.naive_sizes:
             result["naive"][name] = measure_naive(data, parse_sizes(args.naive_sizes))
     if args.json:
-        args.json.write_text(json.dumps(result, indent=1))
+        args.json.write_text(json.dumps(result, indent=1, allow_nan=False))
     print(report(result))
 
 

@@ -63,7 +63,7 @@ def child(case, n):
         else:
             _, result = core.select_linked_across(positions, selected, sub, n // 8, epsilon=10.0)
         seconds = time.perf_counter() - start
-    print(json.dumps({"seconds": seconds, "peak": rss_bytes("VmHWM") - base, "result": result}))
+    print(json.dumps({"seconds": seconds, "peak": rss_bytes("VmHWM") - base, "result": result}, allow_nan=False))
 
 
 def bake_child(count, repeats):
@@ -87,7 +87,7 @@ def bake_child(count, repeats):
         start_cpu = time.process_time()
         core.validate_mesh(*arrays)
         checks.append(time.process_time() - start_cpu)
-    print(json.dumps({"wall": wall, "cpu": cpu, "checks": checks, "peak": peak, "input": sum(a.nbytes for a in arrays)}))
+    print(json.dumps({"wall": wall, "cpu": cpu, "checks": checks, "peak": peak, "input": sum(a.nbytes for a in arrays)}, allow_nan=False))
 
 
 def bake_rows(before, rounds=4):

@@ -285,7 +285,7 @@ def main():
         env.pop("PYTHONPATH", None)
         env["PATH"] = "/usr/bin:/bin:" + env.get("PATH", "")
         proc = subprocess.run([blender, "--background", "--factory-startup", "--python-exit-code", "1", "--python",
-                               __file__, "--", str(parent), str(out), json.dumps(vars(args))],
+                               __file__, "--", str(parent), str(out), json.dumps(vars(args), allow_nan=False)],
                               env=env, capture_output=True, text=True)
         if proc.returncode != 0 or not out.exists():
             sys.exit(proc.stdout[-4000:] + proc.stderr[-4000:])
@@ -296,6 +296,6 @@ if __name__ == "__main__":
     if "--" in sys.argv:  # inside Blender
         parent, out, options = sys.argv[sys.argv.index("--") + 1:]
         sys.path[:0] = [parent, str(HERE.parent)]  # Blender runs this file by path
-        Path(out).write_text(json.dumps(in_blender(json.loads(options))))
+        Path(out).write_text(json.dumps(in_blender(json.loads(options)), allow_nan=False))
     else:
         main()

@@ -134,7 +134,7 @@ def counting_setup(sdf, config):
     if not occluders:
         options["occluders"] = False
     return (f"scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, 'model.glb', "
-            f"{json.dumps(options)}); scene.add(loaded.scene);")
+            f"{json.dumps(options, allow_nan=False)}); scene.add(loaded.scene);")
 
 
 def exported_glb(bpy, name, scene, folder):
@@ -156,8 +156,9 @@ def rows_for(name, scene, glb, sidecar, release):
     _origins, _rotations, _half, sdf, (_to_clip, to_view, eye) = scene
     # before r163 declareDepth changes nothing: the ShaderMaterial rows would repeat the others
     configs = [c for c in CONFIGS if c[3] or int(threejs.RELEASES[release].revision) >= 163]
-    parts = {"__SIZE__": str(SIZE), "__CAMERA__": json.dumps(three_camera(to_view, eye)),
-             "__CONFIGS__": json.dumps(configs), "__MAP__": json.dumps(MAPS[sdf]), "__REPEATS__": str(REPEATS),
+    parts = {"__SIZE__": str(SIZE), "__CAMERA__": json.dumps(three_camera(to_view, eye), allow_nan=False),
+             "__CONFIGS__": json.dumps(configs, allow_nan=False), "__MAP__": json.dumps(MAPS[sdf], allow_nan=False),
+             "__REPEATS__": str(REPEATS),
              "__CLOCK__": threejs.CLOCK}
     js = TIMING_JOB
     for key, value in parts.items():

@@ -1,8 +1,31 @@
 #!/usr/bin/env bash
-# The main job: set up (idempotent), then build, bake, export and check the 16,000-box world
-# headless, then render its .glb in three.js (Debian's r111 in headless Chromium).
+# The demo: installs only what it needs, then builds, bakes, exports and checks the 16,000-box world
+# headless (python3 -m boxmarch demo) and renders its .glb in three.js (Debian's r111 in headless
+# Chromium). Debian packages through apt-get (root: sudo when not root; scripts/packages.sh lists
+# them); Python packages into a virtual environment, .venv-demo (BOXMARCH_DEMO_VENV), never into the
+# system's Python. Safe to run again: a second run installs nothing. Arguments go to the demo
+# (python3 -m boxmarch demo --help).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
-"${PYTHON:-python3}" -m boxmarch demo "$@"
-exec "${PYTHON:-python3}" -m scripts.threejs_picture "$@"
+PYTHON="${PYTHON:-python3}"
+VENV="${BOXMARCH_DEMO_VENV:-.venv-demo}"
+source scripts/packages.sh
+started=$SECONDS
+
+venv_apt=()
+"$PYTHON" -c "import ensurepip" 2>/dev/null || venv_apt=(python3-venv)  # Debian's Python ships venv apart
+apt_install_missing "${DEMO_APT_PACKAGES[@]}" "${venv_apt[@]}"
+[ -x "$VENV/bin/python" ] || "$PYTHON" -m venv "$VENV"
+DEMO_PYTHON="$VENV/bin/python"
+pip_quiet=(-q --disable-pip-version-check)
+if ! "$DEMO_PYTHON" -c "import bpy, scikit_build_core, pybind11" 2>/dev/null; then
+  echo "[demo] pip install ${DEMO_PIP_PACKAGES[*]} into $VENV" >&2
+  "$DEMO_PYTHON" -m pip install "${pip_quiet[@]}" "${DEMO_PIP_PACKAGES[@]}"
+fi
+echo "[demo] building boxmarch into $VENV" >&2
+"$DEMO_PYTHON" -m pip install "${pip_quiet[@]}" --no-build-isolation .
+echo "[demo] set up in $((SECONDS - started)) s" >&2
+
+"$DEMO_PYTHON" -m boxmarch demo "$@"
+"$DEMO_PYTHON" -m scripts.threejs_picture "$@"
+echo "[demo] done in $((SECONDS - started)) s (set-up included)" >&2

@@ -15,7 +15,7 @@ if [ ! -f "$FOLDER/.complete" ]; then
   echo "[install_bpy] pip install --target $FOLDER bpy==$VERSION.*" >&2
   rm -rf "$FOLDER"
   mkdir -p "$CACHE"
-  "$PYTHON" -m pip install -q --disable-pip-version-check --no-deps --target "$FOLDER" "bpy==$VERSION.*" >&2
+  "$PYTHON" -m pip install -q --disable-pip-version-check --root-user-action=ignore --no-deps --target "$FOLDER" "bpy==$VERSION.*" >&2
   touch "$FOLDER/.complete"  # written last: an interrupted install is redone, never trusted
 fi
 echo "$FOLDER"

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# The test command: set up (idempotent), then run every test (Blender 5.0 as the bpy module, Debian's
-# Blender 3.4 program), then the quick Blender-facing selection under bpy 4.2 LTS
-# (scripts/blender_matrix.py). Arguments select tests for the first run and skip the second.
+# The test command: set up (idempotent, scripts/setup.sh), then run every test tier by tier, each
+# announced and timed (pytest names each file as it runs it): the everyday tier, the slow tier
+# (engines, Blender 3.4 program runs, renders, CLI and install runs), the native tier (sanitizers,
+# fuzzer), then the quick Blender-facing selection under bpy 4.2 LTS (scripts/blender_matrix.py).
+# Arguments select tests for one pytest run instead.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PYTHON="${PYTHON:-python3}"
@@ -10,6 +12,17 @@ if [ $# -gt 0 ]; then
   exec "$PYTHON" -m pytest -q "$@"
 fi
 status=0
-"$PYTHON" -m pytest -q || status=$?
-"$PYTHON" scripts/blender_matrix.py --quick 4.2 || status=$?
+started=$SECONDS
+run_tier() {  # NAME COMMAND...: one tier, then its result and time
+  local name="$1" start=$SECONDS result=passed
+  shift
+  echo "[test] $name" >&2
+  "$@" || { status=1; result=FAILED; }
+  echo "[test] $name: $result in $((SECONDS - start)) s" >&2
+}
+run_tier "everyday tier (-m 'not slow')" "$PYTHON" -m pytest -m "not slow"
+run_tier "slow tier (-m 'slow and not native')" "$PYTHON" -m pytest -m "slow and not native"
+run_tier "native tier (-m native)" "$PYTHON" -m pytest -m native
+run_tier "bpy 4.2 LTS selection" "$PYTHON" scripts/blender_matrix.py --quick 4.2
+echo "[test] every tier $([ "$status" -eq 0 ] && echo passed || echo FAILED) in $((SECONDS - started)) s" >&2
 exit "$status"

@@ -31,7 +31,7 @@ LOOKS = {"Chains": ("return sdf_preset_link(p, box_half);", (0.85, 0.65, 0.3)),
 
 
 def setup_js():
-    looks = json.dumps({k: [v[0], v[1]] for k, v in LOOKS.items()})
+    looks = json.dumps({k: [v[0], v[1]] for k, v in LOOKS.items()}, allow_nan=False)
     return ("var looks = " + looks + ";"
             "gltf.scene.traverse(function (o) { if (!o.isMesh) return;"
             " var name = o.name + ' ' + (o.parent ? o.parent.name : ''), look = looks[''];"

@@ -188,12 +188,12 @@ def glm_library() -> str:
 
 def threejs(module: bool) -> str:
     text = (SHADERS / "threejs" / "template.js").read_text()
-    text = text.replace("/*@DECODE@*/''", json.dumps(pasted("decode.glsl")))
+    text = text.replace("/*@DECODE@*/''", json.dumps(pasted("decode.glsl"), allow_nan=False))
     text = text.replace("/*@LIBRARY@*/''", json.dumps(pasted("sdf.glsl") + "\n" + pasted("box_params.glsl") + "\n"
-                                                    + pasted("raymarch.glsl")))
-    exports = ("loadBoxmarch, checkBoxmarchSidecar, createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, "
-               "boxmarchTexcoordName, sortBoxmarchFrontToBack, useBoxmarchOccluders, boxmarchOccluderShape, "
-               "createBoxmarchOccluderMaterial")
+                                                    + pasted("raymarch.glsl"), allow_nan=False))
+    exports = ("loadBoxmarch, checkBoxmarchSidecar, parseBoxmarchSidecar, boxmarchSidecarUrl, checkBoxmarchOptions, "
+               "createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, boxmarchTexcoordName, "
+               "sortBoxmarchFrontToBack, useBoxmarchOccluders, boxmarchOccluderShape, createBoxmarchOccluderMaterial")
     if module:
         return text + f"\nexport {{ {exports} }};\n"
     return text + f"\nif (typeof module !== 'undefined') {{\n  module.exports = {{ {exports} }};\n}}\n"

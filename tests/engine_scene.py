@@ -1,7 +1,9 @@
 """The scene the engine tests export: boxes of very different shapes whose geometry the tests know
 independently of boxmarch (centres, sizes, rotations chosen here), and the checks that compare what
 an engine received or drew with that geometry. Blender-free except :func:`baked_scene`."""
+import functools
 import re
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -177,9 +179,33 @@ def unreal_import(import_data, build):
             "half_float_channels": () if build.get("use_full_precision_u_vs") else (1, 2, 3, 4, 5, 6)}
 
 
-# The imports the shipped helpers set up (engines/unity, engines/unreal, read as source).
-UNITY = unity_import(import_helpers.unity_settings())
-UNREAL = unreal_import(import_helpers.unreal_constants()["IMPORT_DATA"], import_helpers.unreal_constants()["BUILD_SETTINGS"])
+class BuiltOnFirstUse(Mapping):
+    """A modelled import (the dict unity_import or unreal_import returns) built at its first
+    lookup: building runs the engine helper (Unity's compiles C#: seconds), which modules that
+    only import the name must not pay for."""
+
+    def __init__(self, build):
+        self._build = build
+
+    @functools.cached_property
+    def _model(self) -> dict:
+        return self._build()
+
+    def __getitem__(self, key):
+        return self._model[key]
+
+    def __iter__(self):
+        return iter(self._model)
+
+    def __len__(self):
+        return len(self._model)
+
+
+# The imports under what the shipped helpers set when run: the Unity postprocessor under mono on
+# a boxmarch UNITY export, the Unreal script against the stub ``unreal`` module
+# (tests/engines/import_helpers.py).
+UNITY = BuiltOnFirstUse(lambda: unity_import(import_helpers.unity_settings()))
+UNREAL = BuiltOnFirstUse(lambda: unreal_import(*import_helpers.unreal_settings()))
 UV_NAMES = ["BoxQuatXY", "BoxQuatZW", "BoxOffsetXY", "BoxOffsetZIndex", "BoxHalfXY", "BoxHalfZ"]
 
 

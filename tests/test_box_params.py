@@ -138,7 +138,9 @@ def cross(a, b):
                      a[..., 0] * b[..., 1] - b[..., 0] * a[..., 1]], -1)
 
 
-def definition_containment(origins, quaternions, half):
+def definition_containment(origins, quaternions, half, tie=np.max):
+    """``tie``: which of the smallest holders of equal volume is the parent (np.max: the higher
+    index, as the contract says; np.min only for the negative control)."""
     n = len(origins)
     volume = half[:, 0] * half[:, 1] * half[:, 2]
     parent = np.full(n, -1)
@@ -154,15 +156,18 @@ def definition_containment(origins, quaternions, half):
         holders = np.flatnonzero(np.all(np.abs(local) <= bounds, 1) & larger & (index != i))
         if len(holders):  # the smallest by volume, ties to the higher index (the lower one is larger)
             smallest = holders[volume[holders] == volume[holders].min()]
-            parent[i] = smallest.max()
+            parent[i] = tie(smallest)
     return parent
 
 
-def definition_chain(origins):
+def definition_chain(origins, nearest="first"):
+    """``nearest``: which of equally near earlier boxes is the parent ("first", as the contract
+    says; "last" only for the negative control)."""
     parent = np.full(len(origins), -1)
     for i in range(1, len(origins)):
         v = origins[i] - origins[:i]
-        parent[i] = np.argmin(np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2]))  # first minimum
+        distance = np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2])
+        parent[i] = np.argmin(distance) if nearest == "first" else i - 1 - np.argmin(distance[::-1])
     return parent
 
 
@@ -202,6 +207,10 @@ def test_the_definitions_see_ties_and_nesting_and_catch_a_wrong_parent():
     assert containment.tolist() == definition_containment(origins, q, half).tolist() == [-1, 0, 1, 2, 0]
     assert core.box_hierarchy(origins, q, half, rule="CHAIN")[0].tolist() == definition_chain(origins).tolist() \
         == [-1, 0, 0, 0, 3]
-    planted = containment.copy()
-    planted[3] = 1  # a holder, but not the smallest by the order
-    assert planted.tolist() != definition_containment(origins, q, half).tolist()
+    # Negative control: a rule that breaks the ties the other way is a wrong parent the comparison
+    # catches here. Containment taking the lower-numbered of the equal holders 1 and 2 moves box
+    # 3 to box 1 (a holder, not the smallest by the order); the chain taking the last of the
+    # nearest earlier boxes moves box 2 (0 and 1 at distance 0) and box 3 (0, 1, 2 at 1).
+    other_tie = definition_containment(origins, q, half, tie=np.min)
+    assert np.flatnonzero(other_tie != containment).tolist() == [3] and other_tie[3] == 1
+    assert np.flatnonzero(definition_chain(origins, nearest="last") != definition_chain(origins)).tolist() == [2, 3]

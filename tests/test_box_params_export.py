@@ -10,10 +10,12 @@ import pytest
 
 from boxmarch import scenes
 from boxmarch.export import scene as export_scene
+from boxmarch.formats.presets import PRESETS
 from tests.conftest import mesh_object
 from tests.engine_scene import TO_Y_UP, UNITY, UNREAL, table_texels
 from tests.fbx_reader import read_fbx_geometry
 from tests.gltf_reader import read_glb
+from tests.helpers import sidecar_files
 
 SPACING = 1.5
 # Two meshes: boxes at x = 1.5 k, k = 0..5 (mesh A) and 10..14 (mesh B); k names the box in any file.
@@ -123,22 +125,39 @@ def merge_table(vertex_values, table_values):
     return out
 
 
-def decode_by_sidecar(sidecar, uv, texels):
-    """(n, 6) shape, material, random, user, parent, depth read where the export's sidecar says
-    they ride (its box_parameters: "UV5.x" or "TABLE.1.b", the box table's layout its box_table)."""
-    table = sidecar["box_table"]
-    columns = []
+def decode_by_sidecar(bpy, path, sidecar):
+    """(file positions, (n, 6) shape, material, random, user, parent, depth) of ``path`` read
+    through its sidecar alone: each value where box_parameters says it rides, a vertex channel
+    found by its file_channels name, or the texel of the vertex's index in the box_table."""
+    positions, channels = sidecar_files.file_channels(bpy, path, sidecar)
+    table, columns = sidecar["box_table"], []
     for name in ("shape", "material", "random", "user", "parent", "depth"):
-        channel, *rest = sidecar["box_parameters"][name].split(".")
-        if channel == "TABLE":
-            plane, component = int(rest[0]), "rgba".index(rest[1])
-            index = np.rint(uv[int(sidecar["quantities"]["index"]["channels"][0][2])][:, 1]).astype(int)
-            rows = table["height"] // len(table["planes"])
-            width = table["width"]
-            columns.append(texels[(plane * rows + index // width) * width + index % width, component])
-        else:
-            columns.append(uv[int(channel[2:])][:, "xy".index(rest[0])])
-    return np.stack(columns, 1).astype(np.float64)
+        spec = sidecar["box_parameters"][name]
+        if not spec.startswith("TABLE."):
+            columns.append(sidecar_files.values(channels, [spec])[:, 0])
+            continue
+        plane, component = int(spec.split(".")[1]), "rgba".index(spec.split(".")[2])
+        assert table["planes"][plane][component] == name
+        data = path.parent / table["file"]
+        texels = (table_texels(data.read_text()) if table["format"] == "godot3_tres"
+                  else np.fromfile(data, "<f4").reshape(-1, 4))
+        index = np.rint(sidecar_files.values(channels, sidecar["quantities"]["index"]["channels"])[:, 0]).astype(int)
+        rows, width = table["height"] // len(table["planes"]), table["width"]
+        columns.append(texels[(plane * rows + index // width) * width + index % width, component])
+    return positions, np.stack(columns, 1).astype(np.float64)
+
+
+@pytest.mark.parametrize("preset, layout", [(name, layout) for name, preset in PRESETS.items() for layout in preset.layouts])
+def test_every_export_decodes_its_parameters_from_the_sidecar_alone(blender, scene, tmp_path, preset, layout):
+    """Mesh A exported with each preset and layout, its file read only where its sidecar points
+    (file_channels, box_parameters, box_table, axes.v_flipped_in_file): the painted values."""
+    objects, random = scene
+    objects[1].select_set(False)  # one mesh: the FBX reader reads a file's first geometry
+    path = tmp_path / f"p{PRESETS[preset].extension}"
+    assert blender.ops.boxmarch.export(filepath=str(path), preset=preset, layout=layout) == {"FINISHED"}
+    sidecar = json.loads((tmp_path / "p.boxmarch.json").read_text())
+    positions, decoded = decode_by_sidecar(blender, path, sidecar)
+    check(decoded, box_key(positions[:, 0]), "A", random, 0)
 
 
 @pytest.mark.parametrize("layout", ["NORMAL_FRAME", "UV_FRAME", "CLASSIC"])
@@ -159,10 +178,6 @@ def test_gltf(blender, scene, tmp_path, layout):
             check_table_frames(texels, 11, 11, index_of(layout, uv), p["POSITION"].astype(np.float64), offsets, keys,
                                TO_Y_UP, 1.0)
         check(values, keys, mesh["name"], random, base)
-        # The sidecar names the same channels and texels: decoding through it gives the same values.
-        sidecar = json.loads((tmp_path / "p.boxmarch.json").read_text())
-        assert (sidecar["box_table"] is None) == (layout == "CLASSIC")
-        assert np.array_equal(decode_by_sidecar(sidecar, uv, texels), values)
         base += len(KEYS[mesh["name"]]) if layout != "CLASSIC" else 0
     assert base == (11 if layout != "CLASSIC" else 0)
 

@@ -14,6 +14,7 @@ from tests.conftest import empty_scene, mesh_object
 from tests.engine_chain import chain_links, link_coverage
 from tests.engine_scene import TO_Y_UP
 from tests.engines import Shot, godot3, mask_mismatch, ndc_to_pixels, threejs
+from tests.helpers.tools import need
 
 pytestmark = pytest.mark.slow  # Blender bake and export, Chromium, Godot 3 and preview renders
 
@@ -106,9 +107,7 @@ def test_the_default_bake_leaves_the_link_axes_unsorted(chain):
 
 @pytest.mark.parametrize("release", sorted(threejs.RELEASES))
 def test_threejs_draws_links_from_a_default_export(chain, release):
-    reason = threejs.available(release)
-    if reason:
-        pytest.skip(reason)
+    need(threejs.available(release))
     files, _shots, _half, boxes = chain
 
     def setup(body):
@@ -121,9 +120,7 @@ def test_threejs_draws_links_from_a_default_export(chain, release):
 
 
 def test_godot3_draws_links_from_a_default_export(chain, tmp_path):
-    reason = godot3.available()
-    if reason:
-        pytest.skip(reason)
+    need(godot3.available())
     files, _shots, _half, boxes = chain
     project = str(tmp_path / "project")
     godot3.import_gltf(files["GODOT3"], project, compress=False, extra_files={"model.boxes.tres": files["table"]})

@@ -16,6 +16,7 @@ from tests.engine_scene import (TO_Y_UP, UNITY, UNREAL, baked_scene, bone_motion
                                 rig_boxes, skinned_scene)
 from tests.engines import fbx_libraries
 from tests.fbx_reader import read_fbx_geometry
+from tests.helpers.tools import need
 
 pytestmark = pytest.mark.slow
 
@@ -74,17 +75,15 @@ def posed_locals(rest, motions):
     return out
 
 
-def need(library):
+def need_library(library):
     """Fails (not skips) when scripts/setup.sh's ``library`` is missing: these checks must run."""
-    reason = (fbx_libraries.ufbx_available if library == "ufbx" else fbx_libraries.assimp_available)()
-    if reason:
-        pytest.fail(f"{reason}: run scripts/setup.sh")
+    need((fbx_libraries.ufbx_available if library == "ufbx" else fbx_libraries.assimp_available)())
 
 
 def library_read(library, path, folder):
     """{"position", UV map name...: per polygon corner, float64} as ``library`` delivers them
     (Assimp names no UV channel: they are named here by their order in the file)."""
-    need(library)
+    need_library(library)
     if library == "ufbx":
         data = fbx_libraries.read_with_ufbx(path, folder)
         assert list(data["axes"]) == FILE_AXES and data["unit_meters"] == 1.0  # ufbx keeps the file's frame
@@ -250,7 +249,7 @@ def test_ufbx_skinning_carries_each_box_to_its_posed_place(files):
     """ufbx's own skinning (evaluated at load) of the rig's UNITY export with the bones set to
     the test's forward-kinematics pose: each corner decodes at its box's posed place. Negative
     control: the frame left at rest (as UV channels would carry it) misses by far."""
-    need("ufbx")
+    need_library("ufbx")
     errors, rest_frame = posed_errors(files["skinned"], files["posed"], files["folder"], files["motions"])
     assert errors[0] < 1e-5 and errors[1] < 1e-6 and errors[2] < 1e-5, errors
     assert rest_frame[0] > 0.1, rest_frame

@@ -11,6 +11,7 @@ from tests.engine_scene import (MIXED_SHAPES, TO_Y_UP, baked_scene, box_of_verte
                                 frame_and_size_errors, paint_shapes, per_box_agreement, rounded_box_mismatch, silhouettes,
                                 table_texels)
 from tests.engines import coverage_mismatch, godot3, import_helpers
+from tests.helpers.tools import need
 
 pytestmark = pytest.mark.slow  # Godot 3 imports and renders
 
@@ -21,9 +22,7 @@ INNER = 0.6
 
 @pytest.fixture
 def imported(blender, tmp_path):
-    reason = godot3.available()
-    if reason:
-        pytest.skip(reason)
+    need(godot3.available())
     ob, centres, sizes, rotations = baked_scene(blender)
     boxes = paint_shapes(blender, ob, MIXED_SHAPES)
     path = tmp_path / "mixed.glb"
@@ -84,10 +83,43 @@ def test_godot3_renders_each_box_at_its_own_size_and_the_negative_control_fails(
     assert covered.sum() > 500
     wrong = godot3.render(project, shader(godot3.IDENTITY_FRAME), width=W, height=H, camera=WIDE, uniforms=uniforms)
     assert coverage_mismatch(wrong.pixels[..., :3].max(axis=2) > 20, expected) is not None
-    # the quality knob at 0.5 (hit distance an eighth of a pixel, steps by size on screen): the
+    # the quality knob at 0.5 (secant steps within a quarter of a pixel, steps by size on screen): the
     # same silhouettes within 1 px
     knob = godot3.render(project, shader(), width=W, height=H, camera=WIDE, uniforms={**uniforms, "quality": 0.5})
     assert coverage_mismatch(knob.pixels[..., :3].max(axis=2) > 20, expected) is None
+
+
+SHIPPED_ALBEDO = "  ALBEDO = base_color.rgb * (0.35 + 0.65 * max(n.z, 0.0));"
+
+
+def marched_steps(project, uniforms):
+    """(H, W) map() evaluations per pixel Godot ran (0 where nothing was drawn): the shipped
+    shader with its colour replaced by its step count / 255, which Godot writes sRGB-encoded."""
+    code = shader()
+    assert SHIPPED_ALBEDO in code
+    shot = godot3.render(project, code.replace(SHIPPED_ALBEDO, "  ALBEDO = vec3(float(steps) / 255.0);"), width=W,
+                         height=H, camera=WIDE, uniforms=uniforms)
+    encoded = shot.pixels[..., 0].astype(np.float64) / 255.0
+    linear = np.where(encoded <= 0.04045, encoded / 12.92, ((encoded + 0.055) / 1.055) ** 2.4)
+    return np.rint(linear * 255.0)
+
+
+def test_godot3_quality_knob_cuts_the_marching_steps(imported):
+    """The quality knob measured in Godot: at 0.5 the boxes take fewer map() evaluations than at
+    1 (the full march), in total and in no pixel more. Negative control: the knob under a
+    misspelled uniform name (Godot ignores it) leaves the steps as they were, and is caught."""
+    project, _table, _centres, _sizes, _rotations, _boxes = imported
+    uniforms = {"box_table": "res://model.boxes.tres", "max_steps": 256}
+    full = marched_steps(project, uniforms)
+    knob = marched_steps(project, {**uniforms, "quality": 0.5})
+    ignored = marched_steps(project, {**uniforms, "qualty": 0.5})
+    drawn = (full > 0) & (knob > 0)
+    assert drawn.sum() > 500
+    print(f"map() evaluations over {drawn.sum()} pixels: {full[drawn].sum():.0f} at quality 1, "
+          f"{knob[drawn].sum():.0f} at 0.5, {ignored[drawn].sum():.0f} under a misspelled name")
+    assert knob[drawn].sum() < 0.8 * full[drawn].sum()
+    assert np.all(knob[drawn] <= full[drawn] + 2)  # 8-bit sRGB: 2 steps of rounding near 255
+    assert not ignored[drawn].sum() < 0.8 * full[drawn].sum()
 
 
 def test_godot3_shipped_shader_raymarches_a_rounded_box_of_each_box_own_size(imported):
@@ -129,14 +161,12 @@ def test_godot3_draws_the_shape_each_box_id_picks(imported):
 def test_godot3_default_compression_error_is_what_the_report_states(blender, tmp_path):
     """Godot's default import (mesh compression on) quantizes the colour to clamped 8 bits and the
     frame to 8-bit snorm: the decode breaks, and the export report says by how much."""
-    reason = godot3.available()
-    if reason:
-        pytest.skip(reason)
+    need(godot3.available())
     from boxmarch.export import scene as export_scene
 
     ob, centres, sizes, rotations = baked_scene(blender)
     report = export_scene.export_objects(blender.context, [ob], "GODOT3", str(tmp_path / "mixed.glb"))
-    assert any("Compress off" in w and "default import settings" in w for w in report["warnings"])
+    assert "Compress off" in export_scene.import_note(report) and report["warnings"] == []
     project = tmp_path / "project"
     godot3.import_gltf((tmp_path / "mixed.glb").read_bytes(), str(project), compress=True)
     (surface,) = godot3.dump_arrays(str(project))
@@ -164,9 +194,7 @@ def test_godot3_export_folder_copied_alone_imports_float_exact(blender, tmp_path
     """The GODOT3 export's folder copied as it is into a fresh project: Godot honours the
     NAME.glb.import written beside the .glb (compression off) and the decode is float-exact. The
     same folder without that file gets Godot's default import, which misses by over 0.1."""
-    reason = godot3.available()
-    if reason:
-        pytest.skip(reason)
+    need(godot3.available())
     from boxmarch.export import scene as export_scene
 
     ob, centres, sizes, rotations = baked_scene(blender)
@@ -193,9 +221,7 @@ def test_godot3_plugin_imports_boxmarch_glbs_float_exact_and_refuses_other_layou
     has it imported again) and a GLTF export (NORMAL_FRAME: its UV3-4 do not survive Godot 3's
     importer), both with their sidecars: the first decodes float-exact, the second is reported
     by name and layout and left as Godot imported it."""
-    reason = godot3.available()
-    if reason:
-        pytest.skip(reason)
+    need(godot3.available())
     from boxmarch.export import scene as export_scene
 
     ob, centres, sizes, rotations = baked_scene(blender)
@@ -209,5 +235,6 @@ def test_godot3_plugin_imports_boxmarch_glbs_float_exact_and_refuses_other_layou
     (surface,) = godot3.dump_arrays(project, "res://models/mixed.glb")
     assert_decodes_to_the_boxes(surface, (godot / "mixed.boxes.tres").read_text(), centres, sizes, rotations)
     assert "boxmarch: re-importing res://models/mixed.glb with mesh compression off" in log
-    assert "boxmarch: res://other/other.glb: layout NORMAL_FRAME (preset GLTF) is not read by Godot 3" in log, log
+    assert ('boxmarch: res://other/other.boxmarch.json: preset must be "GODOT3", not "GLTF" (layout "NORMAL_FRAME"): '
+            "Godot 3 keeps two UV sets only" in log), log
     assert "meshes/compress=true" in (tmp_path / "project" / "other" / "other.glb.import").read_text()

@@ -18,6 +18,7 @@ from tests.engine_scene import (UNITY, baked_scene, imported, posed_rig_boxes, r
                                 unity_skinned_vertices)
 from tests.engines import Shot, coverage_mismatch, hlsl_webgl, ndc_to_pixels
 from tests.fbx_reader import read_fbx_geometry, read_fbx_skin
+from tests.helpers.tools import need
 
 pytestmark = pytest.mark.slow  # Chromium renders and Blender exports
 
@@ -49,9 +50,7 @@ def look_at(eye, target, fov_deg=50.0, near=0.5, far=100.0):
 @pytest.fixture(scope="module")
 def example(tmp_path_factory):
     """layout -> the example material's two stages in GLSL ES, its map() a box at INNER."""
-    reason = hlsl_webgl.available()
-    if reason:
-        pytest.skip(reason)
+    need(hlsl_webgl.available())
     hlsl = shader_sources.shader_dir() / "hlsl"
     text = (hlsl / "boxmarch_example.hlsl").read_text()
     assert SHIPPED_MAP in text

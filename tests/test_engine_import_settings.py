@@ -2,10 +2,15 @@
 (addon/boxmarch/formats/import_settings.py, which the sidecar records) and the sidecar's values.
 
 Unity: the AssetPostprocessor is compiled with mono's mcs against a stub of the Unity API it calls
-(tests/engines/unity_stub), never run in Unity; a misspelled Unity member must fail the compile.
-Unreal: the import script is parsed (python ast), never run in Unreal; the Custom node code is
-compiled as HLSL by glslangValidator. The modelled imports of tests/engine_scene.py are built from
-the settings read here, so the decode tests of the models test what the helpers set."""
+and run under mono, its OnPreprocessModel invoked by name as Unity sends it, on a boxmarch export,
+a foreign model and refused sidecars; the stub's ModelImporter records what is set
+(tests/engines/unity_stub). Never run in Unity; a misspelled Unity member must fail the compile.
+Unreal: the import script is run against a stub ``unreal`` module that records what it sets
+(tests/engines/unreal_stub.py), never in Unreal; the Custom node code is compiled as HLSL by
+glslangValidator. The modelled imports of tests/engine_scene.py are built from what the helpers
+set when run, so the decode tests of the models test what the helpers do."""
+
+import re
 
 import numpy as np
 import pytest
@@ -15,21 +20,58 @@ from tests.engines import import_helpers
 from tests.helpers.glsl import compile_hlsl_fragment
 
 
-def test_unity_postprocessor_sets_the_table_and_reads_the_sidecar_values():
-    from boxmarch.formats import import_settings, sidecar, presets
+@pytest.mark.slow  # compiles and runs C# under mono
+def test_unity_postprocessor_constants_are_the_sidecar_values():
+    """The compiled assembly's constants, read by reflection."""
+    from boxmarch.formats import sidecar, presets
 
-    assert import_helpers.unity_settings() == import_settings.UNITY
     constants = import_helpers.unity_constants()
     assert constants == {"FormatVersion": sidecar.FORMAT_VERSION, "Preset": "UNITY",
                          "SidecarSuffix": sidecar.SIDECAR_SUFFIX, "LayoutsRead": constants["LayoutsRead"]}
     assert sorted(constants["LayoutsRead"]) == sorted(presets.PRESETS["UNITY"].layouts)
 
 
+@pytest.mark.slow  # compiles and runs C# under mono
+def test_unity_postprocessor_run_as_unity_calls_it_sets_the_table_and_refuses_bad_sidecars():
+    """The postprocessor compiled and run under mono, OnPreprocessModel invoked by name as Unity
+    sends it (tests/engines/unity_stub/UnityImportHarness.cs): a boxmarch UNITY export in each
+    layout gets exactly the table; a model without a sidecar nothing and no message; a sidecar
+    that is not JSON, not an object, empty, of version 2, of another preset or of a layout the
+    package does not read: nothing set and one error naming the sidecar."""
+    from boxmarch.formats import import_settings
+
+    run = import_helpers.unity_import_run()
+    assert import_helpers.unity_import_faults(run, import_settings.UNITY) == []
+    assert import_helpers.unity_settings() == import_settings.UNITY
+
+
+# One-line changes of the package's Editor sources that its run must catch: each compiles, and
+# each leaves a case of the run wrong (what Unity would do with it).
+UNITY_MUTATIONS = {
+    "importer == null inverted: no setting ever applied": (r"importer\s*==\s*null", "importer != null"),
+    "preset check inverted: UNITY refused, other presets set": (r"!=(\s*)([Pp]reset)\b", r"==\1\2"),
+    "OnPreprocessModel misspelled: Unity never calls it": (r"\bOnPreprocessModel\b", "OnPreProcessModel"),
+    "refusal not returned: a bad sidecar's model is set": (r"(LogError\([^;]*;)\s*return;", r"\1"),
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mutation", sorted(UNITY_MUTATIONS))
+def test_unity_postprocessor_run_catches_each_mutation(mutation):
+    from boxmarch.formats import import_settings
+
+    pattern, replacement = UNITY_MUTATIONS[mutation]
+    mutated, count = {}, 0
+    for name, text in import_helpers.unity_editor_sources().items():
+        mutated[name], found = re.subn(pattern, replacement, text, count=1)
+        count += found
+    assert count == 1, f"{mutation}: the pattern is in {count} places of the Editor sources, not one"
+    assert import_helpers.unity_import_faults(import_helpers.unity_import_run(mutated), import_settings.UNITY) != []
+
+
 @pytest.mark.slow
 def test_unity_postprocessor_compiles_against_the_stub_and_a_misspelled_member_does_not(tmp_path):
-    reason = import_helpers.mcs_missing()
-    if reason:
-        pytest.skip(reason)
+    import_helpers.need_mono()
     source = import_helpers.UNITY_POSTPROCESSOR.read_text()
     built = import_helpers.compile_unity(source, tmp_path)
     assert built.returncode == 0, built.stdout + built.stderr
@@ -74,7 +116,81 @@ def test_unreal_script_refuses_sidecars_it_does_not_read():
     assert refusal(good) is None
     assert "UNREAL preset" in refusal(dict(good, preset="UNITY"))
     assert "NORMAL_FRAME" in refusal(dict(good, layout="NORMAL_FRAME"))
-    assert "format version 2" in refusal(dict(good, format_version=2))
+    assert "format_version must be 1 (the format this script reads), not 2" in refusal(dict(good, format_version=2))
+
+
+# What docs/ENGINES.md's Unreal row says Unreal must be told, phrase by phrase, in the part naming
+# its class: "import" (FbxStaticMeshImportData) or "build" (MeshBuildSettings of LOD 0), as
+# {property: value}.
+UNREAL_DOCUMENTED = {
+    "import": {"Convert Scene": {"convert_scene": True}, "Convert Scene Unit": {"convert_scene_unit": True},
+               "no lightmap UVs": {"generate_lightmap_u_vs": False},
+               "Import Normals and Tangents": {"normal_import_method": "FBXNIM_IMPORT_NORMALS_AND_TANGENTS"}},
+    "build": {"Use Full Precision UVs": {"use_full_precision_u_vs": True},
+              "no recomputed normals or tangents": {"recompute_normals": False, "recompute_tangents": False},
+              "no lightmap UVs": {"generate_lightmap_u_vs": False}},
+}
+
+
+def unreal_faults(saved) -> list:
+    """How the (import data, build settings) the script saved differ from the documented ones."""
+    found = dict(zip(("import", "build"), saved))
+    return [f"{phrase}: {part}.{key} = {found[part].get(key)!r}, not {value!r}"
+            for part, phrases in UNREAL_DOCUMENTED.items() for phrase, named in phrases.items()
+            for key, value in named.items() if found[part].get(key) != value]
+
+
+def test_unreal_script_run_against_the_stub_saves_what_the_docs_say_unreal_needs():
+    """import_boxmarch_fbx run against the stub ``unreal`` module: the one static mesh it imports
+    is saved with every setting docs/ENGINES.md names (Unreal's defaults differ in each: the
+    stub starts from them), which is the table the sidecar records."""
+    from boxmarch.formats import import_settings
+
+    row = next(line for line in (import_helpers.REPO / "docs" / "ENGINES.md").read_text().splitlines()
+               if line.startswith("| Unreal | "))
+    import_part, build_part = row.split(" | ")[1].split("(`FbxStaticMeshImportData`)")
+    assert "(`MeshBuildSettings` of LOD 0)" in build_part
+    for part, text in (("import", import_part), ("build", build_part)):
+        assert sorted(p.strip() for p in re.split(r"[,;]", text.split("(`")[0]) if p.strip()) == sorted(
+            UNREAL_DOCUMENTED[part]), text
+    saved = import_helpers.unreal_settings()
+    assert unreal_faults(saved) == []
+    assert {k: saved[0][k] for k in import_settings.UNREAL_IMPORT} == import_settings.UNREAL_IMPORT
+    assert {k: saved[1][k] for k in import_settings.UNREAL_BUILD} == import_settings.UNREAL_BUILD
+
+
+def test_unreal_script_run_imports_nothing_for_a_refused_sidecar():
+    from boxmarch.formats import sidecar
+
+    for changes in ({"preset": "UNITY"}, {"layout": "NORMAL_FRAME"}, {"format_version": sidecar.FORMAT_VERSION + 1}):
+        session, result = import_helpers.unreal_import_run(sidecar=import_helpers.unreal_sidecar(**changes))
+        # one line naming the model or its sidecar
+        assert isinstance(result, ValueError) and re.search(r"model\.(fbx|boxmarch\.json)", str(result)), (changes, result)
+        assert session.tasks == [] and session.saved == {}
+
+
+# One-line changes of the script that its run must catch.
+UNREAL_MUTATIONS = {
+    "build-settings loop emptied": (r"(for key, value in BUILD_SETTINGS\.items\(\):\n\s*)settings\.set_editor_property\(key, value\)",
+                                    r"\1pass"),
+    "build settings not written back": (r"meshes\.set_lod_build_settings\(mesh, 0, settings\)", "pass"),
+    "import-data loop emptied": (r"(for key, value in IMPORT_DATA\.items\(\):\n\s*)data\.set_editor_property\(",
+                                 r"\1(lambda *a: None)("),
+    "import data not handed to the options": (r'options\.set_editor_property\("static_mesh_import_data", data\)',
+                                              "pass"),
+    "mesh not saved after its build settings": (r"unreal\.EditorAssetLibrary\.save_loaded_asset\(mesh\)", "pass"),
+}
+
+
+@pytest.mark.parametrize("mutation", sorted(UNREAL_MUTATIONS))
+def test_unreal_script_run_catches_each_mutation(mutation):
+    pattern, replacement = UNREAL_MUTATIONS[mutation]
+    mutated, count = re.subn(pattern, replacement, import_helpers.UNREAL_SCRIPT.read_text())
+    assert count == 1, f"{mutation}: the pattern is no longer in the script"
+    session, result = import_helpers.unreal_import_run(mutated)
+    saved = list(session.saved.values())
+    assert not isinstance(result, Exception), result
+    assert len(saved) != 1 or unreal_faults(saved[0]) != [], mutation
 
 
 def test_unreal_material_function_compiles_as_hlsl(tmp_path):
@@ -172,6 +288,7 @@ def same_model(a, b):
     return a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
 
 
+@pytest.mark.slow  # compiles and runs C# under mono
 def test_modelled_imports_follow_the_helpers_settings():
     """The models used by the decode tests are those of the helpers' settings; changing one
     setting changes the model (or is refused as not modelled)."""

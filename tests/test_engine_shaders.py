@@ -7,11 +7,13 @@ import sys
 from pathlib import Path
 
 import pytest
+from tests.helpers.tools import need
 
 SHADERS = Path(__file__).resolve().parent.parent / "shaders"
-EXPORTS = ["boxmarchOccluderShape", "boxmarchTexcoordName", "checkBoxmarchSidecar", "createBoxmarchMaterial",
-           "createBoxmarchOccluderMaterial", "loadBoxmarch", "prepareBoxmarchGeometry", "sortBoxmarchFrontToBack",
-           "useBoxmarchMaterial", "useBoxmarchOccluders"]
+EXPORTS = ["boxmarchOccluderShape", "boxmarchSidecarUrl", "boxmarchTexcoordName", "checkBoxmarchOptions",
+           "checkBoxmarchSidecar", "createBoxmarchMaterial", "createBoxmarchOccluderMaterial", "loadBoxmarch",
+           "parseBoxmarchSidecar", "prepareBoxmarchGeometry", "sortBoxmarchFrontToBack", "useBoxmarchMaterial",
+           "useBoxmarchOccluders"]
 
 
 def test_generated_engine_shaders_are_up_to_date():
@@ -45,7 +47,7 @@ def run_generator(root, *args):
 
 @pytest.mark.parametrize("relative, body, drifted", [
     ("shaders/hlsl/boxmarch_sdf.hlsl", "return length(p) - r;", "return length(p) - 0.9 * r;"),
-    ("shaders/hlsl/boxmarch_march.hlsl", "t += relaxation * d;", "t += d;"),
+    ("shaders/hlsl/boxmarch_march.hlsl", "float advance = relaxation * d;", "float advance = d;"),
     ("cpp/src/shader_library.h", "return glm::length(p) - r;", "return glm::length(p) - 0.9f * r;"),
     ("shaders/godot3/boxmarch.shader", "return length(p) - r;", "return length(p) - 0.9 * r;"),
     ("engines/unity/com.boxmarch.boxmarch/Runtime/Shaders/boxmarch_sdf.hlsl", "return length(p) - r;",
@@ -80,8 +82,7 @@ def test_generator_refuses_a_builtin_it_cannot_translate(tmp_path, builtin):
     ("boxmarch.module.js", "const m = await import('file://' + process.argv[1]);")])
 def test_threejs_material_loads_as_script_and_module(name, loader):
     node = shutil.which("node") or shutil.which("nodejs")
-    if node is None:
-        pytest.skip("node is not installed")
+    need(None if node else "node is not installed (apt-get install nodejs)")
     script = f"(async () => {{ {loader} console.log(Object.keys(m).sort().join(',')); }})();"
     proc = subprocess.run([node, "-e", script, str(SHADERS / "threejs" / name)], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr

@@ -32,6 +32,7 @@ from tests.engine_scene import (
 )
 from tests.engines import coverage_mismatch, godot3, threejs
 from tests.gltf_reader import node_globals, read_glb, read_skin
+from tests.helpers.tools import need
 
 pytestmark = pytest.mark.slow  # Chromium and Godot 3 renders of skinned exports
 
@@ -117,9 +118,7 @@ def covered(shot):
 def shots(request, exported):
     """One page per release: {"side", "top", "rest-frame" (SIDE), "loader" (SIDE)} -> Shot."""
     release = request.param
-    reason = threejs.available(release)
-    if reason:
-        pytest.skip(reason)
+    need(threejs.available(release))
     glb = exported[0].read_bytes()
     jobs = {"side": setup_js(), "top": setup_js(), "rest-frame": setup_js(REST_FRAME), "loader": loader_setup(),
             "loader-undeclared": loader_setup(declare_depth=False)}
@@ -276,9 +275,7 @@ def test_godot3_raymarches_each_box_where_the_posed_bone_carries_it(blender, tmp
     bone matrix into the vertex stage's WORLD_MATRIX: the shipped shader carries its frame
     through it. The pixels must cover the posed boxes' silhouettes within 1 px; the shader with
     its frame taken as the vertex carries it at rest (no skinning) must fail."""
-    reason = godot3.available()
-    if reason:
-        pytest.skip(reason)
+    need(godot3.available())
     ob, _rig = skinned_scene(blender)
     project = godot3_import_skinned(blender.context, ob, tmp_path)
     shot, covered_px = godot3_posed_shot(project)

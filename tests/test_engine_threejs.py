@@ -28,6 +28,7 @@ from tests.engine_scene import (
     silhouettes,
 )
 from tests.engines import coverage_mismatch, threejs
+from tests.helpers.tools import need
 
 pytestmark = pytest.mark.slow  # Chromium renders
 
@@ -60,10 +61,11 @@ def setup_js(sdf_body, tamper=""):
             f"color: new THREE.Color(1, 1, 1), maxSteps: 256}})); }});")
 
 
-def loader_setup_js(name, sdf_body, front_to_back=False, declare_depth=True):
+def loader_setup_js(name, sdf_body, front_to_back=False, declare_depth=True, url_tail=""):
     """Draws ``name``.glb as ``loadBoxmarch`` loads it (in place of the page's own parse);
-    ``declare_depth`` False: the ShaderMaterial without the depth declaration on r163+ too."""
-    return (f"scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, '{name}.glb', "
+    ``declare_depth`` False: the ShaderMaterial without the depth declaration on r163+ too;
+    ``url_tail``: a query and fragment after the file name in the URL."""
+    return (f"scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, '{name}.glb{url_tail}', "
             f"{{map: {json.dumps(sdf_body)}, color: new THREE.Color(1, 1, 1), maxSteps: 256, "
             f"frontToBack: {json.dumps(front_to_back)}, declareDepth: {json.dumps(declare_depth)}}});"
             " scene.add(loaded.scene); if (!loaded.meshes.length) throw new Error('loadBoxmarch: no meshes');"
@@ -183,9 +185,7 @@ def page(request, exported):
     """One page per release: {"release", "meshes", (map, camera name) -> Shot, tamper name -> Shot,
     "loader" -> Shot, refusal name -> message}, and the scene's boxes."""
     release = request.param
-    reason = threejs.available(release)
-    if reason:
-        pytest.skip(reason)
+    need(threejs.available(release))
     files, centres, sizes, rotations = exported
     glb = files["NORMAL_FRAME"]
     served = {"mixed.glb": glb, "mixed.boxmarch.json": files["NORMAL_FRAME", "sidecar"],
@@ -200,6 +200,7 @@ def page(request, exported):
     for name, tamper in (("offset-zeroed", offset_zeroed(release)), ("identity-frame", IDENTITY_FRAME)):
         jobs[name] = threejs.render_job(setup_js(BOX_MAP, tamper), W, H, WIDE)
     jobs["loader"] = threejs.render_job(loader_setup_js("mixed", BOX_MAP), W, H, WIDE)
+    jobs["loader-query"] = threejs.render_job(loader_setup_js("mixed", BOX_MAP, url_tail="?v=2#view"), W, H, WIDE)
     jobs["loader-front-to-back"] = threejs.render_job(loader_setup_js("mixed", BOX_MAP, True), W, H, WIDE)
     jobs["sort"] = threejs.Job(SORT_JOB, lambda out: {k: threejs.f64(v) if isinstance(v, str) else v
                                                        for k, v in out.items()})
@@ -286,6 +287,8 @@ def test_load_boxmarch_draws_the_export_from_its_url(page):
     mismatch = coverage_mismatch(covered(shot), silhouettes(shot, centres, INNER * sizes, rotations, TO_Y_UP))
     assert mismatch is None, mismatch
     assert covered(shot).sum() > 500
+    # a cache-busting query and a fragment: the sidecar is mixed.boxmarch.json?v=2, the same picture
+    assert np.array_equal(out["loader-query"].pixels, shot.pixels)
 
 
 def boxes_in_draw_order(index, positions, centres, sizes, rotations):
@@ -314,9 +317,10 @@ def test_front_to_back_sort_draws_the_nearest_box_first_and_the_same_image(page)
 
 def test_load_boxmarch_refuses_a_sidecar_it_does_not_read(page):
     out = page[0]
-    assert out["refuse-classic"] == ('boxmarch: classic.boxmarch.json has layout "CLASSIC"; this material reads '
-                                     'NORMAL_FRAME (export with the GLTF preset and its default layout)')
-    assert out["refuse-future"] == "boxmarch: future.boxmarch.json has format_version 2; this material reads format_version 1"
+    assert out["refuse-classic"] == ('boxmarch: classic.boxmarch.json: layout must be one of NORMAL_FRAME (what this '
+                                     'material reads), not "CLASSIC": export with the GLTF preset and its default layout')
+    assert out["refuse-future"] == ("boxmarch: future.boxmarch.json: format_version must be 1 (the format this material "
+                                    "reads), not 2")
     assert out["refuse-missing"].startswith("boxmarch: no missing.boxmarch.json (HTTP 404)")
 
 

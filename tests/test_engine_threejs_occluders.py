@@ -15,6 +15,7 @@ from tests.conftest import empty_scene, mesh_object
 from tests.engine_scene import TO_Y_UP
 from tests.engines import perspective, threejs
 from tests.helpers.preview_render import quaternions_of
+from tests.helpers.tools import need
 
 pytestmark = pytest.mark.slow  # Chromium renders
 
@@ -52,9 +53,7 @@ def loader_js(occluders):
 @pytest.fixture(scope="module", params=sorted(threejs.RELEASES))
 def counted(request, pile):
     release = request.param
-    reason = threejs.available(release)
-    if reason:
-        pytest.skip(reason)
+    need(threejs.available(release))
     glb, sidecar, centres, rotations = pile
     jobs = [threejs.count_job(loader_js(occluders), W, H, CAMERA) for occluders in (True, False)]
     results = threejs.run_jobs(glb, jobs, threejs.shipped_material(release), release,

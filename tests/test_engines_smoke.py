@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from tests.engines import coverage_mismatch, godot3, threejs
+from tests.helpers.tools import need
 
 pytestmark = pytest.mark.slow  # Chromium and Godot 3 runs
 
@@ -87,12 +88,6 @@ def check_shot(shot):
     return coverage_mismatch(covered, [shot.project(world_corners(q)) for q in QUADS])
 
 
-def skip_unless(engine):
-    reason = engine.available()
-    if reason:
-        pytest.skip(reason)
-
-
 # --- three.js ----------------------------------------------------------------------------------
 
 WHITE_JS = """
@@ -106,7 +101,7 @@ WHITE_SETUP = "gltf.scene.traverse(function (o) { if (o.isMesh) o.material = cre
 
 
 def test_threejs_receives_the_written_floats():
-    skip_unless(threejs)
+    need(threejs.available())
     meshes = threejs.load_attributes(make_glb(QUADS))
     assert [m["name"] for m in meshes] == ["Left", "Right"]
     for i, (m, q) in enumerate(zip(meshes, QUADS)):
@@ -126,7 +121,7 @@ def test_threejs_receives_the_written_floats():
 
 @pytest.mark.parametrize("camera", [CAMERA, ORTHO], ids=["perspective", "ortho"])
 def test_threejs_draws_where_its_camera_projects(camera):
-    skip_unless(threejs)
+    need(threejs.available())
     shot = threejs.render(make_glb(QUADS), WHITE_JS, WHITE_SETUP, W, H, camera)
     assert shot.pixels.shape == (H, W, 4)
     assert set(np.unique(shot.pixels[..., 0])) == {0, 255}
@@ -137,7 +132,7 @@ def test_threejs_draws_where_its_camera_projects(camera):
 
 
 def test_threejs_reports_page_errors():
-    skip_unless(threejs)
+    need(threejs.available())
     with pytest.raises(RuntimeError, match="boom"):
         threejs.render(make_glb(QUADS), "", "throw new Error('boom');", 8, 8, CAMERA)
 
@@ -156,7 +151,7 @@ WHITE_UNIFORMS = {"level": 1.0, "mask": [1.0, 1.0, 1.0]}  # black unless uniform
 @pytest.fixture(scope="module")
 def godot_projects(tmp_path_factory):
     """The QUADS file imported twice: {compress: project_dir}."""
-    skip_unless(godot3)
+    need(godot3.available())
     projects = {}
     for compress in (False, True):
         projects[compress] = tmp_path_factory.mktemp(f"godot-compress-{compress}")

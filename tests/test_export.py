@@ -252,6 +252,23 @@ def test_unity_export_warns_about_float_offsets(blender, tmp_path):
     assert scene.export_objects(blender.context, [ob], "UNITY", str(tmp_path / "w.fbx"), "CLASSIC")["warnings"] == []
 
 
+@pytest.mark.parametrize("preset, name", [("GODOT3", "w.glb"), ("UNITY", "w.fbx"), ("UNREAL", "w.fbx")])
+def test_default_import_loss_is_one_note_not_a_warning(blender, tmp_path, preset, name):
+    """The export writes what sets the engine's import (Godot 3: NAME.glb.import with compression
+    off; Unity and Unreal: the sidecar their helpers read), so what the default import would cost
+    is said once, in the import note, and is no warning."""
+    from boxmarch.export import scene
+
+    ob, _, _, _ = baked_boxes(blender, count=5)
+    report = scene.export_objects(blender.context, [ob], preset, str(tmp_path / name))
+    assert report["default_import_error"] > 1e-4
+    assert report["warnings"] == [], report["warnings"]
+    note = scene.import_note(report)
+    assert note.startswith(presets.PRESETS[preset].import_settings) and f"{report['default_import_error']:.1e}" in note
+    if preset == "GODOT3":
+        assert "compress=false" in (tmp_path / "w.glb.import").read_text()
+
+
 def test_quick_export_repeats_the_last_preset_and_file(blender, tmp_path):
     bpy = blender
     baked_boxes(bpy, count=5)

@@ -16,6 +16,7 @@ from tests.engine_scene import (TO_Y_UP, TRANSFORM_CASES, UNITY, baked_scene, bo
                                 transformed_rig, world_boxes)
 from tests.fbx_reader import read_fbx_geometry
 from tests.gltf_reader import node_globals, read_glb, read_skin
+from tests.helpers.tools import need
 
 TOLERANCES = (1e-5, 1e-6, 1e-5)  # origin / half-extent, axis, half-extent (float32 data)
 
@@ -256,9 +257,8 @@ def test_engines_draw_a_turned_and_scaled_rig_where_its_boxes_are(blender, tmp_p
     centres, sizes, rotations = world_boxes(np.array(ob.matrix_world), *rig_boxes()[:3])
     camera = engine_camera(centres @ TO_Y_UP.T)
     material = (shader_sources.shader_dir() / "threejs" / "boxmarch.js").read_text()
-    reasons = [reason for reason in (threejs.available(), godot3.available()) if reason]
-    if reasons:
-        pytest.skip("; ".join(reasons))
+    need(threejs.available())
+    need(godot3.available())
 
     def draws(folder):
         folder.mkdir()

@@ -6,12 +6,18 @@ arrays byte for byte. The comparison is shown to catch one changed value; replac
 to change only the layer elements it patches. Hostile files (truncated, wrong magic, ASCII FBX,
 an unknown type code, a zlib array whose count disagrees, flipped bytes) raise ValueError naming
 the problem and leave replace_frame's target as it was."""
+import json
+import os
 import struct
+import subprocess
+import sys
 import zlib
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+import boxmarch
 from boxmarch.formats import fbx, fbx_container
 from tests.engine_scene import skinned_scene
 from tests.fbx_reader import read_fbx_geometry, tree_differences
@@ -176,9 +182,37 @@ def damaged(data, old, new):
     return data.replace(old, new)
 
 
+def with_header_extension():
+    """small_document behind a header record like the exporter's (children, a long string)."""
+    document = small_document()
+    creator = fbx_container.Node(b"Creator", [b"Blender (stable FBX IO) - 3.4.1" + bytes(200)], b"S")
+    document.nodes.insert(0, fbx_container.Node(b"FBXHeaderExtension", [], b"", [
+        fbx_container.Node(b"FBXHeaderVersion", [1003], b"I"), creator]))
+    return fbx_container.encode(document)
+
+
+def one_array_file(count, encoding, stored, version=7400):
+    """A file whose one record holds a 'd' array of ``count`` values stored as ``stored`` bytes."""
+    array = b"d" + struct.pack("<III", count, encoding, len(stored)) + stored
+    header = struct.Struct("<IIIB")
+    record = header.pack(27 + header.size + 4 + len(array), 1, len(array), 4) + b"Data" + array
+    body = fbx_container.MAGIC + struct.pack("<I", version) + record + bytes(header.size)
+    return (body + bytes(16) + bytes(-(len(body) + 16) % 16) + bytes(4) + struct.pack("<I", version) + bytes(120)
+            + fbx_container.FOOTER_MAGIC)
+
+
+def zeros_stream(mib):
+    """A zlib stream of ``mib`` MiB of zero bytes (about 1030:1), made a MiB at a time."""
+    deflate, zeros = zlib.compressobj(9), bytes(1 << 20)
+    return b"".join(deflate.compress(zeros) for _ in range(mib)) + deflate.flush()
+
+
 def hostile_files():
     """{what: (bytes, words the ValueError must hold)}."""
     good = fbx_container.encode(small_document())
+    header_extension = with_header_extension()
+    long_name = fbx_container.encode(fbx_container.Document(7400, [fbx_container.Node(b"A" * 200, [7], b"I")], bytes(16)))
+    wide = fbx_container.encode(fbx_container.Document(7500, fbx_container.decode(header_extension).nodes, bytes(16)))
     compressed = zlib.compress(np.arange(100, dtype=np.float64).tobytes(), 1)
     array_header = struct.pack("<III", 100, 1, len(compressed))
     return {
@@ -202,7 +236,74 @@ def hostile_files():
         "unknown encoding": (damaged(good, array_header, struct.pack("<III", 100, 7, len(compressed))),
                              "unknown encoding 7"),
         "no footer": (good[:-160], "footer"),
+        "7500 header over 7.4 records": (header_extension[:23] + struct.pack("<I", 7500) + header_extension[27:],
+                                         "version 7500 does not match its records"),
+        "7400 header over 7.5 records": (wide[:23] + struct.pack("<I", 7400) + wide[27:],
+                                         "version 7400 does not match"),
+        "binary record name": (damaged(good, b"Empty", b"Em\x00\xffy"), "not a record name"),
+        "unknown type code in a record named by 200 characters": (damaged(long_name, b"I" + struct.pack("<i", 7),
+                                                                          b"Q" + struct.pack("<i", 7)),
+                                                                  "'A{40}...': unknown property type code 'Q'"),
+        # 8 GiB declared from about 1 KiB of zlib data: refused before anything is allocated
+        "zlib count past 1032:1": (one_array_file(1 << 30, 1, zlib.compress(bytes(1 << 20), 9)),
+                                   "more than zlib inflates to"),
     }
+
+
+def test_hostile_file_messages_are_one_short_printable_line():
+    """No message quotes the file's binary: a misread record name is described, not printed."""
+    for what, (data, _words) in hostile_files().items():
+        with pytest.raises(ValueError) as caught:
+            fbx_container.decode(data)
+        message = str(caught.value)
+        assert message.isprintable() and len(message) < 240, (what, message)
+
+
+def geometry_file(name, code):
+    objects = fbx_container.Node(b"Objects", [], b"", [fbx_container.Node(b"Geometry", [1, name, b"Mesh"],
+                                                                          b"I" + code + b"S")])
+    return fbx_container.encode(fbx_container.Document(7400, [objects], bytes(16)))
+
+
+@pytest.mark.parametrize("name, code, words", [(7, b"L", "'L' property, not a string"),
+                                               (b"\xff\xfeCube\x00\x01Geometry", b"S", "not UTF-8 text"),
+                                               (2.5, b"D", "'D' property, not a string")])
+def test_replace_frame_refuses_a_geometry_name_that_is_no_text(name, code, words, tmp_path):
+    target = tmp_path / "target.fbx"
+    target.write_bytes(geometry_file(name, code))
+    with pytest.raises(ValueError, match=words):
+        fbx.replace_frame(str(target), {"Cube": {}})
+    assert target.read_bytes() == geometry_file(name, code)
+
+
+def read_in_child(path, limit_kb=None):
+    """fbx_memory_child's JSON for ``path``, optionally under an address-space limit (ulimit -v)."""
+    env = dict(os.environ, PYTHONPATH=str(Path(boxmarch.__file__).parent.parent), OPENBLAS_NUM_THREADS="1")
+    child = f"{sys.executable} {Path(__file__).parent / 'hostile' / 'fbx_memory_child.py'} {path}"
+    command = f"ulimit -v {limit_kb}; exec {child}" if limit_kb else f"exec {child}"
+    run = subprocess.run(["bash", "-c", command], env=env, capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, (run.returncode, run.stdout, run.stderr[-2000:])
+    return json.loads(run.stdout)
+
+
+@pytest.mark.slow
+def test_a_zlib_array_inflates_into_its_own_buffer_only(tmp_path):
+    """A 64 KiB file whose array inflates to 64 MiB (within zlib's 1032:1) is read holding the
+    values about once (a single decompress call held them twice: 128 MiB)."""
+    path = tmp_path / "zeros.fbx"
+    path.write_bytes(one_array_file(8 << 20, 1, zeros_stream(64)))
+    result = read_in_child(path)
+    assert result["outcome"] == "read"
+    assert result["peak_bytes"] < 1.25 * (64 << 20), result
+
+
+@pytest.mark.slow
+def test_an_array_past_the_free_memory_raises_value_error(tmp_path):
+    """1 GiB declared (a 1 MiB zero stream) under an 800 MB address-space limit: ValueError, not MemoryError."""
+    path = tmp_path / "large.fbx"
+    path.write_bytes(one_array_file(1 << 27, 1, zeros_stream(1024)))
+    result = read_in_child(path, limit_kb=800_000)
+    assert result["outcome"].startswith("ValueError") and "bytes of memory" in result["outcome"], result
 
 
 def test_small_document_round_trips():

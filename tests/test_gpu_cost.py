@@ -9,6 +9,7 @@ import pytest
 from boxmarch import core
 from boxmarch.preview import mesh_data
 from boxmarch.formats import shader_sources
+from tests.helpers.tools import need
 
 SHADERS = shader_sources.shader_dir()
 
@@ -299,9 +300,7 @@ def test_webgl2_conservative_depth_needs_its_extension_line_first():
     statement, where three.js's ShaderMaterial puts its own."""
     from tests.engines import threejs
 
-    reason = threejs.available()
-    if reason:
-        pytest.skip(reason)
+    need(threejs.available())
     result = threejs.run_page(b"", _CONSERVATIVE_DEPTH_JOB)
     assert result["extension"] is True
     assert result["first"] == "ok", result["first"]

@@ -122,15 +122,30 @@ def test_a_name_longer_than_255_bytes_is_refused(baked_blend, tmp_path):
     assert os.listdir(tmp_path) == ["world.blend"]
 
 
+# Signals that end a process unless handled, which someone else sends (docs/CLI.md).
+TERMINATING = ["SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT", "SIGUSR1", "SIGUSR2", "SIGALRM", "SIGVTALRM", "SIGPROF",
+               "SIGXCPU", "SIGPWR", "SIGIO"]
+
+
+def test_the_command_line_handles_every_terminating_signal():
+    from boxmarch.formats.files import TERMINATING_SIGNALS
+
+    assert sorted(signal.Signals(s).name for s in TERMINATING_SIGNALS) == sorted(TERMINATING)
+
+
+@pytest.mark.parametrize("name", TERMINATING)
 @pytest.mark.slow
-def test_sigint_during_the_fbx_export_exits_130_and_leaves_no_file(baked_blend, tmp_path):
-    r = subprocess.run([sys.executable, str(SCRIPTS / "interrupted_fbx_export.py"), "export", str(baked_blend),
+def test_a_terminating_signal_during_the_fbx_export_leaves_no_file(baked_blend, tmp_path, name):
+    """Each signal that would end the process (Ctrl-C, a closed terminal, a service manager's
+    stop, ...) exits 128 + its number, with no temporary file left and the report written."""
+    r = subprocess.run([sys.executable, str(SCRIPTS / "interrupted_fbx_export.py"), name, "export", str(baked_blend),
                         "--preset", "UNITY", "--to", "w.fbx", "--json", "r.json"], cwd=tmp_path,
                        env=module_environment(tmp_path), capture_output=True, text=True, timeout=240)
-    assert r.returncode == 128 + signal.SIGINT, r.stderr
-    assert last_line(r).startswith("boxmarch: interrupted:") and "Traceback" not in last_line(r), r.stderr
+    code = 128 + getattr(signal, name)
+    assert r.returncode == code, r.stderr
+    assert last_line(r).startswith(f"boxmarch: interrupted: stopped by {name},"), r.stderr
     assert sorted(os.listdir(tmp_path)) == ["r.json", "world.blend"]
-    assert json.loads((tmp_path / "r.json").read_text())["exit_code"] == 130
+    assert json.loads((tmp_path / "r.json").read_text())["exit_code"] == code
 
 
 @pytest.mark.slow

@@ -42,14 +42,29 @@ def test_threaded_paths_raise_memory_error_under_an_address_space_limit(args, al
     assert result[:1] == [args[0]] and result[-1] in allowed, (r.stdout, r.stderr[-2000:])
 
 
-def test_run_parallel_carries_a_worker_exception_back_for_every_tool():
-    # One thread per part even on small inputs; each tool raises ValueError in the caller on bad
-    # input (checked before the threads), and works with many threads on good input.
-    pos = np.random.default_rng(3).random((50000, 3)).astype(np.float32)
-    sub = (np.arange(50000) // 10).astype(np.int32)
-    for threads in (1, 7, 64):
-        core.merge_targets(pos, sub, 5000, distance=1e-3, threads=threads)
-        core.select_linked_across(pos, np.zeros(50000, np.uint8), sub, 5000, epsilon=1e-3, threads=threads)
+def test_every_threaded_tool_gives_one_answer_on_any_thread_count():
+    """Each tool that runs its parts through run_parallel (one part per thread, even on small
+    inputs) answers the same on 1, 7 and 64 threads, on points in tight clusters (many pairs in
+    every part), and merge_targets on 64 threads is Blender's star rule (reference_merge). A
+    worker's exception carried back to the caller: tests/cpp/test_parallel.cpp (run_parallel
+    itself), and the address-space test above (std::bad_alloc in workers as MemoryError)."""
+    rng = np.random.default_rng(3)
+    pos = (rng.random((30, 3))[rng.integers(0, 30, 600)] + rng.normal(0, 4e-4, (600, 3))).astype(np.float32)
+    sub = (np.arange(600) // 10).astype(np.int32)
+    selected = (np.arange(600) == 0).astype(np.uint8)  # reaches 50 of the 60 submeshes at 2e-4
+    tools = {
+        "find_close_pairs": lambda t: core.find_close_pairs(pos, 1e-3, threads=t),
+        "select_linked_across": lambda t: core.select_linked_across(pos, selected, sub, 60, epsilon=2e-4, threads=t),
+        "merge_passes": lambda t: core.merge_passes(pos, sub, 60, distance=1e-3, threads=t),
+        "merge_targets": lambda t: core.merge_targets(pos, sub, 60, distance=1e-3, threads=t),
+        "find_duplicate_submeshes": lambda t: core.find_duplicate_submeshes(pos, sub, 60, tolerance=1e-3, threads=t),
+    }
+    for name, tool in tools.items():
+        answers = [tool(threads) for threads in (1, 7, 64)]
+        flat = [[np.asarray(part) for part in (a if isinstance(a, tuple) else (a,))] for a in answers]
+        assert all(len(f) == len(flat[0]) and all(np.array_equal(x, y) for x, y in zip(f, flat[0])) for f in flat), name
+    assert len(core.find_close_pairs(pos, 1e-3, threads=1)) > 600  # the clusters hold many pairs
+    assert np.array_equal(core.merge_targets(pos, sub, 60, distance=1e-3, threads=64)[0], reference_merge(pos, sub, 1e-3))
 
 
 def reference_merge(pos, sub, distance):

@@ -36,7 +36,7 @@ def test_angle_epsilon_has_one_range_for_the_api_and_the_command_line():
         assert (offsets == 0.25).all()
     for good in (lo, 1e-6, 0.1, hi):
         assert core.bake(*CUBE, angle_epsilon=good).max_relative_error < 1e-6
-    parser = cli_args.build_parser("", dict.fromkeys(("bake", "dedup", "merge", "pack-uv", "export", "pipeline", "demo")))
+    parser = cli_args.build_parser("", dict.fromkeys(("bake", "dedup", "merge", "pack-uv", "export", "pipeline", "demo")), "boxmarch")
     with pytest.raises(cli_args.InputError, match=r"--angle-epsilon: must be in \[1e-06, 1.570796\] radians, got 1e-8"):
         parser.parse_args(["bake", "--angle-epsilon", "1e-8"])
     assert parser.parse_args(["pipeline", "--angle-epsilon", "1e-6"]).angle_epsilon == 1e-6

@@ -16,6 +16,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.helpers.tools import need
+
 ROOT = Path(__file__).resolve().parent.parent
 PYTHON_TREES = ["addon", "tests", "bench", "scripts", "shaders"]
 # Every cpp/ and bindings/ source keeps the .clang-format layout, except shader_library.h, which
@@ -73,9 +75,41 @@ def test_lint_imports_catches_a_planted_import(tmp_path, module, planted, contra
 
 def clang_format():
     tool = shutil.which("clang-format-14") or shutil.which("clang-format")
-    if tool is None:
-        pytest.fail("clang-format is missing: run scripts/setup.sh")
+    need(None if tool else "clang-format is missing (apt-get install clang-format-14)")
     return tool
+
+
+# A missing tool fails the test through tests/helpers/tools.need, on CI and anywhere else: no test
+# skips (a check that did not run reads as one that passed).
+SKIP_NAMES = {"skip", "skipif", "importorskip", "xfail", "SkipTest", "skipTest", "skipUnless", "skipIf"}
+
+
+def skip_paths(source: str) -> list:
+    """Line numbers of every pytest or unittest skip in ``source``: a call, marker or import of one
+    of SKIP_NAMES, or a raised SkipTest."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        named = (node.attr if isinstance(node, ast.Attribute) else node.id if isinstance(node, ast.Name) else None)
+        if named in SKIP_NAMES:
+            found.append(node.lineno)
+        if isinstance(node, ast.ImportFrom) and any(alias.name in SKIP_NAMES for alias in node.names):
+            found.append(node.lineno)
+    return sorted(set(found))
+
+
+def test_no_test_skips_past_the_missing_tool_helper():
+    skipping = {str(path.relative_to(ROOT)): lines for path in sorted((ROOT / "tests").rglob("*.py"))
+                if (lines := skip_paths(path.read_text()))}
+    assert skipping == {}, f"skips that bypass tests/helpers/tools.need: {skipping}"
+
+
+@pytest.mark.parametrize("planted", ["pytest.skip('no node')", "pytest.importorskip('jsonschema')",
+                                     "@pytest.mark.skipif(True, reason='x')\ndef f(): pass",
+                                     "from pytest import skip", "raise unittest.SkipTest('x')",
+                                     "pytestmark = pytest.mark.skip"])
+def test_skip_scan_catches_a_planted_skip(planted):
+    assert skip_paths(f"import pytest\nimport unittest\n{planted}\n") != []
+    assert skip_paths("import pytest\npytest.fail('x')\n") == []
 
 
 def test_formatted_cpp_files_keep_the_style():

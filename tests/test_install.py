@@ -101,11 +101,22 @@ def install_into_bpy(extension, tmp_path):
 def test_extension_installs_into_clean_blender_4_2_or_later_and_bakes(packages, tmp_path):
     install_into_bpy(packages["extension"], tmp_path)
     # A new session does not read the preferences (the bpy module starts from factory settings):
-    # README's addon_enable line enables the installed copy there.
+    # docs/OVERVIEW.md's addon_enable line enables the installed copy there.
     result = run_in_bpy("enable_check.py", tmp_path, tmp_path / "enable.json")
     assert result["error"] is None, result["error"]
     assert not result["enabled_at_start"] and result["enabled"] and result["operator_registered"]
     assert Path(result["module_file"]).is_relative_to(tmp_path / "resources")
+
+
+@pytest.mark.bpy
+def test_install_script_refuses_what_it_cannot_install(tmp_path):
+    """scripts/install_extension.py: a missing zip is one line and exit 2, nothing installed."""
+    env = python_env(dict(os.environ))
+    env.update(HOME=str(tmp_path), BLENDER_USER_RESOURCES=str(tmp_path / "resources"))
+    proc = subprocess.run([sys.executable, str(REPO / "scripts" / "install_extension.py"), str(tmp_path / "no.zip")],
+                          env=env, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 2, proc.stdout[-2000:] + proc.stderr[-2000:]
+    assert "no.zip: no such .zip file" in proc.stderr and not (tmp_path / "resources" / "extensions").exists()
 
 
 @pytest.mark.slow

@@ -166,7 +166,7 @@ def view_distance(depth, projection):
 
 
 def test_quality_knob_matches_cpu_reference(rendered):
-    """The preview's quality knob (hit distance, step limit, one tap) is the CPU reference's:
+    """The preview's quality knob (secant steps, step limit, one tap) is the CPU reference's:
     TORUS at quality 0.05 on 40 x 30 px; the full-quality reference must differ more."""
     depth = rendered["QUALITY_depth"]
     low = reference_from_layers(rendered, "TORUS", rendered["quality_view"], rendered["quality_projection"],

@@ -11,11 +11,21 @@ import json
 import numpy as np
 import pytest
 
-from tests.engine_scene import baked_scene, rotate, skinned_scene, table_texels
+from tests.engine_scene import baked_scene, box_corners, rotate, skinned_scene, table_texels
 from tests.fbx_reader import read_fbx_geometry
 from tests.gltf_reader import read_glb
+from tests.helpers.sidecar_files import file_channels, values
+from tests.helpers.tools import need
 
-jsonschema = pytest.importorskip("jsonschema")
+
+@pytest.fixture(scope="module")
+def jsonschema():
+    try:
+        import jsonschema
+    except ImportError:
+        jsonschema = None
+    need(None if jsonschema else "jsonschema is not installed (pip install jsonschema)")
+    return jsonschema
 
 EXPORTS = [("GLTF", "NORMAL_FRAME"), ("GLTF", "UV_FRAME"), ("GLTF", "CLASSIC"), ("GODOT3", "NORMAL_COLOR"),
            ("UNITY", "UV_FRAME"), ("UNITY", "CLASSIC"), ("UNITY", "NORMAL_FRAME"), ("UNREAL", "UV_FRAME"),
@@ -35,55 +45,6 @@ def test_the_schema_lists_every_preset():
     from boxmarch.formats import presets
 
     assert set(schema()["properties"]["preset"]["enum"]) == set(presets.PRESETS)
-
-
-def file_channels(bpy, path, sidecar):
-    """(positions (n, 3), {channel: (n, k) float64}) per vertex or corner of the file, by the
-    names the sidecar gives; UV v read back as the engine reads it when the file flips it."""
-    names = sidecar["file_channels"]
-    if path.suffix == ".glb":
-        (mesh,) = read_glb(path)
-        prims = mesh["primitives"]
-        cat = lambda key: np.concatenate([p[key] for p in prims])
-        out = {channel: cat(name) for channel, name in names.items()}
-        positions = cat("POSITION")
-    elif path.suffix == ".fbx":
-        raw = read_fbx_geometry(path)
-        layers = {"LayerElementNormal": "normal", "LayerElementTangent": "tangent"}
-        out = {channel: raw[layers.get(name, name)] for channel, name in names.items()}
-        if "TANGENT" in out:  # FBX keeps the bitangent as its own layer
-            out["BINORMAL"] = raw["binormal"]
-        positions = raw["position"]
-    else:
-        with bpy.data.libraries.load(str(path)) as (src, dst):
-            dst.meshes = list(src.meshes)
-        (mesh,) = dst.meshes
-        corner_vertex = np.empty(len(mesh.loops), np.int32)
-        mesh.loops.foreach_get("vertex_index", corner_vertex)
-        co = np.empty(len(mesh.vertices) * 3, np.float32)
-        mesh.vertices.foreach_get("co", co)
-        positions = co.reshape(-1, 3)[corner_vertex].astype(np.float64)
-        out = {}
-        for channel, name in names.items():
-            if channel == "COLOR":
-                colour = np.empty(len(mesh.vertices) * 4, np.float32)
-                mesh.color_attributes[name].data.foreach_get("color", colour)
-                out[channel] = colour.reshape(-1, 4)[corner_vertex].astype(np.float64)
-            else:
-                uv = np.empty(len(mesh.loops) * 2, np.float32)
-                mesh.uv_layers[name].data.foreach_get("uv", uv)
-                out[channel] = uv.reshape(-1, 2).astype(np.float64)
-    if sidecar["axes"]["v_flipped_in_file"]:
-        for channel in out:
-            if channel.startswith("UV"):
-                out[channel][:, 1] = 1.0 - out[channel][:, 1]
-    return positions, out
-
-
-def values(channels, specs):
-    """(n, len(specs)) of channel components named like "UV3.x", "COLOR.a", "TABLE.r"."""
-    component = {"x": 0, "y": 1, "r": 0, "g": 1, "b": 2, "a": 3}
-    return np.stack([channels[s.split(".")[0]][:, component[s.split(".")[1]]] for s in specs], 1)
 
 
 def decode(positions, channels, sidecar, table=None):
@@ -124,8 +85,51 @@ def clusters(points, tolerance):
     return out
 
 
+# Metres per unit of the frame each engine holds the box data in after its importer, from the
+# engines' documentation: glTF and three.js, Godot, Unity (Convert Units: 1 unit per metre),
+# Blender in metres; Unreal in centimetres.
+DATA_UNIT_METRES = {"GLTF": 1.0, "GODOT3": 1.0, "UNITY": 1.0, "UNREAL": 0.01, "BLENDER": 1.0}
+
+
+def file_vertices_and_unit(bpy, path):
+    """([Blender vertices per mesh of the file], metres per file unit), read from the file: a
+    .glb's distinct positions per glTF mesh (the exporter splits vertices by corner, never joins
+    them) in metres (glTF 2.0, 3.4); an FBX geometry's control points in the unit its
+    GlobalSettings UnitScaleFactor gives (centimetres per unit); a .blend's mesh vertices in its
+    scene's unit scale (a .blend of meshes alone: Blender units, metres)."""
+    if path.suffix == ".glb":
+        counts = [len(np.unique(np.concatenate([p["POSITION"] for p in mesh["primitives"]]), axis=0))
+                  for mesh in read_glb(path)]
+        return counts, 1.0
+    if path.suffix == ".fbx":
+        raw = read_fbx_geometry(path)
+        return [len(raw["control_points"])], float(raw["settings"]["UnitScaleFactor"]) / 100.0
+    with bpy.data.libraries.load(str(path)) as (src, dst):
+        dst.meshes, dst.scenes = list(src.meshes), list(src.scenes)
+    unit = dst.scenes[0].unit_settings.scale_length if dst.scenes else 1.0  # no scene: Blender units, metres
+    return [len(mesh.vertices) for mesh in dst.meshes], float(unit)
+
+
+def reach(points):
+    """The largest distance between two of ``points`` (any rotation or reflection keeps it)."""
+    points = np.unique(np.asarray(points, np.float64), axis=0)
+    return float(max(np.linalg.norm(points - p, axis=1).max() for p in points))
+
+
+def check_counts_and_units(bpy, path, sidecar):
+    """vertex_count, meshes[].vertices and axes.length_scale against the file read independently:
+    its vertex counts, and (metres per file unit) / (metres per unit of the engine's data frame)."""
+    counts, file_unit_metres = file_vertices_and_unit(bpy, path)
+    assert sorted(m["vertices"] for m in sidecar["meshes"]) == sorted(counts), (sidecar["meshes"], counts)
+    assert sidecar["vertex_count"] == sum(counts), (sidecar["vertex_count"], counts)
+    expected_scale = file_unit_metres / DATA_UNIT_METRES[sidecar["preset"]]
+    assert abs(sidecar["axes"]["length_scale"] - expected_scale) <= 1e-12 * expected_scale, (
+        sidecar["axes"]["length_scale"], expected_scale)
+
+
 def check_against_file(bpy, path, sidecar):
     """Every claim the sidecar makes about ``path`` that the file can show; AssertionError if not."""
+    check_counts_and_units(bpy, path, sidecar)
     positions, channels = file_channels(bpy, path, sidecar)
     table = None
     if sidecar["quantities"].get("half_extents", {}).get("encoding") == "box_table":
@@ -143,15 +147,21 @@ def check_against_file(bpy, path, sidecar):
 
 
 @pytest.mark.parametrize("preset, layout", EXPORTS)
-def test_every_sidecar_validates_and_describes_its_file(blender, tmp_path, preset, layout):
+def test_every_sidecar_validates_and_describes_its_file(blender, jsonschema, tmp_path, preset, layout):
     from boxmarch.export import scene
     from boxmarch.formats import sidecar, presets
 
-    ob, centres, _sizes, _rotations = baked_scene(blender)
+    ob, centres, sizes, rotations = baked_scene(blender)
     path = tmp_path / f"boxes{presets.PRESETS[preset].extension}"
     report = scene.export_objects(blender.context, [ob], preset, str(path), layout)
     written = json.loads((tmp_path / "boxes.boxmarch.json").read_text())
     assert report["sidecar"] == str(tmp_path / "boxes.boxmarch.json")
+    # the file's unit read from the file is its coordinates' unit: the scene's reach in metres
+    positions, _channels = file_channels(blender, path, written)
+    counts, file_unit_metres = file_vertices_and_unit(blender, path)
+    corners = np.concatenate([box_corners(*box) for box in zip(centres, sizes, rotations)])
+    assert sum(counts) == len(corners)
+    assert abs(reach(positions) * file_unit_metres / reach(corners) - 1.0) < 1e-6
     jsonschema.validate(written, schema())
     assert (written["format_version"], written["preset"], written["layout"], written["skinned"]) == (1, preset, layout,
                                                                                                       False)
@@ -189,7 +199,7 @@ def test_a_sidecar_that_misnames_the_file_fails_the_check(blender, tmp_path, pre
 
 
 @pytest.mark.parametrize("preset", ["GLTF", "UNITY"])
-def test_skinned_sidecar_says_so_and_describes_the_rest_pose_file(blender, tmp_path, preset):
+def test_skinned_sidecar_says_so_and_describes_the_rest_pose_file(blender, jsonschema, tmp_path, preset):
     from boxmarch.export import scene
     from boxmarch.formats import presets
 
@@ -203,7 +213,7 @@ def test_skinned_sidecar_says_so_and_describes_the_rest_pose_file(blender, tmp_p
     check_against_file(blender, path, written)
 
 
-def test_schema_refuses_a_sidecar_without_an_agreed_key_or_with_a_wrong_type(blender, tmp_path):
+def test_schema_refuses_a_sidecar_without_an_agreed_key_or_with_a_wrong_type(blender, jsonschema, tmp_path):
     from boxmarch.export import scene
 
     ob, *_ = baked_scene(blender)

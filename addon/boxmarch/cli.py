@@ -9,25 +9,27 @@ Commands: bake, dedup, merge, pack-uv, export, pipeline (chains them), demo. The
 objects named with --objects, or on every mesh object of the file. --out writes the result as a
 new .blend, --json a machine-readable report; both appear only complete (written under a
 temporary name, then renamed). Progress goes to stderr, the result table to stdout (Blender's
-own prints are held back). Exit codes: 0 success, 2 bad arguments or input (one line saying why),
-130 interrupted, 1 internal error. docs/CLI.md has the reference.
+own prints are held back), at most TABLE_WIDTH characters wide. Exit codes: 0 success, 2 bad
+arguments or input (one line saying why), 3 no bpy module in this Python (the line says what to
+install), 128 + the signal's number when a signal stopped it (130 for Ctrl-C, 143 for SIGTERM),
+1 internal error. docs/CLI.md has the reference.
 
 This module only parses, checks and reports: every step runs the same job function as the
 add-on's operator (bake_job.bake_meshes, tool_jobs.run_tool, export.scene.export_objects).
 """
 from __future__ import annotations
 
-import contextlib
 import json
 import math
 import os
 import signal
 import sys
-import threading
+import textwrap
 import time
 
 from . import ensure_registered
 from .cli_args import InputError, build_parser, check_outputs, run_outputs
+from .formats import files
 
 PIPELINE_STEPS = ("dedup", "merge", "bake", "pack-uv", "export")
 # The tool each cleanup command runs (a tool_jobs class name), its operator (whose properties
@@ -40,22 +42,39 @@ CLEANUP_TOOLS = {
 }
 
 
+TABLE_WIDTH = 100  # characters: the result table fits a terminal; longer cells wrap within their column
+NARROWEST_COLUMN = 12
+EXIT_NO_BPY = 3
+NO_BPY_MESSAGE = ("boxmarch: error: this Python has no bpy module: install Blender as a Python module "
+                  "(pip install bpy==5.0.*, on Python 3.11), or run the command in the Blender program "
+                  "(blender --background FILE.blend --python-expr \"import boxmarch.cli; boxmarch.cli.main()\" "
+                  "-- COMMAND ...; docs/CLI.md)")
+
+
 def _progress(message: str) -> None:
     print(f"[boxmarch] {message}", file=sys.stderr, flush=True)
 
 
-def _table(headers, rows) -> str:
-    widths = [max(len(str(h)), *(len(str(r[i])) for r in rows)) for i, h in enumerate(headers)]
-    fmt = lambda cells: "| " + " | ".join(str(c).ljust(w) for c, w in zip(cells, widths)) + " |"
-    return "\n".join([fmt(headers), "|" + "|".join("-" * (w + 2) for w in widths) + "|", *map(fmt, rows)])
+def _table(headers, rows, width=TABLE_WIDTH) -> str:
+    """A Markdown-like table at most ``width`` characters wide: the widest columns are narrowed
+    (to NARROWEST_COLUMN at least) and their cells wrap onto continuation lines."""
+    head, *body = [[str(cell) for cell in row] for row in [headers, *rows]]
+    widths = [max(len(row[i]) for row in [head, *body]) for i in range(len(head))]
+    while sum(widths) + 3 * len(widths) + 1 > width and max(widths) > NARROWEST_COLUMN:
+        widths[widths.index(max(widths))] -= 1
+
+    def lines(row):
+        cells = [textwrap.wrap(cell, w) or [""] for cell, w in zip(row, widths)]
+        return ["| " + " | ".join((cell[k] if k < len(cell) else "").ljust(w) for cell, w in zip(cells, widths)) + " |"
+                for k in range(max(map(len, cells)))]
+    rule = "|" + "|".join("-" * (w + 2) for w in widths) + "|"
+    return "\n".join([*lines(head), rule, *(line for row in body for line in lines(row))])
 
 
 def _write_json(path: str, report: dict) -> None:
-    from .formats import files
-
     def write(temp):
         with open(temp, "w") as f:
-            json.dump(report, f, indent=2, default=float)
+            json.dump(report, f, indent=2, default=float, allow_nan=False)
     files.write_atomically(path, write)
 
 
@@ -216,7 +235,8 @@ def step_export(objects, args) -> dict:
         _progress(f"WARNING: {warning}")
     return {"step": "export", **report,
             "summary": f"{args.preset} ({report['layout']}) -> {report['path']}, transform error "
-                       f"{report['transform_error']:.1e} of the offset reach; import settings: {report['import_settings']}"}
+                       f"{report['transform_error']:.1e} of the offset reach; import settings: "
+                       f"{scene.import_note(report)}"}
 
 
 def _run_step(step, objects, args) -> dict:
@@ -314,51 +334,41 @@ def _blender_stdout_held_back():
     return blender_output.stdout_held_back(lambda line: _progress(f"Blender: {line}"))
 
 
-@contextlib.contextmanager
-def _interrupts_recorded(interrupts: list):
-    """While the body runs, a SIGINT is recorded in ``interrupts`` (and raises KeyboardInterrupt
-    as Python's own handler does): Blender's operators turn an exception inside them into a
-    RuntimeError, which must still end the run as interrupted."""
-    def on_interrupt(signum, _frame):
-        interrupts.append(signum)
-        raise KeyboardInterrupt
-
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.signal(signal.SIGINT, on_interrupt)
-    try:
-        yield
-    finally:
-        # None: the Blender program's own C handler, which Python cannot put back; the default
-        # (end the process) is what a background Blender does on SIGINT.
-        signal.signal(signal.SIGINT, signal.SIG_DFL if previous is None else previous)
+def _interrupted_code(interrupts) -> tuple[int, str]:
+    """(exit code, message) of a run stopped by the signal ``interrupts[0]`` (Ctrl-C where none
+    was recorded: a KeyboardInterrupt outside the handler): 128 + the signal's number, as a
+    shell reports a process the signal ended."""
+    signum = interrupts[0] if interrupts else signal.SIGINT
+    return 128 + signum, (f"boxmarch: interrupted: stopped by {signal.Signals(signum).name}, each output is either "
+                          "complete or not written (no partial file is left)")
 
 
 def run(argv=None) -> int:
-    """Run one command; returns the exit code (0; 2 bad input; 130 interrupted; 1 internal
-    error). ``argv`` None: the process's arguments; inside the Blender program those after
-    its first ``--`` (Blender's own come before it)."""
+    """Run one command; returns the exit code (0; 2 bad input; 3 no bpy module; 128 + the
+    signal's number when stopped by one, 130 for Ctrl-C; 1 internal error). ``argv`` None: the
+    process's arguments; inside the Blender program those after its first ``--`` (Blender's own
+    come before it)."""
     if argv is None:
         argv = sys.argv[1:]
         if _in_blender_program():
             argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     args, interrupts = None, []
     try:
-        with _interrupts_recorded(interrupts):
+        with files.interrupts_recorded(interrupts):
             try:
                 runners = {"bake": cmd_bake, "dedup": cmd_cleanup, "merge": cmd_cleanup, "pack-uv": cmd_cleanup,
                            "export": cmd_export, "pipeline": cmd_pipeline, "demo": cmd_demo}
-                args = build_parser(__doc__.splitlines()[0], runners).parse_args(argv)
-            except SystemExit as exit_:  # --help
+                args = build_parser(__doc__.splitlines()[0], runners, _version()).parse_args(argv)
+            except SystemExit as exit_:  # --help, --version
                 return 0 if not exit_.code else 2
             return args.run(args)
     except (Exception, KeyboardInterrupt) as error:
         if interrupts or isinstance(error, KeyboardInterrupt):
-            code, message = 130, ("boxmarch: interrupted: stopped, each output is either complete or not written "
-                                  "(no partial file is left)")
+            code, message = _interrupted_code(interrupts)
         elif isinstance(error, InputError):
             code, message = 2, f"boxmarch: error: {error}"
+        elif isinstance(error, ModuleNotFoundError) and error.name == "bpy":
+            code, message = EXIT_NO_BPY, NO_BPY_MESSAGE
         else:  # internal error: one line, exit 1
             from .blender_output import one_line
 
@@ -371,6 +381,15 @@ def run(argv=None) -> int:
         except Exception:
             pass  # the error line above is the report
     return code
+
+
+def _version() -> str:
+    """boxmarch's version (the add-on's bl_info), and Blender's where bpy is already loaded."""
+    from . import bl_info
+
+    text = "boxmarch " + ".".join(map(str, bl_info["version"]))
+    bpy = sys.modules.get("bpy")
+    return text + (f" (Blender {bpy.app.version_string})" if bpy is not None else "")
 
 
 def _in_blender_program() -> bool:

@@ -31,6 +31,17 @@ def _angle_epsilon(text):
     return value
 
 
+def _random_seed(text):
+    """--random-seed as an int in 0..core.RANDOM_SEED_MAX (the bake operator's Random Seed range)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"invalid int value: {text!r}") from None
+    if not 0 <= value <= core.RANDOM_SEED_MAX:
+        raise argparse.ArgumentTypeError(f"must be in 0..{core.RANDOM_SEED_MAX}, got {text}")
+    return value
+
+
 def _target_options(p, out_help="write the result as a new .blend (the input file is never changed)"):
     p.add_argument("blend", nargs="?", metavar="FILE.blend",
                    help="file to open (omit inside `blender FILE.blend --python-expr ...`)")
@@ -53,7 +64,8 @@ def _bake_options(p):
     p.add_argument("--parents", choices=core.HIERARCHY_RULES, default=core.HIERARCHY_RULES[0],
                    help="each box's parent: ATTRIBUTE (boxmarch_parent), CONTAINMENT, CHAIN or BONES "
                         "(the box of its bone's parent bone)")
-    p.add_argument("--random-seed", type=int, default=0, help="seed of each box's random value (0..2^31-1)")
+    p.add_argument("--random-seed", type=_random_seed, default=0,
+                   help=f"seed of each box's random value (0..{core.RANDOM_SEED_MAX})")
 
 
 def _cleanup_options(p, command):
@@ -78,10 +90,11 @@ def _export_options(p, required):
     p.add_argument("--to", required=required, metavar="PATH", help="file to export (.fbx, .glb or .blend)")
 
 
-def build_parser(description: str, runners: dict):
+def build_parser(description: str, runners: dict, version: str):
     """The parser of every command; ``runners`` = {command: the function that runs it}, set as
-    the parsed arguments' ``run``."""
+    the parsed arguments' ``run``; ``version``: what --version prints."""
     parser = _Parser(prog="boxmarch", description=description)
+    parser.add_argument("--version", action="version", version=version)
     commands = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     p = commands.add_parser("bake", help="bake box frames")
     _target_options(p)
@@ -131,13 +144,11 @@ def run_outputs(args, steps) -> list:
             raise InputError(f"--out must name a .blend file, got '{args.out}'")
         outputs.append(("--out", args.out))
     if "export" in steps and getattr(args, "to", None):
-        from .export import outputs_of
-        from .formats.presets import PRESETS
+        from .export import outputs_of, path_problem
 
-        extension = PRESETS[args.preset].extension
-        if not args.to.lower().endswith(extension):
-            raise InputError(f"--preset {args.preset} writes a {extension} file: --to must end in {extension}, "
-                             f"got '{args.to}'")
+        problem = path_problem(args.to, args.preset)
+        if problem:
+            raise InputError(f"--to: {problem}")
         outputs += [("--to" if path == args.to else "the export beside --to", path)
                     for path in outputs_of(args.to, args.preset, args.layout)]
     if getattr(args, "json", None):

@@ -38,6 +38,9 @@ STATUS_BAKED, STATUS_UNCHANGED, STATUS_NOT_SELECTED = 0, 1, 2
 # property limits and the command line.
 ANGLE_EPSILON_RANGE = (_core.ANGLE_EPSILON_MIN, _core.ANGLE_EPSILON_MAX)
 ANGLE_EPSILON_DEFAULT = _core.ANGLE_EPSILON_DEFAULT  # BakeOptions' default, the one statement of it
+# The bake's seeds of the per-box random value: 0..RANDOM_SEED_MAX, for the operator's Random Seed
+# (a Blender IntProperty holds int32), the command line's --random-seed and mesh_io.prepare_bake.
+RANDOM_SEED_MAX = 2**31 - 1
 
 
 @dataclass

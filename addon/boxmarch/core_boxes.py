@@ -157,7 +157,11 @@ def box_hierarchy(origins, quaternions, half_extents, rule="ATTRIBUTE", given_pa
         given = np.asarray(given_parent)
         if given.shape != (n,) or not np.all(np.isfinite(given)) or np.any(given != np.round(given)):
             raise ValueError(f"given parents must be {n} whole numbers (one per box)")
-        given = np.ascontiguousarray(np.clip(given, -2, 2**31 - 1), np.int32)
+        outside = np.flatnonzero((given < -1) | (given >= n))
+        if len(outside):  # named here as given: the int32 the core checks would show a clipped value
+            box = int(outside[0])
+            raise ValueError(f"box {box} names parent {int(given[box])}, outside -1..{n - 1}")
+        given = np.ascontiguousarray(given, np.int32)
     parent, depth, deepest = _core.box_hierarchy(
         origins, np.ascontiguousarray(quaternions, np.float32).reshape(-1, 4),
         np.ascontiguousarray(half_extents, np.float64).reshape(-1, 3), _RULE_CODES[rule], given)

@@ -258,18 +258,24 @@ def run_demo(count: int, seed: int, folder: str, renderer: str, progress) -> tup
     seconds = time.perf_counter() - t
     worst = _glb_decode_error(glb_path, objects, float_bakes)
     written = " + ".join(os.path.basename(p) for p in report["files"][1:])
-    rows.append(["export demo.glb (GLTF)", f"{seconds:.3f} s", f"{os.path.getsize(glb_path) / 1e6:.1f} MB + {written}, "
-                 f"layout {report['layout']}", f"read back: worst decode error {worst:.2e} of half-extent in glTF's frame"])
+    rows.append(["export demo.glb (GLTF)", f"{seconds:.3f} s",
+                 f"layout {report['layout']}: {os.path.getsize(glb_path) / 1e6:.1f} MB + {written}",
+                 f"read back: worst decode error {worst:.2e} of half-extent in glTF's frame"])
 
     progress("exporting for the other engines")
     for engine in export_every_engine(bpy.context, objects, os.path.abspath(folder), "demo", ENGINE_PRESETS[1:]):
         preset = presets.PRESETS[engine["preset"]]
         lost = engine["default_import_error"]
         written = [os.path.basename(p) for p in engine["files"]]
+        if preset.writes_godot3_import:  # the export wrote the import settings that keep float32
+            settings = next(name for name in written if name.endswith(".import"))
+            accuracy = f"float32 in Godot 3 with {settings} (its default import loses {lost:.1e})"
+        elif lost:
+            accuracy = f"default import loses {lost:.1e} of half-extent: {preset.import_fix}"
+        else:
+            accuracy = "float32 in the engine"
         rows.append([f"export {engine['preset']}", f"{engine['seconds']:.3f} s",
-                     f"{' + '.join(written)}, layout {engine['layout']}",
-                     f"default import loses {lost:.1e} of half-extent: {preset.import_fix}" if lost
-                     else "float32 in the engine"])
+                     f"layout {engine['layout']}: {' + '.join(written)}", accuracy])
 
     png_path = os.path.abspath(os.path.join(folder, "demo.png"))
     progress("rendering demo.png")

@@ -51,8 +51,8 @@ class BoxmarchObjectSettings(bpy.types.PropertyGroup):
     max_distance: FloatProperty(name="Max Distance", default=1000.0, min=1e-4, update=_redraw,
                                 description="Longest march inside a box (box-local units)")
     quality: FloatProperty(name="Quality", default=1.0, min=0.05, max=1.0, update=_redraw,
-                           description="One knob for cost against error (docs/PREVIEW.md): below 1 a hit may stop "
-                                       "a share of a pixel from the surface, small boxes get fewer steps and boxes "
+                           description="One knob for cost against error (docs/PREVIEW.md): below 1 the march takes "
+                                       "longer (secant) steps near a surface, small boxes get fewer steps and boxes "
                                        "under a few pixels take one SDF tap")
     colour_by_material: BoolProperty(name="Colour by Material", default=False, update=_redraw,
                                      description="Shade each box in a colour of its own material id (boxmarch_material)")

@@ -66,13 +66,18 @@ struct March {
     float d;  // the last map() value (bm_normal's d)
 };
 
-// raymarch.glsl: bm_march, without its 512-step bound (a GLSL ES 1.00 constant loop limit).
-March bm_march(SdfPreset kind, vec3 ro, vec3 rd, vec3 h, float t_end, const MarchOptions& o) {
-    float t = 0.0f, d = 0.0f;
+// raymarch.glsl: bm_march, without its 512-step bound (a GLSL ES 1.00 constant loop limit):
+// secant steps under secant.x (at most secant.y times the distance; secant.x = 0: none).
+March bm_march(SdfPreset kind, vec3 ro, vec3 rd, vec3 h, float t_end, const MarchOptions& o, vec2 secant) {
+    float t = 0.0f, d = 0.0f, last_d = 0.0f, last_advance = 0.0f;
     for (int i = 0; i < o.max_steps; ++i) {
         d = sdf_preset(kind, ro + rd * t, h);
         if (d < o.epsilon) return {true, t, i + 1, d};
-        t += o.relaxation * d;
+        float advance = o.relaxation * d;
+        if (d < secant.x && d < last_d) advance = std::min(d * last_advance / (last_d - d), secant.y * d);
+        last_d = d;
+        last_advance = advance;
+        t += advance;
         if (t > t_end) return {false, t, i + 1, d};
     }
     return {false, t, o.max_steps, d};
@@ -303,7 +308,7 @@ void raymarch(const float* origins, const float* directions, const float* half_e
             float t0 = std::max(span.x, 0.0f);
             March m{false, 0.0f, 0, 0.0f};
             vec3 start = ro + rd * t0;
-            if (span.y >= t0) m = bm_march(o.sdf, start, rd, h, std::min(span.y - t0, o.max_distance), o);
+            if (span.y >= t0) m = bm_march(o.sdf, start, rd, h, std::min(span.y - t0, o.max_distance), o, vec2(0.0f));
             vec3 p = start + rd * m.t;
             if (hit) hit[i] = m.hit ? 1 : 0;
             if (positions)
@@ -330,7 +335,7 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
     const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(glm::make_mat4(view.object_to_view))));
     const vec3 base = glm::make_vec3(view.base_color);
     const float row_y = glm::length(vec3(to_clip[0][1], to_clip[1][1], to_clip[2][1]));
-    const vec3 quality = shader::bm_quality(plan.quality);
+    const vec4 quality = shader::bm_quality(plan.quality);
     const std::vector<glm::ivec4> rects = pixel_rects(origins, quaternions, half_extents, box_count, to_clip, W, H);
     RenderCost frame_cost;
     std::mutex cost_lock;
@@ -388,17 +393,16 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                             shader::bm_pixel_size((to_clip * vec4(c + q * face, 1.0f)).w, row_y, float(H));
                     const float box_pixels = 2.0f * shader::bm_max3(h) / footprint;
                     MarchOptions fragment = o;
-                    fragment.epsilon = std::max(o.epsilon, quality.x * footprint);
                     fragment.max_steps = int(shader::bm_step_limit(box_pixels, quality.y, float(o.max_steps)));
                     const bool one_tap = box_pixels < quality.z;
                     cost.lod_fragments += one_tap;
                     March m = one_tap ? bm_one_tap(o.sdf, start, rd, h, t_end, footprint)
-                                      : bm_march(o.sdf, start, rd, h, t_end, fragment);
+                                      : bm_march(o.sdf, start, rd, h, t_end, fragment,
+                                                 vec2(quality.x * footprint, quality.w));
                     if (images.steps) images.steps[pix] += m.steps;
                     vec3 local_hit = start + rd * m.t;
-                    const Normal normal =
-                            m.hit ? normal_by_rule(plan.normal, o.sdf, local_hit, h, m.d, fragment.epsilon)
-                                  : Normal{vec3(0.0f), 0};
+                    const Normal normal = m.hit ? normal_by_rule(plan.normal, o.sdf, local_hit, h, m.d, o.epsilon)
+                                                : Normal{vec3(0.0f), 0};
                     const int evaluations = m.steps + normal.evaluations;
                     cost.sdf_evaluations += uint64_t(evaluations);
                     if (!m.hit) continue;

@@ -396,15 +396,17 @@ inline float bm_normal_tap(vec3 h)
   return 3e-4f * bm_max3(h);
 }
 
-// The quality knob q (0 < q <= 1) as the three settings it stands for. x: hit distance as a share
-// of a pixel's footprint (the march stops that close to the surface when that is more than the
-// epsilon); y: steps allowed per pixel of the box's size on screen (bm_step_limit); z: size on
-// screen in pixels under which a box takes one tap (bm_one_tap). q = 1 leaves the march as the
-// epsilon and step limit set it.
-inline vec3 bm_quality(float q)
+// The quality knob q (0 < q <= 1) as the four settings it stands for. x: distance, as a share of a
+// pixel's footprint, under which the march takes secant steps (bm_march's secant.x); w: the
+// longest secant step, as a multiple of the distance (secant.y): longer steps save more and may
+// land further inside the surface (a hit there shades from a point under it); y: steps allowed
+// per pixel of the box's size on screen (bm_step_limit); z: size on screen in pixels under which a
+// box takes one tap (bm_one_tap). The hit distance stays the epsilon at every q; q = 1 leaves the
+// march as the epsilon and step limit set it.
+inline vec4 bm_quality(float q)
 {
   float loss = 1.0f - glm::clamp(q, 0.0f, 1.0f);
-  return vec3(0.5f * loss * loss, 8.0f / glm::max(loss, 1e-9f), 4.0f * loss);
+  return vec4(0.5f * loss, 8.0f / glm::max(loss, 1e-9f), 4.0f * loss, 1.0f + 2.0f * loss);
 }
 
 // Size of one pixel, in object units, at a point whose clip-space w is clip_w: row_y = length of

@@ -28,32 +28,86 @@ BUILD_SETTINGS = {"use_full_precision_u_vs": True, "generate_lightmap_u_vs": Fal
                   "recompute_tangents": False}
 
 
+MAX_SIDECAR_BYTES = 16777216  # the limits every boxmarch helper applies before parsing (docs/FORMAT.md)
+MAX_SIDECAR_DEPTH = 32
+
+
+def _shown(sidecar, key):
+    """The value at ``key`` as JSON, cut to 40 characters, or "missing"."""
+    text = json.dumps(sidecar[key], allow_nan=False) if key in sidecar else "missing"
+    return text if len(text) <= 40 else text[:40] + "..."
+
+
+def _whole(value, top):
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and 0 <= value <= top and value == int(value)
+
+
 def sidecar_refusal(sidecar):
-    """Why this script does not import the model ``sidecar`` (a dict) describes, or None."""
+    """Why this script does not import the model ``sidecar`` (parsed JSON) describes, or None:
+    the checks every boxmarch helper makes, in the same order (docs/FORMAT.md)."""
     if not isinstance(sidecar, dict):
-        return "the sidecar is not a boxmarch sidecar"
-    if sidecar.get("format_version") != FORMAT_VERSION:
-        return f"the sidecar has format version {sidecar.get('format_version')!r}; this script reads {FORMAT_VERSION}"
-    if sidecar.get("preset") != PRESET:
-        return f"the model was exported with the {sidecar.get('preset')} preset: export with the UNREAL preset"
-    if sidecar.get("layout") not in LAYOUTS_READ:
-        return f"layout {sidecar.get('layout')} is not read by the boxmarch material function ({', '.join(LAYOUTS_READ)})"
+        return "not a JSON object"
+    version = sidecar.get("format_version")
+    if isinstance(version, bool) or not isinstance(version, (int, float)) or version != FORMAT_VERSION:
+        return f"format_version must be {FORMAT_VERSION} (the format this script reads), not " + _shown(sidecar, "format_version")
+    if not isinstance(sidecar.get("preset"), str) or sidecar["preset"] != PRESET:
+        return f'preset must be "{PRESET}", not {_shown(sidecar, "preset")}: export with the UNREAL preset'
+    if not isinstance(sidecar.get("layout"), str) or sidecar["layout"] not in LAYOUTS_READ:
+        return (f"layout must be one of {', '.join(LAYOUTS_READ)} (what the boxmarch material function reads), "
+                f"not {_shown(sidecar, 'layout')}")
+    if not isinstance(sidecar.get("skinned"), bool):
+        return f"skinned must be true or false, not {_shown(sidecar, 'skinned')}"
+    if not _whole(sidecar.get("box_count"), 2**31 - 1):
+        return f"box_count must be a whole number from 0 to 2147483647, not {_shown(sidecar, 'box_count')}"
     return None
 
 
+def _nesting(data):
+    """The deepest nesting of brackets in JSON text ``data`` (bytes), strings skipped."""
+    depth = deepest = 0
+    in_string = escaped = False
+    for byte in data:
+        if in_string:
+            escaped, in_string = (False, True) if escaped else (byte == 0x5C, byte != 0x22)
+        elif byte == 0x22:
+            in_string = True
+        elif byte in (0x5B, 0x7B):
+            depth += 1
+            deepest = max(deepest, depth)
+            if deepest > MAX_SIDECAR_DEPTH:
+                break
+        elif byte in (0x5D, 0x7D):
+            depth -= 1
+    return deepest
+
+
+def _refuse_constant(token):
+    raise ValueError(f"{token} is no JSON number")
+
+
 def read_sidecar(fbx_path):
-    """The sidecar beside ``fbx_path`` as a dict; raises ValueError naming what is wrong."""
+    """The sidecar beside ``fbx_path`` as a dict; raises ValueError, one line naming the sidecar
+    and what is wrong, for anything but a sidecar this script reads."""
     path = os.path.splitext(fbx_path)[0] + SIDECAR_SUFFIX
     if not os.path.isfile(path):
-        raise ValueError(f"{fbx_path}: no boxmarch sidecar {path} beside it: export it with boxmarch")
-    with open(path, encoding="utf-8") as f:
-        try:
-            sidecar = json.load(f)
-        except json.JSONDecodeError as error:
-            raise ValueError(f"{path} is not JSON: {error}") from None
+        raise ValueError(f"boxmarch: {fbx_path}: no boxmarch sidecar {path} beside it: export it with boxmarch")
+    with open(path, "rb") as f:
+        data = f.read(MAX_SIDECAR_BYTES + 1)
+    if len(data) > MAX_SIDECAR_BYTES:
+        raise ValueError(f"boxmarch: {path}: larger than {MAX_SIDECAR_BYTES} bytes, not a boxmarch sidecar")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise ValueError(f"boxmarch: {path}: not UTF-8 text (byte {error.start})") from None
+    if _nesting(data) > MAX_SIDECAR_DEPTH:
+        raise ValueError(f"boxmarch: {path}: brackets nested more than {MAX_SIDECAR_DEPTH} deep")
+    try:
+        sidecar = json.loads(text, parse_constant=_refuse_constant)
+    except ValueError as error:  # json.JSONDecodeError included
+        raise ValueError(f"boxmarch: {path}: not JSON ({str(error).splitlines()[0]})") from None
     refusal = sidecar_refusal(sidecar)
     if refusal:
-        raise ValueError(f"{fbx_path}: {refusal}")
+        raise ValueError(f"boxmarch: {path}: {refusal}")
     return sidecar
 
 

@@ -110,18 +110,18 @@ void main()
   }
 
   // The quality knob: a pixel's size at the rasterised face, the box's size on screen from it.
-  vec3 quality = bm_quality(preview.quality.x);
+  vec4 quality = bm_quality(preview.quality.x);
   vec3 row_y = vec3(preview.object_to_clip[0][1], preview.object_to_clip[1][1], preview.object_to_clip[2][1]);
   float footprint = bm_pixel_size(1.0 / gl_FragCoord.w, length(row_y), preview.quality.y);
   float box_pixels = 2.0 * bm_max3(box_half) / footprint;
-  float epsilon = max(preview.march.x, quality.x * footprint);
   int max_steps = int(bm_step_limit(box_pixels, quality.y, preview.march.w));
   float t;
   float d;
   int steps = 1;
   bool hit = box_pixels < quality.z
     ? bm_one_tap(ro, rd, min(t_end, preview.march.z), footprint, t, d)
-    : bm_march(ro, rd, min(t_end, preview.march.z), max_steps, epsilon, preview.march.y, t, steps, d);
+    : bm_march(ro, rd, min(t_end, preview.march.z), max_steps, preview.march.x, preview.march.y,
+               vec2(quality.x * footprint, quality.w), t, steps, d);
   if (preview.mode.x == 2) {
     frag_color = vec4(float(steps), float(steps + (hit ? 3 : 0)), 0.0, 1.0);
     return;

@@ -29,15 +29,22 @@ vec2 bm_box_span(vec3 ro, vec3 rd, vec3 h)
 }
 
 // Sphere-traces map() from ro along unit rd until a distance falls below epsilon (true), the ray
-// passes t_end or step_limit evaluations (at most 512) are spent (false). t: distance travelled;
-// steps: map() evaluations; d: the last map() value (at a hit, the hit's own distance, which
-// bm_normal reuses). The loop's bound is a constant, as GLSL ES 1.00 (WebGL 1) requires.
-bool bm_march(vec3 ro, vec3 rd, float t_end, int step_limit, float epsilon, float relaxation,
+// passes t_end or step_limit evaluations (at most 512) are spent (false). Where a distance is under
+// secant.x and smaller than the last one, the step is the secant's instead (the line through the
+// last two distances along the ray, extended to zero), at most secant.y times the distance: near
+// a surface met at a slant the distances shrink geometrically and the secant skips that tail, and
+// the hit test stays epsilon, so the silhouette does not move (secant.x = 0: plain sphere tracing).
+// t: distance travelled; steps: map() evaluations; d: the last map() value (at a hit, the hit's
+// own distance, which bm_normal reuses). The loop's bound is a constant, as GLSL ES 1.00 (WebGL 1)
+// requires.
+bool bm_march(vec3 ro, vec3 rd, float t_end, int step_limit, float epsilon, float relaxation, vec2 secant,
               out float t, out int steps, out float d)
 {
   t = 0.0;
   steps = step_limit;
   d = 0.0;
+  float last_d = 0.0;
+  float last_advance = 0.0;
   for (int i = 0; i < 512; ++i) {
     if (i >= step_limit) {
       break;
@@ -47,7 +54,13 @@ bool bm_march(vec3 ro, vec3 rd, float t_end, int step_limit, float epsilon, floa
       steps = i + 1;
       return true;
     }
-    t += relaxation * d;
+    float advance = relaxation * d;
+    if (d < secant.x && d < last_d) {
+      advance = min(d * last_advance / (last_d - d), secant.y * d);
+    }
+    last_d = d;
+    last_advance = advance;
+    t += advance;
     if (t > t_end) {
       steps = i + 1;
       return false;
@@ -67,15 +80,17 @@ bool bm_one_tap(vec3 ro, vec3 rd, float t_end, float footprint, out float t, out
   return d < 0.5 * footprint;
 }
 
-// The quality knob q (0 < q <= 1) as the three settings it stands for. x: hit distance as a share
-// of a pixel's footprint (the march stops that close to the surface when that is more than the
-// epsilon); y: steps allowed per pixel of the box's size on screen (bm_step_limit); z: size on
-// screen in pixels under which a box takes one tap (bm_one_tap). q = 1 leaves the march as the
-// epsilon and step limit set it.
-vec3 bm_quality(float q)
+// The quality knob q (0 < q <= 1) as the four settings it stands for. x: distance, as a share of a
+// pixel's footprint, under which the march takes secant steps (bm_march's secant.x); w: the
+// longest secant step, as a multiple of the distance (secant.y): longer steps save more and may
+// land further inside the surface (a hit there shades from a point under it); y: steps allowed
+// per pixel of the box's size on screen (bm_step_limit); z: size on screen in pixels under which a
+// box takes one tap (bm_one_tap). The hit distance stays the epsilon at every q; q = 1 leaves the
+// march as the epsilon and step limit set it.
+vec4 bm_quality(float q)
 {
   float loss = 1.0 - clamp(q, 0.0, 1.0);
-  return vec3(0.5 * loss * loss, 8.0 / max(loss, 1e-9), 4.0 * loss);
+  return vec4(0.5 * loss, 8.0 / max(loss, 1e-9), 4.0 * loss, 1.0 + 2.0 * loss);
 }
 
 // Size of one pixel, in object units, at a point whose clip-space w is clip_w: row_y = length of

@@ -91,17 +91,16 @@ void fragment()
   // The quality knob (as the Blender preview applies it): a pixel's size at the fragment, the
   // box's size on screen from it.
   mat4 object_to_clip = PROJECTION_MATRIX * INV_CAMERA_MATRIX * WORLD_MATRIX;
-  vec3 knob = bm_quality(quality);
+  vec4 knob = bm_quality(quality);
   float footprint = bm_pixel_size((object_to_clip * vec4(bm_v_obj_pos, 1.0)).w,
       length(vec3(object_to_clip[0][1], object_to_clip[1][1], object_to_clip[2][1])), VIEWPORT_SIZE.y);
   float box_pixels = 2.0 * max3(h) / footprint;
-  float epsilon = max(march_epsilon, knob.x * footprint);
   float t;
   float d;
   int steps = 1;
   bool hit = box_pixels < knob.z ? bm_one_tap(ro, rd, t_end, footprint, t, d, h, index)
-      : bm_march(ro, rd, t_end, int(bm_step_limit(box_pixels, knob.y, float(max_steps))), epsilon, 1.0, t, steps, d,
-                 h, index);
+      : bm_march(ro, rd, t_end, int(bm_step_limit(box_pixels, knob.y, float(max_steps))), march_epsilon, 1.0,
+                 vec2(knob.x * footprint, knob.w), t, steps, d, h, index);
   if (!hit) {
     discard;
   }

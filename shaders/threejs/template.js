@@ -62,14 +62,56 @@ function prepareBoxmarchGeometry(THREE, geometry) {
   return geometry;
 }
 
+// The ranges of createBoxmarchMaterial's numeric options: those of the Blender preview's matching
+// properties (addon/boxmarch/properties.py: max_steps, epsilon, quality), whole: integers only.
+var BOXMARCH_OPTION_RANGES = {
+  maxSteps: { min: 1, max: 512, whole: true },
+  epsilon: { min: 1e-7, max: 1, whole: false },
+  quality: { min: 0.05, max: 1, whole: false }
+};
+
+// The presets whose occluders options.occluders may name, in bm_sdf_by_id's numbering
+// (boxmarchOccluderShape).
+var BOXMARCH_OCCLUDER_PRESETS = ['BOX', 'SPHERE', 'ROUNDED_BOX', 'CAPSULE', 'CYLINDER', 'TORUS', 'LINK'];
+
+// Throws, one line naming the option, for createBoxmarchMaterial options it would not draw as
+// given: a number outside BOXMARCH_OPTION_RANGES (or not a number), a map that is not a non-empty
+// string, occluders that are not a name of BOXMARCH_OCCLUDER_PRESETS, 'PER_BOX', true or false.
+// An option left undefined takes its default.
+function checkBoxmarchOptions(options) {
+  if (options === undefined || options === null) return;
+  if (typeof options !== 'object') throw new Error('boxmarch: the material options must be an object, not ' + typeof options);
+  Object.keys(BOXMARCH_OPTION_RANGES).forEach(function (key) {
+    var value = options[key], range = BOXMARCH_OPTION_RANGES[key];
+    if (value === undefined) return;
+    if (typeof value !== 'number' || !(value >= range.min && value <= range.max) || (range.whole && !Number.isInteger(value))) {
+      throw new Error('boxmarch: option ' + key + ' must be ' + (range.whole ? 'a whole number' : 'a number') + ' from '
+        + range.min + ' to ' + range.max + ' (the Blender preview\'s range), not '
+        + (typeof value === 'string' ? JSON.stringify(value) : String(value)));
+    }
+  });
+  if (options.map !== undefined && (typeof options.map !== 'string' || !options.map.trim())) {
+    throw new Error('boxmarch: option map must be the GLSL body of float map(vec3 p), not '
+      + (typeof options.map === 'string' ? 'an empty string' : typeof options.map));
+  }
+  var occluders = options.occluders;
+  if (occluders !== undefined && typeof occluders !== 'boolean' && occluders !== 'PER_BOX'
+      && BOXMARCH_OCCLUDER_PRESETS.indexOf(occluders) < 0) {
+    throw new Error('boxmarch: option occluders must be one of ' + BOXMARCH_OCCLUDER_PRESETS.join(', ')
+      + ', PER_BOX, true or false, not ' + (typeof occluders === 'string' ? JSON.stringify(occluders) : String(occluders)));
+  }
+}
+
 // options: map (GLSL body of float map(vec3 p), box-local; box_half, box_index and box_params
 // (shape, material, random, user) are set: 'return bm_sdf_by_id(box_params.x, p, box_half);'
 // draws each box the preset its shape id picks),
-// color (THREE.Color), maxSteps, epsilon, quality (the quality knob, 0 < q <= 1, 1 = the full
-// march: shaders/glsl/raymarch.glsl bm_quality), skinning (true for a SkinnedMesh; read before r129
-// and by the raw material), declareDepth (false: the ShaderMaterial without the depth declaration
-// on r163 and later too; the same picture).
+// color (THREE.Color), maxSteps (1..512, default 96), epsilon (1e-7..1, default 1e-4), quality (the
+// quality knob, 0.05..1, 1 = the full march: shaders/glsl/raymarch.glsl bm_quality), skinning (true
+// for a SkinnedMesh; read before r129 and by the raw material), declareDepth (false: the
+// ShaderMaterial without the depth declaration on r163 and later too; the same picture). Throws
+// for options out of range (checkBoxmarchOptions).
 function createBoxmarchMaterial(THREE, options) {
+  checkBoxmarchOptions(options);
   options = options || {};
   var map = options.map || 'return sd_round_box(p, box_half, 0.1 * min3(box_half));';
   var revision = parseInt(THREE.REVISION, 10);
@@ -235,18 +277,16 @@ function sortBoxmarchFrontToBack(THREE, mesh, camera) {
 // shape id (bm_sdf_by_id(box_params.x, ...)), or null: none (a map() of the user's own, whose
 // inside nothing here knows). options.occluders overrides: a preset name (BOX, SPHERE,
 // ROUNDED_BOX, CAPSULE, CYLINDER, TORUS, LINK; any shape containing that preset's shape in the
-// same box), 'PER_BOX', or false. None below full quality (options.quality < 1).
+// same box), 'PER_BOX', false, or true (as left out). None below full quality (options.quality < 1).
+// Throws for options checkBoxmarchOptions refuses.
 function boxmarchOccluderShape(options) {
-  var presets = ['BOX', 'SPHERE', 'ROUNDED_BOX', 'CAPSULE', 'CYLINDER', 'TORUS', 'LINK'];
+  checkBoxmarchOptions(options);
+  var presets = BOXMARCH_OCCLUDER_PRESETS;
   var chosen = options && options.occluders;
   // below full quality the knob's one-tap boxes stand at their centre's depth, which may lie
   // behind their own occluders: no pre-pass there
   if (chosen === false || (options && options.quality && options.quality < 1)) return null;
-  if (typeof chosen === 'string') {
-    if (chosen === 'PER_BOX') return -1;
-    if (presets.indexOf(chosen) < 0) throw new Error('boxmarch: occluders must be one of ' + presets.join(', ') + ', PER_BOX or false');
-    return presets.indexOf(chosen);
-  }
+  if (typeof chosen === 'string') return chosen === 'PER_BOX' ? -1 : presets.indexOf(chosen);
   var map = String(options && options.map || '').replace(/\s+/g, '');
   // the default map, a rounded box of radius 0.1 x min3: it holds ROUNDED_BOX's (radius 0.25 x min3)
   if (!map) return presets.indexOf('ROUNDED_BOX');
@@ -313,21 +353,101 @@ function useBoxmarchOccluders(THREE, mesh, shape) {
   return mesh.userData.boxmarchOccluders;
 }
 
-// The export's sidecar (NAME.boxmarch.json beside NAME.glb) format and the layout this material reads.
+// The export's sidecar (NAME.boxmarch.json beside NAME.glb): the format, preset and layout this
+// material reads, and the limits every boxmarch helper applies before parsing one (docs/FORMAT.md).
 var BOXMARCH_FORMAT_VERSION = 1;
+var BOXMARCH_PRESET = 'GLTF';
 var BOXMARCH_LAYOUT = 'NORMAL_FRAME';
+var BOXMARCH_SIDECAR_MAX_BYTES = 16777216;
+var BOXMARCH_SIDECAR_MAX_DEPTH = 32;
 
-// Throws, saying why, unless the sidecar object describes a file this material reads.
-function checkBoxmarchSidecar(sidecar, name) {
-  if (!sidecar || sidecar.format_version !== BOXMARCH_FORMAT_VERSION) {
-    throw new Error('boxmarch: ' + name + ' has format_version ' + JSON.stringify(sidecar && sidecar.format_version)
-      + '; this material reads format_version ' + BOXMARCH_FORMAT_VERSION);
+// Why the parsed sidecar does not describe a file this material reads, or '' when it does: the
+// checks every boxmarch helper makes, in the same order (docs/FORMAT.md).
+function boxmarchSidecarRefusal(sidecar) {
+  if (sidecar === null || typeof sidecar !== 'object' || Array.isArray(sidecar)) return 'not a JSON object';
+  function shown(key) {  // the value as JSON, cut to 40 characters
+    var text = Object.prototype.hasOwnProperty.call(sidecar, key) ? JSON.stringify(sidecar[key]) : 'missing';
+    return text.length <= 40 ? text : text.slice(0, 40) + '...';
+  }
+  var count = sidecar.box_count;
+  if (typeof sidecar.format_version !== 'number' || sidecar.format_version !== BOXMARCH_FORMAT_VERSION) {
+    return 'format_version must be ' + BOXMARCH_FORMAT_VERSION + ' (the format this material reads), not ' + shown('format_version');
+  }
+  if (sidecar.preset !== BOXMARCH_PRESET) {
+    return 'preset must be "' + BOXMARCH_PRESET + '", not ' + shown('preset') + ': export with the GLTF preset';
   }
   if (sidecar.layout !== BOXMARCH_LAYOUT) {
-    throw new Error('boxmarch: ' + name + ' has layout ' + JSON.stringify(sidecar.layout) + '; this material reads '
-      + BOXMARCH_LAYOUT + ' (export with the GLTF preset and its default layout)');
+    return 'layout must be one of ' + BOXMARCH_LAYOUT + ' (what this material reads), not ' + shown('layout')
+      + ': export with the GLTF preset and its default layout';
   }
+  if (typeof sidecar.skinned !== 'boolean') return 'skinned must be true or false, not ' + shown('skinned');
+  if (typeof count !== 'number' || !Number.isInteger(count) || count < 0 || count > 2147483647) {
+    return 'box_count must be a whole number from 0 to 2147483647, not ' + shown('box_count');
+  }
+  return '';
+}
+
+// Throws, saying why and naming the sidecar (name), unless the sidecar object describes a file
+// this material reads; returns it.
+function checkBoxmarchSidecar(sidecar, name) {
+  var refusal = boxmarchSidecarRefusal(sidecar);
+  if (refusal) throw new Error('boxmarch: ' + name + ': ' + refusal);
   return sidecar;
+}
+
+// The refusal of a sidecar (name) over BOXMARCH_SIDECAR_MAX_BYTES, by its body or its declared length.
+function boxmarchSidecarTooLarge(name) {
+  return new Error('boxmarch: ' + name + ': larger than ' + BOXMARCH_SIDECAR_MAX_BYTES + ' bytes, not a boxmarch sidecar');
+}
+
+// The sidecar of a sidecar file's bytes (an ArrayBuffer), checked (checkBoxmarchSidecar); throws
+// one line naming the file (name) when it is larger than BOXMARCH_SIDECAR_MAX_BYTES, not UTF-8,
+// nested deeper than BOXMARCH_SIDECAR_MAX_DEPTH brackets (counted before any parser runs) or not JSON.
+function parseBoxmarchSidecar(bytes, name) {
+  function refuse(why) { throw new Error('boxmarch: ' + name + ': ' + why); }
+  if (bytes.byteLength > BOXMARCH_SIDECAR_MAX_BYTES) throw boxmarchSidecarTooLarge(name);
+  var text = null, data = new Uint8Array(bytes), depth = 0, inString = false, escaped = false;
+  try {
+    text = new TextDecoder('utf-8', { fatal: true, ignoreBOM: true }).decode(data);
+  } catch (e) {
+    refuse('not UTF-8 text');
+  }
+  for (var i = 0; i < data.length; i++) {
+    var c = data[i];
+    if (inString) {
+      if (escaped) escaped = false;
+      else if (c === 0x5C) escaped = true;
+      else if (c === 0x22) inString = false;
+    } else if (c === 0x22) {
+      inString = true;
+    } else if (c === 0x5B || c === 0x7B) {
+      if (++depth > BOXMARCH_SIDECAR_MAX_DEPTH) refuse('brackets nested more than ' + BOXMARCH_SIDECAR_MAX_DEPTH + ' deep');
+    } else if (c === 0x5D || c === 0x7D) {
+      depth--;
+    }
+  }
+  var sidecar;
+  try {
+    sidecar = JSON.parse(text);
+  } catch (e) {
+    refuse('not JSON (' + e.message + ')');
+  }
+  return checkBoxmarchSidecar(sidecar, name);
+}
+
+// The sidecar's URL for a model's: NAME.boxmarch.json beside NAME.glb, with the model URL's query
+// (a cache-busting ?v=2 applies to both) and without its fragment (#..., never sent to a server).
+function boxmarchSidecarUrl(url) {
+  var text = String(url).split('#')[0], query = text.indexOf('?');
+  var path = query < 0 ? text : text.slice(0, query);
+  return path.replace(/\.glb$/i, '') + '.boxmarch.json' + (query < 0 ? '' : text.slice(query));
+}
+
+// GLTFLoader's failure to load url as one line naming it: r111 hands over the request's
+// ProgressEvent, later releases an Error.
+function boxmarchLoadError(url, e) {
+  var why = e && e.message ? e.message : e && e.target && e.target.status ? 'HTTP ' + e.target.status : String(e);
+  return new Error('boxmarch: ' + url + ': GLTFLoader did not load it (' + why + ')');
 }
 
 // Loads the .glb at url (NAME.glb) after its sidecar NAME.boxmarch.json and gives every mesh,
@@ -336,17 +456,24 @@ function checkBoxmarchSidecar(sidecar, name) {
 // hidden-box pre-pass of each static mesh, useBoxmarchOccluders, on by default where the map is
 // a preset's or the default one, boxmarchOccluderShape). GLTFLoader: the class (THREE.GLTFLoader in r111's examples/js, imported from
 // three/addons later). Resolves to { scene, meshes, gltf, sidecar }; rejects with the reason,
-// before the .glb is fetched, when the sidecar is missing or describes a file the material does
-// not read.
+// before the .glb is fetched, when an option is out of range, or the sidecar is missing or is not
+// one the material reads (parseBoxmarchSidecar).
 function loadBoxmarch(THREE, GLTFLoader, url, options) {
-  var sidecarUrl = String(url).replace(/\.glb$/i, '') + '.boxmarch.json';
-  return fetch(sidecarUrl).then(function (response) {
+  var sidecarUrl = boxmarchSidecarUrl(url);
+  return Promise.resolve().then(function () {
+    checkBoxmarchOptions(options);
+    return fetch(sidecarUrl).catch(function (e) { throw new Error('boxmarch: ' + sidecarUrl + ': cannot be fetched (' + e.message + ')'); });
+  }).then(function (response) {
     if (!response.ok) throw new Error('boxmarch: no ' + sidecarUrl + ' (HTTP ' + response.status + '): the export writes it beside the .glb');
-    return response.json();
-  }).then(function (sidecar) {
-    checkBoxmarchSidecar(sidecar, sidecarUrl);
+    // a declared length over the limit is refused before the body is read (parseBoxmarchSidecar checks the body too)
+    if (Number(response.headers.get('Content-Length')) > BOXMARCH_SIDECAR_MAX_BYTES) throw boxmarchSidecarTooLarge(sidecarUrl);
+    return response.arrayBuffer();
+  }).then(function (bytes) {
+    var sidecar = parseBoxmarchSidecar(bytes, sidecarUrl);
     return new Promise(function (resolve, reject) {
-      new GLTFLoader().load(url, function (gltf) { resolve({ gltf: gltf, sidecar: sidecar }); }, undefined, reject);
+      new GLTFLoader().load(url, function (gltf) { resolve({ gltf: gltf, sidecar: sidecar }); }, undefined, function (e) {
+        reject(boxmarchLoadError(url, e));
+      });
     });
   }).then(function (loaded) {
     var meshes = [];
@@ -460,15 +587,15 @@ var BOXMARCH_FRAGMENT = [
   '    t_end = min(t_end, bm_depth_crossing(c0, objectToClip * vec4(ray / eye_distance, 0.0), 2.0 * hidden - 1.0));',
   '  }',
   // The quality knob (as the Blender preview applies it): a pixel's size at the face, the box's size on screen.
-  '  vec3 knob = bm_quality(bmQuality.x);',
+  '  vec4 knob = bm_quality(bmQuality.x);',
   '  float footprint = bm_pixel_size(1.0 / gl_FragCoord.w, length(vec3(objectToClip[0][1], objectToClip[1][1], objectToClip[2][1])), bmQuality.y);',
   '  float boxPixels = 2.0 * max3(box_half) / footprint;',
-  '  float epsilon = max(bmMarch.x, knob.x * footprint);',
   '  float t;',
   '  float d;',
   '  int steps = 1;',
   '  bool hit = boxPixels < knob.z ? bm_one_tap(ro, rd, t_end, footprint, t, d)',
-  '    : bm_march(ro, rd, t_end, int(bm_step_limit(boxPixels, knob.y, bmMarch.y)), epsilon, 1.0, t, steps, d);',
+  '    : bm_march(ro, rd, t_end, int(bm_step_limit(boxPixels, knob.y, bmMarch.y)), bmMarch.x, 1.0,',
+  '      vec2(knob.x * footprint, knob.w), t, steps, d);',
   '  if (!hit) discard;',
   '  vec3 local_hit = ro + rd * t;',
   '  vec3 obj_hit = bmObjPos + bm_from_local(local_hit + f, x, y, z);',

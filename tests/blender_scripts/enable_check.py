@@ -1,5 +1,5 @@
 """Run with the bpy module in a new process, on the user configuration install_check.py installed
-the extension into: enables it the way README says for a fresh session, and writes what happened.
+the extension into: enables it the way docs/OVERVIEW.md says for a fresh session, and writes what happened.
 Usage: python enable_check.py -- OUT_JSON"""
 import json
 import os

@@ -1,11 +1,13 @@
-"""Run inside a Blender program with a fresh user config: install the add-on from a zip, enable it,
-bake boxes through the installed copy and write what happened.
+"""Run inside a Blender program with a fresh user config: install the add-on from a zip (4.2+: with
+scripts/install_extension.py), enable it, bake boxes through the installed copy and write what happened.
 Usage: blender -b --factory-startup --python install_check.py -- ZIP OUT_JSON"""
 import importlib
 import json
+import os
 import sys
 import traceback
 
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))  # scripts/
 argv = sys.argv[sys.argv.index("--") + 1:]
 zip_path, out_path = argv[0], argv[1]
 result = {"error": None}
@@ -15,8 +17,9 @@ try:
     import numpy as np
 
     if bpy.app.version >= (4, 2, 0):
-        bpy.ops.extensions.package_install_files(filepath=zip_path, repo="user_default", enable_on_install=True)
-        module_name = "bl_ext.user_default.boxmarch"
+        from scripts.install_extension import install  # docs/GETTING_STARTED.md's scripted install
+
+        module_name = install(zip_path)
     else:
         bpy.ops.preferences.addon_install(filepath=zip_path)
         bpy.ops.preferences.addon_enable(module="boxmarch")

@@ -173,8 +173,8 @@ boxes.boxmarch.sdf = "SPHERE"
 result["ORTHO_rgba"], result["ORTHO_depth"] = preview.render(scene, camera, W, H)
 camera.data.type = "PERSP"
 
-# The quality knob at its lowest, 40 x 30 px, where the boxes are 1 to 6 px wide: a hit distance
-# of 0.45 px, the step limit and one tap for boxes under 3.8 px.
+# The quality knob at its lowest, 40 x 30 px, where the boxes are 1 to 6 px wide: secant steps
+# within 0.475 px of a surface, the step limit and one tap for boxes under 3.8 px.
 boxes.boxmarch.sdf = "TORUS"
 boxes.boxmarch.quality = 0.05
 result["quality_view"], result["quality_projection"] = preview.camera_matrices(scene, camera, 40, 30)

@@ -321,6 +321,32 @@ def import_project(project_dir, models, quiet_s=1.0):
     return output
 
 
+def editor_log(project_dir, until, linger_s):
+    """Runs Godot's editor headless on ``project_dir`` until ``until(output so far)`` holds (or
+    TIMEOUT_S), then ``linger_s`` seconds more, and stops it. Returns (its output, whether it was
+    still running at the end): an editor that crashed has stopped by itself."""
+    with tempfile.TemporaryDirectory(prefix="boxmarch-godot-home-") as home:
+        log_path = os.path.join(home, "log.txt")
+        with open(log_path, "w") as log:
+            proc = subprocess.Popen([GODOT_SERVER, "-e", "--audio-driver", "Dummy", "--path", str(project_dir)],
+                                    env=_home_env(home), stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        try:
+            start = time.monotonic()
+            while time.monotonic() - start < TIMEOUT_S and proc.poll() is None:
+                time.sleep(0.25)
+                with open(log_path, errors="replace") as f:
+                    if until(f.read()):
+                        break
+            time.sleep(linger_s)
+            running = proc.poll() is None
+        finally:
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+        with open(log_path, errors="replace") as f:
+            return f.read(), running
+
+
 def import_gltf(glb_bytes, project_dir, *, compress, extra_files=None):
     """Writes a Godot 3 project holding ``model.glb`` (and ``extra_files``: relative path ->
     bytes) into ``project_dir`` and imports it headless (import_project) with ``meshes/compress``
@@ -420,3 +446,32 @@ def render(project_dir, shader_code, *, width, height, camera, uniforms=None, bo
         raise RuntimeError(f"Godot drew {pixels.shape[1]}x{pixels.shape[0]}, not {width}x{height}")
     return Shot(pixels, np.linalg.inv(cam_to_world), to_pixels)
 
+
+
+_REFUSALS = """extends SceneTree
+
+func _init():
+    var f = File.new()
+    f.open(OS.get_environment("BOXMARCH_PARAMS"), File.READ)
+    var params = parse_json(f.get_as_text())
+    f.close()
+    # plugin.gd's refusal(model) as the plug-in makes it (an EditorPlugin is not made outside the editor)
+    var plugin = load("res://addons/boxmarch/plugin.gd").get_script_constant_map()
+    var sidecar = load("res://addons/boxmarch/sidecar.gd")
+    var out = {}
+    for model in params["models"]:
+        out[model] = sidecar.refusal(model.get_basename() + plugin["SIDECAR_SUFFIX"], plugin["FORMAT_VERSION"],
+                                     plugin["PRESET"], plugin["LAYOUTS_READ"])
+    f.open(OS.get_environment("BOXMARCH_OUT"), File.WRITE)
+    f.store_string(to_json(out))
+    f.close()
+    quit()
+"""
+
+
+def plugin_refusals(project_dir, models):
+    """{model: the boxmarch plug-in's refusal of its sidecar ("" when it reads it)} for each
+    ``models`` path (res://NAME.glb), made as ``plugin.gd`` makes it (its constants, its
+    ``sidecar.gd``) by godot3-server in ``project_dir``, which must hold the plug-in under
+    res://addons/boxmarch."""
+    return json.loads(_run_script([GODOT_SERVER], project_dir, _REFUSALS, {"models": list(models)}))

@@ -4,15 +4,13 @@ outputs); an engine's HLSL is compiled as a fragment stage by glslang's HLSL fro
 import shutil
 import subprocess
 
-import pytest
-
 from boxmarch.formats import shader_sources
+from tests.helpers.tools import need
 
 
 def validator():
     path = shutil.which("glslangValidator")
-    if path is None:
-        pytest.fail("glslangValidator is missing: apt-get install glslang-tools (scripts/setup.sh)")
+    need(None if path else "glslangValidator is missing (apt-get install glslang-tools)")
     return path
 
 

@@ -63,6 +63,11 @@ def box_data(mesh, preset, index_base: int = 0, space=None):
                            box_half_extents=target_half, index_base=index_base,
                            box_origins=origins[first_vertex], box_quaternions=target_q[first_vertex])
     box_layers = mesh_io.read_box_layers(mesh, submesh_of_vertex, count)
+    if box_layers is not None and not np.isfinite(box_layers.params).all():
+        bad = sorted({core.PARAM_NAMES[i] for i in np.flatnonzero(~np.isfinite(box_layers.params).all(axis=0))})
+        raise ExportInputError(f"mesh '{mesh.name}': its stored box parameters ({', '.join(bad)}) are not finite, "
+                               "which no file may hold: give the objects' properties and the painted attributes "
+                               "finite values, bake again, then export")
     if box_layers is not None:  # box numbers run on across the file's meshes: so do the parents
         data.box_params, data.box_depth = box_layers.params, box_layers.depth
         data.box_parent = np.where(box_layers.parent >= 0, box_layers.parent + index_base, -1)
@@ -71,7 +76,8 @@ def box_data(mesh, preset, index_base: int = 0, space=None):
     stats = {"mesh": mesh.name, "vertices": len(positions), "corners": len(corner_verts), "boxes": int(count),
              "colour": layers.encoding, "max_alpha": float(offsets[:, 3].max()) / preset.length_scale if len(positions) else 0.0,
              "space": "object" if space is None else "world", "transform_error": error, "stale_boxes": stale,
-             "sheared_boxes": sheared, "box_parameters": box_parameter_stats(data, box_layers is not None)}
+             "sheared_boxes": sheared, "box_parameters": box_parameter_stats(data, box_layers is not None),
+             "stale_parents": box_layers.stale_parents if box_layers is not None else 0}
     return data, corner_verts, stats, origins
 
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from .. import edit_mode, mesh_io
 from ..formats import files, layouts
-from . import boxes, outputs_of
+from . import boxes, outputs_of, path_problem
 from ..formats import fbx, glb, godot, import_settings, sidecar, transforms, presets
 from .boxes import ExportInputError, baked_layers
 
@@ -122,13 +122,24 @@ def _run_exporter(preset, layout, path):
 
 
 def file_channel_names(preset, layout) -> dict:
-    """The name each channel of ``layout`` has in the file ``preset`` writes: glTF attributes,
-    FBX UV maps and layers, the .blend's own attribute and UV map names."""
-    used = sorted({c.split(".")[0] for q in sidecar.QUANTITIES[layout].values() for c in q["channels"]} - {"TABLE"})
+    """The name each channel ``layout`` writes (Layout.channels: the quantities' and the box
+    parameters') has in the file ``preset`` writes: glTF attributes, FBX UV maps and layers, the
+    .blend's own attribute and UV map names."""
+    used = layouts.LAYOUTS[layout].channels
     if preset.extension == ".glb":
         return {c: f"TEXCOORD_{c[2:]}" if c.startswith("UV") else "COLOR_0" if c == "COLOR" else c for c in used}
     fbx_layers = {"COLOR": mesh_io.OFFSET_ATTRIBUTE, "NORMAL": "LayerElementNormal", "TANGENT": "LayerElementTangent"}
-    return {c: uv_name(layout, c) if c.startswith("UV") else fbx_layers[c] for c in used}
+    names = {c: uv_name(layout, c) if c.startswith("UV") else fbx_layers[c] for c in used}
+    if preset.raw_blend:  # the .blend keeps the box values in the bake's own point attributes, not UV maps
+        names.update({channel: _BLEND_PARAM_ATTRIBUTES[pair] for channel, pair in
+                      layouts.LAYOUTS[layout].param_channels.items()})
+    return names
+
+
+# The bake's stored attributes of each pair of box values (mesh_io.box_layers), as a .blend's
+# sidecar names them: a FLOAT2 attribute, or two INT ones joined by "+" (x, then y).
+_BLEND_PARAM_ATTRIBUTES = {("shape", "material"): mesh_io.PARAMS_LAYERS[0], ("random", "user"): mesh_io.PARAMS_LAYERS[1],
+                           ("parent", "depth"): f"{mesh_io.PARENT_LAYER}+{mesh_io.DEPTH_LAYER}"}
 
 
 def export_objects(context, objects, preset_name: str, filepath: str, layout: str | None = None) -> dict:
@@ -138,6 +149,9 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
     preset = presets.PRESETS.get(preset_name)
     if preset is None:
         raise ExportInputError(f"preset must be one of {sorted(presets.PRESETS)}, got {preset_name!r}")
+    problem = path_problem(filepath, preset.name)
+    if problem:
+        raise ExportInputError(problem)
     if layout is not None and layout not in preset.layouts:
         raise ExportInputError(f"{preset.label} carries the layouts {', '.join(preset.layouts)}, not {layout}")
     objects = list({ob.name_full: ob for ob in objects}.values())  # each object once
@@ -188,14 +202,11 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             stats, table, notes = _export_with_copies(context, objects, meshes, preset, layout, temp, skins)
             warnings.extend(notes)
             if table_file and layouts.LAYOUTS[layout].table_format == "godot3_tres":
-                with open(temps[table_file], "w") as f:
-                    f.write(godot.image_texture_tres(table))
+                godot.write_image_texture_tres(temps[table_file], table)
             elif table_file:
-                with open(temps[table_file], "wb") as f:
-                    f.write(godot.table_bin(table))
+                files.write_bytes(temps[table_file], godot.table_bin(table))
         if preset.writes_godot3_import:
-            with open(temps[import_settings.godot3_import_path(outputs[0])], "w") as f:
-                f.write(import_settings.godot3_import_text())
+            files.write_bytes(temps[import_settings.godot3_import_path(outputs[0])], import_settings.godot3_import_text())
         _write_sidecar(temps[sidecar.sidecar_path(outputs[0])], preset, layout, filepath, stats, skins)
         return stats
 
@@ -234,10 +245,14 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': {m['stale_boxes']} of {m['boxes']} boxes changed shape since the bake, "
                             "so the file's offsets and frames are stale and decode off: run Bake Box Frames again, "
                             "then export")
+        if m.get("stale_parents"):
+            warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': {m['stale_parents']} of {m['boxes']} boxes "
+                            "name parents that no box holds since the bake (boxes deleted or added, meshes joined): "
+                            "the file makes them roots: run Bake Box Frames again for their parents, then export")
+    # What the engine's default import would cost is not a warning: the export wrote what sets the
+    # import (NAME.glb.import for Godot 3; the sidecar the Unity and Unreal helpers read), and
+    # import_note says it once.
     default_errors = [m["default_import_error"] for m in stats if "default_import_error" in m]
-    if default_errors:
-        warnings.append(f"with {preset.label}'s default import settings ({preset.default_import_loss}) the decode error is "
-                        f"{max(default_errors):.1e} of the half-extent, not float32's: {preset.import_settings}")
     return {"preset": preset.name, "layout": layout, "path": os.path.abspath(filepath),
             "skinned": _skin_summary(skins),
             "default_import_error": max(default_errors) if default_errors else None,
@@ -248,15 +263,26 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
             "objects": [ob.name for ob in objects], "meshes": stats, "seconds": time.perf_counter() - start,
             "warnings": warnings, "import_settings": preset.import_settings,
             "transform_error": max((s["transform_error"] for s in stats), default=0.0),
-            "stale_boxes": sum(s.get("stale_boxes", 0) for s in stats)}
+            "stale_boxes": sum(s.get("stale_boxes", 0) for s in stats),
+            "stale_parents": sum(s.get("stale_parents", 0) for s in stats)}
+
+
+def import_note(report) -> str:
+    """The import settings an export needs, and what the engine's default import would cost when
+    it differs: one line for the operator's report and the command line's table."""
+    preset = presets.PRESETS[report["preset"]]
+    note = preset.import_settings
+    if report["default_import_error"]:
+        note += (f" (the default import, {preset.default_import_loss}, would leave a decode error of "
+                 f"{report['default_import_error']:.1e} of the half-extent)")
+    return note
 
 
 def _write_sidecar(path, preset, layout, filepath, stats, skins) -> None:
     """Writes the sidecar (formats/sidecar.py) of an export to ``path``."""
     text = json.dumps(sidecar.describe(preset, layout, filepath, stats, _skin_summary(skins),
                                        file_channel_names(preset, layout)), indent=2, allow_nan=False)
-    with open(path, "w") as f:
-        f.write(text + "\n")
+    files.write_bytes(path, text + "\n")
 
 
 def _skin_summary(skins) -> dict:
@@ -324,12 +350,15 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
             ob = owner_of_mesh[mesh.as_pointer()]
             data, corner_verts, mesh_stats, origins = box_data[mesh.as_pointer()]
             copy, channels = _target_copy(mesh, preset, layout, data, corner_verts, mesh_stats, skins.get(ob.name))
+            copies[mesh.as_pointer()] = copy  # removed in the finally below, whatever happens next
             if "TABLE" in channels:
                 tables.append(channels.pop("TABLE"))
             name = mesh.name
-            mesh.name = name + ".boxmarch-original"
+            if mesh.library is None:  # a linked mesh cannot be renamed, nor does its copy need it:
+                mesh.name = name + ".boxmarch-original"  # the copy is local, a name of its own
+                originals[name] = mesh
             copy.name = name  # the file names the mesh as the artist did
-            copies[mesh.as_pointer()], originals[name] = copy, mesh
+            name = copy.name  # (a local mesh of a linked one's name keeps it: the copy then gets another)
             file_channels[name], file_corners[name] = channels, corner_verts
             truths[name] = (origins, mesh_stats)
             stats.append(mesh_stats)

@@ -30,7 +30,7 @@ def replace_frame(path, frames_by_mesh: dict) -> None:
     by_name = {}
     for geometry in (objects.children if objects else ()):
         if geometry.name == b"Geometry" and len(geometry.props) > 1:
-            by_name[geometry.props[1].split(b"\x00\x01")[0].decode()] = geometry
+            by_name[_geometry_name(geometry)] = geometry
     missing = set(frames_by_mesh) - set(by_name)
     if missing:
         raise ValueError(f"the FBX exporter wrote no geometry named {sorted(missing)}")
@@ -59,6 +59,17 @@ def replace_frame(path, frames_by_mesh: dict) -> None:
                 if weights is not None:
                     _set(weights, b"d", np.ones(corners))
     fbx_container.write(path, document)  # nothing is written unless every geometry checked out
+
+
+def _geometry_name(geometry) -> str:
+    """The mesh name of a Geometry record: its second property, a string "NAME\\x00\\x01Geometry"."""
+    if geometry.types[1:2] != b"S" or not isinstance(geometry.props[1], bytes):
+        raise ValueError(f"a Geometry record's name is a '{geometry.types[1:2].decode(errors='replace')}' "
+                         f"property, not a string")
+    try:
+        return geometry.props[1].split(b"\x00\x01")[0].decode()
+    except UnicodeDecodeError:
+        raise ValueError(f"a Geometry record's name {geometry.props[1][:40]!r} is not UTF-8 text") from None
 
 
 def _record(parent, name, mesh):

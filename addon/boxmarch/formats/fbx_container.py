@@ -32,6 +32,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import files
+
 MAGIC = b"Kaydara FBX Binary  \x00\x1a\x00"
 FOOTER_MAGIC = bytes.fromhex("f85a8c6adef5d97eece90ce3758f290b")
 WIDE_VERSION = 7500  # from this version, record headers hold uint64 fields
@@ -41,6 +43,10 @@ _SCALARS = {b"Y": "<h", b"C": "<?", b"I": "<i", b"F": "<f", b"D": "<d", b"L": "<
 _ARRAYS = {b"f": np.dtype("<f4"), b"d": np.dtype("<f8"), b"l": np.dtype("<i8"), b"i": np.dtype("<i4"),
            b"b": np.dtype("u1")}
 _ARRAY_HEADER = struct.Struct("<III")  # count, encoding, stored length
+# zlib's deflate emits at least 2 bits per 258-byte match: no stream inflates to more than 1032
+# times its length, so an array declaring more cannot be what the file holds.
+MAX_INFLATION = 1032
+_INFLATE_PIECE = 1 << 20  # bytes inflated at a time into the array's own buffer
 
 
 @dataclass
@@ -77,10 +83,11 @@ def read(path) -> Document:
 
 
 def write(path, document: Document) -> None:
-    """Write ``document`` to ``path`` in one write, once every byte of it is encoded."""
+    """Write ``document`` to ``path`` once every byte of it is encoded, atomically
+    (files.write_atomically: a failed write, a full disk or a file-size limit, leaves ``path`` as
+    it was)."""
     data = encode(document)
-    with open(path, "wb") as f:
-        f.write(data)
+    files.write_atomically(path, lambda temp: files.write_bytes(temp, data))
 
 
 def decode(data: bytes) -> Document:
@@ -123,19 +130,43 @@ class _StoredArray:
     def values(self):
         if self.encoding == 0:
             return np.frombuffer(self.raw, _ARRAYS[self.kind])
-        inflate = zlib.decompressobj()
         try:
-            values = inflate.decompress(self.raw, max(self.expected, 1))  # 0 would mean "no limit"
+            values = self.inflated()
         except zlib.error as error:
             raise ValueError(f"{self.where}: its zlib data is damaged ({error})") from None
-        if len(values) != self.expected or inflate.unconsumed_tail or not inflate.eof:
+        values.flags.writeable = False
+        return values.view(_ARRAYS[self.kind])
+
+    def inflated(self):
+        """The zlib data inflated piece by piece into one buffer of the declared size (a single
+        decompress call would hold its output twice at the end), refused before anything is
+        allocated when the declared size is more than the stored bytes can inflate to."""
+        if self.expected > MAX_INFLATION * len(self.raw):
+            raise ValueError(f"{self.where} declares {self.expected} bytes from {len(self.raw)} zlib bytes: "
+                             f"more than zlib inflates to (at most {MAX_INFLATION} times)")
+        try:
+            out = np.empty(self.expected, np.uint8)
+        except MemoryError:
+            raise ValueError(f"{self.where} needs {self.expected} bytes of memory, more than is free") from None
+        inflate, tail, filled = zlib.decompressobj(), self.raw, 0
+        while filled < self.expected:
+            piece = inflate.decompress(tail, min(_INFLATE_PIECE, self.expected - filled))
+            if not piece:
+                break
+            out[filled:filled + len(piece)] = np.frombuffer(piece, np.uint8)
+            filled, tail = filled + len(piece), inflate.unconsumed_tail
+        if filled == self.expected and not inflate.eof:
+            extra = inflate.decompress(tail, 1)  # the stream's end, or data past the declared size
+            filled, tail = filled + len(extra), inflate.unconsumed_tail
+        if filled != self.expected or tail or not inflate.eof:
             raise ValueError(f"{self.where}: its zlib data does not inflate to {self.expected} bytes")
-        return np.frombuffer(values, _ARRAYS[self.kind])
+        return out
 
 
 class _Reader:
     def __init__(self, data: memoryview, version: int):
         self.data = data
+        self.mismatch = f": the file is damaged or its header's version {version} does not match its records"
         wide = version >= WIDE_VERSION
         self.header = struct.Struct("<QQQB" if wide else "<IIIB")
         self.null_length = self.header.size  # a null record: a header of zeros, name length 0 included
@@ -173,12 +204,15 @@ class _Reader:
                              f"file's end ({len(self.data)} bytes)")
         if not pos < end_offset <= end:
             raise ValueError(f"FBX record at byte {pos}: end offset {end_offset} lies outside its parent "
-                             f"(bytes {pos} to {end})")
+                             f"(bytes {pos} to {end}){self.mismatch}")
         name, cursor = self.take(pos + self.header.size, name_length, end_offset, "a record's name")
         name = bytes(name)
+        if not _is_record_name(name):
+            raise ValueError(f"FBX record at byte {pos}: its {len(name)}-byte name is not a record name (printable "
+                             f"ASCII){self.mismatch}")
         props_end = cursor + props_length
         if props_end > end_offset:
-            raise ValueError(f"FBX record '{name.decode(errors='replace')}' at byte {pos}: its {props_length} "
+            raise ValueError(f"FBX record '{_label(name)}' at byte {pos}: its {props_length} "
                              f"property bytes run past its end at byte {end_offset}")
         props, types = [], bytearray()
         for _ in range(count):
@@ -186,7 +220,7 @@ class _Reader:
             props.append(value)
             types += kind
         if cursor != props_end:
-            raise ValueError(f"FBX record '{name.decode(errors='replace')}' at byte {pos}: {count} properties "
+            raise ValueError(f"FBX record '{_label(name)}' at byte {pos}: {count} properties "
                              f"fill {cursor - props_end + props_length} bytes, its header says {props_length}")
         if any(isinstance(value, _StoredArray) for value in props):
             self.with_arrays.append(props)
@@ -195,7 +229,7 @@ class _Reader:
             node.children, cursor = self.records(cursor, end_offset, depth + 1)
             node.null_record = True
             if cursor != end_offset:
-                raise ValueError(f"FBX record '{name.decode(errors='replace')}' at byte {pos}: its nested list "
+                raise ValueError(f"FBX record '{_label(name)}' at byte {pos}: its nested list "
                                  f"ends at byte {cursor}, its header says {end_offset}")
         else:
             node.null_record = False
@@ -214,7 +248,7 @@ class _Reader:
         if kind in _ARRAYS:
             return kind, *self.array(kind, pos, end, name)
         label = repr(kind)[1:]
-        raise ValueError(f"FBX record '{name.decode(errors='replace')}': unknown property type code {label} "
+        raise ValueError(f"FBX record '{_label(name)}': unknown property type code {label} "
                          f"at byte {pos - 1}")
 
     def array(self, kind, pos, end, name):
@@ -222,12 +256,22 @@ class _Reader:
         count, encoding, stored = self.unpack(_ARRAY_HEADER.format, pos, end, f"a '{kind.decode()}' array header")
         raw, pos = self.take(pos + _ARRAY_HEADER.size, stored, end, f"a '{kind.decode()}' array")
         expected = count * dtype.itemsize
-        where = f"FBX record '{name.decode(errors='replace')}': a '{kind.decode()}' array of {count} values"
+        where = f"FBX record '{_label(name)}': a '{kind.decode()}' array of {count} values"
         if encoding == 0 and stored != expected:
             raise ValueError(f"{where} stores {stored} bytes, not {expected}")
         if encoding not in (0, 1):
             raise ValueError(f"{where} has unknown encoding {encoding} (0 raw and 1 zlib are known)")
         return _StoredArray(kind, encoding, bytes(raw), expected, where), pos
+
+
+def _is_record_name(name: bytes) -> bool:
+    """Record names are identifiers (``Objects``, ``LayerElementUV``): printable ASCII."""
+    return name.isascii() and name.decode().isprintable()
+
+
+def _label(name: bytes) -> str:
+    """A record name (checked by _is_record_name) for a message: its first 40 characters."""
+    return name.decode() if len(name) <= 40 else name[:40].decode() + "..."
 
 
 def encode(document: Document) -> bytes:

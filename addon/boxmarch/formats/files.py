@@ -1,14 +1,28 @@
 """Files that appear only complete: written under a temporary name in the same folder, then
-renamed over the target (one rename on one filesystem, so a reader never sees half a file)."""
+renamed over the target (one rename on one filesystem, so a reader never sees half a file); and
+the signals that would end the process meanwhile, turned into an interrupt the writers clean up
+after (interrupts_recorded)."""
 from __future__ import annotations
 
+import contextlib
 import os
 import secrets
+import signal
+import threading
 
 NAME_MAX = 255  # bytes of one file name (Linux and macOS file systems)
 # Room left in a temporary name for what a writer adds to it (Blender saves a .blend as NAME@ first).
 WRITER_SUFFIX_ROOM = 8
 _LONGEST_KEPT_EXTENSION = 16  # the exporters need .glb/.fbx/.blend; a longer one is dropped
+
+
+# Signals that end a process unless handled, sent from outside (a terminal closing, a job
+# control, a service manager, a CPU-time limit): interrupts_recorded makes each stop the work as
+# Ctrl-C does, so the temporary files are removed. Synchronous faults (SIGSEGV, SIGBUS, ...) and
+# SIGKILL cannot be handled.
+TERMINATING_SIGNALS = tuple(getattr(signal, name) for name in (
+    "SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT", "SIGUSR1", "SIGUSR2", "SIGALRM", "SIGVTALRM", "SIGPROF",
+    "SIGXCPU", "SIGPWR", "SIGIO") if hasattr(signal, name))
 
 
 def partial_path(path: str) -> str:
@@ -54,3 +68,33 @@ def write_atomically(path: str, write) -> str:
     write_together([path], lambda temps: write(temps[path]))
     return path
 
+
+
+def write_bytes(path: str, data) -> None:
+    """Write ``data`` (bytes or str) to ``path`` in place: the body of a write_atomically or
+    write_together callback, given its temporary path."""
+    with open(path, "wb" if isinstance(data, (bytes, bytearray, memoryview)) else "w") as f:
+        f.write(data)
+
+
+@contextlib.contextmanager
+def interrupts_recorded(interrupts: list):
+    """While the body runs (in the main thread), a terminating signal (TERMINATING_SIGNALS) is
+    appended to ``interrupts`` and raises KeyboardInterrupt, as Python's own SIGINT handler does,
+    so write_together removes its temporary files; Blender's operators turn an exception inside
+    them into a RuntimeError, and ``interrupts`` still tells the caller the run was stopped."""
+    def on_signal(signum, _frame):
+        interrupts.append(signum)
+        raise KeyboardInterrupt
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {signum: signal.signal(signum, on_signal) for signum in TERMINATING_SIGNALS}
+    try:
+        yield
+    finally:
+        # None: the Blender program's own C handler, which Python cannot put back; the default
+        # (end the process) is what a background Blender does on such a signal.
+        for signum, handler in previous.items():
+            signal.signal(signum, signal.SIG_DFL if handler is None else handler)

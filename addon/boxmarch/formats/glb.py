@@ -15,6 +15,8 @@ import struct
 
 import numpy as np
 
+from . import files
+
 GLB_MAGIC, CHUNK_JSON, CHUNK_BIN = 0x46546C67, 0x4E4F534A, 0x004E4942
 COMPONENT_DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16,
                     5125: np.uint32, 5126: np.float32}
@@ -45,16 +47,20 @@ def read(path):
 
 
 def write(path, gltf, binary) -> None:
-    """Write a .glb: JSON chunk padded with spaces, BIN chunk padded with zeros (4-byte aligned)."""
-    text = json.dumps(gltf, separators=(",", ":")).encode()
+    """Write a .glb: JSON chunk padded with spaces, BIN chunk padded with zeros (4-byte aligned),
+    atomically (files.write_atomically)."""
+    text = json.dumps(gltf, separators=(",", ":"), allow_nan=False).encode()
     text += b" " * (-len(text) % 4)
     binary = bytes(binary) + b"\0" * (-len(binary) % 4)
     total = 12 + 8 + len(text) + (8 + len(binary) if binary else 0)
-    with open(path, "wb") as f:
-        f.write(struct.pack("<III", GLB_MAGIC, 2, total))
-        f.write(struct.pack("<II", len(text), CHUNK_JSON) + text)
-        if binary:
-            f.write(struct.pack("<II", len(binary), CHUNK_BIN) + binary)
+
+    def write_chunks(temp):
+        with open(temp, "wb") as f:
+            f.write(struct.pack("<III", GLB_MAGIC, 2, total))
+            f.write(struct.pack("<II", len(text), CHUNK_JSON) + text)
+            if binary:
+                f.write(struct.pack("<II", len(binary), CHUNK_BIN) + binary)
+    files.write_atomically(path, write_chunks)
 
 
 def accessor_array(gltf, binary, index) -> np.ndarray:

@@ -43,17 +43,54 @@ def table_image(table) -> np.ndarray:
     return image.reshape(planes * height, width, 4)
 
 
-def image_texture_tres(table) -> str:
-    """Text of a Godot 3 ImageTexture resource holding the box table ``table`` (see
-    :func:`table_image`) as float32 RGBA texels, row by row."""
+# Bytes of the table turned into text at a time: the text of one chunk (up to 5 characters a byte)
+# stays a few tens of MiB, whatever the table's size.
+TEXT_CHUNK_BYTES = 1 << 22
+
+
+def write_image_texture_tres(path, table) -> None:
+    """Write to ``path`` a Godot 3 ImageTexture resource holding the box table ``table`` (see
+    :func:`table_image`) as float32 RGBA texels, row by row: the image's bytes as the decimal
+    list of a PoolByteArray, written chunk by chunk (TEXT_CHUNK_BYTES)."""
     image = table_image(table)
     height, width = image.shape[:2]
-    data = ", ".join(map(str, image.astype("<f4").tobytes()))
-    return (f'[gd_resource type="ImageTexture" load_steps=2 format=2]\n\n'
-            f'[sub_resource type="Image" id=1]\n'
-            f'data = {{\n"data": PoolByteArray( {data} ),\n"format": "RGBAFloat",\n"height": {height},\n'
-            f'"mipmaps": false,\n"width": {width}\n}}\n\n'
-            f'[resource]\nflags = 0\nimage = SubResource( 1 )\nsize = Vector2( {width}, {height} )\n')
+    data = np.ascontiguousarray(image, "<f4").reshape(-1).view(np.uint8)
+    with open(path, "wb") as f:
+        f.write(b'[gd_resource type="ImageTexture" load_steps=2 format=2]\n\n'
+                b'[sub_resource type="Image" id=1]\n'
+                b'data = {\n"data": PoolByteArray( ')
+        for start in range(0, len(data), TEXT_CHUNK_BYTES):
+            f.write(_decimal_list(data[start:start + TEXT_CHUNK_BYTES], last=start + TEXT_CHUNK_BYTES >= len(data)))
+        f.write(f' ),\n"format": "RGBAFloat",\n"height": {height},\n'
+                f'"mipmaps": false,\n"width": {width}\n}}\n\n'
+                f'[resource]\nflags = 0\nimage = SubResource( 1 )\nsize = Vector2( {width}, {height} )\n'.encode())
+
+
+# Each byte value's text and separator, "0, " .. "255, ", left-aligned in 5 bytes (zeros after);
+# and each pair of bytes' texts one after the other in 10: _decimal_list gathers the rows of a
+# chunk's byte pairs and keeps the non-zero bytes (half as many rows as bytes: faster).
+_BYTE_TEXT = np.array([list(f"{v}, ".encode().ljust(5, b"\0")) for v in range(256)], np.uint8)
+
+
+def _pair_text() -> np.ndarray:
+    pairs = np.zeros((256, 256, 10), np.uint8)
+    pairs[:, :, :5] = _BYTE_TEXT[:, None, :]
+    for length in (3, 4, 5):  # the first text's length: the second follows it
+        pairs[(_BYTE_TEXT != 0).sum(axis=1) == length, :, length:length + 5] = _BYTE_TEXT
+    return pairs.reshape(65536, 10)
+
+
+_PAIR_TEXT = _pair_text()
+
+
+def _decimal_list(values, last: bool) -> bytes:
+    """ASCII of the bytes ``values`` as decimal numbers, each followed by ", " but the very last
+    (``last``: this chunk ends the list): what ", ".join(map(str, values)) gives, without a
+    Python string per byte."""
+    even = len(values) - len(values) % 2
+    rows = [_PAIR_TEXT[values[:even].view(">u2")], _BYTE_TEXT[values[even:]]]
+    text = b"".join(row[row != 0].tobytes() for row in rows)
+    return text[:-2] if last else text
 
 
 def table_bin(table) -> bytes:

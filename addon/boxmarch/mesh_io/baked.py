@@ -284,6 +284,9 @@ def prepare_bake(mesh, settings: BakeSettings, selected_only: bool = False) -> P
     user-facing reason when the mesh cannot be baked."""
     if mesh.library is not None:
         raise BakeInputError(f"mesh '{mesh.name}' is linked from a library and cannot be changed")
+    seed = settings.random_seed
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed <= core.RANDOM_SEED_MAX:
+        raise BakeInputError(f"random seed must be a whole number in 0..{core.RANDOM_SEED_MAX}, got {seed!r}")
     if len(mesh.vertices) == 0:
         raise BakeInputError(f"mesh '{mesh.name}' is empty")
     if len(mesh.polygons) == 0:

@@ -23,9 +23,14 @@ PARENT_ATTRIBUTE = "boxmarch_parent"
 PARAMS_LAYERS = (".boxmarch_shape_material", ".boxmarch_random_user")  # FLOAT2 POINT
 PARENT_LAYER = ".boxmarch_parent"   # INT POINT: the parent box's index, -1 for a root
 DEPTH_LAYER = ".boxmarch_depth"     # INT POINT: 0 at a root
+# INT POINT: the box's own number at the bake. Parents name boxes by number; deleting a box, or
+# joining baked meshes, renumbers the boxes after the bake, and this layer tells which number each
+# box had (read_box_layers maps the parents onto today's numbers, or finds them stale).
+BOX_NUMBER_LAYER = ".boxmarch_box"
 _SCALAR_TYPES = {"FLOAT": ("value", np.float32), "INT": ("value", np.int32), "INT8": ("value", np.int32),
                  "BOOLEAN": ("value", bool)}
 _COLOUR_CHANNELS = {"shape": 0, "material": 1, "user": 3}
+FLOAT32_MAX = float(np.finfo(np.float32).max)  # a larger parameter would be written as infinity
 
 
 class BoxLayerError(ValueError):
@@ -35,11 +40,13 @@ class BoxLayerError(ValueError):
 @dataclass
 class BoxLayers:
     """Per-box values of one mesh: ``params`` float32 (S, 4) in PARAM_NAMES order, ``parent``
-    and ``depth`` int32 (S,)."""
+    and ``depth`` int32 (S,); ``stale_parents``: how many boxes' stored parents no longer name a
+    box since the bake (read_box_layers made them roots)."""
 
     params: np.ndarray
     parent: np.ndarray
     depth: np.ndarray
+    stale_parents: int = 0
 
 
 def _element_submesh(domain, submesh_of_vertex, face_starts, corner_verts):
@@ -72,6 +79,8 @@ def _read_element_values(mesh, name, domain_size):
     prop, dtype = _SCALAR_TYPES[attr.data_type]
     buf = np.empty(count, dtype)
     attr.data.foreach_get(prop, buf)
+    if dtype is np.int32:  # kept whole: float32 would round 16777217 to 16777216 (_reduce)
+        return buf[:, None], attr.domain
     return buf.astype(np.float32)[:, None], attr.domain
 
 
@@ -81,11 +90,16 @@ def _reduce(mesh, name, submesh_of_vertex, count, face_starts, corner_verts, dis
     if read is None:
         return None
     values, domain = read
+    whole = values.dtype == np.int32
+    if whole:  # each int32 as its two 16-bit halves, both exact in float32: the same majority, every bit kept
+        values = np.concatenate([values >> 16, values & 0xFFFF], 1).astype(np.float32)
     try:
         per_box, disagrees, n = core.reduce_per_submesh(
             values, _element_submesh(domain, submesh_of_vertex, face_starts, corner_verts), count)
     except ValueError as error:
         raise BoxLayerError(f"mesh '{mesh.name}': attribute '{name}': {error}") from None
+    if whole:  # float64: the parent rule reads the whole number; parameters become float32 where stored
+        per_box = per_box[:, :1].astype(np.float64) * 65536 + per_box[:, 1:]
     if n:
         disagreements[name] = {"submeshes": n, "first": [int(s) for s in np.flatnonzero(disagrees)[:8]]}
     return per_box
@@ -102,8 +116,9 @@ def object_parameters(mesh) -> dict:
         given = {ob.name: ob.get(name) for ob in users}
         for ob_name, value in given.items():
             if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))
-                                      or not np.isfinite(value)):
-                raise BoxLayerError(f"object '{ob_name}': property '{name}' is {value!r}; give a finite number")
+                                      or not abs(value) <= FLOAT32_MAX):
+                raise BoxLayerError(f"object '{ob_name}': property '{name}' is {value!r}; give a finite number "
+                                    f"within float32's range (±{FLOAT32_MAX:.7g}), the box table's")
         if all(v is None for v in given.values()):
             continue
         if len(set(given.values())) > 1:
@@ -197,7 +212,9 @@ def write_box_layers(mesh, submesh_of_vertex, layers: BoxLayers) -> None:
     for name, data_type, values, prop in ((PARAMS_LAYERS[0], "FLOAT2", layers.params[:, :2], "vector"),
                                           (PARAMS_LAYERS[1], "FLOAT2", layers.params[:, 2:], "vector"),
                                           (PARENT_LAYER, "INT", layers.parent, "value"),
-                                          (DEPTH_LAYER, "INT", layers.depth, "value")):
+                                          (DEPTH_LAYER, "INT", layers.depth, "value"),
+                                          (BOX_NUMBER_LAYER, "INT", np.arange(len(layers.parent), dtype=np.int32),
+                                           "value")):
         old = mesh.attributes.get(name)
         if old is not None and (old.data_type != data_type or old.domain != "POINT"):
             mesh.attributes.remove(old)
@@ -223,4 +240,45 @@ def read_box_layers(mesh, submesh_of_vertex, count):
     first = np.zeros(int(count), np.int64)
     first[submesh_of_vertex[::-1]] = np.arange(n)[::-1]
     params = np.concatenate([pair.reshape(-1, 2) for pair in pairs], 1)
-    return BoxLayers(params[first], parent[first], depth[first])
+    number = mesh.attributes.get(BOX_NUMBER_LAYER)
+    baked_number = None
+    if number is not None and number.domain == "POINT" and number.data_type == "INT":
+        baked_number = np.empty(n, np.int32)
+        number.data.foreach_get("value", baked_number)
+        baked_number = baked_number[first]
+    parent, depth, stale = current_parents(parent[first], depth[first], baked_number)
+    return BoxLayers(params[first], parent, depth, stale)
+
+
+def current_parents(parent, depth, baked_number=None):
+    """(parent int32, depth int32, stale count) of boxes whose stored ``parent`` and ``depth``
+    name boxes by the number each had at the bake, ``baked_number`` (S,) (None: a bake that did
+    not store it; the numbers are taken as unchanged): each parent mapped onto the box that holds
+    its number now. A parent is stale, and its box becomes a root, where no box or two boxes hold
+    its number (a box deleted, baked meshes joined), where it would be the box itself, or where
+    the stored depths disagree with it (its box's depth is not its parent's plus one); depths are
+    then counted again. A parent out of range or a box its own parent is never returned."""
+    parent = np.asarray(parent, np.int64)
+    depth = np.asarray(depth, np.int64)
+    count = len(parent)
+    boxes = np.arange(count)
+    resolved = parent
+    if baked_number is not None and not np.array_equal(baked_number, boxes):
+        order = np.argsort(baked_number, kind="stable")
+        numbers = np.asarray(baked_number, np.int64)[order]
+        held_once = np.ones(count, bool)
+        held_once[1:] &= numbers[1:] != numbers[:-1]
+        held_once[:-1] &= numbers[:-1] != numbers[1:]
+        at = np.minimum(np.searchsorted(numbers, parent), count - 1)
+        found = (numbers[at] == parent) & held_once[at]
+        resolved = np.where(parent < 0, -1, np.where(found, order[at], -2))
+    inside = (resolved >= 0) & (resolved < count)
+    up_depth = depth[np.where(inside, resolved, 0)] if count else depth
+    stale = ((resolved != -1) & ~inside) | (resolved == boxes) | (inside & (depth != up_depth + 1))
+    if not stale.any() and resolved is parent:
+        return parent.astype(np.int32), depth.astype(np.int32), 0
+    resolved = np.where(stale, -1, resolved).astype(np.int32)
+    # Depth falls by one along every parent kept, so the parents form a tree: count the depths again.
+    _, depth, _ = core.box_hierarchy(np.zeros((count, 3)), np.tile(np.float32([0, 0, 0, 1]), (count, 1)),
+                                     np.zeros((count, 3)), rule="ATTRIBUTE", given_parent=resolved)
+    return resolved, depth.astype(np.int32), int(stale.sum())

@@ -72,7 +72,7 @@ class BOXMARCH_OT_bake(bpy.types.Operator):
     incremental: BoolProperty(name="Skip Unchanged", default=True,
                               description="Leave submeshes whose geometry has not changed since the last bake")
     hierarchy: EnumProperty(name="Parents", default=core.HIERARCHY_RULES[0], items=_HIERARCHY_ITEMS)
-    random_seed: IntProperty(name="Random Seed", default=0, min=0,
+    random_seed: IntProperty(name="Random Seed", default=0, min=0, max=core.RANDOM_SEED_MAX,
                              description="Seed of each box's random value (stable while the box is unchanged)")
 
     @classmethod

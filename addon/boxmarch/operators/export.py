@@ -78,7 +78,7 @@ def run_export(operator, context, preset, filepath, layout=None) -> bool:
     if report["table"]:
         text += f"; box table {report['table']}"
     if report["import_settings"]:
-        operator.report({"INFO"}, f"Import settings: {report['import_settings']}")
+        operator.report({"INFO"}, f"Import settings: {scene.import_note(report)}")
     operator.report({"INFO"}, text)
     return True
 

@@ -342,9 +342,10 @@ struct RenderPlan {
 // rasterised depth fails the depth test; plan.occluders first finds, per pixel, the nearest depth
 // of the boxes inscribed in the shapes (bm_occluder_centre/half for the preset; none for a box
 // whose drawn box holds the eye) and returns before marching from a fragment whose rasterised
-// entry lies behind it, and ends every march at it (every fragment still runs); plan.quality below 1 widens the hit distance to a share
-// of a pixel, caps a box's steps by its size on screen and draws boxes under a few pixels with one
-// map() tap (bm_quality); plan.normal picks the normal's differences. Hits are shaded with the
+// entry lies behind it, and ends every march at it (every fragment still runs); plan.quality below
+// 1 takes secant steps within a share of a pixel of the surface (the hit distance stays
+// options.epsilon), caps a box's steps by its size on screen and draws boxes under a few pixels
+// with one map() tap (bm_quality); plan.normal picks the normal's differences. Hits are shaded with the
 // preview's Lambert + hemisphere light in view space. Reads box_count boxes; writes the covered
 // pixels of images and, if plan.cost is set, the counts. Throws std::invalid_argument on bad options (see raymarch), a quality outside (0, 1], an
 // unknown normal rule or an order that is not a permutation of the boxes.

@@ -470,15 +470,17 @@ vec2 bm_box_span(vec3 ro, vec3 rd, vec3 h)
   vec3 t_far = (h - s * ro) * inv;
   return vec2(bm_max3(t_near), bm_min3(t_far));
 }
-// The quality knob q (0 < q <= 1) as the three settings it stands for. x: hit distance as a share
-// of a pixel's footprint (the march stops that close to the surface when that is more than the
-// epsilon); y: steps allowed per pixel of the box's size on screen (bm_step_limit); z: size on
-// screen in pixels under which a box takes one tap (bm_one_tap). q = 1 leaves the march as the
-// epsilon and step limit set it.
-vec3 bm_quality(float q)
+// The quality knob q (0 < q <= 1) as the four settings it stands for. x: distance, as a share of a
+// pixel's footprint, under which the march takes secant steps (bm_march's secant.x); w: the
+// longest secant step, as a multiple of the distance (secant.y): longer steps save more and may
+// land further inside the surface (a hit there shades from a point under it); y: steps allowed
+// per pixel of the box's size on screen (bm_step_limit); z: size on screen in pixels under which a
+// box takes one tap (bm_one_tap). The hit distance stays the epsilon at every q; q = 1 leaves the
+// march as the epsilon and step limit set it.
+vec4 bm_quality(float q)
 {
   float loss = 1.0 - clamp(q, 0.0, 1.0);
-  return vec3(0.5 * loss * loss, 8.0 / max(loss, 1e-9), 4.0 * loss);
+  return vec4(0.5 * loss, 8.0 / max(loss, 1e-9), 4.0 * loss, 1.0 + 2.0 * loss);
 }
 // Size of one pixel, in object units, at a point whose clip-space w is clip_w: row_y = length of
 // the object-to-clip matrix's y row (xyz), height = viewport height in pixels. Perspective and
@@ -530,15 +532,22 @@ float map(vec3 p, vec3 h, float index)
 }
 
 // Sphere-traces map(, h, index) from ro along unit rd until a distance falls below epsilon (true), the ray
-// passes t_end or step_limit evaluations (at most 512) are spent (false). t: distance travelled;
-// steps: map(, h, index) evaluations; d: the last map(, h, index) value (at a hit, the hit's own distance, which
-// bm_normal reuses). The loop's bound is a constant, as GLSL ES 1.00 (WebGL 1) requires.
-bool bm_march(vec3 ro, vec3 rd, float t_end, int step_limit, float epsilon, float relaxation,
+// passes t_end or step_limit evaluations (at most 512) are spent (false). Where a distance is under
+// secant.x and smaller than the last one, the step is the secant's instead (the line through the
+// last two distances along the ray, extended to zero), at most secant.y times the distance: near
+// a surface met at a slant the distances shrink geometrically and the secant skips that tail, and
+// the hit test stays epsilon, so the silhouette does not move (secant.x = 0: plain sphere tracing).
+// t: distance travelled; steps: map(, h, index) evaluations; d: the last map(, h, index) value (at a hit, the hit's
+// own distance, which bm_normal reuses). The loop's bound is a constant, as GLSL ES 1.00 (WebGL 1)
+// requires.
+bool bm_march(vec3 ro, vec3 rd, float t_end, int step_limit, float epsilon, float relaxation, vec2 secant,
               out float t, out int steps, out float d, vec3 h, float index)
 {
   t = 0.0;
   steps = step_limit;
   d = 0.0;
+  float last_d = 0.0;
+  float last_advance = 0.0;
   for (int i = 0; i < 512; ++i) {
     if (i >= step_limit) {
       break;
@@ -548,7 +557,13 @@ bool bm_march(vec3 ro, vec3 rd, float t_end, int step_limit, float epsilon, floa
       steps = i + 1;
       return true;
     }
-    t += relaxation * d;
+    float advance = relaxation * d;
+    if (d < secant.x && d < last_d) {
+      advance = min(d * last_advance / (last_d - d), secant.y * d);
+    }
+    last_d = d;
+    last_advance = advance;
+    t += advance;
     if (t > t_end) {
       steps = i + 1;
       return false;
@@ -615,17 +630,16 @@ void fragment()
   // The quality knob (as the Blender preview applies it): a pixel's size at the fragment, the
   // box's size on screen from it.
   mat4 object_to_clip = PROJECTION_MATRIX * INV_CAMERA_MATRIX * WORLD_MATRIX;
-  vec3 knob = bm_quality(quality);
+  vec4 knob = bm_quality(quality);
   float footprint = bm_pixel_size((object_to_clip * vec4(bm_v_obj_pos, 1.0)).w,
       length(vec3(object_to_clip[0][1], object_to_clip[1][1], object_to_clip[2][1])), VIEWPORT_SIZE.y);
   float box_pixels = 2.0 * max3(h) / footprint;
-  float epsilon = max(march_epsilon, knob.x * footprint);
   float t;
   float d;
   int steps = 1;
   bool hit = box_pixels < knob.z ? bm_one_tap(ro, rd, t_end, footprint, t, d, h, index)
-      : bm_march(ro, rd, t_end, int(bm_step_limit(box_pixels, knob.y, float(max_steps))), epsilon, 1.0, t, steps, d,
-                 h, index);
+      : bm_march(ro, rd, t_end, int(bm_step_limit(box_pixels, knob.y, float(max_steps))), march_epsilon, 1.0,
+                 vec2(knob.x * footprint, knob.w), t, steps, d, h, index);
   if (!hit) {
     discard;
   }

@@ -34,22 +34,10 @@ func models_with_sidecars(dir, out):
 	return out
 
 
-# The sidecar's refusal of ``model``, or "" when this plug-in reads its layout.
+# The sidecar's refusal of ``model`` (one line naming the sidecar), or "" when this plug-in
+# reads it: sidecar.gd, the checks every boxmarch helper makes.
 func refusal(model):
-	var path = model.get_basename() + SIDECAR_SUFFIX
-	var f = File.new()
-	if f.open(path, File.READ) != OK:
-		return "cannot read " + path
-	var parsed = JSON.parse(f.get_as_text())
-	f.close()
-	if parsed.error != OK or typeof(parsed.result) != TYPE_DICTIONARY:
-		return path + " is not a boxmarch sidecar (JSON error: " + parsed.error_string + ")"
-	var sidecar = parsed.result
-	if int(sidecar.get("format_version", -1)) != FORMAT_VERSION:
-		return "%s has format version %s; this plug-in reads version %d" % [path, str(sidecar.get("format_version")), FORMAT_VERSION]
-	if sidecar.get("preset") != PRESET or not sidecar.get("layout") in LAYOUTS_READ:
-		return "%s: layout %s (preset %s) is not read by Godot 3, which keeps two UV sets only: export with the GODOT3 preset (layout %s)" % [model, str(sidecar.get("layout")), str(sidecar.get("preset")), LAYOUTS_READ[0]]
-	return ""
+	return preload("sidecar.gd").refusal(model.get_basename() + SIDECAR_SUFFIX, FORMAT_VERSION, PRESET, LAYOUTS_READ)
 
 
 # True when ``model`` has been imported with settings other than PARAMS; rewrites them.
@@ -79,7 +67,7 @@ func check_project():
 		var why = refusal(model)
 		if why != "":
 			if not reported.has(model):
-				push_error("boxmarch: " + why)
+				push_error(why)
 				reported[model] = true
 		elif set_params(model):
 			print("boxmarch: re-importing %s with mesh compression off" % model)

@@ -6,8 +6,9 @@
 //   Mesh Compression off: it quantizes UVs and colours;
 //   Normals and Tangents: Import: the NORMAL_FRAME layout's box frame is the file's normal and
 //   tangent, which Calculate would replace.
-// A sidecar of another preset or version, or a layout Runtime/Shaders does not read, is refused
-// with an error in the Console and the model keeps Unity's settings.
+// A sidecar of another preset or version, a layout Runtime/Shaders does not read, or one that is
+// not a sidecar (BoxmarchSidecar.cs) is refused with one error naming it in the Console, and the
+// model keeps Unity's settings.
 using System;
 using System.IO;
 using UnityEditor;
@@ -22,17 +23,6 @@ namespace Boxmarch.Editor
         public const string SidecarSuffix = ".boxmarch.json";
         public static readonly string[] LayoutsRead = { "UV_FRAME", "NORMAL_FRAME", "CLASSIC" };
 
-        // The keys every boxmarch helper reads first (docs/FORMAT.md).
-        [Serializable]
-        public class Sidecar
-        {
-            public int format_version;
-            public string preset;
-            public string layout;
-            public bool skinned;
-            public int box_count;
-        }
-
         // Raised when the settings below change, so that Unity imports the models again.
         public override uint GetVersion()
         {
@@ -44,30 +34,11 @@ namespace Boxmarch.Editor
             return Path.ChangeExtension(modelPath, null) + SidecarSuffix;
         }
 
-        // Why the sidecar's model is not set up by this package, or null when it is.
-        public static string Refusal(Sidecar sidecar)
+        // Why the model of the sidecar at sidecarPath is not set up by this package, as one line
+        // naming the sidecar, or null when it is (BoxmarchSidecar: the checks of every helper).
+        public static string Refusal(string sidecarPath)
         {
-            if (sidecar == null)
-                return "the sidecar is not a boxmarch sidecar";
-            if (sidecar.format_version != FormatVersion)
-                return "the sidecar has format version " + sidecar.format_version + "; this package reads version " + FormatVersion;
-            if (sidecar.preset != Preset)
-                return "the model was exported with the " + sidecar.preset + " preset, whose axes are not Unity's: export with the UNITY preset";
-            if (Array.IndexOf(LayoutsRead, sidecar.layout) < 0)
-                return "layout " + sidecar.layout + " is not read by the boxmarch material (it reads " + string.Join(", ", LayoutsRead) + ")";
-            return null;
-        }
-
-        static Sidecar ReadSidecar(string path)
-        {
-            try
-            {
-                return JsonUtility.FromJson<Sidecar>(File.ReadAllText(path));
-            }
-            catch (ArgumentException)  // JsonUtility's answer to text that is not JSON
-            {
-                return null;
-            }
+            return BoxmarchSidecar.Refusal(sidecarPath, FormatVersion, Preset, LayoutsRead);
         }
 
         void OnPreprocessModel()
@@ -75,10 +46,10 @@ namespace Boxmarch.Editor
             string path = SidecarPath(assetPath);
             if (!File.Exists(path))
                 return;  // not a boxmarch export
-            string refusal = Refusal(ReadSidecar(path));
+            string refusal = Refusal(path);
             if (refusal != null)
             {
-                Debug.LogError("boxmarch: " + assetPath + ": " + refusal + " (" + path + ")");
+                Debug.LogError(refusal);
                 return;
             }
             ModelImporter importer = assetImporter as ModelImporter;

@@ -73,9 +73,8 @@ bm_hit bm_raymarch_in_frame(float3 obj_pos, float3 obj_camera, float3 f, float3 
     t_end = eye_distance;
   }
   // the quality knob, as the preview applies it (shaders/glsl/preview.frag.glsl)
-  float3 knob = bm_quality(quality);
+  float4 knob = bm_quality(quality);
   float box_pixels = 2.0 * bm_max3(box_half) / footprint;
-  float hit_epsilon = max(epsilon, knob.x * footprint);
   float t;
   float d;
   int steps = 1;
@@ -83,7 +82,7 @@ bm_hit bm_raymarch_in_frame(float3 obj_pos, float3 obj_camera, float3 f, float3 
     o.hit = bm_one_tap(ro, rd, min(t_end, max_distance), footprint, t, d);
   else
     o.hit = bm_march(ro, rd, min(t_end, max_distance), int(bm_step_limit(box_pixels, knob.y, float(max_steps))),
-                     hit_epsilon, relaxation, t, steps, d);
+                     epsilon, relaxation, float2(knob.x * footprint, knob.w), t, steps, d);
   o.steps = steps;
   if (!o.hit) return o;
   float3 local_hit = ro + rd * t;

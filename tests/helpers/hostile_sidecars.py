@@ -1,0 +1,88 @@
+"""One table of sidecars (NAME.boxmarch.json) that every engine helper must refuse, each with the
+words its one-line message must hold, and the helper-independent rule they break
+(docs/FORMAT.md, "How a helper reads the sidecar"). Each helper's test runs the whole table in
+the helper's own runtime: three.js in Chromium (tests/test_engine_threejs_inputs.py), the Godot 3
+plug-in in godot3-server, the Unity postprocessor under mono and the Unreal script under a stub
+``unreal`` module (tests/test_engine_sidecars.py).
+
+``cases(preset, layout)`` builds the files from the sidecar the helper reads (``preset``,
+``layout``), so one table serves helpers that read different presets. The first case is the
+negative control: a sidecar every helper must accept."""
+import json
+
+MAX_BYTES = 1 << 24  # the sidecar size every helper refuses above (docs/FORMAT.md)
+MAX_DEPTH = 32       # brackets nested deeper than this are refused before any JSON parser runs
+ACCEPTED = "valid"   # the name of the negative control
+
+
+def valid(preset, layout):
+    """The keys every helper reads first, as an export writes them, plus one it ignores."""
+    return {"format_version": 1, "preset": preset, "layout": layout, "skinned": False, "box_count": 3,
+            "file": "model.glb"}
+
+
+def cases(preset, layout):
+    """{name: (file bytes, words the refusal must hold)}; ``ACCEPTED`` holds None: no refusal."""
+    good = valid(preset, layout)
+
+    def with_value(key, value):
+        return json.dumps({**good, key: value}).encode()
+
+    def without(key):
+        return json.dumps({k: v for k, v in good.items() if k != key}).encode()
+
+    text = json.dumps(good)
+    return {
+        ACCEPTED: (json.dumps(good).encode(), None),
+        "version 1.0 (the number 1)": (text.replace('"format_version": 1', '"format_version": 1.0').encode(), None),
+        "version null": (with_value("format_version", None), "format_version must be 1"),
+        "version 1.5": (with_value("format_version", 1.5), "format_version must be 1"),
+        "version 1.9999": (with_value("format_version", 1.9999), "format_version must be 1"),
+        "version string": (with_value("format_version", "1"), "format_version must be 1"),
+        "version true": (with_value("format_version", True), "format_version must be 1"),
+        "version 2": (with_value("format_version", 2), "format_version must be 1"),
+        "version missing": (without("format_version"), "format_version must be 1"),
+        "preset of another engine": (with_value("preset", "BLENDER"), "preset must be"),
+        "preset a number": (with_value("preset", 3), "preset must be"),
+        "preset of 10,000 characters": (with_value("preset", "GLTF" * 2500), "preset must be"),
+        "layout null": (with_value("layout", None), "layout must be one of"),
+        "layout unknown": (with_value("layout", "SOMETHING"), "layout must be one of"),
+        "layout a list": (with_value("layout", [layout]), "layout must be one of"),
+        "skinned a string": (with_value("skinned", "false"), "skinned must be true or false"),
+        "skinned 0": (with_value("skinned", 0), "skinned must be true or false"),
+        "box_count -1": (with_value("box_count", -1), "box_count must be a whole number"),
+        "box_count 2.5": (with_value("box_count", 2.5), "box_count must be a whole number"),
+        "box_count 1e300": (with_value("box_count", 1e300), "box_count must be a whole number"),
+        "box_count a string": (with_value("box_count", "3"), "box_count must be a whole number"),
+        "box_count missing": (without("box_count"), "box_count must be a whole number"),
+        "a list": (b"[1, 2, 3]", "not a JSON object"),
+        "null": (b"null", "not a JSON object"),
+        "not JSON": (text[:-1].encode(), "not JSON"),
+        "NaN token": (text.replace('"box_count": 3', '"box_count": NaN').encode(), "not JSON"),
+        "empty": (b"", "not JSON"),
+        "not UTF-8": (text.replace('"model.glb"', '"mod\\u00e9l.glb"').encode().replace(b"\\u00e9", b"\xe9"),
+                      "not UTF-8 text"),
+        "100,000 nested brackets": (b"[" * 100_000 + b"]" * 100_000, f"nested more than {MAX_DEPTH} deep"),
+        "100,000 nested objects": (b'{"a":' * 100_000 + b"1" + b"}" * 100_000, f"nested more than {MAX_DEPTH} deep"),
+        "32 deep in a valid sidecar": (text[:-1].encode() + b', "extra": ' + b"[" * 31 + b"]" * 31 + b"}", None),
+        "33 deep in a valid sidecar": (text[:-1].encode() + b', "extra": ' + b"[" * 32 + b"]" * 32 + b"}",
+                                       f"nested more than {MAX_DEPTH} deep"),
+        "brackets inside a string are text": (with_value("file", "[[[[" * 20 + '"\\' + "{" * 40), None),
+        "larger than 16 MiB": (text[:-1].encode() + b" " * MAX_BYTES + b"}", f"larger than {MAX_BYTES} bytes"),
+    }
+
+
+def check_refusals(messages, preset, layout, path_of):
+    """Asserts that ``messages`` ({case name: the helper's message, or None for an accepted
+    sidecar}) answers every case of the table: the accepted ones None, each other one line
+    starting with "boxmarch: ", naming its file (``path_of(case)``) and holding its words."""
+    wrong = {}
+    for name, (_data, words) in cases(preset, layout).items():
+        message = messages[name]
+        if words is None:
+            if message is not None:
+                wrong[name] = message
+        elif not (message and message.startswith("boxmarch: ") and path_of(name) in message and words in message
+                  and "\n" not in message and len(message) < 400):
+            wrong[name] = message
+    assert not wrong, json.dumps(wrong, indent=1)[:6000]

@@ -1,0 +1,24 @@
+"""Child of tests/test_fbx_container.py: reads one FBX file with boxmarch.formats.fbx_container
+and prints one JSON line: the outcome ("read", "ValueError: ..." or "MemoryError") and the peak
+resident memory above what the process held before the read, in bytes.
+
+    python fbx_memory_child.py PATH
+"""
+import json
+import resource
+import sys
+
+from boxmarch.formats import fbx_container
+
+with open(sys.argv[1], "rb") as f:
+    data = f.read()
+before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+try:
+    fbx_container.decode(data)
+    outcome = "read"
+except ValueError as error:
+    outcome = f"ValueError: {error}"
+except MemoryError:
+    outcome = "MemoryError"
+peak = (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) * 1024  # Linux: ru_maxrss in KiB
+print(json.dumps({"outcome": outcome, "peak_bytes": peak}))
