@@ -219,7 +219,7 @@ def _normal_index(normal) -> int:
 
 
 def _rows3(a, n, name):
-    a = np.asarray(a, np.float32)
+    a = np.array(a, np.float32)  # a copy: checked here, then read by the core
     if a.shape == (3,):
         a = np.broadcast_to(a, (n, 3))
     if a.shape != (n, 3):
@@ -243,7 +243,7 @@ def raymarch(origins, directions, half_extents, *, sdf="BOX", max_steps=64, epsi
     is inside) and stops at a hit (distance < ``epsilon``), after ``max_steps`` evaluations, when
     it leaves the box, or after travelling ``max_distance``. Each step advances ``relaxation`` x
     the distance. Raises ValueError on bad shapes or options."""
-    origins = np.ascontiguousarray(origins, np.float32)
+    origins = np.array(origins, np.float32, order="C")  # copies: checked here, then read by the core
     if origins.ndim != 2 or origins.shape[1] != 3:
         raise ValueError(f"origins must have shape (N, 3), got {origins.shape}")
     n = len(origins)
@@ -314,9 +314,10 @@ def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_v
     shaders' forward differences (3 map() calls a hit), TETRAHEDRAL taps (4) or CENTRAL
     differences (6, the accuracy reference; cpp NormalRule)."""
     width, height = checked_int(width, "width", 1), checked_int(height, "height", 1)
-    origins = np.ascontiguousarray(origins, np.float32).reshape(-1, 3)
+    # Copies: checked here, then read by the core (another thread may write the caller's arrays).
+    origins = np.array(origins, np.float32, order="C").reshape(-1, 3)
     n = len(origins)
-    quaternions = np.ascontiguousarray(quaternions, np.float32).reshape(-1, 4)
+    quaternions = np.array(quaternions, np.float32, order="C").reshape(-1, 4)
     if depth is None:
         depth = np.ones((height, width), np.float32)
     if rgba is None:
@@ -330,8 +331,8 @@ def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_v
     normals = np.zeros((height, width, 3), np.float32)
     steps = np.zeros((height, width), np.int32)
     if order is not None:
-        order = np.asarray(order)
-        if order.shape != (n,) or order.dtype.kind not in "iu" or (n and (order.min() < 0 or order.max() >= n)):
+        order = checked_indices(order, "order", n)
+        if order.shape != (n,):
             raise ValueError(f"order must be {n} box indices 0..{n - 1}")
         order = order.astype(np.uint32)
     cost = _core.render_boxes(origins, quaternions, half_extents,
