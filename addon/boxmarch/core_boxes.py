@@ -36,7 +36,7 @@ def box_fingerprints(fingerprints, submesh_of_vertex, submesh_count) -> np.ndarr
     if fp.shape != ids.shape:
         raise ValueError(f"fingerprints must have shape {ids.shape} (one per vertex), got {fp.shape}")
     first = np.full(submesh_count, len(ids), np.int64)
-    np.minimum.at(first, ids, np.arange(len(ids)))
+    first[ids[::-1]] = np.arange(len(ids))[::-1]  # the last write of each box is its lowest vertex
     return np.where(first < len(ids), fp[np.minimum(first, max(len(ids) - 1, 0))], 0).astype(np.uint32)
 
 
