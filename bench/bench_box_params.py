@@ -71,10 +71,10 @@ def hierarchy_stress_rows(count):
 
 
 def nearest_rows(count):
-    """core.nearest_rows for ``count`` points among ``count`` candidates (random in a cube of
-    side count^(1/3)): the points on the candidates, 10 units off and 1e9 units off (object
-    parenting's children away from the parent's boxes)."""
-    candidates = np.random.default_rng(2).random((count, 3)) * np.cbrt(count)
+    """core.nearest_rows for ``count`` points among ``count`` candidates (random in a unit cube,
+    as the boxes of one object): the points on the candidates, 10 units off and 1e9 units off
+    (object parenting's children away from the parent's boxes)."""
+    candidates = np.random.default_rng(2).random((count, 3))
     return [(f"{count:,}", f"{offset:g} off", best_of(1, lambda offset=offset: core.nearest_rows(
         candidates + [offset, 0, 0], candidates))) for offset in (0, 10, 1e9)]
 

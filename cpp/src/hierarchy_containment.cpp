@@ -49,7 +49,8 @@ bool finite3(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v
 // linear map whatever the quaternion's length): local axis a of d is dot(rows[a], d), rounded.
 struct Holder {
     glm::dvec3 origin, bounds, rows[3];
-    double length2 = 0.0;  // the quaternion's squared length
+    glm::dvec3 reach{INFINITY};  // half-size along each object axis of what the bounds can hold
+    double length2 = 0.0;        // the quaternion's squared length
     bool holds_nothing = false, finite = false;
 
     Holder(const double* origins, const float* quaternions, const double* half_extents, size_t j)
@@ -72,6 +73,25 @@ struct Holder {
                         !(bounds.y >= 0.0) || !(bounds.z >= 0.0) ||
                         ((!std::isfinite(length2) || !finite3(origin)) && !all_infinite);
         finite = finite3(origin) && finite3(bounds) && finite3(rows[0]) && finite3(rows[1]) && finite3(rows[2]);
+        // The held differences d satisfy |dot(rows[a], d)| <= bounds[a] (within rounding): d lies
+        // in the inverse image of the bounds, within |inverse| * bounds per object axis, widened
+        // by 1e-6 for the rounding of the rotation and of the inverse; only where the map is far
+        // from singular (condition below 1e3: a quaternion of length 1 +- 0.1 or so), so that
+        // the rotation's rounding, amplified by the inverse, stays far below that margin.
+        if (finite) {
+            const glm::dmat3 to_local = glm::transpose(glm::dmat3(rows[0], rows[1], rows[2]));
+            const glm::dmat3 back = glm::inverse(to_local);
+            double largest = 0.0, largest_back = 0.0;
+            for (int a = 0; a < 3; ++a)
+                for (int d = 0; d < 3; ++d)
+                    largest = std::max(largest, std::abs(to_local[a][d])),
+                    largest_back = std::max(largest_back, std::abs(back[a][d]));
+            for (int d = 0; d < 3 && largest * largest_back < 1e3; ++d) {
+                double r = 0.0;
+                for (int a = 0; a < 3; ++a) r += std::abs(back[a][d]) * bounds[a];
+                if (std::isfinite(r)) reach[d] = r * (1.0 + 1e-6);
+            }
+        }
     }
 
     // True when no origin inside the node's bounds can pass the inside test: every difference
@@ -84,6 +104,7 @@ struct Holder {
         double size = 0.0;
         for (int d = 0; d < 3; ++d) {
             const double lo = n.lo[d] - origin[d], hi = n.hi[d] - origin[d];
+            if (lo * (1.0 - 1e-9) > reach[d] || -hi * (1.0 - 1e-9) > reach[d]) return true;
             middle[d] = 0.5 * lo + 0.5 * hi;
             half[d] = 0.5 * hi - 0.5 * lo;
             size += std::abs(middle[d]) + half[d];
