@@ -79,7 +79,7 @@ class BakeResult:
 def bake(positions, edges, face_starts, face_sizes, corner_verts, *, mask=None,
          previous_fingerprints=None, offsets=None, angle_epsilon=ANGLE_EPSILON_DEFAULT, origin="BOUNDS",
          sort_axes_by_extent=False, axis_turn=0, encoding="FLOAT_COLOR", use_cache=True,
-         threads=0) -> BakeResult:
+         threads=0, arrays_owned=False) -> BakeResult:
     """Bake every submesh (connected component) of a mesh.
 
     ``mask`` (booleans or numbers, one per vertex) limits the bake to submeshes with a nonzero
@@ -87,7 +87,11 @@ def bake(positions, edges, face_starts, face_sizes, corner_verts, *, mask=None,
     ``previous_fingerprints`` (uint32 per vertex, from an earlier bake) skips submeshes whose
     geometry and options are unchanged; ``offsets`` (optional, float32 or uint8 (N, 4)) is
     written in place, keeping the values of submeshes not baked. Raises ValueError on malformed
-    input (with the first offending element named) before anything is written.
+    input (with the first offending element named) before anything is written. The core reads
+    private copies of the mesh arrays, mask and fingerprints (another thread may write the
+    caller's during the call); ``arrays_owned=True`` says the caller made them for this call and
+    nothing else can reach them (the bake job's arrays read from Blender), so they are read as
+    they are.
     """
     if origin not in ORIGIN_MODES:
         raise ValueError(f"origin must be one of {ORIGIN_MODES}, got {origin!r}")
@@ -99,7 +103,8 @@ def bake(positions, edges, face_starts, face_sizes, corner_verts, *, mask=None,
                    previous_fingerprints=previous_fingerprints, offsets=offsets,
                    angle_epsilon=float(angle_epsilon), origin=origin,
                    sort_axes_by_extent=bool(sort_axes_by_extent), axis_turn=checked_int(axis_turn, "axis_turn", 0, 23),
-                   encoding=encoding, use_cache=bool(use_cache), threads=checked_int(threads, "threads", -2**31))
+                   encoding=encoding, use_cache=bool(use_cache), threads=checked_int(threads, "threads", -2**31),
+                   arrays_owned=bool(arrays_owned))
     return BakeResult(**r)
 
 
@@ -109,10 +114,12 @@ def find_submeshes(positions, edges, face_starts, face_sizes, corner_verts):
     return _core.find_submeshes(positions, edges, face_starts, face_sizes, corner_verts)
 
 
-def face_offsets_from_corner_edges(corner_verts, corner_edges, edges, vertex_count, face_count):
+def face_offsets_from_corner_edges(corner_verts, corner_edges, edges, vertex_count, face_count, arrays_owned=False):
     """(face_starts, face_sizes) recovered from corner data, or None when they do not give exactly
-    ``face_count`` faces of 3 or more corners (then read the face arrays themselves)."""
-    starts, count = _core.face_starts_from_corner_edges(corner_verts, corner_edges, edges, checked_int(vertex_count, "vertex_count"))
+    ``face_count`` faces of 3 or more corners (then read the face arrays themselves).
+    ``arrays_owned``: as :func:`bake`'s."""
+    starts, count = _core.face_starts_from_corner_edges(corner_verts, corner_edges, edges,
+                                                        checked_int(vertex_count, "vertex_count"), bool(arrays_owned))
     if count != face_count:
         return None
     sizes = np.diff(starts, append=np.int32(len(corner_verts))).astype(np.int32)

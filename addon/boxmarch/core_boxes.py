@@ -65,7 +65,7 @@ def dominant_per_submesh(weights, submesh_of_vertex, submesh_count) -> np.ndarra
 def nearest_rows(points, candidates) -> np.ndarray:
     """int64 (n,): the row of ``candidates`` (m, 3) nearest each of ``points`` (n, 3): the
     smallest sum of squared coordinate differences in float64 (ties: the lower row), found on a
-    grid of the candidates (cpp/src/nearest_points.cpp). Raises ValueError on a NaN or infinite
+    k-d tree of the candidates (cpp/src/nearest_points.cpp). Raises ValueError on a NaN or infinite
     coordinate, or on points without candidates."""
     # Copies: the checks below must hold for what the core then reads.
     points = np.array(points, np.float64, order="C")
