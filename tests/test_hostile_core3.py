@@ -93,14 +93,18 @@ def test_every_index_argument_refuses_wrapped_truncated_and_out_of_range_values(
         assert "\n" not in message and len(message) < 300, (argument, what, message)
 
 
-def test_box_hierarchy_refuses_negative_and_nan_half_extents_for_every_rule():
+def test_box_hierarchy_refuses_bad_sizes_origins_and_turns_for_every_rule():
+    """Negative or NaN half-extents, NaN or infinite origins and quaternions: none comes out of a
+    bake, and each made a box silently hold nothing (or the searches compare every pair)."""
     given = np.full(S, -1)
     for rule in core.HIERARCHY_RULES:
-        for bad in (-1.0, -1e-300, np.nan):
-            half = RESULT.half_extents.copy()
-            half[2, 1] = bad
-            with pytest.raises(ValueError, match=r"box 2 has half-extent .*: half-extents must be 0 or more"):
-                core.box_hierarchy(RESULT.origins, RESULT.quaternions, half, rule, given)
+        for which, bad, message in [(2, v, "half-extent .*: half-extents must be 0 or more") for v in (-1.0, -1e-300, np.nan)] + [
+                (0, v, "origin coordinate .*: origins must be finite") for v in (np.nan, np.inf, -np.inf)] + [
+                (1, v, "quaternion component .*: quaternions must be finite") for v in (np.nan, np.inf)]:
+            boxes = [RESULT.origins.copy(), RESULT.quaternions.copy(), RESULT.half_extents.copy()]
+            boxes[which][2, 1] = bad
+            with pytest.raises(ValueError, match="box 2 has " + message):
+                core.box_hierarchy(*boxes, rule, given)
         half = RESULT.half_extents.copy()
         half[2] = [0.0, np.inf, 1.0]  # zero and infinite sizes are sizes
         core.box_hierarchy(RESULT.origins, RESULT.quaternions, half, rule, given)

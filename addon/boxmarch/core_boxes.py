@@ -117,7 +117,8 @@ def box_hierarchy(origins, quaternions, half_extents, rule="ATTRIBUTE", given_pa
     depth (0 at a root). ``rule``: ATTRIBUTE takes ``given_parent`` (int (S,), -1 for roots;
     None: every box a root), CONTAINMENT the smallest larger box holding the box's origin, CHAIN
     the nearest lower-numbered box (instances along a curve are numbered along it), BONES takes
-    ``given_parent`` (parents_by_bone) as ATTRIBUTE does. Raises ValueError on a parent out of range, a box its own parent or a cycle."""
+    ``given_parent`` (parents_by_bone) as ATTRIBUTE does. Raises ValueError on a parent out of range, a box its own parent or a cycle,
+    and (any rule) on a NaN or infinite origin or quaternion or a negative or NaN half-extent."""
     if rule not in _RULE_CODES:
         raise ValueError(f"hierarchy rule must be one of {HIERARCHY_RULES}, got {rule!r}")
     origins = np.ascontiguousarray(origins, np.float64).reshape(-1, 3)

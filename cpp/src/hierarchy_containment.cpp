@@ -42,16 +42,14 @@ bool holds(const double* origins, const float* quaternions, const double* half_e
     return std::abs(local.x) <= b.x && std::abs(local.y) <= b.y && std::abs(local.z) <= b.z;
 }
 
-bool finite3(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-
-// What box j's inside test reads, and whether it can be answered for a whole node of origins.
-// rows[a] holds the map glm's rotation by j's conjugate quaternion applies to a difference (a
-// linear map whatever the quaternion's length): local axis a of d is dot(rows[a], d), rounded.
+// What box j's inside test reads, to decide it for a whole node of origins. rows[a] holds the map
+// glm's rotation by j's conjugate quaternion applies to a difference (a linear map whatever the
+// quaternion's length): local axis a of d is dot(rows[a], d), rounded. box_hierarchy refuses
+// non-finite origins and quaternions and negative or NaN half-extents; bounds may be infinite.
 struct Holder {
     glm::dvec3 origin, bounds, rows[3];
     glm::dvec3 reach{INFINITY};  // half-size along each object axis of what the bounds can hold
     double length2 = 0.0;        // the quaternion's squared length
-    bool holds_nothing = false, finite = false;
 
     Holder(const double* origins, const float* quaternions, const double* half_extents, size_t j)
             : origin(vec3_at(origins, j)), bounds(inside_bounds(half_extents, j)) {
@@ -64,42 +62,33 @@ struct Holder {
             for (int a = 0; a < 3; ++a) rows[a][k] = column[a];
         }
         length2 = double(q[0]) * q[0] + double(q[1]) * q[1] + double(q[2]) * q[2] + double(q[3]) * q[3];
-        // A NaN anywhere, or negative bounds, fail every comparison of the inside test. A
-        // non-finite quaternion makes every local coordinate NaN or infinite, and an infinite
-        // origin coordinate does so for the difference to any finite origin: only infinite
-        // bounds can hold then (those boxes are tested against every origin).
-        const bool all_infinite = std::isinf(bounds.x) && std::isinf(bounds.y) && std::isinf(bounds.z);
-        holds_nothing = glm::any(glm::isnan(origin)) || std::isnan(length2) || !(bounds.x >= 0.0) ||
-                        !(bounds.y >= 0.0) || !(bounds.z >= 0.0) ||
-                        ((!std::isfinite(length2) || !finite3(origin)) && !all_infinite);
-        finite = finite3(origin) && finite3(bounds) && finite3(rows[0]) && finite3(rows[1]) && finite3(rows[2]);
         // The held differences d satisfy |dot(rows[a], d)| <= bounds[a] (within rounding): d lies
         // in the inverse image of the bounds, within |inverse| * bounds per object axis, widened
         // by 1e-6 for the rounding of the rotation and of the inverse; only where the map is far
         // from singular (condition below 1e3: a quaternion of length 1 +- 0.1 or so), so that
-        // the rotation's rounding, amplified by the inverse, stays far below that margin.
-        if (finite) {
-            const glm::dmat3 to_local = glm::transpose(glm::dmat3(rows[0], rows[1], rows[2]));
-            const glm::dmat3 back = glm::inverse(to_local);
-            double largest = 0.0, largest_back = 0.0;
-            for (int a = 0; a < 3; ++a)
-                for (int d = 0; d < 3; ++d)
-                    largest = std::max(largest, std::abs(to_local[a][d])),
-                    largest_back = std::max(largest_back, std::abs(back[a][d]));
-            for (int d = 0; d < 3 && largest * largest_back < 1e3; ++d) {
-                double r = 0.0;
-                for (int a = 0; a < 3; ++a) r += std::abs(back[a][d]) * bounds[a];
-                if (std::isfinite(r)) reach[d] = r * (1.0 + 1e-6);
-            }
+        // the rotation's rounding, amplified by the inverse, stays far below that margin. An
+        // infinite bound leaves the axes it reaches unbounded (0 * infinity is NaN: not finite).
+        const glm::dmat3 to_object = glm::transpose(glm::dmat3(rows[0], rows[1], rows[2]));
+        const glm::dmat3 back = glm::inverse(to_object);
+        double largest = 0.0, largest_back = 0.0;
+        for (int a = 0; a < 3; ++a)
+            for (int d = 0; d < 3; ++d)
+                largest = std::max(largest, std::abs(to_object[a][d])),
+                largest_back = std::max(largest_back, std::abs(back[a][d]));
+        for (int d = 0; d < 3 && largest * largest_back < 1e3; ++d) {
+            double r = 0.0;
+            for (int a = 0; a < 3; ++a) r += std::abs(back[a][d]) * bounds[a];
+            if (std::isfinite(r)) reach[d] = r * (1.0 + 1e-6);
         }
     }
 
     // True when no origin inside the node's bounds can pass the inside test: every difference
-    // p - origin of such a p rounds into [lo, hi] - origin (rounding is monotonic), whose image
-    // under the rows lies within centre +- reach on each local axis; the margin covers the
-    // rounding of glm's rotation and of this bound by a factor of about 1e6.
+    // p - origin of such a p rounds into [lo, hi] - origin (rounding is monotonic), which lies
+    // within reach on the object axes only if it overlaps it, and whose image under the rows lies
+    // within centre +- extent on each local axis; the margin covers the rounding of glm's
+    // rotation and of this bound by a factor of about 1e6. A NaN (an overflowed difference)
+    // fails every comparison: the node is read.
     bool misses(const KdTree::Node& n) const {
-        if (!finite) return false;
         glm::dvec3 middle, half;
         double size = 0.0;
         for (int d = 0; d < 3; ++d) {
@@ -111,29 +100,22 @@ struct Holder {
         }
         const double margin = 1e-9 * (1.0 + 2.0 * length2) * size;
         for (int a = 0; a < 3; ++a) {
-            const double centre = glm::dot(rows[a], middle), reach = glm::dot(glm::abs(rows[a]), half);
-            if (std::abs(centre) - reach - margin > bounds[a]) return true;
+            const double centre = glm::dot(rows[a], middle), extent = glm::dot(glm::abs(rows[a]), half);
+            if (std::abs(centre) - extent - margin > bounds[a]) return true;
         }
         return false;
     }
 };
 
-// The origins not yet claimed: a k-d tree over the finite ones with a count per node, and a list
-// of those with an infinite coordinate (and no NaN).
+// The origins not yet claimed: a k-d tree over them with a count per node.
 struct Unclaimed {
     KdTree tree;
     std::vector<uint32_t> live;      // per node
     std::vector<uint8_t> is_live;    // per position in tree.items
     std::vector<uint32_t> position;  // of each box in tree.items
-    std::vector<uint32_t> infinite;  // origins with an infinite coordinate
     SearchWork work;
 
-    void add(const double* origins, uint32_t i) {
-        if (!finite_point(origins + 3 * size_t(i))) {
-            if (!std::isnan(origins[3 * i]) && !std::isnan(origins[3 * i + 1]) && !std::isnan(origins[3 * i + 2]))
-                infinite.push_back(i);
-            return;
-        }
+    void add(uint32_t i) {
         const uint32_t at = position[i];
         is_live[at] = 1;
         for (uint32_t node = 0;;) {
@@ -171,41 +153,30 @@ struct Unclaimed {
 void containment_parents(int32_t* parent, const double* origins, const float* quaternions, const double* half_extents,
                          size_t count, SearchWork* work) {
     std::fill(parent, parent + count, -1);
-    // A box with a NaN volume is neither larger nor smaller than any other: it holds nothing and
-    // nothing holds it.
-    std::vector<uint32_t> order, finite;
+    // A box with a NaN volume (a zero and an infinite half-extent) is neither larger nor smaller
+    // than any other: it holds nothing and nothing holds it.
+    std::vector<uint32_t> order;
     std::vector<double> volumes(count);
     for (size_t i = 0; i < count; ++i) {
         volumes[i] = volume(half_extents, i);
-        if (std::isnan(volumes[i])) continue;
-        order.push_back(uint32_t(i));
-        if (finite_point(origins + 3 * i)) finite.push_back(uint32_t(i));
+        if (!std::isnan(volumes[i])) order.push_back(uint32_t(i));
     }
+    Unclaimed u;
+    build_kd_tree(u.tree, origins, order);
+    // Smallest first: the larger of two boxes is the one of larger volume, ties to the lower
+    // index (a strict order, so parents always point to larger boxes and form no cycle).
     std::sort(order.begin(), order.end(),
               [&](uint32_t a, uint32_t b) { return volumes[a] < volumes[b] || (volumes[a] == volumes[b] && a > b); });
-    Unclaimed u;
-    build_kd_tree(u.tree, origins, std::move(finite));
     u.live.assign(u.tree.nodes.size(), 0);
     u.is_live.assign(u.tree.items.size(), 0);
     u.position.assign(count, 0);
     for (size_t k = 0; k < u.tree.items.size(); ++k) u.position[u.tree.items[k]] = uint32_t(k);
     for (uint32_t j : order) {
         const Holder h(origins, quaternions, half_extents, j);
-        if (!h.holds_nothing) {
-            auto holds_origin = [&](uint32_t i) { return holds(origins, quaternions, half_extents, j, i); };
-            if (!u.tree.nodes.empty()) u.claim(0, h, holds_origin, parent, j);
-            if (glm::any(glm::isinf(h.bounds))) {
-                for (size_t k = 0; k < u.infinite.size();)
-                    if (holds_origin(u.infinite[k])) {
-                        parent[u.infinite[k]] = int32_t(j);
-                        u.infinite[k] = u.infinite.back();
-                        u.infinite.pop_back();
-                    } else {
-                        ++k;
-                    }
-            }
-        }
-        u.add(origins, j);
+        if (!u.tree.nodes.empty())
+            u.claim(
+                    0, h, [&](uint32_t i) { return holds(origins, quaternions, half_extents, j, i); }, parent, j);
+        u.add(j);
     }
     if (work) work->add(u.work);
 }

@@ -136,8 +136,9 @@ Scene random_scene(uint32_t seed, size_t count, bool lattice) {
     return s;
 }
 
-// Values the definitions treat specially: NaN and infinite origins, infinite and zero
-// half-extents (negative and NaN ones are refused), zero and non-unit quaternions, coordinates near the double range.
+// Values the definitions treat specially: infinite and zero half-extents, zero and non-unit
+// quaternions, coordinates near the double range (box_hierarchy refuses NaN and infinite
+// origins and quaternions, negative and NaN half-extents: check_refusals).
 Scene special_scene(uint32_t seed) {
     Scene s = random_scene(seed, 300, false);
     s.name = "special values seed " + std::to_string(seed);
@@ -150,15 +151,15 @@ Scene special_scene(uint32_t seed) {
         const size_t c = size_t(unit(rng) * 3) % 3;
         const double v = values[size_t(unit(rng) * 8) % 8];
         if (kind < 0.05)
-            s.origins[i * 3 + c] = v;
+            s.origins[i * 3 + c] = std::isfinite(v) ? v : 1e308;
         else if (kind < 0.1)
-            s.half_extents[i * 3 + c] = std::isnan(v) ? inf : std::abs(v);  // negative, NaN: refused
+            s.half_extents[i * 3 + c] = std::isnan(v) ? inf : std::abs(v);
         else if (kind < 0.15)
             for (int k = 0; k < 4; ++k) s.quaternions[i * 4 + k] *= float(unit(rng) * 2.0);
         else if (kind < 0.18)
             for (int k = 0; k < 4; ++k) s.quaternions[i * 4 + k] = 0.0f;
         else if (kind < 0.2)
-            s.quaternions[i * 4 + c] = float(v);
+            s.quaternions[i * 4 + c] = float(std::isfinite(v) ? std::max(-1e30, std::min(v, 1e30)) : -3e38);
         else if (kind < 0.22)
             for (int k = 0; k < 3; ++k) s.half_extents[i * 3 + k] = inf;
     }
@@ -209,6 +210,33 @@ void check_nearest(const Scene& s) {
                 return;
             }
     }
+}
+
+// NaN and infinite origins and quaternion components, negative and NaN half-extents: refused by
+// every rule, naming the box, with nothing written.
+void check_refusals() {
+    const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+    for (HierarchyRule rule : {HierarchyRule::Given, HierarchyRule::Containment, HierarchyRule::Chain})
+        for (int field = 0; field < 3; ++field)
+            for (double bad : {nan, inf, -inf, -1.0}) {
+                if (field == 2 && bad == inf) continue;  // an infinite half-extent is a size
+                Scene s = random_scene(9, 5, false);
+                if (field == 0) s.origins[3 * 3 + 1] = bad;
+                if (field == 1) s.quaternions[3 * 4 + 2] = float(bad);
+                if (field == 2) s.half_extents[3 * 3 + 1] = bad;
+                if (field < 2 && bad == -1.0) continue;  // a valid coordinate
+                std::vector<int32_t> parent(5, 7), depth(5, 7), given(5, -1);
+                std::string message;
+                try {
+                    box_hierarchy(parent.data(), depth.data(), s.origins.data(), s.quaternions.data(),
+                                  s.half_extents.data(), 5, rule, given.data());
+                } catch (const std::invalid_argument& e) {
+                    message = e.what();
+                }
+                if (message.rfind("box 3 has ", 0) != 0 || parent[0] != 7 || depth[0] != 7)
+                    ++failures, std::fprintf(stderr, "FAIL refusal rule %d field %d value %g: '%s'\n", int(rule), field,
+                                             bad, message.c_str());
+            }
 }
 
 void check_scene(const Scene& s) {
@@ -361,6 +389,7 @@ int main() {
     else
         std::printf("(the planted wrong parent above was caught, as it must be)\n");
 
+    check_refusals();
     check_scaling();
     std::printf("%zu scenes, %d failure(s)\n", scenes.size(), failures);
     return failures ? 1 : 0;

@@ -192,22 +192,23 @@ enum class HierarchyRule : int {
 // the other rules ignore it (may be null). Containment: box j holds box i when i's origin lies
 // within j's half-extents (plus 1e-6 of j's largest half-extent) in j's frame and j is larger
 // (volume, ties: lower index), the parent is the smallest such j. Chain: the parent of box i > 0
-// is the j < i nearest to it (ties: lowest j); a box with a NaN or infinite origin coordinate has
-// none and is none's. Neither rule compares every pair. Containment visits the boxes from the
+// is the j < i nearest to it (ties: lowest j; a distance that overflows to infinity is never
+// taken). Neither rule compares every pair. Containment visits the boxes from the
 // smallest up, each claiming the unclaimed origins of smaller boxes its bounds hold from a k-d
 // tree of the origins (nodes tested against the box's own axes and the object axes, claimed
 // origins dropped), so nested boxes, shared origins and long thin boxes crossing one region stay
 // near O(box_count log box_count) (measured: the work per box grows by 1.07x to 1.23x from
-// 20,000 to 40,000 boxes on those scenes, tests/cpp/test_hierarchy.cpp); boxes with infinite
-// bounds are tested against every origin not yet claimed. Chain descends a k-d tree of the
+// 20,000 to 40,000 boxes on those scenes, tests/cpp/test_hierarchy.cpp); a box with an infinite
+// half-extent holds every origin. Chain descends a k-d tree of the
 // origins, nearer side first, skipping nodes without a lower box or farther than the nearest
 // found: about O(box_count log box_count) for every arrangement tested (clusters any distance
 // apart, one origin, curves). Chain runs on all cores, Containment on one; the parents are those
 // of the pairwise definitions exactly, ties included, for any thread count.
 // Writes parent[box_count] (-1 for a root) and depth[box_count] (0 for a root, parent's + 1
 // otherwise). Returns the largest depth. Throws std::invalid_argument (nothing written) on a
-// given parent out of -1..box_count-1, a box its own parent or a cycle, or a negative or NaN
-// half-extent (any rule), naming the box.
+// given parent out of -1..box_count-1, a box its own parent or a cycle, or (any rule) a NaN or
+// infinite origin coordinate or quaternion component or a negative or NaN half-extent, naming
+// the box.
 int32_t box_hierarchy(int32_t* parent, int32_t* depth, const double* origins, const float* quaternions,
                       const double* half_extents, size_t box_count, HierarchyRule rule, const int32_t* given_parent);
 
