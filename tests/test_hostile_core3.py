@@ -27,6 +27,7 @@ def _with_mesh(corner_verts):
 INDEX_ARGUMENTS = {
     "reduce_per_submesh ids": (lambda ids: core.reduce_per_submesh(np.ones(N, np.float32), ids, S), SV, 0, S),
     "box_fingerprints ids": (lambda ids: core.box_fingerprints(RESULT.fingerprints, ids, S), SV, 0, S),
+    "not_boxes submesh_of_vertex": (lambda ids: core.not_boxes(POSITIONS, ids, RESULT.quaternions), SV, 0, S),
     "dominant_per_submesh ids": (lambda ids: core.dominant_per_submesh(np.ones((N, 2)), ids, S), SV, 0, S),
     "parents_by_bone box_bone": (lambda ids: core.parents_by_bone(ids, [-1, 0, 1], RESULT.origins),
                                  np.arange(S) % 3, -1, 3),

@@ -30,14 +30,17 @@ def not_boxes(positions, submesh_of_vertex, quaternions):
     inside its bounding box. Costs nothing on meshes of 8-vertex boxes."""
     from .core import rotate_vector
 
-    sub = np.asarray(submesh_of_vertex, np.int64)
-    q = np.asarray(quaternions, np.float64).reshape(-1, 4)
+    q = np.array(quaternions, np.float64).reshape(-1, 4)
+    sub = checked_indices(submesh_of_vertex, "submesh_of_vertex", len(q))
+    positions = np.array(positions, np.float64)
+    if positions.shape != (len(sub), 3):
+        raise ValueError(f"positions must be ({len(sub)}, 3) beside submesh_of_vertex, got {positions.shape}")
     counts = np.bincount(sub, minlength=len(q))
     off = np.zeros(len(q))
     checked = np.flatnonzero((counts > 8)[sub])
     if len(checked):
         sub = sub[checked]
-        local = rotate_vector(np.asarray(positions, np.float64)[checked], q[sub] * (-1.0, -1.0, -1.0, 1.0))
+        local = rotate_vector(positions[checked], q[sub] * (-1.0, -1.0, -1.0, 1.0))
         order = np.argsort(sub, kind="stable")
         grouped = sub[order]
         starts = np.flatnonzero(np.r_[True, grouped[1:] != grouped[:-1]])

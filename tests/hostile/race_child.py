@@ -34,7 +34,7 @@ CASES = {
     "raymarch": "raymarch", "sdf": "sdf_distance", "render": "render_boxes", "render-order": "render_boxes",
     "render-shapes": "render_boxes_by_shape", "render-baked": "render_baked_mesh", "boxes": "boxes_from_bake",
     "vertex-values": "vertex_values_from_corners", "rotate": "rotate_vector", "decode": "decode_offsets",
-    "front-to-back": "front_to_back", "presets": "preset_of_shape",
+    "front-to-back": "front_to_back", "presets": "preset_of_shape", "not-boxes": "not_boxes",
 }
 # Cases whose function checks nothing in the spoiled array: any values are valid input.
 CHECKS_NOTHING = {"random", "sdf", "rotate", "decode", "front-to-back", "presets"}
@@ -75,6 +75,12 @@ def box_cases():
     corner_q[:, 3] = 1.0
     offsets = np.ascontiguousarray(core.bake(*small).offsets)
 
+    # Pieces of 24 vertices (three boxes' corners each, scaled): not_boxes measures pieces above 8.
+    tori_positions = np.ascontiguousarray(np.concatenate([positions[:3000], positions[:3000] * 0.5,
+                                                          positions[:3000] * 0.25]))
+    tori_sv = np.ascontiguousarray(np.tile(sv[:3000], 3), np.int64)
+    tori_q = quaternions.copy()
+
     def render(**options):
         return core.render_boxes(few_origins, few_q, few_h, clip, view, 24, 24, **options)
 
@@ -103,6 +109,7 @@ def box_cases():
         "decode": (lambda: core.decode_offsets(offsets), offsets, np.nan),
         "front-to-back": (lambda: core.front_to_back(origins, [0.0, 0.0, 50.0, 1.0]), origins, np.nan),
         "presets": (lambda: core.preset_of_shape(shapes), shapes, np.nan),
+        "not-boxes": (lambda: core.not_boxes(tori_positions, tori_sv, tori_q), tori_sv, 2**30),
     }
 
 
