@@ -9,6 +9,10 @@ time, the peak extra memory of the bake against the size of the attributes it wr
 worst decode error of what Blender stores, for FLOAT_COLOR and BYTE_COLOR.
 
     python3 -m bench.bench_bake [N ...]     (default: 1000 16000 125000 1000000)
+
+To compare with another version side by side (docs/BENCHMARKS.md quotes the bake before the
+per-box parameters landed), run the same command with PYTHONPATH pointing at that checkout's
+addon/ folder (built with scripts/dev_build.sh) right before or after this one.
 """
 import sys
 import time
@@ -134,14 +138,15 @@ def main(counts):
         rows.append([f"{count:,}", f"{first * 1e3:.1f}", f"{rebake * 1e3:.1f}", f"{skip * 1e3:.1f}",
                      f"{transfer_time * 1e3:.2f}", f"{first / transfer_time:.1f}x", f"{rebake / transfer_time:.1f}x",
                      f"{operator_transfer * 1e3:.2f}", f"{rebake / operator_transfer:.1f}x",
-                     f"{floor * 1e3:.2f}", f"{floor / transfer_time:.1f}x", f"{rebake / floor:.1f}x", f"{core_time * 1e3:.1f}",
+                     f"{floor * 1e3:.2f}", f"{floor / transfer_time:.1f}x", f"{first / floor:.1f}x", f"{rebake / floor:.1f}x",
+                     f"{core_time * 1e3:.1f}",
                      f"{peak / 2**20:.0f}", f"{written / 2**20:.0f}", f"{peak / written:.2f}",
                      f"{float_error:.1e}", f"{byte_error:.1e}", f"{centre_error:.1e}"])
         print(f"done {count}", file=sys.stderr, flush=True)
     print(f"Blender {bpy.app.version_string}, boxes of 0.05-2 units within 100 units of the origin; times in ms (best of runs)")
     print(table(["boxes", "bake (first)", "re-bake", "re-bake, unchanged", "transfer", "bake / transfer",
                  "re-bake / transfer", "transfer as operator", "re-bake / operator transfer",
-                 "floor operator", "floor / transfer", "re-bake / floor", "core only", "peak extra MiB", "attributes MiB",
+                 "floor operator", "floor / transfer", "bake / floor", "re-bake / floor", "core only", "peak extra MiB", "attributes MiB",
                  "peak / attributes",
                  "decode error float", "decode error 8-bit", "origin vs generated centre"], rows))
     print("decode error: |decoded origin - baked origin| / largest half-extent, decoding the stored attributes "

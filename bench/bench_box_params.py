@@ -2,10 +2,12 @@
 job in Blender through the bpy module with painted attributes).
 
     python3 -m bench.bench_box_params [BOXES ...]     (default: 1000 16000)
+    python3 -m bench.bench_box_params --searches [BOXES ...]   (the search tables alone)
 
 Meshes: BOXES random boxes (8 vertices each) with boxmarch_shape painted per face and
 boxmarch_user per vertex (one face in a hundred boxes disagreeing). A second table times the
-geometric hierarchy rules on BOXES boxes arranged to crowd their grids."""
+geometric hierarchy rules on BOXES boxes arranged to crowd a grid, a third nearest_rows on
+BOXES points among BOXES candidates, near and far from them."""
 import sys
 
 import numpy as np
@@ -41,22 +43,40 @@ def core_rows(count):
 
 
 def hierarchy_stress_rows(count):
-    """The geometric rules on scenes that crowd their grids: every box at one origin (equal
-    sizes), boxes nested like dolls (numbered in shuffled order) and small boxes along a helix."""
+    """The geometric rules on scenes that crowd a grid: every box at one origin (equal sizes),
+    boxes nested like dolls (numbered in shuffled order), small boxes along a helix, long thin
+    rods (half-extents 5 x 0.005 x 0.005, turned at random) crossing one unit cube, and four
+    clusters of small boxes 1e9 apart (numbered across them in turn)."""
+    rng = np.random.default_rng(1)
     t = np.linspace(0, 50, count)
-    scenes_by_name = {
-        "equal boxes at one origin": (np.zeros((count, 3)), np.ones((count, 3))),
-        "nested boxes, shuffled": (np.zeros((count, 3)), np.repeat(
-            np.random.default_rng(1).permutation(1.0001 ** np.arange(count))[:, None], 3, 1)),
-        "boxes along a helix": (np.stack([np.cos(t), np.sin(t), t / 10], 1), np.full((count, 3), 0.01)),
-    }
     identity = np.tile(np.float32([0, 0, 0, 1]), (count, 1))
+    turned = rng.normal(size=(count, 4)).astype(np.float32)
+    turned /= np.linalg.norm(turned, axis=1, keepdims=True)
+    clusters = rng.random((count, 3))
+    clusters[:, 0] += 1e9 * (np.arange(count) % 4)
+    scenes_by_name = {
+        "equal boxes at one origin": (np.zeros((count, 3)), identity, np.ones((count, 3))),
+        "nested boxes, shuffled": (np.zeros((count, 3)), identity, np.repeat(
+            rng.permutation(1.0001 ** np.arange(count))[:, None], 3, 1)),
+        "boxes along a helix": (np.stack([np.cos(t), np.sin(t), t / 10], 1), identity, np.full((count, 3), 0.01)),
+        "thin rods crossing one region": (rng.random((count, 3)), turned, np.tile([5.0, 0.005, 0.005], (count, 1))),
+        "clusters 1e9 apart": (clusters, identity, np.full((count, 3), 0.01)),
+    }
     rows = []
-    for name, (origins, half) in scenes_by_name.items():
-        seconds = [best_of(1, lambda rule=rule: core.box_hierarchy(origins, identity, half, rule=rule))
+    for name, (origins, quaternions, half) in scenes_by_name.items():
+        seconds = [best_of(1, lambda rule=rule: core.box_hierarchy(origins, quaternions, half, rule=rule))
                    for rule in ("CONTAINMENT", "CHAIN")]
         rows.append((f"{count:,}", name, *seconds))
     return rows
+
+
+def nearest_rows(count):
+    """core.nearest_rows for ``count`` points among ``count`` candidates (random in a unit cube,
+    as the boxes of one object): the points on the candidates, 10 units off and 1e9 units off
+    (object parenting's children away from the parent's boxes)."""
+    candidates = np.random.default_rng(2).random((count, 3))
+    return [(f"{count:,}", f"{offset:g} off", best_of(1, lambda offset=offset: core.nearest_rows(
+        candidates + [offset, 0, 0], candidates))) for offset in (0, 10, 1e9)]
 
 
 def job_rows(count):
@@ -80,16 +100,26 @@ def job_rows(count):
              unchanged)]
 
 
+def search_tables(counts):
+    stress = [row for count in counts for row in hierarchy_stress_rows(count)]
+    print(table(["boxes", "scene", "CONTAINMENT s", "CHAIN s"], [(b, s, f"{a:.4f}", f"{c:.4f}") for b, s, a, c in stress]))
+    print()
+    nearest = [row for count in counts for row in nearest_rows(count)]
+    print(table(["points x candidates", "points", "nearest_rows s"], [(b, s, f"{t:.4f}") for b, s, t in nearest]))
+
+
 def main(counts):
     boxmarch.register()
-    rows, stress = [], []
+    rows = []
     for count in counts:
         rows += core_rows(count) + job_rows(count)
-        stress += hierarchy_stress_rows(count)
     print(table(["boxes", "step", "seconds"], [(b, s, f"{t:.4f}") for b, s, t in rows]))
     print()
-    print(table(["boxes", "scene", "CONTAINMENT s", "CHAIN s"], [(b, s, f"{a:.4f}", f"{c:.4f}") for b, s, a, c in stress]))
+    search_tables(counts)
 
 
 if __name__ == "__main__":
-    main([int(a) for a in sys.argv[1:]] or [1000, 16000])
+    if sys.argv[1:2] == ["--searches"]:  # the search tables alone (no Blender scene)
+        search_tables([int(a) for a in sys.argv[2:]] or [1000, 16000])
+    else:
+        main([int(a) for a in sys.argv[1:]] or [1000, 16000])

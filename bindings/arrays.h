@@ -83,19 +83,27 @@ py::array_t<T> input(const py::object& obj, const char* name, py::ssize_t rows, 
     return copy;
 }
 
-// Arrays of one mesh (private copies, see input()), kept alive while the view points into them.
+// input(), or the checked array itself where the caller vouches that nothing else holds it (it
+// made the array for this call): no thread can write what no other code can reach.
+template <class T>
+py::array_t<T> input_or_own(bool own, const py::object& obj, const char* name, py::ssize_t rows, py::ssize_t cols) {
+    return own ? checked<T>(obj, name, rows, cols) : input<T>(obj, name, rows, cols);
+}
+
+// Arrays of one mesh (private copies, see input(), unless `own`), kept alive while the view
+// points into them.
 struct MeshArrays {
     py::array_t<float> positions;
     py::array_t<int32_t> edges, face_starts, face_sizes, corner_verts;
     MeshView view;
 
     MeshArrays(const py::object& p, const py::object& e, const py::object& fs, const py::object& fz,
-               const py::object& cv)
-            : positions(input<float>(p, "positions", -1, 3)),
-              edges(input<int32_t>(e, "edges", -1, 2)),
-              face_starts(input<int32_t>(fs, "face_starts", -1, 0)),
-              face_sizes(input<int32_t>(fz, "face_sizes", face_starts.shape(0), 0)),
-              corner_verts(input<int32_t>(cv, "corner_verts", -1, 0)) {
+               const py::object& cv, bool own = false)
+            : positions(input_or_own<float>(own, p, "positions", -1, 3)),
+              edges(input_or_own<int32_t>(own, e, "edges", -1, 2)),
+              face_starts(input_or_own<int32_t>(own, fs, "face_starts", -1, 0)),
+              face_sizes(input_or_own<int32_t>(own, fz, "face_sizes", face_starts.shape(0), 0)),
+              corner_verts(input_or_own<int32_t>(own, cv, "corner_verts", -1, 0)) {
         view.positions = positions.data();
         view.vertex_count = size_t(positions.shape(0));
         view.edges = edges.data();

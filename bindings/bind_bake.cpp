@@ -19,8 +19,8 @@ py::dict bake_py(const py::object& positions, const py::object& edges, const py:
                  const py::object& face_sizes, const py::object& corner_verts, const py::object& mask,
                  const py::object& previous_fingerprints, const py::object& offsets_out, double angle_epsilon,
                  const std::string& origin, bool sort_axes_by_extent, int axis_turn, const std::string& encoding,
-                 bool use_cache, int threads) {
-    MeshArrays mesh(positions, edges, face_starts, face_sizes, corner_verts);
+                 bool use_cache, int threads, bool arrays_owned) {
+    MeshArrays mesh(positions, edges, face_starts, face_sizes, corner_verts, arrays_owned);
     const py::ssize_t n = py::ssize_t(mesh.view.vertex_count);
     BakeOptions options;
     options.angle_epsilon = angle_epsilon;
@@ -44,9 +44,9 @@ py::dict bake_py(const py::object& positions, const py::object& edges, const py:
 
     py::array_t<uint8_t> mask_arr;
     py::array_t<uint32_t> previous;
-    if (!mask.is_none()) mask_arr = input<uint8_t>(mask, "mask", n, 0);
+    if (!mask.is_none()) mask_arr = input_or_own<uint8_t>(arrays_owned, mask, "mask", n, 0);
     if (!previous_fingerprints.is_none())
-        previous = input<uint32_t>(previous_fingerprints, "previous_fingerprints", n, 0);
+        previous = input_or_own<uint32_t>(arrays_owned, previous_fingerprints, "previous_fingerprints", n, 0);
     py::array offsets;
     if (offsets_out.is_none()) {
         offsets = bytes ? py::array(empty<uint8_t>(n, 4)) : py::array(empty<float>(n, 4));
@@ -124,7 +124,8 @@ void bind_bake(py::module_& m) {
           py::arg("previous_fingerprints") = py::none(), py::arg("offsets") = py::none(),
           py::arg("angle_epsilon") = BakeOptions{}.angle_epsilon, py::arg("origin") = "BOUNDS",
           py::arg("sort_axes_by_extent") = false, py::arg("axis_turn") = 0, py::arg("encoding") = "FLOAT_COLOR",
-          py::arg("use_cache") = true, py::arg("threads") = 0, "Bake every submesh; see boxmarch.core.bake.");
+          py::arg("use_cache") = true, py::arg("threads") = 0, py::arg("arrays_owned") = false,
+          "Bake every submesh; see boxmarch.core.bake.");
 
     m.def(
             "expand_corner_quaternions",

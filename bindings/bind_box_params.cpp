@@ -1,4 +1,5 @@
 // boxmarch._core: per-box parameters, the box hierarchy and the nearest points it builds on.
+// Every array the core reads with the GIL released is a private copy (input()).
 #include "arrays.h"
 
 namespace boxmarch::bindings {
@@ -9,8 +10,8 @@ void bind_box_params(py::module_& m) {
             [](const py::object& values, const py::object& submesh_of_element, size_t submesh_count) {
                 if (!py::isinstance<py::array>(values) || py::array(values).ndim() != 2)
                     throw py::value_error("values must be a 2-D float32 array (elements, components)");
-                auto v = checked<float>(values, "values", -1, py::array(values).shape(1));
-                auto ids = checked<int32_t>(submesh_of_element, "submesh_of_element", v.shape(0), 0);
+                auto v = input<float>(values, "values", -1, py::array(values).shape(1));
+                auto ids = input<int32_t>(submesh_of_element, "submesh_of_element", v.shape(0), 0);
                 const size_t components = size_t(v.shape(1));
                 py::array_t<float> out = empty<float>(py::ssize_t(submesh_count), py::ssize_t(components));
                 py::array_t<uint8_t> disagrees = empty<uint8_t>(py::ssize_t(submesh_count));
@@ -28,7 +29,7 @@ void bind_box_params(py::module_& m) {
     m.def(
             "box_random",
             [](const py::object& fingerprints, uint32_t seed) {
-                auto fp = checked<uint32_t>(fingerprints, "fingerprints", -1, 0);
+                auto fp = checked<uint32_t>(fingerprints, "fingerprints", -1, 0);  // read holding the GIL
                 py::array_t<float> out = empty<float>(fp.shape(0));
                 box_random(out.mutable_data(), fp.data(), size_t(fp.shape(0)), seed);
                 return out;
@@ -39,12 +40,12 @@ void bind_box_params(py::module_& m) {
             "box_hierarchy",
             [](const py::object& origins, const py::object& quaternions, const py::object& half_extents, int rule,
                const py::object& given_parent) {
-                auto o = checked<double>(origins, "origins", -1, 3);
+                auto o = input<double>(origins, "origins", -1, 3);
                 const py::ssize_t n = o.shape(0);
-                auto q = checked<float>(quaternions, "quaternions", n, 4);
-                auto h = checked<double>(half_extents, "half_extents", n, 3);
+                auto q = input<float>(quaternions, "quaternions", n, 4);
+                auto h = input<double>(half_extents, "half_extents", n, 3);
                 py::array_t<int32_t> given;
-                if (!given_parent.is_none()) given = checked<int32_t>(given_parent, "given_parent", n, 0);
+                if (!given_parent.is_none()) given = input<int32_t>(given_parent, "given_parent", n, 0);
                 const int32_t* gp = given_parent.is_none() ? nullptr : given.data();
                 py::array_t<int32_t> parent = empty<int32_t>(n), depth = empty<int32_t>(n);
                 int32_t deepest;

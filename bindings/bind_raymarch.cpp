@@ -87,12 +87,18 @@ void bind_raymarch(py::module_& m) {
                     throw py::value_error("depth must be a float32 array of shape (height, width)");
                 const py::ssize_t height = py::reinterpret_borrow<py::array>(depth).shape(0);
                 const py::ssize_t width = py::reinterpret_borrow<py::array>(depth).shape(1);
-                auto d = checked<float>(depth, "depth", height, width, true);
+                // depth and steps are read (the depth test, the step sums) and written: the core works
+                // on private copies (see input()), copied back after it.
+                auto depth_out = checked<float>(depth, "depth", height, width, true);
+                auto d = input<float>(depth, "depth", height, width);
                 auto image = checked<float>(rgba, "rgba", height * width, 4, true);
                 py::array_t<float> nrm;
-                py::array_t<int32_t> st;
+                py::array_t<int32_t> st, steps_out;
                 if (!normals.is_none()) nrm = checked<float>(normals, "normals", height * width, 3, true);
-                if (!steps.is_none()) st = checked<int32_t>(steps, "steps", height * width, 0, true);
+                if (!steps.is_none()) {
+                    steps_out = checked<int32_t>(steps, "steps", height * width, 0, true);
+                    st = input<int32_t>(steps, "steps", height * width, 0);
+                }
                 std::vector<float> clip = column_major(object_to_clip, "object_to_clip");
                 std::vector<float> view_m = column_major(object_to_view, "object_to_view");
                 MarchOptions o = march_options(sdf, max_steps, epsilon, relaxation, max_distance, threads);
@@ -123,6 +129,8 @@ void bind_raymarch(py::module_& m) {
                     py::gil_scoped_release release;
                     render_boxes(c.data(), q.data(), h.data(), size_t(c.shape(0)), view, o, images, plan);
                 }
+                std::memcpy(depth_out.mutable_data(), d.data(), size_t(d.nbytes()));
+                if (!steps.is_none()) std::memcpy(steps_out.mutable_data(), st.data(), size_t(st.nbytes()));
                 py::dict counts;
                 counts["fragments"] = cost.fragments;
                 counts["marched_fragments"] = cost.marched_fragments;
@@ -147,7 +155,7 @@ void bind_raymarch(py::module_& m) {
     m.def(
             "sdf_distance",
             [](int sdf, const py::object& points, const py::object& half_extents) {
-                auto p = checked<float>(points, "points", -1, 3);
+                auto p = checked<float>(points, "points", -1, 3);  // read holding the GIL
                 auto h = checked<float>(half_extents, "half_extents", p.shape(0), 3);
                 const SdfPreset preset = preset_of(sdf);
                 py::array_t<float> d = empty<float>(p.shape(0));

@@ -33,10 +33,10 @@ void bind_mesh(py::module_& m) {
     m.def(
             "face_starts_from_corner_edges",
             [](const py::object& corner_verts, const py::object& corner_edges, const py::object& edges,
-               size_t vertex_count) {
-                auto cv = input<int32_t>(corner_verts, "corner_verts", -1, 0);
-                auto ce = input<int32_t>(corner_edges, "corner_edges", cv.shape(0), 0);
-                auto e = input<int32_t>(edges, "edges", -1, 2);
+               size_t vertex_count, bool arrays_owned) {
+                auto cv = input_or_own<int32_t>(arrays_owned, corner_verts, "corner_verts", -1, 0);
+                auto ce = input_or_own<int32_t>(arrays_owned, corner_edges, "corner_edges", cv.shape(0), 0);
+                auto e = input_or_own<int32_t>(arrays_owned, edges, "edges", -1, 2);
                 std::vector<int32_t> starts(size_t(cv.shape(0)) / 3 + 1);
                 size_t count;
                 {
@@ -49,6 +49,7 @@ void bind_mesh(py::module_& m) {
                 return py::make_tuple(result, count);
             },
             py::arg("corner_verts"), py::arg("corner_edges"), py::arg("edges"), py::arg("vertex_count"),
+            py::arg("arrays_owned") = false,
             "(face_starts int32, count): face boundaries recovered from corner edges; compare count with the real face "
             "count.");
 }

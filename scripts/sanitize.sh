@@ -3,7 +3,8 @@
 # tests (build/sanitize), then the checks under it:
 #   bash scripts/sanitize.sh [build|cpp|python|all]     (default: all)
 # cpp: ctest (C++ tests and the fuzz corpus replay). python: the native Python test suite
-# (tests/test_core.py, test_core_properties.py, test_raymarch_core.py, test_tools_core.py) importing the
+# (tests/test_core.py, test_core_properties.py, test_raymarch_core.py, test_tools_core.py,
+# test_nearest_rows.py, test_hostile_core3.py) importing the
 # sanitized module, with the ASan runtime preloaded into Python (leak detection off: CPython
 # keeps its objects to the end).
 # Any sanitizer report aborts with a nonzero exit. Assumes scripts/setup.sh ran once.
@@ -45,6 +46,8 @@ run_python() {
   local suites=(tests/test_core.py tests/test_core_properties.py)
   [ -f tests/test_raymarch_core.py ] && suites+=(tests/test_raymarch_core.py)  # the CPU raymarcher (issue 4)
   [ -f tests/test_tools_core.py ] && suites+=(tests/test_tools_core.py)  # the submesh tools (issue 3)
+  # The hierarchy's nearest-point searches and the index checks of every id argument.
+  [ -f tests/test_nearest_rows.py ] && suites+=(tests/test_nearest_rows.py tests/test_hostile_core3.py)
   LD_PRELOAD="$runtime $stdcxx" PYTHONPATH="$build/pkg" "$PYTHON" -m pytest -q -p no:cacheprovider \
     "${suites[@]}" "${@}"
 }

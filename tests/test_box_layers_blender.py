@@ -21,9 +21,16 @@ def paint(mesh, name, data_type, domain, values):
     attr.data.foreach_set(prop, np.asarray(values).reshape(-1))
 
 
+# A layer not stored holds, per docs/FORMAT.md, this value at every vertex.
+ABSENT_LAYER_VALUES = {".boxmarch_shape_material": 0.0, ".boxmarch_parent": -1, ".boxmarch_depth": 0}
+
+
 def stored(mesh, name, data_type):
     n = len(mesh.vertices)
-    attr = mesh.attributes[name]
+    attr = mesh.attributes.get(name)
+    if attr is None and name in ABSENT_LAYER_VALUES:
+        return np.full((n, 2) if data_type == "FLOAT2" else n, ABSENT_LAYER_VALUES[name],
+                       np.float32 if data_type == "FLOAT2" else np.int32)
     assert attr.domain == "POINT" and attr.data_type == data_type
     buf = np.empty(n * 2 if data_type == "FLOAT2" else n, np.float32 if data_type == "FLOAT2" else np.int32)
     attr.data.foreach_get("vector" if data_type == "FLOAT2" else "value", buf)
@@ -208,3 +215,23 @@ def test_bones_rule_without_a_rig_is_refused(blender):
     with pytest.raises(mesh_io.BakeInputError, match="BONES rule needs"):
         bake(mesh, hierarchy="BONES")
     assert mesh.attributes.get(".boxmarch_parent") is None
+
+
+def test_a_bake_with_nothing_painted_stores_only_the_random_values(blender):
+    """What a scene does not need is not written: painted shapes and parents store their layers,
+    and once the paint is gone the next bake removes them (absent: the defaults), leaving only the
+    random values, which every box has."""
+    mesh = chain_object(blender).data
+    paint(mesh, "boxmarch_parent", "INT", "POINT", np.repeat([-1, 0, 1, 2, 3, 4], 8).astype(np.int32))
+    paint(mesh, "boxmarch_shape", "INT", "POINT", np.full(BOXES * 8, 2, np.int32))
+    bake(mesh)
+    layers = (".boxmarch_shape_material", ".boxmarch_random_user", ".boxmarch_parent", ".boxmarch_depth")
+    assert [name for name in layers if mesh.attributes.get(name) is not None] == list(layers)
+    random = stored_params(mesh)[:, 2].copy()
+    for name in ("boxmarch_parent", "boxmarch_shape"):
+        mesh.attributes.remove(mesh.attributes[name])
+    bake(mesh)
+    assert [name for name in layers if mesh.attributes.get(name) is not None] == [".boxmarch_random_user"]
+    boxes = mesh_io.read_box_layers(mesh, np.repeat(np.arange(BOXES), 8), BOXES)
+    assert boxes.parent.tolist() == [-1] * BOXES and boxes.depth.tolist() == [0] * BOXES
+    assert (boxes.params[:, [0, 1, 3]] == 0).all() and (boxes.params[:, 2] == random[::8]).all()

@@ -2,6 +2,7 @@
 NumPy API converted silently (int64 targets, 2.7 as an integer, bool masks, zero ray directions),
 outputs sharing memory with inputs, and another Python thread writing the input arrays while the
 core runs without the GIL. docs/CHECKS.md lists each case and what it gets."""
+import inspect
 import os
 import subprocess
 import sys
@@ -13,9 +14,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import boxmarch
-from boxmarch import cli_args, core, scenes
+from boxmarch import cli_args, core, core_boxes, core_tools, scenes
 from boxmarch.formats import layouts
 from tests.helpers.core_reference import decoded_origins, mesh_from_polys
+from tests.hostile import race_child
 
 HERE = Path(__file__).parent
 PACKAGE_PARENT = Path(boxmarch.__file__).parent.parent
@@ -202,12 +204,19 @@ def test_corner_quaternions_written_over_the_quaternions_they_read_are_the_quate
 # Another Python thread writing the inputs during the call
 
 
-@pytest.mark.parametrize("case", ["bake", "bake-faces", "bake-edges", "submeshes", "across", "across-nan", "dedup",
-                                  "merge", "weld", "corner-uv", "pairs-nan"])
+# The cases of round 2's functions and one of the hierarchy run in the fast tier, the
+# rest in the slow one: each is a child process of 300 calls.
+FAST_RACES = {"bake", "bake-faces", "bake-edges", "submeshes", "across", "across-nan", "dedup", "merge", "weld",
+              "corner-uv", "pairs-nan", "hierarchy-containment"}
+
+
+@pytest.mark.parametrize("case", [c if c in FAST_RACES else pytest.param(c, marks=pytest.mark.slow)
+                                  for c in race_child.CASES])
 def test_a_thread_writing_the_inputs_during_the_call_never_crashes(case):
-    """The child races a writer thread (bad indices or NaN into the input, then the valid values
-    back) against the call, 300 times: every call returns the untouched arrays' result or
-    raises ValueError, and the process never dies by a signal."""
+    """The child races a writer thread (bad indices, NaN or a negative size into the input, then
+    the valid values back) against the call, 300 times: every call returns the untouched arrays'
+    result (or, where the function checks nothing in that array, one of its shapes) or raises
+    ValueError, and the process never dies by a signal."""
     calls = 300
     env = dict(os.environ, PYTHONPATH=str(PACKAGE_PARENT))
     r = subprocess.run([sys.executable, str(HERE / "hostile" / "race_child.py"), case, str(calls)], env=env,
@@ -215,3 +224,17 @@ def test_a_thread_writing_the_inputs_during_the_call_never_crashes(case):
     assert r.returncode == 0, (r.returncode, r.stdout, r.stderr[-2000:])
     name, results, errors = r.stdout.split()
     assert name == case and int(results) + int(errors) == calls
+
+
+def test_every_public_function_of_the_numpy_api_has_a_race_case():
+    """Enumerated, so that a new function cannot escape the race test: every public function of
+    boxmarch.core, core_boxes and core_tools is called by a case of race_child.py, or takes no
+    array at all."""
+    public = {name for module in (core, core_boxes, core_tools) for name, f in vars(module).items()
+              if inspect.isfunction(f) and not name.startswith("_") and f.__module__ == module.__name__}
+    assert len(public) > 30
+    for name in race_child.TAKES_NO_ARRAY:
+        assert set(inspect.signature(getattr(core, name)).parameters) <= {"index"}, name  # a turn's number
+    raced = set(race_child.CASES.values())
+    assert raced <= public
+    assert public - raced - race_child.TAKES_NO_ARRAY == set()

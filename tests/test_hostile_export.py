@@ -102,11 +102,12 @@ def test_a_stored_infinite_parameter_is_not_exported(blender, tmp_path):
 
     ob = random_boxes_object(blender, "Painted")
     assert blender.ops.boxmarch.bake() == {"FINISHED"}
-    stored = ob.data.attributes[".boxmarch_shape_material"]
+    stored = ob.data.attributes[".boxmarch_random_user"]  # the one box layer every bake stores
     pairs = np.zeros(len(ob.data.vertices) * 2, np.float32)
+    stored.data.foreach_get("vector", pairs)
     pairs[0] = np.inf
     stored.data.foreach_set("vector", pairs)
-    with pytest.raises(scene.ExportInputError, match=r"mesh 'Painted': its stored box parameters \(shape\) are not "
+    with pytest.raises(scene.ExportInputError, match=r"mesh 'Painted': its stored box parameters \(random\) are not "
                                                      "finite"):
         scene.export_objects(blender.context, [ob], "GODOT3", str(tmp_path / "x.glb"))
     assert os.listdir(tmp_path) == []

@@ -82,7 +82,7 @@ class BakeResult:
 def bake(positions, edges, face_starts, face_sizes, corner_verts, *, mask=None,
          previous_fingerprints=None, offsets=None, angle_epsilon=ANGLE_EPSILON_DEFAULT, origin="BOUNDS",
          sort_axes_by_extent=False, axis_turn=0, encoding="FLOAT_COLOR", use_cache=True,
-         threads=0) -> BakeResult:
+         threads=0, arrays_owned=False) -> BakeResult:
     """Bake every submesh (connected component) of a mesh.
 
     ``mask`` (booleans or numbers, one per vertex) limits the bake to submeshes with a nonzero
@@ -90,7 +90,11 @@ def bake(positions, edges, face_starts, face_sizes, corner_verts, *, mask=None,
     ``previous_fingerprints`` (uint32 per vertex, from an earlier bake) skips submeshes whose
     geometry and options are unchanged; ``offsets`` (optional, float32 or uint8 (N, 4)) is
     written in place, keeping the values of submeshes not baked. Raises ValueError on malformed
-    input (with the first offending element named) before anything is written.
+    input (with the first offending element named) before anything is written. The core reads
+    private copies of the mesh arrays, mask and fingerprints (another thread may write the
+    caller's during the call); ``arrays_owned=True`` says the caller made them for this call and
+    nothing else can reach them (the bake job's arrays read from Blender), so they are read as
+    they are.
     """
     if origin not in ORIGIN_MODES:
         raise ValueError(f"origin must be one of {ORIGIN_MODES}, got {origin!r}")
@@ -102,7 +106,8 @@ def bake(positions, edges, face_starts, face_sizes, corner_verts, *, mask=None,
                    previous_fingerprints=previous_fingerprints, offsets=offsets,
                    angle_epsilon=float(angle_epsilon), origin=origin,
                    sort_axes_by_extent=bool(sort_axes_by_extent), axis_turn=checked_int(axis_turn, "axis_turn", 0, 23),
-                   encoding=encoding, use_cache=bool(use_cache), threads=checked_int(threads, "threads", -2**31))
+                   encoding=encoding, use_cache=bool(use_cache), threads=checked_int(threads, "threads", -2**31),
+                   arrays_owned=bool(arrays_owned))
     return BakeResult(**r)
 
 
@@ -112,10 +117,12 @@ def find_submeshes(positions, edges, face_starts, face_sizes, corner_verts):
     return _core.find_submeshes(positions, edges, face_starts, face_sizes, corner_verts)
 
 
-def face_offsets_from_corner_edges(corner_verts, corner_edges, edges, vertex_count, face_count):
+def face_offsets_from_corner_edges(corner_verts, corner_edges, edges, vertex_count, face_count, arrays_owned=False):
     """(face_starts, face_sizes) recovered from corner data, or None when they do not give exactly
-    ``face_count`` faces of 3 or more corners (then read the face arrays themselves)."""
-    starts, count = _core.face_starts_from_corner_edges(corner_verts, corner_edges, edges, checked_int(vertex_count, "vertex_count"))
+    ``face_count`` faces of 3 or more corners (then read the face arrays themselves).
+    ``arrays_owned``: as :func:`bake`'s."""
+    starts, count = _core.face_starts_from_corner_edges(corner_verts, corner_edges, edges,
+                                                        checked_int(vertex_count, "vertex_count"), bool(arrays_owned))
     if count != face_count:
         return None
     sizes = np.diff(starts, append=np.int32(len(corner_verts))).astype(np.int32)
@@ -222,7 +229,7 @@ def _normal_index(normal) -> int:
 
 
 def _rows3(a, n, name):
-    a = np.asarray(a, np.float32)
+    a = np.array(a, np.float32)  # a copy: checked here, then read by the core
     if a.shape == (3,):
         a = np.broadcast_to(a, (n, 3))
     if a.shape != (n, 3):
@@ -246,7 +253,7 @@ def raymarch(origins, directions, half_extents, *, sdf="BOX", max_steps=64, epsi
     is inside) and stops at a hit (distance < ``epsilon``), after ``max_steps`` evaluations, when
     it leaves the box, or after travelling ``max_distance``. Each step advances ``relaxation`` x
     the distance. Raises ValueError on bad shapes or options."""
-    origins = np.ascontiguousarray(origins, np.float32)
+    origins = np.array(origins, np.float32, order="C")  # copies: checked here, then read by the core
     if origins.ndim != 2 or origins.shape[1] != 3:
         raise ValueError(f"origins must have shape (N, 3), got {origins.shape}")
     n = len(origins)
@@ -270,7 +277,7 @@ def occluder_boxes(sdf, half_extents):
     ``sdf``, clipped to the box, drawn by the hidden-box pre-pass) of boxes with ``half_extents``
     ((3,) or (N, 3)): ``(centres, halves)``, float32 (N, 4, 3) box-local; a zero half-extent: no
     box at that index."""
-    half_extents = np.ascontiguousarray(half_extents, np.float32).reshape(-1, 3)
+    half_extents = np.array(half_extents, np.float32, order="C").reshape(-1, 3)  # a copy: checked, then read
     _check_finite(half_extents=half_extents)
     return _core.occluder_boxes(_preset_index(sdf), half_extents)
 
@@ -331,9 +338,10 @@ def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_v
     whose box entry lies behind the nearest conservative occluder (boxes inscribed in the preset,
     box_params.glsl) returns before its march, and no march goes past that depth."""
     width, height = checked_int(width, "width", 1), checked_int(height, "height", 1)
-    origins = np.ascontiguousarray(origins, np.float32).reshape(-1, 3)
+    # Copies: checked here, then read by the core (another thread may write the caller's arrays).
+    origins = np.array(origins, np.float32, order="C").reshape(-1, 3)
     n = len(origins)
-    quaternions = np.ascontiguousarray(quaternions, np.float32).reshape(-1, 4)
+    quaternions = np.array(quaternions, np.float32, order="C").reshape(-1, 4)
     if depth is None:
         depth = np.ones((height, width), np.float32)
     if rgba is None:
@@ -347,8 +355,8 @@ def render_boxes(origins, quaternions, half_extents, object_to_clip, object_to_v
     normals = np.zeros((height, width, 3), np.float32)
     steps = np.zeros((height, width), np.int32)
     if order is not None:
-        order = np.asarray(order)
-        if order.shape != (n,) or order.dtype.kind not in "iu" or (n and (order.min() < 0 or order.max() >= n)):
+        order = checked_indices(order, "order", n)
+        if order.shape != (n,):
             raise ValueError(f"order must be {n} box indices 0..{n - 1}")
         order = order.astype(np.uint32)
     cost = _core.render_boxes(origins, quaternions, half_extents,

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .native import _core, checked_int
+from .native import _core, checked_indices, checked_int
 
 # The four floats every box carries, in their order in every layout and table.
 PARAM_NAMES = ("shape", "material", "random", "user")
@@ -30,14 +30,17 @@ def not_boxes(positions, submesh_of_vertex, quaternions):
     inside its bounding box. Costs nothing on meshes of 8-vertex boxes."""
     from .core import rotate_vector
 
-    sub = np.asarray(submesh_of_vertex, np.int64)
-    q = np.asarray(quaternions, np.float64).reshape(-1, 4)
+    q = np.array(quaternions, np.float64).reshape(-1, 4)
+    sub = checked_indices(submesh_of_vertex, "submesh_of_vertex", len(q))
+    positions = np.array(positions, np.float64)
+    if positions.shape != (len(sub), 3):
+        raise ValueError(f"positions must be ({len(sub)}, 3) beside submesh_of_vertex, got {positions.shape}")
     counts = np.bincount(sub, minlength=len(q))
     off = np.zeros(len(q))
     checked = np.flatnonzero((counts > 8)[sub])
     if len(checked):
         sub = sub[checked]
-        local = rotate_vector(np.asarray(positions, np.float64)[checked], q[sub] * (-1.0, -1.0, -1.0, 1.0))
+        local = rotate_vector(positions[checked], q[sub] * (-1.0, -1.0, -1.0, 1.0))
         order = np.argsort(sub, kind="stable")
         grouped = sub[order]
         starts = np.flatnonzero(np.r_[True, grouped[1:] != grouped[:-1]])
@@ -57,18 +60,22 @@ def reduce_per_submesh(values, submesh_of_element, submesh_count):
     values = np.asarray(values, np.float32)
     flat = values.ndim == 1
     values = np.ascontiguousarray(values.reshape(len(values), -1))
-    ids = np.ascontiguousarray(submesh_of_element, np.int32)
-    out, disagrees, count = _core.reduce_per_submesh(values, ids, checked_int(submesh_count, "submesh_count"))
+    submesh_count = checked_int(submesh_count, "submesh_count")
+    ids = checked_indices(submesh_of_element, "submesh_of_element", submesh_count)
+    out, disagrees, count = _core.reduce_per_submesh(values, ids, submesh_count)
     return (out[:, 0] if flat else out), disagrees.astype(bool), int(count)
 
 
 def box_fingerprints(fingerprints, submesh_of_vertex, submesh_count) -> np.ndarray:
     """uint32 (S,): the bake fingerprint of each submesh (that of its lowest vertex; every vertex
     of a submesh holds the same one)."""
-    ids = np.asarray(submesh_of_vertex, np.int64)
-    first = np.full(int(submesh_count), len(ids), np.int64)
-    np.minimum.at(first, ids, np.arange(len(ids)))
-    fp = np.asarray(fingerprints, np.uint32)
+    submesh_count = checked_int(submesh_count, "submesh_count")
+    ids = checked_indices(submesh_of_vertex, "submesh_of_vertex", submesh_count)
+    fp = np.array(fingerprints, np.uint32)
+    if fp.shape != ids.shape:
+        raise ValueError(f"fingerprints must have shape {ids.shape} (one per vertex), got {fp.shape}")
+    first = np.full(submesh_count, len(ids), np.int64)
+    first[ids[::-1]] = np.arange(len(ids))[::-1]  # the last write of each box is its lowest vertex
     return np.where(first < len(ids), fp[np.minimum(first, max(len(ids) - 1, 0))], 0).astype(np.uint32)
 
 
@@ -82,21 +89,26 @@ def box_random(box_fingerprints_, seed=0) -> np.ndarray:
 def dominant_per_submesh(weights, submesh_of_vertex, submesh_count) -> np.ndarray:
     """int64 (S,): the column of ``weights`` (vertices, B) with the largest sum over each
     submesh's vertices (ties: the lower column); -1 where the submesh has no weight."""
-    weights = np.asarray(weights, np.float64)
-    total = np.zeros((int(submesh_count), weights.shape[1]))
-    np.add.at(total, np.asarray(submesh_of_vertex, np.int64), weights)
+    submesh_count = checked_int(submesh_count, "submesh_count")
+    ids = checked_indices(submesh_of_vertex, "submesh_of_vertex", submesh_count)
+    weights = np.array(weights, np.float64)
+    if weights.ndim != 2 or len(weights) != len(ids):
+        raise ValueError(f"weights must have shape ({len(ids)}, bones) (one row per vertex), got {weights.shape}")
+    total = np.zeros((submesh_count, weights.shape[1]))
+    np.add.at(total, ids, weights)
     if not weights.shape[1]:
-        return np.full(int(submesh_count), -1, np.int64)
+        return np.full(submesh_count, -1, np.int64)
     return np.where(total.max(axis=1) > 0, total.argmax(axis=1), -1)
 
 
 def nearest_rows(points, candidates) -> np.ndarray:
     """int64 (n,): the row of ``candidates`` (m, 3) nearest each of ``points`` (n, 3): the
     smallest sum of squared coordinate differences in float64 (ties: the lower row), found on a
-    grid of the candidates (cpp/src/nearest_points.cpp). Raises ValueError on a NaN or infinite
+    k-d tree of the candidates (cpp/src/nearest_points.cpp). Raises ValueError on a NaN or infinite
     coordinate, or on points without candidates."""
-    points = np.ascontiguousarray(points, np.float64)
-    candidates = np.ascontiguousarray(candidates, np.float64)
+    # Copies: the checks below must hold for what the core then reads.
+    points = np.array(points, np.float64, order="C")
+    candidates = np.array(candidates, np.float64, order="C")
     if not (np.all(np.isfinite(points)) and np.all(np.isfinite(candidates))):
         raise ValueError("nearest_rows: points and candidates must have finite coordinates")
     if len(points) and not len(candidates):
@@ -110,12 +122,13 @@ def parents_by_bone(box_bone, bone_parent, origins) -> np.ndarray:
     is the box of its bone's parent bone whose origin lies nearest its own (nearest_rows; ties:
     the lower number); a parent bone that holds no box passes to its own parent; -1 where no
     ancestor bone holds a box. Raises ValueError on a bone out of range or a cycle of bones."""
-    box_bone = np.asarray(box_bone, np.int64)
-    bone_parent = np.asarray(bone_parent, np.int64)
-    origins = np.asarray(origins, np.float64).reshape(-1, 3)
     bones = len(bone_parent)
-    if np.any(box_bone >= bones) or np.any(bone_parent >= bones):
-        raise ValueError(f"parents_by_bone: a bone number is not below the {bones} bones")
+    bone_parent = checked_indices(bone_parent, "bone_parent", bones, lowest=-1)
+    box_bone = checked_indices(box_bone, "box_bone", bones, lowest=-1)
+    origins = np.array(origins, np.float64).reshape(-1, 3)
+    if bone_parent.ndim != 1 or box_bone.ndim != 1 or len(origins) != len(box_bone):
+        raise ValueError(f"parents_by_bone: box_bone {box_bone.shape} and origins {origins.shape} must have one row "
+                         f"per box, bone_parent {bone_parent.shape} one per bone")
     boxes_of_bone = np.bincount(box_bone[box_bone >= 0], minlength=bones)
     # holder[b]: b's nearest ancestor bone holding a box (-1: none), one step up every ancestor
     # without a box per pass.
@@ -143,7 +156,8 @@ def box_hierarchy(origins, quaternions, half_extents, rule="ATTRIBUTE", given_pa
     depth (0 at a root). ``rule``: ATTRIBUTE takes ``given_parent`` (int (S,), -1 for roots;
     None: every box a root), CONTAINMENT the smallest larger box holding the box's origin, CHAIN
     the nearest lower-numbered box (instances along a curve are numbered along it), BONES takes
-    ``given_parent`` (parents_by_bone) as ATTRIBUTE does. Raises ValueError on a parent out of range, a box its own parent or a cycle."""
+    ``given_parent`` (parents_by_bone) as ATTRIBUTE does. Raises ValueError on a parent out of range, a box its own parent or a cycle,
+    and (any rule) on a NaN or infinite origin or quaternion or a negative or NaN half-extent."""
     if rule not in _RULE_CODES:
         raise ValueError(f"hierarchy rule must be one of {HIERARCHY_RULES}, got {rule!r}")
     origins = np.ascontiguousarray(origins, np.float64).reshape(-1, 3)
@@ -154,7 +168,7 @@ def box_hierarchy(origins, quaternions, half_extents, rule="ATTRIBUTE", given_pa
         given_parent = np.full(n, -1, np.int32)
     given = None
     if given_parent is not None:
-        given = np.asarray(given_parent)
+        given = np.array(given_parent)  # a copy: checked here, read by the core
         if given.shape != (n,) or not np.all(np.isfinite(given)) or np.any(given != np.round(given)):
             raise ValueError(f"given parents must be {n} whole numbers (one per box)")
         outside = np.flatnonzero((given < -1) | (given >= n))

@@ -97,10 +97,13 @@ def remove_vertices(positions, edges, face_starts, face_sizes, corner_verts, rem
     survivors in their order: the same dict as :func:`weld` (with 'incomplete' False). Raises
     ValueError on a malformed mesh (as :func:`boxmarch.core.validate_mesh`), a corner edge out of
     range, or faces naming more corners than there are (overlapping faces, as weld)."""
+    # Copies, validated and then used: another thread writing the caller's arrays cannot turn a
+    # checked index into one out of range.
+    positions, edges, face_starts, face_sizes, corner_verts = (
+        np.array(a) for a in (positions, edges, face_starts, face_sizes, corner_verts))
     _core.validate_mesh(positions, edges, face_starts, face_sizes, corner_verts)
     keep = ~checked_mask(remove, "remove", len(positions)).astype(bool)
-    edges = np.asarray(edges).reshape(-1, 2)
-    corner_verts = np.asarray(corner_verts)
+    edges = edges.reshape(-1, 2)
     corner_edges = checked_indices(corner_edges, "corner_edges", len(edges))
     if corner_edges.shape != corner_verts.shape:
         raise ValueError(f"corner_edges must have shape {corner_verts.shape}, got {corner_edges.shape}")

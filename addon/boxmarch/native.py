@@ -37,17 +37,19 @@ def checked_mask(values, name, length) -> np.ndarray:
     return mask
 
 
-def checked_indices(values, name, limit) -> np.ndarray:
-    """Integer indices as an int32 array, or a ValueError naming the first outside 0..limit-1:
-    NumPy would wrap a negative index silently and raise a bare IndexError past the end, and a
-    cast to int32 would wrap 2**32 + 5 to 5 and truncate 2.7 to 2."""
-    array = np.asarray(values)
+def checked_indices(values, name, limit, lowest=0) -> np.ndarray:
+    """Integer indices as a private int32 array, or a ValueError naming the first outside
+    lowest..limit-1: NumPy would wrap a negative index silently and raise a bare IndexError past
+    the end, and a cast to int32 would wrap 2**32 + 5 to 5 and truncate 2.7 to 2. The values are
+    copied before they are checked, so another thread writing the caller's array cannot change
+    them between the check and their use."""
+    array = np.array(values)
     if array.dtype.kind not in "iub":
         raise ValueError(f"{name} must hold integers, got dtype {array.dtype}")
     flat = array.reshape(-1)
-    bad = np.flatnonzero((flat < 0) | (flat >= limit))
+    bad = np.flatnonzero((flat < lowest) | (flat >= limit))
     if len(bad):
-        raise ValueError(f"{name}[{int(bad[0])}] = {int(flat[bad[0]])} is outside 0..{limit - 1}")
+        raise ValueError(f"{name}[{int(bad[0])}] = {int(flat[bad[0]])} is outside {lowest}..{limit - 1}")
     return np.ascontiguousarray(array, np.int32)
 
 

@@ -2,14 +2,39 @@
 // geometric rules live in hierarchy_containment.cpp and hierarchy_chain.cpp.
 #include "internal.h"
 
+#include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace boxmarch {
 
+namespace {
+
+std::string number_text(double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.17g", v);
+    return text;
+}
+
+}  // namespace
+
 int32_t box_hierarchy(int32_t* parent, int32_t* depth, const double* origins, const float* quaternions,
                       const double* half_extents, size_t box_count, HierarchyRule rule, const int32_t* given_parent) {
+    // What the bake never makes, and what would make the geometric searches compare every pair.
+    for (size_t i = 0; i < 3 * box_count; ++i) {
+        if (!(half_extents[i] >= 0.0))
+            throw std::invalid_argument("box " + std::to_string(i / 3) + " has half-extent " +
+                                        number_text(half_extents[i]) + ": half-extents must be 0 or more");
+        if (!std::isfinite(origins[i]))
+            throw std::invalid_argument("box " + std::to_string(i / 3) + " has origin coordinate " +
+                                        number_text(origins[i]) + ": origins must be finite");
+    }
+    for (size_t i = 0; i < 4 * box_count; ++i)
+        if (!std::isfinite(quaternions[i]))
+            throw std::invalid_argument("box " + std::to_string(i / 4) + " has quaternion component " +
+                                        number_text(quaternions[i]) + ": quaternions must be finite");
     std::vector<int32_t> parents(box_count);
     if (rule == HierarchyRule::Given) {
         if (!given_parent && box_count) throw std::invalid_argument("rule Given needs the given parents");

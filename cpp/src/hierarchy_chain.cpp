@@ -1,16 +1,15 @@
 // Rule Chain of the box hierarchy: each box's parent is the lower-numbered box with the nearest
-// origin. All origins are hashed once into a grid whose buckets list their boxes in ascending
-// order, so the boxes below i in a bucket are a prefix of it: box i searches the cells around
-// its own in growing rings, reading only those prefixes and skipping cells farther than the
-// nearest box found so far, until the ring's inner edge lies farther than that box; past that
-// nothing nearer (or as near) is left unseen.
-// When the rings would visit more cells than there are lower boxes, it reads those boxes
-// directly instead. Boxes are independent of one another, so they are searched in parallel.
+// origin. The finite origins are put once into a k-d tree (kd_tree.h) whose nodes know the lowest
+// box number below them: box i descends it nearer side first, skipping nodes that hold no box
+// below i and nodes whose bounds lie farther than the nearest lower box found so far. The tree
+// follows the origins wherever they are (clusters any distance apart, all boxes at one origin),
+// so no box compares itself with every other. Boxes are independent of one another, so they are
+// searched in parallel.
 #include "internal.h"
-#include "ring_search.h"
+#include "kd_tree.h"
+#include "spatial_hash.h"
 
-#include <cmath>
-#include <limits>
+#include <mutex>
 
 namespace boxmarch {
 
@@ -18,51 +17,40 @@ namespace {
 
 glm::dvec3 vec3_at(const double* a, size_t i) { return glm::dvec3(a[i * 3], a[i * 3 + 1], a[i * 3 + 2]); }
 
-// The nearest box so far by (distance, index). A box at NaN or infinite distance is never taken.
-struct Nearest {
-    double distance = std::numeric_limits<double>::infinity();
-    int64_t box = -1;
-    void consider(const double* origins, size_t i, size_t j) {
-        const double d = glm::length(vec3_at(origins, i) - vec3_at(origins, j));
-        if (d < distance || (d == distance && box >= 0 && int64_t(j) < box)) distance = d, box = int64_t(j);
-    }
-};
-
-// Reads the boxes below i in bucket b, ascending: past a box at distance 0 none can come nearer
-// or lower (boxes sharing one origin cost one read each).
-void read_bucket(const RingGrid& c, const double* origins, size_t i, uint64_t b, Nearest& nearest) {
-    for (uint32_t m = c.grid.bucket_start[b], end = c.grid.bucket_start[b + 1]; m < end && c.grid.items[m] < i; ++m) {
-        if (nearest.distance == 0.0 && int64_t(c.grid.items[m]) > nearest.box) return;
-        nearest.consider(origins, i, c.grid.items[m]);
-    }
-}
-
-int64_t nearest_lower(const RingGrid& c, const double* origins, size_t i) {
-    Nearest nearest;
-    search_rings(
-            c, &c.scaled[3 * i], double(i), [&](uint64_t b) { read_bucket(c, origins, i, b, nearest); },
-            [&] { return nearest.distance * c.scale; },
-            [&] {
-                for (size_t j = 0; j < i; ++j) nearest.consider(origins, i, j);
-            });
-    return nearest.box;
-}
-
 }  // namespace
 
 // Boxes with a NaN or infinite origin coordinate are at NaN or infinite distance from every box:
 // they are nobody's parent and have none.
-void chain_parents(int32_t* parent, const double* origins, size_t count) {
-    RingGrid c;
-    build_ring_grid(c, origins, count, 0.0);
+void chain_parents(int32_t* parent, const double* origins, size_t count, SearchWork* work) {
+    std::vector<uint32_t> finite;
+    for (size_t i = 0; i < count; ++i)
+        if (finite_point(origins + 3 * i)) finite.push_back(uint32_t(i));
+    KdTree tree;
+    build_kd_tree(tree, origins, std::move(finite));
     std::fill(parent, parent + count, -1);
-    // In bucket order, so that boxes searched one after the other read the same cells.
-    const size_t n = c.grid.items.size(), parts = thread_count(0, n);
+    // In tree order, so that boxes searched one after the other read the same nodes.
+    const size_t n = tree.items.size(), parts = thread_count(0, n);
+    std::mutex counted;
     run_parallel(parts, [&](size_t part) {
+        SearchWork done;
         for (size_t k = n * part / parts; k < n * (part + 1) / parts; ++k) {
-            const uint32_t i = c.grid.items[k];
-            parent[i] = int32_t(nearest_lower(c, origins, i));
+            const uint32_t i = tree.items[k];
+            const glm::dvec3 o = vec3_at(origins, i);
+            // The distance of the contract, glm::length of the difference; the bound is the same
+            // length of the gap to a node's bounds, which no difference inside is shorter than.
+            auto distance = [&](uint32_t j) { return glm::length(o - vec3_at(origins, j)); };
+            auto bound = [&](const KdTree::Node& node) {
+                glm::dvec3 gap;
+                gap_to(&o.x, node, &gap.x);
+                return glm::length(gap);
+            };
+            double best = INFINITY;
+            int64_t nearest = -1;
+            nearest_in_tree(tree, i, distance, bound, best, nearest, done);
+            parent[i] = int32_t(nearest);
         }
+        const std::lock_guard<std::mutex> lock(counted);
+        if (work) work->add(done);
     });
 }
 

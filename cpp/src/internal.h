@@ -23,10 +23,14 @@ size_t hardware_threads(int requested);
 void run_parallel(size_t parts, const std::function<void(size_t)>& work);
 
 // hierarchy_containment.cpp, hierarchy_chain.cpp: the geometric rules of box_hierarchy (its
-// contract in boxmarch.h), writing parent[count] only.
+// contract in boxmarch.h), writing parent[count] only; nearest_points (nearest_points.cpp). Each
+// adds the work its search did to *work where that is not null (the scaling tests read it).
+struct SearchWork;
 void containment_parents(int32_t* parent, const double* origins, const float* quaternions, const double* half_extents,
-                         size_t count);
-void chain_parents(int32_t* parent, const double* origins, size_t count);
+                         size_t count, SearchWork* work = nullptr);
+void chain_parents(int32_t* parent, const double* origins, size_t count, SearchWork* work = nullptr);
+void nearest_points_counted(int64_t* nearest, const double* points, size_t point_count, const double* candidates,
+                            size_t candidate_count, int threads, SearchWork* work);
 
 // One submesh seen through the whole mesh: its vertices (ascending), faces and edges as lists of
 // indices into the mesh's arrays. base is the position of its lowest vertex in double: every

@@ -7,6 +7,8 @@
 // quaternions off unit length). A planted wrong parent must be caught. Built with
 // BOXMARCH_TESTS=ON and run by ctest, normally and in the sanitizer build.
 #include "boxmarch/boxmarch.h"
+#include "../../cpp/src/internal.h"  // the searches with their work counted, for the scaling test
+#include "../../cpp/src/kd_tree.h"
 
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -134,8 +136,9 @@ Scene random_scene(uint32_t seed, size_t count, bool lattice) {
     return s;
 }
 
-// Values the definitions treat specially: NaN and infinite origins and half-extents, negative
-// and zero half-extents, zero and non-unit quaternions, coordinates near the double range.
+// Values the definitions treat specially: infinite and zero half-extents, zero and non-unit
+// quaternions, coordinates near the double range (box_hierarchy refuses NaN and infinite
+// origins and quaternions, negative and NaN half-extents: check_refusals).
 Scene special_scene(uint32_t seed) {
     Scene s = random_scene(seed, 300, false);
     s.name = "special values seed " + std::to_string(seed);
@@ -148,15 +151,15 @@ Scene special_scene(uint32_t seed) {
         const size_t c = size_t(unit(rng) * 3) % 3;
         const double v = values[size_t(unit(rng) * 8) % 8];
         if (kind < 0.05)
-            s.origins[i * 3 + c] = v;
+            s.origins[i * 3 + c] = std::isfinite(v) ? v : 1e308;
         else if (kind < 0.1)
-            s.half_extents[i * 3 + c] = v;
+            s.half_extents[i * 3 + c] = std::isnan(v) ? inf : std::abs(v);
         else if (kind < 0.15)
             for (int k = 0; k < 4; ++k) s.quaternions[i * 4 + k] *= float(unit(rng) * 2.0);
         else if (kind < 0.18)
             for (int k = 0; k < 4; ++k) s.quaternions[i * 4 + k] = 0.0f;
         else if (kind < 0.2)
-            s.quaternions[i * 4 + c] = float(v);
+            s.quaternions[i * 4 + c] = float(std::isfinite(v) ? std::max(-1e30, std::min(v, 1e30)) : -3e38);
         else if (kind < 0.22)
             for (int k = 0; k < 3; ++k) s.half_extents[i * 3 + k] = inf;
     }
@@ -209,6 +212,33 @@ void check_nearest(const Scene& s) {
     }
 }
 
+// NaN and infinite origins and quaternion components, negative and NaN half-extents: refused by
+// every rule, naming the box, with nothing written.
+void check_refusals() {
+    const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+    for (HierarchyRule rule : {HierarchyRule::Given, HierarchyRule::Containment, HierarchyRule::Chain})
+        for (int field = 0; field < 3; ++field)
+            for (double bad : {nan, inf, -inf, -1.0}) {
+                if (field == 2 && bad == inf) continue;  // an infinite half-extent is a size
+                Scene s = random_scene(9, 5, false);
+                if (field == 0) s.origins[3 * 3 + 1] = bad;
+                if (field == 1) s.quaternions[3 * 4 + 2] = float(bad);
+                if (field == 2) s.half_extents[3 * 3 + 1] = bad;
+                if (field < 2 && bad == -1.0) continue;  // a valid coordinate
+                std::vector<int32_t> parent(5, 7), depth(5, 7), given(5, -1);
+                std::string message;
+                try {
+                    box_hierarchy(parent.data(), depth.data(), s.origins.data(), s.quaternions.data(),
+                                  s.half_extents.data(), 5, rule, given.data());
+                } catch (const std::invalid_argument& e) {
+                    message = e.what();
+                }
+                if (message.rfind("box 3 has ", 0) != 0 || parent[0] != 7 || depth[0] != 7)
+                    ++failures, std::fprintf(stderr, "FAIL refusal rule %d field %d value %g: '%s'\n", int(rule), field,
+                                             bad, message.c_str());
+            }
+}
+
 void check_scene(const Scene& s) {
     try {
         const size_t containment = differences(parents_of(s, HierarchyRule::Containment), reference_containment(s));
@@ -222,6 +252,79 @@ void check_scene(const Scene& s) {
         ++failures;
         std::fprintf(stderr, "FAIL %s: %s\n", s.name.c_str(), e.what());
     }
+}
+
+// Scaling: the work each search does per box (tree nodes reached and boxes measured, counted by
+// the core) on scenes of n and 2n boxes. A search that compares every pair does twice the work
+// per box at 2n; these must stay below kGrowthLimit, on the random scenes and on the shapes that
+// made the earlier grids pairwise: queries 10 and 1e9 units from a compact set of candidates,
+// clusters 1e9 apart, long thin boxes crossing one region, boxes at one origin, nested boxes.
+constexpr double kGrowthLimit = 1.5;
+
+Scene shaped_scene(const std::string& shape, size_t n, uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    Scene s;
+    s.name = shape + " x" + std::to_string(n);
+    for (size_t i = 0; i < n; ++i) {
+        glm::dvec3 o(unit(rng), unit(rng), unit(rng)), h(0.01);
+        glm::vec4 q(0, 0, 0, 1);
+        if (shape == "random") {
+            o *= std::cbrt(double(n));
+            h = glm::dvec3(0.2 + unit(rng), 0.2 + unit(rng), 0.2 + unit(rng));
+        } else if (shape == "clusters 1e9 apart") {
+            o.x += 1e9 * double(i % 4);
+        } else if (shape == "thin rods crossing one region") {
+            h = glm::dvec3(5.0, 0.005, 0.005);
+            const glm::dquat r =
+                    glm::normalize(glm::dquat(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5));
+            q = glm::vec4(float(r.x), float(r.y), float(r.z), float(r.w));
+        } else if (shape == "one origin") {
+            o = glm::dvec3(2.0);
+            h = glm::dvec3(1.0);
+        } else if (shape == "nested, shuffled") {
+            o = glm::dvec3(0.0);
+            h = glm::dvec3(std::pow(1.0001, double(rng() % 1000000)));
+        }
+        s.add(o, h, q);
+    }
+    return s;
+}
+
+// Work per box of one search ("containment", "chain", "nearest 10 off", "nearest 1e9 off").
+double work_per_box(const std::string& search, const Scene& s) {
+    SearchWork work;
+    const size_t n = s.size();
+    std::vector<int32_t> parent(n);
+    if (search == "containment")
+        containment_parents(parent.data(), s.origins.data(), s.quaternions.data(), s.half_extents.data(), n, &work);
+    else if (search == "chain")
+        chain_parents(parent.data(), s.origins.data(), n, &work);
+    else {  // the boxes' origins moved away, searched among the boxes' own origins
+        std::vector<double> points = s.origins;
+        for (size_t i = 0; i < n; ++i) points[3 * i] += search == "nearest 10 off" ? 10.0 : 1e9;
+        std::vector<int64_t> nearest(n);
+        nearest_points_counted(nearest.data(), points.data(), n, s.origins.data(), n, 0, &work);
+    }
+    return double(work.nodes + work.candidates) / double(std::max<size_t>(n, 1));
+}
+
+void check_scaling() {
+    const char* shapes[] = {"random", "clusters 1e9 apart", "thin rods crossing one region", "one origin",
+                            "nested, shuffled"};
+    const char* searches[] = {"containment", "chain", "nearest 10 off", "nearest 1e9 off"};
+    for (const char* shape : shapes)
+        for (const char* search : searches) {
+            const double small = work_per_box(search, shaped_scene(shape, 20000, 1));
+            const double large = work_per_box(search, shaped_scene(shape, 40000, 1));
+            const bool ok = large <= kGrowthLimit * small;
+            std::printf("%s %-30s %-16s work per box %8.1f at 20,000, %8.1f at 40,000 (x%.2f)\n", ok ? "ok  " : "FAIL",
+                        shape, search, small, large, large / small);
+            failures += !ok;
+        }
+    // Negative control: the pairwise definition's work (every lower box measured) doubles.
+    const double pairwise_small = 20000 / 2.0, pairwise_large = 40000 / 2.0;
+    if (pairwise_large <= kGrowthLimit * pairwise_small) ++failures, std::fprintf(stderr, "FAIL scaling control\n");
 }
 
 }  // namespace
@@ -286,6 +389,8 @@ int main() {
     else
         std::printf("(the planted wrong parent above was caught, as it must be)\n");
 
+    check_refusals();
+    check_scaling();
     std::printf("%zu scenes, %d failure(s)\n", scenes.size(), failures);
     return failures ? 1 : 0;
 }

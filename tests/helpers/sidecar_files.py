@@ -54,8 +54,19 @@ def file_channels(bpy, path, sidecar):
     return positions, out
 
 
+# docs/FORMAT.md: a bake stores these point attributes only where some box holds another value;
+# absent, every vertex holds (value, components).
+ABSENT_POINT_ATTRIBUTES = {".boxmarch_shape_material": (0.0, 2), ".boxmarch_parent": (-1.0, 1),
+                           ".boxmarch_depth": (0.0, 1)}
+
+
 def point_values(mesh, name):
-    """float64 (vertices,) or (vertices, 2) of a point attribute of a Blender mesh."""
+    """float64 (vertices,) or (vertices, 2) of a point attribute of a Blender mesh (one the bake
+    left out: its documented default)."""
+    if name not in mesh.attributes and name in ABSENT_POINT_ATTRIBUTES:
+        value, width = ABSENT_POINT_ATTRIBUTES[name]
+        values = np.full((len(mesh.vertices), width), value)
+        return values[:, 0] if width == 1 else values
     attribute = mesh.attributes[name]
     assert attribute.domain == "POINT", (name, attribute.domain)
     width = 2 if attribute.data_type == "FLOAT2" else 1

@@ -80,7 +80,7 @@ def read_topology(mesh):
     faces = None
     if _fast_attribute(mesh, ".corner_edge") is not None:
         faces = core.face_offsets_from_corner_edges(corner_verts, read_corner_edges(mesh), edges,
-                                                    len(mesh.vertices), len(mesh.polygons))
+                                                    len(mesh.vertices), len(mesh.polygons), arrays_owned=True)
     if faces is None:
         face_starts = np.empty(len(mesh.polygons), np.int32)
         mesh.polygons.foreach_get("loop_start", face_starts)

@@ -332,7 +332,8 @@ def prepare_bake(mesh, settings: BakeSettings, selected_only: bool = False) -> P
                            angle_epsilon=settings.angle_epsilon, origin=settings.origin,
                            sort_axes_by_extent=settings.sort_axes_by_extent,
                            axis_turn=settings.axis_turn, encoding=settings.encoding,
-                           use_cache=settings.use_cache, threads=settings.threads)
+                           use_cache=settings.use_cache, threads=settings.threads,
+                           arrays_owned=True)  # read from Blender for this bake: no other code holds them
     except ValueError as error:
         raise BakeInputError(f"mesh '{mesh.name}': {error}") from None
     try:

@@ -27,6 +27,7 @@ DEPTH_LAYER = ".boxmarch_depth"     # INT POINT: 0 at a root
 # joining baked meshes, renumbers the boxes after the bake, and this layer tells which number each
 # box had (read_box_layers maps the parents onto today's numbers, or finds them stale).
 BOX_NUMBER_LAYER = ".boxmarch_box"
+# Only the random values are always stored: see write_box_layers.
 _SCALAR_TYPES = {"FLOAT": ("value", np.float32), "INT": ("value", np.int32), "INT8": ("value", np.int32),
                  "BOOLEAN": ("value", bool)}
 _COLOUR_CHANNELS = {"shape": 0, "material": 1, "user": 3}
@@ -198,7 +199,10 @@ def compute_box_layers(mesh, result, face_starts, corner_verts, boxes, rule="ATT
     elif rule == "BONES":
         given = bone_parents(mesh, sv, count, boxes[0])
     try:
-        parent, depth, deepest = core.box_hierarchy(*boxes, rule=rule, given_parent=given)
+        if rule == "ATTRIBUTE" and given is None:  # nothing asked: every box a root, no pass over the boxes
+            parent, depth, deepest = np.full(count, -1, np.int32), np.zeros(count, np.int32), 0
+        else:
+            parent, depth, deepest = core.box_hierarchy(*boxes, rule=rule, given_parent=given)
     except ValueError as error:
         raise BoxLayerError(f"mesh '{mesh.name}': box hierarchy: {error}") from None
     report = {"hierarchy": rule, "max_depth": deepest, "roots": int((parent < 0).sum()),
@@ -207,47 +211,65 @@ def compute_box_layers(mesh, result, face_starts, corner_verts, boxes, rule="ATT
     return BoxLayers(params, parent, depth), report
 
 
+# What a layer holds where nothing is painted and every box is a root: such a layer is not
+# stored (read_box_layers reads its absence as these values), so a plain bake writes one layer
+# per vertex (the random values) instead of four.
+_LAYER_DEFAULTS = {PARAMS_LAYERS[0]: 0.0, PARENT_LAYER: -1, DEPTH_LAYER: 0}
+
+
 def write_box_layers(mesh, submesh_of_vertex, layers: BoxLayers) -> None:
-    """Store ``layers`` per vertex (every vertex holds its box's values)."""
+    """Store ``layers`` per vertex (every vertex holds its box's values); a layer whose every box
+    holds its default (_LAYER_DEFAULTS) is removed instead, and so are the box numbers where no
+    box has a parent (nothing names a box by its number)."""
+    roots_only = bool(np.all(layers.parent == -1))
     for name, data_type, values, prop in ((PARAMS_LAYERS[0], "FLOAT2", layers.params[:, :2], "vector"),
                                           (PARAMS_LAYERS[1], "FLOAT2", layers.params[:, 2:], "vector"),
                                           (PARENT_LAYER, "INT", layers.parent, "value"),
                                           (DEPTH_LAYER, "INT", layers.depth, "value"),
                                           (BOX_NUMBER_LAYER, "INT", np.arange(len(layers.parent), dtype=np.int32),
                                            "value")):
-        old = mesh.attributes.get(name)
-        if old is not None and (old.data_type != data_type or old.domain != "POINT"):
-            mesh.attributes.remove(old)
-            old = None
-        if old is None:
-            mesh.attributes.new(name, data_type, "POINT")
-        mesh.attributes[name].data.foreach_set(prop, np.ascontiguousarray(values[submesh_of_vertex]).reshape(-1))
+        unneeded = (np.all(values == _LAYER_DEFAULTS[name]) if name in _LAYER_DEFAULTS
+                    else name == BOX_NUMBER_LAYER and roots_only)
+        attr = mesh.attributes.get(name)
+        if attr is not None and (unneeded or attr.data_type != data_type or attr.domain != "POINT"):
+            mesh.attributes.remove(attr)
+            attr = None
+        if unneeded:
+            continue
+        if attr is None:
+            attr = mesh.attributes.new(name, data_type, "POINT")
+        attr.data.foreach_set(prop, np.ascontiguousarray(values[submesh_of_vertex]).reshape(-1))
 
 
 def read_box_layers(mesh, submesh_of_vertex, count):
-    """The stored BoxLayers of ``mesh`` per box (each box takes its lowest vertex's values), or
-    None when the mesh was baked without them."""
-    attrs = [mesh.attributes.get(name) for name in (*PARAMS_LAYERS, PARENT_LAYER, DEPTH_LAYER)]
-    if any(a is None or a.domain != "POINT" for a in attrs):
+    """The stored BoxLayers of ``mesh`` per box (each box takes its lowest vertex's values; a
+    layer not stored holds its default), or None when the mesh was baked without them (no random
+    values stored)."""
+    attrs = {name: mesh.attributes.get(name) for name in (*PARAMS_LAYERS, PARENT_LAYER, DEPTH_LAYER)}
+    attrs = {name: a for name, a in attrs.items() if a is not None and a.domain == "POINT"}
+    if PARAMS_LAYERS[1] not in attrs:
         return None
     n = len(mesh.vertices)
-    pairs = [np.empty(n * 2, np.float32), np.empty(n * 2, np.float32)]
-    for attr, pair in zip(attrs, pairs):
-        attr.data.foreach_get("vector", pair)
-    parent, depth = np.empty(n, np.int32), np.empty(n, np.int32)
-    attrs[2].data.foreach_get("value", parent)
-    attrs[3].data.foreach_get("value", depth)
     first = np.zeros(int(count), np.int64)
     first[submesh_of_vertex[::-1]] = np.arange(n)[::-1]
-    params = np.concatenate([pair.reshape(-1, 2) for pair in pairs], 1)
+
+    def per_box(name, dtype, width, prop):
+        if name not in attrs:
+            return np.full((int(count), width), _LAYER_DEFAULTS[name], dtype)
+        values = np.empty(n * width, dtype)
+        attrs[name].data.foreach_get(prop, values)
+        return values.reshape(n, width)[first]
+
+    params = np.concatenate([per_box(name, np.float32, 2, "vector") for name in PARAMS_LAYERS], 1)
     number = mesh.attributes.get(BOX_NUMBER_LAYER)
     baked_number = None
     if number is not None and number.domain == "POINT" and number.data_type == "INT":
         baked_number = np.empty(n, np.int32)
         number.data.foreach_get("value", baked_number)
         baked_number = baked_number[first]
-    parent, depth, stale = current_parents(parent[first], depth[first], baked_number)
-    return BoxLayers(params[first], parent, depth, stale)
+    parent, depth, stale = current_parents(per_box(PARENT_LAYER, np.int32, 1, "value")[:, 0],
+                                           per_box(DEPTH_LAYER, np.int32, 1, "value")[:, 0], baked_number)
+    return BoxLayers(params, parent, depth, stale)
 
 
 def current_parents(parent, depth, baked_number=None):

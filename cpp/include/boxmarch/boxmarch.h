@@ -192,20 +192,23 @@ enum class HierarchyRule : int {
 // the other rules ignore it (may be null). Containment: box j holds box i when i's origin lies
 // within j's half-extents (plus 1e-6 of j's largest half-extent) in j's frame and j is larger
 // (volume, ties: lower index), the parent is the smallest such j. Chain: the parent of box i > 0
-// is the j < i nearest to it (ties: lowest j); a box with a NaN or infinite origin coordinate has
-// none and is none's. Neither rule compares every pair: Containment hashes the boxes by the
-// size of their bounding spheres (classes a factor of 2 apart), each origin looking up at most
-// 27 cells per class and testing there the boxes larger than its own, smallest first, up to the
-// first that holds it: about O(box_count * classes * log box_count), growing towards
-// O(box_count^2) only where many larger boxes' spheres reach an origin their oriented bounds do
-// not hold; boxes with infinite bounds or a quaternion far from unit length are tested against
-// every box. Chain searches a grid of the origins in rings around each box up to its nearest
-// lower box: about O(box_count) for origins spread evenly or along curves, never more than
-// O(box_count^2). Both run on all cores; the parents are those of the pairwise definitions
-// exactly, ties included, for any thread count.
+// is the j < i nearest to it (ties: lowest j; a distance that overflows to infinity is never
+// taken). Neither rule compares every pair. Containment visits the boxes from the
+// smallest up, each claiming the unclaimed origins of smaller boxes its bounds hold from a k-d
+// tree of the origins (nodes tested against the box's own axes and the object axes, claimed
+// origins dropped), so nested boxes, shared origins and long thin boxes crossing one region stay
+// near O(box_count log box_count) (measured: the work per box grows by 1.07x to 1.23x from
+// 20,000 to 40,000 boxes on those scenes, tests/cpp/test_hierarchy.cpp); a box with an infinite
+// half-extent holds every origin. Chain descends a k-d tree of the
+// origins, nearer side first, skipping nodes without a lower box or farther than the nearest
+// found: about O(box_count log box_count) for every arrangement tested (clusters any distance
+// apart, one origin, curves). Chain runs on all cores, Containment on one; the parents are those
+// of the pairwise definitions exactly, ties included, for any thread count.
 // Writes parent[box_count] (-1 for a root) and depth[box_count] (0 for a root, parent's + 1
 // otherwise). Returns the largest depth. Throws std::invalid_argument (nothing written) on a
-// given parent out of -1..box_count-1, a box its own parent or a cycle, naming the box.
+// given parent out of -1..box_count-1, a box its own parent or a cycle, or (any rule) a NaN or
+// infinite origin coordinate or quaternion component or a negative or NaN half-extent, naming
+// the box.
 int32_t box_hierarchy(int32_t* parent, int32_t* depth, const double* origins, const float* quaternions,
                       const double* half_extents, size_t box_count, HierarchyRule rule, const int32_t* given_parent);
 
@@ -219,10 +222,10 @@ int32_t box_hierarchy(int32_t* parent, int32_t* depth, const double* origins, co
 // first scaled by the power of 2 that brings it below 2^300 (exact but below 2^-1022), so no
 // square overflows where NumPy's would. A candidate with a NaN or infinite coordinate is never
 // taken; a point with one, or without such a candidate, gets -1. Does not compare every pair: the
-// candidates are hashed into a grid searched in rings around each point (as the Chain hierarchy
-// rule): about O(point_count + candidate_count) for points near candidates spread
-// evenly or along curves, never more than O(point_count * candidate_count). threads: 0 for all
-// cores; the rows do not depend on it.
+// finite candidates go into a k-d tree each point descends, nearer side first, up to its
+// nearest: about O((point_count + candidate_count) log candidate_count) wherever the points lie
+// (near the candidates, far from a compact set of them, clusters any distance apart). threads: 0
+// for all cores; the rows do not depend on it.
 void nearest_points(int64_t* nearest, const double* points, size_t point_count, const double* candidates,
                     size_t candidate_count, int threads);
 
