@@ -214,7 +214,7 @@ def timed_rows(bpy, count):
     from gpu_extras.batch import batch_for_shader
 
     from bench.bench_preview_cost import baked_object
-    from bench.common import best_of, preview_frame
+    from bench.common import best_of, offscreen_frame, preview_frame
 
     scene = chain_rows(count)
     to_clip, to_view, eye = scene[4]
@@ -230,24 +230,14 @@ def timed_rows(bpy, count):
     def boxes(read=False):
         return preview_frame(offscreen, ob, to_view, projection, read)
 
+    def draw_mesh():
+        shader.bind()
+        shader.uniform_float("to_clip", to_clip.T.ravel().tolist())
+        shader.uniform_float("to_view", to_view.T.ravel().tolist())
+        batch.draw(shader)
+
     def mesh(read=False):
-        width, height = SIZE if read else (1, 1)
-        with offscreen.bind():
-            fb = gpu.state.active_framebuffer_get()
-            fb.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
-            gpu.state.depth_test_set("LESS_EQUAL")
-            gpu.state.depth_mask_set(True)
-            shader.bind()
-            shader.uniform_float("to_clip", to_clip.T.ravel().tolist())
-            shader.uniform_float("to_view", to_view.T.ravel().tolist())
-            batch.draw(shader)
-            buffer = fb.read_color(0, 0, width, height, 4, 0, "FLOAT")
-            gpu.state.depth_test_set("NONE")
-            gpu.state.depth_mask_set(False)
-        if read:
-            buffer.dimensions = width * height * 4
-            return np.array(buffer, np.float32).reshape(height, width, 4)
-        return None
+        return offscreen_frame(offscreen, draw_mesh, read)
 
     images = {name: draw(read=True) for name, draw in (("boxes", boxes), ("mesh", mesh))}
     if os.environ.get("BM_DUMP"):

@@ -31,11 +31,17 @@ def best_of(repeats, fn):
 
 def preview_frame(offscreen, ob, view, projection, read=False):
     """One frame of the raymarch preview of ``ob`` drawn into ``offscreen`` as the viewport draws
-    it (depth test LESS_EQUAL, depth writes), then read back: one pixel (so the frame has finished
-    on the GPU) or, with ``read``, the whole image as a float32 (height, width, 4) array."""
-    import gpu
-
+    it (depth test LESS_EQUAL, depth writes), then read back as :func:`offscreen_frame` does."""
     from boxmarch.preview import draw
+
+    return offscreen_frame(offscreen, lambda: draw.draw_object(ob, view, projection, True), read)
+
+
+def offscreen_frame(offscreen, draw_call, read=False):
+    """``draw_call()`` into ``offscreen`` cleared, with the viewport's depth state (test LESS_EQUAL,
+    writes on), then read back: one pixel (so the frame has finished on the GPU) or, with
+    ``read``, the whole image as a float32 (height, width, 4) array."""
+    import gpu
 
     width, height = (offscreen.width, offscreen.height) if read else (1, 1)
     with offscreen.bind():
@@ -43,7 +49,7 @@ def preview_frame(offscreen, ob, view, projection, read=False):
         fb.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
         gpu.state.depth_test_set("LESS_EQUAL")
         gpu.state.depth_mask_set(True)
-        draw.draw_object(ob, view, projection, True)
+        draw_call()
         buffer = fb.read_color(0, 0, width, height, 4, 0, "FLOAT")
         gpu.state.depth_test_set("NONE")
         gpu.state.depth_mask_set(False)

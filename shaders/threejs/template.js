@@ -510,16 +510,21 @@ var BOXMARCH_VARYINGS = [
   'varying vec4 bmParams;'
 ].join('\n');
 
-var BOXMARCH_VERTEX = [
-  '#include <common>',
-  '#include <skinning_pars_vertex>',
+// The box mesh's attributes (prepareBoxmarchGeometry), read by the marching and pre-pass vertex stages.
+var BOXMARCH_ATTRIBUTES = [
   'attribute vec4 tangent;',
   'attribute vec2 bmOffsetXY;',
   'attribute vec2 bmOffsetZIndex;',
   'attribute vec2 bmHalfXY;',
   'attribute vec2 bmHalfZ;',
   'attribute vec2 bmShapeMaterial;',
-  'attribute vec2 bmRandomUser;',
+  'attribute vec2 bmRandomUser;'
+].join('\n');
+
+var BOXMARCH_VERTEX = [
+  '#include <common>',
+  '#include <skinning_pars_vertex>',
+  BOXMARCH_ATTRIBUTES,
   BOXMARCH_VARYINGS,
   'void main() {',
   '  #include <beginnormal_vertex>',
@@ -611,13 +616,7 @@ var BOXMARCH_FRAGMENT = [
 // centre + v * extent / h of its occluder box (box_params.glsl), as the Blender preview's does.
 var BOXMARCH_OCCLUDER_VERTEX = [
   'float map(vec3 p) { return 1.0; }',  // the library's march needs one; the pre-pass marches nothing
-  'attribute vec4 tangent;',
-  'attribute vec2 bmOffsetXY;',
-  'attribute vec2 bmOffsetZIndex;',
-  'attribute vec2 bmHalfXY;',
-  'attribute vec2 bmHalfZ;',
-  'attribute vec2 bmShapeMaterial;',
-  'attribute vec2 bmRandomUser;',
+  BOXMARCH_ATTRIBUTES,
   'uniform vec4 bmEye;',
   'uniform vec2 bmOccluder;',
   'void main() {',
