@@ -11,8 +11,12 @@ threads, which a busy machine disturbs less). Rows:
 * + occluders: the hidden-box pre-pass (preview/occlusion.py);
 * + back faces culled: draw.CULL_BACK_FACES (closed, outward-wound boxes drawn with their far side
   culled, the boxes holding the eye again with both sides);
-* + occluders + back faces culled: what the preview draws by default; + quality 0.5: the knob
-  (occlusion.occluder_count runs no pre-pass below full quality).
+* + occluders + back faces culled, one pass: the pre-pass, the march in one pass that writes its
+  depth (every fragment runs on llvmpipe);
+* + resolved passes where 4+ layers deep: what the preview draws by default (Blender 4.2 and
+  later): the marching passes write no depth, so the depth test culls before the fragment stage
+  (preview/resolve.py), for objects whose boxes lie resolve.MIN_OVERDRAW layers deep or more;
+  + quality 0.5: the knob (occlusion.occluder_count runs no pre-pass below full quality).
 
 SDF evaluations per covered pixel: counted in the shader (the STEPS output: green = march steps
 plus a hit's normal taps, summed over every fragment through an additive float target), divided
@@ -32,13 +36,15 @@ HERE = Path(__file__).resolve().parent
 
 SIZE, REPEATS = 480, 5
 SCENES = ("chain down the arm", "pile", "cloud")
-# (label, create-info depth_write, draw.FRONT_TO_BACK, quality, occlusion.ENABLED, draw.CULL_BACK_FACES)
-CONFIGS = (("today", "ANY", False, 1.0, False, False),
-           ("depth_greater + front to back", "GREATER", True, 1.0, False, False),
-           ("+ occluders", "GREATER", True, 1.0, True, False),
-           ("+ back faces culled", "GREATER", True, 1.0, False, True),
-           ("+ occluders + back faces culled (shipped)", "GREATER", True, 1.0, True, True),
-           ("shipped + quality 0.5 (no pre-pass below quality 1)", "GREATER", True, 0.5, True, True))
+# (label, create-info depth_write, draw.FRONT_TO_BACK, quality, occlusion.ENABLED, draw.CULL_BACK_FACES,
+#  resolve.ENABLED)
+CONFIGS = (("today", "ANY", False, 1.0, False, False, False),
+           ("depth_greater + front to back", "GREATER", True, 1.0, False, False, False),
+           ("+ occluders", "GREATER", True, 1.0, True, False, False),
+           ("+ back faces culled", "GREATER", True, 1.0, False, True, False),
+           ("+ occluders + back faces culled, one pass", "GREATER", True, 1.0, True, True, False),
+           ("+ resolved passes where 4+ layers deep (shipped)", "GREATER", True, 1.0, True, True, True),
+           ("shipped + quality 0.5 (no pre-pass below quality 1)", "GREATER", True, 0.5, True, True, True))
 
 
 def baked_object(bpy, name, scene):
@@ -63,7 +69,7 @@ def frame_rows(bpy, name, scene):
     import numpy as np
 
     from boxmarch import preview
-    from boxmarch.preview import draw, occlusion, shader
+    from boxmarch.preview import draw, occlusion, resolve, shader
     from bench.common import best_of, preview_frame
 
     ob = baked_object(bpy, name, scene)
@@ -76,7 +82,7 @@ def frame_rows(bpy, name, scene):
 
     def use(config):
         (shader.DEPTH_WRITE, draw.FRONT_TO_BACK, ob.boxmarch.quality, occlusion.ENABLED,
-         draw.CULL_BACK_FACES) = config[1:]
+         draw.CULL_BACK_FACES, resolve.ENABLED) = config[1:]
 
     camera = scene_camera(bpy, to_view)
 
@@ -106,7 +112,8 @@ def frame_rows(bpy, name, scene):
                      f"{best[CONFIGS[0]] / best[config]:.2f}x",
                      f"{best_cpu[config] * 1e3:.0f}", f"{best_cpu[CONFIGS[0]] / best_cpu[config]:.2f}x",
                      f"{100 * changed.sum() / max(covered.sum(), 1):.2f}%"])
-    shader.DEPTH_WRITE, draw.FRONT_TO_BACK, occlusion.ENABLED, draw.CULL_BACK_FACES = "GREATER", True, True, True
+    shader.DEPTH_WRITE, draw.FRONT_TO_BACK, occlusion.ENABLED, draw.CULL_BACK_FACES, resolve.ENABLED = ("GREATER", True, True,
+                                                                                                    True, True)
     bpy.data.objects.remove(ob)
     bpy.data.objects.remove(camera)
     return rows

@@ -57,3 +57,35 @@ def test_pre_pass_cuts_evaluations_as_the_cost_model_counts(rendered):
     assert rendered["OFF_steps"][..., 1].sum() == pytest.approx(model_off["sdf_evaluations"], rel=0.05)
     assert rendered["ON_steps"][..., 1].sum() == pytest.approx(model_on["sdf_evaluations"], rel=0.05)
     assert on <= 35 and off >= 3 * on
+
+
+def resolved_or_absent(rendered):
+    """The resolved passes' arrays, or None in a Blender without them (3.4: no shader images),
+    which must then be that version."""
+    if not rendered["resolved_available"]:
+        assert "RESOLVED_rgba" not in rendered
+        return None
+    return rendered
+
+
+def test_resolved_passes_change_no_pixel(rendered):
+    """preview/resolve.py (Blender 4.2 and later) draws the one-pass picture exactly, colour and
+    depth; the negative control (the shade pass run with the visibility pass's word) does not."""
+    r = resolved_or_absent(rendered)
+    if r is None:
+        return
+    assert np.array_equal(r["RESOLVED_rgba"], r["OFF_rgba"])
+    assert np.array_equal(r["RESOLVED_depth"], r["OFF_depth"])
+    assert not np.array_equal(r["BROKEN_rgba"], r["OFF_rgba"])
+
+
+def test_resolved_passes_run_fewer_evaluations(rendered):
+    """Counted in the shader over the fragments the passes run (the depth test culls before the
+    fragment stage there): at most the in-shader cut's count plus the shade pass's, far under the
+    every-fragment count."""
+    r = resolved_or_absent(rendered)
+    if r is None:
+        return
+    resolved = evaluations_per_covered_pixel(r["RESOLVED_steps"], r["OFF_depth"])
+    off = evaluations_per_covered_pixel(r["OFF_steps"], r["OFF_depth"])
+    assert resolved <= 35 and off >= 3 * resolved

@@ -34,6 +34,26 @@
 // test; NVIDIA's GL driver, Mesa llvmpipe and SwiftShader were measured not to (docs/BENCHMARKS.md).
 // Mirrored by cpp/src/raymarch.cpp (render_boxes); bm_shade is translated into it by
 // shaders/generate.py.
+//
+// With BM_RESOLVED defined it is the stage of the preview's resolved passes (preview/resolve.py,
+// docs/PREVIEW.md "Hidden boxes"), which write no depth, so that the depth test runs before the
+// fragment stage on every renderer (declared: early_fragment_tests) and hidden fragments are never
+// run: preview.occlusion.w = 1, the visibility pass, tested against the occluders' depth, keeps the
+// nearest hit's window depth of each pixel in the image hit_min (as uint bits: for depths >= 0
+// their order is the floats'); 2, the shade pass, tested against that depth, shades only the
+// fragment whose march gives that very depth, the same program making the same march.
+
+#ifdef BM_RESOLVED
+layout(early_fragment_tests) in;
+
+// hit_min's value where no hit was kept: the bits of 1.0, the far plane's window depth.
+const uint BM_NO_HIT = 1065353216u;
+// How far (window depth) from the nearest hit the shade pass looks for the fragment that made it:
+// 2^-18, 64 float steps at the far plane. The march's hit depth and the inversion of a depth into
+// a distance along the ray (bm_depth_crossing) round differently; on the cloud of spheres a margin
+// of 2^-21 (bm_occluder_limit's) lost 10 of 22,614 pixels, 2^-20 lost none.
+const float BM_SHADE_MARGIN = 3.8e-6;
+#endif
 
 // Lambert from a light fixed in view space plus a sky/ground hemisphere, like the viewport's
 // studio look.
@@ -108,6 +128,26 @@ void main()
     vec4 c1 = preview.object_to_clip * vec4(ray_object / eye_distance, 0.0);
     t_end = min(t_end, bm_depth_crossing(c0, c1, 2.0 * hidden_from - 1.0));
   }
+#ifdef BM_RESOLVED
+  // The shade pass: only a box that reaches the pixel's nearest hit can have made it (its exit
+  // lies beyond that depth, less the margin), and its march need not go past it.
+  uint winner = BM_NO_HIT;
+  if (preview.occlusion.w == 2.0) {
+    winner = imageLoad(hit_min, ivec2(gl_FragCoord.xy)).x;
+    vec4 c0 = preview.object_to_clip * vec4(march_start, 1.0);
+    vec4 c1 = preview.object_to_clip * vec4(ray_object / eye_distance, 0.0);
+    float nearest = uintBitsToFloat(winner);
+    float reach = bm_depth_crossing(c0, c1, 2.0 * (nearest - BM_SHADE_MARGIN) - 1.0);
+    if (winner >= BM_NO_HIT || (reach < 1e30 && reach > t_end)) {
+      if (preview.mode.x == 2) {
+        frag_color = vec4(0.0, 0.0, 0.0, 1.0);
+        return;
+      }
+      discard;
+    }
+    t_end = min(t_end, bm_depth_crossing(c0, c1, 2.0 * (nearest + BM_SHADE_MARGIN) - 1.0));
+  }
+#endif
 
   // The quality knob: a pixel's size at the rasterised face, the box's size on screen from it.
   vec4 quality = bm_quality(preview.quality.x);
@@ -122,6 +162,25 @@ void main()
     ? bm_one_tap(ro, rd, min(t_end, preview.march.z), footprint, t, d)
     : bm_march(ro, rd, min(t_end, preview.march.z), max_steps, preview.march.x, preview.march.y,
                vec2(quality.x * footprint, quality.w), t, steps, d);
+  vec3 local_hit = ro + rd * t;
+  vec3 obj_hit = obj_pos + transpose(frame) * bm_from_local(local_hit + f, x, y, z);
+  vec4 clip = preview.object_to_clip * vec4(obj_hit, 1.0);
+#ifdef BM_RESOLVED
+  float hit_depth = max(clip.z / clip.w * 0.5 + 0.5, gl_FragCoord.z);
+  // the visibility pass counts the march alone (no normal); the shade pass its march and, for the
+  // one fragment it shades, the normal's taps
+  bool shaded = hit && preview.occlusion.w == 2.0 && floatBitsToUint(hit_depth) == winner;
+  if (hit && preview.occlusion.w == 1.0) {
+    imageAtomicMin(hit_min, ivec2(gl_FragCoord.xy), floatBitsToUint(hit_depth));
+  }
+  if (preview.mode.x == 2) {
+    frag_color = vec4(float(steps), float(steps + (shaded ? 3 : 0)), 0.0, 1.0);
+    return;
+  }
+  if (!shaded) {
+    discard;
+  }
+#else
   if (preview.mode.x == 2) {
     frag_color = vec4(float(steps), float(steps + (hit ? 3 : 0)), 0.0, 1.0);
     return;
@@ -129,10 +188,8 @@ void main()
   if (!hit) {
     discard;
   }
-  vec3 local_hit = ro + rd * t;
-  vec3 obj_hit = obj_pos + transpose(frame) * bm_from_local(local_hit + f, x, y, z);
-  vec4 clip = preview.object_to_clip * vec4(obj_hit, 1.0);
   gl_FragDepth = max(clip.z / clip.w * 0.5 + 0.5, gl_FragCoord.z);
+#endif
 
   vec3 n_object = transpose(frame) * bm_from_local(bm_normal(local_hit, d, bm_normal_tap(box_half)), x, y, z);
   if (preview.mode.x == 1) {

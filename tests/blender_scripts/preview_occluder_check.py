@@ -1,7 +1,8 @@
 """Run in a Blender (Debian's 3.4 program in the background, or the bpy module): a dense pile of
 links drawn by the viewport preview offscreen with and without the hidden-box pre-pass
-(preview/occlusion.py): the shaded images and the STEPS output (green: SDF evaluations of every
-fragment, summed per pixel through an additive float target), with the pile's ground truth.
+(preview/occlusion.py), and with its resolved passes (preview/resolve.py): the shaded images
+and the STEPS output (green: SDF evaluations of every fragment, summed per pixel through an
+additive float target), with the pile's ground truth.
 
 Usage: blender --background --factory-startup --python preview_occluder_check.py -- PACKAGE_PARENT OUT.npz
 """
@@ -17,7 +18,7 @@ import numpy as np  # noqa: E402
 
 import boxmarch  # noqa: E402
 from boxmarch import mesh_io, preview, scenes  # noqa: E402
-from boxmarch.preview import occlusion  # noqa: E402
+from boxmarch.preview import occlusion, resolve  # noqa: E402
 
 boxmarch.register()
 bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -49,12 +50,20 @@ bpy.context.view_layer.update()
 
 result = {"centres": centres, "rotations": rotations, "link": LINK, "matrix_world": np.array(pile.matrix_world)}
 result["view"], result["projection"] = preview.camera_matrices(scene, camera, W, H)
-for enabled in (True, False):
-    occlusion.ENABLED = enabled
-    name = "ON" if enabled else "OFF"
+# ON: the pre-pass with the one-pass march; RESOLVED: with the resolved passes (preview/resolve.py,
+# forced whatever the overdraw; Blender 4.2 and later); BROKEN: the resolved passes with the shade
+# pass given the visibility pass's word (a negative control: it must not draw the picture).
+configs = {"ON": (True, False, resolve.SHADE), "OFF": (False, False, resolve.SHADE)}
+result["resolved_available"] = resolve.available()
+if resolve.available():
+    configs.update(RESOLVED=(True, True, resolve.SHADE), BROKEN=(True, True, resolve.VISIBILITY))
+shade, minimum = resolve.SHADE, resolve.MIN_OVERDRAW
+for name, (enabled, resolved, shade_word) in configs.items():
+    occlusion.ENABLED, resolve.ENABLED, resolve.SHADE = enabled, resolved, shade_word
+    resolve.MIN_OVERDRAW = 0.0
     result[f"{name}_rgba"], result[f"{name}_depth"] = preview.render(scene, camera, W, H)
     result[f"{name}_steps"] = preview.render(scene, camera, W, H, output="STEPS")[0]
-occlusion.ENABLED = True
+occlusion.ENABLED, resolve.ENABLED, resolve.SHADE, resolve.MIN_OVERDRAW = True, True, shade, minimum
 
 np.savez_compressed(out_path, **result)
 sys.stdout.flush()

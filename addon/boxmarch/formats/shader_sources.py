@@ -74,6 +74,12 @@ FRAGMENT_OUTPUTS = ((0, "VEC4", "frag_color"),)
 # box mesh in to.
 OCCLUDER_SAMPLER = (0, "FLOAT_2D", "occluder_depth")
 OCCLUDER_INDEX = ("FLOAT", "occluder_index")
+# The resolved passes (preview/resolve.py): each pixel's nearest hit as the uint bits of its window
+# depth, kept by the visibility pass (imageAtomicMin) and read by the shade and resolve passes;
+# the full-screen stages' vertex input and the composite's textures.
+HIT_MIN_IMAGE = (1, "R32UI", "UINT_2D", "hit_min")
+FULLSCREEN_INPUT = ("VEC2", "pos")
+COMPOSITE_SAMPLERS = ((0, "FLOAT_2D", "shaded_colour"), (1, "FLOAT_2D", "shaded_depth"))
 
 OUTPUT_MODES = ("SHADED", "NORMAL", "STEPS")
 
@@ -83,12 +89,13 @@ DEPTH_LAYOUTS = {"ANY": "depth_any", "GREATER": "depth_greater", "LESS": "depth_
 
 
 def gl_declarations(stage: str, layout: str = "CLASSIC", version: str = "330 core",
-                    depth_write: str | None = None) -> str:
+                    depth_write: str | None = None, resolved: bool = False) -> str:
     """What Blender's GL backend puts before our source from the preview's create-info (stage
     'vert' or 'frag'): uniform block, vertex inputs, stage interface, outputs and, for
     ``depth_write`` (a key of DEPTH_LAYOUTS; None: no declaration, as Blender 3.4), the
-    gl_FragDepth layout. For compilers and drivers outside Blender (tests, bench/bench_gpu_frame.py)."""
-    lines = [f"#version {version}", UNIFORM_STRUCT,
+    gl_FragDepth layout; ``resolved``: the resolved passes' hit_min image (GLSL 4.30).
+    For compilers and drivers outside Blender (tests, bench/bench_gpu_frame.py)."""
+    lines = [f"#version {'430 core' if resolved else version}", UNIFORM_STRUCT,
              f"layout(std140) uniform _{UNIFORM_NAME} {{ {UNIFORM_TYPE} {UNIFORM_NAME}; }};"]
     if stage == "vert":
         lines += [f"layout(location = {i}) in {GLSL_TYPES[t]} {name};"
@@ -101,6 +108,8 @@ def gl_declarations(stage: str, layout: str = "CLASSIC", version: str = "330 cor
     if stage == "frag":
         lines.append(f"uniform sampler2D {OCCLUDER_SAMPLER[2]};")
         lines += [f"layout(location = {slot}) out {GLSL_TYPES[t]} {name};" for slot, t, name in FRAGMENT_OUTPUTS]
+        if resolved:
+            lines.append(f"layout(r32ui) uniform uimage2D {HIT_MIN_IMAGE[3]};")
         if depth_write is not None:
             lines.append(f"layout({DEPTH_LAYOUTS[depth_write]}) out float gl_FragDepth;")
     return "\n".join(lines) + "\n"
@@ -134,17 +143,27 @@ def engine_map_source(body: str, local_mirror) -> str:
             f"float map(vec3 p)\n{{\n  return bm_engine_map(p * vec3({mirror}));\n}}\n")
 
 
-def fragment_source(sdf: str = "BOX", user_text: str | None = None, local_mirror=(1.0, 1.0, 1.0)) -> str:
+def fragment_source(sdf: str = "BOX", user_text: str | None = None, local_mirror=(1.0, 1.0, 1.0),
+                    resolved: bool = False) -> str:
     """The fragment stage as Blender compiles it (after its own declarations): the library, the
     preset's map() or the user's text (seen through an engine's local mirror, if any), and the
-    preview's main()."""
+    preview's main(); ``resolved``: the stage of the resolved passes (BM_RESOLVED), which writes
+    no depth."""
     if user_text is None and sdf not in PRESET_MAPS:
         raise ValueError(f"sdf must be one of {tuple(PRESET_MAPS)}, got {sdf!r}")
     body = user_map_source(user_text) if user_text is not None else PRESET_MAPS[sdf]
     if any(float(v) < 0 for v in local_mirror):
         body = engine_map_source(body, local_mirror)
-    return "\n".join([read_glsl("decode.glsl"), read_glsl("sdf.glsl"), read_glsl("box_params.glsl"),
-                      read_glsl("raymarch.glsl"), body, read_glsl("preview.frag.glsl")])
+    return "\n".join([*(["#define BM_RESOLVED"] if resolved else []), read_glsl("decode.glsl"), read_glsl("sdf.glsl"),
+                      read_glsl("box_params.glsl"), read_glsl("raymarch.glsl"), body, read_glsl("preview.frag.glsl")])
+
+
+def fullscreen_source(stage: str) -> str:
+    """A full-screen stage of the resolved passes (shaders/glsl/preview_resolve.glsl): 'vertex',
+    'resolve_depth', 'composite' or 'composite_steps'."""
+    defines = {"vertex": ["BM_VERTEX"], "resolve_depth": ["BM_RESOLVE_DEPTH"], "composite": ["BM_COMPOSITE"],
+               "composite_steps": ["BM_COMPOSITE", "BM_COMPOSITE_STEPS"]}[stage]
+    return "\n".join([*(f"#define {name}" for name in defines), read_glsl("preview_resolve.glsl")])
 
 
 def vertex_source(layout: str = "CLASSIC", occluder: bool = False) -> str:

@@ -120,7 +120,7 @@ def register():
 def unregister():
     import bpy
 
-    from . import draw, occlusion, shader
+    from . import draw, occlusion, resolve, shader
 
     global _handler
     if _handler is not None:
@@ -132,6 +132,7 @@ def unregister():
             handlers.remove(function)
     draw.forget()
     occlusion.forget()
+    resolve.forget()
     shader.clear_cache()
 
 

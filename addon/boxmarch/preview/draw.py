@@ -12,7 +12,7 @@ from gpu_extras.batch import batch_for_shader
 
 from .. import mesh_io
 from ..formats import layouts, presets, shader_sources
-from . import mesh_data, occlusion, skinning
+from . import mesh_data, occlusion, resolve, skinning
 from . import shader as preview_shader
 
 RAW_VECTOR_COLOR = (0.35, 0.75, 1.0, 1.0)      # light blue, as in the seed's Unity script
@@ -278,13 +278,14 @@ def uniform_block_data(object_to_clip, object_to_view, perspective, settings, ou
     return data
 
 
-def _marching_shader(ob):
-    """The object's preview shader, or None (and an error noted) when its user SDF fails."""
+def _marching_shader(ob, resolved: bool):
+    """The object's preview shader (``resolved``: the resolved passes' stage), or None (and an
+    error noted) when its user SDF fails."""
     settings = ob.boxmarch
     mirror = presets.PRESETS[settings.engine].mirror  # what the engine's local frame does
     if settings.sdf != "USER":
         errors.pop(ob.name, None)
-        return preview_shader.preview_shader(settings.sdf, None, mirror, settings.layout)
+        return preview_shader.preview_shader(settings.sdf, None, mirror, settings.layout, resolved)
     text = bpy.data.texts.get(settings.user_text)
     if text is None:
         errors[ob.name] = f"no text block named '{settings.user_text}'" if settings.user_text else "choose a text block"
@@ -304,22 +305,29 @@ def _marching_shader(ob):
 CULL_BACK_FACES = True
 
 
-def _draw_sides(shader, batch, block, ubo, cull, perspective, mirrored):
-    """Draws the marching batch: every face, or with ``cull`` the boxes not holding the eye with
-    their back faces culled (front faces when the object's matrix mirrors) and, in a perspective
-    view, the boxes holding it with both sides (preview.vert.glsl, occlusion.z)."""
-    if not cull:
-        shader.uniform_block(shader_sources.UNIFORM_NAME, ubo)
+def _draw_sides(shader, batch, block, cull, perspective, mirrored, eye_depth_test=None):
+    """Draws the marching batch with the BoxmarchPreview words ``block``: every face in one draw,
+    or with ``cull`` the boxes not holding the eye with their back faces culled (front faces when
+    the object's matrix mirrors) and, in a perspective view, the boxes holding it with both sides
+    (preview.vert.glsl, occlusion.z); ``eye_depth_test``: those boxes apart, whatever ``cull``,
+    drawn with that depth test (the resolved passes: their far side's depth bounds nothing)."""
+    if not cull and eye_depth_test is None:
+        whole = gpu.types.GPUUniformBuf(block.tobytes())  # held until drawn: freeing it unbinds it
+        shader.uniform_block(shader_sources.UNIFORM_NAME, whole)
         batch.draw(shader)
         return
+    depth_test = gpu.state.depth_test_get()
     for selection in (1.0, 2.0) if perspective else (1.0,):
         chosen = block.copy()
         chosen[74] = selection
-        selected = gpu.types.GPUUniformBuf(chosen.tobytes())  # held until drawn: freeing it unbinds it
+        selected = gpu.types.GPUUniformBuf(chosen.tobytes())
         shader.uniform_block(shader_sources.UNIFORM_NAME, selected)
-        gpu.state.face_culling_set(("FRONT" if mirrored else "BACK") if selection == 1.0 else "NONE")
+        gpu.state.face_culling_set(("FRONT" if mirrored else "BACK") if cull and selection == 1.0 else "NONE")
+        if selection == 2.0 and eye_depth_test is not None:
+            gpu.state.depth_test_set(eye_depth_test)
         batch.draw(shader)
     gpu.state.face_culling_set("NONE")
+    gpu.state.depth_test_set(depth_test)
 
 
 def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, depsgraph=None):
@@ -339,25 +347,37 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, 
         errors[ob.name] = str(exc)
         raise
     settings = ob.boxmarch
-    shader = _marching_shader(ob)
+    occluders = occlusion.occluder_count(settings.sdf, settings.quality)
+    viewport = gpu.state.viewport_get()
+    baked = _mesh(ob.data, settings.layout).baked
+    layers = resolve.overdraw(baked.origins, baked.box_half_extents, object_to_clip, viewport[2], viewport[3])
+    resolved = resolve.used(occluders, layers)
+    shader = _marching_shader(ob, resolved)
     try:
         frame = object_frame(ob)
     except ValueError as exc:
         errors[ob.name] = str(exc)
         shader = None
     if shader is not None:
-        viewport = gpu.state.viewport_get()
-        occluders = occlusion.occluder_count(settings.sdf, settings.quality)
         block = uniform_block_data(object_to_clip, object_to_view, perspective, settings, output_mode,
                                    tuple(ob.color[:3]) + (1.0,), frame, viewport[3], occluders > 0)
         ubo = gpu.types.GPUUniformBuf(block.tobytes())
         batch = drawn.march(mesh_data.view_octant(object_to_view) if FRONT_TO_BACK else None)
-        depth = (occlusion.draw_occluders(batch, settings.layout, ubo, occluders, viewport[2], viewport[3])
-                 if occluders else occlusion.no_depth())
-        shader.bind()
-        shader.uniform_sampler(shader_sources.OCCLUDER_SAMPLER[2], depth)
-        _draw_sides(shader, batch, block, ubo, drawn.outward and CULL_BACK_FACES, perspective,
-                    np.linalg.det(object_to_view[:3, :3]) < 0.0)
+        cull, mirrored = drawn.outward and CULL_BACK_FACES, np.linalg.det(object_to_view[:3, :3]) < 0.0
+
+        def draw_sides(shader, batch, block, eye_depth_test=None):
+            _draw_sides(shader, batch, block, cull, perspective, mirrored, eye_depth_test)
+
+        depth, occluder_framebuffer = (
+            occlusion.draw_occluders(batch, settings.layout, ubo, occluders, viewport[2], viewport[3],
+                                     ("FRONT" if mirrored else "BACK") if cull else "NONE")
+            if occluders else (occlusion.no_depth(), None))
+        if resolved:
+            resolve.draw(shader, batch, block, depth, occluder_framebuffer, draw_sides, counting=output_mode == 2)
+        else:
+            shader.bind()
+            shader.uniform_sampler(shader_sources.OCCLUDER_SAMPLER[2], depth)
+            draw_sides(shader, batch, block)
     if output_mode != 0:
         return shader is not None
     lines = uniform_shader()

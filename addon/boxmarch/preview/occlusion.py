@@ -56,10 +56,12 @@ def no_depth():
     return _unused[0]
 
 
-def draw_occluders(batch, layout: str, block, count: int, width: int, height: int):
+def draw_occluders(batch, layout: str, block, count: int, width: int, height: int, culled_faces: str = "NONE"):
     """Draws ``batch`` (the object's box mesh) ``count`` times with the pre-pass shader, one
     occluder index each, into a depth texture of ``width`` x ``height`` cleared to 1, with the
-    object's uniform ``block``; the GPU state is left as found. Returns the texture."""
+    object's uniform ``block``, ``culled_faces`` culled (gpu.state.face_culling_set: an occluder
+    box is wound as its box); the GPU state is left as found. Returns the texture and the
+    framebuffer it is attached to."""
     texture, framebuffer = _target(width, height)
     shader = preview_shader.occluder_shader(layout)
     state = gpu.state.blend_get(), gpu.state.depth_test_get(), gpu.state.depth_mask_get()
@@ -70,13 +72,15 @@ def draw_occluders(batch, layout: str, block, count: int, width: int, height: in
         gpu.state.depth_mask_set(True)
         shader.bind()
         shader.uniform_block(shader_sources.UNIFORM_NAME, block)
+        gpu.state.face_culling_set(culled_faces)
         for index in range(count):
             shader.uniform_float(shader_sources.OCCLUDER_INDEX[1], float(index))
             batch.draw(shader)
+        gpu.state.face_culling_set("NONE")
     gpu.state.blend_set(state[0])
     gpu.state.depth_test_set(state[1])
     gpu.state.depth_mask_set(state[2])
-    return texture
+    return texture, framebuffer
 
 
 def forget():

@@ -34,9 +34,10 @@ _failed: dict = {}
 MAX_USER_SHADERS = 8
 
 
-def _create_info(fragment: str, layout: str, occluder: bool = False):
+def _create_info(fragment: str, layout: str, occluder: bool = False, resolved: bool = False):
     """The create-info of the marching shader, or with ``occluder`` of the hidden-box pre-pass
-    (the same inputs and block; the box mesh pulled in to an occluder box, depth only)."""
+    (the same inputs and block; the box mesh pulled in to an occluder box, depth only); with
+    ``resolved`` of the resolved passes' marching stage (the hit_min image, no depth written)."""
     iface = gpu.types.GPUStageInterfaceInfo("boxmarch_preview_interface")
     for interpolation, type_name, name in shader_sources.STAGE_INTERFACE:
         getattr(iface, interpolation)(type_name, name)
@@ -52,7 +53,9 @@ def _create_info(fragment: str, layout: str, occluder: bool = False):
         info.push_constant(*shader_sources.OCCLUDER_INDEX)
     else:
         info.sampler(*shader_sources.OCCLUDER_SAMPLER)
-        if hasattr(info, "depth_write"):  # Blender 4+; 3.4 has no declaration
+        if resolved:
+            info.image(*shader_sources.HIT_MIN_IMAGE, qualifiers={"READ", "WRITE"})
+        elif hasattr(info, "depth_write"):  # Blender 4+; 3.4 has no declaration
             info.depth_write(DEPTH_WRITE)
     info.vertex_source(shader_sources.vertex_source(layout, occluder))
     info.fragment_source(fragment)
@@ -153,16 +156,18 @@ def _log_line_offset(sdf, local_mirror, layout) -> int:
 
 
 def preview_shader(sdf: str = "BOX", user_text: str | None = None, local_mirror=(1.0, 1.0, 1.0),
-                   layout: str = "CLASSIC"):
+                   layout: str = "CLASSIC", resolved: bool = False):
     """The compiled preview shader for a preset, or for user text defining ``float map(vec3 p)``,
-    as an engine with ``local_mirror`` sees it, reading the channels of engine ``layout``. Raises
+    as an engine with ``local_mirror`` sees it, reading the channels of engine ``layout``;
+    ``resolved``: the marching stage of the resolved passes (preview/resolve.py). Raises
     UserSdfError with the line for user text that does not compile."""
-    key = (sdf, user_text, tuple(float(v) for v in local_mirror), layout, DEPTH_WRITE)
+    key = (sdf, user_text, tuple(float(v) for v in local_mirror), layout, "RESOLVED" if resolved else DEPTH_WRITE)
     if key in _cache:
         return _cache[key]
     if key in _failed:
         raise UserSdfError(*_failed[key])
-    info, iface = _create_info(shader_sources.fragment_source(sdf, user_text, local_mirror), layout)
+    info, iface = _create_info(shader_sources.fragment_source(sdf, user_text, local_mirror, resolved), layout,
+                               resolved=resolved)
     shader, error, log = _compile_capturing_log(info)
     del iface  # the create-info refers to it until compiled
     if shader is None:
@@ -188,6 +193,42 @@ def occluder_shader(layout: str = "CLASSIC"):
         if shader is None:
             raise RuntimeError(f"boxmarch occluder shader failed to compile: {error}\n{log}")
         _cache[key] = shader
+    return _cache[key]
+
+
+def fullscreen_shader(stage: str):
+    """A compiled full-screen stage of the resolved passes (shader_sources.fullscreen_source:
+    'resolve_depth', 'composite' or 'composite_steps'), drawn over a triangle covering the view."""
+    key = ("FULLSCREEN", stage, None, None, None)
+    if key not in _cache:
+        info = gpu.types.GPUShaderCreateInfo()
+        info.vertex_in(0, *shader_sources.FULLSCREEN_INPUT)
+        if stage == "resolve_depth":
+            info.image(*shader_sources.HIT_MIN_IMAGE, qualifiers={"READ"})
+        else:
+            for sampler in shader_sources.COMPOSITE_SAMPLERS:
+                info.sampler(*sampler)
+        for slot, type_name, name in shader_sources.FRAGMENT_OUTPUTS:
+            info.fragment_out(slot, type_name, name)
+        info.vertex_source(shader_sources.fullscreen_source("vertex"))
+        info.fragment_source(shader_sources.fullscreen_source(stage))
+        shader, error, log = _compile_capturing_log(info)
+        if shader is None:
+            raise RuntimeError(f"boxmarch {stage} shader failed to compile: {error}\n{log}")
+        _cache[key] = shader
+    return _cache[key]
+
+
+def barrier_shader():
+    """A compute shader that does nothing: Blender's gpu.compute.dispatch issues the memory barrier
+    for image access and texture fetches after it, the only barrier its Python API offers, which
+    the resolved passes need between the image writes of one draw and the reads of the next."""
+    key = ("BARRIER", None, None, None, None)
+    if key not in _cache:
+        info = gpu.types.GPUShaderCreateInfo()
+        info.local_group_size(1, 1, 1)
+        info.compute_source("void main()\n{\n}\n")
+        _cache[key] = gpu.shader.create_from_info(info)
     return _cache[key]
 
 
