@@ -87,5 +87,22 @@ def test_resolved_passes_run_fewer_evaluations(rendered):
     if r is None:
         return
     resolved = evaluations_per_covered_pixel(r["RESOLVED_steps"], r["OFF_depth"])
+    one_pass = evaluations_per_covered_pixel(r["ON_steps"], r["OFF_depth"])
     off = evaluations_per_covered_pixel(r["OFF_steps"], r["OFF_depth"])
+    # the shade pass marches again for the few fragments its depth test leaves: more than the
+    # in-shader cut counts (which every fragment runs), still far under the full march
+    assert one_pass < resolved <= 1.5 * one_pass
     assert resolved <= 35 and off >= 3 * resolved
+
+
+def test_resolved_passes_run_fewer_fragments(rendered):
+    """Fragments run (the STEPS output's blue: one per fragment the fragment stage ran): the one-pass
+    march runs every fragment of every box, the resolved passes only those in front of the
+    occluders (visibility) and of the nearest hit (shade)."""
+    r = resolved_or_absent(rendered)
+    if r is None:
+        return
+    one_pass, resolved = r["ON_steps"][..., 2].sum(), r["RESOLVED_steps"][..., 2].sum()
+    covered = (r["OFF_depth"] < 1.0).sum()
+    assert one_pass >= 3 * covered  # the pile: several layers of boxes over each covered pixel
+    assert resolved <= one_pass / 2

@@ -20,7 +20,8 @@
 // frame: identity, or an export preset's orthonormal axis change); eye (object-space camera position with w = 1, or for
 // orthographic views the object-space view direction with w = 0); march (epsilon, relaxation,
 // max_distance, max_steps); base_color; mode.x (0 shaded, 1 object-space normal as colour,
-// 2 steps of every fragment in red with alpha 1, for Blender's ADDITIVE blend: src * alpha + dst);
+// 2 steps of every fragment in red, 1 in blue, with alpha 1, for Blender's ADDITIVE blend: src *
+// alpha + dst);
 // quality (x: the quality knob of bm_quality, y: the viewport height in pixels);
 // blend.x (the blend radius of PER_BOX_BLEND, else 0); blend.y (1: colour each box by its
 // material id); occlusion.x (1: the hidden-box pre-pass ran and occluder_depth holds the nearest
@@ -28,7 +29,8 @@
 // occlusion.y (the pre-pass's shape id, preview.vert.glsl). With the pre-pass a fragment whose box
 // entry lies behind the occluders returns before marching (every renderer runs it: this does not
 // rest on the driver's early depth test) and no march goes past the occluders' depth. In mode 2
-// the green channel counts every map() evaluation (march steps plus a hit's 3 normal taps).
+// the green channel counts every map() evaluation (march steps plus a hit's 3 normal taps) and
+// the blue one every fragment run.
 // The written depth is never nearer than the rasterised face's (clamped): the create-info
 // declares it (depth_write GREATER, Blender 4+), which allows a driver to keep its early depth
 // test; NVIDIA's GL driver, Mesa llvmpipe and SwiftShader were measured not to (docs/BENCHMARKS.md).
@@ -103,7 +105,7 @@ void main()
   if (from_eye) {
     if (preview.eye.w < 0.5 || eye_distance > -span.x) {
       if (preview.mode.x == 2) {
-        frag_color = vec4(0.0, 0.0, 0.0, 1.0);
+        frag_color = vec4(0.0, 0.0, 1.0, 1.0);
         return;
       }
       discard;
@@ -119,7 +121,7 @@ void main()
     float hidden_from = bm_occluder_limit(texelFetch(occluder_depth, ivec2(gl_FragCoord.xy), 0).r);
     if (!from_eye && gl_FragCoord.z > hidden_from) {
       if (preview.mode.x == 2) {
-        frag_color = vec4(0.0, 0.0, 0.0, 1.0);
+        frag_color = vec4(0.0, 0.0, 1.0, 1.0);
         return;
       }
       discard;
@@ -140,7 +142,7 @@ void main()
     float reach = bm_depth_crossing(c0, c1, 2.0 * (nearest - BM_SHADE_MARGIN) - 1.0);
     if (winner >= BM_NO_HIT || (reach < 1e30 && reach > t_end)) {
       if (preview.mode.x == 2) {
-        frag_color = vec4(0.0, 0.0, 0.0, 1.0);
+        frag_color = vec4(0.0, 0.0, 1.0, 1.0);
         return;
       }
       discard;
@@ -174,7 +176,7 @@ void main()
     imageAtomicMin(hit_min, ivec2(gl_FragCoord.xy), floatBitsToUint(hit_depth));
   }
   if (preview.mode.x == 2) {
-    frag_color = vec4(float(steps), float(steps + (shaded ? 3 : 0)), 0.0, 1.0);
+    frag_color = vec4(float(steps), float(steps + (shaded ? 3 : 0)), 1.0, 1.0);
     return;
   }
   if (!shaded) {
@@ -182,7 +184,7 @@ void main()
   }
 #else
   if (preview.mode.x == 2) {
-    frag_color = vec4(float(steps), float(steps + (hit ? 3 : 0)), 0.0, 1.0);
+    frag_color = vec4(float(steps), float(steps + (hit ? 3 : 0)), 1.0, 1.0);
     return;
   }
   if (!hit) {

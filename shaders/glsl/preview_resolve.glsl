@@ -30,7 +30,11 @@ void main()
 {
   ivec2 pixel = ivec2(gl_FragCoord.xy);
   frag_color = texelFetch(shaded_colour, pixel, 0);
-#ifndef BM_COMPOSITE_STEPS
+#ifdef BM_COMPOSITE_STEPS
+  // Blender's ADDITIVE blend adds colour times alpha and keeps the target's alpha: the counts
+  // summed in shaded_colour's rgb are added once
+  frag_color.a = 1.0;
+#else
   float depth = texelFetch(shaded_depth, pixel, 0).r;
   if (depth >= 1.0) {
     discard;

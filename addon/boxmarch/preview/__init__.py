@@ -200,8 +200,9 @@ def render(scene, camera_object, width, height, *, output="SHADED"):
     Returns ``(rgba, depth)``: float32 (H, W, 4) and (H, W) window-space depth (0 near plane,
     1.0 far plane and where nothing was drawn), row 0 at the TOP, one sample per pixel centre.
     ``output``: 'SHADED' (the viewport look), 'NORMAL' (object-space normals of raymarched hits
-    as 0.5 + 0.5 n), or 'STEPS' (red = SDF evaluations summed over all raymarch fragments of a
-    pixel, no depth test; for the benchmark).
+    as 0.5 + 0.5 n), or 'STEPS' (summed over the raymarch fragments run at a pixel: red the march
+    steps, green the SDF evaluations, blue the fragments; every fragment of the one-pass march,
+    those the depth test leaves of the resolved passes, preview/resolve.py; for the benchmark).
 
     An object that cannot be drawn (a NaN coordinate, broken baked data) is left out and the
     others still draw; ``last_skipped`` then lists "name: reason" for each, and a RuntimeWarning
