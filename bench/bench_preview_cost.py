@@ -119,6 +119,52 @@ def frame_rows(bpy, name, scene):
     return rows
 
 
+def sweep_rows(bpy, made):
+    """Piles of 500 to 4,000 links (the pile's cube and camera) and the other scenes, drawn as
+    shipped with the pre-pass, in one pass and in the resolved passes (resolve.MIN_OVERDRAW set
+    aside): frame times side by side, round robin, with mesh_data.layers_over_view."""
+    import gpu
+    import numpy as np
+
+    from boxmarch import scenes
+    from boxmarch.preview import draw, mesh_data, resolve
+    from bench.bench_gpu_cost import camera
+    from bench.common import best_of, preview_frame
+    from scripts import chain_arm
+
+    rng = np.random.default_rng(1)
+    for count in (500, 1000, 2000):
+        centres = rng.uniform(-2.0, 2.0, (count, 3))
+        made[f"pile of {count}"] = (centres, scenes.random_rotations(count, rng), np.tile(chain_arm.LINK / 2, (count, 1)),
+                                    "LINK", camera((0.0, -7.0, 1.0), (0.0, 0.0, 0.0), SIZE, SIZE))
+    offscreen = gpu.types.GPUOffScreen(SIZE, SIZE, format="RGBA32F")
+    rows, minimum = [], resolve.MIN_OVERDRAW
+    for name in ("chain down the arm", "cloud", "pile of 500", "pile of 1000", "pile of 2000", "pile"):
+        ob = baked_object(bpy, name, made[name])
+        to_clip, to_view, _eye = made[name][4]
+        projection = to_clip @ np.linalg.inv(to_view)
+        best, images = {}, {}
+        for resolved in (False, True):
+            resolve.MIN_OVERDRAW = 0.0 if resolved else float("inf")
+            images[resolved] = preview_frame(offscreen, ob, to_view, projection, read=True)
+        mesh = draw.cached_mesh(ob.data.name_full, ob.boxmarch.layout).baked  # read by the frames above
+        layers = mesh_data.layers_over_view(mesh.origins, mesh.box_half_extents, to_clip @ np.array(ob.matrix_world),
+                                            SIZE, SIZE)
+        for _ in range(REPEATS):
+            for resolved in (False, True):
+                resolve.MIN_OVERDRAW = 0.0 if resolved else float("inf")
+                best[resolved] = min(best.get(resolved, float("inf")), best_of(1, lambda: preview_frame(
+                    offscreen, ob, to_view, projection)))
+        covered = (images[False][..., 3] > 0) | (images[True][..., 3] > 0)
+        changed = (np.abs(images[True] - images[False]).max(-1) > 1 / 255) & covered
+        rows.append([name, f"{layers:.1f}", f"{best[False] * 1e3:.0f}", f"{best[True] * 1e3:.0f}",
+                     f"{best[False] / best[True]:.2f}x", str(int(changed.sum())),
+                     "resolved" if layers >= minimum else "one pass"])
+        bpy.data.objects.remove(ob)
+    resolve.MIN_OVERDRAW = minimum
+    return rows
+
+
 def scene_camera(bpy, to_view):
     """A camera object at bench_gpu_cost's perspective camera (40 degrees, clip 0.1 to 4000) of view
     matrix ``to_view``, for preview.render's STEPS output."""
@@ -150,12 +196,20 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=SIZE, help="image width and height in pixels")
     parser.add_argument("--scenes", default=",".join(SCENES), help="comma-separated scene names")
+    parser.add_argument("--sweep", action="store_true",
+                        help="instead: one pass against the resolved passes on piles of 500 to 4,000 links")
     args = parser.parse_args(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:])
     SIZE = args.size
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)
     preview.ensure_gpu_context()
     made = scenes_to_measure(SIZE, 8)
+    if args.sweep:
+        rows = sweep_rows(bpy, made)
+        print(f"Blender {bpy.app.version_string}, {gpu.platform.renderer_get()}, {SIZE} x {SIZE} px, best of {REPEATS}")
+        print(table(["scene", "layers over the view", "one pass ms", "resolved ms", "speed-up", "pixels changed",
+                     "shipped"], rows))
+        return
     rows = [row for name in args.scenes.split(",") for row in frame_rows(bpy, name, made[name])]
     print(f"Blender {bpy.app.version_string}, {gpu.platform.renderer_get()}, {SIZE} x {SIZE} px, best of {REPEATS}")
     print(table(["scene", "preview", "SDF evals/px", "frame ms", "speed-up", "CPU ms", "CPU speed-up", "pixels changed"],

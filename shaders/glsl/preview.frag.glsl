@@ -131,23 +131,44 @@ void main()
     t_end = min(t_end, bm_depth_crossing(c0, c1, 2.0 * hidden_from - 1.0));
   }
 #ifdef BM_RESOLVED
-  // The shade pass: only a box that reaches the pixel's nearest hit can have made it (its exit
-  // lies beyond that depth, less the margin), and its march need not go past it.
-  uint winner = BM_NO_HIT;
-  if (preview.occlusion.w == 2.0) {
-    winner = imageLoad(hit_min, ivec2(gl_FragCoord.xy)).x;
+  // The nearest hit kept so far at this pixel (hit_min): the visibility pass needs no march past
+  // it (the boxes are drawn about front to back, so most marches find one already kept); for the
+  // shade pass it is the pixel's nearest hit, and only a box whose march ends there can have made
+  // it: the box must reach that depth (its exit beyond it, less the margin), and the shape must
+  // lie within the margin's distance plus the hit distance of the ray's point at that depth (its
+  // map() is 1-Lipschitz: an exact distance or a bound), one map() instead of a march.
+  uint winner = imageLoad(hit_min, ivec2(gl_FragCoord.xy)).x;
+  if (winner < BM_NO_HIT) {
     vec4 c0 = preview.object_to_clip * vec4(march_start, 1.0);
     vec4 c1 = preview.object_to_clip * vec4(ray_object / eye_distance, 0.0);
     float nearest = uintBitsToFloat(winner);
     float reach = bm_depth_crossing(c0, c1, 2.0 * (nearest - BM_SHADE_MARGIN) - 1.0);
-    if (winner >= BM_NO_HIT || (reach < 1e30 && reach > t_end)) {
+    float beyond = bm_depth_crossing(c0, c1, 2.0 * (nearest + BM_SHADE_MARGIN) - 1.0);
+    bool hidden = !from_eye && gl_FragCoord.z > nearest + BM_SHADE_MARGIN;
+    int taps = 0;
+    if (!hidden && preview.occlusion.w == 2.0) {
+      hidden = reach < 1e30 && reach > t_end;
+      if (!hidden && beyond < 1e30) {
+        float at = min(bm_depth_crossing(c0, c1, 2.0 * nearest - 1.0), beyond);
+        taps = 1;
+        hidden = map(ro + rd * at) > preview.march.x + beyond - (reach < 1e30 ? reach : 0.0);
+      }
+    }
+    if (hidden) {
       if (preview.mode.x == 2) {
-        frag_color = vec4(0.0, 0.0, 1.0, 1.0);
+        frag_color = vec4(float(taps), float(taps), 1.0, 1.0);
         return;
       }
       discard;
     }
-    t_end = min(t_end, bm_depth_crossing(c0, c1, 2.0 * (nearest + BM_SHADE_MARGIN) - 1.0));
+    t_end = min(t_end, beyond);
+  }
+  else if (preview.occlusion.w == 2.0) {
+    if (preview.mode.x == 2) {
+      frag_color = vec4(0.0, 0.0, 1.0, 1.0);
+      return;
+    }
+    discard;
   }
 #endif
 

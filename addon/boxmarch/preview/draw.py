@@ -350,7 +350,7 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, 
     occluders = occlusion.occluder_count(settings.sdf, settings.quality)
     viewport = gpu.state.viewport_get()
     baked = _mesh(ob.data, settings.layout).baked
-    layers = resolve.overdraw(baked.origins, baked.box_half_extents, object_to_clip, viewport[2], viewport[3])
+    layers = mesh_data.layers_over_view(baked.origins, baked.box_half_extents, object_to_clip, viewport[2], viewport[3])
     resolved = resolve.used(occluders, layers)
     shader = _marching_shader(ob, resolved)
     try:

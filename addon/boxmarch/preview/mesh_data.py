@@ -179,3 +179,18 @@ def octant_triangles(baked: BakedMesh, octant: int) -> np.ndarray:
     rank[order] = np.arange(len(order))
     box_of_triangle = baked.submesh_of_vertex[baked.triangles[:, 0]]
     return np.ascontiguousarray(baked.triangles[np.argsort(rank[box_of_triangle], kind="stable")])
+
+
+def layers_over_view(origins, half_extents, object_to_clip, width: int, height: int) -> float:
+    """About how many layers of boxes cover the view: the bounding spheres of the boxes in the
+    view frustum projected (each at most the view's area; none behind the eye), their areas
+    summed over the view's."""
+    origins = np.asarray(origins, np.float64)
+    clip = origins @ object_to_clip.T[:3] + object_to_clip.T[3]
+    radius = np.linalg.norm(np.asarray(half_extents, np.float64), axis=1)
+    rows = np.linalg.norm(object_to_clip[:3, :3], axis=1)  # clip units per object unit, x, y and z
+    w = clip[:, 3] if np.any(object_to_clip[3, :3]) else np.ones(len(clip))
+    inside = ((np.abs(clip[:, 0]) - radius * rows[0] <= w) & (np.abs(clip[:, 1]) - radius * rows[1] <= w)
+              & (w > 0.0))
+    pixels = np.pi * (radius[inside] * rows[1] * 0.5 * height / w[inside]) ** 2
+    return float(np.minimum(pixels, width * height).sum() / (width * height))

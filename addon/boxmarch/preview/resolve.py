@@ -15,7 +15,6 @@ Python API has no images, and marches in one pass there (occlusion.py's in-shade
 from __future__ import annotations
 
 import gpu
-import numpy as np
 from gpu_extras.batch import batch_for_shader
 
 from ..formats import shader_sources
@@ -42,31 +41,18 @@ def available() -> bool:
     return hasattr(gpu.types.GPUShader, "image") and hasattr(gpu, "compute")
 
 
-# Layers of boxes over the view (overdraw()) from which the resolved passes pay: below it their
-# fixed cost (a second marching draw and two full-screen passes) outweighs the hidden fragments
-# they skip (docs/BENCHMARKS.md, "Hidden boxes": the pile against the chain and the cloud).
-MIN_OVERDRAW = 4.0
+# Layers of boxes over the view (mesh_data.layers_over_view) from which the resolved passes pay on Mesa llvmpipe:
+# below it their fixed cost (a second marching draw, two full-screen passes that write depth)
+# outweighs the hidden fragments they skip. Measured on piles of 500 to 4,000 links at 480 x 480
+# (bench/bench_preview_cost.py --sweep): 0.76x at 4.3 layers, 0.84x at 8.6, 1.04x at 17.4,
+# 1.33x at 34.6. Not measured on a GPU, where a fragment costs less beside its march.
+MIN_OVERDRAW = 16.0
 
 
-def overdraw(origins, half_extents, object_to_clip, width: int, height: int) -> float:
-    """About how many layers of boxes cover the view: the bounding spheres of the boxes in the
-    view frustum projected (each at most the view's area; none behind the eye), their areas
-    summed over the view's."""
-    origins = np.asarray(origins, np.float64)
-    clip = origins @ object_to_clip.T[:3] + object_to_clip.T[3]
-    radius = np.linalg.norm(np.asarray(half_extents, np.float64), axis=1)
-    rows = np.linalg.norm(object_to_clip[:3, :3], axis=1)  # clip units per object unit, x, y and z
-    w = clip[:, 3] if np.any(object_to_clip[3, :3]) else np.ones(len(clip))
-    inside = ((np.abs(clip[:, 0]) - radius * rows[0] <= w) & (np.abs(clip[:, 1]) - radius * rows[1] <= w)
-              & (w > 0.0))
-    pixels = np.pi * (radius[inside] * rows[1] * 0.5 * height / w[inside]) ** 2
-    return float(np.minimum(pixels, width * height).sum() / (width * height))
-
-
-def used(occluders: int, overdraw_estimate: float) -> bool:
-    """Whether an object whose pre-pass draws ``occluders`` boxes, about ``overdraw_estimate``
-    layers deep (overdraw()), marches in the resolved passes."""
-    return ENABLED and occluders > 0 and overdraw_estimate >= MIN_OVERDRAW and available()
+def used(occluders: int, layers: float) -> bool:
+    """Whether an object whose pre-pass draws ``occluders`` boxes, about ``layers`` deep over the
+    view (mesh_data.layers_over_view), marches in the resolved passes."""
+    return ENABLED and occluders > 0 and layers >= MIN_OVERDRAW and available()
 
 
 class _Targets:
