@@ -13,7 +13,7 @@ threads, which a busy machine disturbs less). Rows:
   culled, the boxes holding the eye again with both sides);
 * + occluders + back faces culled, one pass: the pre-pass, the march in one pass that writes its
   depth (every fragment runs on llvmpipe);
-* + resolved passes where 4+ layers deep: what the preview draws by default (Blender 4.2 and
+* + resolved passes where 16+ layers deep: what the preview draws by default (Blender 4.2 and
   later): the marching passes write no depth, so the depth test culls before the fragment stage
   (preview/resolve.py), for objects whose boxes lie resolve.MIN_OVERDRAW layers deep or more;
   + quality 0.5: the knob (occlusion.occluder_count runs no pre-pass below full quality).
@@ -43,7 +43,7 @@ CONFIGS = (("today", "ANY", False, 1.0, False, False, False),
            ("+ occluders", "GREATER", True, 1.0, True, False, False),
            ("+ back faces culled", "GREATER", True, 1.0, False, True, False),
            ("+ occluders + back faces culled, one pass", "GREATER", True, 1.0, True, True, False),
-           ("+ resolved passes where 4+ layers deep (shipped)", "GREATER", True, 1.0, True, True, True),
+           ("+ resolved passes where 16+ layers deep (shipped)", "GREATER", True, 1.0, True, True, True),
            ("shipped + quality 0.5 (no pre-pass below quality 1)", "GREATER", True, 0.5, True, True, True))
 
 

@@ -21,7 +21,7 @@ REPO = Path(__file__).resolve().parent.parent
 VERSIONS = ["3.4", "4.2", "4.5", "5.0"]
 # --quick: the add-on proved on a release in about a minute: registration and the bake operator,
 # the submesh tools, the export presets, the offscreen preview against the CPU reference (and a
-# broken user SDF named by its line), `python -m boxmarch` (exit codes 0 and 2), and the 4.2+
+# broken user SDF named by its line), the hidden-box pre-pass and resolved passes, `python -m boxmarch` (exit codes 0 and 2), and the 4.2+
 # extension zip validated, installed and enabled by that release's own extension tool.
 QUICK = [
     "tests/test_blender.py::test_operator_is_registered_for_search_and_menus",
@@ -36,6 +36,7 @@ QUICK = [
     "tests/test_preview_blender.py",
     "tests/test_preview.py::test_preview_matches_cpu_reference",
     "tests/test_preview.py::test_user_sdf_error_names_line_and_falls_back_to_outline",
+    "tests/test_preview_occluders.py",
     "tests/test_cli.py::test_module_bake_export_pipeline_on_a_file",
     "tests/test_cli.py::test_module_failure_report_is_json_when_asked",
     "tests/test_install.py::test_extension_installs_into_clean_blender_4_2_or_later_and_bakes",
