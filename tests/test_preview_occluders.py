@@ -79,6 +79,20 @@ def test_resolved_passes_change_no_pixel(rendered):
     assert not np.array_equal(r["BROKEN_rgba"], r["OFF_rgba"])
 
 
+def test_eye_in_a_box_of_a_mirrored_pile(rendered):
+    """The eye inside a link's box of the pile mirrored in x: the boxes the near plane cuts draw no
+    occluders (their shapes may not be drawn where their occluders lie), the boxes holding the eye
+    march from it, the others draw with their mirrored back faces culled; with the pre-pass, in
+    one pass and (Blender 4.2+) in the resolved passes, the picture is the one without it."""
+    r = rendered
+    assert (r["INSIDE_OFF_depth"] < 1.0).mean() > 0.9  # seen from inside the pile
+    assert np.array_equal(r["INSIDE_ONE_PASS_rgba"], r["INSIDE_OFF_rgba"])
+    assert np.array_equal(r["INSIDE_ONE_PASS_depth"], r["INSIDE_OFF_depth"])
+    if resolved_or_absent(r) is not None:
+        assert np.array_equal(r["INSIDE_RESOLVED_rgba"], r["INSIDE_OFF_rgba"])
+        assert np.array_equal(r["INSIDE_RESOLVED_depth"], r["INSIDE_OFF_depth"])
+
+
 def test_resolved_passes_run_fewer_evaluations(rendered):
     """Counted in the shader over the fragments the passes run (the depth test culls before the
     fragment stage there): far under the every-fragment count."""

@@ -146,7 +146,9 @@ void main()
     float beyond = bm_depth_crossing(c0, c1, 2.0 * (nearest + BM_SHADE_MARGIN) - 1.0);
     bool hidden = !from_eye && gl_FragCoord.z > nearest + BM_SHADE_MARGIN;
     int taps = 0;
-    if (!hidden && preview.occlusion.w == 2.0) {
+    // (a march from the eye writes no nearer than its far side, clamped as every depth here is:
+    // its hit need not lie at the depth kept, so it takes no test)
+    if (!hidden && !from_eye && preview.occlusion.w == 2.0) {
       hidden = reach < 1e30 && reach > t_end;
       if (!hidden && beyond < 1e30) {
         float at = min(bm_depth_crossing(c0, c1, 2.0 * nearest - 1.0), beyond);

@@ -15,6 +15,7 @@ out_path = argv[1]
 
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
+from mathutils import Vector  # noqa: E402
 
 import boxmarch  # noqa: E402
 from boxmarch import mesh_io, preview, scenes  # noqa: E402
@@ -63,6 +64,22 @@ for name, (enabled, resolved, shade_word) in configs.items():
     resolve.MIN_OVERDRAW = 0.0
     result[f"{name}_rgba"], result[f"{name}_depth"] = preview.render(scene, camera, W, H)
     result[f"{name}_steps"] = preview.render(scene, camera, W, H, output="STEPS")[0]
+resolve.SHADE = shade
+# The hard cases: the eye inside a box of the pile (that box marches from the eye; boxes the near
+# plane cuts lie around it) and the pile mirrored (front faces culled), without the pre-pass, with
+# it and one pass, and in the resolved passes (there the boxes holding the eye draw with the depth
+# test off).
+pile.scale = (-1.0, 1.0, 1.0)
+bpy.context.view_layer.update()  # the mirrored matrix_world
+camera.location = pile.matrix_world @ Vector(centres[0])
+camera.rotation_euler = (Vector((0.0, 0.0, 0.0)) - camera.location).to_track_quat("-Z", "Y").to_euler()
+bpy.context.view_layer.update()
+inside = {"INSIDE_OFF": (False, False), "INSIDE_ONE_PASS": (True, False)}
+if resolve.available():
+    inside["INSIDE_RESOLVED"] = (True, True)
+for name, (enabled, resolved) in inside.items():
+    occlusion.ENABLED, resolve.ENABLED = enabled, resolved
+    result[f"{name}_rgba"], result[f"{name}_depth"] = preview.render(scene, camera, W, H)
 occlusion.ENABLED, resolve.ENABLED, resolve.SHADE, resolve.MIN_OVERDRAW = True, True, shade, minimum
 
 np.savez_compressed(out_path, **result)
