@@ -93,6 +93,17 @@ def test_eye_in_a_box_of_a_mirrored_pile(rendered):
         assert np.array_equal(r["INSIDE_RESOLVED_depth"], r["INSIDE_OFF_depth"])
 
 
+def test_a_backend_that_cannot_build_the_resolved_passes_marches_in_one_pass(rendered):
+    """A full-screen stage that does not compile (as on a GPU backend that refuses it): the reason
+    is kept, and the picture is the one-pass march's (the eye in the mirrored pile, as above)."""
+    r = resolved_or_absent(rendered)
+    if r is None:
+        return
+    assert "compile" in str(r["fallback_refused"])
+    assert np.array_equal(r["FALLBACK_rgba"], r["INSIDE_OFF_rgba"])
+    assert np.array_equal(r["FALLBACK_depth"], r["INSIDE_OFF_depth"])
+
+
 def test_resolved_passes_run_fewer_evaluations(rendered):
     """Counted in the shader over the fragments the passes run (the depth test culls before the
     fragment stage there): far under the every-fragment count."""

@@ -19,7 +19,9 @@ from mathutils import Vector  # noqa: E402
 
 import boxmarch  # noqa: E402
 from boxmarch import mesh_io, preview, scenes  # noqa: E402
+from boxmarch.formats import shader_sources  # noqa: E402
 from boxmarch.preview import occlusion, resolve  # noqa: E402
+from boxmarch.preview import shader as pv_shader  # noqa: E402
 
 boxmarch.register()
 bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -80,6 +82,18 @@ if resolve.available():
 for name, (enabled, resolved) in inside.items():
     occlusion.ENABLED, resolve.ENABLED = enabled, resolved
     result[f"{name}_rgba"], result[f"{name}_depth"] = preview.render(scene, camera, W, H)
+# A GPU backend where a shader of the resolved passes does not compile: the preview says so once
+# and marches in one pass (the full-screen stage's source broken for the test).
+if resolve.available():
+    occlusion.ENABLED, resolve.ENABLED = True, True
+    fullscreen_source = shader_sources.fullscreen_source
+    shader_sources.fullscreen_source = lambda stage: fullscreen_source(stage) + "\nnot glsl"
+    pv_shader.clear_cache()
+    result["FALLBACK_rgba"], result["FALLBACK_depth"] = preview.render(scene, camera, W, H)
+    result["fallback_refused"] = resolve.refused or ""
+    shader_sources.fullscreen_source = fullscreen_source
+    resolve.refused = None
+    pv_shader.clear_cache()
 occlusion.ENABLED, resolve.ENABLED, resolve.SHADE, resolve.MIN_OVERDRAW = True, True, shade, minimum
 
 np.savez_compressed(out_path, **result)

@@ -352,7 +352,10 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, 
     baked = _mesh(ob.data, settings.layout).baked
     layers = mesh_data.layers_over_view(baked.origins, baked.box_half_extents, object_to_clip, viewport[2], viewport[3])
     resolved = resolve.used(occluders, layers)
-    shader = _marching_shader(ob, resolved)
+    shader = resolve.prepared(lambda: _marching_shader(ob, True)) if resolved else None
+    if shader is None:
+        resolved = False
+        shader = _marching_shader(ob, False)
     try:
         frame = object_frame(ob)
     except ValueError as exc:

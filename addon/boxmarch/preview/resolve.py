@@ -35,10 +35,32 @@ _targets: dict = {}   # (width, height) -> _Targets: one size at a time
 _triangle: list = []  # the full-screen triangle's batch
 
 
+# Why this session's GPU backend cannot build the resolved passes (a shader of theirs failed to
+# compile), or None: then every object marches in one pass.
+refused = None
+
+
 def available() -> bool:
     """Whether this Blender can draw the resolved passes: images in shaders, and the compute
-    dispatch whose barrier orders the image writes before their reads (Blender 4.2 and later)."""
-    return hasattr(gpu.types.GPUShader, "image") and hasattr(gpu, "compute")
+    dispatch whose barrier orders the image writes before their reads (Blender 4.2 and later),
+    unless their shaders failed to compile here."""
+    return refused is None and hasattr(gpu.types.GPUShader, "image") and hasattr(gpu, "compute")
+
+
+def prepared(marching_shader):
+    """The resolved marching stage ``marching_shader()`` returns, with the full-screen and
+    barrier shaders compiled first, or None where one of them does not compile on this GPU
+    backend: the reason is kept in ``refused``, printed once, and the one-pass march is drawn."""
+    global refused
+    try:
+        for stage in ("resolve_depth", "composite", "composite_steps"):
+            preview_shader.fullscreen_shader(stage)
+        preview_shader.barrier_shader()
+        return marching_shader()
+    except RuntimeError as exc:
+        refused = str(exc).splitlines()[0]
+        print(f"boxmarch: the preview marches in one pass: the resolved passes do not compile here ({refused})")
+        return None
 
 
 # Layers of boxes over the view (mesh_data.layers_over_view) from which the resolved passes pay on Mesa llvmpipe:

@@ -228,7 +228,10 @@ def barrier_shader():
         info = gpu.types.GPUShaderCreateInfo()
         info.local_group_size(1, 1, 1)
         info.compute_source("void main()\n{\n}\n")
-        _cache[key] = gpu.shader.create_from_info(info)
+        shader, error, log = _compile_capturing_log(info)
+        if shader is None:
+            raise RuntimeError(f"boxmarch barrier shader failed to compile: {error}\n{log}")
+        _cache[key] = shader
     return _cache[key]
 
 
