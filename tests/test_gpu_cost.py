@@ -325,3 +325,27 @@ def test_closed_outward_accepts_only_closed_boxes_wound_outward():
     turned = box[triangles[:, 0]] == 2
     one_inward[turned] = triangles[turned][:, ::-1]
     assert not mesh_data.closed_outward(positions, one_inward, origins, box)
+
+
+def test_a_box_the_near_plane_cuts_draws_no_occluders():
+    """The pre-pass rule of every implementation (preview.vert.glsl, three.js, occluder_depths): a
+    box that the near plane cuts draws no occluders, though it does not hold the eye. Sphere N
+    (radius 0.3 at z = -0.25, beside the eye) reaches past the near plane at z = -0.1; box F (a
+    sphere of radius 1 at z = -4) lies behind it. Were N's occluders drawn, F's fragments behind
+    them would count as occluded; with the rule none are, and the picture is the one without."""
+    near, far = 0.1, 100.0
+    f = 1.0 / np.tan(np.radians(45.0))
+    projection = np.array([[f, 0, 0, 0], [0, f, 0, 0], [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)],
+                           [0, 0, -1, 0]])
+    origins, half = [[0.35, 0.0, -0.25], [0.0, 0.0, -4.0]], [[0.3, 0.3, 0.3], [1.0, 1.0, 1.0]]
+    q = np.tile([0.0, 0.0, 0.0, 1.0], (2, 1))
+    eye_outside = np.any(np.abs(np.zeros(3) - origins[0]) > half[0])
+    cuts_near_plane = origins[0][2] + half[0][2] > -near
+    assert eye_outside and cuts_near_plane
+
+    def draw(**plan):
+        return core.render_boxes(origins, q, half, projection, np.eye(4), 32, 32, sdf="SPHERE", **plan)
+
+    with_occluders = draw(occluders=True)
+    assert with_occluders.cost["occluded_fragments"] == 0
+    assert np.array_equal(with_occluders.depth, draw().depth)

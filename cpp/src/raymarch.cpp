@@ -224,15 +224,17 @@ PixelRay pixel_ray(const glm::dmat4& from_clip, int x, int y, int W, int H, cons
 
 // The depth pre-pass of RenderPlan::occluders over rows [row_begin, row_end): per pixel, the
 // nearest window depth (1: none) of the occluder boxes of every box (bm_occluder_centre and
-// bm_occluder_half of the preset), as the rasteriser would write them; a box whose drawn box holds
-// the eye (perspective) draws none, as the shaders' pre-pass drops it.
+// bm_occluder_half of the preset), as the rasteriser would write them; a box that the near plane
+// cuts (the eye inside it among them) draws none, as the shaders' pre-pass drops it: its shape may
+// not be drawn where its occluders would lie.
 std::vector<float> occluder_depths(const float* origins, const float* quaternions, const float* half_extents,
                                    size_t box_count, const std::vector<glm::ivec4>& rects, const glm::mat4& to_clip,
-                                   const glm::dmat4& from_clip, const glm::mat4& to_view, SdfPreset kind, int W, int H,
-                                   size_t row_begin, size_t row_end) {
+                                   const glm::dmat4& from_clip, SdfPreset kind, int W, int H, size_t row_begin,
+                                   size_t row_end) {
     std::vector<float> depth((row_end - row_begin) * size_t(W), 1.0f);
-    const bool perspective = (to_clip * glm::inverse(to_view))[2][3] != 0.0f;
-    const vec3 eye = vec3(glm::inverse(to_view) * vec4(0.0f, 0.0f, 0.0f, 1.0f));
+    // z + w >= 0 in GL clip space on the near plane's far side
+    const vec4 near_side(to_clip[0][2] + to_clip[0][3], to_clip[1][2] + to_clip[1][3], to_clip[2][2] + to_clip[2][3],
+                         to_clip[3][2] + to_clip[3][3]);
     const float shape = float(int(kind));
     for (size_t b = 0; b < box_count; ++b) {
         const glm::ivec4 r = rects[b];
@@ -240,7 +242,13 @@ std::vector<float> occluder_depths(const float* origins, const float* quaternion
         const glm::quat q(quaternions[4 * b + 3], quaternions[4 * b], quaternions[4 * b + 1], quaternions[4 * b + 2]);
         const glm::quat iq = glm::conjugate(q);
         const vec3 c = glm::make_vec3(origins + 3 * b), h = glm::make_vec3(half_extents + 3 * b);
-        if (perspective && glm::all(glm::lessThanEqual(glm::abs(iq * (eye - c)), h))) continue;
+        float nearest = glm::dot(vec3(near_side), c) + near_side.w;
+        for (int axis = 0; axis < 3; ++axis) {
+            vec3 unit(0.0f);
+            unit[axis] = 1.0f;
+            nearest -= h[axis] * std::abs(glm::dot(vec3(near_side), q * unit));
+        }
+        if (nearest <= 0.0f) continue;
         for (float k = 0.0f; k < shader::bm_occluder_count(shape); k += 1.0f) {
             const vec3 centre = shader::bm_occluder_centre(shape, h, k), extent = shader::bm_occluder_half(shape, h, k);
             if (shader::bm_min3(extent) <= 0.0f) continue;
@@ -330,7 +338,6 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
         throw std::invalid_argument("render_boxes needs both matrices, rgba and depth");
     const int W = int(view.width), H = int(view.height);
     const glm::mat4 to_clip = glm::make_mat4(view.object_to_clip);
-    const glm::mat4 to_view = glm::make_mat4(view.object_to_view);
     const glm::dmat4 from_clip = glm::inverse(glm::dmat4(to_clip));
     const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(glm::make_mat4(view.object_to_view))));
     const vec3 base = glm::make_vec3(view.base_color);
@@ -347,7 +354,7 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
         std::vector<uint8_t> covered(shown.size(), 0);
         const std::vector<float> occluder =
                 plan.occluders ? occluder_depths(origins, quaternions, half_extents, box_count, rects, to_clip,
-                                                 from_clip, to_view, o.sdf, W, H, row_begin, row_end)
+                                                 from_clip, o.sdf, W, H, row_begin, row_end)
                                : std::vector<float>();
         for (size_t drawn = 0; drawn < box_count; ++drawn) {
             const size_t b = plan.order ? plan.order[drawn] : drawn;
