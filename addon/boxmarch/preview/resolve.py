@@ -10,7 +10,7 @@ a shader writing its depth (Mesa llvmpipe, NVIDIA's GL driver: docs/BENCHMARKS.m
    that very depth is shaded, into a colour texture;
 4. composite: a full-screen pass writes the colour and depth into the framebuffer drawn to.
 
-The picture is the one-pass march's (tests/test_preview_resolved.py). Blender 4.2 and later: 3.4's
+The picture is the one-pass march's (tests/test_preview_occluders.py). Blender 4.2 and later: 3.4's
 Python API has no images, and marches in one pass there (occlusion.py's in-shader cut)."""
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ ENABLED = True
 NO_HIT = 0x3F800000
 
 # The uniform block's pass word (preview.occlusion.w) and the pre-pass switch (occlusion.x).
-_PASS_WORD, _OCCLUDER_WORD, _SELECTION_WORD = 75, 72, 74
+_PASS_WORD, _OCCLUDER_WORD = 75, 72
 VISIBILITY, SHADE = 1.0, 2.0
 
 _targets: dict = {}   # (width, height) -> _Targets: one size at a time
