@@ -1,5 +1,5 @@
-"""loadBoxmarch's default passes (useBoxmarchVisibility: the marching passes write no depth, so
-the depth test culls hidden fragments; the mesh's own draw is one full-screen triangle) in three.js
+"""loadBoxmarch's passes without depth writes (``visibilityPass: true``, useBoxmarchVisibility: the
+depth test culls hidden fragments; the mesh's own draw is one full-screen triangle) in three.js
 r111 (WebGL 1) and r180 (WebGL 2) on SwiftShader, on the pile of test_engine_threejs_occluders: the
 picture and the depth buffer are those of the full march (``occluders: false``, every fragment
 marching and writing its depth) to the bit, with an opaque plane through the pile (drawn by three.js
@@ -61,15 +61,14 @@ DEPTH_AFTER = """var gl = renderer.getContext();
     return {depth: __b64(new Uint8Array(depth.buffer)), visibility: !!(passes && passes.supported)};"""
 
 
-def setup_js(default, tamper=""):
-    """The pile as loadBoxmarch loads it: its default passes, or the full march (``occluders: false``)."""
+def setup_js(passes, tamper=""):
+    """The pile as loadBoxmarch loads it with ``visibilityPass: true``, or the full march (``occluders: false``)."""
     options = {"map": LINK_MAP, "maxSteps": 64, "epsilon": 1e-3}
-    if not default:
-        options["occluders"] = False
+    options.update({"visibilityPass": True} if passes else {"occluders": False})
     return ("scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, 'pile.glb', "
             f"{json.dumps(options)}); scene.add(loaded.scene); {PLANE}"
             " var passes = window.bmPasses = loaded.meshes[0].userData.boxmarchVisibility;"
-            f" if (!passes !== {json.dumps(not default)}) throw new Error('not the passes asked for'); {tamper}")
+            f" if (!passes !== {json.dumps(not passes)}) throw new Error('not the passes asked for'); {tamper}")
 
 
 def inside_a_link(centres):
@@ -92,10 +91,10 @@ def drawn(request, pile):  # noqa: F811 (the fixture imported above)
     release = request.param
     need(threejs.available(release))
     glb, sidecar, centres, _rotations = pile
-    runs = {"full": (False, "", CAMERA), "default": (True, "", CAMERA), **{k: (True, v, CAMERA) for k, v in TAMPER.items()},
-            "inside, full": (False, "", inside_a_link(centres)), "inside, default": (True, "", inside_a_link(centres))}
-    jobs = [parse(threejs.render_job(setup_js(default, tamper), W, H, camera, DEPTH_AFTER))
-            for default, tamper, camera in runs.values()]
+    runs = {"full": (False, "", CAMERA), "passes": (True, "", CAMERA), **{k: (True, v, CAMERA) for k, v in TAMPER.items()},
+            "inside, full": (False, "", inside_a_link(centres)), "inside, passes": (True, "", inside_a_link(centres))}
+    jobs = [parse(threejs.render_job(setup_js(passes, tamper), W, H, camera, DEPTH_AFTER))
+            for passes, tamper, camera in runs.values()]
     results = threejs.run_jobs(glb, jobs, threejs.shipped_material(release), release,
                                {"pile.glb": glb, "pile.boxmarch.json": sidecar})
     return dict(zip(runs, results))
@@ -109,13 +108,13 @@ def changed(a, b):
 
 
 @pytest.mark.parametrize("view", ["", "inside, "])
-def test_default_passes_draw_the_full_march_to_the_bit(drawn, view):
-    full, default = drawn[view + "full"], drawn[view + "default"]
-    assert default[2] and not full[2]  # the passes ran (the context has the extensions)
+def test_visibility_passes_draw_the_full_march_to_the_bit(drawn, view):
+    full, passes = drawn[view + "full"], drawn[view + "passes"]
+    assert passes[2] and not full[2]  # the passes ran (the context has the extensions)
     covered = full[0].pixels[..., 3] > 0
     links = (full[0].pixels[..., 2] < 200) & covered  # the plane is blue
     assert covered.mean() > 0.9 and links.mean() > 0.2 and (full[1] < 1).mean() > 0.9
-    assert changed(full, default) == (0, 0)
+    assert changed(full, passes) == (0, 0)
 
 
 @pytest.mark.parametrize("tamper", sorted(TAMPER))

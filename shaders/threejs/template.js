@@ -76,7 +76,8 @@ var BOXMARCH_OCCLUDER_PRESETS = ['BOX', 'SPHERE', 'ROUNDED_BOX', 'CAPSULE', 'CYL
 
 // Throws, one line naming the option, for createBoxmarchMaterial options it would not draw as
 // given: a number outside BOXMARCH_OPTION_RANGES (or not a number), a map that is not a non-empty
-// string, occluders that are not a name of BOXMARCH_OCCLUDER_PRESETS, 'PER_BOX', true or false.
+// string, occluders that are not a name of BOXMARCH_OCCLUDER_PRESETS, 'PER_BOX', true or false,
+// a visibilityPass that is not true or false.
 // An option left undefined takes its default.
 function checkBoxmarchOptions(options) {
   if (options === undefined || options === null) return;
@@ -310,6 +311,20 @@ function createBoxmarchOccluderMaterial(THREE, index, shape) {
   });
 }
 
+// The pre-pass's draws of geometry's occluders of shape id `shape`: four meshes, box_params.glsl's
+// most (an index a shape lacks draws nothing: its vertices leave the view), their matrices to be
+// copied from the mesh's world matrix before each draw.
+function boxmarchOccluderScene(THREE, geometry, shape) {
+  var scene = new THREE.Scene();
+  for (var k = 0; k < 4; k++) {
+    var occluder = new THREE.Mesh(geometry, createBoxmarchOccluderMaterial(THREE, k, shape));
+    occluder.matrixAutoUpdate = false;
+    occluder.frustumCulled = false;
+    scene.add(occluder);
+  }
+  return scene;
+}
+
 // Sets up the hidden-box pre-pass of mesh (given useBoxmarchMaterial's material) for occluder
 // shape id `shape` (boxmarchOccluderShape; null: none): before each draw of mesh, its occluders
 // are rendered into their own target, as three.js's Reflector renders its view from the mesh's
@@ -317,17 +332,11 @@ function createBoxmarchOccluderMaterial(THREE, index, shape) {
 // pre-pass draws the geometry at rest). Returns the pre-pass ({target, scene}), or null.
 function useBoxmarchOccluders(THREE, mesh, shape) {
   if (shape === null || shape === undefined || mesh.isSkinnedMesh) return null;
-  // Four draws, box_params.glsl's most (an index a shape lacks draws nothing: its vertices leave the view).
-  var material = mesh.material, count = 4;
+  var material = mesh.material;
   var target = new THREE.WebGLRenderTarget(1, 1, { minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
     depthBuffer: true, stencilBuffer: false });
-  var scene = new THREE.Scene(), size = new THREE.Vector2(), clear = new THREE.Color(), white = new THREE.Color(1, 1, 1);
-  for (var k = 0; k < count; k++) {
-    var occluder = new THREE.Mesh(mesh.geometry, createBoxmarchOccluderMaterial(THREE, k, shape));
-    occluder.matrixAutoUpdate = false;  // its matrix is mesh's world matrix, copied before each draw
-    occluder.frustumCulled = false;
-    scene.add(occluder);
-  }
+  var scene = boxmarchOccluderScene(THREE, mesh.geometry, shape);
+  var size = new THREE.Vector2(), clear = new THREE.Color(), white = new THREE.Color(1, 1, 1);
   var marching = mesh.onBeforeRender;
   mesh.onBeforeRender = function (renderer, parentScene, camera, geometry, drawnMaterial, group) {
     marching.call(mesh, renderer, parentScene, camera, geometry, drawnMaterial, group);
@@ -383,13 +392,13 @@ function boxmarchVisibilitySupported(renderer) {
 
 // A full-screen pass reading the least-depth target (bmResolvedDepth) and, for the composite,
 // the shaded colour (bmShaded): no hit (depth 1, the clear) is discarded.
-function createBoxmarchScreenMaterial(THREE, uniforms, body) {
+function createBoxmarchScreenMaterial(THREE, uniforms, body, all) {
   var revision = parseInt(THREE.REVISION, 10), material = new THREE.ShaderMaterial({
     uniforms: uniforms,
     vertexShader: 'void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }',
     fragmentShader: ['uniform sampler2D bmResolvedDepth;', 'uniform sampler2D bmShaded;', 'uniform vec4 bmOcclusion;',
       'void main() {', '  vec2 uv = gl_FragCoord.xy * bmOcclusion.yz;',
-      '  float depth = texture2D(bmResolvedDepth, uv).r;', '  if (depth >= 1.0) discard;', body, '}'].join('\n')
+      '  float depth = texture2D(bmResolvedDepth, uv).r;', all ? '' : '  if (depth >= 1.0) discard;', body, '}'].join('\n')
   });
   if (revision < 163) material.extensions = { fragDepth: true };
   return material;
@@ -440,12 +449,15 @@ function useBoxmarchVisibility(THREE, mesh, shape) {
   // stencilBuffer: a 24-bit depth buffer on r111 too (its depth-only renderbuffer is 16-bit)
   var nearest = new THREE.WebGLRenderTarget(1, 1, Object.assign({ type: THREE.FloatType }, options));
   var shaded = new THREE.WebGLRenderTarget(1, 1, options);
+  // the occluders' depth, which bounds the marches of both passes (the depth test only culls)
+  var bound = new THREE.WebGLRenderTarget(1, 1, { minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
+    type: THREE.FloatType, depthBuffer: false, stencilBuffer: false });
   uniforms.bmResolvedDepth = { value: nearest.texture };
   var scenes = { fallback: new THREE.Scene(), visibility: new THREE.Scene(), shade: new THREE.Scene() };
   scenes.fallback.add(fallback);
-  scenes.occluders = useBoxmarchOccluders(THREE, new THREE.Mesh(mesh.geometry, material), shape).scene;
+  scenes.occluders = boxmarchOccluderScene(THREE, mesh.geometry, shape);
   scenes.occluders.children.forEach(function (occluder) {
-    occluder.material.colorWrite = false;
+    occluder.material.fragmentShader = 'void main() {\n  gl_FragColor = vec4(gl_FragCoord.z);\n}\n';
     // a margin for the march's own rounding: the occluders a little farther than drawn
     occluder.material.polygonOffset = true;
     occluder.material.polygonOffsetUnits = 4;
@@ -457,6 +469,9 @@ function useBoxmarchVisibility(THREE, mesh, shape) {
   var screen = { bmResolvedDepth: uniforms.bmResolvedDepth, bmShaded: { value: shaded.texture }, bmOcclusion: uniforms.bmOcclusion };
   var triangle = new THREE.BufferGeometry();
   triangle.setAttribute('position', new THREE.BufferAttribute(new Float32Array([-1, -1, 0, 3, -1, 0, -1, 3, 0]), 3));
+  var copy = new THREE.Mesh(triangle, createBoxmarchScreenMaterial(THREE, screen, '  gl_FragColor = vec4(depth);', true));
+  copy.frustumCulled = false;
+  scenes.copy = new THREE.Scene().add(copy);
   var resolve = new THREE.Mesh(triangle, createBoxmarchScreenMaterial(THREE, screen,
     // a margin for the depth buffer's rounding: a winner whose hit lies on its face must pass
     '  gl_FragDepthEXT = min(depth + 4.8e-7, 1.0);'));
@@ -491,12 +506,15 @@ function useBoxmarchVisibility(THREE, mesh, shape) {
       if (previous) size.set(previous.width, previous.height);
       else renderer.getDrawingBufferSize(size);
       if (nearest.width !== size.x || nearest.height !== size.y) {
-        nearest.setSize(size.x, size.y);
-        shaded.setSize(size.x, size.y);
+        [nearest, shaded, bound].forEach(function (target) { target.setSize(size.x, size.y); });
       }
-      uniforms.bmOcclusion.value.set(0, 1 / size.x, 1 / size.y, 0);
+      uniforms.bmOcclusion.value.set(1, 1 / size.x, 1 / size.y, 0);
+      uniforms.bmOccluderDepth.value = bound.texture;
       scenes.occluders.children.forEach(function (occluder) { occluder.material.uniforms.bmEye.value.copy(uniforms.bmEye.value); });
       draw(renderer, nearest, scenes.occluders, camera, white);
+      draw(renderer, bound, scenes.copy, camera, null);
+      renderer.setRenderTarget(nearest);
+      renderer.clear(true, false, false);  // white again, the occluders' depth kept
       draw(renderer, nearest, scenes.visibility, camera, null);
       draw(renderer, shaded, scenes.resolve, camera, new THREE.Color(0, 0, 0));
       draw(renderer, shaded, scenes.shade, camera, null);
@@ -616,7 +634,8 @@ function boxmarchLoadError(url, e) {
 // skinned or not, its own material (options: those of createBoxmarchMaterial, skinning set per
 // mesh, frontToBack: draw each mesh's boxes front to back, useBoxmarchMaterial; occluders: the
 // hidden-box pre-pass of each static mesh, useBoxmarchOccluders, on by default where the map is
-// a preset's or the default one, boxmarchOccluderShape). GLTFLoader: the class (THREE.GLTFLoader in r111's examples/js, imported from
+// a preset's or the default one, boxmarchOccluderShape; visibilityPass: true draws behind those
+// occluders with useBoxmarchVisibility's passes instead, which write no depth). GLTFLoader: the class (THREE.GLTFLoader in r111's examples/js, imported from
 // three/addons later). Resolves to { scene, meshes, gltf, sidecar }; rejects with the reason,
 // before the .glb is fetched, when an option is out of range, or the sidecar is missing or is not
 // one the material reads (parseBoxmarchSidecar).
@@ -643,8 +662,8 @@ function loadBoxmarch(THREE, GLTFLoader, url, options) {
     meshes.forEach(function (mesh) {
       var settings = Object.assign({}, options, { skinning: !!mesh.isSkinnedMesh });
       useBoxmarchMaterial(THREE, mesh, createBoxmarchMaterial(THREE, settings), !!(options && options.frontToBack));
-      if (options && options.visibilityPass === false) useBoxmarchOccluders(THREE, mesh, boxmarchOccluderShape(options));
-      else useBoxmarchVisibility(THREE, mesh, boxmarchOccluderShape(options));
+      if (options && options.visibilityPass) useBoxmarchVisibility(THREE, mesh, boxmarchOccluderShape(options));
+      else useBoxmarchOccluders(THREE, mesh, boxmarchOccluderShape(options));
     });
     return { scene: loaded.gltf.scene, meshes: meshes, gltf: loaded.gltf, sidecar: loaded.sidecar };
   });
@@ -759,7 +778,11 @@ var BOXMARCH_FRAGMENT = [
   // Hidden boxes (useBoxmarchOccluders): behind the occluders' depth nothing is visible; a march
   // from the eye is only bounded (its box's own entry is the eye).
   '  if (bmOcclusion.x > 0.5) {',
+  '#if defined(BM_VISIBILITY_PASS) || defined(BM_SHADE_PASS)',
+  '    float hidden = bm_occluder_limit(texture2D(bmOccluderDepth, gl_FragCoord.xy * bmOcclusion.yz).r);',  // float
+  '#else',
   '    float hidden = bm_occluder_limit(bm_unpack_depth(texture2D(bmOccluderDepth, gl_FragCoord.xy * bmOcclusion.yz)));',
+  '#endif',
   '    if (!fromEye && gl_FragCoord.z > hidden) discard;',
   '    vec4 c0 = objectToClip * vec4(fromEye ? bmEye.xyz : bmObjPos, 1.0);',
   '    t_end = min(t_end, bm_depth_crossing(c0, objectToClip * vec4(ray / eye_distance, 0.0), 2.0 * hidden - 1.0));',
@@ -853,9 +876,10 @@ var BOXMARCH_RAW_FRAGMENT = [
   '#extension GL_EXT_conservative_depth : enable',
   'precision highp float;',
   'precision highp int;',
-  // the visibility and shade passes write no depth (useBoxmarchVisibility)
-  '#if defined(GL_EXT_conservative_depth) && !defined(BM_VISIBILITY_PASS) && !defined(BM_SHADE_PASS)',
+  '#if !defined(BM_VISIBILITY_PASS) && !defined(BM_SHADE_PASS)',  // passes writing no depth (useBoxmarchVisibility)
+  '#ifdef GL_EXT_conservative_depth',
   'layout(depth_greater) out highp float gl_FragDepth;',
+  '#endif',
   '#endif',
   '#define varying in',
   'layout(location = 0) out highp vec4 pc_fragColor;',
