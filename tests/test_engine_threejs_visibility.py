@@ -3,7 +3,8 @@ depth test culls hidden fragments; the mesh's own draw is one full-screen triang
 r111 (WebGL 1) and r180 (WebGL 2) on SwiftShader, on the pile of test_engine_threejs_occluders: the
 picture and the depth buffer are those of the full march (``occluders: false``, every fragment
 marching and writing its depth) to the bit, with an opaque plane through the pile (drawn by three.js
-itself) composited by depth, seen from outside the pile and from inside one link's box. Negative
+itself) composited by depth, seen from outside the pile and from inside one link's box, and as
+drawn where the context lacks the extensions (the pre-pass path, from the composite). Negative
 controls: the shade pass without its test that a hit's depth is the least one (every box that
 passes the depth test shades), and the visibility pass without MIN blending (the last hit drawn
 is taken for the nearest)."""
@@ -92,7 +93,8 @@ def drawn(request, pile):  # noqa: F811 (the fixture imported above)
     need(threejs.available(release))
     glb, sidecar, centres, _rotations = pile
     runs = {"full": (False, "", CAMERA), "passes": (True, "", CAMERA), **{k: (True, v, CAMERA) for k, v in TAMPER.items()},
-            "inside, full": (False, "", inside_a_link(centres)), "inside, passes": (True, "", inside_a_link(centres))}
+            "inside, full": (False, "", inside_a_link(centres)), "inside, passes": (True, "", inside_a_link(centres)),
+            "without the extensions": (True, "passes.supported = false;", CAMERA)}
     jobs = [parse(threejs.render_job(setup_js(passes, tamper), W, H, camera, DEPTH_AFTER))
             for passes, tamper, camera in runs.values()]
     results = threejs.run_jobs(glb, jobs, threejs.shipped_material(release), release,
@@ -115,6 +117,13 @@ def test_visibility_passes_draw_the_full_march_to_the_bit(drawn, view):
     links = (full[0].pixels[..., 2] < 200) & covered  # the plane is blue
     assert covered.mean() > 0.9 and links.mean() > 0.2 and (full[1] < 1).mean() > 0.9
     assert changed(full, passes) == (0, 0)
+
+
+def test_a_context_without_the_extensions_draws_the_pre_pass_path(drawn):
+    """What the composite draws where boxmarchVisibilitySupported said no: the marching material
+    behind the pre-pass, from the composite's onBeforeRender; the same picture."""
+    fallback = drawn["without the extensions"]
+    assert not fallback[2] and changed(drawn["full"], fallback) == (0, 0)
 
 
 @pytest.mark.parametrize("tamper", sorted(TAMPER))
