@@ -252,6 +252,10 @@ def rows_for(name, scene, glb, sidecar, release):
 
 
 def main():
+    names = sys.argv[1:] or SCENES
+    unknown = [name for name in names if name not in SCENES]
+    if unknown:
+        sys.exit(f"bench_threejs_cost: no scene {unknown[0]!r} (its scenes: {', '.join(SCENES)})")
     import bpy
     from tests.engines import threejs
 
@@ -266,7 +270,7 @@ def main():
     releases = [r for r in ("r180", "r111") if threejs.available(r) is None]
     rows = []
     with tempfile.TemporaryDirectory(prefix="bench-threejs-") as folder:
-        for name in sys.argv[1:] or SCENES:
+        for name in names:
             glb, sidecar = exported_glb(bpy, name, made[name], folder)
             for release in releases:
                 rows += rows_for(name, made[name], glb, sidecar, release)
