@@ -3,7 +3,8 @@ depth test culls hidden fragments; the mesh's own draw is one full-screen triang
 r111 (WebGL 1) and r180 (WebGL 2) on SwiftShader, on the pile of test_engine_threejs_occluders: the
 picture and the depth buffer are those of the full march (``occluders: false``, every fragment
 marching and writing its depth) to the bit, with an opaque plane through the pile (drawn by three.js
-itself) composited by depth, seen from outside the pile and from inside one link's box, and as
+itself) composited by depth, seen from outside the pile, from inside one link's box and through
+an orthographic camera, and as
 drawn where the context lacks the extensions (the pre-pass path, from the composite). Negative
 controls: the shade pass without its test that a hit's depth is the least one (every box that
 passes the depth test shades), and the visibility pass without MIN blending (the last hit drawn
@@ -24,6 +25,8 @@ pytestmark = pytest.mark.slow  # Chromium renders
 PLANE = ("var plane = new THREE.Mesh(new THREE.PlaneGeometry(4, 4), new THREE.MeshBasicMaterial({color: 0x3366ff,"
          " side: THREE.DoubleSide})); plane.lookAt(new THREE.Vector3().fromArray(camera.position.toArray()));"
          " scene.add(plane);")
+# The same view through an orthographic camera (the eye at infinity: no box holds it).
+ORTHOGRAPHIC = dict(CAMERA, ortho=1.2, near=0.5, far=10)
 # Tampering with the shipped passes for the negative controls (JS, ``passes`` the mesh's userData entry).
 TAMPER = {
     "no equality test": ("passes.scenes.shade.children.forEach(function (m) {"
@@ -94,6 +97,7 @@ def drawn(request, pile):  # noqa: F811 (the fixture imported above)
     glb, sidecar, centres, _rotations = pile
     runs = {"full": (False, "", CAMERA), "passes": (True, "", CAMERA), **{k: (True, v, CAMERA) for k, v in TAMPER.items()},
             "inside, full": (False, "", inside_a_link(centres)), "inside, passes": (True, "", inside_a_link(centres)),
+            "orthographic, full": (False, "", ORTHOGRAPHIC), "orthographic, passes": (True, "", ORTHOGRAPHIC),
             "without the extensions": (True, "passes.supported = false;", CAMERA)}
     jobs = [parse(threejs.render_job(setup_js(passes, tamper), W, H, camera, DEPTH_AFTER))
             for passes, tamper, camera in runs.values()]
@@ -109,7 +113,7 @@ def changed(a, b):
     return colour.sum(), (depth_a != depth_b).sum()
 
 
-@pytest.mark.parametrize("view", ["", "inside, "])
+@pytest.mark.parametrize("view", ["", "inside, ", "orthographic, "])
 def test_visibility_passes_draw_the_full_march_to_the_bit(drawn, view):
     full, passes = drawn[view + "full"], drawn[view + "passes"]
     assert passes[2] and not full[2]  # the passes ran (the context has the extensions)
