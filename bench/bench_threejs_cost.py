@@ -13,6 +13,10 @@ round robin over the configurations, best of REPEATS frames each. Rows:
   has no declaration): the material as it was before the pre-pass;
 * pre-pass: what loadBoxmarch sets up by default (useBoxmarchOccluders: the links' inscribed
   boxes drawn depth-only into a target each frame, the march returning behind them);
+* visibility passes: ``visibilityPass: true`` (useBoxmarchVisibility: the same occluders into a
+  depth buffer, then marching passes that write no depth, so the depth test culls hidden fragments
+  before they run: a visibility pass keeping each pixel's least hit depth, a shade pass shading
+  the hit of that depth, a full-screen composite); its evaluations are both passes' (PASSES_COUNT_AFTER);
 * front to back: loadBoxmarch's frontToBack (sortBoxmarchFrontToBack before each draw; the camera
   stands still, so the boxes are sorted once, before the timed frames), without and with the
   pre-pass;
@@ -30,10 +34,12 @@ of 20).
 On a GPU that keeps its early depth test for a declared depth write, front to back lets it reject
 the fragments of hidden boxes before their march; the rows say what SwiftShader makes of it.
 
-    PYTHONPATH=addon python3 -m bench.bench_threejs_cost        # PyPI bpy for the bake and the export
+    PYTHONPATH=addon python3 -m bench.bench_threejs_cost [pile]   # PyPI bpy for the bake and the export;
+                                                                  # a scene's name: that scene only
 """
 import json
 import os
+import sys
 import tempfile
 from pathlib import Path
 
@@ -45,11 +51,16 @@ SIZE, REPEATS = 320, 7
 SCENES = ("chain down the arm", "pile")
 MAPS = {"LINK": "return sdf_preset_link(p, box_half);"}
 # label, quality, front to back, declareDepth (the loader's option: false gives the ShaderMaterial),
-# the hidden-box pre-pass (loadBoxmarch's default; false: occluders: false)
-CONFIGS = (("no pre-pass", 1.0, False, True, False), ("pre-pass (loadBoxmarch default)", 1.0, False, True, True),
-           ("front to back, no pre-pass", 1.0, True, True, False), ("pre-pass + front to back", 1.0, True, True, True),
-           ("quality 0.5, no pre-pass", 0.5, False, True, False),
-           ("ShaderMaterial (undeclared), no pre-pass", 1.0, False, False, False))
+# the hidden-box pre-pass (loadBoxmarch's default; false: occluders: false), the passes without
+# depth writes behind it (visibilityPass)
+CONFIGS = (("no pre-pass", 1.0, False, True, False, False),
+           ("pre-pass (loadBoxmarch default)", 1.0, False, True, True, False),
+           ("visibility passes (visibilityPass: true)", 1.0, False, True, True, True),
+           ("front to back, no pre-pass", 1.0, True, True, False, False),
+           ("pre-pass + front to back", 1.0, True, True, True, False),
+           ("quality 0.5, no pre-pass", 0.5, False, True, False, False),
+           ("ShaderMaterial (undeclared), no pre-pass", 1.0, False, False, False, False))
+FRONT_TO_BACK = 3  # the row whose sort is timed
 
 TIMING_JOB = """async function (gltf) {
   var W = __SIZE__, H = __SIZE__, cam = __CAMERA__, configs = __CONFIGS__;
@@ -65,7 +76,7 @@ TIMING_JOB = """async function (gltf) {
   for (var i = 0; i < configs.length; i++) {
     var loaded = await loadBoxmarch(THREE, GLTFLoader, 'model.glb', {map: __MAP__, quality: configs[i][1],
       frontToBack: configs[i][2], declareDepth: configs[i][3], occluders: configs[i][4] ? undefined : false,
-      maxSteps: 64, epsilon: 1e-3});
+      visibilityPass: configs[i][5], maxSteps: 64, epsilon: 1e-3});
     var scene = new THREE.Scene();
     scene.add(loaded.scene);
     drawn.push({scene: scene, mesh: loaded.meshes[0]});
@@ -103,7 +114,7 @@ TIMING_JOB = """async function (gltf) {
   for (var r = 0; r < __REPEATS__; r++) {
     for (k = 0; k < drawn.length; k++) best[k] = Math.min(best[k], frame(k));
   }
-  var mesh = drawn[2].mesh, start = now();  // front to back
+  var mesh = drawn[__FRONT_TO_BACK__].mesh, start = now();
   for (var s = 0; s < 20; s++) {
     mesh.userData.boxmarchBoxes.eye = null;  // as if the camera had moved
     sortBoxmarchFrontToBack(THREE, mesh, camera);
@@ -126,11 +137,66 @@ def three_camera(to_view, eye):
             "up": (TO_Y_UP @ [0.0, 0.0, 1.0]).tolist(), "fov": 40.0, "near": 0.1, "far": 4000.0}
 
 
+# Counts the SDF evaluations of loadBoxmarch's visibility and shade passes (useBoxmarchVisibility),
+# as count_job counts the marching material's: each pass's march steps (plus the winner's 3 normal
+# taps in the shade pass) summed by additive blending into its own float target, the depth tests
+# as shipped (the visibility pass's count from a frame of its own; the shade pass's, its target
+# made float, from a frame with the visibility pass as shipped).
+PASSES_COUNT_AFTER = """var passes = null;
+    scene.traverse(function (o) { if (o.userData.boxmarchVisibility) passes = o.userData.boxmarchVisibility; });
+    if (!passes || !passes.supported) throw new Error('counting: no visibility passes ran');
+    var gl = renderer.getContext();
+    ['EXT_color_buffer_float', 'EXT_float_blend', 'OES_texture_float', 'WEBGL_color_buffer_float']
+      .forEach(function (e) { gl.getExtension(e); });
+    function counting(pass, lines) {
+      var saved = pass.children.map(function (m) { return [m.material.fragmentShader, m.material.blending]; });
+      pass.children.forEach(function (m) {
+        var text = m.material.fragmentShader;
+        lines.forEach(function (line) {
+          if (text.indexOf(line[0]) < 0) throw new Error('counting: no ' + line[0]);
+          text = text.replace(line[0], line[1]);
+        });
+        m.material.fragmentShader = text;
+        m.material.blending = THREE.CustomBlending;
+        m.material.blendEquation = THREE.AddEquation;
+        m.material.blendSrc = THREE.OneFactor;
+        m.material.blendDst = THREE.OneFactor;
+        m.material.needsUpdate = true;
+      });
+      return function () {
+        pass.children.forEach(function (m, i) {
+          m.material.fragmentShader = saved[i][0];
+          m.material.blending = saved[i][1];
+          m.material.blendEquation = THREE.MinEquation;
+          m.material.needsUpdate = true;
+        });
+      };
+    }
+    function read(target) {
+      var values = new Float32Array(W * H * 4);
+      renderer.readRenderTargetPixels(target, 0, 0, W, H, values);
+      return values;
+    }
+    var miss = '  if (!hit) discard;';
+    var restore = counting(passes.scenes.visibility, [[miss, '  gl_FragColor = vec4(float(steps));\\n  return;']]);
+    renderer.render(scene, camera);
+    var visibility = read(passes.targets.nearest);  // cleared to 1
+    restore();
+    passes.targets.shaded.dispose();
+    passes.targets.shaded.texture.type = THREE.FloatType;
+    counting(passes.scenes.shade, [[miss, '  if (!hit) { gl_FragColor = vec4(float(steps)); return; }'],
+      ['  if (depth != resolved) discard;', '  gl_FragColor = vec4(float(steps + (depth == resolved ? 3 : 0)));\\n  return;']]);
+    renderer.render(scene, camera);
+    var shade = read(passes.targets.shaded), counts = new Float32Array(W * H * 4);
+    for (var i = 0; i < W * H; i++) counts[4 * i] = visibility[4 * i] - 1 + shade[4 * i];
+    return {counts: __f64(counts)};"""
+
+
 def counting_setup(sdf, config):
     """count_job's setup: the export loaded as TIMING_JOB loads it for ``config``."""
-    _label, quality, front_to_back, declare, occluders = config
+    _label, quality, front_to_back, declare, occluders, visibility = config
     options = {"map": MAPS[sdf], "quality": quality, "frontToBack": front_to_back, "declareDepth": declare,
-               "maxSteps": 64, "epsilon": 1e-3}
+               "visibilityPass": visibility, "maxSteps": 64, "epsilon": 1e-3}
     if not occluders:
         options["occluders"] = False
     return (f"scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, 'model.glb', "
@@ -158,7 +224,7 @@ def rows_for(name, scene, glb, sidecar, release):
     configs = [c for c in CONFIGS if c[3] or int(threejs.RELEASES[release].revision) >= 163]
     parts = {"__SIZE__": str(SIZE), "__CAMERA__": json.dumps(three_camera(to_view, eye), allow_nan=False),
              "__CONFIGS__": json.dumps(configs, allow_nan=False), "__MAP__": json.dumps(MAPS[sdf], allow_nan=False),
-             "__REPEATS__": str(REPEATS),
+             "__REPEATS__": str(REPEATS), "__FRONT_TO_BACK__": str(FRONT_TO_BACK),
              "__CLOCK__": threejs.CLOCK}
     js = TIMING_JOB
     for key, value in parts.items():
@@ -166,7 +232,8 @@ def rows_for(name, scene, glb, sidecar, release):
     out = threejs.run_jobs(glb, [js], threejs.shipped_material(release), release,
                            {"model.boxmarch.json": sidecar})[0]
     # one page per count: a page of them all outlasts the harness's time limit on the pile
-    counted = [threejs.run_jobs(glb, [threejs.count_job(counting_setup(sdf, config), SIZE, SIZE, three_camera(to_view, eye))],
+    counted = [threejs.run_jobs(glb, [threejs.count_job(counting_setup(sdf, config), SIZE, SIZE, three_camera(to_view, eye),
+                                                        *([PASSES_COUNT_AFTER] if config[4] and config[5] else []))],
                                 threejs.shipped_material(release), release, {"model.boxmarch.json": sidecar})[0]
                for config in configs]
     images = [np.frombuffer(base64.b64decode(b), np.uint8).reshape(SIZE, SIZE, 4).astype(int) for b in out["images"]]
@@ -185,6 +252,10 @@ def rows_for(name, scene, glb, sidecar, release):
 
 
 def main():
+    names = sys.argv[1:] or SCENES
+    unknown = [name for name in names if name not in SCENES]
+    if unknown:
+        sys.exit(f"bench_threejs_cost: no scene {unknown[0]!r} (its scenes: {', '.join(SCENES)})")
     import bpy
     from tests.engines import threejs
 
@@ -199,7 +270,7 @@ def main():
     releases = [r for r in ("r180", "r111") if threejs.available(r) is None]
     rows = []
     with tempfile.TemporaryDirectory(prefix="bench-threejs-") as folder:
-        for name in SCENES:
+        for name in names:
             glb, sidecar = exported_glb(bpy, name, made[name], folder)
             for release in releases:
                 rows += rows_for(name, made[name], glb, sidecar, release)

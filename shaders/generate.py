@@ -193,7 +193,8 @@ def threejs(module: bool) -> str:
                                                     + pasted("raymarch.glsl"), allow_nan=False))
     exports = ("loadBoxmarch, checkBoxmarchSidecar, parseBoxmarchSidecar, boxmarchSidecarUrl, checkBoxmarchOptions, "
                "createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, boxmarchTexcoordName, "
-               "sortBoxmarchFrontToBack, useBoxmarchOccluders, boxmarchOccluderShape, createBoxmarchOccluderMaterial")
+               "sortBoxmarchFrontToBack, useBoxmarchOccluders, boxmarchOccluderShape, createBoxmarchOccluderMaterial, "
+               "useBoxmarchVisibility, boxmarchVisibilitySupported")
     if module:
         return text + f"\nexport {{ {exports} }};\n"
     return text + f"\nif (typeof module !== 'undefined') {{\n  module.exports = {{ {exports} }};\n}}\n"

@@ -59,6 +59,9 @@ MATERIAL_OPTIONS = {
     "{occluders: 1}": "option occluders must be",
     "{occluders: 'LINK'}": None,
     "{occluders: false}": None,
+    "{visibilityPass: 'no'}": "option visibilityPass must be true or false, not no",
+    "{visibilityPass: 0}": "option visibilityPass must be true or false",
+    "{visibilityPass: false}": None,
     "{}": None,
     "{quality: 0.05, maxSteps: 1, epsilon: 1e-7}": None,
     "{quality: 1, maxSteps: 512, epsilon: 1}": None,
@@ -66,7 +69,7 @@ MATERIAL_OPTIONS = {
 # What each accepted option set leaves in the material: bmMarch (epsilon, max steps) and the knob.
 DRAWN = {"{}": [1e-4, 96, 1], "{quality: 0.05, maxSteps: 1, epsilon: 1e-7}": [1e-7, 1, 0.05],
          "{quality: 1, maxSteps: 512, epsilon: 1}": [1, 512, 1], "{occluders: 'LINK'}": [1e-4, 96, 1],
-         "{occluders: false}": [1e-4, 96, 1]}
+         "{occluders: false}": [1e-4, 96, 1], "{visibilityPass: false}": [1e-4, 96, 1]}
 
 
 def options_job():

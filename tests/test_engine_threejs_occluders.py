@@ -41,6 +41,7 @@ def pile(bpy_module, tmp_path_factory):
 
 
 def loader_js(occluders):
+    """The pile as loadBoxmarch draws it, with the pre-pass (its default) or without (``occluders: false``)."""
     options = {"map": LINK_MAP, "maxSteps": 64, "epsilon": 1e-3}
     if not occluders:
         options["occluders"] = False

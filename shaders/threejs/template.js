@@ -76,7 +76,8 @@ var BOXMARCH_OCCLUDER_PRESETS = ['BOX', 'SPHERE', 'ROUNDED_BOX', 'CAPSULE', 'CYL
 
 // Throws, one line naming the option, for createBoxmarchMaterial options it would not draw as
 // given: a number outside BOXMARCH_OPTION_RANGES (or not a number), a map that is not a non-empty
-// string, occluders that are not a name of BOXMARCH_OCCLUDER_PRESETS, 'PER_BOX', true or false.
+// string, occluders that are not a name of BOXMARCH_OCCLUDER_PRESETS, 'PER_BOX', true or false,
+// a visibilityPass that is not true or false.
 // An option left undefined takes its default.
 function checkBoxmarchOptions(options) {
   if (options === undefined || options === null) return;
@@ -93,6 +94,9 @@ function checkBoxmarchOptions(options) {
   if (options.map !== undefined && (typeof options.map !== 'string' || !options.map.trim())) {
     throw new Error('boxmarch: option map must be the GLSL body of float map(vec3 p), not '
       + (typeof options.map === 'string' ? 'an empty string' : typeof options.map));
+  }
+  if (options.visibilityPass !== undefined && typeof options.visibilityPass !== 'boolean') {
+    throw new Error('boxmarch: option visibilityPass must be true or false, not ' + String(options.visibilityPass));
   }
   var occluders = options.occluders;
   if (occluders !== undefined && typeof occluders !== 'boolean' && occluders !== 'PER_BOX'
@@ -307,6 +311,20 @@ function createBoxmarchOccluderMaterial(THREE, index, shape) {
   });
 }
 
+// The pre-pass's draws of geometry's occluders of shape id `shape`: four meshes, box_params.glsl's
+// most (an index a shape lacks draws nothing: its vertices leave the view), their matrices to be
+// copied from the mesh's world matrix before each draw.
+function boxmarchOccluderScene(THREE, geometry, shape) {
+  var scene = new THREE.Scene();
+  for (var k = 0; k < 4; k++) {
+    var occluder = new THREE.Mesh(geometry, createBoxmarchOccluderMaterial(THREE, k, shape));
+    occluder.matrixAutoUpdate = false;
+    occluder.frustumCulled = false;
+    scene.add(occluder);
+  }
+  return scene;
+}
+
 // Sets up the hidden-box pre-pass of mesh (given useBoxmarchMaterial's material) for occluder
 // shape id `shape` (boxmarchOccluderShape; null: none): before each draw of mesh, its occluders
 // are rendered into their own target, as three.js's Reflector renders its view from the mesh's
@@ -314,17 +332,11 @@ function createBoxmarchOccluderMaterial(THREE, index, shape) {
 // pre-pass draws the geometry at rest). Returns the pre-pass ({target, scene}), or null.
 function useBoxmarchOccluders(THREE, mesh, shape) {
   if (shape === null || shape === undefined || mesh.isSkinnedMesh) return null;
-  // Four draws, box_params.glsl's most (an index a shape lacks draws nothing: its vertices leave the view).
-  var material = mesh.material, count = 4;
+  var material = mesh.material;
   var target = new THREE.WebGLRenderTarget(1, 1, { minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
     depthBuffer: true, stencilBuffer: false });
-  var scene = new THREE.Scene(), size = new THREE.Vector2(), clear = new THREE.Color(), white = new THREE.Color(1, 1, 1);
-  for (var k = 0; k < count; k++) {
-    var occluder = new THREE.Mesh(mesh.geometry, createBoxmarchOccluderMaterial(THREE, k, shape));
-    occluder.matrixAutoUpdate = false;  // its matrix is mesh's world matrix, copied before each draw
-    occluder.frustumCulled = false;
-    scene.add(occluder);
-  }
+  var scene = boxmarchOccluderScene(THREE, mesh.geometry, shape);
+  var size = new THREE.Vector2(), clear = new THREE.Color(), white = new THREE.Color(1, 1, 1);
   var marching = mesh.onBeforeRender;
   mesh.onBeforeRender = function (renderer, parentScene, camera, geometry, drawnMaterial, group) {
     marching.call(mesh, renderer, parentScene, camera, geometry, drawnMaterial, group);
@@ -351,6 +363,174 @@ function useBoxmarchOccluders(THREE, mesh, shape) {
   };
   mesh.userData.boxmarchOccluders = { target: target, scene: scene };
   return mesh.userData.boxmarchOccluders;
+}
+
+// Hidden fragments culled by the depth test (docs/ENGINES.md, three.js): SwiftShader, llvmpipe and
+// NVIDIA's GL driver run every fragment of a shader that writes its depth, so the marching passes
+// here write none and let the early depth test drop hidden fragments before they run. Each frame,
+// into targets the size of the drawing buffer: (1) the occluders (useBoxmarchOccluders' boxes)
+// into a depth buffer; (2) visibility: the boxes' front faces tested against it (a face is never
+// behind its own hit), each marching and writing its hit's window depth into a float colour
+// target that keeps the least (MIN blending); (3) resolve: that least depth into a second target's
+// depth buffer; (4) shade: the boxes tested against it, each marching again and shading only
+// where its hit's depth equals the least (the same march gives the same bits); the box holding
+// the eye draws its back faces in (2) and (4) untested (its march starts at the eye); (5) the
+// mesh's own draw: one full-screen triangle writing the shaded colour and the least depth, so
+// the mesh composites by depth with the rest of the scene. Needs float colour targets with MIN
+// blending (WebGL 2: EXT_color_buffer_float, EXT_float_blend; WebGL 1: OES_texture_float,
+// WEBGL_color_buffer_float, EXT_float_blend, EXT_blend_minmax, EXT_frag_depth); where the context
+// lacks one, each frame draws the marching mesh behind the occluder pre-pass instead.
+
+// Whether renderer's context has what useBoxmarchVisibility's passes need (and hands it out).
+function boxmarchVisibilitySupported(renderer) {
+  var gl = renderer.getContext();
+  var names = typeof WebGL2RenderingContext !== 'undefined' && gl instanceof WebGL2RenderingContext
+    ? ['EXT_color_buffer_float', 'EXT_float_blend']
+    : ['OES_texture_float', 'WEBGL_color_buffer_float', 'EXT_float_blend', 'EXT_blend_minmax', 'EXT_frag_depth'];
+  return names.every(function (name) { return gl.getExtension(name) !== null; });
+}
+
+// A full-screen pass reading the least-depth target (bmResolvedDepth) and, for the composite,
+// the shaded colour (bmShaded): no hit (depth 1, the clear) is discarded.
+function createBoxmarchScreenMaterial(THREE, uniforms, body, all) {
+  var revision = parseInt(THREE.REVISION, 10), material = new THREE.ShaderMaterial({
+    uniforms: uniforms,
+    vertexShader: 'void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }',
+    fragmentShader: ['uniform sampler2D bmResolvedDepth;', 'uniform sampler2D bmShaded;', 'uniform vec4 bmOcclusion;',
+      'void main() {', '  vec2 uv = gl_FragCoord.xy * bmOcclusion.yz;',
+      '  float depth = texture2D(bmResolvedDepth, uv).r;', all ? '' : '  if (depth >= 1.0) discard;', body, '}'].join('\n')
+  });
+  if (revision < 163) material.extensions = { fragDepth: true };
+  return material;
+}
+
+// The mesh for one pass of useBoxmarchVisibility: mesh's geometry with a variant of its marching
+// material (defines; the uniforms shared), front faces tested against the depth buffer, or the
+// back faces of the box holding the eye untested (eyeBox).
+function boxmarchPassMesh(THREE, mesh, defines, eyeBox) {
+  var material = mesh.material.clone();
+  material.uniforms = mesh.material.uniforms;
+  material.defines = Object.assign({}, mesh.material.defines, defines, eyeBox ? { BM_EYE_BOX_ONLY: '' } : {});
+  material.onBeforeCompile = mesh.material.onBeforeCompile;
+  // BackSide would flip the winding three.js calls front (gl_FrontFacing with it); from inside
+  // its box every face is a back face anyway
+  material.side = eyeBox ? THREE.DoubleSide : THREE.FrontSide;
+  material.depthTest = !eyeBox;
+  material.depthWrite = false;
+  if (defines.BM_VISIBILITY_PASS !== undefined) {
+    material.blending = THREE.CustomBlending;
+    material.blendEquation = THREE.MinEquation;
+    material.blendSrc = THREE.OneFactor;
+    material.blendDst = THREE.OneFactor;
+  }
+  var pass = new THREE.Mesh(mesh.geometry, material);
+  pass.matrixAutoUpdate = false;  // mesh's world matrix, copied before each draw
+  pass.frustumCulled = false;
+  return pass;
+}
+
+// Sets up useBoxmarchVisibility's passes for mesh (given useBoxmarchMaterial's material) with
+// occluder shape id `shape` (boxmarchOccluderShape; null: none, nor these passes, as for a
+// SkinnedMesh): mesh itself is no longer drawn (its material's visible is false); its child
+// `composite` draws the picture, running the passes from its onBeforeRender. Where the context
+// lacks the extensions (boxmarchVisibilitySupported), it draws mesh's material behind the
+// occluder pre-pass (useBoxmarchOccluders) there instead. Returns {composite, targets, scenes,
+// supported}, or null.
+function useBoxmarchVisibility(THREE, mesh, shape) {
+  if (shape === null || shape === undefined || mesh.isSkinnedMesh) return null;
+  var material = mesh.material, uniforms = material.uniforms, marching = mesh.onBeforeRender;
+  // today's path, drawn from the composite's onBeforeRender where the extensions are missing
+  var fallback = new THREE.Mesh(mesh.geometry, material);
+  fallback.matrixAutoUpdate = false;
+  fallback.frustumCulled = mesh.frustumCulled;
+  fallback.onBeforeRender = marching;
+  useBoxmarchOccluders(THREE, fallback, shape);
+  var options = { minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter, depthBuffer: true, stencilBuffer: true };
+  // stencilBuffer: a 24-bit depth buffer on r111 too (its depth-only renderbuffer is 16-bit)
+  var nearest = new THREE.WebGLRenderTarget(1, 1, Object.assign({ type: THREE.FloatType }, options));
+  var shaded = new THREE.WebGLRenderTarget(1, 1, options);
+  // the occluders' depth, which bounds the marches of both passes (the depth test only culls)
+  var bound = new THREE.WebGLRenderTarget(1, 1, { minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
+    type: THREE.FloatType, depthBuffer: false, stencilBuffer: false });
+  uniforms.bmResolvedDepth = { value: nearest.texture };
+  var scenes = { fallback: new THREE.Scene(), visibility: new THREE.Scene(), shade: new THREE.Scene() };
+  scenes.fallback.add(fallback);
+  scenes.occluders = boxmarchOccluderScene(THREE, mesh.geometry, shape);
+  scenes.occluders.children.forEach(function (occluder) {
+    occluder.material.fragmentShader = 'void main() {\n  gl_FragColor = vec4(gl_FragCoord.z);\n}\n';
+    // a margin for the march's own rounding: the occluders a little farther than drawn
+    occluder.material.polygonOffset = true;
+    occluder.material.polygonOffsetUnits = 4;
+  });
+  [false, true].forEach(function (eyeBox) {
+    scenes.visibility.add(boxmarchPassMesh(THREE, mesh, { BM_VISIBILITY_PASS: '' }, eyeBox));
+    scenes.shade.add(boxmarchPassMesh(THREE, mesh, { BM_SHADE_PASS: '' }, eyeBox));
+  });
+  var screen = { bmResolvedDepth: uniforms.bmResolvedDepth, bmShaded: { value: shaded.texture }, bmOcclusion: uniforms.bmOcclusion };
+  var triangle = new THREE.BufferGeometry();
+  triangle.setAttribute('position', new THREE.BufferAttribute(new Float32Array([-1, -1, 0, 3, -1, 0, -1, 3, 0]), 3));
+  var copy = new THREE.Mesh(triangle, createBoxmarchScreenMaterial(THREE, screen, '  gl_FragColor = vec4(depth);', true));
+  copy.frustumCulled = false;
+  scenes.copy = new THREE.Scene().add(copy);
+  var resolve = new THREE.Mesh(triangle, createBoxmarchScreenMaterial(THREE, screen,
+    // a margin for the depth buffer's rounding: a winner whose hit lies on its face must pass
+    '  gl_FragDepthEXT = min(depth + 4.8e-7, 1.0);'));
+  resolve.material.colorWrite = false;
+  resolve.material.depthFunc = THREE.AlwaysDepth;
+  resolve.frustumCulled = false;
+  scenes.resolve = new THREE.Scene().add(resolve);
+  var composite = new THREE.Mesh(triangle.clone(), createBoxmarchScreenMaterial(THREE, screen,
+    '  gl_FragColor = texture2D(bmShaded, uv);\n  gl_FragDepthEXT = depth;'));
+  composite.frustumCulled = false;
+  composite.name = mesh.name + ' (boxmarch)';
+  var size = new THREE.Vector2(), clear = new THREE.Color(), white = new THREE.Color(1, 1, 1);
+  // supported: whether the context has the extensions (boxmarchVisibilitySupported), known from the first draw
+  var passes = { composite: composite, targets: { nearest: nearest, shaded: shaded }, scenes: scenes, supported: null };
+  function draw(renderer, target, scene, camera, clearColor) {
+    renderer.setRenderTarget(target);
+    if (clearColor) renderer.setClearColor(clearColor, clearColor === white ? 1 : 0);
+    renderer.autoClear = !!clearColor;
+    renderer.render(scene, camera);
+  }
+  composite.onBeforeRender = function (renderer, parentScene, camera) {
+    if (passes.supported === null) passes.supported = boxmarchVisibilitySupported(renderer);
+    var supported = passes.supported;
+    var previous = renderer.getRenderTarget(), alpha = renderer.getClearAlpha(), autoClear = renderer.autoClear;
+    clear.copy(renderer.getClearColor(clear));  // r111 returns its own colour and takes no argument
+    [scenes.fallback, scenes.occluders, scenes.visibility, scenes.shade].forEach(function (scene) {
+      scene.children.forEach(function (pass) { pass.matrix.copy(mesh.matrixWorld); pass.matrixWorldNeedsUpdate = true; });
+    });
+    composite.geometry.setDrawRange(0, supported ? Infinity : 0);
+    if (supported) {
+      marching.call(mesh, renderer, parentScene, camera);
+      if (previous) size.set(previous.width, previous.height);
+      else renderer.getDrawingBufferSize(size);
+      if (nearest.width !== size.x || nearest.height !== size.y) {
+        [nearest, shaded, bound].forEach(function (target) { target.setSize(size.x, size.y); });
+      }
+      uniforms.bmOcclusion.value.set(1, 1 / size.x, 1 / size.y, 0);
+      uniforms.bmOccluderDepth.value = bound.texture;
+      scenes.occluders.children.forEach(function (occluder) { occluder.material.uniforms.bmEye.value.copy(uniforms.bmEye.value); });
+      draw(renderer, nearest, scenes.occluders, camera, white);
+      draw(renderer, bound, scenes.copy, camera, null);
+      renderer.setRenderTarget(nearest);
+      renderer.clear(true, false, false);  // white again, the occluders' depth kept
+      draw(renderer, nearest, scenes.visibility, camera, null);
+      draw(renderer, shaded, scenes.resolve, camera, new THREE.Color(0, 0, 0));
+      draw(renderer, shaded, scenes.shade, camera, null);
+    } else {
+      material.visible = true;
+      draw(renderer, previous, scenes.fallback, camera, null);
+      material.visible = false;
+    }
+    renderer.setRenderTarget(previous);
+    renderer.setClearColor(clear, alpha);
+    renderer.autoClear = autoClear;
+  };
+  material.visible = false;
+  mesh.add(composite);
+  mesh.userData.boxmarchVisibility = passes;
+  return passes;
 }
 
 // The export's sidecar (NAME.boxmarch.json beside NAME.glb): the format, preset and layout this
@@ -454,7 +634,8 @@ function boxmarchLoadError(url, e) {
 // skinned or not, its own material (options: those of createBoxmarchMaterial, skinning set per
 // mesh, frontToBack: draw each mesh's boxes front to back, useBoxmarchMaterial; occluders: the
 // hidden-box pre-pass of each static mesh, useBoxmarchOccluders, on by default where the map is
-// a preset's or the default one, boxmarchOccluderShape). GLTFLoader: the class (THREE.GLTFLoader in r111's examples/js, imported from
+// a preset's or the default one, boxmarchOccluderShape; visibilityPass: true draws behind those
+// occluders with useBoxmarchVisibility's passes instead, which write no depth). GLTFLoader: the class (THREE.GLTFLoader in r111's examples/js, imported from
 // three/addons later). Resolves to { scene, meshes, gltf, sidecar }; rejects with the reason,
 // before the .glb is fetched, when an option is out of range, or the sidecar is missing or is not
 // one the material reads (parseBoxmarchSidecar).
@@ -481,7 +662,8 @@ function loadBoxmarch(THREE, GLTFLoader, url, options) {
     meshes.forEach(function (mesh) {
       var settings = Object.assign({}, options, { skinning: !!mesh.isSkinnedMesh });
       useBoxmarchMaterial(THREE, mesh, createBoxmarchMaterial(THREE, settings), !!(options && options.frontToBack));
-      useBoxmarchOccluders(THREE, mesh, boxmarchOccluderShape(options));
+      if (options && options.visibilityPass) useBoxmarchVisibility(THREE, mesh, boxmarchOccluderShape(options));
+      else useBoxmarchOccluders(THREE, mesh, boxmarchOccluderShape(options));
     });
     return { scene: loaded.gltf.scene, meshes: meshes, gltf: loaded.gltf, sidecar: loaded.sidecar };
   });
@@ -526,6 +708,7 @@ var BOXMARCH_VERTEX = [
   '#include <skinning_pars_vertex>',
   BOXMARCH_ATTRIBUTES,
   BOXMARCH_VARYINGS,
+  'uniform vec4 bmEye;',
   'void main() {',
   '  #include <beginnormal_vertex>',
   '  #include <skinbase_vertex>',
@@ -545,6 +728,14 @@ var BOXMARCH_VERTEX = [
   '  bmHalf = bm_half_extents(bmHalfXY, bmHalfZ);',
   '  bmParams = bm_box_params(bmShapeMaterial, bmRandomUser);',
   '  gl_Position = projectionMatrix * modelViewMatrix * vec4(transformed, 1.0);',
+  '#ifdef BM_EYE_BOX_ONLY',
+  // Only the box holding the eye (give or take a margin) stays in view: its back faces start the
+  // march at the eye, the fragment stage decides (useBoxmarchVisibility).
+  '  vec3 eyeOffset = abs(bm_to_local(bmEye.xyz - transformed, normalize(axisX), normalize(bmAxisY),',
+  '    normalize(objectNormal)) - bmOffset) - bmHalf;',
+  '  float bmMost = max(bmHalf.x, max(bmHalf.y, bmHalf.z));',
+  '  if (bmEye.w < 0.5 || max(eyeOffset.x, max(eyeOffset.y, eyeOffset.z)) > 1e-3 * bmMost) gl_Position = vec4(2.0, 2.0, 2.0, 1.0);',
+  '#endif',
   '}'
 ].join('\n');
 
@@ -559,6 +750,7 @@ var BOXMARCH_FRAGMENT = [
   'uniform vec2 bmQuality;',
   'uniform vec4 bmOcclusion;',
   'uniform sampler2D bmOccluderDepth;',
+  'uniform sampler2D bmResolvedDepth;',
   BOXMARCH_VARYINGS,
   BOXMARCH_DEPTH_PACKING,
   'void main() {',
@@ -586,11 +778,26 @@ var BOXMARCH_FRAGMENT = [
   // Hidden boxes (useBoxmarchOccluders): behind the occluders' depth nothing is visible; a march
   // from the eye is only bounded (its box's own entry is the eye).
   '  if (bmOcclusion.x > 0.5) {',
+  '#if defined(BM_VISIBILITY_PASS) || defined(BM_SHADE_PASS)',
+  '    float hidden = bm_occluder_limit(texture2D(bmOccluderDepth, gl_FragCoord.xy * bmOcclusion.yz).r);',  // float
+  '#else',
   '    float hidden = bm_occluder_limit(bm_unpack_depth(texture2D(bmOccluderDepth, gl_FragCoord.xy * bmOcclusion.yz)));',
+  '#endif',
   '    if (!fromEye && gl_FragCoord.z > hidden) discard;',
   '    vec4 c0 = objectToClip * vec4(fromEye ? bmEye.xyz : bmObjPos, 1.0);',
   '    t_end = min(t_end, bm_depth_crossing(c0, objectToClip * vec4(ray / eye_distance, 0.0), 2.0 * hidden - 1.0));',
   '  }',
+  '#ifdef BM_SHADE_PASS',
+  // The nearest hit's depth (useBoxmarchVisibility): where the ray reaches it lies the winning hit;
+  // a box that does not hold that point (give or take a margin for the depth's rounding) loses.
+  '  float resolved = texture2D(bmResolvedDepth, gl_FragCoord.xy * bmOcclusion.yz).r;',
+  '  vec4 start = objectToClip * vec4(fromEye ? bmEye.xyz : bmObjPos, 1.0);',
+  '  float t_win = bm_depth_crossing(start, objectToClip * vec4(ray / eye_distance, 0.0), 2.0 * resolved - 1.0);',
+  // none ahead: the least depth is this fragment's own (a hit on the face, rounded nearer) or
+  // nearer, which the depth test has judged
+  '  if (t_win > 1e29) t_win = 0.0;',
+  '  if (max3(abs(ro + rd * t_win) - box_half) > 1e-3 * (t_win + max3(box_half))) discard;',
+  '#endif',
   // The quality knob (as the Blender preview applies it): a pixel's size at the face, the box's size on screen.
   '  vec4 knob = bm_quality(bmQuality.x);',
   '  float footprint = bm_pixel_size(1.0 / gl_FragCoord.w, length(vec3(objectToClip[0][1], objectToClip[1][1], objectToClip[2][1])), bmQuality.y);',
@@ -606,9 +813,19 @@ var BOXMARCH_FRAGMENT = [
   '  vec3 obj_hit = bmObjPos + bm_from_local(local_hit + f, x, y, z);',
   '  vec4 clip = objectToClip * vec4(obj_hit, 1.0);',
   // Never nearer than the rasterised face: what the raw material's layout(depth_greater) declares.
-  '  gl_FragDepthEXT = max(0.5 + 0.5 * clip.z / clip.w, gl_FragCoord.z);',
+  '  float depth = max(0.5 + 0.5 * clip.z / clip.w, gl_FragCoord.z);',
+  '#ifdef BM_VISIBILITY_PASS',
+  '  gl_FragColor = vec4(depth);',  // MIN-blended: the nearest hit's depth (useBoxmarchVisibility)
+  '#else',
+  '#ifdef BM_SHADE_PASS',
+  // Only the hit the visibility pass kept is shaded: the same march gives the same bits.
+  '  if (depth != resolved) discard;',
+  '#else',
+  '  gl_FragDepthEXT = depth;',
+  '#endif',
   '  vec3 n = normalize(normalMatrix * bm_from_local(bm_normal(local_hit, d, bm_normal_tap(box_half)), x, y, z));',
   '  gl_FragColor = vec4(bmColor * (0.35 + 0.65 * max(n.z, 0.0)), 1.0);',
+  '#endif',
   '}'
 ].join('\n');
 
@@ -659,8 +876,10 @@ var BOXMARCH_RAW_FRAGMENT = [
   '#extension GL_EXT_conservative_depth : enable',
   'precision highp float;',
   'precision highp int;',
+  '#if !defined(BM_VISIBILITY_PASS) && !defined(BM_SHADE_PASS)',  // passes writing no depth (useBoxmarchVisibility)
   '#ifdef GL_EXT_conservative_depth',
   'layout(depth_greater) out highp float gl_FragDepth;',
+  '#endif',
   '#endif',
   '#define varying in',
   'layout(location = 0) out highp vec4 pc_fragColor;',

@@ -370,11 +370,12 @@ def render_job(setup_js, width, height, camera, after_js="return {};"):
     return Job(js, shot)
 
 
-def count_job(setup_js, width, height, camera):
+def count_job(setup_js, width, height, camera, counting_js=_COUNT_AFTER):
     """:class:`Job` rendering as :func:`render_job` does, then counting the SDF evaluations of
-    every fragment of the shipped marching material (_COUNT_AFTER); its result is ``(Shot,
-    evaluations)``, evaluations a (height, width) float array, row 0 at the top."""
-    job = render_job(setup_js, width, height, camera, _COUNT_AFTER)
+    every fragment of the shipped marching material (_COUNT_AFTER; ``counting_js``: another
+    ``after_js`` returning ``{counts: __f64(W x H x 4 floats, the count in the first)}``); its
+    result is ``(Shot, evaluations)``, evaluations a (height, width) float array, row 0 at the top."""
+    job = render_job(setup_js, width, height, camera, counting_js)
 
     def parse(out):
         counts = f64(out["counts"]).reshape(height, width, 4)[::-1, :, 0].copy()
