@@ -56,10 +56,22 @@ def counted(request, pile):
     release = request.param
     need(threejs.available(release))
     glb, sidecar, centres, rotations = pile
-    jobs = [threejs.count_job(loader_js(occluders), W, H, CAMERA) for occluders in (True, False)]
+    # and from inside the first link's box, where the near plane cuts the boxes around the eye
+    inside = dict(CAMERA, position=(TO_Y_UP @ centres[0]).tolist())
+    jobs = [threejs.count_job(loader_js(occluders), W, H, camera) for camera in (CAMERA, inside)
+            for occluders in (True, False)]
     results = threejs.run_jobs(glb, jobs, threejs.shipped_material(release), release,
                                {"pile.glb": glb, "pile.boxmarch.json": sidecar})
-    return dict(zip(("on", "off"), results)), centres, rotations
+    return dict(zip(("on", "off", "inside_on", "inside_off"), results)), centres, rotations
+
+
+def test_pre_pass_changes_no_pixel_with_the_eye_inside_the_pile(counted):
+    """A box that the near plane cuts draws no occluders (its shape may not be drawn where they
+    would lie), as a box holding the eye draws none: the picture is the one without the pre-pass."""
+    out, _centres, _rotations = counted
+    (on, _), (off, _) = out["inside_on"], out["inside_off"]
+    assert (off.pixels[..., 3] > 0).mean() > 0.9  # seen from inside the pile
+    assert np.array_equal(on.pixels, off.pixels)
 
 
 def model(shot, centres, rotations, occluders):

@@ -848,8 +848,14 @@ var BOXMARCH_OCCLUDER_VERTEX = [
   '  vec3 eye = bm_to_local(bmEye.xyz - position, x, y, z) + v;',
   '  bool eyeInside = bmEye.w > 0.5 && max3(abs(eye) - h) <= 0.0;',
   '  vec3 moved = position + bm_from_local(pulled - v, x, y, z);',
-  '  gl_Position = eyeInside || min3(extent) <= 0.0 ? vec4(2.0, 2.0, 2.0, 1.0)',
-  '    : projectionMatrix * modelViewMatrix * vec4(moved, 1.0);',
+  // a box the near plane cuts draws none either: its shape may not be drawn where its occluders
+  // would lie (preview.vert.glsl); z + w >= 0 in clip space beyond that plane, least over the box
+  '  mat4 m = projectionMatrix * modelViewMatrix;',
+  '  vec3 side = vec3(m[0][2] + m[0][3], m[1][2] + m[1][3], m[2][2] + m[2][3]);',
+  '  float nearest = dot(side, position + bm_from_local(-v, x, y, z)) + m[3][2] + m[3][3]',
+  '    - h.x * abs(dot(side, x)) - h.y * abs(dot(side, y)) - h.z * abs(dot(side, z));',
+  '  gl_Position = eyeInside || nearest <= 0.0 || min3(extent) <= 0.0 ? vec4(2.0, 2.0, 2.0, 1.0)',
+  '    : m * vec4(moved, 1.0);',
   '}'
 ].join('\n');
 
