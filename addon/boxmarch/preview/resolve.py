@@ -66,8 +66,8 @@ def prepared(marching_shader):
 # Layers of boxes over the view (mesh_data.layers_over_view) from which the resolved passes pay on Mesa llvmpipe:
 # below it their fixed cost (a second marching draw, two full-screen passes that write depth)
 # outweighs the hidden fragments they skip. Measured on piles of 500 to 4,000 links at 480 x 480
-# (bench/bench_preview_cost.py --sweep): 0.76x at 4.3 layers, 0.84x at 8.6, 1.04x at 17.4,
-# 1.33x at 34.6. Not measured on a GPU, where a fragment costs less beside its march.
+# (bench/bench_preview_cost.py --sweep): 0.68x at 4.3 layers, 0.81x at 8.6, 0.99x at 17.4,
+# 1.28x at 34.6. Not measured on a GPU, where a fragment costs less beside its march.
 MIN_OVERDRAW = 16.0
 
 
