@@ -9,6 +9,7 @@ import pytest
 from boxmarch import core
 from boxmarch.preview import mesh_data
 from boxmarch.formats import shader_sources
+from tests.engines import perspective
 from tests.helpers.tools import need
 
 SHADERS = shader_sources.shader_dir()
@@ -101,10 +102,7 @@ def test_a_box_holding_the_eye_draws_no_occluders():
     # box's far side. Sphere F (radius 0.1) stands behind E's first occluder box along its rays, in
     # front of that far side: visible. Were E's occluders drawn, F would return before marching
     # (4 pixels lost, measured with the rule taken out of occluder_depths).
-    near, far = 0.1, 100.0
-    f = 1.0 / np.tan(np.radians(60.0))
-    projection = np.array([[f, 0, 0, 0], [0, f, 0, 0], [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)],
-                           [0, 0, -1, 0]])
+    projection = perspective({"fov": 120.0, "near": 0.1, "far": 100.0}, 1.0)
     origins, half = [[1.2, 1.2, -1.0], [0.45, 1.2, -1.5]], [[2.0, 2.0, 2.0], [0.1, 0.1, 0.1]]
     q = np.tile([0.0, 0.0, 0.0, 1.0], (2, 1))
 
@@ -333,10 +331,8 @@ def test_a_box_the_near_plane_cuts_draws_no_occluders():
     (radius 0.3 at z = -0.25, beside the eye) reaches past the near plane at z = -0.1; box F (a
     sphere of radius 1 at z = -4) lies behind it. Were N's occluders drawn, F's fragments behind
     them would count as occluded; with the rule none are, and the picture is the one without."""
-    near, far = 0.1, 100.0
-    f = 1.0 / np.tan(np.radians(45.0))
-    projection = np.array([[f, 0, 0, 0], [0, f, 0, 0], [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)],
-                           [0, 0, -1, 0]])
+    near = 0.1
+    projection = perspective({"fov": 90.0, "near": near, "far": 100.0}, 1.0)
     origins, half = [[0.35, 0.0, -0.25], [0.0, 0.0, -4.0]], [[0.3, 0.3, 0.3], [1.0, 1.0, 1.0]]
     q = np.tile([0.0, 0.0, 0.0, 1.0], (2, 1))
     eye_outside = np.any(np.abs(np.zeros(3) - origins[0]) > half[0])

@@ -89,6 +89,15 @@ def _compile_capturing_log(info, echo=True):
     return shader, error, text
 
 
+def _compiled(info, what: str):
+    """create_from_info of a shader the add-on writes (no user text): RuntimeError with the
+    compiler's log where it fails (``what`` names the shader)."""
+    shader, error, log = _compile_capturing_log(info)
+    if shader is None:
+        raise RuntimeError(f"boxmarch {what} shader failed to compile: {error}\n{log}")
+    return shader
+
+
 # Blender 4+ reformats the driver's log with the line in the message ("| :12:5: Error: <message>");
 # 3.4 as "   12 | <source line>" ... "   | Error: <message>"; raw logs say "0:12(5): error: <message>".
 _LOCATED_ERROR = re.compile(r"\|\s*:(\d+):\d+:\s*error:?\s*(.*)", re.I)
@@ -188,11 +197,8 @@ def occluder_shader(layout: str = "CLASSIC"):
     key = ("OCCLUDER", None, None, layout, None)
     if key not in _cache:
         info, iface = _create_info(shader_sources.OCCLUDER_FRAGMENT_SOURCE, layout, occluder=True)
-        shader, error, log = _compile_capturing_log(info)
-        del iface
-        if shader is None:
-            raise RuntimeError(f"boxmarch occluder shader failed to compile: {error}\n{log}")
-        _cache[key] = shader
+        _cache[key] = _compiled(info, "occluder")
+        del iface  # the create-info refers to it until compiled
     return _cache[key]
 
 
@@ -212,10 +218,7 @@ def fullscreen_shader(stage: str):
             info.fragment_out(slot, type_name, name)
         info.vertex_source(shader_sources.fullscreen_source("vertex"))
         info.fragment_source(shader_sources.fullscreen_source(stage))
-        shader, error, log = _compile_capturing_log(info)
-        if shader is None:
-            raise RuntimeError(f"boxmarch {stage} shader failed to compile: {error}\n{log}")
-        _cache[key] = shader
+        _cache[key] = _compiled(info, stage)
     return _cache[key]
 
 
@@ -228,10 +231,7 @@ def barrier_shader():
         info = gpu.types.GPUShaderCreateInfo()
         info.local_group_size(1, 1, 1)
         info.compute_source("void main()\n{\n}\n")
-        shader, error, log = _compile_capturing_log(info)
-        if shader is None:
-            raise RuntimeError(f"boxmarch barrier shader failed to compile: {error}\n{log}")
-        _cache[key] = shader
+        _cache[key] = _compiled(info, "barrier")
     return _cache[key]
 
 
