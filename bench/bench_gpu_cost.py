@@ -59,27 +59,29 @@ def camera(eye, target, width, height, up=(0.0, 0.0, 1.0), fov_deg=40.0):
     return projection @ view, view, np.append(eye, 1.0)
 
 
-def scenes_to_measure(size, far_boxes):
-    """name -> (origins, rotations (S, 3, 3), half_extents, sdf, camera)."""
+def scenes_to_measure(size, far_boxes, height=None):
+    """name -> (origins, rotations (S, 3, 3), half_extents, sdf, camera) for a ``size`` x ``height``
+    image (square when ``height`` is None)."""
+    height = size if height is None else height
     from scripts import chain_arm
 
     made = {}
     _, centres, sizes, rotations = scenes.random_boxes(16000, seed=0)
     made["cloud"] = (centres, rotations, sizes / 2, "SPHERE",
-                     camera((0.0, -60.0, 10.0), (0.0, 40.0, 0.0), size, size))
+                     camera((0.0, -60.0, 10.0), (0.0, 40.0, 0.0), size, height))
     centres, rotations = chain_arm.chain_geometry()
     links = (centres, rotations, np.tile(chain_arm.LINK / 2, (len(centres), 1)), "LINK")
-    made["chain side"] = links + (camera((6.0, -4.0, 4.5), (0.0, 0.0, 4.5), size, size),)
-    made["chain down the arm"] = links + (camera((0.4, -1.2, 14.0), (0.0, 0.0, 4.5), size, size),)
+    made["chain side"] = links + (camera((6.0, -4.0, 4.5), (0.0, 0.0, 4.5), size, height),)
+    made["chain down the arm"] = links + (camera((0.4, -1.2, 14.0), (0.0, 0.0, 4.5), size, height),)
     rng = np.random.default_rng(1)
     pile = rng.uniform(-2.0, 2.0, (4000, 3))
     made["pile"] = (pile, scenes.random_rotations(4000, rng), np.tile(chain_arm.LINK / 2, (4000, 1)),
-                    "LINK", camera((0.0, -7.0, 1.0), (0.0, 0.0, 0.0), size, size))
+                    "LINK", camera((0.0, -7.0, 1.0), (0.0, 0.0, 0.0), size, height))
     side = round(far_boxes ** (1 / 3))
     grid = np.stack(np.meshgrid(*[np.arange(side) * 0.5] * 3, indexing="ij"), -1).reshape(-1, 3)
     made["far"] = (grid, scenes.random_rotations(len(grid), rng),
                    np.tile([0.2, 0.15, 0.1], (len(grid), 1)), "ROUNDED_BOX",
-                   camera((side * 0.25, side * 0.25 - 150.0, side * 0.25), (side * 0.25,) * 3, size, size))
+                   camera((side * 0.25, side * 0.25 - 150.0, side * 0.25), (side * 0.25,) * 3, size, height))
     return made
 
 

@@ -25,7 +25,8 @@ by the pixels the shaded image covers.
 Pixels changed: pixels whose colour differs from today's by more than 1/255, as a share of the
 pixels covered in either image.
 
-    PYTHONPATH=addon python3 -m bench.bench_preview_cost [--size 480] [--scenes pile,cloud]   # PyPI bpy (Blender 5.0), EGL llvmpipe
+    # PyPI bpy (Blender 5.0), EGL (llvmpipe here; a GPU where one is); --size N or WxH (960x540)
+    PYTHONPATH=addon python3 -m bench.bench_preview_cost [--size 480] [--scenes pile,cloud] [--sweep]
     blender -b --factory-startup --python bench/bench_preview_cost.py -- [--size 480]   # Debian's Blender 3.4
 """
 import sys
@@ -34,7 +35,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 
-SIZE, REPEATS = 480, 5
+WIDTH, HEIGHT, REPEATS = 480, 480, 5
 SCENES = ("chain down the arm", "pile", "cloud")
 # (label, create-info depth_write, draw.FRONT_TO_BACK, quality, occlusion.ENABLED, draw.CULL_BACK_FACES,
 #  resolve.ENABLED)
@@ -75,7 +76,7 @@ def frame_rows(bpy, name, scene):
     ob = baked_object(bpy, name, scene)
     to_clip, to_view, _eye = scene[4]
     projection = to_clip @ np.linalg.inv(to_view)
-    offscreen = gpu.types.GPUOffScreen(SIZE, SIZE, format="RGBA32F")
+    offscreen = gpu.types.GPUOffScreen(WIDTH, HEIGHT, format="RGBA32F")
 
     def frame(read=False):
         return preview_frame(offscreen, ob, to_view, projection, read)
@@ -94,8 +95,8 @@ def frame_rows(bpy, name, scene):
         use(config)
         frame()  # compiles and uploads outside the timing
         images[config] = frame(read=True)
-        steps, depth = preview.render(bpy.context.scene, camera, SIZE, SIZE, output="STEPS")
-        covered = preview.render(bpy.context.scene, camera, SIZE, SIZE)[1] < 1.0
+        steps, depth = preview.render(bpy.context.scene, camera, WIDTH, HEIGHT, output="STEPS")
+        covered = preview.render(bpy.context.scene, camera, WIDTH, HEIGHT)[1] < 1.0
         evaluations[config] = steps[..., 1][covered].sum() / max(covered.sum(), 1)
     for _ in range(REPEATS):
         for config in CONFIGS:
@@ -136,8 +137,8 @@ def sweep_rows(bpy, made):
     for count in (500, 1000, 2000):
         centres = rng.uniform(-2.0, 2.0, (count, 3))
         made[f"pile of {count}"] = (centres, scenes.random_rotations(count, rng), np.tile(chain_arm.LINK / 2, (count, 1)),
-                                    "LINK", camera((0.0, -7.0, 1.0), (0.0, 0.0, 0.0), SIZE, SIZE))
-    offscreen = gpu.types.GPUOffScreen(SIZE, SIZE, format="RGBA32F")
+                                    "LINK", camera((0.0, -7.0, 1.0), (0.0, 0.0, 0.0), WIDTH, HEIGHT))
+    offscreen = gpu.types.GPUOffScreen(WIDTH, HEIGHT, format="RGBA32F")
     rows, minimum = [], resolve.MIN_OVERDRAW
     for name in ("chain down the arm", "cloud", "pile of 500", "pile of 1000", "pile of 2000", "pile"):
         ob = baked_object(bpy, name, made[name])
@@ -149,7 +150,7 @@ def sweep_rows(bpy, made):
             images[resolved] = preview_frame(offscreen, ob, to_view, projection, read=True)
         mesh = draw.cached_mesh(ob.data.name_full, ob.boxmarch.layout).baked  # read by the frames above
         layers = mesh_data.layers_over_view(mesh.origins, mesh.box_half_extents, to_clip @ np.array(ob.matrix_world),
-                                            SIZE, SIZE)
+                                            WIDTH, HEIGHT)
         for _ in range(REPEATS):
             for resolved in (False, True):
                 resolve.MIN_OVERDRAW = 0.0 if resolved else float("inf")
@@ -174,7 +175,8 @@ def scene_camera(bpy, to_view):
     from bench.bench_gpu_cost import FAR, NEAR
 
     data = bpy.data.cameras.new("bench camera")
-    data.angle, data.clip_start, data.clip_end = np.radians(40.0), NEAR, FAR
+    data.sensor_fit = "VERTICAL"  # bench_gpu_cost's camera: 40 degrees high, whatever the image's width
+    data.angle_y, data.clip_start, data.clip_end = np.radians(40.0), NEAR, FAR
     camera = bpy.data.objects.new("bench camera", data)
     bpy.context.scene.collection.objects.link(camera)
     camera.matrix_world = Matrix(np.linalg.inv(to_view).tolist())
@@ -192,26 +194,26 @@ def main():
     from bench.bench_gpu_cost import scenes_to_measure
     from bench.common import table
 
-    global SIZE
+    global WIDTH, HEIGHT
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--size", type=int, default=SIZE, help="image width and height in pixels")
+    parser.add_argument("--size", default=f"{WIDTH}", help="image size in pixels: N (N x N) or WxH (960x540)")
     parser.add_argument("--scenes", default=",".join(SCENES), help="comma-separated scene names")
     parser.add_argument("--sweep", action="store_true",
                         help="instead: one pass against the resolved passes on piles of 500 to 4,000 links")
     args = parser.parse_args(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:])
-    SIZE = args.size
+    WIDTH, HEIGHT = (int(v) for v in (args.size.split("x") if "x" in args.size else (args.size, args.size)))
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)
     preview.ensure_gpu_context()
-    made = scenes_to_measure(SIZE, 8)
+    made = scenes_to_measure(WIDTH, 8, HEIGHT)
     if args.sweep:
         rows = sweep_rows(bpy, made)
-        print(f"Blender {bpy.app.version_string}, {gpu.platform.renderer_get()}, {SIZE} x {SIZE} px, best of {REPEATS}")
+        print(f"Blender {bpy.app.version_string}, {gpu.platform.renderer_get()}, {WIDTH} x {HEIGHT} px, best of {REPEATS}")
         print(table(["scene", "layers over the view", "one pass ms", "resolved ms", "speed-up", "pixels changed",
                      "shipped"], rows))
         return
     rows = [row for name in args.scenes.split(",") for row in frame_rows(bpy, name, made[name])]
-    print(f"Blender {bpy.app.version_string}, {gpu.platform.renderer_get()}, {SIZE} x {SIZE} px, best of {REPEATS}")
+    print(f"Blender {bpy.app.version_string}, {gpu.platform.renderer_get()}, {WIDTH} x {HEIGHT} px, best of {REPEATS}")
     print(table(["scene", "preview", "SDF evals/px", "frame ms", "speed-up", "CPU ms", "CPU speed-up", "pixels changed"],
                 rows))
     sys.stdout.flush()
