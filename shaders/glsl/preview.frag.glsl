@@ -48,8 +48,8 @@
 #ifdef BM_RESOLVED
 layout(early_fragment_tests) in;
 
-// hit_min's value where no hit was kept: the bits of 1.0, the far plane's window depth.
-const uint BM_NO_HIT = 1065353216u;
+// BM_NO_HIT (defined by formats/shader_sources.py, as for preview_resolve.glsl): hit_min's value
+// where no hit was kept, the bits of 1.0, the far plane's window depth.
 // How far (window depth) from the nearest hit the shade pass looks for the fragment that made it:
 // 2^-18, 64 float steps at the far plane. The march's hit depth and the inversion of a depth into
 // a distance along the ray (bm_depth_crossing) round differently; on the cloud of spheres a margin
@@ -115,6 +115,10 @@ void main()
     march_start = preview.eye.xyz;
   }
 
+  // The ray in clip space, c0 + t c1 from the march's start: where it reaches a depth kept by the
+  // pre-pass or the resolved passes, a march may stop (bm_depth_crossing).
+  vec4 c0 = preview.object_to_clip * vec4(march_start, 1.0);
+  vec4 c1 = preview.object_to_clip * vec4(ray_object / eye_distance, 0.0);
   // Hidden boxes: behind the occluders' depth nothing is visible (a march from the eye is only
   // bounded: its box's own entry is the eye).
   if (preview.occlusion.x > 0.5) {
@@ -126,8 +130,6 @@ void main()
       }
       discard;
     }
-    vec4 c0 = preview.object_to_clip * vec4(march_start, 1.0);
-    vec4 c1 = preview.object_to_clip * vec4(ray_object / eye_distance, 0.0);
     t_end = min(t_end, bm_depth_crossing(c0, c1, 2.0 * hidden_from - 1.0));
   }
 #ifdef BM_RESOLVED
@@ -139,8 +141,6 @@ void main()
   // map() is 1-Lipschitz: an exact distance or a bound), one map() instead of a march.
   uint winner = imageLoad(hit_min, ivec2(gl_FragCoord.xy)).x;
   if (winner < BM_NO_HIT) {
-    vec4 c0 = preview.object_to_clip * vec4(march_start, 1.0);
-    vec4 c1 = preview.object_to_clip * vec4(ray_object / eye_distance, 0.0);
     float nearest = uintBitsToFloat(winner);
     float reach = bm_depth_crossing(c0, c1, 2.0 * (nearest - BM_SHADE_MARGIN) - 1.0);
     float beyond = bm_depth_crossing(c0, c1, 2.0 * (nearest + BM_SHADE_MARGIN) - 1.0);

@@ -96,10 +96,8 @@ void main()
   vec4 near_side = vec4(m[0][2] + m[0][3], m[1][2] + m[1][3], m[2][2] + m[2][3], m[3][2] + m[3][3]);
   mat3 to_object = transpose(frame);
   vec3 origin = pos - to_object * bm_from_local(v, frag_axis_x, frag_axis_y, frag_axis_z);
-  float nearest = dot(near_side.xyz, origin) + near_side.w
-    - frag_half.x * abs(dot(near_side.xyz, to_object * bm_from_local(vec3(1.0, 0.0, 0.0), frag_axis_x, frag_axis_y, frag_axis_z)))
-    - frag_half.y * abs(dot(near_side.xyz, to_object * bm_from_local(vec3(0.0, 1.0, 0.0), frag_axis_x, frag_axis_y, frag_axis_z)))
-    - frag_half.z * abs(dot(near_side.xyz, to_object * bm_from_local(vec3(0.0, 0.0, 1.0), frag_axis_x, frag_axis_y, frag_axis_z)));
+  float nearest = dot(near_side.xyz, origin) + near_side.w - frag_half.x * abs(dot(near_side.xyz, to_object * frag_axis_x))
+    - frag_half.y * abs(dot(near_side.xyz, to_object * frag_axis_y)) - frag_half.z * abs(dot(near_side.xyz, to_object * frag_axis_z));
   // outside the clip volume (every vertex of the box alike): nothing drawn
   gl_Position = (eye_inside || nearest <= 0.0 || bm_min3(extent) <= 0.0) ? vec4(2.0, 2.0, 2.0, 1.0)
                                                                         : preview.object_to_clip * vec4(moved, 1.0);

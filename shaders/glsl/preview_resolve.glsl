@@ -17,7 +17,7 @@ void main()
 void main()
 {
   uint nearest = imageLoad(hit_min, ivec2(gl_FragCoord.xy)).x;
-  if (nearest >= 1065353216u) {  // the bits of 1.0: no hit
+  if (nearest >= BM_NO_HIT) {  // formats/shader_sources.py defines it: the bits of 1.0, no hit
     discard;
   }
   gl_FragDepth = uintBitsToFloat(nearest);

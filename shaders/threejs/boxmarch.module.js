@@ -777,6 +777,9 @@ var BOXMARCH_FRAGMENT = [
   '  mat4 objectToClip = projectionMatrix * modelViewMatrix;',
   // Hidden boxes (useBoxmarchOccluders): behind the occluders' depth nothing is visible; a march
   // from the eye is only bounded (its box's own entry is the eye).
+  // the ray in clip space, c0 + t c1 from the march's start (bm_depth_crossing)
+  '  vec4 c0 = objectToClip * vec4(fromEye ? bmEye.xyz : bmObjPos, 1.0);',
+  '  vec4 c1 = objectToClip * vec4(ray / eye_distance, 0.0);',
   '  if (bmOcclusion.x > 0.5) {',
   '#if defined(BM_VISIBILITY_PASS) || defined(BM_SHADE_PASS)',
   '    float hidden = bm_occluder_limit(texture2D(bmOccluderDepth, gl_FragCoord.xy * bmOcclusion.yz).r);',  // float
@@ -784,15 +787,13 @@ var BOXMARCH_FRAGMENT = [
   '    float hidden = bm_occluder_limit(bm_unpack_depth(texture2D(bmOccluderDepth, gl_FragCoord.xy * bmOcclusion.yz)));',
   '#endif',
   '    if (!fromEye && gl_FragCoord.z > hidden) discard;',
-  '    vec4 c0 = objectToClip * vec4(fromEye ? bmEye.xyz : bmObjPos, 1.0);',
-  '    t_end = min(t_end, bm_depth_crossing(c0, objectToClip * vec4(ray / eye_distance, 0.0), 2.0 * hidden - 1.0));',
+  '    t_end = min(t_end, bm_depth_crossing(c0, c1, 2.0 * hidden - 1.0));',
   '  }',
   '#ifdef BM_SHADE_PASS',
   // The nearest hit's depth (useBoxmarchVisibility): where the ray reaches it lies the winning hit;
   // a box that does not hold that point (give or take a margin for the depth's rounding) loses.
   '  float resolved = texture2D(bmResolvedDepth, gl_FragCoord.xy * bmOcclusion.yz).r;',
-  '  vec4 start = objectToClip * vec4(fromEye ? bmEye.xyz : bmObjPos, 1.0);',
-  '  float t_win = bm_depth_crossing(start, objectToClip * vec4(ray / eye_distance, 0.0), 2.0 * resolved - 1.0);',
+  '  float t_win = bm_depth_crossing(c0, c1, 2.0 * resolved - 1.0);',
   // none ahead: the least depth is this fragment's own (a hit on the face, rounded nearer) or
   // nearer, which the depth test has judged
   '  if (t_win > 1e29) t_win = 0.0;',

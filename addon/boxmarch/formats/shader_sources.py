@@ -78,6 +78,9 @@ OCCLUDER_INDEX = ("FLOAT", "occluder_index")
 # depth, kept by the visibility pass (imageAtomicMin) and read by the shade and resolve passes;
 # the full-screen stages' vertex input and the composite's textures.
 HIT_MIN_IMAGE = (1, "R32UI", "UINT_2D", "hit_min")
+# hit_min's value where no hit was kept: the bits of 1.0 (the far plane's window depth), above the
+# bits of every depth kept; defined as BM_NO_HIT in the resolved passes' stages.
+NO_HIT = 0x3F800000
 FULLSCREEN_INPUT = ("VEC2", "pos")
 COMPOSITE_SAMPLERS = ((0, "FLOAT_2D", "shaded_colour"), (1, "FLOAT_2D", "shaded_depth"))
 
@@ -154,8 +157,9 @@ def fragment_source(sdf: str = "BOX", user_text: str | None = None, local_mirror
     body = user_map_source(user_text) if user_text is not None else PRESET_MAPS[sdf]
     if any(float(v) < 0 for v in local_mirror):
         body = engine_map_source(body, local_mirror)
-    return "\n".join([*(["#define BM_RESOLVED"] if resolved else []), read_glsl("decode.glsl"), read_glsl("sdf.glsl"),
-                      read_glsl("box_params.glsl"), read_glsl("raymarch.glsl"), body, read_glsl("preview.frag.glsl")])
+    resolved_defines = ["#define BM_RESOLVED", f"#define BM_NO_HIT {NO_HIT}u"] if resolved else []
+    return "\n".join([*resolved_defines, read_glsl("decode.glsl"), read_glsl("sdf.glsl"), read_glsl("box_params.glsl"),
+                      read_glsl("raymarch.glsl"), body, read_glsl("preview.frag.glsl")])
 
 
 def fullscreen_source(stage: str) -> str:
@@ -163,7 +167,8 @@ def fullscreen_source(stage: str) -> str:
     'resolve_depth', 'composite' or 'composite_steps'."""
     defines = {"vertex": ["BM_VERTEX"], "resolve_depth": ["BM_RESOLVE_DEPTH"], "composite": ["BM_COMPOSITE"],
                "composite_steps": ["BM_COMPOSITE", "BM_COMPOSITE_STEPS"]}[stage]
-    return "\n".join([*(f"#define {name}" for name in defines), read_glsl("preview_resolve.glsl")])
+    return "\n".join([*(f"#define {name}" for name in defines), f"#define BM_NO_HIT {NO_HIT}u",
+                      read_glsl("preview_resolve.glsl")])
 
 
 def vertex_source(layout: str = "CLASSIC", occluder: bool = False) -> str:

@@ -349,8 +349,11 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, 
     settings = ob.boxmarch
     occluders = occlusion.occluder_count(settings.sdf, settings.quality)
     viewport = gpu.state.viewport_get()
-    baked = _mesh(ob.data, settings.layout).baked
-    layers = mesh_data.layers_over_view(baked.origins, baked.box_half_extents, object_to_clip, viewport[2], viewport[3])
+
+    def layers():
+        baked = _mesh(ob.data, settings.layout).baked
+        return mesh_data.layers_over_view(baked.origins, baked.box_half_extents, object_to_clip, viewport[2], viewport[3])
+
     resolved = resolve.used(occluders, layers)
     shader = resolve.prepared(lambda: _marching_shader(ob, True)) if resolved else None
     if shader is None:

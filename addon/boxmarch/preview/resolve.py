@@ -24,9 +24,6 @@ from . import shader as preview_shader
 # On by default where available(); False marches in one pass (the benchmarks compare the two).
 ENABLED = True
 
-# hit_min's value where no hit was kept: the bits of 1.0, the far plane (preview.frag.glsl).
-NO_HIT = 0x3F800000
-
 # The uniform block's pass word (preview.occlusion.w) and the pre-pass switch (occlusion.x).
 _PASS_WORD, _OCCLUDER_WORD = 75, 72
 VISIBILITY, SHADE = 1.0, 2.0
@@ -71,10 +68,11 @@ def prepared(marching_shader):
 MIN_OVERDRAW = 16.0
 
 
-def used(occluders: int, layers: float) -> bool:
-    """Whether an object whose pre-pass draws ``occluders`` boxes, about ``layers`` deep over the
-    view (mesh_data.layers_over_view), marches in the resolved passes."""
-    return ENABLED and occluders > 0 and layers >= MIN_OVERDRAW and available()
+def used(occluders: int, layers) -> bool:
+    """Whether an object whose pre-pass draws ``occluders`` boxes marches in the resolved passes:
+    where they are on and available, and ``layers()`` (its boxes' depth over the view,
+    mesh_data.layers_over_view, computed only then) is at least MIN_OVERDRAW."""
+    return ENABLED and occluders > 0 and available() and layers() >= MIN_OVERDRAW
 
 
 class _Targets:
@@ -134,7 +132,7 @@ def draw(shader, batch, block, occluder_depth, occluder_framebuffer, draw_sides,
     width, height = occluder_depth.width, occluder_depth.height
     targets = _target(width, height)
     state = gpu.state.blend_get(), gpu.state.depth_test_get(), gpu.state.depth_mask_get()
-    targets.hit_min.clear(format="UINT", value=(NO_HIT,))
+    targets.hit_min.clear(format="UINT", value=(shader_sources.NO_HIT,))
     visible = targets.counting(occluder_depth) if counting else occluder_framebuffer
     gpu.state.blend_set("ADDITIVE" if counting else "NONE")
     with visible.bind():
