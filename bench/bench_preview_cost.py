@@ -65,6 +65,15 @@ def baked_object(bpy, name, scene):
     return ob
 
 
+def changed_pixels(image, reference):
+    """(pixels whose colour differs from ``reference``'s by more than 1/255, pixels covered in
+    either image): the rule of the tables' pixels changed."""
+    import numpy as np
+
+    covered = (reference[..., 3] > 0) | (image[..., 3] > 0)
+    return int(((np.abs(image - reference).max(-1) > 1 / 255) & covered).sum()), int(covered.sum())
+
+
 def frame_rows(bpy, name, scene):
     import gpu
     import numpy as np
@@ -107,12 +116,11 @@ def frame_rows(bpy, name, scene):
     today = images[CONFIGS[0]]
     rows = []
     for config in CONFIGS:
-        covered = (today[..., 3] > 0) | (images[config][..., 3] > 0)
-        changed = (np.abs(images[config] - today).max(-1) > 1 / 255) & covered
+        changed, covered = changed_pixels(images[config], today)
         rows.append([name, config[0], f"{evaluations[config]:.1f}", f"{best[config] * 1e3:.0f}",
                      f"{best[CONFIGS[0]] / best[config]:.2f}x",
                      f"{best_cpu[config] * 1e3:.0f}", f"{best_cpu[CONFIGS[0]] / best_cpu[config]:.2f}x",
-                     f"{100 * changed.sum() / max(covered.sum(), 1):.2f}%"])
+                     f"{100 * changed / max(covered, 1):.2f}%"])
     shader.DEPTH_WRITE, draw.FRONT_TO_BACK, occlusion.ENABLED, draw.CULL_BACK_FACES, resolve.ENABLED = ("GREATER", True, True,
                                                                                                     True, True)
     bpy.data.objects.remove(ob)
@@ -156,10 +164,9 @@ def sweep_rows(bpy, made):
                 resolve.MIN_OVERDRAW = 0.0 if resolved else float("inf")
                 best[resolved] = min(best.get(resolved, float("inf")), best_of(1, lambda: preview_frame(
                     offscreen, ob, to_view, projection)))
-        covered = (images[False][..., 3] > 0) | (images[True][..., 3] > 0)
-        changed = (np.abs(images[True] - images[False]).max(-1) > 1 / 255) & covered
+        changed, _covered = changed_pixels(images[True], images[False])
         rows.append([name, f"{layers:.1f}", f"{best[False] * 1e3:.0f}", f"{best[True] * 1e3:.0f}",
-                     f"{best[False] / best[True]:.2f}x", str(int(changed.sum())),
+                     f"{best[False] / best[True]:.2f}x", str(changed),
                      "resolved" if layers >= minimum else "one pass"])
         bpy.data.objects.remove(ob)
     resolve.MIN_OVERDRAW = minimum
