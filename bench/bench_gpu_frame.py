@@ -49,45 +49,36 @@ import numpy as np
 from bench.common import table  # noqa: E402
 from bench.gl_headless import (GL, counted, egl_context, framebuffer, program, read_back, timed_frames,  # noqa: E402
                                timed_frames_exact)
+from bench.gl_preview import PreviewObject  # noqa: E402
 
 REFERENCE_SIZE = (960, 540)
-# (label, fragment source, triangle order, quality)
-CONFIGS = (("shipped", "depth_greater", "octant", 1.0), ("undeclared", "undeclared", "octant", 1.0),
-           ("file order", "depth_greater", "file", 1.0), ("undeclared, file order", "undeclared", "file", 1.0),
-           ("quality 0.5", "depth_greater", "octant", 0.5), ("quality 0.25", "depth_greater", "octant", 0.25),
-           ("face depth (diagnostic)", "face_depth", "octant", 1.0),
-           ("face depth, file order (diagnostic)", "face_depth", "file", 1.0),
-           ("no discard (diagnostic)", "depth_greater_no_discard", "octant", 1.0),
-           ("undeclared, no discard (diagnostic)", "undeclared_no_discard", "octant", 1.0),
-           ("GLSL 4.50 (diagnostic)", "depth_greater_450", "octant", 1.0),
-           ("extension named (diagnostic)", "depth_greater_extension", "octant", 1.0))
+# (label, bench/gl_preview.py PreviewObject.draw's arguments) per set; the first of each set is
+# the base its speed-ups and pixels changed are against.
+CONFIG_SETS = {
+    # what the preview draws: the march in one pass against the pre-pass and the resolved passes
+    "passes": (("today", dict(fragment="undeclared", order="file")),
+               ("depth_greater + octant order", dict()),
+               ("+ back faces culled", dict(cull=True)),
+               ("+ occluders + back faces culled, one pass", dict(cull=True, occluders=True)),
+               ("+ resolved passes", dict(cull=True, occluders=True, resolved=True))),
+    # does the depth declaration or the order keep early depth? (one pass, every face)
+    "declaration": (("undeclared, file order", dict(fragment="undeclared", order="file")),
+                    ("depth_greater + octant order", dict()),
+                    ("undeclared", dict(fragment="undeclared")),
+                    ("file order", dict(order="file")),
+                    ("quality 0.5", dict(quality=0.5)), ("quality 0.25", dict(quality=0.25)),
+                    ("face depth (diagnostic)", dict(fragment="face_depth")),
+                    ("face depth, file order (diagnostic)", dict(fragment="face_depth", order="file")),
+                    ("no discard (diagnostic)", dict(fragment="depth_greater_no_discard")),
+                    ("undeclared, no discard (diagnostic)", dict(fragment="undeclared_no_discard")),
+                    ("GLSL 4.50 (diagnostic)", dict(fragment="depth_greater_450")),
+                    ("extension named (diagnostic)", dict(fragment="depth_greater_extension")))}
+SHIPPED = ("+ occluders + back faces culled, one pass", "+ resolved passes")
 # The naive frame is drawn in strips (measure_naive): on the H100, 16 strips of 960 x 34 px queued
 # at once returned nonsense timer values and an empty image (the driver stopping long GPU work).
 NAIVE_ROWS = 4
 NAIVE_BUDGET_MS = 20000.0
 GL_FRAGMENT_SHADER_INVOCATIONS = 0x82F4  # ARB_pipeline_statistics_query
-
-
-def vertex_array(data, names):
-    """One VAO of the preview's vertex inputs (attribute i = names[i], as the create-info declares
-    them) and an element buffer per triangle order."""
-    vao = GL.glGenVertexArrays(1)
-    GL.glBindVertexArray(vao)
-    for location, name in enumerate(names):
-        values = np.ascontiguousarray(data[f"input_{name}"], np.float32)
-        buffer = GL.glGenBuffers(1)
-        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, buffer)
-        GL.glBufferData(GL.GL_ARRAY_BUFFER, values.nbytes, values, GL.GL_STATIC_DRAW)
-        GL.glEnableVertexAttribArray(location)
-        GL.glVertexAttribPointer(location, values.shape[1], GL.GL_FLOAT, GL.GL_FALSE, 0, None)
-    elements = {}
-    for order in ("file", "octant"):
-        triangles = np.ascontiguousarray(data[f"triangles_{order}"], np.uint32)
-        buffer = GL.glGenBuffers(1)
-        GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, buffer)
-        GL.glBufferData(GL.GL_ELEMENT_ARRAY_BUFFER, triangles.nbytes, triangles, GL.GL_STATIC_DRAW)
-        elements[order] = (buffer, triangles.size)
-    return vao, elements
 
 
 def view_distance(depth, object_to_clip, object_to_view):
@@ -114,39 +105,26 @@ def compare(data, quality, rgba, depth):
     return result
 
 
-def measure_scene(data, sizes, passes):
-    """{config label: {size: {"ms": [median per pass], "mean": ..., "frames": ...}}} and the
-    correctness of each configuration at REFERENCE_SIZE."""
-    names = [str(n) for n in data["input_names"]]
-    vao, elements = vertex_array(data, names)
-    programs = {kind: program(data["source_vertex"], data[f"source_fragment_{kind}"])
-                for kind in {config[1] for config in CONFIGS}}
-    ubo = GL.glGenBuffers(1)
-    block = np.array(data["uniform_block"], np.float32)
-    for handle in programs.values():
-        GL.glUniformBlockBinding(handle, GL.glGetUniformBlockIndex(handle, "_preview"), 0)
+def changed_pixels(image, depth, base_image, base_depth):
+    """(pixels whose colour differs from the base's by more than 1/255, pixels whose depth differs
+    at all, pixels covered in either image)."""
+    covered = (depth < 1.0) | (base_depth < 1.0)
+    colour = (np.abs(image - base_image).max(-1) > 1 / 255) & covered
+    return int(colour.sum()), int(((depth != base_depth) & covered).sum()), int(covered.sum())
+
+
+def measure_scene(data, sizes, passes, configs):
+    """{config label: {size: {"median_ms": [per pass], "mean_ms": ..., "frames": ...}}} and, at
+    REFERENCE_SIZE, each configuration's picture against the CPU reference and the first
+    configuration's, and its fragment shader invocations."""
+    drawn = PreviewObject(data)
     times, checks = {}, {}
     for width, height in sizes:
         fbo = framebuffer(width, height)
-        for config in CONFIGS:
-            label, kind, order, quality = config
-            block[64:66] = quality, height  # quality.x, quality.y (uniform_block_data)
-            GL.glBindBuffer(GL.GL_UNIFORM_BUFFER, ubo)
-            GL.glBufferData(GL.GL_UNIFORM_BUFFER, block.nbytes, block, GL.GL_DYNAMIC_DRAW)
-            GL.glBindBufferBase(GL.GL_UNIFORM_BUFFER, 0, ubo)
-            GL.glUseProgram(programs[kind])
-            GL.glBindVertexArray(vao)
-            buffer, count = elements[order]
-            GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, buffer)
-
+        base = None
+        for label, arguments in configs:
             def frame():
-                GL.glClearColor(0.0, 0.0, 0.0, 0.0)
-                GL.glClearDepth(1.0)
-                GL.glDepthMask(GL.GL_TRUE)
-                GL.glEnable(GL.GL_DEPTH_TEST)
-                GL.glDepthFunc(GL.GL_LEQUAL)
-                GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
-                GL.glDrawElements(GL.GL_TRIANGLES, count, GL.GL_UNSIGNED_INT, None)
+                drawn.draw(fbo, width, height, **arguments)
 
             runs = [timed_frames(frame) for _ in range(passes)]
             times.setdefault(label, {})[f"{width}x{height}"] = {
@@ -154,10 +132,20 @@ def measure_scene(data, sizes, passes):
                 "frames": [len(r) for r in runs]}
             if (width, height) == REFERENCE_SIZE:
                 invocations = counted(GL_FRAGMENT_SHADER_INVOCATIONS, frame)
-                checks[label] = compare(data, quality, *read_back(width, height))
-                checks[label]["shader_invocations"] = invocations
+                rgba, depth = read_back(width, height)
+                base = base or (rgba, depth)
+                check = compare(data, arguments.get("quality", 1.0), rgba, depth)
+                check["shader_invocations"] = invocations
+                check["colour_changed"], check["depth_changed"], check["covered"] = changed_pixels(rgba, depth, *base)
+                checks[label] = check
         GL.glDeleteFramebuffers(1, [fbo])
     return times, checks
+
+
+def shipped_label(data, size):
+    """The configuration the preview draws at ``size``: the resolved passes where the boxes lie
+    resolve.MIN_OVERDRAW layers deep or more (draw_object), else the one pass."""
+    return SHIPPED[1] if float(data[f"layers_{size}"]) >= float(data["min_overdraw"]) else SHIPPED[0]
 
 
 def measure_naive(data, sizes):
@@ -226,30 +214,39 @@ def parse_sizes(text):
 
 def report(result):
     lines = [f"{result['renderer']} | OpenGL {result['version']}", ""]
-    base = CONFIGS[3][0]
-    headers = ["scene", "size", *[c[0] for c in CONFIGS]]
+    labels = result["configs"]
+    base = labels[0]
     rows = []
     for scene, entry in result["scenes"].items():
         for size in entry["times"].get(base, {}):
+            def ms(label):
+                return min(entry["times"][label][size]["median_ms"])
+
             def cell(label):
-                ms = min(entry["times"][label][size]["median_ms"])
-                ratio = min(entry["times"][base][size]["median_ms"]) / ms
-                return f"{ms:.3f} ({ratio:.2f}x)"
-            rows.append([scene, size, *[cell(c[0]) for c in CONFIGS]])
-    lines += [] if not rows else ["GPU ms per frame (median of the frames, lower of two passes; speed-up against "
+                return f"{ms(label):.3f} ({ms(base) / ms(label):.2f}x)"
+            shipped = entry["shipped"].get(size)
+            rows.append([scene, size, *[cell(label) for label in labels]]
+                        + ([f"{shipped}: {cell(shipped)}"] if shipped else []))
+    headers = ["scene", "size", *labels] + (["shipped (the preview's choice)"] if result["set"] == "passes" else [])
+    lines += [] if not rows else ["GPU ms per frame (median of the frames, lower of the passes; speed-up against "
               f"'{base}')", table(headers, rows), ""]
     rows = []
     for scene, entry in result["scenes"].items():
         for label, check in entry["checks"].items():
             invocations = check.get("shader_invocations")
-            per_pixel = "-" if invocations is None else \
-                f"{invocations / max(check['coverage'] * REFERENCE_SIZE[0] * REFERENCE_SIZE[1], 1):.2f}"
+            covered = max(check["coverage"] * REFERENCE_SIZE[0] * REFERENCE_SIZE[1], 1)
+            per_pixel = "-" if invocations is None else f"{invocations / covered:.2f}"
+            changed = max(check["covered"], 1)
             rows.append([scene, label, f"{100 * check['coverage']:.2f}", f"{100 * check['coverage_agreement']:.3f}",
-                         per_pixel,
+                         per_pixel, f"{check['colour_changed']} ({100 * check['colour_changed'] / changed:.2f} %)",
+                         f"{check['depth_changed']}",
                          f"{check['depth_error_p99']:.2e}", f"{check['depth_error_max']:.2e}",
                          f"{check['colour_error_p99']:.4f}" if "colour_error_p99" in check else "-"])
-    lines += [] if not rows else [f"Against the CPU reference at {REFERENCE_SIZE[0]} x {REFERENCE_SIZE[1]} (same quality)",
-              table(["scene", "config", "coverage %", "coverage agrees %", "shader runs / covered px", "depth err p99", "depth err max",
+    lines += [] if not rows else [f"At {REFERENCE_SIZE[0]} x {REFERENCE_SIZE[1]}: fragment shader runs (every pass), pixels "
+              f"changed against '{base}' (colour by more than 1/255; depth at all), and against the CPU reference "
+              "(same quality)",
+              table(["scene", "config", "coverage %", "coverage agrees %", "shader runs / covered px",
+                     f"colour changed vs '{base}'", "depth changed", "depth err p99", "depth err max",
                      "colour err p99"], rows), ""]
     for scene, naive in result.get("naive", {}).items():
         for size, entry in naive.items():
@@ -281,11 +278,14 @@ def main():
                         help="the same view at these sizes, empty: no naive frame")
     parser.add_argument("--scenes", default="", help="comma-separated file stems (default: every .npz)")
     parser.add_argument("--passes", type=int, default=2)
+    parser.add_argument("--set", default="passes", choices=sorted(CONFIG_SETS),
+                        help="passes: the preview's passes, today against what it draws; declaration: the "
+                             "depth declaration, order and quality in one pass, and diagnostics")
     parser.add_argument("--json", type=Path)
     args = parser.parse_args()
     egl_context()
     result = {"renderer": GL.glGetString(GL.GL_RENDERER).decode(), "version": GL.glGetString(GL.GL_VERSION).decode(),
-              "scenes": {}, "naive": {}}
+              "set": args.set, "configs": [label for label, _ in CONFIG_SETS[args.set]], "scenes": {}, "naive": {}}
     print(result["renderer"], "|", result["version"], flush=True)
     wanted = [s for s in args.scenes.split(",") if s]
     for path in sorted(args.data.glob("*.npz")):
@@ -293,9 +293,13 @@ def main():
             continue
         data = dict(np.load(path))
         name = str(data["info"][0])
-        times, checks = measure_scene(data, parse_sizes(args.sizes), args.passes)
+        sizes = parse_sizes(args.sizes)
+        times, checks = measure_scene(data, sizes, args.passes, CONFIG_SETS[args.set])
         result["scenes"][name] = {"boxes": int(data["info"][2]), "sdf": str(data["info"][1]), "times": times,
-                                  "checks": checks}
+                                  "checks": checks,
+                                  "layers": {f"{w}x{h}": float(data[f"layers_{w}x{h}"]) for w, h in sizes},
+                                  "shipped": {f"{w}x{h}": shipped_label(data, f"{w}x{h}") for w, h in sizes
+                                              if args.set == "passes"}}
         print(f"{name}: done", flush=True)
         if args.json:
             args.json.write_text(json.dumps(result, indent=1, allow_nan=False))

@@ -25,6 +25,7 @@ from boxmarch.formats import shader_sources  # noqa: E402
 SCENES = ("cloud", "chain side", "chain down the arm", "pile")
 ASPECT = (16, 9)
 REFERENCE_SIZE = (960, 540)
+SIZES = ((960, 540), (1920, 1080))
 QUALITIES = (1.0, 0.5, 0.25)
 BASE_COLOR = (0.8, 0.8, 0.8, 1.0)
 GL_VERSION = "430 core"  # what Blender's GL backend asks for
@@ -64,7 +65,16 @@ def stage_sources(sdf: str) -> dict:
             **{f"fragment_{kind}_no_discard": shader_sources.gl_declarations("frag", "CLASSIC", GL_VERSION, depth_write)
                + fragment.replace("discard;", "{ gl_FragDepth = 1.0; frag_color = vec4(0.0); return; }")
                for kind, depth_write in (("depth_greater", "GREATER"), ("undeclared", None))},
-            "naive_vertex": NAIVE_VERTEX_SOURCE, "naive_fragment": naive_fragment_source()}
+            "naive_vertex": NAIVE_VERTEX_SOURCE, "naive_fragment": naive_fragment_source(),
+            # the hidden-box pre-pass and the resolved passes (bench/gl_preview.py)
+            "fragment_resolved": shader_sources.gl_declarations("frag", "CLASSIC", GL_VERSION, resolved=True)
+            + shader_sources.fragment_source(sdf, resolved=True),
+            "occluder_vertex": shader_sources.gl_declarations("vert", "CLASSIC", GL_VERSION)
+            + shader_sources.vertex_source("CLASSIC", occluder=True),
+            "occluder_fragment": shader_sources.gl_declarations("frag", "CLASSIC", GL_VERSION)
+            + shader_sources.OCCLUDER_FRAGMENT_SOURCE,
+            **{f"fullscreen_{stage}": shader_sources.fullscreen_declarations(stage) + shader_sources.fullscreen_source(stage)
+               for stage in ("vertex", "resolve_depth", "composite")}}
 
 
 def widescreen(camera):
@@ -74,6 +84,22 @@ def widescreen(camera):
     projection = to_clip @ np.linalg.inv(to_view)
     projection[0, 0] *= ASPECT[1] / ASPECT[0]
     return projection @ to_view, to_view
+
+
+def preview_facts(baked, settings, to_clip, to_view) -> dict:
+    """What draw_object decides for the object (bench/gl_preview.py draws as it does): the
+    pre-pass's draws and shape id (occlusion.py), whether back faces may be culled and are the
+    front ones (a mirroring matrix), and its boxes' layers over the view at each size
+    (mesh_data.layers_over_view: the resolved passes from resolve.MIN_OVERDRAW on)."""
+    from boxmarch.preview import mesh_data, occlusion, resolve
+
+    facts = {"occluder_count": occlusion.occluder_count(settings.sdf), "occluder_shape_id": occlusion.shape_id(settings.sdf),
+             "outward": bool(baked.outward), "mirrored": bool(np.linalg.det(to_view[:3, :3]) < 0.0),
+             "min_overdraw": resolve.MIN_OVERDRAW}
+    for width, height in SIZES:
+        facts[f"layers_{width}x{height}"] = mesh_data.layers_over_view(baked.origins, baked.box_half_extents, to_clip,
+                                                                        width, height)
+    return facts
 
 
 def scene_arrays(bpy, name, scene) -> dict:
@@ -108,6 +134,7 @@ def scene_arrays(bpy, name, scene) -> dict:
         if quality == 1.0:
             arrays["reference_rgba8"] = np.rint(np.clip(reference.rgba, 0, 1) * 255).astype(np.uint8)
     arrays.update({f"source_{k}": np.array(v) for k, v in stage_sources(settings.sdf).items()})
+    arrays.update(preview_facts(baked, settings, to_clip, to_view))
     arrays["info"] = np.array([name, settings.sdf, str(len(baked.origins)), str(octant)])
     bpy.data.objects.remove(ob)
     return arrays

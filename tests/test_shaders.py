@@ -62,7 +62,7 @@ def test_every_glsl_file_is_compiled():
         assert path.read_text() in used, f"{path.name} is not part of the compiled preview"
 
 
-@pytest.mark.parametrize("stage", ["marching", "resolve_depth", "composite", "composite_steps"])
+@pytest.mark.parametrize("stage", ["marching", "vertex", "resolve_depth", "composite", "composite_steps"])
 def test_resolved_pass_stages_compile(tmp_path, stage):
     """The resolved passes' stages (preview/resolve.py) under the declarations Blender makes of
     their create-infos: the marching stage with the hit_min image and no gl_FragDepth (so the depth
@@ -71,12 +71,8 @@ def test_resolved_pass_stages_compile(tmp_path, stage):
         source = shader_sources.gl_declarations("frag", resolved=True) + shader_sources.fragment_source("LINK", resolved=True)
         assert "gl_FragDepth" not in source.split("#else")[0].split("#ifdef BM_RESOLVED")[-1]
     else:
-        kind = "image" if stage == "resolve_depth" else "textures"
-        inputs = (f"layout(r32ui) uniform uimage2D {shader_sources.HIT_MIN_IMAGE[3]};" if kind == "image" else
-                  "\n".join(f"uniform sampler2D {name};" for _slot, _type, name in shader_sources.COMPOSITE_SAMPLERS))
-        source = ("#version 430 core\n" + inputs + "\nlayout(location = 0) out vec4 frag_color;\n"
-                  + shader_sources.fullscreen_source(stage))
-    path = tmp_path / f"{stage}.frag"
+        source = shader_sources.fullscreen_declarations(stage) + shader_sources.fullscreen_source(stage)
+    path = tmp_path / f"{stage}.{'vert' if stage == 'vertex' else 'frag'}"
     path.write_text(source)
     proc = subprocess.run([validator(), str(path)], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout + proc.stderr

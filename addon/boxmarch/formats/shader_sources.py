@@ -171,6 +171,23 @@ def fullscreen_source(stage: str) -> str:
                       read_glsl("preview_resolve.glsl")])
 
 
+def fullscreen_declarations(stage: str) -> str:
+    """What Blender's GL backend puts before a full-screen stage of the resolved passes from its
+    create-info (preview/shader.py fullscreen_shader): the vertex input, the hit_min image or the
+    composite's textures, the colour output. For compilers and drivers outside Blender (tests,
+    bench/gl_preview.py)."""
+    lines = ["#version 430 core"]
+    if stage == "vertex":
+        lines.append(f"layout(location = 0) in {GLSL_TYPES[FULLSCREEN_INPUT[0]]} {FULLSCREEN_INPUT[1]};")
+    elif stage == "resolve_depth":
+        lines.append(f"layout(r32ui) uniform uimage2D {HIT_MIN_IMAGE[3]};")
+    else:
+        lines += [f"uniform sampler2D {name};" for _slot, _type, name in COMPOSITE_SAMPLERS]
+    if stage != "vertex":
+        lines += [f"layout(location = {slot}) out {GLSL_TYPES[t]} {name};" for slot, t, name in FRAGMENT_OUTPUTS]
+    return "\n".join(lines) + "\n"
+
+
 def vertex_source(layout: str = "CLASSIC", occluder: bool = False) -> str:
     """The vertex stage as Blender compiles it: ``layout``'s decode (the shipped decode.glsl);
     ``occluder``: the hidden-box pre-pass's, which pulls each box in to its occluder box number
