@@ -135,7 +135,7 @@ void create_device(Gpu& gpu, const std::string& choice) {
     for (uint32_t i = 0; i < count; ++i) {
         VkPhysicalDeviceProperties properties;
         vkGetPhysicalDeviceProperties(devices[i], &properties);
-        std::fprintf(stderr, "device %u: %s\n", i, properties.deviceName);
+        std::printf("device %u: %s\n", i, properties.deviceName);
         bool named =
                 !choice.empty() && (choice == std::to_string(i) || std::strstr(properties.deviceName, choice.c_str()));
         bool first_gpu = choice.empty() && properties.deviceType != VK_PHYSICAL_DEVICE_TYPE_CPU;
