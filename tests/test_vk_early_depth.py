@@ -12,6 +12,8 @@ figures must be whatever the driver culls, checked against what is known without
 * The depth written lies a quarter to a half of a layer gap behind the face (0 where the shader
   writes none, writes the face's own depth, or runs under early_fragment_tests, whose depth write
   the Vulkan specification says has no effect).
+* The Khronos validation layer (core, synchronization and best-practice checks) reports nothing
+  about the harness's use of Vulkan.
 * Each variant's SPIR-V declares its depth execution modes (spirv-dis, not the harness's reader),
   and a module with the wrong ones, a missing shader, an unknown device or a bad option stops the
   harness with one line and no JSON.
@@ -23,6 +25,7 @@ early_fragment_tests take about 0.2x their back-to-front time, the depth-writing
 depth_greater included, about 0.9x."""
 import json
 import os
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -145,6 +148,22 @@ def test_depth_written_behind_the_face(measured):
             written = results[variant, order]["depth_above_face_in_layer_gaps"]
             assert abs(written - (0.0 if order == "behind_cleared_depth" else depth)) < 1e-4, (variant, order)
     assert 0.3 < offset < 0.45  # the check above tells a write from none
+
+
+def test_the_validation_layer_reports_nothing(built, tmp_path):
+    layer = Path("/usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json")
+    need(None if layer.exists() else "the Khronos validation layer is missing (apt-get install vulkan-validationlayers)")
+    checks = ["VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT", "VK_VALIDATION_FEATURE_ENABLE_BEST_PRACTICES_EXT"]
+    proc = subprocess.run([str(built / "vk_early_depth"), "--device", "llvmpipe", "--size", "32x32", "--layers", "2",
+                           "--iterations", "4", "--max-frames", "1", "--json", str(tmp_path / "figures.json")],
+                          env=dict(lavapipe_environment(), VK_INSTANCE_LAYERS="VK_LAYER_KHRONOS_validation",
+                                   VK_LAYER_ENABLES=":".join(checks), VK_LOADER_DEBUG="layer"),
+                          capture_output=True, text=True, timeout=120)
+    output = proc.stdout + proc.stderr
+    assert proc.returncode == 0, output[-3000:]
+    # The loader's own log shows the layer in place, so silence means it checked and found nothing.
+    assert 'Insert instance layer "VK_LAYER_KHRONOS_validation"' in output
+    assert re.findall(r".*Validation (?:Error|Warning|Performance Warning).*", output) == []
 
 
 def test_spirv_declares_each_variants_depth_modes(built, measured):

@@ -34,12 +34,14 @@
 // Run: OUT/vk_early_depth [--size 960x540] [--layers 16] [--iterations 1024] [--budget-ms 500]
 //      [--max-frames 200] [--device NAME|INDEX] [--shaders DIR] [--json PATH] [--images DIR]
 // The shaders are read from the binary's folder unless --shaders names another. The device is the
-// first that is not a CPU (else the first) unless --device names one. The Vulkan loader finds the
+// first that is not a CPU unless --device names one (by its index or part of its name: a machine
+// with CPU devices only, like lavapipe's, needs --device). The Vulkan loader finds the
 // driver from its ICD JSON; where it does not (NVIDIA's nvidia_icd.json outside the default
 // folders, or to force one driver), set VK_DRIVER_FILES (loader 1.3.234+) and VK_ICD_FILENAMES
 // (older loaders) to that file, e.g. VK_DRIVER_FILES=/usr/share/vulkan/icd.d/nvidia_icd.json; for
 // Mesa lavapipe /usr/share/vulkan/icd.d/lvp_icd.x86_64.json. Validation, where installed:
-// VK_INSTANCE_LAYERS=VK_LAYER_KHRONOS_validation. Each configuration runs one warm-up frame, then
+// VK_INSTANCE_LAYERS=VK_LAYER_KHRONOS_validation, and for its synchronization checks
+// VK_LAYER_ENABLES=VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT. Each configuration runs one warm-up frame, then
 // frames up to --budget-ms of GPU time (at least 3, at most --max-frames). Exit status: 0, 1 with
 // a one-line message on any failure, 2 when a picture was wrong (the table and JSON still written).
 #include <vulkan/vulkan.h>
@@ -746,7 +748,7 @@ void print_table(const Gpu& gpu, const Options& options, const std::vector<std::
                 options.iterations);
     if (!gpu.has_statistics) std::printf("fragment invocations: unsupported (no pipelineStatisticsQuery)\n");
     if (gpu.timestamp_bits == 0) std::printf("GPU time: unsupported (no timestamps on the graphics queue)\n");
-    std::printf("%-21s %-21s %10s %7s %9s %7s %9s %7s  %s\n", "variant", "order", "shaded/px", "x ctrl", "GPU ms",
+    std::printf("%-21s %-21s %10s %7s %9s %7s %9s %7s  %s\n", "variant", "order", "invoc/px", "x ctrl", "GPU ms",
                 "x ctrl", "depth+", "frames", "picture");
     for (const std::vector<Measurement>& order : results) {
         for (const Measurement& m : order) {
@@ -757,8 +759,9 @@ void print_table(const Gpu& gpu, const Options& options, const std::vector<std::
         }
     }
     std::printf(
-            "shaded/px: fragment shader invocations per pixel (layers shaded); x ctrl: against no_depth_write in\n"
-            "the same order; depth+: mean depth written above the visible face, in gaps between layers.\n");
+            "invoc/px: fragment shader invocations counted per pixel (a GPU counts the layers it shades); x ctrl:\n"
+            "against no_depth_write in the same order; depth+: mean depth written above the visible face, in gaps\n"
+            "between layers.\n");
     // Where early depth works, the fragments behind the cleared depth are neither shaded nor (on a
     // GPU) counted; a driver that counts before its own early test shows it in the time alone.
     std::printf("behind the cleared depth, against the same variant back to front (1.000 where nothing is culled):\n");
