@@ -8,7 +8,8 @@ here="$(cd "$(dirname "$0")" && pwd)"
 out="${1:-$here/build}"
 mkdir -p "$out"
 
-# compile STAGE OUTPUT [DEFINE]: glslangValidator prints its errors on stdout; shown only on failure.
+# compile STAGE OUTPUT DEFINE SOURCE (DEFINE may be empty): glslangValidator prints its errors on
+# stdout, shown only on failure.
 compile() {
   local log
   if ! log="$(glslangValidator -V -S "$1" ${3:+"-D$3"} -o "$out/$2" "$here/$4")"; then
@@ -20,9 +21,11 @@ compile vert layers.vert.spv "" layers.vert.glsl
 for variant in no_depth_write depth_undeclared depth_greater depth_unchanged early_fragment_tests; do
   compile frag "$variant.frag.spv" "VARIANT_${variant^^}" layer.frag.glsl
 done
-# Static libstdc++ and libgcc: the binary runs on other distributions with only libvulkan.so.1
-# (found beside the binary first, through the $ORIGIN run path, then the system's). The Vulkan
-# structures are zero-filled by naming only their sType: the warning about the rest is off.
+# Static libstdc++ and libgcc, and the Vulkan loader copied beside the binary (found there first
+# through the $ORIGIN run path): OUT runs as it is on another x86-64 Linux with glibc 2.36 or later
+# and a Vulkan driver, with or without a loader of its own. The Vulkan structures are zero-filled
+# by naming only their sType: the warning about the rest is off.
 # shellcheck disable=SC2016  # '$ORIGIN' is for the dynamic linker, not the shell
-g++ -std=c++17 -O2 -Wall -Wextra -Wno-missing-field-initializers -static-libstdc++ -static-libgcc -Wl,-rpath,'$ORIGIN' \
-    -o "$out/vk_early_depth" "$here/vk_early_depth.cpp" -lvulkan
+g++ -std=c++17 -O2 -Wall -Wextra -Wno-missing-field-initializers -static-libstdc++ -static-libgcc \
+    -Wl,-rpath,'$ORIGIN' -o "$out/vk_early_depth" "$here/vk_early_depth.cpp" -lvulkan
+cp -L "$(g++ -print-file-name=libvulkan.so.1)" "$out/libvulkan.so.1"

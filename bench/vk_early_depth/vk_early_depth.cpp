@@ -28,9 +28,9 @@
 // depth written above the visible face.
 //
 // Build (Debian 12: glslang-tools, libvulkan-dev, g++): bash bench/vk_early_depth/build.sh [OUT]
-// writes OUT (default bench/vk_early_depth/build/): vk_early_depth, layers.vert.spv and the five
-// <variant>.frag.spv. The binary links libvulkan.so.1 (looked up beside it first), libstdc++ and
-// libgcc statically.
+// writes OUT (default bench/vk_early_depth/build/): vk_early_depth, layers.vert.spv, the five
+// <variant>.frag.spv and a copy of the Vulkan loader, libvulkan.so.1, which the binary looks up
+// beside itself first (libstdc++ and libgcc are linked statically): OUT runs as it is elsewhere.
 // Run: OUT/vk_early_depth [--size 960x540] [--layers 16] [--iterations 1024] [--budget-ms 500]
 //      [--max-frames 200] [--device NAME|INDEX] [--shaders DIR] [--json PATH] [--images DIR]
 // The shaders are read from the binary's folder unless --shaders names another. The device is the
@@ -39,7 +39,9 @@
 // driver from its ICD JSON; where it does not (NVIDIA's nvidia_icd.json outside the default
 // folders, or to force one driver), set VK_DRIVER_FILES (loader 1.3.234+) and VK_ICD_FILENAMES
 // (older loaders) to that file, e.g. VK_DRIVER_FILES=/usr/share/vulkan/icd.d/nvidia_icd.json; for
-// Mesa lavapipe /usr/share/vulkan/icd.d/lvp_icd.x86_64.json. Validation, where installed:
+// Mesa lavapipe /usr/share/vulkan/icd.d/lvp_icd.x86_64.json. A driver installed without its JSON
+// can be named by one written by hand: NVIDIA's reads {"file_format_version": "1.0.0", "ICD":
+// {"library_path": "libGLX_nvidia.so.0", "api_version": "1.3.0"}}. Validation, where installed:
 // VK_INSTANCE_LAYERS=VK_LAYER_KHRONOS_validation, and for its synchronization checks
 // VK_LAYER_ENABLES=VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT. Each configuration runs one warm-up frame, then
 // frames up to --budget-ms of GPU time (at least 3, at most --max-frames). Exit status: 0, 1 with
@@ -133,13 +135,15 @@ void create_device(Gpu& gpu, const std::string& choice) {
     check(vkEnumeratePhysicalDevices(gpu.instance, &count, devices.data()), "vkEnumeratePhysicalDevices");
     // A machine with a GPU may list Mesa's CPU driver first: take the first real device by default,
     // and refuse to fall back to a CPU one unasked (a GPU run would time software rendering).
+    // --device 1 names the second device, even where the first one's name holds a "1" (H100).
+    bool by_index = !choice.empty() && choice.find_first_not_of("0123456789") == std::string::npos;
     int chosen = -1;
     for (uint32_t i = 0; i < count; ++i) {
         VkPhysicalDeviceProperties properties;
         vkGetPhysicalDeviceProperties(devices[i], &properties);
         std::printf("device %u: %s\n", i, properties.deviceName);
-        bool named =
-                !choice.empty() && (choice == std::to_string(i) || std::strstr(properties.deviceName, choice.c_str()));
+        bool named = by_index ? choice == std::to_string(i)
+                              : !choice.empty() && std::strstr(properties.deviceName, choice.c_str()) != nullptr;
         bool first_gpu = choice.empty() && properties.deviceType != VK_PHYSICAL_DEVICE_TYPE_CPU;
         if (chosen < 0 && (named || first_gpu)) chosen = int(i);
     }
