@@ -17,6 +17,7 @@ APT_PACKAGES=(blender python3-numpy glslang-tools xvfb xauth
               assimp-utils  # tests/engines/fbx_libraries.py: Assimp reads the FBX exports
               mono-mcs mono-runtime  # tests/test_engine_import_settings.py: the Unity postprocessor compiled against a stub of Unity's API and run under mono
               clang-format-14  # tests/test_house.py: the cpp/ style check
+              libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers  # bench/vk_early_depth: the Vulkan harness's headers and loader, run on lavapipe under validation (tests/test_vk_early_depth.py)
               shellcheck)  # actionlint checks the workflows' run: scripts with it (tests/test_workflows.py)
 # Beyond the demo's (DEMO_PIP_PACKAGES, bpy 5.0 among them): the test and lint tools.
 PIP_PACKAGES=(pytest hypothesis matplotlib
