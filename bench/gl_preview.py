@@ -101,6 +101,7 @@ class PreviewObject:
         self.triangle = _fullscreen_triangle()
         self.no_depth = _texture(1, 1, GL.GL_DEPTH_COMPONENT32F)
         self.size = None
+        self.draws = 0  # draw calls made (the benchmarks report a frame's)
 
     def _set_samplers(self):
         for handle in self.programs.values():
@@ -143,6 +144,7 @@ class PreviewObject:
         GL.glBindVertexArray(self.vao)
         GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, buffer)
         GL.glDrawElements(GL.GL_TRIANGLES, count, GL.GL_UNSIGNED_INT, None)
+        self.draws += 1
 
     def _draw_sides(self, order, cull, quality, height, eye_depth_test=False, **words):
         """draw.py _draw_sides: every face in one draw, or the boxes not holding the eye (back
@@ -229,6 +231,7 @@ class PreviewObject:
     def _fullscreen(self):
         GL.glBindVertexArray(self.triangle)
         GL.glDrawArrays(GL.GL_TRIANGLES, 0, 3)
+        self.draws += 1
 
     def draw(self, target, width, height, fragment="depth_greater", order="octant", quality=1.0, cull=False,
              occluders=False, resolved=False):

@@ -11,7 +11,7 @@ generates from its create-info, with and without the depth_greater declaration; 
 full-screen raymarch (naive_fullscreen.frag.glsl) is assembled as bench_preview.py compiles it.
 The CPU reference (core.render_boxes, every quality of QUALITIES) at REFERENCE_SIZE.
 
-    PYTHONPATH=addon python3 -m bench.gpu_frame_data OUTDIR          # bpy 5.0.1 (PyPI module)
+    PYTHONPATH=addon python3 -m bench.gpu_frame_data OUTDIR [--chains 1000,10000,100000]  # bpy 5.0.1
 """
 import sys
 from pathlib import Path
@@ -102,15 +102,11 @@ def preview_facts(baked, settings, to_clip, to_view) -> dict:
     return facts
 
 
-def scene_arrays(bpy, name, scene) -> dict:
-    from bench.bench_preview_cost import baked_object
-    from boxmarch import core
+def preview_arrays(baked, settings, to_clip, to_view) -> dict:
+    """What the preview uploads to draw a baked object (CLASSIC layout) and what draw_object
+    decides for it (preview_facts), with the shader sources."""
     from boxmarch.preview import draw, mesh_data
 
-    ob = baked_object(bpy, name, scene)
-    settings = ob.boxmarch
-    to_clip, to_view = widescreen(scene[4])
-    baked = mesh_data.read_baked(ob.data)
     inputs = mesh_data.layout_inputs("CLASSIC", baked)
     octant = mesh_data.view_octant(to_view)
     arrays = {f"input_{k}": np.ascontiguousarray(v, np.float32) for k, v in inputs.items()}
@@ -120,6 +116,21 @@ def scene_arrays(bpy, name, scene) -> dict:
     arrays["uniform_block"] = draw.uniform_block_data(to_clip, to_view, True, settings, 0, BASE_COLOR, None,
                                                       REFERENCE_SIZE[1])
     arrays["object_to_clip"], arrays["object_to_view"] = to_clip, to_view
+    arrays.update({f"source_{k}": np.array(v) for k, v in stage_sources(settings.sdf).items()})
+    arrays.update(preview_facts(baked, settings, to_clip, to_view))
+    return arrays
+
+
+def scene_arrays(bpy, name, scene) -> dict:
+    from bench.bench_preview_cost import baked_object
+    from boxmarch import core
+    from boxmarch.preview import mesh_data
+
+    ob = baked_object(bpy, name, scene)
+    settings = ob.boxmarch
+    to_clip, to_view = widescreen(scene[4])
+    baked = mesh_data.read_baked(ob.data)
+    arrays = preview_arrays(baked, settings, to_clip, to_view)
     arrays["march"] = np.array([settings.epsilon, settings.relaxation, settings.max_distance, settings.max_steps])
     boxes = np.zeros((len(baked.origins), 3, 4), np.float32)  # the naive shader's texture
     boxes[:, 0, :3], boxes[:, 1], boxes[:, 2, :3] = baked.origins, baked.box_quaternions, baked.box_half_extents
@@ -133,27 +144,58 @@ def scene_arrays(bpy, name, scene) -> dict:
         arrays[f"reference_depth_{quality}"] = reference.depth
         if quality == 1.0:
             arrays["reference_rgba8"] = np.rint(np.clip(reference.rgba, 0, 1) * 255).astype(np.uint8)
-    arrays.update({f"source_{k}": np.array(v) for k, v in stage_sources(settings.sdf).items()})
-    arrays.update(preview_facts(baked, settings, to_clip, to_view))
-    arrays["info"] = np.array([name, settings.sdf, str(len(baked.origins)), str(octant)])
+    arrays["info"] = np.array([name, settings.sdf, str(len(baked.origins)), str(mesh_data.view_octant(to_view))])
     bpy.data.objects.remove(ob)
     return arrays
 
 
+def chain_arrays(bpy, count) -> dict:
+    """bench_boxes_vs_triangles.chain_rows(count) baked and stored compactly (chain_data.py), with
+    its links' origins and rotations (the triangle mesh is made from them where it is drawn) and
+    the CLASSIC export's vertex bytes."""
+    from bench import chain_data
+    from bench.bench_boxes_vs_triangles import chain_rows, layout_bytes
+    from bench.bench_preview_cost import baked_object
+    from boxmarch.preview import mesh_data
+
+    scene = chain_rows(count)
+    ob = baked_object(bpy, f"chain {count}", scene)
+    baked = mesh_data.read_baked(ob.data)
+    to_clip, to_view, _eye = scene[4]
+    arrays = preview_arrays(baked, ob.boxmarch, to_clip, to_view)
+    vertices_per_box = len(baked.positions) // count
+    stored = chain_data.compact(arrays, 2, vertices_per_box)
+    stored.update({k: v for k, v in arrays.items() if not k.startswith(("input_", "triangles_"))})
+    stored.update(origins=scene[0].astype(np.float32), rotations=scene[1].astype(np.float32),
+                  classic_vertex_bytes=np.int64(layout_bytes()["CLASSIC"] * len(baked.positions)))
+    bpy.data.objects.remove(ob)
+    return stored
+
+
 def main():
+    import argparse
+
     import bpy
 
     import boxmarch
     from bench.bench_gpu_cost import scenes_to_measure
 
-    out = Path(sys.argv[1])
-    out.mkdir(parents=True, exist_ok=True)
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("out", type=Path)
+    parser.add_argument("--chains", default="1000,10000,100000",
+                        help="chain lengths of bench_gpu_triangles.py, written into OUT/chains (empty: none)")
+    args = parser.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)
     made = scenes_to_measure(480, 8)
-    for name in SCENES:
-        path = out / (name.replace(" ", "_") + ".npz")
-        np.savez_compressed(path, **scene_arrays(bpy, name, made[name]))
+    written = [(args.out / (name.replace(" ", "_") + ".npz"), lambda name=name: scene_arrays(bpy, name, made[name]))
+               for name in SCENES]
+    written += [(args.out / "chains" / f"chain_{count}.npz", lambda count=count: chain_arrays(bpy, count))
+                for count in (int(c) for c in args.chains.split(",") if c)]
+    for path, arrays in written:
+        path.parent.mkdir(exist_ok=True)
+        np.savez_compressed(path, **arrays())
         print(f"{path}: {path.stat().st_size / 2**20:.1f} MiB")
     sys.stdout.flush()
     import os
