@@ -85,6 +85,22 @@ def scenes_to_measure(size, far_boxes, height=None):
     return made
 
 
+def smaller_piles(size, height=None, counts=(500, 1000, 2000)):
+    """name -> scene (as scenes_to_measure) of piles of ``counts`` links in the pile's cube under
+    its camera: where the hidden-box techniques start to pay (bench_preview_cost.py --sweep,
+    bench_gpu_frame.py)."""
+    from scripts import chain_arm
+
+    height = size if height is None else height
+    rng = np.random.default_rng(1)
+    made = {}
+    for count in counts:
+        centres = rng.uniform(-2.0, 2.0, (count, 3))
+        made[f"pile of {count}"] = (centres, scenes.random_rotations(count, rng), np.tile(chain_arm.LINK / 2, (count, 1)),
+                                    "LINK", camera((0.0, -7.0, 1.0), (0.0, 0.0, 0.0), size, height))
+    return made
+
+
 def octant_order(origins, eye, object_to_view):
     """The preview's order: boxes sorted along the diagonal of the view direction's octant."""
     direction = -np.asarray(object_to_view)[2, :3]

@@ -143,9 +143,13 @@ def measure_scene(data, sizes, passes, configs):
 
 
 def shipped_label(data, size):
-    """The configuration the preview draws at ``size``: the resolved passes where the boxes lie
-    resolve.MIN_OVERDRAW layers deep or more (draw_object), else the one pass."""
-    return SHIPPED[1] if float(data[f"layers_{size}"]) >= float(data["min_overdraw"]) else SHIPPED[0]
+    """The configuration the preview draws at ``size`` (draw_object): no pre-pass where the boxes
+    lie fewer than occlusion.MIN_LAYERS layers deep, the resolved passes from
+    resolve.MIN_OVERDRAW on, else the pre-pass and one pass."""
+    layers = float(data[f"layers_{size}"])
+    if layers < float(data["min_layers"]):
+        return "+ back faces culled"
+    return SHIPPED[1] if layers >= float(data["min_overdraw"]) else SHIPPED[0]
 
 
 def measure_naive(data, sizes):

@@ -87,8 +87,9 @@ def measure_chain(stored, passes):
     count = int(stored["boxes"])
     rows = []
     for width, height in SIZES:
-        shipped = dict(cull=True, occluders=True,
-                       resolved=float(stored[f"layers_{width}x{height}"]) >= float(stored["min_overdraw"]))
+        layers = float(stored[f"layers_{width}x{height}"])
+        shipped = dict(cull=True, occluders=layers >= float(stored["min_layers"]),
+                       resolved=layers >= float(stored["min_overdraw"]))
         mesh = TriangleMesh(stored, height)
         fbo = framebuffer(width, height)
         frames = {"boxes": lambda: boxes.draw(fbo, width, height, **shipped),

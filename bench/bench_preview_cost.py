@@ -130,46 +130,44 @@ def frame_rows(bpy, name, scene):
 
 def sweep_rows(bpy, made):
     """Piles of 500 to 4,000 links (the pile's cube and camera) and the other scenes, drawn as
-    shipped with the pre-pass, in one pass and in the resolved passes (resolve.MIN_OVERDRAW set
-    aside): frame times side by side, round robin, with mesh_data.layers_over_view."""
+    shipped (back faces culled) without the pre-pass, with it in one pass and with it in the
+    resolved passes (occlusion.MIN_LAYERS and resolve.MIN_OVERDRAW set aside): frame times side by
+    side, round robin, with mesh_data.layers_over_view."""
     import gpu
     import numpy as np
 
-    from boxmarch import scenes
-    from boxmarch.preview import draw, mesh_data, resolve
-    from bench.bench_gpu_cost import camera
+    from bench.bench_gpu_cost import smaller_piles
     from bench.common import best_of, preview_frame
-    from scripts import chain_arm
+    from boxmarch.preview import draw, mesh_data, occlusion, resolve
 
-    rng = np.random.default_rng(1)
-    for count in (500, 1000, 2000):
-        centres = rng.uniform(-2.0, 2.0, (count, 3))
-        made[f"pile of {count}"] = (centres, scenes.random_rotations(count, rng), np.tile(chain_arm.LINK / 2, (count, 1)),
-                                    "LINK", camera((0.0, -7.0, 1.0), (0.0, 0.0, 0.0), WIDTH, HEIGHT))
+    made.update(smaller_piles(WIDTH, HEIGHT))
     offscreen = gpu.types.GPUOffScreen(WIDTH, HEIGHT, format="RGBA32F")
-    rows, minimum = [], resolve.MIN_OVERDRAW
+    kept = occlusion.MIN_LAYERS, resolve.MIN_OVERDRAW
+    ways = {"none": (float("inf"), float("inf")), "one pass": (0.0, float("inf")), "resolved": (0.0, 0.0)}
+    rows = []
     for name in ("chain down the arm", "cloud", "pile of 500", "pile of 1000", "pile of 2000", "pile"):
         ob = baked_object(bpy, name, made[name])
         to_clip, to_view, _eye = made[name][4]
         projection = to_clip @ np.linalg.inv(to_view)
         best, images = {}, {}
-        for resolved in (False, True):
-            resolve.MIN_OVERDRAW = 0.0 if resolved else float("inf")
-            images[resolved] = preview_frame(offscreen, ob, to_view, projection, read=True)
+        for way, limits in ways.items():
+            occlusion.MIN_LAYERS, resolve.MIN_OVERDRAW = limits
+            images[way] = preview_frame(offscreen, ob, to_view, projection, read=True)
         mesh = draw.cached_mesh(ob.data.name_full, ob.boxmarch.layout).baked  # read by the frames above
         layers = mesh_data.layers_over_view(mesh.origins, mesh.box_half_extents, to_clip @ np.array(ob.matrix_world),
                                             WIDTH, HEIGHT)
         for _ in range(REPEATS):
-            for resolved in (False, True):
-                resolve.MIN_OVERDRAW = 0.0 if resolved else float("inf")
-                best[resolved] = min(best.get(resolved, float("inf")), best_of(1, lambda: preview_frame(
+            for way, limits in ways.items():
+                occlusion.MIN_LAYERS, resolve.MIN_OVERDRAW = limits
+                best[way] = min(best.get(way, float("inf")), best_of(1, lambda: preview_frame(
                     offscreen, ob, to_view, projection)))
-        changed, _covered = changed_pixels(images[True], images[False])
-        rows.append([name, f"{layers:.1f}", f"{best[False] * 1e3:.0f}", f"{best[True] * 1e3:.0f}",
-                     f"{best[False] / best[True]:.2f}x", str(changed),
-                     "resolved" if layers >= minimum else "one pass"])
+        changed = max(changed_pixels(images[way], images["none"])[0] for way in ways)
+        shipped = ("resolved" if layers >= kept[1] else "one pass") if layers >= kept[0] else "none"
+        rows.append([name, f"{layers:.1f}", *[f"{best[way] * 1e3:.0f}" for way in ways],
+                     f"{best['none'] / best['one pass']:.2f}x", f"{best['one pass'] / best['resolved']:.2f}x",
+                     str(changed), shipped])
         bpy.data.objects.remove(ob)
-    resolve.MIN_OVERDRAW = minimum
+    occlusion.MIN_LAYERS, resolve.MIN_OVERDRAW = kept
     return rows
 
 
@@ -216,8 +214,8 @@ def main():
     if args.sweep:
         rows = sweep_rows(bpy, made)
         print(f"Blender {bpy.app.version_string}, {gpu.platform.renderer_get()}, {WIDTH} x {HEIGHT} px, best of {REPEATS}")
-        print(table(["scene", "layers over the view", "one pass ms", "resolved ms", "speed-up", "pixels changed",
-                     "shipped"], rows))
+        print(table(["scene", "layers over the view", "no pre-pass ms", "pre-pass, one pass ms", "resolved passes ms",
+                     "pre-pass's speed-up", "resolved against one pass", "pixels changed", "shipped"], rows))
         return
     rows = [row for name in args.scenes.split(",") for row in frame_rows(bpy, name, made[name])]
     print(f"Blender {bpy.app.version_string}, {gpu.platform.renderer_get()}, {WIDTH} x {HEIGHT} px, best of {REPEATS}")

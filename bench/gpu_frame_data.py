@@ -22,7 +22,7 @@ HERE = Path(__file__).resolve().parent
 
 from boxmarch.formats import shader_sources  # noqa: E402
 
-SCENES = ("cloud", "chain side", "chain down the arm", "pile")
+SCENES = ("cloud", "chain side", "chain down the arm", "pile", "pile of 500", "pile of 1000", "pile of 2000")
 ASPECT = (16, 9)
 REFERENCE_SIZE = (960, 540)
 SIZES = ((960, 540), (1920, 1080))
@@ -90,12 +90,13 @@ def preview_facts(baked, settings, to_clip, to_view) -> dict:
     """What draw_object decides for the object (bench/gl_preview.py draws as it does): the
     pre-pass's draws and shape id (occlusion.py), whether back faces may be culled and are the
     front ones (a mirroring matrix), and its boxes' layers over the view at each size
-    (mesh_data.layers_over_view: the resolved passes from resolve.MIN_OVERDRAW on)."""
+    (mesh_data.layers_over_view: the pre-pass from occlusion.MIN_LAYERS on, the resolved passes
+    from resolve.MIN_OVERDRAW on)."""
     from boxmarch.preview import mesh_data, occlusion, resolve
 
     facts = {"occluder_count": occlusion.occluder_count(settings.sdf), "occluder_shape_id": occlusion.shape_id(settings.sdf),
              "outward": bool(baked.outward), "mirrored": bool(np.linalg.det(to_view[:3, :3]) < 0.0),
-             "min_overdraw": resolve.MIN_OVERDRAW}
+             "min_overdraw": resolve.MIN_OVERDRAW, "min_layers": occlusion.MIN_LAYERS}
     for width, height in SIZES:
         facts[f"layers_{width}x{height}"] = mesh_data.layers_over_view(baked.origins, baked.box_half_extents, to_clip,
                                                                         width, height)
@@ -178,7 +179,7 @@ def main():
     import bpy
 
     import boxmarch
-    from bench.bench_gpu_cost import scenes_to_measure
+    from bench.bench_gpu_cost import scenes_to_measure, smaller_piles
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("out", type=Path)
@@ -188,7 +189,7 @@ def main():
     args.out.mkdir(parents=True, exist_ok=True)
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    made = scenes_to_measure(480, 8)
+    made = {**scenes_to_measure(480, 8), **smaller_piles(480)}
     written = [(args.out / (name.replace(" ", "_") + ".npz"), lambda name=name: scene_arrays(bpy, name, made[name]))
                for name in SCENES]
     written += [(args.out / "chains" / f"chain_{count}.npz", lambda count=count: chain_arrays(bpy, count))

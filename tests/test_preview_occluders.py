@@ -59,6 +59,14 @@ def test_pre_pass_cuts_evaluations_as_the_cost_model_counts(rendered):
     assert on <= 35 and off >= 3 * on
 
 
+def test_no_pre_pass_where_the_boxes_lie_shallower_than_min_layers(rendered):
+    """Below occlusion.MIN_LAYERS (forced here: no depth reaches it) the preview draws no pre-pass:
+    the evaluations are those without it, to the count, and differ from those with it."""
+    below, off, on = (rendered[f"{name}_steps"][..., 1] for name in ("BELOW_MIN_LAYERS", "OFF", "ON"))
+    assert np.array_equal(below, off)
+    assert below.sum() > on.sum()
+
+
 def resolved_or_absent(rendered):
     """The resolved passes' arrays, or None in a Blender without them (3.4: no shader images),
     which must then be that version."""

@@ -60,13 +60,18 @@ configs = {"ON": (True, False, resolve.SHADE), "OFF": (False, False, resolve.SHA
 result["resolved_available"] = resolve.available()
 if resolve.available():
     configs.update(RESOLVED=(True, True, resolve.SHADE), BROKEN=(True, True, resolve.VISIBILITY))
-shade, minimum = resolve.SHADE, resolve.MIN_OVERDRAW
+shade, minimum, min_layers = resolve.SHADE, resolve.MIN_OVERDRAW, occlusion.MIN_LAYERS
+occlusion.MIN_LAYERS = 0.0  # the pre-pass whatever the depth of the boxes (but in BELOW_MIN_LAYERS)
 for name, (enabled, resolved, shade_word) in configs.items():
     occlusion.ENABLED, resolve.ENABLED, resolve.SHADE = enabled, resolved, shade_word
     resolve.MIN_OVERDRAW = 0.0
     result[f"{name}_rgba"], result[f"{name}_depth"] = preview.render(scene, camera, W, H)
     result[f"{name}_steps"] = preview.render(scene, camera, W, H, output="STEPS")[0]
 resolve.SHADE = shade
+# Boxes fewer layers deep than occlusion.MIN_LAYERS: no pre-pass (the same counts as OFF).
+occlusion.ENABLED, resolve.ENABLED, occlusion.MIN_LAYERS = True, True, float("inf")
+result["BELOW_MIN_LAYERS_steps"] = preview.render(scene, camera, W, H, output="STEPS")[0]
+occlusion.MIN_LAYERS = 0.0
 # The hard cases: the eye inside a box of the pile (that box marches from the eye; boxes the near
 # plane cuts lie around it) and the pile mirrored (front faces culled), without the pre-pass, with
 # it and one pass, and in the resolved passes (there the boxes holding the eye draw with the depth
@@ -95,6 +100,7 @@ if resolve.available():
     resolve.refused = None
     pv_shader.clear_cache()
 occlusion.ENABLED, resolve.ENABLED, resolve.SHADE, resolve.MIN_OVERDRAW = True, True, shade, minimum
+occlusion.MIN_LAYERS = min_layers
 
 np.savez_compressed(out_path, **result)
 sys.stdout.flush()

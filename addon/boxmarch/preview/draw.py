@@ -2,6 +2,7 @@
 overlay. Shared by the viewport draw handler and the offscreen render (``preview.render``)."""
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -347,13 +348,15 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, 
         errors[ob.name] = str(exc)
         raise
     settings = ob.boxmarch
-    occluders = occlusion.occluder_count(settings.sdf, settings.quality)
     viewport = gpu.state.viewport_get()
 
+    @functools.cache
     def layers():
         baked = _mesh(ob.data, settings.layout).baked
         return mesh_data.layers_over_view(baked.origins, baked.box_half_extents, object_to_clip, viewport[2], viewport[3])
 
+    occluders = occlusion.occluder_count(settings.sdf, settings.quality)
+    occluders = occluders if occlusion.used(occluders, layers) else 0
     resolved = resolve.used(occluders, layers)
     shader = resolve.prepared(lambda: _marching_shader(ob, True)) if resolved else None
     if shader is None:

@@ -34,6 +34,20 @@ def occluder_count(sdf: str, quality: float = 1.0) -> int:
     return int((core.occluder_boxes(sdf, (1.0, 1.0, 1.0))[1][0].min(axis=1) > 0.0).sum())
 
 
+# Layers of boxes over the view (mesh_data.layers_over_view) from which the pre-pass runs: below
+# it the draws of the occluders cost more than the hidden marches they save. Measured with
+# bench/bench_preview_cost.py --sweep (Mesa llvmpipe) and bench/bench_gpu_frame.py (NVIDIA H200):
+# docs/BENCHMARKS.md, "Where the pre-pass pays".
+MIN_LAYERS = 2.0
+
+
+def used(count: int, layers) -> bool:
+    """Whether an object whose preview shape has ``count`` occluder boxes (occluder_count) draws
+    the pre-pass: ``layers()`` (its boxes' depth over the view, computed only then) is at least
+    MIN_LAYERS."""
+    return count > 0 and layers() >= MIN_LAYERS
+
+
 def shape_id(sdf: str) -> float:
     """The shape id the pre-pass pulls boxes in for: the preset's number, or -1 where each box's
     own id (its parameters' x) decides."""
