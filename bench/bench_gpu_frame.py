@@ -49,7 +49,7 @@ import numpy as np
 from bench.common import table  # noqa: E402
 from bench.gl_headless import (GL, counted, egl_context, framebuffer, program, read_back, timed_frames,  # noqa: E402
                                timed_frames_exact)
-from bench.gl_preview import PreviewObject  # noqa: E402
+from bench.gl_preview import PreviewObject, fullscreen_triangle  # noqa: E402
 
 REFERENCE_SIZE = (960, 540)
 # (label, bench/gl_preview.py PreviewObject.draw's arguments) per set; the first of each set is
@@ -165,14 +165,7 @@ def measure_naive(data, sizes):
     GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_NEAREST)
     GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_NEAREST)
     GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGBA32F, 3, len(boxes), 0, GL.GL_RGBA, GL.GL_FLOAT, boxes)
-    vao = GL.glGenVertexArrays(1)
-    GL.glBindVertexArray(vao)
-    triangle = np.array([-1.0, -1.0, 3.0, -1.0, -1.0, 3.0], np.float32)
-    buffer = GL.glGenBuffers(1)
-    GL.glBindBuffer(GL.GL_ARRAY_BUFFER, buffer)
-    GL.glBufferData(GL.GL_ARRAY_BUFFER, triangle.nbytes, triangle, GL.GL_STATIC_DRAW)
-    GL.glEnableVertexAttribArray(0)
-    GL.glVertexAttribPointer(0, 2, GL.GL_FLOAT, GL.GL_FALSE, 0, None)
+    GL.glBindVertexArray(fullscreen_triangle())
     GL.glUseProgram(handle)
     clip_to_object = np.linalg.inv(data["object_to_clip"]).astype(np.float32)
     GL.glUniformMatrix4fv(GL.glGetUniformLocation(handle, "clip_to_object"), 1, GL.GL_TRUE, clip_to_object)

@@ -26,7 +26,7 @@ from bench.bench_boxes_vs_triangles import (HALF, LINK, TRIANGLE_FRAGMENT, TRIAN
                                             fewest_triangles, pixel_width)
 from bench.common import table
 from bench.gl_headless import GL, egl_context, framebuffer, program, read_back, timed_frames
-from bench.gl_preview import PreviewObject
+from bench.gl_preview import PreviewObject, begin_frame
 
 SIZES = ((960, 540), (1920, 1080))
 DECLARATIONS = {"vert": "#version 430 core\nuniform mat4 to_clip;\nuniform mat4 to_view;\n"
@@ -64,14 +64,7 @@ class TriangleMesh:
         GL.glBufferData(GL.GL_ELEMENT_ARRAY_BUFFER, triangles.nbytes, triangles, GL.GL_STATIC_DRAW)
 
     def draw(self, target, width, height):
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, target)
-        GL.glViewport(0, 0, width, height)
-        GL.glEnable(GL.GL_DEPTH_TEST)
-        GL.glDepthFunc(GL.GL_LEQUAL)
-        GL.glDepthMask(GL.GL_TRUE)
-        GL.glClearColor(0.0, 0.0, 0.0, 0.0)
-        GL.glClearDepth(1.0)
-        GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
+        begin_frame(target, width, height)
         GL.glUseProgram(self.program)
         GL.glBindVertexArray(self.vao)
         GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, self.elements)

@@ -98,7 +98,7 @@ class PreviewObject:
                 GL.glUniformBlockBinding(handle, index, 0)
         self._set_samplers()
         self._blocks = {}
-        self.triangle = _fullscreen_triangle()
+        self.triangle = fullscreen_triangle()
         self.no_depth = _texture(1, 1, GL.GL_DEPTH_COMPONENT32F)
         self.size = None
         self.draws = 0  # draw calls made (the benchmarks report a frame's)
@@ -240,15 +240,7 @@ class PreviewObject:
         ``cull``: back faces culled; ``occluders``: the pre-pass first (at quality 1 only, as
         occlusion.occluder_count); ``resolved``: then the resolved passes."""
         self._targets(width, height)
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, target)
-        GL.glViewport(0, 0, width, height)
-        GL.glDisable(GL.GL_BLEND)
-        GL.glEnable(GL.GL_DEPTH_TEST)
-        GL.glDepthFunc(GL.GL_LEQUAL)
-        GL.glDepthMask(GL.GL_TRUE)
-        GL.glClearColor(0.0, 0.0, 0.0, 0.0)
-        GL.glClearDepth(1.0)
-        GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
+        begin_frame(target, width, height)
         cull = cull and self.outward
         prepass = occluders and self.occluders > 0 and quality == 1.0
         if prepass:
@@ -260,6 +252,20 @@ class PreviewObject:
         GL.glActiveTexture(GL.GL_TEXTURE0)
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.occluder_depth if prepass else self.no_depth)
         self._draw_sides(order, cull, quality, height, occluder=float(prepass), shape=self.shape_id)
+
+
+def begin_frame(target, width, height):
+    """Binds framebuffer ``target``, clears it and sets the viewport's state (depth test
+    LESS_EQUAL, depth writes, no blending), as Blender's viewport draws a previewed object."""
+    GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, target)
+    GL.glViewport(0, 0, width, height)
+    GL.glDisable(GL.GL_BLEND)
+    GL.glEnable(GL.GL_DEPTH_TEST)
+    GL.glDepthFunc(GL.GL_LEQUAL)
+    GL.glDepthMask(GL.GL_TRUE)
+    GL.glClearColor(0.0, 0.0, 0.0, 0.0)
+    GL.glClearDepth(1.0)
+    GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
 
 
 def _compute_program(source):
@@ -274,7 +280,8 @@ def _compute_program(source):
     return handle
 
 
-def _fullscreen_triangle():
+def fullscreen_triangle():
+    """A VAO of one triangle covering the viewport (clip-space xy at attribute 0)."""
     vao = GL.glGenVertexArrays(1)
     GL.glBindVertexArray(vao)
     triangle = np.array([-1.0, -1.0, 3.0, -1.0, -1.0, 3.0], np.float32)

@@ -1,4 +1,5 @@
 #version 450
+#extension GL_GOOGLE_include_directive : require
 // One layer's fragment: `iterations` rounds of a hash stand for a march's work; the variant (a
 // -D VARIANT_... from build.sh) decides what the shader says about its depth. Every variant but
 // no_depth_write writes a depth at or behind the rasterised face's, as boxmarch's march does.
@@ -10,12 +11,7 @@ layout(depth_unchanged) out float gl_FragDepth;
 layout(early_fragment_tests) in;
 #endif
 
-layout(push_constant) uniform Settings {
-    uint layer_count;
-    uint iterations;
-    uint back_to_front;
-    float layer_spacing;
-} settings;
+#include "settings.glsl"
 
 layout(location = 0) flat in uint layer;
 layout(location = 0) out vec4 colour;

@@ -1,14 +1,10 @@
 #version 450
+#extension GL_GOOGLE_include_directive : require
 // One full-screen triangle per instance (no inner edge, so every 2 x 2 quad lies wholly inside
 // one triangle and a layer shades exactly width x height fragments when width and height are
 // even). Instance i draws layer i in front-to-back order and layer L-1-i back to front; layer k
 // lies at depth (k + 1) * layer_spacing, layer 0 nearest.
-layout(push_constant) uniform Settings {
-    uint layer_count;
-    uint iterations;
-    uint back_to_front;
-    float layer_spacing;
-} settings;
+#include "settings.glsl"
 
 layout(location = 0) flat out uint layer;
 

@@ -80,7 +80,7 @@ struct Options {
     std::string device, shaders, json, images;
 };
 
-// The push constants both stages read (layers.vert.glsl, layer.frag.glsl).
+// The push constants both stages read (settings.glsl, included by layers.vert.glsl and layer.frag.glsl).
 struct Settings {
     uint32_t layer_count, iterations, back_to_front;
     float layer_spacing;
