@@ -77,7 +77,7 @@ var BOXMARCH_OCCLUDER_PRESETS = ['BOX', 'SPHERE', 'ROUNDED_BOX', 'CAPSULE', 'CYL
 // Throws, one line naming the option, for createBoxmarchMaterial options it would not draw as
 // given: a number outside BOXMARCH_OPTION_RANGES (or not a number), a map that is not a non-empty
 // string, occluders that are not a name of BOXMARCH_OCCLUDER_PRESETS, 'PER_BOX', true or false,
-// a visibilityPass that is not true or false.
+// a visibilityPass or cullBackFaces that is not true or false.
 // An option left undefined takes its default.
 function checkBoxmarchOptions(options) {
   if (options === undefined || options === null) return;
@@ -95,9 +95,11 @@ function checkBoxmarchOptions(options) {
     throw new Error('boxmarch: option map must be the GLSL body of float map(vec3 p), not '
       + (typeof options.map === 'string' ? 'an empty string' : typeof options.map));
   }
-  if (options.visibilityPass !== undefined && typeof options.visibilityPass !== 'boolean') {
-    throw new Error('boxmarch: option visibilityPass must be true or false, not ' + String(options.visibilityPass));
-  }
+  ['visibilityPass', 'cullBackFaces'].forEach(function (key) {
+    if (options[key] !== undefined && typeof options[key] !== 'boolean') {
+      throw new Error('boxmarch: option ' + key + ' must be true or false, not ' + String(options[key]));
+    }
+  });
   var occluders = options.occluders;
   if (occluders !== undefined && typeof occluders !== 'boolean' && occluders !== 'PER_BOX'
       && BOXMARCH_OCCLUDER_PRESETS.indexOf(occluders) < 0) {
@@ -267,6 +269,83 @@ function sortBoxmarchFrontToBack(THREE, mesh, camera) {
   return true;
 }
 
+// Whether every box of geometry is closed and wound outward, the rule the Blender preview culls
+// by (mesh_data.closed_outward) applied to the triangles the file carries: within each box (the
+// box number of bmOffsetZIndex.y), its vertices welded by position (the glTF export splits them per
+// face corner), each directed edge once and its reverse once, and the box's signed volume
+// positive. Then a box's back faces are its far side, hidden by its own front.
+function boxmarchClosedOutward(geometry) {
+  var position = geometry.getAttribute('position'), number = geometry.getAttribute('bmOffsetZIndex');
+  var index = geometry.index ? geometry.index.array : null, corners = index ? index.length : position.count;
+  if (!corners || corners % 3) return false;
+  var welded = new Map(), id = new Float64Array(position.count);
+  for (var v = 0; v < position.count; v++) {
+    var key = number.getY(v) + ':' + position.getX(v) + ',' + position.getY(v) + ',' + position.getZ(v);
+    if (!welded.has(key)) welded.set(key, welded.size);
+    id[v] = welded.get(key);
+  }
+  var n = welded.size, edges = new Set(), volume = new Map(), corner = [0, 0, 0];
+  for (var t = 0; t < corners; t += 3) {
+    for (var k = 0; k < 3; k++) corner[k] = index ? index[t + k] : t + k;
+    for (k = 0; k < 3; k++) {
+      var edge = id[corner[k]] * n + id[corner[(k + 1) % 3]];
+      if (edges.has(edge)) return false;
+      edges.add(edge);
+    }
+    // the signed volume about the box's first corner: a closed surface's does not depend on the point
+    var box = number.getY(corner[0]);
+    if (!volume.has(box)) volume.set(box, { o: corner[0], sum: 0 });
+    var entry = volume.get(box), p = [];
+    for (k = 0; k < 3; k++) {
+      p.push([position.getX(corner[k]) - position.getX(entry.o), position.getY(corner[k]) - position.getY(entry.o),
+        position.getZ(corner[k]) - position.getZ(entry.o)]);
+    }
+    entry.sum += p[0][0] * (p[1][1] * p[2][2] - p[1][2] * p[2][1]) + p[0][1] * (p[1][2] * p[2][0] - p[1][0] * p[2][2])
+      + p[0][2] * (p[1][0] * p[2][1] - p[1][1] * p[2][0]);
+  }
+  var closed = true;
+  edges.forEach(function (e) { if (closed && !edges.has((e % n) * n + Math.floor(e / n))) closed = false; });
+  volume.forEach(function (entry) { if (!(entry.sum > 0)) closed = false; });
+  return closed;
+}
+
+// A copy of mesh's marching material with defines added (the uniforms shared) drawing `side`.
+function boxmarchMaterialVariant(THREE, mesh, defines, side) {
+  var material = mesh.material.clone();
+  material.uniforms = mesh.material.uniforms;
+  material.defines = Object.assign({}, mesh.material.defines, defines);
+  material.onBeforeCompile = mesh.material.onBeforeCompile;
+  material.side = side;
+  return material;
+}
+
+// Culls the far side of mesh's boxes (given useBoxmarchMaterial's material) where they are closed
+// and wound outward (boxmarchClosedOutward), as the Blender preview does: a back face's fragments
+// return at once, yet SwiftShader runs such a fragment's lanes on through the march (measured:
+// docs/BENCHMARKS.md), so a face never rasterised is the saving. The material draws front faces
+// only (three.js flips the winding for a mirroring matrix); the box holding the eye, whose march
+// starts at the eye, is drawn again with both sides right after the mesh (its onAfterRender), by a
+// mesh that keeps every other box out of view (BM_EYE_BOX_ONLY). A SkinnedMesh is left drawing
+// both sides (skinning may bend a box). Returns that eye-box mesh (also mesh.userData.boxmarchEyeBox), or null.
+function useBoxmarchBackFaceCulling(THREE, mesh) {
+  if (mesh.isSkinnedMesh || !boxmarchClosedOutward(mesh.geometry)) return null;
+  var eyeBox = new THREE.Mesh(mesh.geometry, boxmarchMaterialVariant(THREE, mesh, { BM_EYE_BOX_ONLY: '' }, THREE.DoubleSide));
+  eyeBox.matrixAutoUpdate = false;  // mesh's world matrix, copied before each draw
+  eyeBox.frustumCulled = false;
+  var scene = new THREE.Scene().add(eyeBox);
+  mesh.material.side = THREE.FrontSide;
+  mesh.onAfterRender = function (renderer, parentScene, camera) {
+    eyeBox.matrix.copy(mesh.matrixWorld);
+    eyeBox.matrixWorldNeedsUpdate = true;
+    var autoClear = renderer.autoClear;
+    renderer.autoClear = false;
+    renderer.render(scene, camera);
+    renderer.autoClear = autoClear;
+  };
+  mesh.userData.boxmarchEyeBox = eyeBox;
+  return eyeBox;
+}
+
 // Hidden boxes (docs/ENGINES.md, three.js): a depth pre-pass of each box's conservative
 // occluders (shaders/glsl/box_params.glsl: boxes inscribed in the shape, so the visible surface
 // is at least as near wherever they cover a pixel), drawn by the same geometry with its vertices
@@ -302,22 +381,23 @@ function boxmarchOccluderShape(options) {
 // The pre-pass material: occluder box number bmOccluder.x of shape id bmOccluder.y (< 0: each
 // box's own), none for a box holding the eye (its march starts at the eye); writes its window
 // depth packed into RGBA.
-function createBoxmarchOccluderMaterial(THREE, index, shape) {
+function createBoxmarchOccluderMaterial(THREE, index, shape, side) {
   return new THREE.ShaderMaterial({
     uniforms: { bmEye: { value: new THREE.Vector4(0, 0, 0, 1) }, bmOccluder: { value: new THREE.Vector2(index, shape) } },
     vertexShader: BOXMARCH_DECODE + '\n' + BOXMARCH_LIBRARY + '\n' + BOXMARCH_OCCLUDER_VERTEX,
     fragmentShader: BOXMARCH_DEPTH_PACKING + '\nvoid main() {\n  gl_FragColor = bm_pack_depth(gl_FragCoord.z);\n}\n',
-    side: THREE.DoubleSide
+    side: side
   });
 }
 
 // The pre-pass's draws of geometry's occluders of shape id `shape`: four meshes, box_params.glsl's
 // most (an index a shape lacks draws nothing: its vertices leave the view), their matrices to be
-// copied from the mesh's world matrix before each draw.
-function boxmarchOccluderScene(THREE, geometry, shape) {
+// copied from the mesh's world matrix before each draw; `side`: the faces drawn (the occluders
+// are their boxes scaled and moved, so a box's back faces are their far side too).
+function boxmarchOccluderScene(THREE, geometry, shape, side) {
   var scene = new THREE.Scene();
   for (var k = 0; k < 4; k++) {
-    var occluder = new THREE.Mesh(geometry, createBoxmarchOccluderMaterial(THREE, k, shape));
+    var occluder = new THREE.Mesh(geometry, createBoxmarchOccluderMaterial(THREE, k, shape, side));
     occluder.matrixAutoUpdate = false;
     occluder.frustumCulled = false;
     scene.add(occluder);
@@ -335,7 +415,8 @@ function useBoxmarchOccluders(THREE, mesh, shape) {
   var material = mesh.material;
   var target = new THREE.WebGLRenderTarget(1, 1, { minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
     depthBuffer: true, stencilBuffer: false });
-  var scene = boxmarchOccluderScene(THREE, mesh.geometry, shape);
+  // the boxes' far sides culled where the march culls them (useBoxmarchBackFaceCulling)
+  var scene = boxmarchOccluderScene(THREE, mesh.geometry, shape, mesh.userData.boxmarchEyeBox ? THREE.FrontSide : THREE.DoubleSide);
   var size = new THREE.Vector2(), clear = new THREE.Color(), white = new THREE.Color(1, 1, 1);
   var marching = mesh.onBeforeRender;
   mesh.onBeforeRender = function (renderer, parentScene, camera, geometry, drawnMaterial, group) {
@@ -408,13 +489,10 @@ function createBoxmarchScreenMaterial(THREE, uniforms, body, all) {
 // material (defines; the uniforms shared), front faces tested against the depth buffer, or the
 // back faces of the box holding the eye untested (eyeBox).
 function boxmarchPassMesh(THREE, mesh, defines, eyeBox) {
-  var material = mesh.material.clone();
-  material.uniforms = mesh.material.uniforms;
-  material.defines = Object.assign({}, mesh.material.defines, defines, eyeBox ? { BM_EYE_BOX_ONLY: '' } : {});
-  material.onBeforeCompile = mesh.material.onBeforeCompile;
   // BackSide would flip the winding three.js calls front (gl_FrontFacing with it); from inside
   // its box every face is a back face anyway
-  material.side = eyeBox ? THREE.DoubleSide : THREE.FrontSide;
+  var material = boxmarchMaterialVariant(THREE, mesh, Object.assign({}, defines, eyeBox ? { BM_EYE_BOX_ONLY: '' } : {}),
+    eyeBox ? THREE.DoubleSide : THREE.FrontSide);
   material.depthTest = !eyeBox;
   material.depthWrite = false;
   if (defines.BM_VISIBILITY_PASS !== undefined) {
@@ -455,7 +533,7 @@ function useBoxmarchVisibility(THREE, mesh, shape) {
   uniforms.bmResolvedDepth = { value: nearest.texture };
   var scenes = { fallback: new THREE.Scene(), visibility: new THREE.Scene(), shade: new THREE.Scene() };
   scenes.fallback.add(fallback);
-  scenes.occluders = boxmarchOccluderScene(THREE, mesh.geometry, shape);
+  scenes.occluders = boxmarchOccluderScene(THREE, mesh.geometry, shape, THREE.DoubleSide);
   scenes.occluders.children.forEach(function (occluder) {
     occluder.material.fragmentShader = 'void main() {\n  gl_FragColor = vec4(gl_FragCoord.z);\n}\n';
     // a margin for the march's own rounding: the occluders a little farther than drawn
@@ -632,7 +710,9 @@ function boxmarchLoadError(url, e) {
 
 // Loads the .glb at url (NAME.glb) after its sidecar NAME.boxmarch.json and gives every mesh,
 // skinned or not, its own material (options: those of createBoxmarchMaterial, skinning set per
-// mesh, frontToBack: draw each mesh's boxes front to back, useBoxmarchMaterial; occluders: the
+// mesh, frontToBack: draw each mesh's boxes front to back, useBoxmarchMaterial; cullBackFaces:
+// false draws both sides of every box, where by default a static mesh whose boxes are closed and
+// wound outward draws their front faces, useBoxmarchBackFaceCulling; occluders: the
 // hidden-box pre-pass of each static mesh, useBoxmarchOccluders, on by default where the map is
 // a preset's or the default one, boxmarchOccluderShape; visibilityPass: true draws behind those
 // occluders with useBoxmarchVisibility's passes instead, which write no depth). GLTFLoader: the class (THREE.GLTFLoader in r111's examples/js, imported from
@@ -662,6 +742,7 @@ function loadBoxmarch(THREE, GLTFLoader, url, options) {
     meshes.forEach(function (mesh) {
       var settings = Object.assign({}, options, { skinning: !!mesh.isSkinnedMesh });
       useBoxmarchMaterial(THREE, mesh, createBoxmarchMaterial(THREE, settings), !!(options && options.frontToBack));
+      if (!(options && (options.visibilityPass || options.cullBackFaces === false))) useBoxmarchBackFaceCulling(THREE, mesh);
       if (options && options.visibilityPass) useBoxmarchVisibility(THREE, mesh, boxmarchOccluderShape(options));
       else useBoxmarchOccluders(THREE, mesh, boxmarchOccluderShape(options));
     });
