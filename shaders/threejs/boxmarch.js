@@ -378,12 +378,16 @@ function boxmarchOccluderShape(options) {
   return preset && presets.indexOf(preset[1].toUpperCase()) >= 0 ? presets.indexOf(preset[1].toUpperCase()) : null;
 }
 
-// The pre-pass material: occluder box number bmOccluder.x of shape id bmOccluder.y (< 0: each
-// box's own), none for a box holding the eye (its march starts at the eye); writes its window
-// depth packed into RGBA.
+// The pre-pass material: occluder box number `index` (BM_OCCLUDER_INDEX) of shape id `shape`
+// (BM_OCCLUDER_SHAPE; < 0: each box's own), none for a box holding the eye (its march starts at
+// the eye); writes its window depth packed into RGBA. Both are compiled in as constants: the
+// compiler then keeps only that preset's branch of the occluder's arithmetic, which SwiftShader
+// would otherwise run for every preset at every vertex (measured: the pile's four occluder draws
+// take about 2.7x as long with them as uniforms, docs/BENCHMARKS.md).
 function createBoxmarchOccluderMaterial(THREE, index, shape, side) {
   return new THREE.ShaderMaterial({
-    uniforms: { bmEye: { value: new THREE.Vector4(0, 0, 0, 1) }, bmOccluder: { value: new THREE.Vector2(index, shape) } },
+    uniforms: { bmEye: { value: new THREE.Vector4(0, 0, 0, 1) } },
+    defines: { BM_OCCLUDER_INDEX: index.toFixed(1), BM_OCCLUDER_SHAPE: shape.toFixed(1) },
     vertexShader: BOXMARCH_DECODE + '\n' + BOXMARCH_LIBRARY + '\n' + BOXMARCH_OCCLUDER_VERTEX,
     fragmentShader: BOXMARCH_DEPTH_PACKING + '\nvoid main() {\n  gl_FragColor = bm_pack_depth(gl_FragCoord.z);\n}\n',
     side: side
@@ -917,16 +921,15 @@ var BOXMARCH_OCCLUDER_VERTEX = [
   'float map(vec3 p) { return 1.0; }',  // the library's march needs one; the pre-pass marches nothing
   BOXMARCH_ATTRIBUTES,
   'uniform vec4 bmEye;',
-  'uniform vec2 bmOccluder;',
   'void main() {',
   '  vec3 z = normalize(normal);',
   '  vec3 x = normalize(tangent.xyz);',
   '  vec3 y = normalize(bm_axis_y(normal, tangent));',
   '  vec3 v = -bm_offset(bmOffsetXY, bmOffsetZIndex);',
   '  vec3 h = bm_half_extents(bmHalfXY, bmHalfZ);',
-  '  float shape = bmOccluder.y < 0.0 ? bm_box_params(bmShapeMaterial, bmRandomUser).x : bmOccluder.y;',
-  '  vec3 extent = bm_occluder_half(shape, h, bmOccluder.x);',
-  '  vec3 pulled = bm_occluder_centre(shape, h, bmOccluder.x) + v * extent / max(h, vec3(1e-30));',
+  '  float shape = BM_OCCLUDER_SHAPE < 0.0 ? bm_box_params(bmShapeMaterial, bmRandomUser).x : BM_OCCLUDER_SHAPE;',
+  '  vec3 extent = bm_occluder_half(shape, h, BM_OCCLUDER_INDEX);',
+  '  vec3 pulled = bm_occluder_centre(shape, h, BM_OCCLUDER_INDEX) + v * extent / max(h, vec3(1e-30));',
   '  vec3 eye = bm_to_local(bmEye.xyz - position, x, y, z) + v;',
   '  bool eyeInside = bmEye.w > 0.5 && max3(abs(eye) - h) <= 0.0;',
   '  vec3 moved = position + bm_from_local(pulled - v, x, y, z);',
