@@ -380,10 +380,9 @@ function boxmarchOccluderShape(options) {
 
 // The pre-pass material: occluder box number `index` (BM_OCCLUDER_INDEX) of shape id `shape`
 // (BM_OCCLUDER_SHAPE; < 0: each box's own), none for a box holding the eye (its march starts at
-// the eye); writes its window depth packed into RGBA. Both are compiled in as constants: the
-// compiler then keeps only that preset's branch of the occluder's arithmetic, which SwiftShader
-// would otherwise run for every preset at every vertex (measured: the pile's four occluder draws
-// take about 2.7x as long with them as uniforms, docs/BENCHMARKS.md).
+// the eye); writes its window depth packed into RGBA. Both are compiled in as constants, so the
+// compiler keeps only that preset's branch of the occluder's arithmetic (measured on SwiftShader:
+// the pile's four occluder draws 1.2x as fast as with them as uniforms, docs/BENCHMARKS.md).
 function createBoxmarchOccluderMaterial(THREE, index, shape, side) {
   return new THREE.ShaderMaterial({
     uniforms: { bmEye: { value: new THREE.Vector4(0, 0, 0, 1) } },
