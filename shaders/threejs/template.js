@@ -73,6 +73,9 @@ var BOXMARCH_OPTION_RANGES = {
 // The presets whose occluders options.occluders may name, in bm_sdf_by_id's numbering
 // (boxmarchOccluderShape).
 var BOXMARCH_OCCLUDER_PRESETS = ['BOX', 'SPHERE', 'ROUNDED_BOX', 'CAPSULE', 'CYLINDER', 'TORUS', 'LINK'];
+// How many occluder boxes each of those presets has (box_params.glsl bm_occluder_unclipped: the
+// indices below it have an extent), so the pre-pass makes no draw that draws nothing.
+var BOXMARCH_OCCLUDER_COUNTS = [1, 3, 3, 2, 2, 4, 4];
 
 // Throws, one line naming the option, for createBoxmarchMaterial options it would not draw as
 // given: a number outside BOXMARCH_OPTION_RANGES (or not a number), a map that is not a non-empty
@@ -393,13 +396,14 @@ function createBoxmarchOccluderMaterial(THREE, index, shape, side) {
   });
 }
 
-// The pre-pass's draws of geometry's occluders of shape id `shape`: four meshes, box_params.glsl's
-// most (an index a shape lacks draws nothing: its vertices leave the view), their matrices to be
+// The pre-pass's draws of geometry's occluders of shape id `shape`: one mesh per occluder box of
+// the preset (BOXMARCH_OCCLUDER_COUNTS), four for each box's own shape (box_params.glsl's most; an
+// index a box's shape lacks draws nothing: its vertices leave the view), their matrices to be
 // copied from the mesh's world matrix before each draw; `side`: the faces drawn (the occluders
 // are their boxes scaled and moved, so a box's back faces are their far side too).
 function boxmarchOccluderScene(THREE, geometry, shape, side) {
   var scene = new THREE.Scene();
-  for (var k = 0; k < 4; k++) {
+  for (var k = 0; k < (shape >= 0 ? BOXMARCH_OCCLUDER_COUNTS[shape] : 4); k++) {
     var occluder = new THREE.Mesh(geometry, createBoxmarchOccluderMaterial(THREE, k, shape, side));
     occluder.matrixAutoUpdate = false;
     occluder.frustumCulled = false;
