@@ -7,30 +7,33 @@ scene, and drawn from bench_gpu_cost's camera. Timed from render() to a 1-pixel 
 waits for the frame) on the serving process's clock less one reading's round trip (*clock ms*),
 round robin over the configurations, best of REPEATS frames each. Rows:
 
-* no pre-pass: the material without the hidden-box pre-pass (``occluders: false``; file order,
-  quality 1): on r180 the RawShaderMaterial declaring layout(depth_greater)
-  (EXT_conservative_depth, which SwiftShader's WebGL 2 offers), on r111 the ShaderMaterial (WebGL 1
-  has no declaration): the material as it was before the pre-pass;
-* pre-pass: what loadBoxmarch sets up by default (useBoxmarchOccluders: the links' inscribed
+* both sides, no pre-pass: every face of every box drawn (``cullBackFaces: false``), no hidden-box
+  pre-pass (``occluders: false``; file order, quality 1): on r180 the RawShaderMaterial declaring
+  layout(depth_greater) (EXT_conservative_depth, which SwiftShader's WebGL 2 offers), on r111 the
+  ShaderMaterial (WebGL 1 has no declaration); the speed-ups are against this row;
+* both sides, pre-pass: the same with the pre-pass (useBoxmarchOccluders: the links' inscribed
   boxes drawn depth-only into a target each frame, the march returning behind them);
+* culled, pre-pass: what loadBoxmarch sets up by default (useBoxmarchBackFaceCulling: the boxes'
+  far sides, and the occluders', not rasterised; the box holding the eye drawn again with both
+  sides), with the pre-pass; culled, no pre-pass: the same with ``occluders: false``;
 * visibility passes: ``visibilityPass: true`` (useBoxmarchVisibility: the same occluders into a
   depth buffer, then marching passes that write no depth, so the depth test culls hidden fragments
   before they run: a visibility pass keeping each pixel's least hit depth, a shade pass shading
-  the hit of that depth, a full-screen composite); its evaluations are both passes' (PASSES_COUNT_AFTER);
+  the hit of that depth, a full-screen composite; their marches draw front faces only, the box
+  holding the eye both sides); its evaluations are both passes' (PASSES_COUNT_AFTER);
 * front to back: loadBoxmarch's frontToBack (sortBoxmarchFrontToBack before each draw; the camera
-  stands still, so the boxes are sorted once, before the timed frames), without and with the
-  pre-pass;
-* quality 0.5: the quality knob, without the pre-pass;
-* r180 only, the ShaderMaterial without the declaration (declareDepth false), without the
+  stands still, so the boxes are sorted once, before the timed frames), culled, with the pre-pass;
+* quality 0.5: the quality knob, culled (the pre-pass is off below full quality);
+* r180 only, the ShaderMaterial without the declaration (declareDepth false), both sides, no
   pre-pass: what the declaration changes, same scenes, same run.
 
 SDF evaluations per covered pixel: counted in the shader (tests/engines/threejs.py count_job: every
 fragment's march steps plus a hit's normal taps, summed through an additive float target) over the
 pixels the shaded image covers, one page per configuration after the timed page.
 
-Pixels changed: pixels whose colour differs from plain's by more than 1/255, as a share of the
+Pixels changed: pixels whose colour differs from the first row's by more than 1/255, as a share of the
 pixels covered in either image. *sort ms*: one sortBoxmarchFrontToBack after the eye moved (mean
-of 20).
+of 20). PIECES: parts of a frame timed in the same round robin (a second table).
 On a GPU that keeps its early depth test for a declared depth write, front to back lets it reject
 the fragments of hidden boxes before their march; the rows say what SwiftShader makes of it.
 
@@ -52,15 +55,24 @@ SCENES = ("chain down the arm", "pile")
 MAPS = {"LINK": "return sdf_preset_link(p, box_half);"}
 # label, quality, front to back, declareDepth (the loader's option: false gives the ShaderMaterial),
 # the hidden-box pre-pass (loadBoxmarch's default; false: occluders: false), the passes without
-# depth writes behind it (visibilityPass)
-CONFIGS = (("no pre-pass", 1.0, False, True, False, False),
-           ("pre-pass (loadBoxmarch default)", 1.0, False, True, True, False),
-           ("visibility passes (visibilityPass: true)", 1.0, False, True, True, True),
-           ("front to back, no pre-pass", 1.0, True, True, False, False),
-           ("pre-pass + front to back", 1.0, True, True, True, False),
-           ("quality 0.5, no pre-pass", 0.5, False, True, False, False),
-           ("ShaderMaterial (undeclared), no pre-pass", 1.0, False, False, False, False))
-FRONT_TO_BACK = 3  # the row whose sort is timed
+# depth writes behind it (visibilityPass), back faces culled (loadBoxmarch's default; false:
+# cullBackFaces: false)
+CONFIGS = (("both sides, no pre-pass", 1.0, False, True, False, False, False),
+           ("both sides, pre-pass", 1.0, False, True, True, False, False),
+           ("culled, pre-pass (loadBoxmarch default)", 1.0, False, True, True, False, True),
+           ("culled, no pre-pass", 1.0, False, True, False, False, True),
+           ("visibility passes (visibilityPass: true)", 1.0, False, True, True, True, False),
+           ("culled, pre-pass + front to back", 1.0, True, True, True, False, True),
+           ("quality 0.5, culled (no pre-pass)", 0.5, False, True, False, False, True),
+           ("ShaderMaterial (undeclared), both sides, no pre-pass", 1.0, False, False, False, False, False))
+FRONT_TO_BACK = 5  # the row whose sort is timed
+DEFAULT = 2  # the row whose pre-pass is also timed alone (PIECES)
+# Pieces of a frame timed in the same round robin: an empty scene (what render() and the read-back
+# cost with nothing to draw), the box mesh with three.js's MeshBasicMaterial (front faces; both
+# sides), i.e. the rasterisation of the boxes with a trivial fragment stage, and the default's
+# hidden-box pre-pass alone (its four occluder draws, culled, into the canvas)
+PIECES = ("empty scene", "boxes, MeshBasicMaterial, front faces", "boxes, MeshBasicMaterial, both sides",
+          "the default's pre-pass alone (4 occluder draws)")
 
 TIMING_JOB = """async function (gltf) {
   var W = __SIZE__, H = __SIZE__, cam = __CAMERA__, configs = __CONFIGS__;
@@ -76,12 +88,20 @@ TIMING_JOB = """async function (gltf) {
   for (var i = 0; i < configs.length; i++) {
     var loaded = await loadBoxmarch(THREE, GLTFLoader, 'model.glb', {map: __MAP__, quality: configs[i][1],
       frontToBack: configs[i][2], declareDepth: configs[i][3], occluders: configs[i][4] ? undefined : false,
-      visibilityPass: configs[i][5], maxSteps: 64, epsilon: 1e-3});
+      visibilityPass: configs[i][5], cullBackFaces: configs[i][6], maxSteps: 64, epsilon: 1e-3});
     var scene = new THREE.Scene();
     scene.add(loaded.scene);
     drawn.push({scene: scene, mesh: loaded.meshes[0]});
     declared.push(!!loaded.meshes[0].material.isRawShaderMaterial);
   }
+  var pieces = [new THREE.Scene()];
+  [THREE.FrontSide, THREE.DoubleSide].forEach(function (side) {
+    var basic = new THREE.Mesh(drawn[0].mesh.geometry, new THREE.MeshBasicMaterial({color: 0xcccccc, side: side}));
+    basic.matrixAutoUpdate = false;
+    basic.matrix.copy(drawn[0].mesh.matrixWorld);
+    pieces.push(new THREE.Scene().add(basic));
+  });
+  pieces.push(drawn[__DEFAULT__].mesh.userData.boxmarchOccluders.scene);  // its matrices and eye: set by each draw of the mesh
   // The serving process's clock (performance.now() stands still under Chromium's virtual time
   // once the page has awaited anything); a reading costs a loopback round trip, taken off below.
   function now() {
@@ -98,7 +118,7 @@ TIMING_JOB = """async function (gltf) {
   var gl = renderer.getContext(), pixel = new Uint8Array(4);
   function frame(k) {
     var start = now();
-    renderer.render(drawn[k].scene, camera);
+    renderer.render(k < drawn.length ? drawn[k].scene : pieces[k - drawn.length], camera);
     gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
     return now() - start - overhead;
   }
@@ -111,8 +131,9 @@ TIMING_JOB = """async function (gltf) {
     images.push(__b64(px));
     best.push(Infinity);
   }
+  for (k = 0; k < pieces.length; k++) best.push(Infinity);
   for (var r = 0; r < __REPEATS__; r++) {
-    for (k = 0; k < drawn.length; k++) best[k] = Math.min(best[k], frame(k));
+    for (k = 0; k < best.length; k++) best[k] = Math.min(best[k], frame(k));
   }
   var mesh = drawn[__FRONT_TO_BACK__].mesh, start = now();
   for (var s = 0; s < 20; s++) {
@@ -123,7 +144,8 @@ TIMING_JOB = """async function (gltf) {
   var extension = (gl.getSupportedExtensions() || []).indexOf('EXT_conservative_depth') >= 0;
   renderer.dispose();
   renderer.forceContextLoss();
-  return {best: best, images: images, sort_ms: sortMs, boxes: mesh.userData.boxmarchBoxes.count, overhead: overhead,
+  return {best: best.slice(0, drawn.length), pieces: best.slice(drawn.length), images: images, sort_ms: sortMs,
+          boxes: mesh.userData.boxmarchBoxes.count, overhead: overhead,
           declared: declared, extension: extension};
 }"""
 
@@ -194,9 +216,9 @@ PASSES_COUNT_AFTER = """var passes = null;
 
 def counting_setup(sdf, config):
     """count_job's setup: the export loaded as TIMING_JOB loads it for ``config``."""
-    _label, quality, front_to_back, declare, occluders, visibility = config
+    _label, quality, front_to_back, declare, occluders, visibility, cull = config
     options = {"map": MAPS[sdf], "quality": quality, "frontToBack": front_to_back, "declareDepth": declare,
-               "visibilityPass": visibility, "maxSteps": 64, "epsilon": 1e-3}
+               "visibilityPass": visibility, "cullBackFaces": cull, "maxSteps": 64, "epsilon": 1e-3}
     if not occluders:
         options["occluders"] = False
     return (f"scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, 'model.glb', "
@@ -224,7 +246,7 @@ def rows_for(name, scene, glb, sidecar, release):
     configs = [c for c in CONFIGS if c[3] or int(threejs.RELEASES[release].revision) >= 163]
     parts = {"__SIZE__": str(SIZE), "__CAMERA__": json.dumps(three_camera(to_view, eye), allow_nan=False),
              "__CONFIGS__": json.dumps(configs, allow_nan=False), "__MAP__": json.dumps(MAPS[sdf], allow_nan=False),
-             "__REPEATS__": str(REPEATS), "__FRONT_TO_BACK__": str(FRONT_TO_BACK),
+             "__REPEATS__": str(REPEATS), "__FRONT_TO_BACK__": str(FRONT_TO_BACK), "__DEFAULT__": str(DEFAULT),
              "__CLOCK__": threejs.CLOCK}
     js = TIMING_JOB
     for key, value in parts.items():
@@ -248,7 +270,8 @@ def rows_for(name, scene, glb, sidecar, release):
                      f"{out['best'][0] / best:.2f}x", f"{100 * changed.sum() / max(covered.sum(), 1):.2f}%",
                      f"{100 * covered.mean():.0f}%", f"{out['sort_ms']:.1f} ({out['boxes']} boxes)",
                      f"{out['overhead']:.1f}"])
-    return rows
+    pieces = [[name, f"r{threejs.RELEASES[release].revision}", label, f"{ms:.1f}"] for label, ms in zip(PIECES, out["pieces"])]
+    return rows, pieces
 
 
 def main():
@@ -268,15 +291,19 @@ def main():
     threejs.TIMEOUT_S = 600  # a page times every configuration of a 4,000-link pile: minutes on SwiftShader
     made = scenes_to_measure(SIZE, 8)
     releases = [r for r in ("r180", "r111") if threejs.available(r) is None]
-    rows = []
+    rows, pieces = [], []
     with tempfile.TemporaryDirectory(prefix="bench-threejs-") as folder:
         for name in names:
             glb, sidecar = exported_glb(bpy, name, made[name], folder)
             for release in releases:
-                rows += rows_for(name, made[name], glb, sidecar, release)
+                configurations, parts = rows_for(name, made[name], glb, sidecar, release)
+                rows += configurations
+                pieces += parts
     print(f"three.js on SwiftShader (headless Chromium), {SIZE} x {SIZE} px, best of {REPEATS}")
     print(table(["scene", "three.js", "material", "declared", "SDF evals/px", "frame ms", "speed-up", "pixels changed", "covered",
                  "sort ms", "clock ms"], rows))
+    print("\nPieces of a frame, timed in the same round robin (PIECES)")
+    print(table(["scene", "three.js", "what is drawn", "frame ms"], pieces))
 
 
 if __name__ == "__main__":

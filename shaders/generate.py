@@ -194,7 +194,7 @@ def threejs(module: bool) -> str:
     exports = ("loadBoxmarch, checkBoxmarchSidecar, parseBoxmarchSidecar, boxmarchSidecarUrl, checkBoxmarchOptions, "
                "createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, boxmarchTexcoordName, "
                "sortBoxmarchFrontToBack, useBoxmarchOccluders, boxmarchOccluderShape, createBoxmarchOccluderMaterial, "
-               "useBoxmarchVisibility, boxmarchVisibilitySupported")
+               "useBoxmarchVisibility, boxmarchVisibilitySupported, useBoxmarchBackFaceCulling, boxmarchClosedOutward")
     if module:
         return text + f"\nexport {{ {exports} }};\n"
     return text + f"\nif (typeof module !== 'undefined') {{\n  module.exports = {{ {exports} }};\n}}\n"

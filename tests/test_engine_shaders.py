@@ -10,10 +10,11 @@ import pytest
 from tests.helpers.tools import need
 
 SHADERS = Path(__file__).resolve().parent.parent / "shaders"
-EXPORTS = ["boxmarchOccluderShape", "boxmarchSidecarUrl", "boxmarchTexcoordName", "boxmarchVisibilitySupported",
-           "checkBoxmarchOptions", "checkBoxmarchSidecar", "createBoxmarchMaterial", "createBoxmarchOccluderMaterial",
-           "loadBoxmarch", "parseBoxmarchSidecar", "prepareBoxmarchGeometry", "sortBoxmarchFrontToBack",
-           "useBoxmarchMaterial", "useBoxmarchOccluders", "useBoxmarchVisibility"]
+EXPORTS = ["boxmarchClosedOutward", "boxmarchOccluderShape", "boxmarchSidecarUrl", "boxmarchTexcoordName",
+           "boxmarchVisibilitySupported", "checkBoxmarchOptions", "checkBoxmarchSidecar", "createBoxmarchMaterial",
+           "createBoxmarchOccluderMaterial", "loadBoxmarch", "parseBoxmarchSidecar", "prepareBoxmarchGeometry",
+           "sortBoxmarchFrontToBack", "useBoxmarchBackFaceCulling", "useBoxmarchMaterial", "useBoxmarchOccluders",
+           "useBoxmarchVisibility"]
 
 
 def test_generated_engine_shaders_are_up_to_date():

@@ -62,6 +62,9 @@ MATERIAL_OPTIONS = {
     "{visibilityPass: 'no'}": "option visibilityPass must be true or false, not no",
     "{visibilityPass: 0}": "option visibilityPass must be true or false",
     "{visibilityPass: false}": None,
+    "{cullBackFaces: 'no'}": "option cullBackFaces must be true or false, not no",
+    "{cullBackFaces: 1}": "option cullBackFaces must be true or false",
+    "{cullBackFaces: false}": None,
     "{}": None,
     "{quality: 0.05, maxSteps: 1, epsilon: 1e-7}": None,
     "{quality: 1, maxSteps: 512, epsilon: 1}": None,
@@ -69,7 +72,8 @@ MATERIAL_OPTIONS = {
 # What each accepted option set leaves in the material: bmMarch (epsilon, max steps) and the knob.
 DRAWN = {"{}": [1e-4, 96, 1], "{quality: 0.05, maxSteps: 1, epsilon: 1e-7}": [1e-7, 1, 0.05],
          "{quality: 1, maxSteps: 512, epsilon: 1}": [1, 512, 1], "{occluders: 'LINK'}": [1e-4, 96, 1],
-         "{occluders: false}": [1e-4, 96, 1], "{visibilityPass: false}": [1e-4, 96, 1]}
+         "{occluders: false}": [1e-4, 96, 1], "{visibilityPass: false}": [1e-4, 96, 1],
+         "{cullBackFaces: false}": [1e-4, 96, 1]}
 
 
 def options_job():

@@ -51,6 +51,17 @@ def loader_js(occluders):
             " throw new Error('not the pre-pass asked for');")
 
 
+# How many occluder draws loadBoxmarch's pre-pass makes for each preset options.occluders names
+DRAWS_JS = """async function (gltf) {
+  var out = {};
+  for (var name of __NAMES__) {
+    var loaded = await loadBoxmarch(THREE, GLTFLoader, 'pile.glb', {map: __MAP__, occluders: name});
+    out[name] = loaded.meshes[0].userData.boxmarchOccluders.scene.children.length;
+  }
+  return out;
+}""".replace("__NAMES__", json.dumps([*core.SDF_PRESETS, "PER_BOX"])).replace("__MAP__", json.dumps(LINK_MAP))
+
+
 @pytest.fixture(scope="module", params=sorted(threejs.RELEASES))
 def counted(request, pile):
     release = request.param
@@ -60,9 +71,9 @@ def counted(request, pile):
     inside = dict(CAMERA, position=(TO_Y_UP @ centres[0]).tolist())
     jobs = [threejs.count_job(loader_js(occluders), W, H, camera) for camera in (CAMERA, inside)
             for occluders in (True, False)]
-    results = threejs.run_jobs(glb, jobs, threejs.shipped_material(release), release,
+    results = threejs.run_jobs(glb, [*jobs, DRAWS_JS], threejs.shipped_material(release), release,
                                {"pile.glb": glb, "pile.boxmarch.json": sidecar})
-    return dict(zip(("on", "off", "inside_on", "inside_off"), results)), centres, rotations
+    return dict(zip(("on", "off", "inside_on", "inside_off", "draws"), results)), centres, rotations
 
 
 def test_pre_pass_changes_no_pixel_with_the_eye_inside_the_pile(counted):
@@ -100,3 +111,13 @@ def test_pre_pass_cuts_evaluations_as_the_cost_model_counts(counted):
     assert total["on"] == pytest.approx(model_on["sdf_evaluations"], rel=0.05)
     per_covered_pixel = total["on"] / (shot.pixels[..., 3] > 0).sum()
     assert per_covered_pixel <= 35 and total["off"] >= 3 * total["on"]
+
+
+def test_pre_pass_draws_each_preset_s_occluder_boxes_and_no_empty_draw(counted):
+    """One draw per occluder box the CPU reference gives the preset (core.occluder_boxes: those
+    with an extent in the link's box), the most any preset has for the per-box shapes."""
+    out, _centres, _rotations = counted
+    expected = {name: int((core.occluder_boxes(name, LINK / 2)[1][0].min(axis=1) > 0.0).sum())
+                for name in core.SDF_PRESETS}
+    expected["PER_BOX"] = core.occluder_boxes("BOX", LINK / 2)[0].shape[1]
+    assert out["draws"] == expected

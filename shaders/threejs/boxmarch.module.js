@@ -73,11 +73,14 @@ var BOXMARCH_OPTION_RANGES = {
 // The presets whose occluders options.occluders may name, in bm_sdf_by_id's numbering
 // (boxmarchOccluderShape).
 var BOXMARCH_OCCLUDER_PRESETS = ['BOX', 'SPHERE', 'ROUNDED_BOX', 'CAPSULE', 'CYLINDER', 'TORUS', 'LINK'];
+// How many occluder boxes each of those presets has (box_params.glsl bm_occluder_unclipped: the
+// indices below it have an extent), so the pre-pass makes no draw that draws nothing.
+var BOXMARCH_OCCLUDER_COUNTS = [1, 3, 3, 2, 2, 4, 4];
 
 // Throws, one line naming the option, for createBoxmarchMaterial options it would not draw as
 // given: a number outside BOXMARCH_OPTION_RANGES (or not a number), a map that is not a non-empty
 // string, occluders that are not a name of BOXMARCH_OCCLUDER_PRESETS, 'PER_BOX', true or false,
-// a visibilityPass that is not true or false.
+// a visibilityPass or cullBackFaces that is not true or false.
 // An option left undefined takes its default.
 function checkBoxmarchOptions(options) {
   if (options === undefined || options === null) return;
@@ -95,9 +98,11 @@ function checkBoxmarchOptions(options) {
     throw new Error('boxmarch: option map must be the GLSL body of float map(vec3 p), not '
       + (typeof options.map === 'string' ? 'an empty string' : typeof options.map));
   }
-  if (options.visibilityPass !== undefined && typeof options.visibilityPass !== 'boolean') {
-    throw new Error('boxmarch: option visibilityPass must be true or false, not ' + String(options.visibilityPass));
-  }
+  ['visibilityPass', 'cullBackFaces'].forEach(function (key) {
+    if (options[key] !== undefined && typeof options[key] !== 'boolean') {
+      throw new Error('boxmarch: option ' + key + ' must be true or false, not ' + String(options[key]));
+    }
+  });
   var occluders = options.occluders;
   if (occluders !== undefined && typeof occluders !== 'boolean' && occluders !== 'PER_BOX'
       && BOXMARCH_OCCLUDER_PRESETS.indexOf(occluders) < 0) {
@@ -267,6 +272,83 @@ function sortBoxmarchFrontToBack(THREE, mesh, camera) {
   return true;
 }
 
+// Whether every box of geometry is closed and wound outward, the rule the Blender preview culls
+// by (mesh_data.closed_outward) applied to the triangles the file carries: within each box (the
+// box number of bmOffsetZIndex.y), its vertices welded by position (the glTF export splits them per
+// face corner), each directed edge once and its reverse once, and the box's signed volume
+// positive. Then a box's back faces are its far side, hidden by its own front.
+function boxmarchClosedOutward(geometry) {
+  var position = geometry.getAttribute('position'), number = geometry.getAttribute('bmOffsetZIndex');
+  var index = geometry.index ? geometry.index.array : null, corners = index ? index.length : position.count;
+  if (!corners || corners % 3) return false;
+  var welded = new Map(), id = new Float64Array(position.count);
+  for (var v = 0; v < position.count; v++) {
+    var key = number.getY(v) + ':' + position.getX(v) + ',' + position.getY(v) + ',' + position.getZ(v);
+    if (!welded.has(key)) welded.set(key, welded.size);
+    id[v] = welded.get(key);
+  }
+  var n = welded.size, edges = new Set(), volume = new Map(), corner = [0, 0, 0];
+  for (var t = 0; t < corners; t += 3) {
+    for (var k = 0; k < 3; k++) corner[k] = index ? index[t + k] : t + k;
+    for (k = 0; k < 3; k++) {
+      var edge = id[corner[k]] * n + id[corner[(k + 1) % 3]];
+      if (edges.has(edge)) return false;
+      edges.add(edge);
+    }
+    // the signed volume about the box's first corner: a closed surface's does not depend on the point
+    var box = number.getY(corner[0]);
+    if (!volume.has(box)) volume.set(box, { o: corner[0], sum: 0 });
+    var entry = volume.get(box), p = [];
+    for (k = 0; k < 3; k++) {
+      p.push([position.getX(corner[k]) - position.getX(entry.o), position.getY(corner[k]) - position.getY(entry.o),
+        position.getZ(corner[k]) - position.getZ(entry.o)]);
+    }
+    entry.sum += p[0][0] * (p[1][1] * p[2][2] - p[1][2] * p[2][1]) + p[0][1] * (p[1][2] * p[2][0] - p[1][0] * p[2][2])
+      + p[0][2] * (p[1][0] * p[2][1] - p[1][1] * p[2][0]);
+  }
+  var closed = true;
+  edges.forEach(function (e) { if (closed && !edges.has((e % n) * n + Math.floor(e / n))) closed = false; });
+  volume.forEach(function (entry) { if (!(entry.sum > 0)) closed = false; });
+  return closed;
+}
+
+// A copy of mesh's marching material with defines added (the uniforms shared) drawing `side`.
+function boxmarchMaterialVariant(THREE, mesh, defines, side) {
+  var material = mesh.material.clone();
+  material.uniforms = mesh.material.uniforms;
+  material.defines = Object.assign({}, mesh.material.defines, defines);
+  material.onBeforeCompile = mesh.material.onBeforeCompile;
+  material.side = side;
+  return material;
+}
+
+// Culls the far side of mesh's boxes (given useBoxmarchMaterial's material) where they are closed
+// and wound outward (boxmarchClosedOutward), as the Blender preview does: a back face's fragments
+// return at once, yet SwiftShader runs such a fragment's lanes on through the march (measured:
+// docs/BENCHMARKS.md), so a face never rasterised is the saving. The material draws front faces
+// only (three.js flips the winding for a mirroring matrix); the box holding the eye, whose march
+// starts at the eye, is drawn again with both sides right after the mesh (its onAfterRender), by a
+// mesh that keeps every other box out of view (BM_EYE_BOX_ONLY). A SkinnedMesh is left drawing
+// both sides (skinning may bend a box). Returns that eye-box mesh (also mesh.userData.boxmarchEyeBox), or null.
+function useBoxmarchBackFaceCulling(THREE, mesh) {
+  if (mesh.isSkinnedMesh || !boxmarchClosedOutward(mesh.geometry)) return null;
+  var eyeBox = new THREE.Mesh(mesh.geometry, boxmarchMaterialVariant(THREE, mesh, { BM_EYE_BOX_ONLY: '' }, THREE.DoubleSide));
+  eyeBox.matrixAutoUpdate = false;  // mesh's world matrix, copied before each draw
+  eyeBox.frustumCulled = false;
+  var scene = new THREE.Scene().add(eyeBox);
+  mesh.material.side = THREE.FrontSide;
+  mesh.onAfterRender = function (renderer, parentScene, camera) {
+    eyeBox.matrix.copy(mesh.matrixWorld);
+    eyeBox.matrixWorldNeedsUpdate = true;
+    var autoClear = renderer.autoClear;
+    renderer.autoClear = false;
+    renderer.render(scene, camera);
+    renderer.autoClear = autoClear;
+  };
+  mesh.userData.boxmarchEyeBox = eyeBox;
+  return eyeBox;
+}
+
 // Hidden boxes (docs/ENGINES.md, three.js): a depth pre-pass of each box's conservative
 // occluders (shaders/glsl/box_params.glsl: boxes inscribed in the shape, so the visible surface
 // is at least as near wherever they cover a pixel), drawn by the same geometry with its vertices
@@ -299,25 +381,30 @@ function boxmarchOccluderShape(options) {
   return preset && presets.indexOf(preset[1].toUpperCase()) >= 0 ? presets.indexOf(preset[1].toUpperCase()) : null;
 }
 
-// The pre-pass material: occluder box number bmOccluder.x of shape id bmOccluder.y (< 0: each
-// box's own), none for a box holding the eye (its march starts at the eye); writes its window
-// depth packed into RGBA.
-function createBoxmarchOccluderMaterial(THREE, index, shape) {
+// The pre-pass material: occluder box number `index` (BM_OCCLUDER_INDEX) of shape id `shape`
+// (BM_OCCLUDER_SHAPE; < 0: each box's own), none for a box holding the eye (its march starts at
+// the eye); writes its window depth packed into RGBA. Both are compiled in as constants, so the
+// compiler keeps only that preset's branch of the occluder's arithmetic (measured on SwiftShader:
+// the pile's four occluder draws 1.2x as fast as with them as uniforms, docs/BENCHMARKS.md).
+function createBoxmarchOccluderMaterial(THREE, index, shape, side) {
   return new THREE.ShaderMaterial({
-    uniforms: { bmEye: { value: new THREE.Vector4(0, 0, 0, 1) }, bmOccluder: { value: new THREE.Vector2(index, shape) } },
+    uniforms: { bmEye: { value: new THREE.Vector4(0, 0, 0, 1) } },
+    defines: { BM_OCCLUDER_INDEX: index.toFixed(1), BM_OCCLUDER_SHAPE: shape.toFixed(1) },
     vertexShader: BOXMARCH_DECODE + '\n' + BOXMARCH_LIBRARY + '\n' + BOXMARCH_OCCLUDER_VERTEX,
     fragmentShader: BOXMARCH_DEPTH_PACKING + '\nvoid main() {\n  gl_FragColor = bm_pack_depth(gl_FragCoord.z);\n}\n',
-    side: THREE.DoubleSide
+    side: side
   });
 }
 
-// The pre-pass's draws of geometry's occluders of shape id `shape`: four meshes, box_params.glsl's
-// most (an index a shape lacks draws nothing: its vertices leave the view), their matrices to be
-// copied from the mesh's world matrix before each draw.
-function boxmarchOccluderScene(THREE, geometry, shape) {
+// The pre-pass's draws of geometry's occluders of shape id `shape`: one mesh per occluder box of
+// the preset (BOXMARCH_OCCLUDER_COUNTS), four for each box's own shape (box_params.glsl's most; an
+// index a box's shape lacks draws nothing: its vertices leave the view), their matrices to be
+// copied from the mesh's world matrix before each draw; `side`: the faces drawn (the occluders
+// are their boxes scaled and moved, so a box's back faces are their far side too).
+function boxmarchOccluderScene(THREE, geometry, shape, side) {
   var scene = new THREE.Scene();
-  for (var k = 0; k < 4; k++) {
-    var occluder = new THREE.Mesh(geometry, createBoxmarchOccluderMaterial(THREE, k, shape));
+  for (var k = 0; k < (shape >= 0 ? BOXMARCH_OCCLUDER_COUNTS[shape] : 4); k++) {
+    var occluder = new THREE.Mesh(geometry, createBoxmarchOccluderMaterial(THREE, k, shape, side));
     occluder.matrixAutoUpdate = false;
     occluder.frustumCulled = false;
     scene.add(occluder);
@@ -335,7 +422,8 @@ function useBoxmarchOccluders(THREE, mesh, shape) {
   var material = mesh.material;
   var target = new THREE.WebGLRenderTarget(1, 1, { minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
     depthBuffer: true, stencilBuffer: false });
-  var scene = boxmarchOccluderScene(THREE, mesh.geometry, shape);
+  // the boxes' far sides culled where the march culls them (useBoxmarchBackFaceCulling)
+  var scene = boxmarchOccluderScene(THREE, mesh.geometry, shape, mesh.userData.boxmarchEyeBox ? THREE.FrontSide : THREE.DoubleSide);
   var size = new THREE.Vector2(), clear = new THREE.Color(), white = new THREE.Color(1, 1, 1);
   var marching = mesh.onBeforeRender;
   mesh.onBeforeRender = function (renderer, parentScene, camera, geometry, drawnMaterial, group) {
@@ -408,13 +496,10 @@ function createBoxmarchScreenMaterial(THREE, uniforms, body, all) {
 // material (defines; the uniforms shared), front faces tested against the depth buffer, or the
 // back faces of the box holding the eye untested (eyeBox).
 function boxmarchPassMesh(THREE, mesh, defines, eyeBox) {
-  var material = mesh.material.clone();
-  material.uniforms = mesh.material.uniforms;
-  material.defines = Object.assign({}, mesh.material.defines, defines, eyeBox ? { BM_EYE_BOX_ONLY: '' } : {});
-  material.onBeforeCompile = mesh.material.onBeforeCompile;
   // BackSide would flip the winding three.js calls front (gl_FrontFacing with it); from inside
   // its box every face is a back face anyway
-  material.side = eyeBox ? THREE.DoubleSide : THREE.FrontSide;
+  var material = boxmarchMaterialVariant(THREE, mesh, Object.assign({}, defines, eyeBox ? { BM_EYE_BOX_ONLY: '' } : {}),
+    eyeBox ? THREE.DoubleSide : THREE.FrontSide);
   material.depthTest = !eyeBox;
   material.depthWrite = false;
   if (defines.BM_VISIBILITY_PASS !== undefined) {
@@ -455,7 +540,7 @@ function useBoxmarchVisibility(THREE, mesh, shape) {
   uniforms.bmResolvedDepth = { value: nearest.texture };
   var scenes = { fallback: new THREE.Scene(), visibility: new THREE.Scene(), shade: new THREE.Scene() };
   scenes.fallback.add(fallback);
-  scenes.occluders = boxmarchOccluderScene(THREE, mesh.geometry, shape);
+  scenes.occluders = boxmarchOccluderScene(THREE, mesh.geometry, shape, THREE.DoubleSide);
   scenes.occluders.children.forEach(function (occluder) {
     occluder.material.fragmentShader = 'void main() {\n  gl_FragColor = vec4(gl_FragCoord.z);\n}\n';
     // a margin for the march's own rounding: the occluders a little farther than drawn
@@ -632,7 +717,9 @@ function boxmarchLoadError(url, e) {
 
 // Loads the .glb at url (NAME.glb) after its sidecar NAME.boxmarch.json and gives every mesh,
 // skinned or not, its own material (options: those of createBoxmarchMaterial, skinning set per
-// mesh, frontToBack: draw each mesh's boxes front to back, useBoxmarchMaterial; occluders: the
+// mesh, frontToBack: draw each mesh's boxes front to back, useBoxmarchMaterial; cullBackFaces:
+// false draws both sides of every box, where by default a static mesh whose boxes are closed and
+// wound outward draws their front faces, useBoxmarchBackFaceCulling; occluders: the
 // hidden-box pre-pass of each static mesh, useBoxmarchOccluders, on by default where the map is
 // a preset's or the default one, boxmarchOccluderShape; visibilityPass: true draws behind those
 // occluders with useBoxmarchVisibility's passes instead, which write no depth). GLTFLoader: the class (THREE.GLTFLoader in r111's examples/js, imported from
@@ -662,6 +749,7 @@ function loadBoxmarch(THREE, GLTFLoader, url, options) {
     meshes.forEach(function (mesh) {
       var settings = Object.assign({}, options, { skinning: !!mesh.isSkinnedMesh });
       useBoxmarchMaterial(THREE, mesh, createBoxmarchMaterial(THREE, settings), !!(options && options.frontToBack));
+      if (!(options && (options.visibilityPass || options.cullBackFaces === false))) useBoxmarchBackFaceCulling(THREE, mesh);
       if (options && options.visibilityPass) useBoxmarchVisibility(THREE, mesh, boxmarchOccluderShape(options));
       else useBoxmarchOccluders(THREE, mesh, boxmarchOccluderShape(options));
     });
@@ -767,10 +855,13 @@ var BOXMARCH_FRAGMENT = [
   '  vec3 ro = -f;',
   '  vec2 span = bm_box_span(ro, rd, box_half);',
   '  float t_end = span.y;',
+  // SwiftShader runs a lane on past its discard to the end of the shader (measured,
+  // docs/BENCHMARKS.md): `drawn` turns the march and the normal off for it there.
+  '  bool drawn = true;',
   // A fragment of the far side only marches when the eye is inside the box (the preview's rule).
   '  bool fromEye = !gl_FrontFacing && span.x + span.y < 0.0;',
   '  if (fromEye) {',
-  '    if (bmEye.w < 0.5 || eye_distance > -span.x) discard;',
+  '    if (bmEye.w < 0.5 || eye_distance > -span.x) { drawn = false; discard; }',
   '    ro -= rd * eye_distance;',
   '    t_end = eye_distance;',
   '  }',
@@ -786,7 +877,7 @@ var BOXMARCH_FRAGMENT = [
   '#else',
   '    float hidden = bm_occluder_limit(bm_unpack_depth(texture2D(bmOccluderDepth, gl_FragCoord.xy * bmOcclusion.yz)));',
   '#endif',
-  '    if (!fromEye && gl_FragCoord.z > hidden) discard;',
+  '    if (!fromEye && gl_FragCoord.z > hidden) { drawn = false; discard; }',
   '    t_end = min(t_end, bm_depth_crossing(c0, c1, 2.0 * hidden - 1.0));',
   '  }',
   '#ifdef BM_SHADE_PASS',
@@ -797,18 +888,18 @@ var BOXMARCH_FRAGMENT = [
   // none ahead: the least depth is this fragment's own (a hit on the face, rounded nearer) or
   // nearer, which the depth test has judged
   '  if (t_win > 1e29) t_win = 0.0;',
-  '  if (max3(abs(ro + rd * t_win) - box_half) > 1e-3 * (t_win + max3(box_half))) discard;',
+  '  if (max3(abs(ro + rd * t_win) - box_half) > 1e-3 * (t_win + max3(box_half))) { drawn = false; discard; }',
   '#endif',
   // The quality knob (as the Blender preview applies it): a pixel's size at the face, the box's size on screen.
   '  vec4 knob = bm_quality(bmQuality.x);',
   '  float footprint = bm_pixel_size(1.0 / gl_FragCoord.w, length(vec3(objectToClip[0][1], objectToClip[1][1], objectToClip[2][1])), bmQuality.y);',
   '  float boxPixels = 2.0 * max3(box_half) / footprint;',
-  '  float t;',
-  '  float d;',
+  '  float t = 0.0;',
+  '  float d = 0.0;',
   '  int steps = 1;',
-  '  bool hit = boxPixels < knob.z ? bm_one_tap(ro, rd, t_end, footprint, t, d)',
+  '  bool hit = drawn && (boxPixels < knob.z ? bm_one_tap(ro, rd, t_end, footprint, t, d)',
   '    : bm_march(ro, rd, t_end, int(bm_step_limit(boxPixels, knob.y, bmMarch.y)), bmMarch.x, 1.0,',
-  '      vec2(knob.x * footprint, knob.w), t, steps, d);',
+  '      vec2(knob.x * footprint, knob.w), t, steps, d));',
   '  if (!hit) discard;',
   '  vec3 local_hit = ro + rd * t;',
   '  vec3 obj_hit = bmObjPos + bm_from_local(local_hit + f, x, y, z);',
@@ -824,7 +915,8 @@ var BOXMARCH_FRAGMENT = [
   '#else',
   '  gl_FragDepthEXT = depth;',
   '#endif',
-  '  vec3 n = normalize(normalMatrix * bm_from_local(bm_normal(local_hit, d, bm_normal_tap(box_half)), x, y, z));',
+  '  vec3 n = vec3(0.0, 0.0, 1.0);',
+  '  if (hit) n = normalize(normalMatrix * bm_from_local(bm_normal(local_hit, d, bm_normal_tap(box_half)), x, y, z));',
   '  gl_FragColor = vec4(bmColor * (0.35 + 0.65 * max(n.z, 0.0)), 1.0);',
   '#endif',
   '}'
@@ -836,16 +928,15 @@ var BOXMARCH_OCCLUDER_VERTEX = [
   'float map(vec3 p) { return 1.0; }',  // the library's march needs one; the pre-pass marches nothing
   BOXMARCH_ATTRIBUTES,
   'uniform vec4 bmEye;',
-  'uniform vec2 bmOccluder;',
   'void main() {',
   '  vec3 z = normalize(normal);',
   '  vec3 x = normalize(tangent.xyz);',
   '  vec3 y = normalize(bm_axis_y(normal, tangent));',
   '  vec3 v = -bm_offset(bmOffsetXY, bmOffsetZIndex);',
   '  vec3 h = bm_half_extents(bmHalfXY, bmHalfZ);',
-  '  float shape = bmOccluder.y < 0.0 ? bm_box_params(bmShapeMaterial, bmRandomUser).x : bmOccluder.y;',
-  '  vec3 extent = bm_occluder_half(shape, h, bmOccluder.x);',
-  '  vec3 pulled = bm_occluder_centre(shape, h, bmOccluder.x) + v * extent / max(h, vec3(1e-30));',
+  '  float shape = BM_OCCLUDER_SHAPE < 0.0 ? bm_box_params(bmShapeMaterial, bmRandomUser).x : BM_OCCLUDER_SHAPE;',
+  '  vec3 extent = bm_occluder_half(shape, h, BM_OCCLUDER_INDEX);',
+  '  vec3 pulled = bm_occluder_centre(shape, h, BM_OCCLUDER_INDEX) + v * extent / max(h, vec3(1e-30));',
   '  vec3 eye = bm_to_local(bmEye.xyz - position, x, y, z) + v;',
   '  bool eyeInside = bmEye.w > 0.5 && max3(abs(eye) - h) <= 0.0;',
   '  vec3 moved = position + bm_from_local(pulled - v, x, y, z);',
@@ -899,4 +990,4 @@ var BOXMARCH_RAW_FRAGMENT = [
 var BOXMARCH_DECODE = "// boxmarch decode: recover a fragment's box-local frame from the baked vertex data\n// (docs/FORMAT.md). shaders/generate.py translates it into every engine's language.\n// The blog post's shader has its own GetFragToOrigin,\n// GetRotation and rotate_vector; bm_offset_from_color, bm_quaternion and bm_rotate_vector compute\n// the same, so that shader reads the CLASSIC layout unchanged (docs/FORMAT.md names the pairs).\n\n// f = vector from the fragment to its submesh's origin, in box-local coordinates.\n// color = the BoxOffset colour attribute (rgb = 0.5 + 0.5 * s * f, a = s).\nvec3 bm_offset_from_color(vec4 color)\n{\n  return (color.rgb * 2.0 - 1.0) / color.a;\n}\n\n// q = the submesh's frame as a quaternion (x, y, z, w) mapping box-local to object space,\n// from the two UV maps BoxQuatXY and BoxQuatZW.\nvec4 bm_quaternion(vec2 quat_xy, vec2 quat_zw)\n{\n  return vec4(quat_xy, quat_zw);\n}\n\n// q v q* for a unit quaternion q; bm_rotate_vector(v, bm_quat_conjugate(q)) is the inverse\n// rotation.\nvec3 bm_rotate_vector(vec3 v, vec4 q)\n{\n  return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v);\n}\n\n// The inverse rotation of a unit quaternion.\nvec4 bm_quat_conjugate(vec4 q)\n{\n  return vec4(-q.xyz, q.w);\n}\n\n// ---- Engine layouts (docs/ENGINES.md). The NORMAL_* layouts carry the frame in the normal\n// (local z) and the tangent (local x, w = +1), the two vectors every engine's skinning\n// transforms; UV_FRAME carries the quaternion as CLASSIC does. The offset f, the box index and\n// the half-extents h ride in float channels: UVa = f.xy, UVb = (f.z, index), UVc = h.xy,\n// UVd = (h.z, 0) (NORMAL_COLOR: colour = (f, index), h from the box table).\n\n// Local y axis of a NORMAL_* frame: the glTF bitangent cross(normal, tangent.xyz) * tangent.w.\nvec3 bm_axis_y(vec3 normal, vec4 tangent)\n{\n  return cross(normal, tangent.xyz) * tangent.w;\n}\n\n// Box-local coordinates of v, given the frame's unit axes x, y, z in v's space.\nvec3 bm_to_local(vec3 v, vec3 x, vec3 y, vec3 z)\n{\n  return vec3(dot(v, x), dot(v, y), dot(v, z));\n}\n\n// The vector with box-local coordinates l, in the space of the axes x, y, z.\nvec3 bm_from_local(vec3 l, vec3 x, vec3 y, vec3 z)\n{\n  return x * l.x + y * l.y + z * l.z;\n}\n\n// f from the offset pair of channels (f.xy, (f.z, index)).\nvec3 bm_offset(vec2 offset_xy, vec2 offset_z_index)\n{\n  return vec3(offset_xy, offset_z_index.x);\n}\n\n// The box number from its interpolated channel (constant over a box; rounding absorbs\n// interpolation round-off).\nfloat bm_box_index(float channel)\n{\n  return floor(channel + 0.5);\n}\n\n// h from the half-extent pair of channels (h.xy, (h.z, 0)).\nvec3 bm_half_extents(vec2 half_xy, vec2 half_z)\n{\n  return vec3(half_xy, half_z.x);\n}\n\n// ---- Per-box parameters and parents (docs/ENGINES.md: which channels or box-table plane hold\n// them in each layout).\n\n// The box's parameters (shape, material, random, user) from the layout's two channels\n// (shape, material) and (random, user) (docs/ENGINES.md), or from the box table's plane 1 texel\n// passed as (texel.xy, texel.zw).\nvec4 bm_box_params(vec2 shape_material, vec2 random_user)\n{\n  return vec4(shape_material, random_user);\n}\n\n// The parent's box number from its interpolated channel, -1 for a root (rounding absorbs\n// interpolation round-off, as bm_box_index does).\nfloat bm_parent_index(float channel)\n{\n  return floor(channel + 0.5);\n}\n\n// Texel (x, y) of box `index` in plane `plane` of the box table, an image `size` texels wide and\n// high holding 5 planes of size.y / 5 rows each (docs/ENGINES.md): 0 (h, parent), 1 (shape,\n// material, random, user), 2 (depth, 0, 0, 0), 3 (origin, 0), 4 the frame's quaternion.\n// Integer-valued floats, for texelFetch, Load or a texture lookup at (x + 0.5, y + 0.5) / size.\nvec2 bm_box_table_texel(float index, float plane, vec2 size)\n{\n  float row = floor(index / size.x);\n  return vec2(index - row * size.x, plane * floor(size.y / 5.0 + 0.5) + row);\n}\n";
 var BOXMARCH_LIBRARY = "// boxmarch SDF library. `box_half` holds the box's half-extents (a 1 x 0.6 x 0.2 box has\n// box_half = (0.5, 0.3, 0.1)), so shapes can be sized without typing numbers. Exactness of an op_\n// assumes exact inputs. shaders/generate.py translates it into HLSL and into GLM for the CPU\n// reference (cpp/src).\n\n// Half-extents of the box being marched; set by the raymarcher before map() is called.\nvec3 box_half = vec3(0.0);\n\n// The smallest and the largest component.\nfloat bm_min3(vec3 v) { return min(v.x, min(v.y, v.z)); }\nfloat bm_max3(vec3 v) { return max(v.x, max(v.y, v.z)); }\n// min3 and max3: the same, under the names map() texts use.\nfloat min3(vec3 v) { return bm_min3(v); }\nfloat max3(vec3 v) { return bm_max3(v); }\n\n// ---- primitives, centred at the origin\n// Exact.\nfloat sd_sphere(vec3 p, float r) { return length(p) - r; }\n\n// Exact. Half-extents b.\nfloat sd_box(vec3 p, vec3 b)\n{\n  vec3 q = abs(p) - b;\n  return length(max(q, vec3(0.0))) + min(bm_max3(q), 0.0);\n}\n\n// Exact for r <= min3(b): the box b with its edges rounded by r (outer size b).\nfloat sd_round_box(vec3 p, vec3 b, float r) { return sd_box(p, b - vec3(r)) - r; }\n\n// Exact. Segment a-b with radius r.\nfloat sd_capsule(vec3 p, vec3 a, vec3 b, float r)\n{\n  vec3 pa = p - a;\n  vec3 ba = b - a;\n  float h = clamp(dot(pa, ba) / max(dot(ba, ba), 1e-20), 0.0, 1.0);\n  return length(pa - ba * h) - r;\n}\n\n// Exact. Capped, axis z.\nfloat sd_cylinder(vec3 p, float r, float half_height)\n{\n  vec2 d = abs(vec2(length(p.xy), p.z)) - vec2(r, half_height);\n  return min(max(d.x, d.y), 0.0) + length(max(d, vec2(0.0)));\n}\n\n// Exact. Around axis z.\nfloat sd_torus(vec3 p, float major, float minor)\n{\n  vec2 q = vec2(length(p.xy) - major, p.z);\n  return length(q) - minor;\n}\n\n// Exact. Chain link: a ring of radius `ring` in the xy plane stretched by half_length along y.\nfloat sd_link(vec3 p, float half_length, float ring, float thickness)\n{\n  vec3 q = vec3(p.x, max(abs(p.y) - half_length, 0.0), p.z);\n  return length(vec2(length(q.xy) - ring, q.z)) - thickness;\n}\n\n// Exact for a unit normal n. Plane with normal n, offset along n.\nfloat sd_plane(vec3 p, vec3 n, float offset) { return dot(p, n) + offset; }\n\n// ---- combinations of two distances\n// Exact outside both shapes, a bound inside.\nfloat op_union(float a, float b) { return min(a, b); }\n// A bound outside the result, exact inside. a minus b.\nfloat op_subtract(float a, float b) { return max(a, -b); }\n// A bound outside the result, exact inside.\nfloat op_intersect(float a, float b) { return max(a, b); }\n\n// Smooth versions: k is the blend radius (box-local units).\n// A bound; equals op_union where |a - b| >= k.\nfloat op_smooth_union(float a, float b, float k)\n{\n  float h = clamp(0.5 + 0.5 * (b - a) / k, 0.0, 1.0);\n  return mix(b, a, h) - k * h * (1.0 - h);\n}\n// A bound; equals op_intersect where |a - b| >= k.\nfloat op_smooth_intersect(float a, float b, float k) { return -op_smooth_union(-a, -b, k); }\n// A bound; equals op_subtract where |a + b| >= k.\nfloat op_smooth_subtract(float a, float b, float k) { return op_smooth_intersect(a, -b, k); }\n\n// ---- modifiers\n// The shape grown by r: exact outside, a bound inside.\nfloat op_round(float d, float r) { return d - r; }\n// A shell of half-thickness `thickness` around the surface: exact outside the shell, a bound\n// inside it.\nfloat op_onion(float d, float thickness) { return abs(d) - thickness; }\n\n// Finite repetition: copies every `spacing`, `limit` copies each side of the centre per axis.\n// Moves p (returns no distance): a shape evaluated at the result stays exact when it is\n// mirror-symmetric in each axis and fits its cell (half of `spacing` each side); otherwise it can\n// overestimate (neither exact nor a bound: march with relaxation below 1).\n// floor(x + 0.5), not round(): GLSL ES 1.00 (WebGL 1) has no round().\nvec3 op_repeat_limited(vec3 p, vec3 spacing, vec3 limit)\n{\n  return p - spacing * clamp(floor(p / spacing + 0.5), -limit, limit);\n}\n\n// ---- presets of the preview's SDF menu, sized by the box\n// A preset with a preferred axis (capsule, cylinder, torus, link) reads the box's axes by extent,\n// not by name, so it fits its box whatever order the bake gave the axes (no bake option needed).\n\n// v with its components in the order that sorts h from the largest to the smallest: called with\n// v = p it gives the point, with v = h the sorted half-extents. A later axis moves ahead only when\n// its extent is more than 0.1% larger (the bake's tie band), so near-equal extents keep the order\n// x, y, z and all boxes of one shape read their axes alike. The order depends on h alone, one\n// permutation per box, so a preset that is exact on the sorted axes stays exact.\nvec3 bm_by_extent(vec3 v, vec3 h)\n{\n  vec3 s = h;\n  vec3 r = v;\n  if (s.y > 1.001 * s.x) {\n    s = s.yxz;\n    r = r.yxz;\n  }\n  if (s.z > 1.001 * s.y) {\n    s = s.xzy;\n    r = r.xzy;\n  }\n  if (s.y > 1.001 * s.x) {\n    s = s.yxz;\n    r = r.yxz;\n  }\n  return r;\n}\n\n// Exact.\nfloat sdf_preset_box(vec3 p, vec3 h) { return sd_box(p, h); }\n// Exact.\nfloat sdf_preset_sphere(vec3 p, vec3 h) { return sd_sphere(p, bm_min3(h)); }\n// Exact.\nfloat sdf_preset_rounded_box(vec3 p, vec3 h) { return sd_round_box(p, h, 0.25 * bm_min3(h)); }\n// Exact. Along the box's longest axis, radius its smallest half-extent.\nfloat sdf_preset_capsule(vec3 p, vec3 h)\n{\n  vec3 q = bm_by_extent(p, h);\n  vec3 s = bm_by_extent(h, h);\n  float r = min(s.y, s.z);\n  float a = max(s.x - r, 0.0);\n  return sd_capsule(q, vec3(-a, 0.0, 0.0), vec3(a, 0.0, 0.0), r);\n}\n// Exact. Along the box's longest axis where that holds the larger cylinder (a rod: longest x\n// smallest > middle^2), else along its shortest axis (a disc); a cube's stands along local z.\nfloat sdf_preset_cylinder(vec3 p, vec3 h)\n{\n  vec3 q = bm_by_extent(p, h);\n  vec3 s = bm_by_extent(h, h);\n  if (s.x * s.z > s.y * s.y) {\n    q = q.yzx;\n    s = s.yzx;\n  }\n  return sd_cylinder(q, min(s.x, s.y), s.z);\n}\n// Exact. Around the box's shortest axis, as wide as its middle half-extent.\nfloat sdf_preset_torus(vec3 p, vec3 h)\n{\n  vec3 q = bm_by_extent(p, h);\n  vec3 s = bm_by_extent(h, h);\n  float minor = min(s.z, 0.5 * min(s.x, s.y));\n  return sd_torus(q, min(s.x, s.y) - minor, minor);\n}\n// Exact. Stretched along the box's longest axis, the ring across its middle one, the thickness\n// along its shortest.\nfloat sdf_preset_link(vec3 p, vec3 h)\n{\n  vec3 q = bm_by_extent(p, h);\n  vec3 s = bm_by_extent(h, h);\n  float thickness = min(s.z, 0.25 * min(s.x, s.y));\n  return sd_link(q.yxz, max(s.x - s.y, 0.0), s.y - thickness, thickness);\n}\n\n// boxmarch per-box shapes: the parameters of the box being marched (decoded by decode.glsl's\n// bm_box_params) and the per-box shape switch. Needs decode.glsl and sdf.glsl before it.\n// shaders/generate.py translates it into every engine's language and\n// into GLM for the CPU reference.\n\n// Parameters of the box being marched (shape, material, random, user); set by the raymarcher\n// before map() is called, as box_half is (the preview's PER_BOX map() reads box_params.x).\nvec4 box_params = vec4(0.0);\n// The parent box, in this box's local coordinates: its origin (xyz) and the blend radius (w),\n// its frame as a quaternion, its half-extents (xyz; x < 0: no parent) and its shape id (w).\nvec4 box_parent_origin = vec4(0.0);\nvec4 box_parent_q = vec4(0.0, 0.0, 0.0, 1.0);\nvec4 box_parent_half = vec4(-1.0);\n\n// The SDF preset a shape id picks, sized by the box's half-extents h: the id rounded to the\n// nearest whole number indexes the presets in the preview's menu order (0 box, 1 sphere,\n// 2 rounded box, 3 capsule, 4 cylinder, 5 torus, 6 link); any other id draws the box. Exact\n// (each preset is).\nfloat bm_sdf_by_id(float shape, vec3 p, vec3 h)\n{\n  float id = floor(shape + 0.5);\n  if (id == 1.0) {\n    return sdf_preset_sphere(p, h);\n  }\n  if (id == 2.0) {\n    return sdf_preset_rounded_box(p, h);\n  }\n  if (id == 3.0) {\n    return sdf_preset_capsule(p, h);\n  }\n  if (id == 4.0) {\n    return sdf_preset_cylinder(p, h);\n  }\n  if (id == 5.0) {\n    return sdf_preset_torus(p, h);\n  }\n  if (id == 6.0) {\n    return sdf_preset_link(p, h);\n  }\n  return sdf_preset_box(p, h);\n}\n\n// This box's shape (its shape id, sized by h) blended into its parent's across their boundary:\n// the parent's shape evaluated in the parent's frame (parent_origin: its origin in this box's\n// local coordinates; parent_q: its frame relative to this box's; parent_half.xyz its\n// half-extents, parent_half.w its shape id; parent_half.x < 0: no parent), joined by\n// op_smooth_union with blend radius k (k <= 0: the own shape). A bound. Two SDF evaluations\n// with a parent, one without; the fillet lies within k of this box's shape, so the box it is\n// drawn in must be grown by k.\nfloat bm_sdf_blend_parent(float shape, vec3 p, vec3 h, vec3 parent_origin, vec4 parent_q, vec4 parent_half, float k)\n{\n  float own = bm_sdf_by_id(shape, p, h);\n  if (k <= 0.0 || parent_half.x < 0.0) {\n    return own;\n  }\n  vec3 in_parent = bm_rotate_vector(p - parent_origin, bm_quat_conjugate(parent_q));\n  return op_smooth_union(own, bm_sdf_by_id(parent_half.w, in_parent, parent_half.xyz), k);\n}\n\n// ---- conservative occluders: boxes inscribed in each preset, for a depth-only pre-pass\n// A pre-pass draws every box's occluders (the box mesh pulled in by its vertex stage to each\n// occluder box: centre + v * half / h for a box-local vertex v) and keeps their nearest depth. An\n// occluder lies inside its shape, so wherever it covers a pixel the visible surface there is at\n// least as near: a fragment whose box entry lies behind that depth is hidden and need not march,\n// and no march need go past it (docs/PREVIEW.md, \"Hidden boxes\"). Occluders in the style of\n// conservative occluder meshes (contained in the shape, as large as cheaply possible), each shrunk\n// by 1/1000 of the box's largest half-extent so that it lies strictly inside and a surface\n// touching it keeps its own depth.\n//\n// bm_occluder_count boxes per preset (index k = 0, 1, ...; at most 4), each clipped to the box\n// (the march never leaves it); a half-extent of zero: no box at k. Every box is symmetric about the preset's own axes, so an engine's mirrored frame\n// (docs/EXPORT.md) sees the same set. Inscribed, per preset (h: the box's half-extents):\n// * box: the box itself (exact).\n// * sphere (radius r = min3(h)): three crossed boxes r(0.825, 0.4, 0.4) and their axis turns;\n//   each corner lies at 0.825^2 + 2 x 0.4^2 < 1 of r: inside.\n// * rounded box (box h - r rounded by r = min3(h) / 4): the three slabs of the box h with two\n//   axes pulled in by r; a slab's points lie within r of the inner box h - r: inside.\n// The capsule, cylinder, torus and link are placed in the preset's own frame (the box's axes sorted\n// by extent, as sdf.glsl's presets read them) and mapped back.\n// * capsule (axis x, half-length a, radius r): two crossed boxes (a + 0.62 r, 0.7 r, 0.35 r) and\n//   (a + 0.62 r, 0.35 r, 0.7 r); at |x| = a + 0.62 r the cap's section has radius\n//   0.785 r >= |(0.7, 0.35)| r = 0.783 r: inside.\n// * cylinder (radius r = min(h.x, h.y), half height h.z): boxes (0.866 r, 0.5 r, h.z) and\n//   (0.5 r, 0.866 r, h.z), corners on the circle: inside.\n// * torus and link: bm_ring_occluder_*; the torus is the link with half-length 0.\n// A draw per occluder index: the pre-pass writes depth only, so each is cheap.\n\n// How many occluder boxes shape id `shape` has (bm_sdf_by_id's numbering).\nfloat bm_occluder_count(float shape)\n{\n  // if chains, not nested ?: (Godot 3's shading language refuses a ?: inside a ?:)\n  float id = floor(shape + 0.5);\n  if (id == 1.0 || id == 2.0) {\n    return 3.0;\n  }\n  if (id == 3.0 || id == 4.0) {\n    return 2.0;\n  }\n  if (id == 5.0 || id == 6.0) {\n    return 4.0;\n  }\n  return 1.0;\n}\n\n// Ring of a link (sd_link: the stadium of half-length `half_length` along x, radius `ring`,\n// wire radius `minor`, in the xy plane) or torus (half_length 0): k = 0, 1 the straight wires at\n// y = +-ring, k = 2, 3 the ends at x = +-(half_length + ring). Each box has half-extent a = minor / 2\n// across the wire (radial and z), so its points lie within w = sqrt(minor^2 - a^2) of the wire's\n// circle radially; along the wire it reaches e past the straight part (or either side of the\n// end), where sqrt(e^2 + (ring + a)^2) = ring + w: the farthest corner at radius ring + w, the\n// nearest at ring - a > ring - w. Inside the tube, exactly.\nvec3 bm_ring_occluder_centre(float half_length, float ring, float k)\n{\n  float side = (k == 1.0 || k == 3.0) ? -1.0 : 1.0;\n  return k < 2.0 ? vec3(0.0, side * ring, 0.0) : vec3(side * (half_length + ring), 0.0, 0.0);\n}\nvec3 bm_ring_occluder_half(float half_length, float ring, float minor, float k)\n{\n  float a = 0.5 * minor;\n  float w = sqrt(max(minor * minor - a * a, 0.0));\n  float e = sqrt(max((ring + w) * (ring + w) - (ring + a) * (ring + a), 0.0));\n  return k < 2.0 ? vec3(half_length + e, a, a) : vec3(a, e, a);\n}\n\n// v in the box's own axis order from the order bm_by_extent sorts h into (its inverse: the same\n// swaps, decided alike, undone in reverse).\nvec3 bm_from_extent(vec3 v, vec3 h)\n{\n  vec3 s = h;\n  bool first = s.y > 1.001 * s.x;\n  if (first) {\n    s = s.yxz;\n  }\n  bool second = s.z > 1.001 * s.y;\n  if (second) {\n    s = s.xzy;\n  }\n  bool third = s.y > 1.001 * s.x;\n  vec3 r = v;\n  if (third) {\n    r = r.yxz;\n  }\n  if (second) {\n    r = r.xzy;\n  }\n  if (first) {\n    r = r.yxz;\n  }\n  return r;\n}\n\n// Centre (centre true) or half-extents of occluder box k of shape id `shape` (bm_sdf_by_id's\n// numbering) in a box of half-extents h, in the preset's own frame (sdf.glsl: the capsule,\n// cylinder, torus and link read the axes by extent, bm_by_extent) mapped back to the box's axes,\n// before bm_occluder_centre and bm_occluder_half clip it to the box.\nvec3 bm_occluder_unclipped(float shape, vec3 h, float k, bool centre)\n{\n  float id = floor(shape + 0.5);\n  vec3 s = bm_by_extent(h, h);\n  vec3 at = vec3(0.0);\n  vec3 extent = k == 0.0 ? h : vec3(0.0);\n  // the k-th of a preset's boxes by its axis lengths: (long, short, short) turned so the long one\n  // lies along axis k (sphere, rounded box), or the first two of them (capsule, cylinder)\n  vec3 turned = k == 1.0 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);\n  if (k == 2.0) {\n    turned = vec3(0.0, 0.0, 1.0);\n  }\n  if (id == 1.0) {\n    float r = bm_min3(h);\n    extent = k < 3.0 ? r * (vec3(0.4) + 0.425 * turned) : vec3(0.0);\n  }\n  if (id == 2.0) {\n    float r = 0.25 * bm_min3(h);\n    extent = k < 3.0 ? h - r * (vec3(1.0) - turned) : vec3(0.0);\n  }\n  if (id == 3.0) {\n    float r = min(s.y, s.z);\n    float reach = max(s.x - r, 0.0) + 0.62 * r;\n    extent = k == 0.0 ? vec3(reach, 0.7 * r, 0.35 * r) : vec3(reach, 0.35 * r, 0.7 * r);\n    extent = k < 2.0 ? bm_from_extent(extent, h) : vec3(0.0);\n  }\n  if (id == 4.0) {\n    // sdf_preset_cylinder: along the sorted x (q.yzx) for a rod, else along the sorted z\n    bool rod = s.x * s.z > s.y * s.y;\n    vec3 c = rod ? s.yzx : s;\n    float r = min(c.x, c.y);\n    extent = k == 0.0 ? vec3(0.866 * r, 0.5 * r, c.z) : vec3(0.5 * r, 0.866 * r, c.z);\n    extent = k < 2.0 ? bm_from_extent(rod ? extent.zxy : extent, h) : vec3(0.0);\n  }\n  if (id == 5.0) {\n    float minor = min(s.z, 0.5 * min(s.x, s.y));\n    at = bm_from_extent(bm_ring_occluder_centre(0.0, min(s.x, s.y) - minor, k), h);\n    extent = bm_from_extent(bm_ring_occluder_half(0.0, min(s.x, s.y) - minor, minor, k), h);\n  }\n  if (id == 6.0) {\n    float thickness = min(s.z, 0.25 * min(s.x, s.y));\n    at = bm_from_extent(bm_ring_occluder_centre(max(s.x - s.y, 0.0), s.y - thickness, k), h);\n    extent = bm_from_extent(bm_ring_occluder_half(max(s.x - s.y, 0.0), s.y - thickness, thickness, k), h);\n  }\n  return centre ? at : extent;\n}\n\n// Occluder box k clipped to the box (a shape that reaches past its box is drawn cut by it: a\n// capsule or link box shorter than it is wide), then shrunk by the margin: its centre, and its\n// half-extents (zero: none).\nvec3 bm_occluder_centre(float shape, vec3 h, float k)\n{\n  vec3 centre = bm_occluder_unclipped(shape, h, k, true);\n  vec3 extent = bm_occluder_unclipped(shape, h, k, false);\n  return 0.5 * (max(centre - extent, -h) + min(centre + extent, h));\n}\nvec3 bm_occluder_half(float shape, vec3 h, float k)\n{\n  vec3 centre = bm_occluder_unclipped(shape, h, k, true);\n  vec3 extent = bm_occluder_unclipped(shape, h, k, false);\n  vec3 clipped = 0.5 * (min(centre + extent, h) - max(centre - extent, -h));\n  return max(clipped - vec3(1e-3 * bm_max3(h)), vec3(0.0));\n}\n\n// boxmarch raymarcher: sphere tracing inside one box, box-local coordinates.\n// Needs decode.glsl and sdf.glsl before it and a `float map(vec3 p)` after it.\n// shaders/generate.py translates it into HLSL, and bm_box_span and bm_normal_tap into GLM for the\n// CPU reference (cpp/src/raymarch.cpp writes bm_march and bm_normal around its preset switch).\n\nfloat map(vec3 p);\n\n// Entry (x) and exit (y) distances of the ray ro + t rd with the box |p| <= h.\nvec2 bm_box_span(vec3 ro, vec3 rd, vec3 h)\n{\n  vec3 s = vec3(rd.x < 0.0 ? -1.0 : 1.0, rd.y < 0.0 ? -1.0 : 1.0, rd.z < 0.0 ? -1.0 : 1.0);\n  vec3 inv = 1.0 / max(abs(rd), vec3(1e-12));\n  vec3 t_near = (-h - s * ro) * inv;\n  vec3 t_far = (h - s * ro) * inv;\n  return vec2(bm_max3(t_near), bm_min3(t_far));\n}\n\n// Sphere-traces map() from ro along unit rd until a distance falls below epsilon (true), the ray\n// passes t_end or step_limit evaluations (at most 512) are spent (false). Where a distance is under\n// secant.x and smaller than the last one, the step is the secant's instead (the line through the\n// last two distances along the ray, extended to zero), at most secant.y times the distance: near\n// a surface met at a slant the distances shrink geometrically and the secant skips that tail, and\n// the hit test stays epsilon, so the silhouette does not move (secant.x = 0: plain sphere tracing).\n// t: distance travelled; steps: map() evaluations; d: the last map() value (at a hit, the hit's\n// own distance, which bm_normal reuses). The loop's bound is a constant, as GLSL ES 1.00 (WebGL 1)\n// requires.\nbool bm_march(vec3 ro, vec3 rd, float t_end, int step_limit, float epsilon, float relaxation, vec2 secant,\n              out float t, out int steps, out float d)\n{\n  t = 0.0;\n  steps = step_limit;\n  d = 0.0;\n  float last_d = 0.0;\n  float last_advance = 0.0;\n  for (int i = 0; i < 512; ++i) {\n    if (i >= step_limit) {\n      break;\n    }\n    d = map(ro + rd * t);\n    if (d < epsilon) {\n      steps = i + 1;\n      return true;\n    }\n    float advance = relaxation * d;\n    if (d < secant.x && d < last_d) {\n      advance = min(d * last_advance / (last_d - d), secant.y * d);\n    }\n    last_d = d;\n    last_advance = advance;\n    t += advance;\n    if (t > t_end) {\n      steps = i + 1;\n      return false;\n    }\n  }\n  return false;\n}\n\n// Level of detail for a box a few pixels wide: one map() evaluation where the ray passes nearest\n// the box's centre (within its span) stands for the march; a hit when that point lies within half\n// a pixel (footprint, box-local units) of the surface or inside. t: that point's distance along\n// the ray; d: its map() value (for bm_normal).\nbool bm_one_tap(vec3 ro, vec3 rd, float t_end, float footprint, out float t, out float d)\n{\n  t = clamp(-dot(ro, rd), 0.0, t_end);\n  d = map(ro + rd * t);\n  return d < 0.5 * footprint;\n}\n\n// The quality knob q (0 < q <= 1) as the four settings it stands for. x: distance, as a share of a\n// pixel's footprint, under which the march takes secant steps (bm_march's secant.x); w: the\n// longest secant step, as a multiple of the distance (secant.y): longer steps save more and may\n// land further inside the surface (a hit there shades from a point under it); y: steps allowed\n// per pixel of the box's size on screen (bm_step_limit); z: size on screen in pixels under which a\n// box takes one tap (bm_one_tap). The hit distance stays the epsilon at every q; q = 1 leaves the\n// march as the epsilon and step limit set it.\nvec4 bm_quality(float q)\n{\n  float loss = 1.0 - clamp(q, 0.0, 1.0);\n  return vec4(0.5 * loss, 8.0 / max(loss, 1e-9), 4.0 * loss, 1.0 + 2.0 * loss);\n}\n\n// Size of one pixel, in object units, at a point whose clip-space w is clip_w: row_y = length of\n// the object-to-clip matrix's y row (xyz), height = viewport height in pixels. Perspective and\n// orthographic alike (w = 1 there).\nfloat bm_pixel_size(float clip_w, float row_y, float height)\n{\n  return 2.0 * clip_w / (height * row_y);\n}\n\n// Step limit of a box box_pixels wide on screen: steps_per_pixel per pixel, at least 16, at most\n// step_cap (a float holding a whole number).\nfloat bm_step_limit(float box_pixels, float steps_per_pixel, float step_cap)\n{\n  return min(step_cap, max(16.0, floor(steps_per_pixel * box_pixels)));\n}\n\n// Tap distance of bm_normal, 3/10,000 of the box: a forward difference errs by about half the tap\n// times the surface's curvature, and closer taps lose the gradient in float rounding (measured in\n// docs/ACCURACY.md, \"GPU cost against error\": the normal error column).\nfloat bm_normal_tap(vec3 h)\n{\n  return 3e-4 * bm_max3(h);\n}\n\n// Unit SDF gradient at p from forward differences: d = map(p), which the march has already\n// computed (bm_march's d), so the normal costs three map() calls; taps at distance e.\nvec3 bm_normal(vec3 p, float d, float e)\n{\n  vec3 n = vec3(map(p + vec3(e, 0.0, 0.0)), map(p + vec3(0.0, e, 0.0)), map(p + vec3(0.0, 0.0, e))) - d;\n  float len = length(n);\n  return len > 0.0 ? n / len : vec3(0.0);\n}\n\n// Hidden boxes (box_params.glsl, conservative occluders): the occluders' nearest window depth (0\n// near, 1 far; GL's depth range) made safe to compare with: 2^-21 farther, eight float steps at\n// the far plane. That covers the rounding of window depths near 1 (a float step there spans\n// about 1 cm at 140 units with a 0.1 near plane) and a 24-bit depth buffer's step. A fragment\n// whose box entry lies beyond this limit is hidden; a march stops at it.\nfloat bm_occluder_limit(float occluder_depth)\n{\n  return occluder_depth + 4.8e-7;\n}\n\n// Distance t along a ray whose clip-space position is c0 + t c1 at which its clip depth z / w\n// reaches ndc_z (GL: 2 x window depth - 1; D3D and Vulkan: the window depth), so a march can\n// stop at the occluders' depth: nothing beyond it is visible. 1e30 (no bound) where the ray does\n// not reach that depth ahead of it: a depth that does not change along the ray, or one past what\n// the projection reaches (an empty pixel's depth 1 plus bm_occluder_limit's margin lies beyond the\n// far plane, whose depth a perspective ray only approaches).\nfloat bm_depth_crossing(vec4 c0, vec4 c1, float ndc_z)\n{\n  float rate = c1.z - ndc_z * c1.w;\n  float t = abs(rate) > 1e-30 ? (ndc_z * c0.w - c0.z) / rate : -1.0;\n  return t >= 0.0 ? t : 1e30;\n}\n";
 
-export { loadBoxmarch, checkBoxmarchSidecar, parseBoxmarchSidecar, boxmarchSidecarUrl, checkBoxmarchOptions, createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, boxmarchTexcoordName, sortBoxmarchFrontToBack, useBoxmarchOccluders, boxmarchOccluderShape, createBoxmarchOccluderMaterial, useBoxmarchVisibility, boxmarchVisibilitySupported };
+export { loadBoxmarch, checkBoxmarchSidecar, parseBoxmarchSidecar, boxmarchSidecarUrl, checkBoxmarchOptions, createBoxmarchMaterial, useBoxmarchMaterial, prepareBoxmarchGeometry, boxmarchTexcoordName, sortBoxmarchFrontToBack, useBoxmarchOccluders, boxmarchOccluderShape, createBoxmarchOccluderMaterial, useBoxmarchVisibility, boxmarchVisibilitySupported, useBoxmarchBackFaceCulling, boxmarchClosedOutward };

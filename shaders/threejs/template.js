@@ -73,11 +73,14 @@ var BOXMARCH_OPTION_RANGES = {
 // The presets whose occluders options.occluders may name, in bm_sdf_by_id's numbering
 // (boxmarchOccluderShape).
 var BOXMARCH_OCCLUDER_PRESETS = ['BOX', 'SPHERE', 'ROUNDED_BOX', 'CAPSULE', 'CYLINDER', 'TORUS', 'LINK'];
+// How many occluder boxes each of those presets has (box_params.glsl bm_occluder_unclipped: the
+// indices below it have an extent), so the pre-pass makes no draw that draws nothing.
+var BOXMARCH_OCCLUDER_COUNTS = [1, 3, 3, 2, 2, 4, 4];
 
 // Throws, one line naming the option, for createBoxmarchMaterial options it would not draw as
 // given: a number outside BOXMARCH_OPTION_RANGES (or not a number), a map that is not a non-empty
 // string, occluders that are not a name of BOXMARCH_OCCLUDER_PRESETS, 'PER_BOX', true or false,
-// a visibilityPass that is not true or false.
+// a visibilityPass or cullBackFaces that is not true or false.
 // An option left undefined takes its default.
 function checkBoxmarchOptions(options) {
   if (options === undefined || options === null) return;
@@ -95,9 +98,11 @@ function checkBoxmarchOptions(options) {
     throw new Error('boxmarch: option map must be the GLSL body of float map(vec3 p), not '
       + (typeof options.map === 'string' ? 'an empty string' : typeof options.map));
   }
-  if (options.visibilityPass !== undefined && typeof options.visibilityPass !== 'boolean') {
-    throw new Error('boxmarch: option visibilityPass must be true or false, not ' + String(options.visibilityPass));
-  }
+  ['visibilityPass', 'cullBackFaces'].forEach(function (key) {
+    if (options[key] !== undefined && typeof options[key] !== 'boolean') {
+      throw new Error('boxmarch: option ' + key + ' must be true or false, not ' + String(options[key]));
+    }
+  });
   var occluders = options.occluders;
   if (occluders !== undefined && typeof occluders !== 'boolean' && occluders !== 'PER_BOX'
       && BOXMARCH_OCCLUDER_PRESETS.indexOf(occluders) < 0) {
@@ -267,6 +272,83 @@ function sortBoxmarchFrontToBack(THREE, mesh, camera) {
   return true;
 }
 
+// Whether every box of geometry is closed and wound outward, the rule the Blender preview culls
+// by (mesh_data.closed_outward) applied to the triangles the file carries: within each box (the
+// box number of bmOffsetZIndex.y), its vertices welded by position (the glTF export splits them per
+// face corner), each directed edge once and its reverse once, and the box's signed volume
+// positive. Then a box's back faces are its far side, hidden by its own front.
+function boxmarchClosedOutward(geometry) {
+  var position = geometry.getAttribute('position'), number = geometry.getAttribute('bmOffsetZIndex');
+  var index = geometry.index ? geometry.index.array : null, corners = index ? index.length : position.count;
+  if (!corners || corners % 3) return false;
+  var welded = new Map(), id = new Float64Array(position.count);
+  for (var v = 0; v < position.count; v++) {
+    var key = number.getY(v) + ':' + position.getX(v) + ',' + position.getY(v) + ',' + position.getZ(v);
+    if (!welded.has(key)) welded.set(key, welded.size);
+    id[v] = welded.get(key);
+  }
+  var n = welded.size, edges = new Set(), volume = new Map(), corner = [0, 0, 0];
+  for (var t = 0; t < corners; t += 3) {
+    for (var k = 0; k < 3; k++) corner[k] = index ? index[t + k] : t + k;
+    for (k = 0; k < 3; k++) {
+      var edge = id[corner[k]] * n + id[corner[(k + 1) % 3]];
+      if (edges.has(edge)) return false;
+      edges.add(edge);
+    }
+    // the signed volume about the box's first corner: a closed surface's does not depend on the point
+    var box = number.getY(corner[0]);
+    if (!volume.has(box)) volume.set(box, { o: corner[0], sum: 0 });
+    var entry = volume.get(box), p = [];
+    for (k = 0; k < 3; k++) {
+      p.push([position.getX(corner[k]) - position.getX(entry.o), position.getY(corner[k]) - position.getY(entry.o),
+        position.getZ(corner[k]) - position.getZ(entry.o)]);
+    }
+    entry.sum += p[0][0] * (p[1][1] * p[2][2] - p[1][2] * p[2][1]) + p[0][1] * (p[1][2] * p[2][0] - p[1][0] * p[2][2])
+      + p[0][2] * (p[1][0] * p[2][1] - p[1][1] * p[2][0]);
+  }
+  var closed = true;
+  edges.forEach(function (e) { if (closed && !edges.has((e % n) * n + Math.floor(e / n))) closed = false; });
+  volume.forEach(function (entry) { if (!(entry.sum > 0)) closed = false; });
+  return closed;
+}
+
+// A copy of mesh's marching material with defines added (the uniforms shared) drawing `side`.
+function boxmarchMaterialVariant(THREE, mesh, defines, side) {
+  var material = mesh.material.clone();
+  material.uniforms = mesh.material.uniforms;
+  material.defines = Object.assign({}, mesh.material.defines, defines);
+  material.onBeforeCompile = mesh.material.onBeforeCompile;
+  material.side = side;
+  return material;
+}
+
+// Culls the far side of mesh's boxes (given useBoxmarchMaterial's material) where they are closed
+// and wound outward (boxmarchClosedOutward), as the Blender preview does: a back face's fragments
+// return at once, yet SwiftShader runs such a fragment's lanes on through the march (measured:
+// docs/BENCHMARKS.md), so a face never rasterised is the saving. The material draws front faces
+// only (three.js flips the winding for a mirroring matrix); the box holding the eye, whose march
+// starts at the eye, is drawn again with both sides right after the mesh (its onAfterRender), by a
+// mesh that keeps every other box out of view (BM_EYE_BOX_ONLY). A SkinnedMesh is left drawing
+// both sides (skinning may bend a box). Returns that eye-box mesh (also mesh.userData.boxmarchEyeBox), or null.
+function useBoxmarchBackFaceCulling(THREE, mesh) {
+  if (mesh.isSkinnedMesh || !boxmarchClosedOutward(mesh.geometry)) return null;
+  var eyeBox = new THREE.Mesh(mesh.geometry, boxmarchMaterialVariant(THREE, mesh, { BM_EYE_BOX_ONLY: '' }, THREE.DoubleSide));
+  eyeBox.matrixAutoUpdate = false;  // mesh's world matrix, copied before each draw
+  eyeBox.frustumCulled = false;
+  var scene = new THREE.Scene().add(eyeBox);
+  mesh.material.side = THREE.FrontSide;
+  mesh.onAfterRender = function (renderer, parentScene, camera) {
+    eyeBox.matrix.copy(mesh.matrixWorld);
+    eyeBox.matrixWorldNeedsUpdate = true;
+    var autoClear = renderer.autoClear;
+    renderer.autoClear = false;
+    renderer.render(scene, camera);
+    renderer.autoClear = autoClear;
+  };
+  mesh.userData.boxmarchEyeBox = eyeBox;
+  return eyeBox;
+}
+
 // Hidden boxes (docs/ENGINES.md, three.js): a depth pre-pass of each box's conservative
 // occluders (shaders/glsl/box_params.glsl: boxes inscribed in the shape, so the visible surface
 // is at least as near wherever they cover a pixel), drawn by the same geometry with its vertices
@@ -299,25 +381,30 @@ function boxmarchOccluderShape(options) {
   return preset && presets.indexOf(preset[1].toUpperCase()) >= 0 ? presets.indexOf(preset[1].toUpperCase()) : null;
 }
 
-// The pre-pass material: occluder box number bmOccluder.x of shape id bmOccluder.y (< 0: each
-// box's own), none for a box holding the eye (its march starts at the eye); writes its window
-// depth packed into RGBA.
-function createBoxmarchOccluderMaterial(THREE, index, shape) {
+// The pre-pass material: occluder box number `index` (BM_OCCLUDER_INDEX) of shape id `shape`
+// (BM_OCCLUDER_SHAPE; < 0: each box's own), none for a box holding the eye (its march starts at
+// the eye); writes its window depth packed into RGBA. Both are compiled in as constants, so the
+// compiler keeps only that preset's branch of the occluder's arithmetic (measured on SwiftShader:
+// the pile's four occluder draws 1.2x as fast as with them as uniforms, docs/BENCHMARKS.md).
+function createBoxmarchOccluderMaterial(THREE, index, shape, side) {
   return new THREE.ShaderMaterial({
-    uniforms: { bmEye: { value: new THREE.Vector4(0, 0, 0, 1) }, bmOccluder: { value: new THREE.Vector2(index, shape) } },
+    uniforms: { bmEye: { value: new THREE.Vector4(0, 0, 0, 1) } },
+    defines: { BM_OCCLUDER_INDEX: index.toFixed(1), BM_OCCLUDER_SHAPE: shape.toFixed(1) },
     vertexShader: BOXMARCH_DECODE + '\n' + BOXMARCH_LIBRARY + '\n' + BOXMARCH_OCCLUDER_VERTEX,
     fragmentShader: BOXMARCH_DEPTH_PACKING + '\nvoid main() {\n  gl_FragColor = bm_pack_depth(gl_FragCoord.z);\n}\n',
-    side: THREE.DoubleSide
+    side: side
   });
 }
 
-// The pre-pass's draws of geometry's occluders of shape id `shape`: four meshes, box_params.glsl's
-// most (an index a shape lacks draws nothing: its vertices leave the view), their matrices to be
-// copied from the mesh's world matrix before each draw.
-function boxmarchOccluderScene(THREE, geometry, shape) {
+// The pre-pass's draws of geometry's occluders of shape id `shape`: one mesh per occluder box of
+// the preset (BOXMARCH_OCCLUDER_COUNTS), four for each box's own shape (box_params.glsl's most; an
+// index a box's shape lacks draws nothing: its vertices leave the view), their matrices to be
+// copied from the mesh's world matrix before each draw; `side`: the faces drawn (the occluders
+// are their boxes scaled and moved, so a box's back faces are their far side too).
+function boxmarchOccluderScene(THREE, geometry, shape, side) {
   var scene = new THREE.Scene();
-  for (var k = 0; k < 4; k++) {
-    var occluder = new THREE.Mesh(geometry, createBoxmarchOccluderMaterial(THREE, k, shape));
+  for (var k = 0; k < (shape >= 0 ? BOXMARCH_OCCLUDER_COUNTS[shape] : 4); k++) {
+    var occluder = new THREE.Mesh(geometry, createBoxmarchOccluderMaterial(THREE, k, shape, side));
     occluder.matrixAutoUpdate = false;
     occluder.frustumCulled = false;
     scene.add(occluder);
@@ -335,7 +422,8 @@ function useBoxmarchOccluders(THREE, mesh, shape) {
   var material = mesh.material;
   var target = new THREE.WebGLRenderTarget(1, 1, { minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
     depthBuffer: true, stencilBuffer: false });
-  var scene = boxmarchOccluderScene(THREE, mesh.geometry, shape);
+  // the boxes' far sides culled where the march culls them (useBoxmarchBackFaceCulling)
+  var scene = boxmarchOccluderScene(THREE, mesh.geometry, shape, mesh.userData.boxmarchEyeBox ? THREE.FrontSide : THREE.DoubleSide);
   var size = new THREE.Vector2(), clear = new THREE.Color(), white = new THREE.Color(1, 1, 1);
   var marching = mesh.onBeforeRender;
   mesh.onBeforeRender = function (renderer, parentScene, camera, geometry, drawnMaterial, group) {
@@ -408,13 +496,10 @@ function createBoxmarchScreenMaterial(THREE, uniforms, body, all) {
 // material (defines; the uniforms shared), front faces tested against the depth buffer, or the
 // back faces of the box holding the eye untested (eyeBox).
 function boxmarchPassMesh(THREE, mesh, defines, eyeBox) {
-  var material = mesh.material.clone();
-  material.uniforms = mesh.material.uniforms;
-  material.defines = Object.assign({}, mesh.material.defines, defines, eyeBox ? { BM_EYE_BOX_ONLY: '' } : {});
-  material.onBeforeCompile = mesh.material.onBeforeCompile;
   // BackSide would flip the winding three.js calls front (gl_FrontFacing with it); from inside
   // its box every face is a back face anyway
-  material.side = eyeBox ? THREE.DoubleSide : THREE.FrontSide;
+  var material = boxmarchMaterialVariant(THREE, mesh, Object.assign({}, defines, eyeBox ? { BM_EYE_BOX_ONLY: '' } : {}),
+    eyeBox ? THREE.DoubleSide : THREE.FrontSide);
   material.depthTest = !eyeBox;
   material.depthWrite = false;
   if (defines.BM_VISIBILITY_PASS !== undefined) {
@@ -455,7 +540,7 @@ function useBoxmarchVisibility(THREE, mesh, shape) {
   uniforms.bmResolvedDepth = { value: nearest.texture };
   var scenes = { fallback: new THREE.Scene(), visibility: new THREE.Scene(), shade: new THREE.Scene() };
   scenes.fallback.add(fallback);
-  scenes.occluders = boxmarchOccluderScene(THREE, mesh.geometry, shape);
+  scenes.occluders = boxmarchOccluderScene(THREE, mesh.geometry, shape, THREE.DoubleSide);
   scenes.occluders.children.forEach(function (occluder) {
     occluder.material.fragmentShader = 'void main() {\n  gl_FragColor = vec4(gl_FragCoord.z);\n}\n';
     // a margin for the march's own rounding: the occluders a little farther than drawn
@@ -632,7 +717,9 @@ function boxmarchLoadError(url, e) {
 
 // Loads the .glb at url (NAME.glb) after its sidecar NAME.boxmarch.json and gives every mesh,
 // skinned or not, its own material (options: those of createBoxmarchMaterial, skinning set per
-// mesh, frontToBack: draw each mesh's boxes front to back, useBoxmarchMaterial; occluders: the
+// mesh, frontToBack: draw each mesh's boxes front to back, useBoxmarchMaterial; cullBackFaces:
+// false draws both sides of every box, where by default a static mesh whose boxes are closed and
+// wound outward draws their front faces, useBoxmarchBackFaceCulling; occluders: the
 // hidden-box pre-pass of each static mesh, useBoxmarchOccluders, on by default where the map is
 // a preset's or the default one, boxmarchOccluderShape; visibilityPass: true draws behind those
 // occluders with useBoxmarchVisibility's passes instead, which write no depth). GLTFLoader: the class (THREE.GLTFLoader in r111's examples/js, imported from
@@ -662,6 +749,7 @@ function loadBoxmarch(THREE, GLTFLoader, url, options) {
     meshes.forEach(function (mesh) {
       var settings = Object.assign({}, options, { skinning: !!mesh.isSkinnedMesh });
       useBoxmarchMaterial(THREE, mesh, createBoxmarchMaterial(THREE, settings), !!(options && options.frontToBack));
+      if (!(options && (options.visibilityPass || options.cullBackFaces === false))) useBoxmarchBackFaceCulling(THREE, mesh);
       if (options && options.visibilityPass) useBoxmarchVisibility(THREE, mesh, boxmarchOccluderShape(options));
       else useBoxmarchOccluders(THREE, mesh, boxmarchOccluderShape(options));
     });
@@ -767,10 +855,13 @@ var BOXMARCH_FRAGMENT = [
   '  vec3 ro = -f;',
   '  vec2 span = bm_box_span(ro, rd, box_half);',
   '  float t_end = span.y;',
+  // SwiftShader runs a lane on past its discard to the end of the shader (measured,
+  // docs/BENCHMARKS.md): `drawn` turns the march and the normal off for it there.
+  '  bool drawn = true;',
   // A fragment of the far side only marches when the eye is inside the box (the preview's rule).
   '  bool fromEye = !gl_FrontFacing && span.x + span.y < 0.0;',
   '  if (fromEye) {',
-  '    if (bmEye.w < 0.5 || eye_distance > -span.x) discard;',
+  '    if (bmEye.w < 0.5 || eye_distance > -span.x) { drawn = false; discard; }',
   '    ro -= rd * eye_distance;',
   '    t_end = eye_distance;',
   '  }',
@@ -786,7 +877,7 @@ var BOXMARCH_FRAGMENT = [
   '#else',
   '    float hidden = bm_occluder_limit(bm_unpack_depth(texture2D(bmOccluderDepth, gl_FragCoord.xy * bmOcclusion.yz)));',
   '#endif',
-  '    if (!fromEye && gl_FragCoord.z > hidden) discard;',
+  '    if (!fromEye && gl_FragCoord.z > hidden) { drawn = false; discard; }',
   '    t_end = min(t_end, bm_depth_crossing(c0, c1, 2.0 * hidden - 1.0));',
   '  }',
   '#ifdef BM_SHADE_PASS',
@@ -797,18 +888,18 @@ var BOXMARCH_FRAGMENT = [
   // none ahead: the least depth is this fragment's own (a hit on the face, rounded nearer) or
   // nearer, which the depth test has judged
   '  if (t_win > 1e29) t_win = 0.0;',
-  '  if (max3(abs(ro + rd * t_win) - box_half) > 1e-3 * (t_win + max3(box_half))) discard;',
+  '  if (max3(abs(ro + rd * t_win) - box_half) > 1e-3 * (t_win + max3(box_half))) { drawn = false; discard; }',
   '#endif',
   // The quality knob (as the Blender preview applies it): a pixel's size at the face, the box's size on screen.
   '  vec4 knob = bm_quality(bmQuality.x);',
   '  float footprint = bm_pixel_size(1.0 / gl_FragCoord.w, length(vec3(objectToClip[0][1], objectToClip[1][1], objectToClip[2][1])), bmQuality.y);',
   '  float boxPixels = 2.0 * max3(box_half) / footprint;',
-  '  float t;',
-  '  float d;',
+  '  float t = 0.0;',
+  '  float d = 0.0;',
   '  int steps = 1;',
-  '  bool hit = boxPixels < knob.z ? bm_one_tap(ro, rd, t_end, footprint, t, d)',
+  '  bool hit = drawn && (boxPixels < knob.z ? bm_one_tap(ro, rd, t_end, footprint, t, d)',
   '    : bm_march(ro, rd, t_end, int(bm_step_limit(boxPixels, knob.y, bmMarch.y)), bmMarch.x, 1.0,',
-  '      vec2(knob.x * footprint, knob.w), t, steps, d);',
+  '      vec2(knob.x * footprint, knob.w), t, steps, d));',
   '  if (!hit) discard;',
   '  vec3 local_hit = ro + rd * t;',
   '  vec3 obj_hit = bmObjPos + bm_from_local(local_hit + f, x, y, z);',
@@ -824,7 +915,8 @@ var BOXMARCH_FRAGMENT = [
   '#else',
   '  gl_FragDepthEXT = depth;',
   '#endif',
-  '  vec3 n = normalize(normalMatrix * bm_from_local(bm_normal(local_hit, d, bm_normal_tap(box_half)), x, y, z));',
+  '  vec3 n = vec3(0.0, 0.0, 1.0);',
+  '  if (hit) n = normalize(normalMatrix * bm_from_local(bm_normal(local_hit, d, bm_normal_tap(box_half)), x, y, z));',
   '  gl_FragColor = vec4(bmColor * (0.35 + 0.65 * max(n.z, 0.0)), 1.0);',
   '#endif',
   '}'
@@ -836,16 +928,15 @@ var BOXMARCH_OCCLUDER_VERTEX = [
   'float map(vec3 p) { return 1.0; }',  // the library's march needs one; the pre-pass marches nothing
   BOXMARCH_ATTRIBUTES,
   'uniform vec4 bmEye;',
-  'uniform vec2 bmOccluder;',
   'void main() {',
   '  vec3 z = normalize(normal);',
   '  vec3 x = normalize(tangent.xyz);',
   '  vec3 y = normalize(bm_axis_y(normal, tangent));',
   '  vec3 v = -bm_offset(bmOffsetXY, bmOffsetZIndex);',
   '  vec3 h = bm_half_extents(bmHalfXY, bmHalfZ);',
-  '  float shape = bmOccluder.y < 0.0 ? bm_box_params(bmShapeMaterial, bmRandomUser).x : bmOccluder.y;',
-  '  vec3 extent = bm_occluder_half(shape, h, bmOccluder.x);',
-  '  vec3 pulled = bm_occluder_centre(shape, h, bmOccluder.x) + v * extent / max(h, vec3(1e-30));',
+  '  float shape = BM_OCCLUDER_SHAPE < 0.0 ? bm_box_params(bmShapeMaterial, bmRandomUser).x : BM_OCCLUDER_SHAPE;',
+  '  vec3 extent = bm_occluder_half(shape, h, BM_OCCLUDER_INDEX);',
+  '  vec3 pulled = bm_occluder_centre(shape, h, BM_OCCLUDER_INDEX) + v * extent / max(h, vec3(1e-30));',
   '  vec3 eye = bm_to_local(bmEye.xyz - position, x, y, z) + v;',
   '  bool eyeInside = bmEye.w > 0.5 && max3(abs(eye) - h) <= 0.0;',
   '  vec3 moved = position + bm_from_local(pulled - v, x, y, z);',

@@ -161,16 +161,20 @@ _RENDER_JOB = """async function (gltf) {
                         projection: __f64(camera.projectionMatrix.elements)}, extra || {});
 }"""
 
-# Counts the SDF evaluations of every fragment (march steps plus a hit's 3 normal taps), as the
-# Blender preview's STEPS output does: the shipped marching material's line that discards a miss
-# becomes one that writes the count, drawn with additive blending into a float target, no depth
-# test; the rest of the material (the hidden-box pre-pass's returns among it) runs as shipped.
-_COUNT_AFTER = """var marching = [];
-    scene.traverse(function (o) { if (o.isMesh && o.material.uniforms && o.material.uniforms.bmMarch) marching.push(o.material); });
+def counting_js(line, counted):
+    """``after_js`` for :func:`count_job` counting, per pixel, what every fragment of the shipped
+    marching material (and of its eye-box pass, useBoxmarchBackFaceCulling) adds: the material's
+    ``line`` becomes ``counted`` (GLSL that writes the fragment's count into gl_FragColor.r and
+    returns), drawn with additive blending into a float target, no depth test; the rest of the
+    material (the hidden-box pre-pass's returns among it) runs as shipped."""
+    return """var marching = [];
+    scene.traverse(function (o) {
+      if (o.isMesh && o.material.uniforms && o.material.uniforms.bmMarch) marching.push(o.material);
+      if (o.userData.boxmarchEyeBox) marching.push(o.userData.boxmarchEyeBox.material);
+    });
     marching.forEach(function (m) {
-      var count = '  gl_FragColor = vec4(float(steps + (hit ? 3 : 0)), 0.0, 0.0, 1.0);\\n  return;';
-      var text = m.fragmentShader.replace('  if (!hit) discard;', count);
-      if (text === m.fragmentShader) throw new Error('counting: no march in the material');
+      var text = m.fragmentShader.replace(__LINE__, __COUNTED__);
+      if (text === m.fragmentShader) throw new Error('counting: no ' + __LINE__ + ' in the material');
       m.fragmentShader = text;
       m.blending = THREE.AdditiveBlending;
       m.transparent = true;
@@ -188,7 +192,15 @@ _COUNT_AFTER = """var marching = [];
     var counts = new Float32Array(W * H * 4);
     renderer.readRenderTargetPixels(target, 0, 0, W, H, counts);
     renderer.setRenderTarget(null);
-    return {counts: __f64(counts)};"""
+    return {counts: __f64(counts)};""".replace("__LINE__", json.dumps(line)).replace("__COUNTED__", json.dumps(counted))
+
+
+# The SDF evaluations of every fragment (march steps plus a hit's 3 normal taps), as the Blender
+# preview's STEPS output counts them: the line that discards a miss writes the count instead.
+_COUNT_AFTER = counting_js("  if (!hit) discard;",
+                           "  gl_FragColor = vec4(float(steps + (hit ? 3 : 0)), 0.0, 0.0, 1.0);\n  return;")
+# The fragments the rasteriser hands the material, before anything in it runs: 1 per fragment.
+FRAGMENTS_AFTER = counting_js("void main() {", "void main() {\n  gl_FragColor = vec4(1.0, 0.0, 0.0, 1.0);\n  return;")
 
 
 def shipped_material(release="r111"):
