@@ -63,8 +63,8 @@ def prepared(marching_shader):
 # Layers of boxes over the view (mesh_data.layers_over_view) from which the resolved passes pay on Mesa llvmpipe:
 # below it their fixed cost (a second marching draw, two full-screen passes that write depth)
 # outweighs the hidden fragments they skip. Measured on piles of 500 to 4,000 links at 480 x 480
-# (bench/bench_preview_cost.py --sweep): 0.68x at 4.3 layers, 0.81x at 8.6, 0.99x at 17.4,
-# 1.28x at 34.6. On an NVIDIA H200 they pay from between 4.8 and 9.8 layers (bench/bench_gpu_frame.py:
+# (bench/bench_preview_cost.py --sweep, against the pre-pass in one pass): 0.69x at 4.3 layers, 0.83x at 8.6, 1.00x at 17.4,
+# 1.33x at 34.6. On an NVIDIA H200 they pay from between 4.8 and 9.8 layers (bench/bench_gpu_frame.py:
 # 0.89x at 4.8, 1.11x at 9.8, 1.38x at 19.5): the threshold keeps the software renderer's.
 MIN_OVERDRAW = 16.0
 
