@@ -37,9 +37,9 @@ for path in sys.argv[1:]:
 
 
 @pytest.fixture(scope="module")
-def drawn(tmp_path_factory):
+def drawn(package_parent, tmp_path_factory):
     tmp = tmp_path_factory.mktemp("gl_preview")
-    proc = subprocess.run([sys.executable, str(SCRIPT), "--", str(ROOT / "addon"), str(ROOT), str(tmp)],
+    proc = subprocess.run([sys.executable, str(SCRIPT), "--", str(package_parent), str(ROOT), str(tmp)],
                           env=python_env(blender_env(tmp)), capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     paths = [str(tmp / f"{name}.npz") for name in SCENES]
