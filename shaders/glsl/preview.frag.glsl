@@ -57,6 +57,18 @@ layout(early_fragment_tests) in;
 const float BM_SHADE_MARGIN = 3.8e-6;
 #endif
 
+// Ends a fragment that draws nothing: thrown away, or in mode 2 (STEPS) counted, with the SDF
+// evaluations it made before it stopped, as one fragment run.
+void bm_drop(float evaluations)
+{
+  if (preview.mode.x == 2) {
+    frag_color = vec4(evaluations, evaluations, 1.0, 1.0);
+  }
+  else {
+    discard;
+  }
+}
+
 // Lambert from a light fixed in view space plus a sky/ground hemisphere, like the viewport's
 // studio look.
 vec3 bm_shade(vec3 n_view, vec3 base)
@@ -104,11 +116,8 @@ void main()
   bool from_eye = !gl_FrontFacing && span.x + span.y < 0.0;
   if (from_eye) {
     if (preview.eye.w < 0.5 || eye_distance > -span.x) {
-      if (preview.mode.x == 2) {
-        frag_color = vec4(0.0, 0.0, 1.0, 1.0);
-        return;
-      }
-      discard;
+      bm_drop(0.0);
+      return;
     }
     ro -= rd * eye_distance;
     t_end = eye_distance;
@@ -124,11 +133,8 @@ void main()
   if (preview.occlusion.x > 0.5) {
     float hidden_from = bm_occluder_limit(texelFetch(occluder_depth, ivec2(gl_FragCoord.xy), 0).r);
     if (!from_eye && gl_FragCoord.z > hidden_from) {
-      if (preview.mode.x == 2) {
-        frag_color = vec4(0.0, 0.0, 1.0, 1.0);
-        return;
-      }
-      discard;
+      bm_drop(0.0);
+      return;
     }
     t_end = min(t_end, bm_depth_crossing(c0, c1, 2.0 * hidden_from - 1.0));
   }
@@ -157,20 +163,14 @@ void main()
       }
     }
     if (hidden) {
-      if (preview.mode.x == 2) {
-        frag_color = vec4(float(taps), float(taps), 1.0, 1.0);
-        return;
-      }
-      discard;
+      bm_drop(float(taps));
+      return;
     }
     t_end = min(t_end, beyond);
   }
   else if (preview.occlusion.w == 2.0) {
-    if (preview.mode.x == 2) {
-      frag_color = vec4(0.0, 0.0, 1.0, 1.0);
-      return;
-    }
-    discard;
+    bm_drop(0.0);
+    return;
   }
 #endif
 
