@@ -37,7 +37,7 @@ def occluder_count(sdf: str, quality: float = 1.0) -> int:
 # Layers of boxes over the view (mesh_data.layers_over_view) from which the pre-pass runs: below
 # it the draws of the occluders cost more than the hidden marches they save. Measured with
 # bench/bench_preview_cost.py --sweep (Mesa llvmpipe) and bench/bench_gpu_frame.py (NVIDIA H200):
-# docs/BENCHMARKS.md, "Where the pre-pass pays".
+# docs/BENCHMARKS.md, "GPU cost" (the llvmpipe sweep) and "GPU (NVIDIA H200)".
 MIN_LAYERS = 2.0
 
 
