@@ -74,9 +74,7 @@ def scenes_to_measure(size, far_boxes, height=None):
     made["chain side"] = links + (camera((6.0, -4.0, 4.5), (0.0, 0.0, 4.5), size, height),)
     made["chain down the arm"] = links + (camera((0.4, -1.2, 14.0), (0.0, 0.0, 4.5), size, height),)
     rng = np.random.default_rng(1)
-    pile = rng.uniform(-2.0, 2.0, (4000, 3))
-    made["pile"] = (pile, scenes.random_rotations(4000, rng), np.tile(chain_arm.LINK / 2, (4000, 1)),
-                    "LINK", camera((0.0, -7.0, 1.0), (0.0, 0.0, 0.0), size, height))
+    made["pile"] = pile_of_links(4000, rng, size, height)
     side = round(far_boxes ** (1 / 3))
     grid = np.stack(np.meshgrid(*[np.arange(side) * 0.5] * 3, indexing="ij"), -1).reshape(-1, 3)
     made["far"] = (grid, scenes.random_rotations(len(grid), rng),
@@ -85,20 +83,23 @@ def scenes_to_measure(size, far_boxes, height=None):
     return made
 
 
+def pile_of_links(count, rng, width, height):
+    """A scene (as scenes_to_measure's) of ``count`` links at random in a 4 x 4 x 4 cube, turned at
+    random, under the pile's camera."""
+    from scripts import chain_arm
+
+    centres = rng.uniform(-2.0, 2.0, (count, 3))
+    return (centres, scenes.random_rotations(count, rng), np.tile(chain_arm.LINK / 2, (count, 1)), "LINK",
+            camera((0.0, -7.0, 1.0), (0.0, 0.0, 0.0), width, height))
+
+
 def smaller_piles(size, height=None, counts=(500, 1000, 2000)):
     """name -> scene (as scenes_to_measure) of piles of ``counts`` links in the pile's cube under
     its camera: where the hidden-box techniques start to pay (bench_preview_cost.py --sweep,
     bench_gpu_frame.py)."""
-    from scripts import chain_arm
-
     height = size if height is None else height
     rng = np.random.default_rng(1)
-    made = {}
-    for count in counts:
-        centres = rng.uniform(-2.0, 2.0, (count, 3))
-        made[f"pile of {count}"] = (centres, scenes.random_rotations(count, rng), np.tile(chain_arm.LINK / 2, (count, 1)),
-                                    "LINK", camera((0.0, -7.0, 1.0), (0.0, 0.0, 0.0), size, height))
-    return made
+    return {f"pile of {count}": pile_of_links(count, rng, size, height) for count in counts}
 
 
 def octant_order(origins, eye, object_to_view):

@@ -49,7 +49,7 @@ import numpy as np
 from bench.common import table  # noqa: E402
 from bench.gl_headless import (GL, counted, egl_context, framebuffer, program, read_back, timed_frames,  # noqa: E402
                                timed_frames_exact)
-from bench.gl_preview import PreviewObject, fullscreen_triangle  # noqa: E402
+from bench.gl_preview import PreviewObject, fullscreen_triangle, shipped_arguments  # noqa: E402
 
 REFERENCE_SIZE = (960, 540)
 # (label, bench/gl_preview.py PreviewObject.draw's arguments) per set; the first of each set is
@@ -73,7 +73,6 @@ CONFIG_SETS = {
                     ("undeclared, no discard (diagnostic)", dict(fragment="undeclared_no_discard")),
                     ("GLSL 4.50 (diagnostic)", dict(fragment="depth_greater_450")),
                     ("extension named (diagnostic)", dict(fragment="depth_greater_extension")))}
-SHIPPED = ("+ occluders + back faces culled, one pass", "+ resolved passes")
 # The naive frame is drawn in strips (measure_naive): on the H100, 16 strips of 960 x 34 px queued
 # at once returned nonsense timer values and an empty image (the driver stopping long GPU work).
 NAIVE_ROWS = 4
@@ -143,13 +142,9 @@ def measure_scene(data, sizes, passes, configs):
 
 
 def shipped_label(data, size):
-    """The configuration the preview draws at ``size`` (draw_object): no pre-pass where the boxes
-    lie fewer than occlusion.MIN_LAYERS layers deep, the resolved passes from
-    resolve.MIN_OVERDRAW on, else the pre-pass and one pass."""
-    layers = float(data[f"layers_{size}"])
-    if layers < float(data["min_layers"]):
-        return "+ back faces culled"
-    return SHIPPED[1] if layers >= float(data["min_overdraw"]) else SHIPPED[0]
+    """The configuration of the passes set that the preview draws at ``size`` (gl_preview.shipped_arguments)."""
+    arguments = shipped_arguments(data, size)
+    return next(label for label, drawn in CONFIG_SETS["passes"] if drawn == arguments)
 
 
 def measure_naive(data, sizes):

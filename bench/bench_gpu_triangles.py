@@ -26,7 +26,7 @@ from bench.bench_boxes_vs_triangles import (HALF, LINK, TRIANGLE_FRAGMENT, TRIAN
                                             fewest_triangles, pixel_width)
 from bench.common import table
 from bench.gl_headless import GL, egl_context, framebuffer, program, read_back, timed_frames
-from bench.gl_preview import PreviewObject, begin_frame
+from bench.gl_preview import PreviewObject, begin_frame, shipped_arguments
 
 SIZES = ((960, 540), (1920, 1080))
 DECLARATIONS = {"vert": "#version 430 core\nuniform mat4 to_clip;\nuniform mat4 to_view;\n"
@@ -80,9 +80,7 @@ def measure_chain(stored, passes):
     count = int(stored["boxes"])
     rows = []
     for width, height in SIZES:
-        layers = float(stored[f"layers_{width}x{height}"])
-        shipped = dict(cull=True, occluders=layers >= float(stored["min_layers"]),
-                       resolved=layers >= float(stored["min_overdraw"]))
+        shipped = shipped_arguments(stored, f"{width}x{height}")
         mesh = TriangleMesh(stored, height)
         fbo = framebuffer(width, height)
         frames = {"boxes": lambda: boxes.draw(fbo, width, height, **shipped),
@@ -104,7 +102,7 @@ def measure_chain(stored, passes):
                      "mesh_vertex_bytes": int(mesh.vertex_bytes), "mesh_index_bytes": int(mesh.index_bytes),
                      "mesh_ms": best["mesh"], "box_triangles": 12 * count,
                      "box_vertex_bytes": int(stored["classic_vertex_bytes"]), "box_index_bytes": 36 * 4 * count,
-                     "box_draw_calls": draw_calls, "resolved": bool(shipped["resolved"]), "boxes_ms": best["boxes"],
+                     "box_draw_calls": draw_calls, "resolved": shipped.get("resolved", False), "boxes_ms": best["boxes"],
                      "covered": float(covered["boxes"].mean()),
                      "coverage_differs": float((covered["boxes"] != covered["mesh"]).sum() / either)})
         mesh.free()

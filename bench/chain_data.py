@@ -37,7 +37,8 @@ def compact(arrays: dict, period_boxes: int, vertices_per_box: int) -> dict:
     out["period_triangles"] = arrays["triangles_file"][:period_boxes * TRIANGLES_PER_BOX]
     by_box = np.asarray(arrays["triangles_octant"]).reshape(boxes, TRIANGLES_PER_BOX, 3)
     out["octant_boxes"] = (by_box[:, 0, 0] // vertices_per_box).astype(np.uint32)
-    if not all(np.array_equal(expand(out)[key], arrays[key]) for key in expand(out)):
+    expanded = expand(out)
+    if not all(np.array_equal(values, arrays[key]) for key, values in expanded.items()):
         raise ValueError("the chain's triangles do not repeat by periods of two boxes")
     return out
 

@@ -254,6 +254,20 @@ class PreviewObject:
         self._draw_sides(order, cull, quality, height, occluder=float(prepass), shape=self.shape_id)
 
 
+def shipped_arguments(data, size: str) -> dict:
+    """PreviewObject.draw's arguments for what draw_object draws at ``size`` ('960x540') by
+    default: back faces culled; the pre-pass where the boxes lie occlusion.MIN_LAYERS layers deep
+    or more, and the resolved passes from resolve.MIN_OVERDRAW on (both recorded in ``data`` by
+    gpu_frame_data.preview_facts)."""
+    layers = float(data[f"layers_{size}"])
+    arguments = dict(cull=True)
+    if layers >= float(data["min_layers"]):
+        arguments["occluders"] = True
+        if layers >= float(data["min_overdraw"]):
+            arguments["resolved"] = True
+    return arguments
+
+
 def begin_frame(target, width, height):
     """Binds framebuffer ``target``, clears it and sets the viewport's state (depth test
     LESS_EQUAL, depth writes, no blending), as Blender's viewport draws a previewed object."""
