@@ -36,20 +36,29 @@ def view_js(options, tamper=""):
             " boxmarchDecodeVectors(THREE, o, " + options + "); });")
 
 
+# The README's snippet (loadBoxmarch's defaults: the rounded boxes marched, the pre-pass, the
+# back-face culling), the corrected lines only.
+README_JS = ("scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, 'mixed.glb');"
+             " scene.add(loaded.scene);"
+             " loaded.meshes.forEach(function (mesh) { boxmarchDecodeVectors(THREE, mesh, {raw: false}); });")
+
+
 @pytest.fixture(scope="module")
 def exported(bpy_module, tmp_path_factory):
     blender = empty_scene(bpy_module)
     _ob, centres, sizes, rotations = baked_scene(blender)
     path = tmp_path_factory.mktemp("vectors") / "mixed.glb"
     assert blender.ops.boxmarch.export(filepath=str(path), preset="GLTF") == {"FINISHED"}
-    return path.read_bytes(), centres, sizes, rotations
+    files = {"mixed.glb": path.read_bytes(), "mixed.boxmarch.json": path.with_suffix(".boxmarch.json").read_bytes()}
+    return files, centres, sizes, rotations
 
 
 @pytest.fixture(scope="module", params=sorted(threejs.RELEASES))
 def page(request, exported):
     release = request.param
     need(threejs.available(release))
-    glb, centres, sizes, rotations = exported
+    files, centres, sizes, rotations = exported
+    glb = files["mixed.glb"]
     jobs = {"meshes": threejs.load_job(),
             "corrected": threejs.render_job(view_js("{raw: false}"), W, H, CAMERA),
             "raw": threejs.render_job(view_js("{corrected: false}"), W, H, CAMERA),
@@ -58,7 +67,8 @@ def page(request, exported):
         jobs[name] = threejs.render_job(view_js("{raw: false}", tamper), W, H, CAMERA)
     jobs["refusal"] = ("function (gltf) { try { boxmarchDecodeVectors(THREE, gltf.scene, {}); return 'no error'; }"
                        " catch (e) { return e.message; } }")
-    results = threejs.run_jobs(glb, list(jobs.values()), threejs.shipped_material(release), release)
+    jobs["readme"] = threejs.render_job(README_JS, W, H, CAMERA)
+    results = threejs.run_jobs(glb, list(jobs.values()), threejs.shipped_material(release), release, files)
     return dict(zip(jobs, results), release=release), centres, sizes, rotations
 
 
@@ -105,6 +115,16 @@ def test_raw_vectors_run_along_the_stored_offsets_and_do_not_meet(page):
     stray, missed = segment_errors(drawn(shot), corrected_segments(shot, centres, sizes, rotations))
     print(f"raw vectors: {stray} px drawn off the box-centre lines, {missed} points of them missed")
     assert stray > 300 and missed > 300, (stray, missed)
+
+
+def test_the_view_over_the_loaders_marched_boxes_meets_at_each_box_centre(page):
+    """The README's snippet: the orange lines drawn over the grey shapes loadBoxmarch marches."""
+    out, centres, sizes, rotations = page
+    shot = out["readme"]
+    rgb = shot.pixels[..., :3].astype(int)
+    orange = rgb[..., 0] - rgb[..., 2] > 100
+    assert ((rgb.max(axis=2) > 40) & ~orange).sum() > 2000  # the marched shapes are there too
+    assert segment_errors(orange, corrected_segments(shot, centres, sizes, rotations)) == (0, 0)
 
 
 def test_the_view_draws_both_kinds_by_default(page):
