@@ -96,3 +96,9 @@ def test_godot3_a_wrong_frame_channel_visibly_fails_to_converge(imported, contro
     stray, missed = segment_errors(lines, corrected_segments(shot, centres, sizes, rotations))
     print(f"{control}: {stray} px drawn off the box-centre lines, {missed} points of them missed")
     assert stray > 300 and missed > 300, (stray, missed)
+
+
+def test_godot3_view_draws_nothing_for_a_parent_it_cannot_read(imported):
+    project, _centres, _sizes, _rotations = imported
+    built = godot3.child_meshes(str(project), "res://" + SCRIPT)
+    assert built == {"model": 2, "not_a_mesh_instance": -1, "mesh_without_colours": -1}

@@ -486,3 +486,37 @@ def plugin_refusals(project_dir, models):
     ``sidecar.gd``) by godot3-server in ``project_dir``, which must hold the plug-in under
     res://addons/boxmarch."""
     return json.loads(_run_script([GODOT_SERVER], project_dir, _REFUSALS, {"models": list(models)}))
+
+
+_CHILD_MESHES = _COMMON + """
+func _init():
+    var f = File.new()
+    f.open(OS.get_environment("BOXMARCH_PARAMS"), File.READ)
+    var params = parse_json(f.get_as_text())
+    f.close()
+    var parents = {"model": load("res://model.glb").instance(), "not_a_mesh_instance": Spatial.new(),
+                   "mesh_without_colours": MeshInstance.new()}
+    parents["mesh_without_colours"].mesh = CubeMesh.new()
+    var out = {}
+    for name in parents:
+        root.add_child(parents[name])
+        var parent = parents[name]
+        if name == "model":
+            parent = nodes_of_class(parent, "MeshInstance", [])[0]
+        var child = MeshInstance.new()
+        child.set_script(load(params.script))
+        parent.add_child(child)
+        out[name] = -1 if child.mesh == null else child.mesh.get_surface_count()
+    f.open(OS.get_environment("BOXMARCH_OUT"), File.WRITE)
+    f.store_string(to_json(out))
+    f.close()
+    quit()
+"""
+
+
+def child_meshes(project_dir, script):
+    """{parent: the surface count of the mesh a MeshInstance with ``script`` (res:// path) built
+    once added under it (-1: none)} for three parents made by godot3-server in ``project_dir``:
+    "model" (the first MeshInstance of res://model.glb), "not_a_mesh_instance" (a Spatial) and
+    "mesh_without_colours" (a MeshInstance of a CubeMesh)."""
+    return json.loads(_run_script([GODOT_SERVER], project_dir, _CHILD_MESHES, {"script": script}))
