@@ -54,3 +54,10 @@ def test_the_three_js_material_and_the_godot_shader_carry_the_source():
     godot = (shader_sources.shader_dir() / "godot3" / "boxmarch.shader").read_text()
     assert "uniform int max_steps : hint_range(1, 512) = 96;" in godot
     assert "uniform float quality : hint_range(0.05, 1.0) = 1.0;" in godot
+
+
+def test_the_unity_example_shaders_quality_slider_is_the_sources():
+    """shaders/hlsl/BoxmarchExample.shader is written by hand (Unity's ShaderLab): checked, not generated."""
+    text = (REPO / "shaders" / "hlsl" / "BoxmarchExample.shader").read_text()
+    least, most = re.search(r'_Quality \("[^"]*", Range\(([^,]+), ([^)]+)\)\)', text).groups()
+    assert (float(least), float(most)) == MARCH_RANGES["quality"][:2]
