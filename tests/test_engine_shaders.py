@@ -10,7 +10,7 @@ import pytest
 from tests.helpers.tools import need
 
 SHADERS = Path(__file__).resolve().parent.parent / "shaders"
-EXPORTS = ["boxmarchClosedOutward", "boxmarchOccluderShape", "boxmarchSidecarUrl", "boxmarchTexcoordName",
+EXPORTS = ["boxmarchClosedOutward", "boxmarchDecodeVectors", "boxmarchOccluderShape", "boxmarchSidecarUrl", "boxmarchTexcoordName",
            "boxmarchVisibilitySupported", "checkBoxmarchOptions", "checkBoxmarchSidecar", "createBoxmarchMaterial",
            "createBoxmarchOccluderMaterial", "loadBoxmarch", "parseBoxmarchSidecar", "prepareBoxmarchGeometry",
            "sortBoxmarchFrontToBack", "useBoxmarchBackFaceCulling", "useBoxmarchMaterial", "useBoxmarchOccluders",
@@ -33,10 +33,13 @@ def test_generated_files_carry_the_shared_decode_verbatim():
 
 
 def copy_of_the_generated_tree(tmp_path):
-    """shaders/ (generator, sources, outputs), the generated C++ and the engine packages' copies
-    (engines/) at their relative paths."""
+    """shaders/ (generator, sources, outputs), the generated C++, the engine packages' copies
+    (engines/) and the march's ranges the generator reads (march_ranges.py) at their relative paths."""
     shutil.copytree(SHADERS, tmp_path / "shaders")
     shutil.copytree(SHADERS.parent / "engines", tmp_path / "engines")
+    (tmp_path / "addon" / "boxmarch" / "formats").mkdir(parents=True)
+    shutil.copy(SHADERS.parent / "addon" / "boxmarch" / "formats" / "march_ranges.py",
+                tmp_path / "addon" / "boxmarch" / "formats")
     (tmp_path / "cpp" / "src").mkdir(parents=True)
     shutil.copy(SHADERS.parent / "cpp" / "src" / "shader_library.h", tmp_path / "cpp" / "src")
     return tmp_path

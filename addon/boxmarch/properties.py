@@ -5,6 +5,7 @@ from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, Po
 from . import core
 from .formats import layouts
 from .formats import presets
+from .formats.march_ranges import MARCH_RANGES
 
 _SDF_DESCRIPTIONS = {
     "BOX": "The submesh's own box (matches the rasterised mesh)",
@@ -39,9 +40,11 @@ class BoxmarchObjectSettings(bpy.types.PropertyGroup):
                       description="Distance field raymarched inside every submesh's box")
     user_text: StringProperty(name="Text", default="", update=_redraw,
                               description="Text block holding a GLSL 'float map(vec3 p)' (when SDF is Text Block)")
-    max_steps: IntProperty(name="Max Steps", default=64, min=1, max=512, update=_redraw,
+    max_steps: IntProperty(name="Max Steps", default=64, min=MARCH_RANGES["max_steps"][0],
+                           max=MARCH_RANGES["max_steps"][1], update=_redraw,
                            description="Most SDF evaluations per pixel")
-    epsilon: FloatProperty(name="Hit Epsilon", default=1e-3, min=1e-7, max=1.0, precision=5, step=0.01,
+    epsilon: FloatProperty(name="Hit Epsilon", default=1e-3, min=MARCH_RANGES["epsilon"][0],
+                           max=MARCH_RANGES["epsilon"][1], precision=5, step=0.01,
                            update=_redraw, description="A ray hits when the distance falls below this (box-local units)")
     relaxation: FloatProperty(name="Step Relaxation", default=1.0, min=0.05, max=2.0, update=_redraw,
                               description="Each step advances this times the distance (below 1 is safer for inexact SDFs)")
@@ -50,7 +53,8 @@ class BoxmarchObjectSettings(bpy.types.PropertyGroup):
                                 "reaches (each box with a parent is drawn grown by it)")
     max_distance: FloatProperty(name="Max Distance", default=1000.0, min=1e-4, update=_redraw,
                                 description="Longest march inside a box (box-local units)")
-    quality: FloatProperty(name="Quality", default=1.0, min=0.05, max=1.0, update=_redraw,
+    quality: FloatProperty(name="Quality", default=1.0, min=MARCH_RANGES["quality"][0],
+                           max=MARCH_RANGES["quality"][1], update=_redraw,
                            description="One knob for cost against error (docs/PREVIEW.md): below 1 the march takes "
                                        "longer (secant) steps near a surface, small boxes get fewer steps and boxes "
                                        "under a few pixels take one SDF tap")

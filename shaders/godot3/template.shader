@@ -26,8 +26,8 @@ render_mode unshaded, cull_disabled;
 uniform sampler2D box_table;            // NAME.boxes.tres: texel index = (h, 0)
 uniform vec4 base_color : hint_color = vec4(0.8, 0.8, 0.8, 1.0);
 uniform float march_epsilon = 0.0001;
-uniform int max_steps = 96;
-uniform float quality : hint_range(0.01, 1.0) = 1.0;  // the quality knob (bm_quality; 1 = the full march)
+uniform int max_steps : hint_range(/*@MAX_STEPS_RANGE@*/) = 96;
+uniform float quality : hint_range(/*@QUALITY_RANGE@*/) = 1.0;  // the quality knob (bm_quality; 1 = the full march)
 
 // Position and frame in world space: Godot 3 skins by folding the blended bone matrix into the
 // vertex stage's WORLD_MATRIX (NORMAL, TANGENT, VERTEX stay at rest there), so the posed frame

@@ -63,12 +63,9 @@ function prepareBoxmarchGeometry(THREE, geometry) {
 }
 
 // The ranges of createBoxmarchMaterial's numeric options: those of the Blender preview's matching
-// properties (addon/boxmarch/properties.py: max_steps, epsilon, quality), whole: integers only.
-var BOXMARCH_OPTION_RANGES = {
-  maxSteps: { min: 1, max: 512, whole: true },
-  epsilon: { min: 1e-7, max: 1, whole: false },
-  quality: { min: 0.05, max: 1, whole: false }
-};
+// properties (max_steps, epsilon, quality), written by shaders/generate.py from their one source,
+// addon/boxmarch/formats/march_ranges.py; whole: integers only.
+var BOXMARCH_OPTION_RANGES = /*@OPTION_RANGES@*/{};
 
 // The presets whose occluders options.occluders may name, in bm_sdf_by_id's numbering
 // (boxmarchOccluderShape).
@@ -984,6 +981,89 @@ var BOXMARCH_RAW_FRAGMENT = [
   '#define gl_FragColor pc_fragColor',
   '#define gl_FragDepthEXT gl_FragDepth',
   '#define texture2D texture'
+].join('\n');
+
+// The design's "Decode vertex vectors" view (docs/ENGINES.md, *The decode-vectors view*): from
+// every vertex of a mesh exported with the GLTF preset, a line along the raw baked vector f (the
+// box-local numbers drawn as if they were object-space: light blue) and one along f turned by the
+// box's frame (orange), decoded on the GPU by decode.glsl's functions as the material decodes them.
+// The orange lines of each box meet at the box's origin; where they do not, the file or its import
+// changed the frame or the offset. The lines are drawn over everything (no depth test). Returns a THREE.Group of the two THREE.LineSegments (raw, then
+// corrected), added to mesh as a child so it follows the mesh's transform; a SkinnedMesh's lines
+// stay in its bind pose (lines are not skinned). options: raw, corrected (true: draw them),
+// rawColor, correctedColor (THREE.Color). Throws, changing nothing, for a geometry without the
+// NORMAL_FRAME channels or options it would not draw as given.
+function boxmarchDecodeVectors(THREE, mesh, options) {
+  options = options || {};
+  if (!mesh || !mesh.isMesh) throw new Error('boxmarch: boxmarchDecodeVectors needs a THREE.Mesh, not ' + String(mesh));
+  ['raw', 'corrected'].forEach(function (key) {
+    if (options[key] !== undefined && typeof options[key] !== 'boolean') {
+      throw new Error('boxmarch: option ' + key + ' must be true or false, not ' + String(options[key]));
+    }
+  });
+  var source = mesh.geometry, names = ['position', 'normal', 'tangent', 'bmOffsetXY', 'bmOffsetZIndex'];
+  var texcoords = { bmOffsetXY: 1, bmOffsetZIndex: 2 };
+  var lines = new THREE.BufferGeometry();
+  names.forEach(function (name) {
+    var attribute = source.getAttribute(name in texcoords ? boxmarchTexcoordName(THREE, texcoords[name]) : name);
+    if (!attribute) {
+      throw new Error('boxmarch: the geometry has no ' + (name in texcoords ? 'TEXCOORD_' + texcoords[name] : name.toUpperCase())
+        + ' (export with the GLTF preset)');
+    }
+    lines.setAttribute(name, boxmarchEveryVertexTwice(THREE, attribute));
+  });
+  var count = source.getAttribute('position').count, end = new Float32Array(2 * count);
+  for (var i = 0; i < count; i++) end[2 * i + 1] = 1;
+  lines.setAttribute('bmEnd', new THREE.BufferAttribute(end, 1));
+  var group = new THREE.Group();
+  group.name = 'boxmarch decode vectors';
+  [['raw', options.rawColor || new THREE.Color(0.55, 0.8, 1)],
+   ['corrected', options.correctedColor || new THREE.Color(1, 0.55, 0.1)]].forEach(function (kind) {
+    var material = new THREE.ShaderMaterial({
+      uniforms: { bmColor: { value: kind[1] } },
+      defines: kind[0] === 'raw' ? { BM_RAW_VECTORS: '' } : {},
+      vertexShader: BOXMARCH_DECODE + '\n' + BOXMARCH_VECTORS_VERTEX,
+      fragmentShader: 'uniform vec3 bmColor;\nvoid main() {\n  gl_FragColor = vec4(bmColor, 1.0);\n}',
+      depthTest: false,  // over the boxes, whose faces hide the box origins the lines meet at
+      depthWrite: false
+    });
+    var segments = new THREE.LineSegments(lines, material);
+    segments.renderOrder = 1;  // after the mesh and its boxes
+    segments.name = kind[0];
+    segments.visible = options[kind[0]] !== false;
+    segments.frustumCulled = false;  // the lines reach beyond the mesh's own bounds
+    group.add(segments);
+  });
+  mesh.add(group);
+  return group;
+}
+
+// attribute's values with every vertex written twice (the two ends of its line), as floats.
+function boxmarchEveryVertexTwice(THREE, attribute) {
+  var n = attribute.itemSize, values = new Float32Array(2 * attribute.count * n);
+  var get = [attribute.getX, attribute.getY, attribute.getZ, attribute.getW];
+  for (var i = 0; i < attribute.count; i++) {
+    for (var k = 0; k < n; k++) values[2 * i * n + k] = values[(2 * i + 1) * n + k] = get[k].call(attribute, i);
+  }
+  return new THREE.BufferAttribute(values, n);
+}
+
+// The decode-vectors view's vertex stage: the line's far end (bmEnd = 1) is the vertex moved by f
+// as stored (BM_RAW_VECTORS) or by f turned by the box's frame (what BOXMARCH_VERTEX decodes).
+var BOXMARCH_VECTORS_VERTEX = [
+  'attribute vec4 tangent;',
+  'attribute vec2 bmOffsetXY;',
+  'attribute vec2 bmOffsetZIndex;',
+  'attribute float bmEnd;',
+  'void main() {',
+  '  vec3 f = bm_offset(bmOffsetXY, bmOffsetZIndex);',
+  '#ifdef BM_RAW_VECTORS',
+  '  vec3 v = f;',
+  '#else',
+  '  vec3 v = bm_from_local(f, normalize(tangent.xyz), normalize(bm_axis_y(normal, tangent)), normalize(normal));',
+  '#endif',
+  '  gl_Position = projectionMatrix * modelViewMatrix * vec4(position + bmEnd * v, 1.0);',
+  '}'
 ].join('\n');
 
 // The shared GLSL: shaders/glsl/decode.glsl, and sdf.glsl + raymarch.glsl.

@@ -120,3 +120,38 @@ def tightest_tolerance(covered, polygons, limit: int = 64) -> int:
         if not stray.any() and not missing.any():
             return tol
     return limit + 1
+
+
+def segment_errors(drawn, segments, tol: float = 1.5, shortest: float = 2.0):
+    """(stray, missed) for lines an engine drew against the pixel-space ``segments`` ((N, 2, 2):
+    start and end, as :meth:`Shot.project` returns them) they should be: ``stray`` the drawn
+    pixels whose centres lie farther than ``tol`` px from every segment; ``missed`` the points,
+    every half pixel along each segment longer than ``shortest`` px (a shorter line may rasterise
+    to nothing), inside the image and with no drawn pixel within ``tol`` px (centre to point,
+    largest coordinate difference), so a line that stops short or bends away misses them."""
+    drawn = np.asarray(drawn, dtype=bool)
+    seg = np.asarray(segments, dtype=np.float64).reshape(-1, 2, 2)
+    a, d = seg[:, 0], seg[:, 1] - seg[:, 0]
+    ys, xs = np.nonzero(drawn)
+    centres = np.c_[xs, ys] + 0.5
+    stray = 0
+    for chunk in np.array_split(centres, max(1, len(centres) // 4096)):
+        rel = chunk[:, None, :] - a[None]
+        t = np.clip(np.einsum("nsk,sk->ns", rel, d) / np.maximum(np.einsum("sk,sk->s", d, d), 1e-12), 0.0, 1.0)
+        gap = np.linalg.norm(rel - t[..., None] * d[None], axis=2).min(axis=1)
+        stray += int((gap > tol).sum())
+    reach = int(np.ceil(tol))
+    padded = np.pad(drawn, reach)
+    missed = 0
+    for start, step in zip(a, d):
+        length = np.linalg.norm(step)
+        if length <= shortest:
+            continue
+        points = start + np.linspace(0.0, 1.0, int(2 * length) + 1)[:, None] * step
+        inside = (points[:, 0] >= 0) & (points[:, 1] >= 0) & (points[:, 0] < drawn.shape[1]) & (points[:, 1] < drawn.shape[0])
+        for x, y in points[inside]:
+            column, row = int(x), int(y)  # padded[row + reach, column + reach] is pixel (row, column)
+            wy, wx = np.nonzero(padded[row : row + 2 * reach + 1, column : column + 2 * reach + 1])
+            near = np.maximum(np.abs(column - reach + wx + 0.5 - x), np.abs(row - reach + wy + 0.5 - y))
+            missed += not (near <= tol).any()
+    return stray, missed

@@ -142,6 +142,12 @@ func _init():
     for mi in nodes_of_class(scene, "MeshInstance", []):
         for s in range(mi.mesh.get_surface_count()):
             mi.set_surface_material(s, material)
+        if params.has("child_script"):
+            var child = MeshInstance.new()
+            child.set_script(load(params.child_script))
+            for name in params.child_properties:
+                child.set(name, uniform_value(params.child_properties[name]))
+            mi.add_child(child)
     if params.has("bone_turns"):
         posed = pose_bones(scene, params.bone_turns, params.turn_angle)
     var c = params.camera
@@ -409,7 +415,8 @@ def _fit_to_pixels(world, pixels):
     return m / np.linalg.norm(m[2, :3]) if np.linalg.norm(m[2, :3]) > 1e-9 else m / m[2, 3]
 
 
-def render(project_dir, shader_code, *, width, height, camera, uniforms=None, bone_turns=None, turn_angle=0.0):
+def render(project_dir, shader_code, *, width, height, camera, uniforms=None, bone_turns=None, turn_angle=0.0,
+           child_script=None, child_properties=None):
     """Draws the imported ``res://model.glb`` once with ``godot3`` (GLES3 on llvmpipe under
     xvfb-run) and returns a :class:`Shot`.
 
@@ -421,7 +428,9 @@ def render(project_dir, shader_code, *, width, height, camera, uniforms=None, bo
     optional. ``bone_turns`` (bone name -> world axis (3,) as it points with the skeleton at
     rest) turns each named bone of the imported Skeleton by ``turn_angle`` radians about its own
     head, on top of its rest pose (``Skeleton.set_bone_pose``); a name no bone has fails the
-    render. The background is opaque black (0, 0, 0, 255). ``Shot.view`` inverts
+    render. ``child_script`` (a ``res://`` path of a script extending MeshInstance): a MeshInstance
+    with that script, its properties set from ``child_properties`` (name -> value, as ``uniforms``),
+    is added under every MeshInstance after its material is set. The background is opaque black (0, 0, 0, 255). ``Shot.view`` inverts
     ``Camera.get_camera_transform()``; ``Shot.to_pixels`` is fitted to
     ``Camera.unproject_position`` of probe points (the fit must reproduce them within 1e-3 px).
     """
@@ -430,6 +439,8 @@ def render(project_dir, shader_code, *, width, height, camera, uniforms=None, bo
     if bone_turns:
         params.update(bone_turns={k: [float(x) for x in v] for k, v in bone_turns.items()},
                       turn_angle=float(turn_angle))
+    if child_script:
+        params.update(child_script=child_script, child_properties=child_properties or {})
     cmd = ["xvfb-run", "-a", "-s", f"-screen 0 {max(width, 640)}x{max(height, 480)}x24",
            GODOT, "--resolution", f"{width}x{height}"]
     data = _run_script(cmd, project_dir, _SHOT, params)
@@ -475,3 +486,37 @@ def plugin_refusals(project_dir, models):
     ``sidecar.gd``) by godot3-server in ``project_dir``, which must hold the plug-in under
     res://addons/boxmarch."""
     return json.loads(_run_script([GODOT_SERVER], project_dir, _REFUSALS, {"models": list(models)}))
+
+
+_CHILD_MESHES = _COMMON + """
+func _init():
+    var f = File.new()
+    f.open(OS.get_environment("BOXMARCH_PARAMS"), File.READ)
+    var params = parse_json(f.get_as_text())
+    f.close()
+    var parents = {"model": load("res://model.glb").instance(), "not_a_mesh_instance": Spatial.new(),
+                   "mesh_without_colours": MeshInstance.new()}
+    parents["mesh_without_colours"].mesh = CubeMesh.new()
+    var out = {}
+    for name in parents:
+        root.add_child(parents[name])
+        var parent = parents[name]
+        if name == "model":
+            parent = nodes_of_class(parent, "MeshInstance", [])[0]
+        var child = MeshInstance.new()
+        child.set_script(load(params.script))
+        parent.add_child(child)
+        out[name] = -1 if child.mesh == null else child.mesh.get_surface_count()
+    f.open(OS.get_environment("BOXMARCH_OUT"), File.WRITE)
+    f.store_string(to_json(out))
+    f.close()
+    quit()
+"""
+
+
+def child_meshes(project_dir, script):
+    """{parent: the surface count of the mesh a MeshInstance with ``script`` (res:// path) built
+    once added under it (-1: none)} for three parents made by godot3-server in ``project_dir``:
+    "model" (the first MeshInstance of res://model.glb), "not_a_mesh_instance" (a Spatial) and
+    "mesh_without_colours" (a MeshInstance of a CubeMesh)."""
+    return json.loads(_run_script([GODOT_SERVER], project_dir, _CHILD_MESHES, {"script": script}))

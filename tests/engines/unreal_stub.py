@@ -2,7 +2,9 @@
 engines/unreal/boxmarch_import.py calls, so the script runs here and what it sets is recorded.
 Names, property names and defaults are Unreal's (Python API reference: FbxStaticMeshImportData,
 FbxImportUI, AssetImportTask, MeshBuildSettings, whose defaults are FMeshBuildSettings' in
-EngineTypes.h). Modelled, and only as far as the tests need: set_editor_property refuses a
+EngineTypes.h; for engines/unreal/boxmarch_decode_vectors.py: StaticMeshDescription, VertexInstanceID,
+Transform.transform_location, SystemLibrary.draw_debug_line, EditorActorSubsystem,
+UnrealEditorSubsystem). Modelled, and only as far as the tests need: set_editor_property refuses a
 property the class does not have (as Unreal does); an import task with automated options imports
 the file as one static mesh ``destination/NAME`` carrying the task's FbxStaticMeshImportData;
 LOD build settings are copies (get) written back by set_lod_build_settings; a saved asset keeps
@@ -89,13 +91,126 @@ class StaticMeshEditorSubsystem:
         mesh.lod_build_settings[lod] = copy.deepcopy(settings)
 
 
+class _Struct:
+    """A struct of named float fields, built positionally or by name (unreal.Vector(x, y, z))."""
+    FIELDS: tuple = ()
+
+    def __init__(self, *values, **named):
+        for name, value in zip(self.FIELDS, values):
+            setattr(self, name, float(value))
+        for name in self.FIELDS[len(values):]:
+            setattr(self, name, float(named.pop(name, 0.0)))
+        if named:
+            raise TypeError(f"{type(self).__name__}: no field {', '.join(named)}")
+
+
+class Vector(_Struct):
+    FIELDS = ("x", "y", "z")
+
+
+class Vector2D(_Struct):
+    FIELDS = ("x", "y")
+
+
+class LinearColor(_Struct):
+    FIELDS = ("r", "g", "b", "a")
+
+
+class VertexInstanceID:
+    def __init__(self, id_value=0):
+        self.id_value = int(id_value)
+
+
+class VertexID(VertexInstanceID):
+    pass
+
+
+class Transform:
+    """A local-to-world transform as a 4x4 matrix (column vectors)."""
+
+    def __init__(self, matrix=None):
+        self.matrix = [[float(i == j) for j in range(4)] for i in range(4)] if matrix is None else matrix
+
+    def transform_location(self, v):
+        m = self.matrix
+        return Vector(*(m[i][0] * v.x + m[i][1] * v.y + m[i][2] * v.z + m[i][3] for i in range(3)))
+
+
+class StaticMeshDescription:
+    """LOD 0 of an imported mesh: one vertex per vertex instance, ``positions`` (n, 3) and ``uvs``
+    (UV channel -> (n, 2)), as the modelled import stores them."""
+
+    def __init__(self, positions, uvs):
+        self.positions, self.uvs = positions, uvs
+
+    def get_vertex_instance_count(self):
+        return len(self.positions)
+
+    def get_vertex_instance_vertex(self, vertex_instance_id):
+        return VertexID(vertex_instance_id.id_value)
+
+    def get_vertex_position(self, vertex_id):
+        return Vector(*self.positions[vertex_id.id_value])
+
+    def get_vertex_instance_uv(self, vertex_instance_id, uv_index=0):
+        return Vector2D(*self.uvs[uv_index][vertex_instance_id.id_value])
+
+
+class ImportedStaticMesh:
+    """A static mesh asset whose mesh description the tests give."""
+
+    def __init__(self, description):
+        self.description = description
+
+    def get_static_mesh_description(self, lod_index):
+        if lod_index != 0:
+            raise Exception(f"StaticMesh: no LOD {lod_index}")
+        return self.description
+
+
+class StaticMeshComponent(_Properties):
+    DEFAULTS = {"static_mesh": None}
+
+    def __init__(self, static_mesh=None, transform=None):
+        super().__init__()
+        self.set_editor_property("static_mesh", static_mesh)
+        self.transform = transform or Transform()
+
+    def get_world_transform(self):
+        return self.transform
+
+
+class Actor:
+    def __init__(self, label, component=None):
+        self.label, self.component = label, component
+
+    def get_actor_label(self):
+        return self.label
+
+    def get_component_by_class(self, component_class):
+        return self.component if isinstance(self.component, component_class) else None
+
+
 class Unreal:
-    """One editor session: the stub module's state, and what was imported and saved."""
+    """One editor session: the stub module's state, and what was imported and saved; the actors
+    selected in the level, the debug lines drawn ((start, end, colour, duration) as tuples) and
+    the messages logged."""
 
     def __init__(self):
         self.assets = {}   # path -> StaticMesh
         self.saved = {}    # path -> (import data, LOD 0 build settings) when saved
         self.tasks = []
+        self.selected = []
+        self.lines = []
+        self.log = []
+
+    def draw_debug_line(self, world_context_object, line_start, line_end, line_color=None, duration=0.0,
+                        thickness=0.0):
+        if world_context_object is not self:
+            raise Exception("SystemLibrary.draw_debug_line: no world context")
+        colour = line_color or LinearColor()
+        self.lines.append(((line_start.x, line_start.y, line_start.z), (line_end.x, line_end.y, line_end.z),
+                           (colour.r, colour.g, colour.b, colour.a), duration))
 
     def import_asset_tasks(self, tasks):
         for task in tasks:
@@ -125,7 +240,16 @@ class Unreal:
         unreal.StaticMeshEditorSubsystem = StaticMeshEditorSubsystem
         tools = types.SimpleNamespace(import_asset_tasks=self.import_asset_tasks)
         unreal.AssetToolsHelpers = types.SimpleNamespace(get_asset_tools=lambda: tools)
-        subsystems = {StaticMeshEditorSubsystem: StaticMeshEditorSubsystem()}
+        unreal.Vector, unreal.Vector2D, unreal.LinearColor, unreal.Transform = Vector, Vector2D, LinearColor, Transform
+        unreal.VertexInstanceID, unreal.VertexID, unreal.StaticMeshComponent = VertexInstanceID, VertexID, StaticMeshComponent
+        unreal.SystemLibrary = types.SimpleNamespace(draw_debug_line=self.draw_debug_line)
+        unreal.UnrealEditorSubsystem = type("UnrealEditorSubsystem", (), {"get_editor_world": lambda _s: self})
+        unreal.EditorActorSubsystem = type("EditorActorSubsystem", (), {"get_selected_level_actors": lambda _s: list(self.selected)})
+        unreal.log_warning = lambda text: self.log.append(("warning", text))
+        unreal.log_error = lambda text: self.log.append(("error", text))
+        subsystems = {StaticMeshEditorSubsystem: StaticMeshEditorSubsystem(),
+                      unreal.UnrealEditorSubsystem: unreal.UnrealEditorSubsystem(),
+                      unreal.EditorActorSubsystem: unreal.EditorActorSubsystem()}
         unreal.get_editor_subsystem = lambda kind: subsystems[kind]
         unreal.EditorAssetLibrary = types.SimpleNamespace(load_asset=self.assets.get, save_loaded_asset=self.save)
         return unreal
