@@ -22,9 +22,9 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import signal
 import sys
-import textwrap
 import time
 
 from . import ensure_registered
@@ -55,16 +55,51 @@ def _progress(message: str) -> None:
     print(f"[boxmarch] {message}", file=sys.stderr, flush=True)
 
 
+def _words(cell: str, width: int) -> list:
+    """The cell's words, a word wider than ``width`` cut after its '/' (a path) where it has one
+    and only where no whole component would fit, then, as a last resort, every ``width``
+    characters. Each piece comes with whether a space goes before it on a shared line."""
+    pieces = []
+    for word in cell.split():
+        parts = [word]
+        if len(word) > width:
+            parts = [p for p in re.split(r"(?<=/)", word) if p]
+            parts = [p[i:i + width] for p in parts for i in range(0, len(p), width)]
+        pieces += [(part, k == 0) for k, part in enumerate(parts)]
+    return pieces
+
+
+def _wrap(cell: str, width: int) -> list:
+    """The cell's lines, each at most ``width`` wide, broken between words (textwrap would cut
+    a long word such as a path anywhere: 'e | ngines/unreal')."""
+    lines = []
+    for piece, spaced in _words(cell, width):
+        joined = (lines[-1] + (" " if spaced else "") + piece) if lines else piece
+        if lines and len(joined) <= width:
+            lines[-1] = joined
+        else:
+            lines.append(piece)
+    return lines or [""]
+
+
 def _table(headers, rows, width=TABLE_WIDTH) -> str:
-    """A Markdown-like table at most ``width`` characters wide: the widest columns are narrowed
-    (to NARROWEST_COLUMN at least) and their cells wrap onto continuation lines."""
+    """A Markdown-like table at most ``width`` characters wide: the widest columns are narrowed,
+    not below their longest word (so cells break between words) unless the longest words
+    cannot all fit: then the column of the longest is given less (NARROWEST_COLUMN at least),
+    and its long words break after a '/'; cells wrap onto continuation lines."""
     head, *body = [[str(cell) for cell in row] for row in [headers, *rows]]
     widths = [max(len(row[i]) for row in [head, *body]) for i in range(len(head))]
-    while sum(widths) + 3 * len(widths) + 1 > width and max(widths) > NARROWEST_COLUMN:
-        widths[widths.index(max(widths))] -= 1
+    room = width - 3 * len(widths) - 1
+    floors = [min(w, max(NARROWEST_COLUMN, *(len(word) for row in [head, *body] for word in row[i].split())))
+              for i, w in enumerate(widths)]
+    while sum(floors) > room and max(floors) > NARROWEST_COLUMN:
+        floors[floors.index(max(floors))] -= 1
+    while sum(widths) > room and any(w > f for w, f in zip(widths, floors)):
+        widest = max((i for i, w in enumerate(widths) if w > floors[i]), key=lambda i: widths[i])
+        widths[widest] -= 1
 
     def lines(row):
-        cells = [textwrap.wrap(cell, w) or [""] for cell, w in zip(row, widths)]
+        cells = [_wrap(cell, w) for cell, w in zip(row, widths)]
         return ["| " + " | ".join((cell[k] if k < len(cell) else "").ljust(w) for cell, w in zip(cells, widths)) + " |"
                 for k in range(max(map(len, cells)))]
     rule = "|" + "|".join("-" * (w + 2) for w in widths) + "|"
