@@ -17,7 +17,7 @@ def test_table_fits_the_width_and_keeps_every_word():
     assert len({len(line) for line in lines}) == 1  # every line ends at the same column
     # Reading a column top to bottom gives its cells back: nothing cut, nothing reordered.
     columns = [[cell.strip() for cell in line.strip("|").split(" | ")] for line in lines if not line.startswith("|-")]
-    what = " ".join(cells[2] for cells in columns[1:] if cells[2])
+    what = " ".join(cells[2] for cells in columns[1:] if cells[2]).replace("/ ", "/")  # a path breaks after a '/'
     assert f"layout NORMAL_COLOR: {long}" in what and "wrote /a/rather/long/path" in what
     assert "".join(cells[3] for cells in columns[1:]) == "x" * 150
     assert " ".join(cells[0] for cells in columns if cells[0]) == "step export GODOT3 total"
@@ -27,8 +27,8 @@ def test_table_fits_the_width_and_keeps_every_word():
 
 
 def test_table_breaks_cells_between_words_only():
-    """The demo's rows (issue 37: 'e | ngines/unreal/...'): every word whole on one line of its
-    column; a path wider than any column it could get breaks only after a '/'."""
+    """The demo's rows (issue 37: 'e | ngines/unreal/...'): each column read top to bottom gives
+    its cells' words back whole, a line breaking only between words or after a path's '/'."""
     from boxmarch.formats import presets
 
     rows = [[f"export {name}", "0.812 s", f"layout {preset.layouts[0]}: demo_{name.lower()}.fbx + "
@@ -36,18 +36,17 @@ def test_table_breaks_cells_between_words_only():
              f"default import loses 4.9e-04 of half-extent: {preset.import_fix}"]
             for name, preset in presets.PRESETS.items() if preset.import_fix]
     assert any("engines/unreal/" in row[3] for row in rows)  # the word that was cut
-    table = cli._table(["step", "time", "what", "accuracy"], rows)
-    lines = table.splitlines()
-    assert max(map(len, lines)) <= cli.TABLE_WIDTH, table
-    cells = [[cell.strip() for cell in line.strip("|").split(" | ")] for line in lines if not line.startswith("|-")]
-    for row in rows:
-        for column, cell in enumerate(row):
-            for word in cell.split():
-                assert any(word in line_cells[column].split() for line_cells in cells), (word, table)
-    path = "/home/someone/projects/a-rather-long-folder-name/boxmarch/demo_out/demo.blend"
-    narrow = cli._table(["step", "what"], [["total", f"wrote {path}"]], width=40).splitlines()
-    pieces = [line.strip("|").split(" | ")[1].strip() for line in narrow[2:]]
-    assert "".join(pieces) == f"wrote {path}" and all(p.endswith("/") for p in pieces[:-1]), narrow
+    rows.append(["total", "63.463 s", "wrote /home/someone/projects/a-rather-long-folder-name/demo_out/demo.blend", ""])
+    for width in (100, 90):
+        table = cli._table(["step", "time", "what", "accuracy"], rows, width=width)
+        lines = [line for line in table.splitlines()[2:]]
+        assert max(map(len, lines)) <= width, table
+        for column in range(4):
+            read = " ".join(line.strip("|").split(" | ")[column].strip() for line in lines).replace("/ ", "/")
+            assert read.split() == " ".join(row[column] for row in rows).split(), (column, table)
+    narrow = cli._table(["step", "what"], [["total", "wrote /home/someone/a-rather-long-folder-name/x.blend"]], width=40)
+    pieces = [line.strip("|").split(" | ")[1].strip() for line in narrow.splitlines()[2:]]
+    assert pieces == ["wrote /home/someone/", "a-rather-long-folder-name/", "x.blend"], narrow
 
 
 def test_version_prints_the_add_on_version(capsys):

@@ -55,48 +55,41 @@ def _progress(message: str) -> None:
     print(f"[boxmarch] {message}", file=sys.stderr, flush=True)
 
 
-def _words(cell: str, width: int) -> list:
-    """The cell's words, a word wider than ``width`` cut after its '/' (a path) where it has one
-    and only where no whole component would fit, then, as a last resort, every ``width``
-    characters. Each piece comes with whether a space goes before it on a shared line."""
-    pieces = []
-    for word in cell.split():
-        parts = [word]
-        if len(word) > width:
-            parts = [p for p in re.split(r"(?<=/)", word) if p]
-            parts = [p[i:i + width] for p in parts for i in range(0, len(p), width)]
-        pieces += [(part, k == 0) for k, part in enumerate(parts)]
-    return pieces
+def _pieces(word: str) -> list:
+    """A word cut after each '/' it holds (a path's components), the places a long word may break."""
+    return [piece for piece in re.split(r"(?<=/)", word) if piece]
 
 
 def _wrap(cell: str, width: int) -> list:
-    """The cell's lines, each at most ``width`` wide, broken between words (textwrap would cut
-    a long word such as a path anywhere: 'e | ngines/unreal')."""
+    """The cell's lines, each at most ``width`` wide, broken between words, a word wider than
+    the line after one of its '/' and, only where a piece is still too wide, every ``width``
+    characters (textwrap cuts a long word anywhere: 'e | ngines/unreal')."""
     lines = []
-    for piece, spaced in _words(cell, width):
-        joined = (lines[-1] + (" " if spaced else "") + piece) if lines else piece
-        if lines and len(joined) <= width:
-            lines[-1] = joined
-        else:
-            lines.append(piece)
+    for word in cell.split():
+        pieces = [word] if len(word) <= width else [
+            piece[i:i + width] for piece in _pieces(word) for i in range(0, len(piece), width)]
+        for k, piece in enumerate(pieces):
+            joined = (lines[-1] + (" " if k == 0 else "") + piece) if lines else piece
+            if lines and len(joined) <= width:
+                lines[-1] = joined
+            else:
+                lines.append(piece)
     return lines or [""]
 
 
 def _table(headers, rows, width=TABLE_WIDTH) -> str:
     """A Markdown-like table at most ``width`` characters wide: the widest columns are narrowed,
-    not below their longest word (so cells break between words) unless the longest words
-    cannot all fit: then the column of the longest is given less (NARROWEST_COLUMN at least),
-    and its long words break after a '/'; cells wrap onto continuation lines."""
+    first not below their longest word-or-path-component (NARROWEST_COLUMN at least), so their
+    cells wrap between words or after a path's '/', then, where that cannot fit, down to
+    NARROWEST_COLUMN; cells wrap onto continuation lines."""
     head, *body = [[str(cell) for cell in row] for row in [headers, *rows]]
     widths = [max(len(row[i]) for row in [head, *body]) for i in range(len(head))]
-    room = width - 3 * len(widths) - 1
-    floors = [min(w, max(NARROWEST_COLUMN, *(len(word) for row in [head, *body] for word in row[i].split())))
-              for i, w in enumerate(widths)]
-    while sum(floors) > room and max(floors) > NARROWEST_COLUMN:
-        floors[floors.index(max(floors))] -= 1
-    while sum(widths) > room and any(w > f for w, f in zip(widths, floors)):
-        widest = max((i for i, w in enumerate(widths) if w > floors[i]), key=lambda i: widths[i])
-        widths[widest] -= 1
+    pieces = [max([len(p) for row in [head, *body] for word in row[i].split() for p in _pieces(word)], default=0)
+              for i in range(len(head))]
+    for floors in ([max(NARROWEST_COLUMN, p) for p in pieces], [NARROWEST_COLUMN] * len(widths)):
+        while sum(widths) + 3 * len(widths) + 1 > width and any(w > f for w, f in zip(widths, floors)):
+            widest = max((i for i, w in enumerate(widths) if w > floors[i]), key=lambda i: widths[i])
+            widths[widest] -= 1
 
     def lines(row):
         cells = [_wrap(cell, w) for cell, w in zip(row, widths)]
