@@ -104,6 +104,9 @@ def test_module_demo_prints_table_and_writes_checked_files(tmp_path, renderer):
                  "pack-uv", "export demo.glb (GLTF)", "preview demo.png", "total"):
         assert f"| {step} " in proc.stdout, step
     assert "[boxmarch]" in proc.stderr  # progress goes to stderr
+    # No warning of Blender's passed on: the glTF exporter's "Armature must be the parent of
+    # skinned mesh" is gone with the character parented to its rig.
+    assert "[boxmarch] Blender:" not in proc.stderr, proc.stderr
     # stdout is the table alone: Blender's exporter and save lines (naming temporary files) are held back
     assert proc.stdout.startswith("boxmarch demo:") and "boxmarch-partial" not in proc.stdout + proc.stderr
     assert max(map(len, proc.stdout.splitlines())) <= 100, proc.stdout  # fits a terminal

@@ -83,3 +83,27 @@ def test_threejs_draws_each_link_where_the_pose_puts_it(demo_scene):
     mismatch = coverage_mismatch(posed.pixels[..., 3] > 0, expected)
     assert mismatch is None, mismatch
     assert coverage_mismatch(unposed.pixels[..., 3] > 0, expected) is not None
+
+
+def test_idea_picture_prints_its_one_line_alone(tmp_path):
+    """scripts/idea_picture.py (README's picture) says what it wrote and nothing else: no bake
+    report, no EGL_BAD_MATCH lines of Blender's first GPU context, no glTF exporter progress."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import boxmarch
+    from tests.helpers.blender_program import python_env
+
+    reason = threejs.available()
+    if reason:
+        pytest.skip(reason)
+    root = Path(__file__).resolve().parent.parent
+    env = python_env(dict(os.environ), Path(boxmarch.__file__).parent.parent, root)
+    proc = subprocess.run([sys.executable, "-m", "scripts.idea_picture", "--out", "pictures"],
+                          cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    printed = (proc.stdout + proc.stderr).splitlines()
+    assert len(printed) == 1 and printed[0].startswith("idea_picture: wrote") and len(printed[0]) <= 100, printed
+    assert (tmp_path / "pictures" / "idea.png").stat().st_size > 0
