@@ -13,6 +13,7 @@ import pytest
 from boxmarch import demo_character
 from tests.engine_scene import TO_Y_UP, axis_turn, silhouettes
 from tests.engines import coverage_mismatch, threejs
+from tests.helpers.tools import need
 
 pytestmark = [pytest.mark.slow, pytest.mark.bpy]  # the demo in bpy, then three.js in Chromium
 
@@ -65,9 +66,7 @@ def test_blender_poses_the_character_as_the_pose_says(demo_scene):
 
 
 def test_threejs_draws_each_link_where_the_pose_puts_it(demo_scene):
-    reason = threejs.available()
-    if reason:
-        pytest.skip(reason)
+    need(threejs.available())
     from scripts import threejs_picture
 
     _bpy, folder, _report = demo_scene
@@ -96,9 +95,7 @@ def test_idea_picture_prints_its_one_line_alone(tmp_path):
     import boxmarch
     from tests.helpers.blender_program import python_env
 
-    reason = threejs.available()
-    if reason:
-        pytest.skip(reason)
+    need(threejs.available())
     root = Path(__file__).resolve().parent.parent
     env = python_env(dict(os.environ), Path(boxmarch.__file__).parent.parent, root)
     proc = subprocess.run([sys.executable, "-m", "scripts.idea_picture", "--out", "pictures"],
