@@ -1,5 +1,5 @@
 """The demo's character (``python -m boxmarch demo``): a mannequin of boxes (every box a capsule in
-the preview: limbs, a sphere of a head) on a 16-bone armature, wearing chains of links (a
+the preview: limbs, torso and an egg of a head) on a 15-bone armature, wearing chains of links (a
 necklace, a belt, a sash across the body and a chain wound round each arm), every box rigidly
 weighted to one bone, and the pose the demo gives it (a hand on the hip, a wave, a bent knee).
 Geometry and pose are plain arrays (NumPy only) so that scripts/threejs_picture.py turns three.js's
