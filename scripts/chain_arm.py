@@ -59,6 +59,7 @@ def build(bpy, scene, radius=RADIUS, turns=TURNS, link=LINK):
         chain.vertex_groups.new(name=f"bone{k}").add(
             np.flatnonzero(np.repeat(bone_of_link, 8) == k).tolist(), 1.0, "REPLACE")
     chain.modifiers.new("Armature", "ARMATURE").object = rig
+    chain.parent = rig  # as Ctrl+P > With Empty Groups leaves it: the glTF exporter wants the armature as parent
     for ob in scene.objects:
         ob.select_set(ob == chain)
     bpy.context.view_layer.objects.active = chain

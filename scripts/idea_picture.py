@@ -24,6 +24,7 @@ import bpy  # noqa: E402
 import mathutils  # noqa: E402
 
 import boxmarch  # noqa: E402
+from boxmarch import blender_output  # noqa: E402
 from boxmarch.export import scene as export_scene  # noqa: E402
 from scripts import chain_arm  # noqa: E402
 from scripts.threejs_picture import write_png  # noqa: E402
@@ -99,14 +100,10 @@ def setup_js():
             + " var sun = new THREE.DirectionalLight(0xffffff, 0.8); sun.position.copy(camera.position); scene.add(sun);")
 
 
-def main():
-    parser = argparse.ArgumentParser(description="Writes idea.png: the box mesh in Blender beside the links three.js draws")
-    parser.add_argument("--out", default=os.path.join(ROOT, "docs"), help="folder to write idea.png into (default docs/)")
-    out = os.path.join(parser.parse_args().out, "idea.png")
-    reason = threejs.available()
-    if reason:
-        print(f"idea_picture: skipped, {reason}")
-        return 0
+def blender_side(folder):
+    """The Blender half, in ``folder``: the posed meshes as Workbench renders them, and the chain
+    exported with the GLTF preset. Returns (Workbench panel, .glb bytes, export report, links,
+    three.js camera)."""
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
@@ -119,19 +116,39 @@ def main():
     three_camera = {"position": (TO_Y_UP @ np.array(camera.location)).tolist(),
                     "target": (TO_Y_UP @ np.array(target)).tolist(), "near": 0.5, "far": 100.0,
                     "fov": math.degrees(2 * math.atan(18.0 / camera.data.lens * min(1.0, H / W)))}  # 36 mm sensor on the longer side
-    with tempfile.TemporaryDirectory() as folder:
-        boxes = workbench_panel(scene, os.path.join(folder, "boxes.png"))
-        path = os.path.join(folder, "chain.glb")
-        report = export_scene.export_objects(bpy.context, [chain], "GLTF", path)
-        glb = open(path, "rb").read()
+    boxes = workbench_panel(scene, os.path.join(folder, "boxes.png"))
+    path = os.path.join(folder, "chain.glb")
+    report = export_scene.export_objects(bpy.context, [chain], "GLTF", path)
+    with open(path, "rb") as f:
+        return boxes, f.read(), report, links, three_camera
+
+
+def main():
+    parser = argparse.ArgumentParser(description="Writes idea.png: the box mesh in Blender beside the links three.js draws")
+    parser.add_argument("--out", default=os.path.join(ROOT, "docs"), help="folder to write idea.png into (default docs/)")
+    out = os.path.join(parser.parse_args().out, "idea.png")
+    reason = threejs.available()
+    if reason:
+        print(f"idea_picture: skipped, {reason}")
+        return 0
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    # What Blender prints meanwhile (the bake's report, the EGL_BAD_MATCH lines of its first GPU
+    # context, the render's and the glTF exporter's progress) is held back: shown only on failure.
+    printed_out, printed_err = [], []
+    try:
+        with tempfile.TemporaryDirectory() as folder, blender_output.captured(1) as printed_out, \
+                blender_output.captured(2) as printed_err:
+            boxes, glb, report, links, three_camera = blender_side(folder)
+    except Exception:
+        sys.stderr.write("".join(line + "\n" for line in printed_out + printed_err))
+        raise
     material = open(os.path.join(ROOT, "shaders", "threejs", "boxmarch.js")).read()
     start = time.perf_counter()
     links_panel = threejs.render(glb, material, setup_js(), W, H, three_camera).pixels
     gap = np.zeros((H, 4, 4), np.uint8)
     gap[..., :3], gap[..., 3] = 128, 255
     write_png(out, np.concatenate([boxes, gap, links_panel], axis=1))
-    print(f"idea_picture: wrote {out} ({links} link boxes baked with every default, {report['layout']}; "
-          f"{time.perf_counter() - start:.1f} s in three.js)")
+    print(f"idea_picture: wrote {out} ({links} links, {report['layout']}, {time.perf_counter() - start:.1f} s in three.js)")
     return 0
 
 

@@ -22,7 +22,7 @@ from boxmarch import mesh_io, scenes  # noqa: E402
 boxmarch.register()
 
 
-def baked_object(name, centres, sizes, rotations, sdf, location, color, sort_axes=True, **settings):
+def baked_object(name, centres, sizes, rotations, sdf, location, color, **settings):
     arrays = scenes.box_arrays(centres, sizes, rotations)
     mesh = mesh_io.new_mesh(name, arrays[0], *arrays[2:])
     ob = bpy.data.objects.new(name, mesh)
@@ -33,7 +33,7 @@ def baked_object(name, centres, sizes, rotations, sdf, location, color, sort_axe
     for other in bpy.context.view_layer.objects:
         other.select_set(other == ob)
     bpy.context.view_layer.objects.active = ob
-    assert bpy.ops.boxmarch.bake(sort_axes_by_extent=sort_axes) == {"FINISHED"}
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}  # every default, as a user bakes
     ob.boxmarch.sdf = sdf
     for key, value in settings.items():
         setattr(ob.boxmarch, key, value)

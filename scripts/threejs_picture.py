@@ -1,6 +1,8 @@
 """Renders the demo's demo.glb in Debian's three.js r111 (headless Chromium, software WebGL) with the
 shipped ShaderMaterial (shaders/threejs/boxmarch.js), seen from the demo camera, to a PNG: the
-world's boxes as rounded boxes, the chains as links. Run by scripts/demo.sh after the demo.
+character's bones turned by the demo's pose (boxmarch.demo_character.POSE; the file holds the
+rest pose and the skin), the mannequin's boxes drawn as capsules, the chains as links, the
+pebbles as capsules too. Run by scripts/demo.sh after the demo.
 
     python3 -m scripts.threejs_picture [--out demo_out]    (writes demo_out/demo_threejs.png)
 """
@@ -13,31 +15,44 @@ import time
 import zlib
 import struct
 
+import numpy as np
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from boxmarch import demo_character  # noqa: E402
 from tests.engines import threejs  # noqa: E402
 
-# The demo's Blender camera (demo._camera: at (0, -24, 3), turned 85 degrees about x, 30 mm
-# lens on a 36 mm sensor fitted to the 640 px width) in glTF's Y-up axes (x, z, -y).
-WIDTH, HEIGHT = 640, 360
-TILT = math.radians(85.0)
-POSITION = [0.0, 3.0, 24.0]
-DIRECTION = [0.0, -math.cos(TILT), -math.sin(TILT)]
-VERTICAL_FOV = math.degrees(2 * math.atan(18.0 / 30.0 * HEIGHT / WIDTH))
-CAMERA = {"position": POSITION, "target": [p + 24.0 * d for p, d in zip(POSITION, DIRECTION)],
-          "fov": VERTICAL_FOV, "near": 0.1, "far": 200.0}
-# Mesh name prefix -> (map() body, colour): as the demo's Blender preview draws them.
-LOOKS = {"Chains": ("return sdf_preset_link(p, box_half);", (0.85, 0.65, 0.3)),
-         "": ("return sdf_preset_rounded_box(p, box_half);", (0.7, 0.75, 0.8))}
+TO_Y_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])  # Blender -> glTF axes
+WIDTH, HEIGHT = demo_character.PICTURE_SIZE
+# The demo's Blender camera (a lens on a 36 mm sensor fitted to the picture's width) in glTF's axes.
+CAMERA = {"position": (TO_Y_UP @ demo_character.CAMERA["location"]).tolist(),
+          "target": (TO_Y_UP @ demo_character.CAMERA["target"]).tolist(),
+          "fov": math.degrees(2 * math.atan(18.0 / demo_character.CAMERA["lens"] * HEIGHT / WIDTH)),
+          "near": 1.0, "far": 100.0}
 
 
-def setup_js():
-    looks = json.dumps({k: [v[0], v[1]] for k, v in LOOKS.items()}, allow_nan=False)
-    return ("var looks = " + looks + ";"
+def pose_js():
+    """Turns three.js's bones as the demo turns Blender's (tests/engines/threejs.pose_bones_js)."""
+    turns = {name: TO_Y_UP @ np.asarray(axis, float) for name, (axis, _degrees) in demo_character.POSE.items()}
+    angles = {name: math.radians(degrees) for name, (_axis, degrees) in demo_character.POSE.items()}
+    return threejs.pose_bones_js(turns, angles)
+
+
+def materials_js(looks=None):
+    """Gives each mesh of the file the shipped material drawing its object's preview SDF in its
+    colour (``looks``: object name -> (SDF, colour), demo_character.LOOKS by default); a skinned
+    mesh gets the skinning material, and is never culled (its bounds are the rest pose's)."""
+    looks = {name: [f"return sdf_preset_{sdf.lower()}(p, box_half);", colour]
+             for name, (sdf, colour) in (looks or demo_character.LOOKS).items()}
+    return ("var looks = " + json.dumps(looks, allow_nan=False) + ", drawn = {};"
             "gltf.scene.traverse(function (o) { if (!o.isMesh) return;"
-            " var name = o.name + ' ' + (o.parent ? o.parent.name : ''), look = looks[''];"
-            " for (var k in looks) { if (k && name.indexOf(k) >= 0) look = looks[k]; }"
+            " var name = Object.keys(looks).filter(function (k) {"
+            "   return o.name.indexOf(k) === 0 || (o.parent && o.parent.name.indexOf(k) === 0); })[0];"
+            " if (!name) { o.visible = false; return; }"
+            " var look = looks[name]; drawn[name] = true; if (o.isSkinnedMesh) o.frustumCulled = false;"
             " useBoxmarchMaterial(THREE, o, createBoxmarchMaterial(THREE, {map: look[0],"
-            " color: new THREE.Color(look[1][0], look[1][1], look[1][2]), maxSteps: 96})); });")
+            " color: new THREE.Color(look[1][0], look[1][1], look[1][2]), maxSteps: 96,"
+            " skinning: !!o.isSkinnedMesh})); });"
+            "Object.keys(looks).forEach(function (k) { if (!drawn[k]) throw new Error('no mesh ' + k); });")
 
 
 def write_png(path, rgba):
@@ -67,11 +82,11 @@ def main():
     glb = os.path.join(args.out, "demo.glb")
     material = open(os.path.join(ROOT, "shaders", "threejs", "boxmarch.js")).read()
     start = time.perf_counter()
-    shot = threejs.render(open(glb, "rb").read(), material, setup_js(), WIDTH, HEIGHT, CAMERA)
+    shot = threejs.render(open(glb, "rb").read(), material, pose_js() + materials_js(), WIDTH, HEIGHT, CAMERA)
     path = os.path.join(args.out, "demo_threejs.png")
     write_png(path, shot.pixels)
     print(f"threejs_picture: {path} ({WIDTH} x {HEIGHT}, three.js r111 in Chromium, "
-          f"{time.perf_counter() - start:.1f} s)")
+          f"{len(demo_character.POSE)} bones turned, {time.perf_counter() - start:.1f} s)")
     return 0
 
 

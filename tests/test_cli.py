@@ -104,13 +104,16 @@ def test_module_demo_prints_table_and_writes_checked_files(tmp_path, renderer):
                  "pack-uv", "export demo.glb (GLTF)", "preview demo.png", "total"):
         assert f"| {step} " in proc.stdout, step
     assert "[boxmarch]" in proc.stderr  # progress goes to stderr
+    # No warning of Blender's passed on: the glTF exporter's "Armature must be the parent of
+    # skinned mesh" is gone with the character parented to its rig.
+    assert "[boxmarch] Blender:" not in proc.stderr, proc.stderr
     # stdout is the table alone: Blender's exporter and save lines (naming temporary files) are held back
     assert proc.stdout.startswith("boxmarch demo:") and "boxmarch-partial" not in proc.stdout + proc.stderr
     assert max(map(len, proc.stdout.splitlines())) <= 100, proc.stdout  # fits a terminal
     # The demo wrote demo_godot3.glb.import, which keeps Godot 3's import float32
     assert "float32 in Godot 3" in next(line for line in proc.stdout.splitlines() if "| export GODOT3" in line)
     # 300 boxes + 6 split-corner vertices: 6 planted duplicates (48 vertices) and the 6 splits go away
-    assert "2,406 -> 2,358 vertices" in proc.stdout and "2,358 -> 2,352 vertices" in proc.stdout
+    assert "2,406 -> 2,358 pebble vertices" in proc.stdout and "2,358 -> 2,352 pebble vertices" in proc.stdout
     report = json.loads((tmp_path / "demo.json").read_text())
     assert report["ok"] and report["count"] == 300 and report["glb_max_relative_error"] < 1e-5
     if renderer == "CPU":
@@ -118,17 +121,17 @@ def test_module_demo_prints_table_and_writes_checked_files(tmp_path, renderer):
     else:  # no EGL complaints of Blender's while making the GPU context that then worked
         assert report["preview"] != "GPU raymarch preview" or "EGL Error" not in proc.stderr, proc.stderr
     meshes = read_glb(tmp_path / "out" / "demo.glb")
-    assert [m["name"] for m in meshes] == ["BoxWorld", "Chains"]
+    assert sorted(m["name"] for m in meshes) == ["Chains", "Mannequin", "Pebbles"]
     assert sorted(os.listdir(tmp_path / "out")) == sorted([
         "demo.blend", "demo.glb", "demo.boxes.bin", "demo.png", "demo_godot3.glb", "demo_godot3.boxes.tres",
         "demo_unity.fbx", "demo_unity.boxes.bin", "demo_unreal.fbx", "demo_unreal.boxes.bin",
         "demo_godot3.glb.import"]  # demo.glb is the GLTF preset's file
         + [f"demo{suffix}.boxmarch.json" for suffix in ("", "_godot3", "_unity", "_unreal")])
-    for preset, layout in (("demo.glb \\(GLTF\\)", "NORMAL_FRAME"), ("GODOT3", "NORMAL_COLOR"), ("UNITY", "UV_FRAME"),
+    for preset, layout in (("demo.glb \\(GLTF\\)", "NORMAL_FRAME"), ("GODOT3", "NORMAL_COLOR"), ("UNITY", "NORMAL_FRAME"),
                            ("UNREAL", "UV_FRAME")):
         assert re.search(rf"export {preset} .*layout {layout}", proc.stdout), proc.stdout
     png = (tmp_path / "out" / "demo.png").read_bytes()
-    assert png[:8] == b"\x89PNG\r\n\x1a\n" and int.from_bytes(png[16:20], "big") == 640
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and int.from_bytes(png[16:20], "big") == 800
 
 
 @pytest.mark.bpy

@@ -22,9 +22,9 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import signal
 import sys
-import textwrap
 import time
 
 from . import ensure_registered
@@ -55,16 +55,44 @@ def _progress(message: str) -> None:
     print(f"[boxmarch] {message}", file=sys.stderr, flush=True)
 
 
+def _pieces(word: str) -> list:
+    """A word cut after each '/' it holds (a path's components), the places a long word may break."""
+    return [piece for piece in re.split(r"(?<=/)", word) if piece]
+
+
+def _wrap(cell: str, width: int) -> list:
+    """The cell's lines, each at most ``width`` wide, broken between words, a word wider than
+    the line after one of its '/' and, only where a piece is still too wide, every ``width``
+    characters (textwrap cuts a long word anywhere: 'e | ngines/unreal')."""
+    lines = []
+    for word in cell.split():
+        pieces = [word] if len(word) <= width else [
+            piece[i:i + width] for piece in _pieces(word) for i in range(0, len(piece), width)]
+        for k, piece in enumerate(pieces):
+            joined = (lines[-1] + (" " if k == 0 else "") + piece) if lines else piece
+            if lines and len(joined) <= width:
+                lines[-1] = joined
+            else:
+                lines.append(piece)
+    return lines or [""]
+
+
 def _table(headers, rows, width=TABLE_WIDTH) -> str:
-    """A Markdown-like table at most ``width`` characters wide: the widest columns are narrowed
-    (to NARROWEST_COLUMN at least) and their cells wrap onto continuation lines."""
+    """A Markdown-like table at most ``width`` characters wide: the widest columns are narrowed,
+    first not below their longest word-or-path-component (NARROWEST_COLUMN at least), so their
+    cells wrap between words or after a path's '/', then, where that cannot fit, down to
+    NARROWEST_COLUMN; cells wrap onto continuation lines."""
     head, *body = [[str(cell) for cell in row] for row in [headers, *rows]]
     widths = [max(len(row[i]) for row in [head, *body]) for i in range(len(head))]
-    while sum(widths) + 3 * len(widths) + 1 > width and max(widths) > NARROWEST_COLUMN:
-        widths[widths.index(max(widths))] -= 1
+    pieces = [max([len(p) for row in [head, *body] for word in row[i].split() for p in _pieces(word)], default=0)
+              for i in range(len(head))]
+    for floors in ([max(NARROWEST_COLUMN, p) for p in pieces], [NARROWEST_COLUMN] * len(widths)):
+        while sum(widths) + 3 * len(widths) + 1 > width and any(w > f for w, f in zip(widths, floors)):
+            widest = max((i for i, w in enumerate(widths) if w > floors[i]), key=lambda i: widths[i])
+            widths[widest] -= 1
 
     def lines(row):
-        cells = [textwrap.wrap(cell, w) or [""] for cell, w in zip(row, widths)]
+        cells = [_wrap(cell, w) for cell, w in zip(row, widths)]
         return ["| " + " | ".join((cell[k] if k < len(cell) else "").ljust(w) for cell, w in zip(cells, widths)) + " |"
                 for k in range(max(map(len, cells)))]
     rule = "|" + "|".join("-" * (w + 2) for w in widths) + "|"

@@ -1,24 +1,25 @@
-"""The README's main job, headless (``python -m boxmarch demo``): build a world of boxes (duplicates,
-split corners, chains along curves), run dedup, merge, bake (8-bit and float, then an incremental
+"""The README's main job, headless (``python -m boxmarch demo``): build a posed character wearing
+chains of links (demo_character) on a ground of pebbles (the scale: ``--count`` boxes, with
+duplicates and split corners), run dedup, merge, bake (8-bit and float, then an incremental
 re-bake) and pack-uv through the same jobs as the operators, export demo.glb with the GLTF preset
 and decode it back in glTF's frame, render demo.png and save demo.blend. cli.py parses the options
 and prints the table ``run_demo`` returns."""
 from __future__ import annotations
 
-import math
 import os
 import time
 
 import bpy
 import numpy as np
 
-from . import bake_job, blend_file, blender_output, core, edit_mode, ensure_registered, mesh_io, scenes, tool_jobs
+from . import bake_job, blend_file, blender_output, core, demo_character, ensure_registered, mesh_io, scenes, tool_jobs
 from .formats import files
 from .export.every_engine import ENGINE_PRESETS, engine_outputs, engine_path, export_every_engine
-from .formats import glb, transforms, presets
+from .formats import glb, layouts, presets, transforms
 from .export import scene as export_scene
 
-DEMO_IMAGE_SIZE = (640, 360)
+DEMO_IMAGE_SIZE = demo_character.PICTURE_SIZE
+PEBBLE_RADIUS = 14.0  # the ground's pebbles lie this far around the character at most
 MAX_COUNT = 1_000_000  # boxes: 8 million vertices, the scale of Instance on Curve's limit
 
 
@@ -28,21 +29,24 @@ def demo_outputs(folder: str) -> list:
     return engine_outputs(folder, "demo") + [os.path.join(folder, "demo.png"), os.path.join(folder, "demo.blend")]
 
 
-def _box_world(count, seed):
-    """The box world of the README: ``count`` boxes of varied sizes and rotations, 5% of them
+def _pebbles(count, seed):
+    """The ground the character stands on, the README's scale: ``count`` pebbles (boxes of varied
+    sizes and rotations, half sunk in the ground) within PEBBLE_RADIUS of the character, 5% of them
     translated copies (the copy cache's case), 2% exact duplicates of others (for dedup) and 2%
-    with one corner split into two vertices 1e-5 apart (for merge). Returns (world object,
+    with one corner split into two vertices 1e-5 apart (for merge). Returns (object 'Pebbles',
     expected duplicates, expected split corners)."""
     rng = np.random.default_rng(seed)
     duplicates = count // 50
     splits = count // 50
     unique = count - duplicates
     copies = unique // 20
-    sizes = rng.uniform(0.05, 2.0, (unique, 3))
+    sizes = rng.uniform(0.08, 0.4, (unique, 3))
     rotations = scenes.random_rotations(unique, rng)
     sizes[-copies:] = sizes[:copies]
     rotations[-copies:] = rotations[:copies]
-    centres = rng.uniform(-100, 100, (unique, 3))
+    radius = PEBBLE_RADIUS * np.sqrt(rng.uniform(0.0, 1.0, unique))  # even over the disc
+    angle = rng.uniform(0.0, 2 * np.pi, unique)
+    centres = np.column_stack([radius * np.cos(angle), radius * np.sin(angle), rng.uniform(-0.05, 0.05, unique)])
     # Disjoint sets: a box that got both a duplicate and a split corner would leave two nearly
     # equal boxes that neither dedup nor merge removes.
     chosen = rng.permutation(unique)
@@ -55,41 +59,10 @@ def _box_world(count, seed):
     extra = positions[8 * split] + np.float32(1e-5)
     corner_verts[24 * split] = len(positions) + np.arange(splits, dtype=np.int32)
     positions = np.concatenate([positions, extra])
-    world = bpy.data.objects.new("BoxWorld", mesh_io.new_mesh("BoxWorld", positions, face_starts, face_sizes,
+    pebbles = bpy.data.objects.new("Pebbles", mesh_io.new_mesh("Pebbles", positions, face_starts, face_sizes,
                                                                corner_verts))
-    bpy.context.scene.collection.objects.link(world)
-    return world, duplicates, splits
-
-
-def _chains():
-    """Chains of links laid along three helices around the origin (where the camera looks) by the
-    add-on's Instance on Curve operator, converted to a mesh and joined as one object 'Chains'."""
-    (link_positions, _e, link_starts, link_sizes, link_corners) = scenes.box_arrays(
-        np.zeros((1, 3)), np.array([[0.3, 0.6, 0.1]]), np.eye(3)[None])
-    link = bpy.data.objects.new("Link", mesh_io.new_mesh("Link", link_positions, link_starts, link_sizes,
-                                                         link_corners))
-    bpy.context.scene.collection.objects.link(link)
-    converted = []
-    for i in range(3):
-        t = np.linspace(0.0, 4.0 * np.pi, 64)
-        curve_data = bpy.data.curves.new(f"Chain{i}", "CURVE")
-        curve_data.dimensions = "3D"
-        spline = curve_data.splines.new("POLY")
-        spline.points.add(len(t) - 1)
-        radius = 3.0 + 2.0 * i
-        points = np.stack([radius * np.cos(t + i), radius * np.sin(t + i), 1.5 * t - 9.0, np.ones_like(t)], 1)
-        spline.points.foreach_set("co", points.astype(np.float32).reshape(-1))
-        curve = bpy.data.objects.new(f"Chain{i}", curve_data)
-        bpy.context.scene.collection.objects.link(curve)
-        edit_mode.select_only(bpy.context.view_layer, [curve])
-        bpy.ops.boxmarch.add_instance_on_curve(instance=link.name, spacing=0.7, convert_to_mesh=True)
-        converted.append(bpy.data.objects[f"Chain{i}"])
-    bpy.data.objects.remove(link)
-    edit_mode.select_only(bpy.context.view_layer, converted)
-    bpy.ops.object.join()
-    chains = bpy.context.view_layer.objects.active
-    chains.name = chains.data.name = "Chains"
-    return chains
+    bpy.context.scene.collection.objects.link(pebbles)
+    return pebbles, duplicates, splits
 
 
 def _bake_all(meshes, encoding, incremental):
@@ -134,28 +107,34 @@ def _glb_decode_error(path, objects, prepared):
 
 
 def _camera():
+    """The scene's camera, as demo_character.CAMERA puts it (scripts/threejs_picture.py takes the
+    same)."""
+    from mathutils import Vector
+
     data = bpy.data.cameras.new("DemoCamera")
-    data.lens = 30.0
+    data.lens = demo_character.CAMERA["lens"]
     camera = bpy.data.objects.new("DemoCamera", data)
     bpy.context.scene.collection.objects.link(camera)
-    camera.location = (0.0, -24.0, 3.0)
-    camera.rotation_euler = (math.radians(85.0), 0.0, 0.0)  # looks at the chains around the origin
+    camera.location = demo_character.CAMERA["location"]
+    aim = Vector(demo_character.CAMERA["target"]) - camera.location
+    camera.rotation_euler = aim.to_track_quat("-Z", "Y").to_euler()
     bpy.context.scene.camera = camera
     return camera
 
 
-def _preview_picture(objects, sdfs, path, renderer, progress):
-    """Render the preview picture: the GPU raymarch preview when a GPU context can be made (or
-    ``renderer`` is 'GPU'), else the CPU reference raymarcher (same decode, same SDFs). Returns
-    the method used."""
+def _preview_picture(objects, path, renderer, progress):
+    """Render the preview picture, each object as demo_character.LOOKS has it (the NORMAL_FRAME
+    layout, the GLTF preset's, whose frame the pose turns): the GPU raymarch preview when a GPU
+    context can be made (or ``renderer`` is 'GPU'), else the CPU reference raymarcher (same
+    SDFs, the posed boxes baked from the posed mesh). Returns the method used."""
     from . import preview  # the GPU module: imported only when a picture is made
-    from .preview import mesh_data
 
     scene = bpy.context.scene
     camera = _camera()
     width, height = DEMO_IMAGE_SIZE
-    for ob, sdf in zip(objects, sdfs):
-        ob.boxmarch.sdf = sdf
+    for ob in objects:
+        sdf, colour = demo_character.LOOKS[ob.name]
+        ob.boxmarch.sdf, ob.boxmarch.layout, ob.color = sdf, "NORMAL_FRAME", (*colour, 1.0)
         ob.boxmarch.preview = True
     rgba, context_lines = None, []
     if renderer != "CPU":
@@ -177,11 +156,14 @@ def _preview_picture(objects, sdfs, path, renderer, progress):
         view, projection = preview.camera_matrices(scene, camera, width, height)
         depth = np.ones((height, width), np.float32)
         rgba = np.zeros((height, width, 4), np.float32)
-        for ob, sdf in zip(objects, sdfs):
-            baked = mesh_data.read_baked(ob.data)  # the boxes the GPU preview draws
+        depsgraph = bpy.context.evaluated_depsgraph_get()
+        for ob in objects:
+            # The boxes as posed: the bake's frames of the armature-deformed mesh (each box moves rigidly).
+            posed = ob.evaluated_get(depsgraph).data
+            boxes = core.bake(mesh_io.read_positions(posed), *mesh_io.read_topology(posed))
             world = np.array(ob.matrix_world, np.float64)
-            core.render_boxes(baked.origins, baked.box_quaternions, baked.box_half_extents,
-                              projection @ view @ world, view @ world, width, height, sdf=sdf,
+            core.render_boxes(boxes.origins, boxes.quaternions, boxes.half_extents, projection @ view @ world,
+                              view @ world, width, height, sdf=ob.boxmarch.sdf, base_color=tuple(ob.color[:3]),
                               depth=depth, rgba=rgba)
         method = "CPU reference raymarcher"
     image = bpy.data.images.new("boxmarch_demo", width, height, alpha=True)
@@ -209,25 +191,26 @@ def run_demo(count: int, seed: int, folder: str, renderer: str, progress) -> tup
     os.makedirs(folder, exist_ok=True)
     rows = []
     start = time.perf_counter()
-    progress(f"building {count:,} boxes and the chains")
+    progress(f"building the character and {count:,} pebbles")
     bpy.ops.wm.read_factory_settings(use_empty=True)
     ensure_registered()
-    world, duplicates, splits = _box_world(count, seed)
-    chains = _chains()
-    objects = [world, chains]
+    pebbles, duplicates, splits = _pebbles(count, seed)
+    rig, mannequin, chains = demo_character.build(bpy, bpy.context.scene)
+    objects = [pebbles, mannequin, chains]
     rows.append(["build scene", f"{time.perf_counter() - start:.3f} s",
-                 f"{len(world.data.vertices):,} vertices; {len(chains.data.vertices) // 8} chain links on 3 curves",
-                 ""])
+                 f"{len(pebbles.data.vertices):,} pebble vertices; a mannequin of {len(demo_character.BODY)} boxes "
+                 f"and {len(chains.data.vertices) // 8} chain links on {len(rig.data.bones)} bones, "
+                 f"{len(demo_character.POSE)} of them turned", ""])
 
     for name, tool, expected in (("dedup", tool_jobs.DeleteDuplicates(tolerance=1e-4),
                                   f"{duplicates} exact duplicates planted"),
                                  ("merge", tool_jobs.MergeByDistance(distance=1e-3), f"{splits} split corners planted")):
         progress(name)
-        before = len(world.data.vertices)
+        before = len(pebbles.data.vertices)
         t = time.perf_counter()
-        tool_jobs.run_tool(bpy.context, tool, [world])
+        tool_jobs.run_tool(bpy.context, tool, [pebbles])  # where the duplicates and splits were planted
         rows.append([name, f"{time.perf_counter() - t:.3f} s",
-                     f"{before:,} -> {len(world.data.vertices):,} vertices", expected])
+                     f"{before:,} -> {len(pebbles.data.vertices):,} pebble vertices", expected])
 
     meshes = [ob.data for ob in objects]
     for encoding in ("BYTE_COLOR", "FLOAT_COLOR"):
@@ -263,8 +246,12 @@ def run_demo(count: int, seed: int, folder: str, renderer: str, progress) -> tup
                  f"read back: worst decode error {worst:.2e} of half-extent in glTF's frame"])
 
     progress("exporting for the other engines")
-    for engine in export_every_engine(bpy.context, objects, os.path.abspath(folder), "demo", ENGINE_PRESETS[1:]):
-        preset = presets.PRESETS[engine["preset"]]
+    for name in ENGINE_PRESETS[1:]:
+        preset = presets.PRESETS[name]
+        # A preset none of whose layouts skinning carries (Unreal's) gets the pebbles alone.
+        carries_skin = any(layouts.LAYOUTS[layout].skin_safe for layout in preset.layouts)
+        exported = objects if carries_skin else [pebbles]
+        engine, = export_every_engine(bpy.context, exported, os.path.abspath(folder), "demo", [name])
         lost = engine["default_import_error"]
         written = [os.path.basename(p) for p in engine["files"]]
         if preset.writes_godot3_import:  # the export wrote the import settings that keep float32
@@ -274,13 +261,14 @@ def run_demo(count: int, seed: int, folder: str, renderer: str, progress) -> tup
             accuracy = f"default import loses {lost:.1e} of half-extent: {preset.import_fix}"
         else:
             accuracy = "float32 in the engine"
-        rows.append([f"export {engine['preset']}", f"{engine['seconds']:.3f} s",
-                     f"layout {engine['layout']}: {' + '.join(written)}", accuracy])
+        left_out = "" if carries_skin else " (the pebbles alone: no layout of its carries a skinned frame)"
+        rows.append([f"export {name}", f"{engine['seconds']:.3f} s",
+                     f"layout {engine['layout']}: {' + '.join(written)}{left_out}", accuracy])
 
     png_path = os.path.abspath(os.path.join(folder, "demo.png"))
     progress("rendering demo.png")
     t = time.perf_counter()
-    method = _preview_picture(objects, ["ROUNDED_BOX", "LINK"], png_path, renderer, progress)
+    method = _preview_picture(objects, png_path, renderer, progress)
     rows.append(["preview demo.png", f"{time.perf_counter() - t:.3f} s",
                  f"{DEMO_IMAGE_SIZE[0]} x {DEMO_IMAGE_SIZE[1]}, {method}", ""])
 
@@ -288,5 +276,6 @@ def run_demo(count: int, seed: int, folder: str, renderer: str, progress) -> tup
     rows.append(["total", f"{time.perf_counter() - start:.3f} s", f"wrote {path}", ""])
     report = {"ok": True, "command": "demo", "count": count, "blend": path, "glb": glb_path, "png": png_path,
               "preview": method, "glb_max_relative_error": worst, "rows": rows,
+              "links": len(chains.data.vertices) // 8, "bones": len(rig.data.bones),
               "blender": bpy.app.version_string}
     return rows, report

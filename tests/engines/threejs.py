@@ -403,11 +403,14 @@ def render(glb_bytes, material_js, setup_js, width, height, camera, release="r11
 
 def pose_bones_js(turns, angle):
     """JavaScript for :func:`render`'s ``setup_js``: turns each bone named in ``turns`` (name ->
-    world axis (3,) as the axis points with the skeleton at rest) by ``angle`` radians about its
-    own head, on top of its rest rotation, so it carries the bones below it. The axis is moved
-    into the bone's local frame with the bones' rest world rotations, read before any turn."""
+    world axis (3,) as the axis points with the skeleton at rest) by ``angle`` radians (or
+    ``angle[name]``, a dict giving each bone its own) about its own head, on top of its rest
+    rotation, so it carries the bones below it. The axis is moved into the bone's local frame
+    with the bones' rest world rotations, read before any turn."""
+    angles = {name: float(angle[name] if isinstance(angle, dict) else angle) for name in turns}
     return ("gltf.scene.updateMatrixWorld(true);\n"
             f"var bmTurns = {json.dumps({k: [float(x) for x in v] for k, v in turns.items()})}, bmRest = {{}};\n"
+            f"var bmAngles = {json.dumps(angles)};\n"
             "Object.keys(bmTurns).forEach(function (name) {\n"
             "  var bone = gltf.scene.getObjectByName(name);\n"
             "  if (!bone || !bone.isBone) throw new Error('no bone named ' + name);\n"
@@ -416,6 +419,6 @@ def pose_bones_js(turns, angle):
             "Object.keys(bmTurns).forEach(function (name) {\n"
             "  var back = bmRest[name].clone(); back = back.invert ? back.invert() : back.inverse();  // r123 renamed it\n"
             "  var axis = new THREE.Vector3().fromArray(bmTurns[name]).normalize().applyQuaternion(back);\n"
-            f"  gltf.scene.getObjectByName(name).quaternion.multiply(new THREE.Quaternion().setFromAxisAngle(axis, {float(angle)!r}));\n"
+            "  gltf.scene.getObjectByName(name).quaternion.multiply(new THREE.Quaternion().setFromAxisAngle(axis, bmAngles[name]));\n"
             "});\n"
             "gltf.scene.updateMatrixWorld(true);\n")
