@@ -1,10 +1,21 @@
-"""What the command line prints in a terminal: tables that fit TABLE_WIDTH columns, --version, and
-a missing bpy module named as what to install (its own exit code) rather than an internal error."""
+"""What the command line prints in a terminal: tables that fit TABLE_WIDTH columns, --version,
+--help with every default, a missing bpy module or native build named as what to install or build
+(their own exit code) rather than an internal error, and a command given no .blend refused rather
+than run on Blender's startup scene."""
+import os
+import re
+import shutil
+import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
-from boxmarch import bl_info, cli
+from boxmarch import bl_info, cli, cli_args
+from tests.conftest import random_boxes_object
+
+COMMANDS = ("bake", "dedup", "merge", "pack-uv", "export", "pipeline", "demo")
+REQUIRED = {"export": ["--to", "x.glb"]}  # what each command needs to parse
 
 
 def test_table_fits_the_width_and_keeps_every_word():
@@ -59,7 +70,65 @@ def test_version_prints_the_add_on_version(capsys):
 def test_missing_bpy_says_what_to_install(monkeypatch, capsys, tmp_path, argv):
     monkeypatch.setitem(sys.modules, "bpy", None)  # `import bpy` raises ModuleNotFoundError, as without bpy
     monkeypatch.chdir(tmp_path)
-    assert cli.run(argv) == cli.EXIT_NO_BPY == 3
+    assert cli.run(argv) == cli.EXIT_MISSING_MODULE == 3
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "no bpy module" in err[0] and "pip install bpy==5.0" in err[0], err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_commands_are_those_the_tests_know(capsys):
+    assert cli.run(["--help"]) == 0
+    assert "{" + ",".join(COMMANDS) + "}" in capsys.readouterr().out
+
+
+def option_help(text, option):
+    """The help of ``option`` in a --help text, on one line."""
+    found = re.search(rf"^  {re.escape(option)}\b.*?(?=^  -|\Z)", text, re.M | re.S)
+    assert found, f"{option} is not in the help:\n{text}"
+    return " ".join(found.group(0).split())
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_help_shows_every_default(capsys, command):
+    """Each option that has a value when not given shows it in --help, as the parser uses it."""
+    parser = cli_args.build_parser("boxmarch", dict.fromkeys(COMMANDS), "boxmarch")
+    defaults = vars(parser.parse_args([command, *REQUIRED.get(command, [])]))
+    assert cli.run([command, "--help"]) == 0
+    text = capsys.readouterr().out
+    shown = 0
+    for dest, value in defaults.items():
+        given = "--" + dest.replace("_", "-") in REQUIRED.get(command, [])
+        if value is None or value is False or given or dest in ("command", "run"):
+            continue
+        assert f"(default: {value})" in option_help(text, "--" + dest.replace("_", "-")), (dest, value)
+        shown += 1
+    # Control: the options with defaults were found (--origin ... --random-seed, --steps, --tolerance ...).
+    assert shown >= {"bake": 7, "dedup": 1, "merge": 1, "pack-uv": 2, "export": 1, "pipeline": 12, "demo": 4}[command]
+
+
+def test_a_checkout_without_the_native_build_says_how_to_build(tmp_path):
+    """``PYTHONPATH=addon python3 -m boxmarch`` before anything was built: one line naming the
+    build script, exit code 3, for --version and for a command alike."""
+    addon = tmp_path / "addon"
+    shutil.copytree(Path(cli.__file__).parent, addon / "boxmarch", ignore=shutil.ignore_patterns("*.so", "__pycache__"))
+    env = dict(os.environ, PYTHONPATH=str(addon))
+    for argv in (["--version"], ["bake", "world.blend"]):
+        r = subprocess.run([sys.executable, "-m", "boxmarch", *argv], cwd=tmp_path, env=env, capture_output=True,
+                           text=True, timeout=120)
+        err = r.stderr.strip().splitlines()
+        assert r.returncode == cli.EXIT_MISSING_MODULE and len(err) == 1, (r.returncode, r.stderr)
+        assert err[0].startswith("boxmarch: error: boxmarch's native module") and "scripts/dev_build.sh" in err[0], err
+
+
+@pytest.mark.parametrize("argv", [["bake"], ["dedup"], ["merge"], ["pack-uv"], ["export", "--to", "x.glb"],
+                                  ["pipeline", "--to", "x.glb"]])
+def test_a_command_without_a_blend_file_is_refused(blender, capsys, tmp_path, monkeypatch, argv):
+    """No FILE.blend and none open (bpy's own startup scene, or the Blender program started without
+    a file): exit 2 with one line, and the scene in memory is left as it was, never baked."""
+    ob = random_boxes_object(blender)
+    monkeypatch.chdir(tmp_path)
+    assert blender.data.filepath == ""
+    assert cli.run(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith(f"boxmarch: error: {argv[0]}: no .blend file to work on: give FILE.blend"), err
+    assert "BoxOffset" not in ob.data.attributes and list(tmp_path.iterdir()) == []

@@ -89,3 +89,22 @@ def test_the_bake_warns_about_a_modelled_torus_and_not_about_boxes(blender, capf
     assert "384 vertices" in warning  # 32 x 12 around the tube
     assert bake_job.not_box_warnings(
         [p.report for p in bake_job.bake_meshes([boxes.data], mesh_io.BakeSettings(incremental=False))]) == []
+
+
+def test_the_warning_reads_well_for_one_piece_or_many():
+    """Singular and plural agree with the counts, and the line stays short: the warning once read
+    "1 of its 1 pieces do not look like boxes" on a line of 250 characters."""
+    from boxmarch import bake_job
+
+    example = {"submesh": 4, "vertices": 384, "off_box": 0.67}
+    cases = {(1, 1): "mesh 'Torus' does not look like a box (384 vertices, 67% off its faces)",
+             (3, 3): "mesh 'Torus': its 3 pieces do not look like boxes (piece 4: 384 vertices, 67% off its faces)",
+             (1, 3): "mesh 'Torus': 1 of its 3 pieces does not look like a box (piece 4: 384 vertices",
+             (2, 1000): "mesh 'Torus': 2 of its 1,000 pieces do not look like boxes (piece 4: 384 vertices"}
+    for (found, pieces), start in cases.items():
+        (warning,) = bake_job.not_box_warnings([{"mesh": "Torus", "not_boxes": found, "submeshes": pieces,
+                                                 "not_box_example": example}])
+        assert warning.startswith(start), warning
+        assert warning.endswith(": model one box per shape, not the shape (docs/PREVIEW.md)"), warning
+        assert len(warning) <= 160, (len(warning), warning)
+    assert bake_job.not_box_warnings([{"mesh": "Boxes", "not_boxes": 0, "submeshes": 5, "not_box_example": None}]) == []

@@ -18,6 +18,11 @@ bl_info = {
 _registered = []
 
 
+class NativeModuleMissing(ModuleNotFoundError):
+    """boxmarch's native module (_core) is not built: its message says how to build it (raised by
+    boxmarch.native; here, where the command line can catch it without importing that module)."""
+
+
 def register():
     import bpy
 

@@ -38,14 +38,20 @@ def report_totals(reports) -> dict:
 def not_box_warnings(reports) -> list[str]:
     """One warning per baked mesh holding pieces that do not look like boxes (core.not_boxes):
     each piece is drawn as one box holding one shape, so a modelled shape baked as it is draws
-    clipped to its own faces, and a shape made of loose pieces draws a fragment per piece."""
+    clipped to its own faces, and a shape made of loose pieces draws a fragment per piece.
+    docs/TROUBLESHOOTING.md says what the figures mean."""
     warnings = []
     for r in reports:
         example = r.get("not_box_example")
-        if example:
-            warnings.append(
-                f"mesh '{r['mesh']}': {r['not_boxes']:,} of its {r['submeshes']:,} pieces do not look like boxes "
-                f"(piece {example['submesh']}: {example['vertices']:,} vertices, {example['off_box']:.0%} of them "
-                "inside its bounding box, off its faces): each piece is drawn as one box holding one shape, so "
-                "model one box per shape, sized like the shape (docs/PREVIEW.md)")
+        if not example:
+            continue
+        found, pieces = r["not_boxes"], r["submeshes"]
+        figures = f"{example['vertices']:,} vertices, {example['off_box']:.0%} off its faces"
+        if pieces == 1:
+            head = f"mesh '{r['mesh']}' does not look like a box ({figures})"
+        else:
+            which = f"its {pieces:,} pieces" if found == pieces else f"{found:,} of its {pieces:,} pieces"
+            verb = "does not look like a box" if found == 1 else "do not look like boxes"
+            head = f"mesh '{r['mesh']}': {which} {verb} (piece {example['submesh']}: {figures})"
+        warnings.append(f"{head}: model one box per shape, not the shape (docs/PREVIEW.md)")
     return warnings

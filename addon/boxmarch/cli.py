@@ -10,9 +10,10 @@ objects named with --objects, or on every mesh object of the file. --out writes 
 new .blend, --json a machine-readable report; both appear only complete (written under a
 temporary name, then renamed). Progress goes to stderr, the result table to stdout (Blender's
 own prints are held back), at most TABLE_WIDTH characters wide. Exit codes: 0 success, 2 bad
-arguments or input (one line saying why), 3 no bpy module in this Python (the line says what to
-install), 128 + the signal's number when a signal stopped it (130 for Ctrl-C, 143 for SIGTERM),
-1 internal error. docs/CLI.md has the reference.
+arguments or input (one line saying why; a command given no .blend is one), 3 no bpy module in
+this Python or boxmarch's native module not built (the line says what to install or build), 128 +
+the signal's number when a signal stopped it (130 for Ctrl-C, 143 for SIGTERM), 1 internal
+error. docs/CLI.md has the reference.
 
 This module only parses, checks and reports: every step runs the same job function as the
 add-on's operator (bake_job.bake_meshes, tool_jobs.run_tool, export.scene.export_objects).
@@ -27,7 +28,7 @@ import signal
 import sys
 import time
 
-from . import ensure_registered
+from . import NativeModuleMissing, ensure_registered
 from .cli_args import InputError, build_parser, check_outputs, run_outputs
 from .formats import files
 
@@ -44,7 +45,7 @@ CLEANUP_TOOLS = {
 
 TABLE_WIDTH = 100  # characters: the result table fits a terminal; longer cells wrap within their column
 NARROWEST_COLUMN = 12
-EXIT_NO_BPY = 3
+EXIT_MISSING_MODULE = 3  # no bpy module in this Python, or boxmarch's native module not built
 NO_BPY_MESSAGE = ("boxmarch: error: this Python has no bpy module: install Blender as a Python module "
                   "(pip install bpy==5.0.*, on Python 3.11), or run the command in the Blender program "
                   "(blender --background FILE.blend --python-expr \"import boxmarch.cli; boxmarch.cli.main()\" "
@@ -281,6 +282,9 @@ def _run_steps(args, steps) -> int:
     from .blend_file import save_blend_copy
 
     start = time.perf_counter()
+    if not getattr(args, "blend", None) and not bpy.data.filepath:  # else it would work on Blender's startup scene
+        raise InputError(f"{args.command}: no .blend file to work on: give FILE.blend (boxmarch {args.command} "
+                         "FILE.blend ...), or open it in the Blender program (blender --background FILE.blend ...)")
     # Before opening, so that nothing is loaded for a bad path; the file Blender itself opened
     # (the Blender form) is an input too.
     _accept_outputs(args, run_outputs(args, steps), [getattr(args, "blend", None), bpy.data.filepath])
@@ -372,7 +376,7 @@ def _interrupted_code(interrupts) -> tuple[int, str]:
 
 
 def run(argv=None) -> int:
-    """Run one command; returns the exit code (0; 2 bad input; 3 no bpy module; 128 + the
+    """Run one command; returns the exit code (0; 2 bad input; 3 no bpy or native module; 128 + the
     signal's number when stopped by one, 130 for Ctrl-C; 1 internal error). ``argv`` None: the
     process's arguments; inside the Blender program those after its first ``--`` (Blender's own
     come before it)."""
@@ -396,7 +400,9 @@ def run(argv=None) -> int:
         elif isinstance(error, InputError):
             code, message = 2, f"boxmarch: error: {error}"
         elif isinstance(error, ModuleNotFoundError) and error.name == "bpy":
-            code, message = EXIT_NO_BPY, NO_BPY_MESSAGE
+            code, message = EXIT_MISSING_MODULE, NO_BPY_MESSAGE
+        elif isinstance(error, NativeModuleMissing):
+            code, message = EXIT_MISSING_MODULE, f"boxmarch: error: {error}"
         else:  # internal error: one line, exit 1
             from .blender_output import one_line
 

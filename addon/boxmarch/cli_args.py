@@ -4,7 +4,6 @@ from __future__ import annotations
 import argparse
 import os
 
-from . import core
 from .formats import files
 
 
@@ -12,7 +11,23 @@ class InputError(Exception):
     """Bad arguments or input: exit code 2 with this one-line message."""
 
 
+class _DefaultsShown(argparse.HelpFormatter):
+    """--help gives each option's default after its help, where it has one (flags and options
+    without a value default have none) and the help does not already say it."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        has_default = not any(action.default is none for none in (None, False, argparse.SUPPRESS))  # 0 is one
+        if action.option_strings and has_default and "default" not in text:
+            text += " (default: %(default)s)"
+        return text
+
+
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", _DefaultsShown)
+        super().__init__(*args, **kwargs)
+
     def error(self, message):  # one line, exit code 2
         command = self.prog.split(" ", 1)[1:]  # "boxmarch bake" -> "bake: ..."; top level: the message
         raise InputError(f"{command[0]}: {message}" if command else message)
@@ -21,6 +36,8 @@ class _Parser(argparse.ArgumentParser):
 def _angle_epsilon(text):
     """--angle-epsilon as a float in core.ANGLE_EPSILON_RANGE (the bake operator's limits and the
     core's check), so the command line refuses what the core would refuse before any file opens."""
+    from . import core
+
     lo, hi = core.ANGLE_EPSILON_RANGE
     try:
         value = float(text)
@@ -33,6 +50,8 @@ def _angle_epsilon(text):
 
 def _random_seed(text):
     """--random-seed as an int in 0..core.RANDOM_SEED_MAX (the bake operator's Random Seed range)."""
+    from . import core
+
     try:
         value = int(text)
     except ValueError:
@@ -51,14 +70,24 @@ def _target_options(p, out_help="write the result as a new .blend (the input fil
 
 
 def _bake_options(p):
-    p.add_argument("--origin", choices=core.ORIGIN_MODES, default=core.ORIGIN_MODES[0])
+    # core here, not at the top: a checkout whose native module is not built then reaches
+    # cli.run, which says how to build it in one line, instead of a traceback at import.
+    from . import core
+
+    p.add_argument("--origin", choices=core.ORIGIN_MODES, default=core.ORIGIN_MODES[0],
+                   help="each box's origin: BOUNDS, the centre of its bounds in its own frame; MEAN, its vertices' mean")
     lo, hi = core.ANGLE_EPSILON_RANGE
     p.add_argument("--angle-epsilon", type=_angle_epsilon, default=core.ANGLE_EPSILON_DEFAULT,
-                   help=f"radians, {lo:g}..{hi:.7g} (default {core.ANGLE_EPSILON_DEFAULT:g})")
-    p.add_argument("--encoding", choices=core.ENCODINGS, default=core.ENCODINGS[0])
-    p.add_argument("--domain", choices=("POINT", "CORNER"), default="POINT")
-    p.add_argument("--axis-turn", type=int, default=0, choices=range(24), metavar="0..23")
-    p.add_argument("--sort-axes-by-extent", action="store_true")
+                   help=f"radians, {lo:g}..{hi:.7g}: the second axis comes from the largest face at least this far "
+                        "from the first axis's plane")
+    p.add_argument("--encoding", choices=core.ENCODINGS, default=core.ENCODINGS[0],
+                   help="the offset colour: FLOAT_COLOR (exact) or BYTE_COLOR (8-bit)")
+    p.add_argument("--domain", choices=("POINT", "CORNER"), default="POINT",
+                   help="one offset colour per vertex (POINT) or per face corner")
+    p.add_argument("--axis-turn", type=int, default=0, choices=range(24), metavar="0..23",
+                   help="turn the derived frame by one of the 24 axis-aligned rotations (offsets follow)")
+    p.add_argument("--sort-axes-by-extent", action="store_true",
+                   help="local X along each box's longest side, Z along its shortest, before the turn")
     p.add_argument("--no-cache", action="store_true", help="derive every frame (no copy cache)")
     p.add_argument("--full", action="store_true", help="re-bake unchanged submeshes too")
     p.add_argument("--parents", choices=core.HIERARCHY_RULES, default=core.HIERARCHY_RULES[0],
@@ -69,22 +98,28 @@ def _bake_options(p):
 
 
 def _cleanup_options(p, command):
+    from . import core_tools
+
     if command in ("dedup", "pipeline"):
-        p.add_argument("--tolerance", type=float, help="dedup: vertices this close count as the same")
+        p.add_argument("--tolerance", type=float, default=core_tools.DUPLICATE_TOLERANCE,
+                       help="dedup: vertices this close count as the same")
     if command in ("merge", "pipeline"):
-        p.add_argument("--distance", type=float, help="merge: merge distance within each submesh")
+        p.add_argument("--distance", type=float, default=core_tools.MERGE_DISTANCE,
+                       help="merge: merge distance within each submesh")
     if command in ("pack-uv", "pipeline"):
-        p.add_argument("--padding", type=float)
-        p.add_argument("--max-per-row", type=int)
-        p.add_argument("--lock-overlapping", action="store_true", default=None)
-        p.add_argument("--uv-map", help="UV map to pack (default: the operator's)")
+        p.add_argument("--padding", type=float, default=core_tools.PACK_UV_PADDING,
+                       help="pack-uv: UV space between islands and around the square")
+        p.add_argument("--max-per-row", type=int, default=0, help="pack-uv: most islands in one row (0: as many as fit)")
+        p.add_argument("--lock-overlapping", action="store_true", help="pack-uv: islands whose UV bounds overlap "
+                                                                       "move together")
+        p.add_argument("--uv-map", help="pack-uv: the UV map to pack (default: each mesh's active UV map)")
 
 
 def _export_options(p, required):
     from .formats.layouts import LAYOUTS
     from .formats.presets import PRESETS
 
-    p.add_argument("--preset", choices=sorted(PRESETS), default="GLTF")
+    p.add_argument("--preset", choices=sorted(PRESETS), default="GLTF", help="the engine's export (docs/ENGINES.md)")
     p.add_argument("--layout", choices=sorted(LAYOUTS), default=None,
                    help="channels to write (default: the preset's own, docs/ENGINES.md)")
     p.add_argument("--to", required=required, metavar="PATH", help="file to export (.fbx, .glb or .blend)")
@@ -119,12 +154,12 @@ def build_parser(description: str, runners: dict, version: str):
     _export_options(p, required=False)
     p.set_defaults(run=runners["pipeline"])
     p = commands.add_parser("demo", help="build, bake, export and check a world of boxes")
-    p.add_argument("--count", type=int, default=16000, help="number of boxes (default 16000)")
-    p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--out", default="demo_out", help="folder for demo.blend and demo.glb (default ./demo_out)")
+    p.add_argument("--count", type=int, default=16000, help="number of boxes, 100..1,000,000")
+    p.add_argument("--seed", type=int, default=1, help="seed of the world's random boxes (0 or more)")
+    p.add_argument("--out", default="demo_out", help="folder for demo.blend, demo.glb and the rest, made if missing")
     p.add_argument("--preview", choices=("AUTO", "GPU", "CPU"), default="AUTO",
                    help="renderer of demo.png (AUTO: the GPU preview if a GPU context can be made)")
-    p.add_argument("--json", metavar="REPORT.json")
+    p.add_argument("--json", metavar="REPORT.json", help="write a machine-readable report")
     p.set_defaults(run=runners["demo"])
     return parser
 

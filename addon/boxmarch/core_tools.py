@@ -7,6 +7,12 @@ import numpy as np
 
 from .native import _core, checked_indices, checked_int, checked_mask, row_count
 
+# The cleanup tools' defaults, stated once: the functions below, their jobs (tool_jobs, whose
+# operators take them) and the command line's options read them here.
+DUPLICATE_TOLERANCE = 1e-4
+MERGE_DISTANCE = 1e-3
+PACK_UV_PADDING = 0.002
+
 
 def find_close_pairs(positions, radius, groups=None, method="HASH", threads=0) -> np.ndarray:
     """uint32 (P, 2): every pair i < j of points with Euclidean distance <= ``radius``, sorted.
@@ -31,7 +37,7 @@ def select_linked_across(positions, selected, submesh_of_vertex, submesh_count, 
 
 
 def find_duplicate_submeshes(positions, submesh_of_vertex, submesh_count, candidates=None,
-                             tolerance=1e-4, threads=0):
+                             tolerance=DUPLICATE_TOLERANCE, threads=0):
     """(duplicate_of int32 per submesh, count). A candidate submesh (``candidates``: mask per
     submesh, None: all) duplicates an earlier kept candidate when both have the same vertex
     count and its vertices pair one-to-one with that one's within ``tolerance``; duplicate_of
@@ -42,7 +48,7 @@ def find_duplicate_submeshes(positions, submesh_of_vertex, submesh_count, candid
                                           float(tolerance), checked_int(threads, "threads", -2**31))
 
 
-def merge_passes(positions, submesh_of_vertex, submesh_count, chosen=None, distance=1e-3, threads=0):
+def merge_passes(positions, submesh_of_vertex, submesh_count, chosen=None, distance=MERGE_DISTANCE, threads=0):
     """(pass_of_vertex int32, passes): a plan for merging by distance inside each chosen
     submesh (mask per submesh, None: all) with a selection-based merge: pass k selects the
     vertices marked k and merges them; -1 marks vertices with no partner in their submesh."""
@@ -53,7 +59,7 @@ def merge_passes(positions, submesh_of_vertex, submesh_count, chosen=None, dista
 
 def pack_uv_by_height(corner_uv, positions, edges, face_starts, face_sizes, corner_verts, *,
                       vertex_height, submesh_of_vertex, submesh_count, face_mask=None,
-                      padding=0.002, max_per_row=0, lock_overlapping=False) -> dict:
+                      padding=PACK_UV_PADDING, max_per_row=0, lock_overlapping=False) -> dict:
     """Pack the UV islands of the masked faces (None: all) into the unit square in rows, sorted
     by the height of their submesh (``vertex_height`` per vertex, e.g. world Z; highest on top),
     at one uniform scale with ``padding`` around every island; ``max_per_row`` 0 means no limit.
@@ -70,7 +76,7 @@ def pack_uv_by_height(corner_uv, positions, edges, face_starts, face_sizes, corn
                                    lock_overlapping=bool(lock_overlapping))
 
 
-def merge_targets(positions, submesh_of_vertex, submesh_count, chosen=None, distance=1e-3, threads=0):
+def merge_targets(positions, submesh_of_vertex, submesh_count, chosen=None, distance=MERGE_DISTANCE, threads=0):
     """Blender's Merge by Distance inside each chosen submesh (mask per submesh, None: all):
     (target int32 per vertex, merged positions float32 (N, 3), vertices merged away). A vertex
     merges into target[v] (itself for survivors); targets sit at their cluster's centroid."""

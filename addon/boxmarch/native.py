@@ -7,10 +7,23 @@ import operator
 
 import numpy as np
 
+from . import NativeModuleMissing
+
+WHEEL_PACKAGE = "boxmarch_native"  # the extension's platform wheel, which holds _core
+
 try:
     from . import _core
 except ImportError:  # installed as a Blender 4.2+ extension: the module comes from its platform wheel
-    from boxmarch_native import _core  # noqa: F401 (used through this module's name)
+    try:
+        from boxmarch_native import _core  # noqa: F401 (used through this module's name)
+    except ModuleNotFoundError as error:
+        if error.name != WHEEL_PACKAGE:
+            raise
+        # A checkout on the path (PYTHONPATH=addon) before anything was built: say how to build.
+        raise NativeModuleMissing(
+            "boxmarch's native module (boxmarch/_core*.so) is not built: run `bash scripts/dev_build.sh` in the "
+            "checkout (it builds into addon/boxmarch/), or use the Python `bash scripts/demo.sh` builds it into "
+            "(.venv-demo/bin/python)", name=WHEEL_PACKAGE) from None
 
 
 def checked_int(value, name, lo=0, hi=2**31 - 1) -> int:

@@ -13,7 +13,7 @@ from typing import Callable, ClassVar
 
 import numpy as np
 
-from . import core, edit_mode, mesh_io
+from . import core, core_tools, edit_mode, mesh_io
 
 
 class ToolInputError(ValueError):
@@ -140,7 +140,7 @@ class SelectLinkedAcross:
 
 @dataclass
 class DeleteDuplicates:
-    tolerance: float = 1e-4
+    tolerance: float = core_tools.DUPLICATE_TOLERANCE
     need_faces: ClassVar[bool] = False
     needs_vertex_selection: ClassVar[bool] = True
 
@@ -170,7 +170,7 @@ class DeleteDuplicates:
 
 @dataclass
 class MergeByDistance:
-    distance: float = 1e-3
+    distance: float = core_tools.MERGE_DISTANCE
     need_faces: ClassVar[bool] = False
     needs_vertex_selection: ClassVar[bool] = True
 
@@ -244,7 +244,7 @@ def world_heights(ob, positions) -> np.ndarray:
 
 @dataclass
 class PackUvByZ:
-    padding: float = 0.002
+    padding: float = core_tools.PACK_UV_PADDING
     max_per_row: int = 0
     lock_overlapping: bool = False
     uv_map: str = ""

@@ -273,6 +273,24 @@ def _serve(files):
     return server
 
 
+def chromium(url, *mode, budget_ms=30000):
+    """(exit code, stdout, stderr) of headless Chromium on SwiftShader, with a fresh profile, run on
+    ``url`` in ``mode`` (its flags: ``--dump-dom``, or ``--screenshot=PATH``, ``--window-size=W,H``)
+    for at most ``budget_ms`` of the page's virtual time; RuntimeError after TIMEOUT_S."""
+    with tempfile.TemporaryDirectory(prefix="boxmarch-three-") as tmp:
+        cmd = [CHROMIUM, "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+               "--no-proxy-server", f"--virtual-time-budget={budget_ms}", f"--user-data-dir={os.path.join(tmp, 'profile')}",
+               *mode, url]
+        # own session: on timeout every Chromium process (GPU, renderer) is killed with it
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+        try:
+            stdout, stderr = proc.communicate(timeout=TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            raise RuntimeError(f"chromium timed out after {TIMEOUT_S} s:\n{proc.communicate()[1][-4000:]}") from None
+    return proc.returncode, stdout, stderr
+
+
 def run_jobs(glb_bytes, jobs, material_js="", release="r111", files=None):
     """Runs each :class:`Job` (or plain JS function text) in headless Chromium with three.js
     ``release`` loaded, in order, each on a fresh parse of ``glb_bytes`` (null when it is empty);
@@ -288,24 +306,13 @@ def run_jobs(glb_bytes, jobs, material_js="", release="r111", files=None):
     served["page.html"] = re.sub("|".join(parts), lambda m: parts[m.group(0)], _PAGE).encode()
     server = _serve(served)
     try:
-        with tempfile.TemporaryDirectory(prefix="boxmarch-three-") as tmp:
-            cmd = [CHROMIUM, "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-                   "--no-proxy-server", "--virtual-time-budget=30000", f"--user-data-dir={os.path.join(tmp, 'profile')}",
-                   "--dump-dom", f"http://127.0.0.1:{server.server_address[1]}/page.html"]
-            # own session: on timeout every Chromium process (GPU, renderer) is killed with it
-            proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                    start_new_session=True)
-            try:
-                stdout, stderr = proc.communicate(timeout=TIMEOUT_S)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                raise RuntimeError(f"chromium timed out after {TIMEOUT_S} s:\n{proc.communicate()[1][-4000:]}") from None
+        returncode, stdout, stderr = chromium(f"http://127.0.0.1:{server.server_address[1]}/page.html", "--dump-dom")
     finally:
         server.shutdown()
         server.server_close()
     found = re.search(r'<pre id="out">(.*?)</pre>', stdout, re.S)
-    if proc.returncode != 0 or not found or not found.group(1):
-        raise RuntimeError(f"chromium (exit {proc.returncode}) wrote no result:\n{stderr[-4000:]}")
+    if returncode != 0 or not found or not found.group(1):
+        raise RuntimeError(f"chromium (exit {returncode}) wrote no result:\n{stderr[-4000:]}")
     results = json.loads(html.unescape(found.group(1)))
     if isinstance(results, dict) and "errors" in results:
         raise RuntimeError(f"three.js r{RELEASES[release].revision} page failed:\n" + "\n".join(results["errors"]))
