@@ -204,7 +204,7 @@ def glm_library() -> str:
 
 def threejs_option_ranges() -> str:
     """BOXMARCH_OPTION_RANGES: the march's ranges (march_ranges.py) under the material's option names."""
-    rows = [f"  {MARCH.THREEJS_OPTIONS[name]}: {{ min: {least!r}, max: {most!r}, whole: {json.dumps(whole)} }}"
+    rows = [f"  {MARCH.THREEJS_OPTIONS[name]}: {{ min: {least!r}, max: {most!r}, whole: {json.dumps(whole, allow_nan=False)} }}"
             for name, (least, most, whole) in MARCH.MARCH_RANGES.items()]
     return "{\n" + ",\n".join(rows) + "\n}"
 
