@@ -94,9 +94,10 @@ def cases(preset, layout):
         "a UTF-8 byte order mark": (BOM + text.encode(), None),
         "two byte order marks": (BOM * 2 + text.encode(), "not JSON"),
         # Every refusal is one line (str.splitlines: no CR, LF, VT, FF, FS..RS, NEL, U+2028/9).
-        "a comment first": (b"// exported by boxmarch\n" + text.encode(), "not JSON"),
-        "blank lines, then not JSON": (b"\n\n\r\n" + text[:-1].encode(), "not JSON"),
-        "an HTML page": (b"<!DOCTYPE html>\n<html>\n<head><title>404 Not Found</title></head>\n"
+        # (Chromium quotes the text around the error in its message.)
+        "a comment first": (b"//\n// exported by boxmarch\n" + text.encode(), "not JSON"),
+        "blank lines, then not JSON": (b"\n\n\r\nnot JSON\n", "not JSON"),
+        "an HTML page": (b"<html>\n<head><title>404 Not Found</title></head>\n"
                          b"<body>\n<h1>Not Found</h1>\n</body>\n</html>\n", "not JSON"),
         "a vertical tab before a value": (text.replace('"skinned": false', '"skinned":\x0bfalse').encode(), "not JSON"),
         "a line separator before a value": (text.replace('"skinned": false', '"skinned":\u2028false').encode(),
