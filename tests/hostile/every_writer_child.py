@@ -20,8 +20,9 @@ import numpy as np
 
 import boxmarch
 from boxmarch import blend_file, cli, scenes
-from boxmarch.export import scene as export_scene
+from boxmarch.export import outputs_of, scene as export_scene
 from boxmarch.formats import fbx, fbx_container, glb
+from boxmarch.formats.presets import PRESETS
 
 LIMIT = 1024  # bytes: every write below is larger
 mode, folder = sys.argv[1:3]
@@ -107,13 +108,12 @@ results = {
     "cli._write_json": run_writer(["r.json"], lambda path: cli._write_json(path, {"text": "x" * 4096})),
     "blend_file.save_blend_copy": run_writer(["c.blend"], blend_file.save_blend_copy),
 }
-for preset, name, beside in (("GLTF", "e.glb", ["e.boxmarch.json"]),
-                             ("UNITY", "u.fbx", ["u.boxmarch.json"]),
-                             ("GODOT3", "g.glb", ["g.boxmarch.json", "g.boxes.tres", "g.glb.import"]),
-                             ("BLENDER", "x.blend", ["x.boxmarch.json"])):
-    layout = "NORMAL_FRAME" if preset == "UNITY" else None  # the FBX frame patch (formats/fbx.py) too
+for preset, name in (("GLTF", "e.glb"), ("UNITY", "u.fbx"), ("GODOT3", "g.glb"), ("BLENDER", "x.blend")):
+    # the preset's own layout; for UNITY NORMAL_FRAME, so that the FBX frame patch (formats/fbx.py) runs too
+    layout = "NORMAL_FRAME" if preset == "UNITY" else PRESETS[preset].layouts[0]
     results[f"export.scene.export_objects {preset}"] = run_writer(
-        [name, *beside], lambda path: export_scene.export_objects(bpy.context, [ob], preset, path, layout))
+        [os.path.basename(path) for path in outputs_of(name, preset, layout)],
+        lambda path: export_scene.export_objects(bpy.context, [ob], preset, path, layout))
 print(json.dumps(results, allow_nan=False))
 sys.stdout.flush()
 os._exit(0)  # bpy 4.2 and 4.5 crash at exit once an add-on registered (docs/PLATFORMS.md)
