@@ -1,8 +1,8 @@
 """Files that appear only complete: written under a temporary name in the same folder, then
 renamed over the target (one rename on one filesystem, so a reader never sees half a file); a
 path that is a symbolic link is written through: its target is replaced and the link kept, as
-shell redirection and most tools do (written_path); and the signals that would end the process meanwhile, turned into an interrupt the writers clean up
-after (interrupts_recorded)."""
+shell redirection and most tools do (written_path); and the signals that would end the process
+meanwhile, turned into an interrupt the writers clean up after (interrupts_recorded)."""
 from __future__ import annotations
 
 import contextlib
