@@ -38,6 +38,11 @@ def cases(preset, layout):
     text = json.dumps(good)
     return {
         ACCEPTED: (json.dumps(good).encode(), None),
+        # Every JSON form a sidecar may hold, laid out as the exports write it (indent 2): read.
+        "every JSON form, indented": (json.dumps({**good, "extra": {
+            "empty": [[], {}], "numbers": [-0.5, 1e-05, -2e+300, 0, 12.25, -0.0, 1E2], "words": [True, False, None],
+            "text": "\u00e9 \U0001f600 \"quoted\" back\\slash /", "deep": {"a": [{"b": [1, {"c": "d"}]}]}}},
+            indent=2, ensure_ascii=False).replace(" /\"", " \\/ \\u00e9\\n\\t\"").replace("100.0", "1E2").encode(), None),
         "version 1.0 (the number 1)": (text.replace('"format_version": 1', '"format_version": 1.0').encode(), None),
         "version null": (with_value("format_version", None), "format_version must be 1"),
         "version 1.5": (with_value("format_version", 1.5), "format_version must be 1"),
