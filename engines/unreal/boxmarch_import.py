@@ -42,7 +42,7 @@ def _shown(sidecar, key):
     value = sidecar[key]
     if isinstance(value, float) and not math.isfinite(value):
         return "a number beyond the range of a double"
-    text = json.dumps(value)  # ASCII: every line break in a string escaped
+    text = json.dumps(value, allow_nan=False)  # finite here; ASCII: every line break in a string escaped
     return text if len(text) <= 40 else text[:40] + "..."
 
 
