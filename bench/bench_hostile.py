@@ -12,7 +12,15 @@ alternately:
 
     python3 -m bench.bench_hostile --bake [--before DIR]
 
-Each measurement runs in its own process, so its peak RSS (VmHWM) is its own."""
+Each measurement runs in its own process, so its peak RSS (VmHWM) is its own.
+
+The CONTAINMENT hierarchy on randomly turned long thin boxes (200 x 0.01 x 0.01, issue 36) beside
+as many random boxes (0.05 to 2 on a side), both with random rotations and origins in one cube of
+side 200, for 100,000, 200,000 and 400,000 boxes (or the counts given): wall and CPU time, and
+the CPU time's growth from the count before (n^(4/3) work, the bound this rule meets for lines
+crossing one region, is 2.52x per doubling; linear is 2x):
+
+    python3 -m bench.bench_hostile --containment [BOXES ...]"""
 import json
 import os
 import subprocess
@@ -130,6 +138,37 @@ def bake_rows(before, rounds=4):
     return rows
 
 
+def containment_scene(count, kind, seed=0):
+    """(origins, quaternions, half-extents) of ``count`` boxes turned at random, origins in a cube
+    of side 200 (scenes.random_boxes' default spread): "thin" 200 x 0.01 x 0.01, "random" 0.05 to 2 a
+    side."""
+    import numpy as np
+
+    rng = np.random.default_rng(seed)
+    origins = rng.uniform(-100, 100, (count, 3))
+    turns = rng.normal(size=(count, 4))
+    turns /= np.linalg.norm(turns, axis=1, keepdims=True)
+    half = np.tile([100.0, 0.005, 0.005], (count, 1)) if kind == "thin" else rng.uniform(0.05, 2.0, (count, 3)) / 2
+    return origins, turns.astype(np.float32), half
+
+
+def containment_rows(counts):
+    from boxmarch import core
+
+    rows, before = [], {}
+    for count in counts:
+        for kind in ("random", "thin"):
+            origins, quaternions, half = containment_scene(count, kind)
+            start, start_cpu = time.perf_counter(), time.process_time()
+            parent = core.box_hierarchy(origins, quaternions, half, rule="CONTAINMENT")[0]
+            wall, cpu = time.perf_counter() - start, time.process_time() - start_cpu
+            growth = f"{cpu / before[kind]:.2f}x" if kind in before else ""
+            before[kind] = cpu
+            rows.append([f"{count:,}", "turned thin 200 x 0.01 x 0.01" if kind == "thin" else "random 0.05-2",
+                         f"{wall:.2f}", f"{cpu:.2f}", growth, f"{int((parent >= 0).sum()):,}"])
+    return rows
+
+
 def main(n):
     rows = []
     for case, label, result_label in (
@@ -150,6 +189,10 @@ if __name__ == "__main__":
         child(sys.argv[2], int(sys.argv[3]))
     elif sys.argv[1:2] == ["--bake-child"]:
         bake_child(int(sys.argv[2]), int(sys.argv[3]))
+    elif sys.argv[1:2] == ["--containment"]:
+        counts = [int(c) for c in sys.argv[2:]] or [100_000, 200_000, 400_000]
+        print(table(["boxes", "scene", "CONTAINMENT wall s", "CPU s", "CPU growth", "boxes with a parent"],
+                    containment_rows(counts)))
     elif sys.argv[1:2] == ["--bake"]:
         before = sys.argv[sys.argv.index("--before") + 1] if "--before" in sys.argv else None
         print(table(["boxes", "module", "core.bake best ms", "median ms", "best CPU ms", "validate_mesh CPU ms",

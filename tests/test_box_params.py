@@ -198,6 +198,38 @@ def test_geometric_rules_give_the_parents_of_their_pairwise_definitions(scene):
         definition_chain(origins).tolist()
 
 
+def rods_and_boxes(seed, rods=40, others=160):
+    """Randomly turned long thin boxes (half-extents 100 x 0.005 x 0.005, as issue 36 timed them)
+    crossing a cube of side 20 with small and random boxes: half of the small ones on a rod's axis
+    (0.004 off it, so some inside, some past its ends), the rest spread in the cube, a few nested
+    boxes and boxes as large as a rod at its origin."""
+    rng = np.random.default_rng(seed)
+    turns = rng.normal(size=(rods + others, 4))
+    turns /= np.linalg.norm(turns, axis=1, keepdims=True)
+    quaternions = turns.astype(np.float32)
+    origins = rng.uniform(-10, 10, (rods + others, 3))
+    half = np.concatenate([np.tile([100.0, 0.005, 0.005], (rods, 1)),
+                           rng.uniform(0.001, 0.02, (others, 3))])
+    q = quaternions[:rods].astype(np.float64)
+    for k in range(others // 2):  # on rod k % rods: its local x axis in object space, t up to 120 along
+        r = k % rods
+        x, y, z, w = q[r]
+        axis = np.array([1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w)])
+        side = np.cross(axis, [0.0, 0.0, 1.0] if abs(axis[2]) < 0.9 else [1.0, 0.0, 0.0])
+        origins[rods + k] = origins[r] + rng.uniform(-120, 120) * axis + 0.004 * side / np.linalg.norm(side)
+    half[rods + others - 5:] = [100.0, 0.005, 0.005]   # as large as a rod: ties broken by index
+    half[rods + others - 10:rods + others - 5] = 30.0  # large boxes holding many origins
+    return origins, quaternions, half
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_containment_of_turned_long_thin_boxes_gives_the_parents_of_its_definition(seed):
+    origins, quaternions, half = rods_and_boxes(seed)
+    parent = core.box_hierarchy(origins, quaternions, half, rule="CONTAINMENT")[0]
+    assert parent.tolist() == definition_containment(origins, quaternions, half).tolist()
+    assert (parent[40:120] >= 0).sum() > 10 and (parent[40:120] < 40).sum() > 5  # rods do hold boxes here
+
+
 def test_the_definitions_see_ties_and_nesting_and_catch_a_wrong_parent():
     # Box 1 and 2 are equal and share box 0's origin; box 3 sits in both, on box 2's face.
     origins = np.float64([[0, 0, 0], [0, 0, 0], [0, 0, 0], [1, 0, 0], [2, 0, 0]])

@@ -298,6 +298,20 @@ def test_a_zlib_array_inflates_into_its_own_buffer_only(tmp_path):
 
 
 @pytest.mark.slow
+def test_a_zlib_bomb_is_refused_before_its_memory_is_reserved(tmp_path):
+    """8 GiB declared from about 1 KiB of zlib data (hostile_files' "zlib count past 1032:1"):
+    refused, and the read reserves less than an eighth of it in address space (threads' stacks
+    and arenas included). Without the check the 8 GiB are reserved (untouched pages, so the
+    resident peak alone would not see it) and the read fails later on the stream's length."""
+    path = tmp_path / "bomb.fbx"
+    data, words = hostile_files()["zlib count past 1032:1"]
+    path.write_bytes(data)
+    result = read_in_child(path)
+    assert result["peak_address_bytes"] < (8 << 30) / 8, result
+    assert result["outcome"].startswith("ValueError") and words in result["outcome"], result
+
+
+@pytest.mark.slow
 def test_an_array_past_the_free_memory_raises_value_error(tmp_path):
     """1 GiB declared (a 1 MiB zero stream) under an 800 MB address-space limit: ValueError, not MemoryError."""
     path = tmp_path / "large.fbx"

@@ -81,6 +81,28 @@ def test_a_second_run_writing_the_same_outputs_meanwhile_both_succeed(baked_blen
     assert [m["name"] for m in read_glb(tmp_path / "same.glb")] == ["Baked"]
 
 
+def test_output_checks_follow_symbolic_links(tmp_path):
+    """check_outputs judges the file a link names (files.written_path): two links to one file
+    are one output, a link to the input is the input, a link into a missing folder names that
+    folder, links that loop are refused; a plain link to a new file passes."""
+    from boxmarch import cli_args
+
+    (tmp_path / "world.blend").write_bytes(b"input")
+    (tmp_path / "target.glb").write_bytes(b"earlier")
+    for name, target in (("a.glb", "target.glb"), ("b.json", "target.glb"), ("in.glb", "world.blend"),
+                         ("lost.glb", "missing/x.glb"), ("loop1.glb", "loop2.glb"), ("loop2.glb", "loop1.glb"),
+                         ("new.glb", "made.glb")):
+        os.symlink(target, tmp_path / name)
+    inputs = [str(tmp_path / "world.blend")]
+    for outputs, words in (([("--to", "a.glb"), ("--json", "b.json")], "name the same file"),
+                           ([("--to", "in.glb")], "is the input file"),
+                           ([("--to", "lost.glb")], f"folder '{tmp_path / 'missing'}' does not exist"),
+                           ([("--to", "loop1.glb")], "loop")):
+        with pytest.raises(cli_args.InputError, match=words):
+            cli_args.check_outputs([(o, str(tmp_path / p)) for o, p in outputs], inputs)
+    cli_args.check_outputs([("--to", str(tmp_path / "new.glb")), ("--json", str(tmp_path / "a.glb"))], inputs)
+
+
 def test_partial_names_stay_within_name_max():
     for name, ending in (("a" * 251 + ".glb", ".boxmarch-partial.glb"),
                          ("é" * 124 + ".blend", ".boxmarch-partial.blend"),

@@ -214,13 +214,12 @@ def test_every_file_writer_is_listed_and_atomic():
         assert _only_reached_atomically(functions, name), name
 
 
-@pytest.mark.slow
-def test_every_writer_under_a_file_size_limit_leaves_the_earlier_files(tmp_path):
-    """tests/hostile/file_limit_child.py runs each writer a caller reaches under RLIMIT_FSIZE (a
-    full disk stops a write the same way): each fails, and every file is as it was, none added."""
+def run_every_writer(tmp_path, mode):
+    """tests/hostile/every_writer_child.py's results in ``mode`` ("limit" or "links"), having
+    checked that they cover each writer a caller reaches."""
     folder = tmp_path / "out"
     folder.mkdir()
-    r = subprocess.run([sys.executable, str(ROOT / "tests" / "hostile" / "file_limit_child.py"), str(folder)],
+    r = subprocess.run([sys.executable, str(ROOT / "tests" / "hostile" / "every_writer_child.py"), mode, str(folder)],
                        env=module_environment(tmp_path), capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr[-3000:]
     results = json.loads(r.stdout.strip().splitlines()[-1])
@@ -228,9 +227,30 @@ def test_every_writer_under_a_file_size_limit_leaves_the_earlier_files(tmp_path)
     # the demo's picture is left out (the demo runs in tests/test_cli.py); the FBX frame patch
     # writes through fbx_container.write, and is run too
     assert {name.split()[0] for name in results} == atomic - {"demo._preview_picture"} | {"formats.fbx.replace_frame"}
-    for name, result in results.items():
+    return results
+
+
+@pytest.mark.slow
+def test_every_writer_under_a_file_size_limit_leaves_the_earlier_files(tmp_path):
+    """Each writer a caller reaches, under RLIMIT_FSIZE (a full disk stops a write the same way):
+    each fails, and every file is as it was, none added."""
+    for name, result in run_every_writer(tmp_path, "limit").items():
         assert result["error"] is not None, name  # the limit was reached...
         assert (result["changed"], result["added"]) == ([], []), (name, result)  # ...and nothing is left of it
+
+
+@pytest.mark.slow
+def test_every_writer_writes_through_a_symbolic_link(tmp_path):
+    """Each writer a caller reaches, every file it writes a relative symbolic link to a file in
+    another folder: each link is kept, pointing where it did, and every target is replaced by
+    the new file, nothing added. Before: the link was replaced by a regular file, its target left
+    as it was."""
+    for name, result in run_every_writer(tmp_path, "links").items():
+        linked = result["earlier"] + ["cube.fbx"]  # the FBX frame patch's own file, linked throughout
+        assert result["error"] is None, (name, result)
+        assert result["links"] == {n: f"targets/{n}" for n in linked}, (name, result)
+        changed = {f"targets/{n}" for n in result["earlier"]} | ({"targets/cube.fbx"} if "replace_frame" in name else set())
+        assert set(result["changed"]) == changed and result["added"] == [], (name, result)
 
 
 # --- export paths ---------------------------------------------------------------------------
@@ -397,6 +417,20 @@ def test_a_bake_without_box_numbers_writes_no_self_parent_after_a_deletion(blend
     assert {key: row[1:] for key, row in boxes.items()} == {0: (-1, 0), 1: (boxes[0][0], 1), 3: (-1, 0),
                                                             4: (-1, 0), 5: (-1, 0)}
     assert report["stale_parents"] == 3
+
+
+def test_a_bake_without_box_numbers_drops_a_parent_its_stored_depths_disagree_with(blender, tmp_path):
+    """Boxes 2 and 3 of the chain deleted, no box numbers stored: box 4, numbered 2 now, stores
+    parent 3 (box 5's number now), which is in range and not itself; only the stored depths (4
+    under a parent of depth 5) tell the parent is stale. Box 5 stores parent 4, out of range."""
+    ob = _row(blender, "Chain", range(6))
+    assert blender.ops.boxmarch.bake(hierarchy="CHAIN") == {"FINISHED"}
+    ob.data.attributes.remove(ob.data.attributes[".boxmarch_box"])
+    _delete_box(ob.data, 2)
+    _delete_box(ob.data, 3)
+    report, boxes = _export_parents(blender, tmp_path, [ob])
+    assert {key: row[1:] for key, row in boxes.items()} == {0: (-1, 0), 1: (boxes[0][0], 1), 4: (-1, 0), 5: (-1, 0)}
+    assert report["stale_parents"] == 2
 
 
 def test_removing_a_duplicate_box_after_a_chain_bake_keeps_every_parent(blender, tmp_path):

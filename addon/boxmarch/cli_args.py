@@ -208,16 +208,20 @@ def _writable_folder(option, folder, made_folders) -> None:
 def check_outputs(outputs, inputs, made_folders=()) -> None:
     """Every check on the output paths ``outputs`` [(option, path)], run before anything is
     written (docs/CLI.md): each folder exists (or is in ``made_folders``) and is writable, no
-    output is a folder, one of ``inputs`` (files never written) or another output."""
-    inputs = [os.path.abspath(p) for p in inputs if p]
-    made_folders = {os.path.abspath(f) for f in made_folders}
+    output is a folder, one of ``inputs`` (files never written) or another output; of an output
+    that is a symbolic link, these hold for the file it names (files.written_path)."""
+    inputs = [os.path.realpath(p) for p in inputs if p]
+    made_folders = {os.path.realpath(f) for f in made_folders}
     seen = {}
     for option, path in outputs:
-        full = os.path.abspath(path)
-        name_bytes = len(os.path.basename(full).encode())
+        name_bytes = len(os.path.basename(os.path.abspath(path)).encode())
         if name_bytes > files.NAME_MAX:
-            raise InputError(f"{option}: the name '{os.path.basename(full)}' is {name_bytes} bytes, longer than the "
-                             f"{files.NAME_MAX} bytes a file name may have")
+            raise InputError(f"{option}: the name '{os.path.basename(os.path.abspath(path))}' is {name_bytes} bytes, "
+                             f"longer than the {files.NAME_MAX} bytes a file name may have")
+        try:
+            full = files.written_path(path)  # a symbolic link is written through: its target is the output
+        except OSError as error:
+            raise InputError(f"{option}: '{path}': {error.strerror}") from None
         _writable_folder(option, os.path.dirname(full), made_folders)
         if os.path.isdir(full):
             raise InputError(f"{option}: '{path}' is a folder")

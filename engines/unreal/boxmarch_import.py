@@ -9,6 +9,7 @@ has never run in Unreal: boxmarch's tests parse it and require IMPORT_DATA and B
 be the settings their modelled Unreal import applies (tests/test_engine_import_settings.py).
 """
 import json
+import math
 import os
 import sys
 
@@ -30,11 +31,18 @@ BUILD_SETTINGS = {"use_full_precision_u_vs": True, "generate_lightmap_u_vs": Fal
 
 MAX_SIDECAR_BYTES = 16777216  # the limits every boxmarch helper applies before parsing (docs/FORMAT.md)
 MAX_SIDECAR_DEPTH = 32
+UTF8_BOM = b"\xef\xbb\xbf"
 
 
 def _shown(sidecar, key):
-    """The value at ``key`` as JSON, cut to 40 characters, or "missing"."""
-    text = json.dumps(sidecar[key], allow_nan=False) if key in sidecar else "missing"
+    """The value at ``key`` as JSON, cut to 40 characters, or "missing"; a number beyond a
+    double's range (1e400, valid JSON, parsed as an infinity) in words."""
+    if key not in sidecar:
+        return "missing"
+    value = sidecar[key]
+    if isinstance(value, float) and not math.isfinite(value):
+        return "a number beyond the range of a double"
+    text = json.dumps(value, allow_nan=False)  # finite here; ASCII: every line break in a string escaped
     return text if len(text) <= 40 else text[:40] + "..."
 
 
@@ -95,6 +103,8 @@ def read_sidecar(fbx_path):
         data = f.read(MAX_SIDECAR_BYTES + 1)
     if len(data) > MAX_SIDECAR_BYTES:
         raise ValueError(f"boxmarch: {path}: larger than {MAX_SIDECAR_BYTES} bytes, not a boxmarch sidecar")
+    if data.startswith(UTF8_BOM):  # no part of the JSON text: one is skipped (docs/FORMAT.md)
+        data = data[len(UTF8_BOM):]
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as error:

@@ -631,8 +631,11 @@ var BOXMARCH_SIDECAR_MAX_DEPTH = 32;
 // checks every boxmarch helper makes, in the same order (docs/FORMAT.md).
 function boxmarchSidecarRefusal(sidecar) {
   if (sidecar === null || typeof sidecar !== 'object' || Array.isArray(sidecar)) return 'not a JSON object';
-  function shown(key) {  // the value as JSON, cut to 40 characters
-    var text = Object.prototype.hasOwnProperty.call(sidecar, key) ? JSON.stringify(sidecar[key]) : 'missing';
+  function shown(key) {  // the value as JSON, cut to 40 characters; 1e400 (parsed as Infinity) in words
+    if (!Object.prototype.hasOwnProperty.call(sidecar, key)) return 'missing';
+    var value = sidecar[key];
+    if (typeof value === 'number' && !isFinite(value)) return 'a number beyond the range of a double';
+    var text = JSON.stringify(value);
     return text.length <= 40 ? text : text.slice(0, 40) + '...';
   }
   var count = sidecar.box_count;
@@ -657,8 +660,16 @@ function boxmarchSidecarRefusal(sidecar) {
 // this material reads; returns it.
 function checkBoxmarchSidecar(sidecar, name) {
   var refusal = boxmarchSidecarRefusal(sidecar);
-  if (refusal) throw new Error('boxmarch: ' + name + ': ' + refusal);
+  if (refusal) throw new Error('boxmarch: ' + name + ': ' + boxmarchOneLine(refusal));
   return sidecar;
+}
+
+// why, on one line: each control character and line or paragraph separator (what a JSON string
+// or a parser's quote of the file may hold) written as its JSON escape.
+function boxmarchOneLine(why) {
+  return why.replace(/[\u0000-\u001f\u007f-\u009f\u2028\u2029]/g, function (c) {
+    return '\\u' + ('000' + c.charCodeAt(0).toString(16)).slice(-4);
+  });
 }
 
 // The refusal of a sidecar (name) over BOXMARCH_SIDECAR_MAX_BYTES, by its body or its declared length.
@@ -670,11 +681,11 @@ function boxmarchSidecarTooLarge(name) {
 // one line naming the file (name) when it is larger than BOXMARCH_SIDECAR_MAX_BYTES, not UTF-8,
 // nested deeper than BOXMARCH_SIDECAR_MAX_DEPTH brackets (counted before any parser runs) or not JSON.
 function parseBoxmarchSidecar(bytes, name) {
-  function refuse(why) { throw new Error('boxmarch: ' + name + ': ' + why); }
+  function refuse(why) { throw new Error('boxmarch: ' + name + ': ' + boxmarchOneLine(why)); }
   if (bytes.byteLength > BOXMARCH_SIDECAR_MAX_BYTES) throw boxmarchSidecarTooLarge(name);
   var text = null, data = new Uint8Array(bytes), depth = 0, inString = false, escaped = false;
-  try {
-    text = new TextDecoder('utf-8', { fatal: true, ignoreBOM: true }).decode(data);
+  try {  // a byte order mark is no part of the JSON text: the decoder skips one (docs/FORMAT.md)
+    text = new TextDecoder('utf-8', { fatal: true }).decode(data);
   } catch (e) {
     refuse('not UTF-8 text');
   }

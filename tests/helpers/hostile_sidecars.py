@@ -13,6 +13,10 @@ import json
 MAX_BYTES = 1 << 24  # the sidecar size every helper refuses above (docs/FORMAT.md)
 MAX_DEPTH = 32       # brackets nested deeper than this are refused before any JSON parser runs
 ACCEPTED = "valid"   # the name of the negative control
+BOM = b"\xef\xbb\xbf"   # U+FEFF in UTF-8
+# How every helper shows a number that is valid JSON but beyond a double's range (1e400): the
+# parsers make it an infinity, which has no JSON form.
+BEYOND_DOUBLE = "a number beyond the range of a double"
 
 
 def valid(preset, layout):
@@ -34,6 +38,11 @@ def cases(preset, layout):
     text = json.dumps(good)
     return {
         ACCEPTED: (json.dumps(good).encode(), None),
+        # Every JSON form a sidecar may hold, laid out as the exports write it (indent 2): read.
+        "every JSON form, indented": (json.dumps({**good, "extra": {
+            "empty": [[], {}], "numbers": [-0.5, 1e-05, -2e+300, 0, 12.25, -0.0, 1E2], "words": [True, False, None],
+            "text": "\u00e9 \U0001f600 \"quoted\" back\\slash /", "deep": {"a": [{"b": [1, {"c": "d"}]}]}}},
+            indent=2, ensure_ascii=False).replace(" /\"", " \\/ \\u00e9\\n\\t\"").replace("100.0", "1E2").encode(), None),
         "version 1.0 (the number 1)": (text.replace('"format_version": 1', '"format_version": 1.0').encode(), None),
         "version null": (with_value("format_version", None), "format_version must be 1"),
         "version 1.5": (with_value("format_version", 1.5), "format_version must be 1"),
@@ -69,6 +78,37 @@ def cases(preset, layout):
                                        f"nested more than {MAX_DEPTH} deep"),
         "brackets inside a string are text": (with_value("file", "[[[[" * 20 + '"\\' + "{" * 40), None),
         "larger than 16 MiB": (text[:-1].encode() + b" " * MAX_BYTES + b"}", f"larger than {MAX_BYTES} bytes"),
+        # Valid JSON whose number no double holds: refused by the key's rule, shown in words.
+        "box_count 1e400": (text.replace('"box_count": 3', '"box_count": 1e400').encode(),
+                            "box_count must be a whole number from 0 to 2147483647, not " + BEYOND_DOUBLE),
+        "version 1e400": (text.replace('"format_version": 1', '"format_version": 1e400').encode(),
+                          "not " + BEYOND_DOUBLE),
+        "version -1e400": (text.replace('"format_version": 1', '"format_version": -1e400').encode(),
+                           "not " + BEYOND_DOUBLE),
+        # Strict JSON (RFC 8259): one value, nothing after it but white space.
+        "text after the object": (text.encode() + b" x", "not JSON"),
+        "two objects back to back": (text.encode() * 2, "not JSON"),
+        "a number with a leading zero": (text.replace('"box_count": 3', '"box_count": 03').encode(), "not JSON"),
+        "a trailing comma": (text[:-1].encode() + b", }", "not JSON"),
+        "a raw newline in a string": (text.replace('"model.glb"', '"model\n.glb"').encode(), "not JSON"),
+        "a raw tab in a string": (text.replace('"model.glb"', '"model\t.glb"').encode(), "not JSON"),
+        "CESU-8 surrogate bytes": (text.replace('"model.glb"', '"mod?l.glb"').encode().replace(b"?", b"\xed\xa0\x80"),
+                                   "not UTF-8 text"),
+        # A byte order mark is no part of the JSON text; RFC 8259 lets a parser ignore one, and
+        # Windows editors write one: every helper skips one (a second one is text, not JSON).
+        "a UTF-8 byte order mark": (BOM + text.encode(), None),
+        "two byte order marks": (BOM * 2 + text.encode(), "not JSON"),
+        # Every refusal is one line (str.splitlines: no CR, LF, VT, FF, FS..RS, NEL, U+2028/9).
+        # (Chromium quotes the text around the error in its message.)
+        "a comment first": (b"//\n// exported by boxmarch\n" + text.encode(), "not JSON"),
+        "blank lines, then not JSON": (b"\n\n\r\nnot JSON\n", "not JSON"),
+        "an HTML page": (b"<html>\n<head><title>404 Not Found</title></head>\n"
+                         b"<body>\n<h1>Not Found</h1>\n</body>\n</html>\n", "not JSON"),
+        "a vertical tab before a value": (text.replace('"skinned": false', '"skinned":\x0bfalse').encode(), "not JSON"),
+        "a line separator before a value": (text.replace('"skinned": false', '"skinned":\u2028false').encode(),
+                                            "not JSON"),
+        "preset with line breaks": (with_value("preset", "GL\nTF\r\u000b\u000c\u001c\u0085\u2028\u2029"),
+                                    "preset must be"),
     }
 
 
@@ -83,6 +123,6 @@ def check_refusals(messages, preset, layout, path_of):
             if message is not None:
                 wrong[name] = message
         elif not (message and message.startswith("boxmarch: ") and path_of(name) in message and words in message
-                  and "\n" not in message and len(message) < 400):
+                  and len(message.splitlines()) == 1 and len(message) < 400):
             wrong[name] = message
     assert not wrong, json.dumps(wrong, indent=1)[:6000]

@@ -184,7 +184,7 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
         raise ExportInputError(f"folder '{folder}' does not exist")
     outputs = outputs_of(os.path.abspath(filepath), preset.name, layout)
     for path in outputs:
-        if bpy.data.filepath and path == os.path.abspath(bpy.data.filepath):
+        if bpy.data.filepath and files.written_path(path) == os.path.realpath(bpy.data.filepath):
             raise ExportInputError(f"'{path}' is the open .blend file: export to another path")
         if os.path.isdir(path):
             raise ExportInputError(f"'{path}' is a folder: the export writes a file there")

@@ -1,10 +1,12 @@
 """Files that appear only complete: written under a temporary name in the same folder, then
-renamed over the target (one rename on one filesystem, so a reader never sees half a file); and
-the signals that would end the process meanwhile, turned into an interrupt the writers clean up
-after (interrupts_recorded)."""
+renamed over the target (one rename on one filesystem, so a reader never sees half a file); a
+path that is a symbolic link is written through: its target is replaced and the link kept, as
+shell redirection and most tools do (written_path); and the signals that would end the process
+meanwhile, turned into an interrupt the writers clean up after (interrupts_recorded)."""
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import secrets
 import signal
@@ -25,6 +27,17 @@ TERMINATING_SIGNALS = tuple(getattr(signal, name) for name in (
     "SIGXCPU", "SIGPWR", "SIGIO") if hasattr(signal, name))
 
 
+def written_path(path: str) -> str:
+    """The file a write to ``path`` replaces: its absolute path with every symbolic link resolved
+    (a link to a file that does not exist yet names the file it would make). Renaming a file onto
+    the link itself would replace the link with a regular file and leave its target as it was.
+    Raises OSError (ELOOP) for links that loop."""
+    resolved = os.path.realpath(os.path.abspath(path))
+    if os.path.islink(resolved):  # realpath stops at a loop and returns a link in it
+        raise OSError(errno.ELOOP, "its symbolic links loop", path)
+    return resolved
+
+
 def partial_path(path: str) -> str:
     """A temporary name to write ``path`` under: hidden, beside it, with its extension, unique to
     this call (runs writing the same file at once each write their own), and short enough for
@@ -41,19 +54,22 @@ def partial_path(path: str) -> str:
 
 def write_together(paths, write) -> list:
     """Call write({path: temporary path}) for the absolute ``paths``, then rename each temporary
-    file onto its path. On failure (an interrupt included) every temporary file is removed and
-    each path is left as it was. Returns what write returned. Each folder must exist
-    (FileNotFoundError names it otherwise). Runs writing the same paths at once each write their
-    own temporary files: the last rename wins."""
+    file onto the file its path names (written_path: through symbolic links; the temporary file
+    is named after the path, whose extension the writer may need, in the target's folder, on its
+    filesystem). On failure (an interrupt included) every temporary file is removed and each path
+    is left as it was. Returns what write returned. Each folder must exist (FileNotFoundError
+    names it otherwise). Runs writing the same paths at once each write their own temporary
+    files: the last rename wins."""
     paths = [os.path.abspath(p) for p in paths]
-    for folder in dict.fromkeys(os.path.dirname(p) for p in paths):
+    finals = {p: written_path(p) for p in paths}
+    for folder in dict.fromkeys(os.path.dirname(p) for p in finals.values()):
         if not os.path.isdir(folder):
             raise FileNotFoundError(f"folder '{folder}' does not exist")
-    temps = {p: partial_path(p) for p in paths}
+    temps = {p: partial_path(os.path.join(os.path.dirname(finals[p]), os.path.basename(p))) for p in paths}
     try:
         result = write(temps)
-        for final, temp in temps.items():
-            os.replace(temp, final)
+        for path, temp in temps.items():
+            os.replace(temp, finals[path])
     finally:
         for temp in temps.values():
             if os.path.exists(temp):

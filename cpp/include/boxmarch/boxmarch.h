@@ -196,10 +196,12 @@ enum class HierarchyRule : int {
 // taken). Neither rule compares every pair. Containment visits the boxes from the
 // smallest up, each claiming the unclaimed origins of smaller boxes its bounds hold from a k-d
 // tree of the origins (nodes tested against the box's own axes and the object axes, claimed
-// origins dropped), so nested boxes, shared origins and long thin boxes crossing one region stay
-// near O(box_count log box_count) (measured: the work per box grows by 1.07x to 1.23x from
-// 20,000 to 40,000 boxes on those scenes, tests/cpp/test_hierarchy.cpp); a box with an infinite
-// half-extent holds every origin. Chain descends a k-d tree of the
+// origins dropped), so nested boxes and shared origins stay near O(box_count log box_count);
+// a long thin box crossing a region of n origins reads about (n / 8)^(1/3) leaves along it, so
+// such boxes cost O(box_count^(4/3)) (points on lines: Hopcroft's problem, with no known
+// near-linear method) (measured: the work per box grows by 1.07x to 1.28x from 20,000 to 40,000
+// boxes on those scenes, tests/cpp/test_hierarchy.cpp); a box with an infinite half-extent
+// holds every origin. Chain descends a k-d tree of the
 // origins, nearer side first, skipping nodes without a lower box or farther than the nearest
 // found: about O(box_count log box_count) for every arrangement tested (clusters any distance
 // apart, one origin, curves). Chain runs on all cores, Containment on one; the parents are those

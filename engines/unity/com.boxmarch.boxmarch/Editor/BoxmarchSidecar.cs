@@ -22,7 +22,7 @@ namespace Boxmarch.Editor
         public static string Refusal(string path, int formatVersion, string preset, string[] layoutsRead)
         {
             string why = FileRefusal(path, formatVersion, preset, layoutsRead);
-            return why == null ? null : "boxmarch: " + path + ": " + why;
+            return why == null ? null : "boxmarch: " + path + ": " + OneLine(why);
         }
 
         static string FileRefusal(string path, int formatVersion, string preset, string[] layoutsRead)
@@ -39,9 +39,11 @@ namespace Boxmarch.Editor
                 return "cannot be read (" + e.Message + ")";
             }
             string text;
+            // A byte order mark is no part of the JSON text: one is skipped (docs/FORMAT.md).
+            int start = data.Length >= 3 && data[0] == 0xEF && data[1] == 0xBB && data[2] == 0xBF ? 3 : 0;
             try
             {
-                text = new UTF8Encoding(false, true).GetString(data);
+                text = new UTF8Encoding(false, true).GetString(data, start, data.Length - start);
             }
             catch (DecoderFallbackException)
             {
@@ -85,7 +87,23 @@ namespace Boxmarch.Editor
             return null;
         }
 
-        // The value at key as JSON (a string cut to 40 characters, arrays and objects named), or "missing".
+        // why, on one line: each control character and line or paragraph separator (what a JSON
+        // string may hold) written as its JSON escape.
+        static string OneLine(string why)
+        {
+            var result = new StringBuilder();
+            foreach (char c in why)
+            {
+                if (c < 0x20 || (c >= 0x7F && c <= 0x9F) || c == '\u2028' || c == '\u2029')
+                    result.Append("\\u").Append(((int)c).ToString("x4"));
+                else
+                    result.Append(c);
+            }
+            return result.ToString();
+        }
+
+        // The value at key as JSON (a string cut to 40 characters, arrays and objects named; a
+        // number beyond a double's range, 1e400 parsed as an infinity, in words), or "missing".
         static string Shown(Dictionary<string, object> sidecar, string key)
         {
             object value;
@@ -95,6 +113,8 @@ namespace Boxmarch.Editor
                 return "null";
             if (value is bool)
                 return (bool)value ? "true" : "false";
+            if (value is double && double.IsInfinity((double)value))
+                return "a number beyond the range of a double";
             if (value is double)
                 return ((double)value).ToString("R", CultureInfo.InvariantCulture);
             if (value is string)
