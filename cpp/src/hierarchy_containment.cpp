@@ -39,7 +39,6 @@ glm::dvec3 inside_bounds(const double* half_extents, size_t j) {
     return h + slack;
 }
 
-
 // What box j's inside test reads, to decide it for a whole node of origins. rows[a] holds the map
 // glm's rotation by j's conjugate quaternion applies to a difference (a linear map whatever the
 // quaternion's length): local axis a of d is dot(rows[a], d), rounded. box_hierarchy refuses
