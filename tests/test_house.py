@@ -164,12 +164,21 @@ def module_names():
     return modules
 
 
+def made_folders():
+    """The folders the commands make inside the checkout, which .gitignore names from the root
+    (``/.venv-test/``): the docs may name paths in them (``.venv-test/bin/python``)."""
+    return {line.strip("/") for line in (ROOT / ".gitignore").read_text().split()
+            if line.startswith("/") and line.endswith("/")}
+
+
 def stale_references(text, files, modules, identifiers):
     """The backticked names of ``text`` (outside code blocks) that name nothing in the tree: a path
     (relative to the repository or the package, ``...`` and ``*`` as wildcards, ``a/b.name`` a
-    module's attribute), a file name, ``module.name`` (the module by its path in the package or its
-    own name: ``layouts.channels``), or an identifier found in no source file."""
+    module's attribute, or inside a folder of :func:`made_folders`), a file name, ``module.name``
+    (the module by its path in the package or its own name: ``layouts.channels``), or an identifier
+    found in no source file."""
     paths = set(files) | {str(Path(f).parent) for f in files}
+    made = made_folders()
     package_paths = {p[len("addon/boxmarch/"):] for p in paths if p.startswith("addon/boxmarch/")}
     basenames = {Path(f).name for f in files}
     by_own_name = {}
@@ -204,8 +213,8 @@ def stale_references(text, files, modules, identifiers):
                  if " " not in token or "/" in word and "$" not in word]
         for token in words:
             first = token.split("/")[0]
-            if token.startswith("."):  # `.cpp`: a kind of file; `.clang-format`: a file
-                ok = token in paths or re.fullmatch(r"\.\w+", token) is not None
+            if token.startswith("."):  # `.cpp`: a kind of file; `.clang-format`: a file; `.venv-test/bin/python`
+                ok = token in paths or re.fullmatch(r"\.\w+", token) is not None or first in made
             elif token.endswith(SOURCE_SUFFIXES) or "/" in token and (first in paths or first in package_paths):
                 if "/" not in token:
                     ok = token in basenames
@@ -246,7 +255,7 @@ def test_docs_check_catches_planted_stale_references(code_names):
     """Negative control: names of modules, functions and files that do not exist are reported."""
     planted = ["export/transforms.py", "formats/nowhere.py", "preview/sources", "transforms.PRESETS",
                "files.save_blend_copy", "import_settings.for_preset", "export/boxes.no_such_function",
-               "read_tool_meshes", "cpp/src/nowhere.cpp"]
+               "read_tool_meshes", "cpp/src/nowhere.cpp", ".venv-tests/bin/python"]
     text = (ROOT / "docs/ARCHITECTURE.md").read_text() + "\n" + " ".join(f"`{name}`" for name in planted)
     assert stale_references(text, *code_names) == planted
 
