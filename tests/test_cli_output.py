@@ -11,7 +11,7 @@ def test_table_fits_the_width_and_keeps_every_word():
     long = "demo_godot3.glb + demo_godot3.boxmarch.json + demo_godot3.boxes.tres + demo_godot3.glb.import"
     rows = [["export GODOT3", "2.783 s", f"layout NORMAL_COLOR: {long}", "x" * 150],
             ["total", "16.612 s", "wrote /a/rather/long/path/to/demo_out/demo.blend", ""]]
-    table = cli._table(["step", "time", "what", "accuracy"], rows)
+    table = cli.format_table(["step", "time", "what", "accuracy"], rows)
     lines = table.splitlines()
     assert max(map(len, lines)) <= cli.TABLE_WIDTH, table
     assert len({len(line) for line in lines}) == 1  # every line ends at the same column
@@ -22,7 +22,7 @@ def test_table_fits_the_width_and_keeps_every_word():
     assert "".join(cells[3] for cells in columns[1:]) == "x" * 150
     assert [cells[0] for cells in columns if cells[0]] == ["step", "export GODOT3", "total"]
     # A table that fits is left as it is.
-    narrow = cli._table(["step", "time"], [["bake", "0.1 s"]])
+    narrow = cli.format_table(["step", "time"], [["bake", "0.1 s"]])
     assert narrow.splitlines() == ["| step | time  |", "|------|-------|", "| bake | 0.1 s |"]
 
 

@@ -73,7 +73,7 @@ results = {
     "formats.glb.write": under_limit(["a.glb"], lambda path: glb.write(path, {"asset": {"version": "2.0"}}, bytes(4096))),
     "formats.fbx_container.write": under_limit(["b.fbx"], lambda path: fbx_container.write(path, document)),
     "formats.fbx.replace_frame": under_limit([], lambda path: fbx.replace_frame(path, frames), "cube.fbx"),
-    "cli._write_json": under_limit(["r.json"], lambda path: cli._write_json(path, {"text": "x" * 4096})),
+    "cli.write_json": under_limit(["r.json"], lambda path: cli.write_json(path, {"text": "x" * 4096})),
     "blend_file.save_blend_copy": under_limit(["c.blend"], blend_file.save_blend_copy),
 }
 for preset, name, beside in (("GLTF", "e.glb", ["e.boxmarch.json"]),

@@ -104,7 +104,8 @@ def _operator_kwargs(operator, wanted: dict) -> dict:
     return {k: v for k, v in wanted.items() if k in known}
 
 
-def _run_exporter(preset, layout, path):
+def run_exporter(preset, layout, path):
+    """Blender's exporter for ``preset``'s file extension, run on the selected objects into ``path``."""
     if preset.extension == ".fbx":
         op = bpy.ops.export_scene.fbx
         op(**_operator_kwargs(op, dict(  # tangent layers for formats/fbx.py to overwrite with the frame
@@ -366,7 +367,7 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
             users[ob.name] = ob.data
             ob.data = copies[ob.data.as_pointer()]
         edit_mode.select_only(context.view_layer, objects + armatures)  # a selected armature exports its skin
-        _run_exporter(preset, layout, temp)
+        run_exporter(preset, layout, temp)
         if not os.path.exists(temp):
             raise RuntimeError(f"the {preset.label} exporter wrote nothing")
         if preset.extension == ".glb":
