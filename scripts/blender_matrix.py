@@ -1,13 +1,14 @@
 """Runs the add-on's Blender-facing tests under each Blender release and prints a table.
 
-    python3 scripts/blender_matrix.py                 # 3.4 4.2 4.5 5.0, every Blender-facing test
-    python3 scripts/blender_matrix.py --quick 4.2     # the CI selection under bpy 4.2 (scripts/test.sh)
-    python3 scripts/blender_matrix.py 4.5 -- -x       # arguments after -- go to pytest
+    .venv-test/bin/python scripts/blender_matrix.py               # 3.4 4.2 4.5 5.0, every Blender-facing test
+    .venv-test/bin/python scripts/blender_matrix.py --quick 4.2   # the CI selection under bpy 4.2 (scripts/test.sh)
+    .venv-test/bin/python scripts/blender_matrix.py 4.5 -- -x     # arguments after -- go to pytest
 
 3.4 is Debian's Blender program (tests marked ``blender_program``); 4.2 and later are PyPI's bpy
 module (tests marked ``bpy``), the release in this Python when it matches, else one installed by
-scripts/install_bpy.sh into its own folder and put first on the path by BOXMARCH_BPY_PATH
-(tests/conftest.py). Exit status 1 when any release failed.
+scripts/install_bpy.sh into its own folder (.cache/bpy-MAJOR.MINOR) and put first on the path by
+BOXMARCH_BPY_PATH (tests/conftest.py). Every run uses this Python (the test environment's,
+.venv-test, made by scripts/setup.sh). Exit status 1 when any release failed.
 """
 import argparse
 import os
@@ -51,7 +52,7 @@ def bpy_folder(version):
     if own.returncode == 0 and own.stdout.strip().splitlines()[-1:] == [version]:
         return None
     return subprocess.run(["bash", str(REPO / "scripts" / "install_bpy.sh"), version], check=True,
-                          capture_output=True, text=True).stdout.strip()
+                          env=dict(os.environ, PYTHON=sys.executable), capture_output=True, text=True).stdout.strip()
 
 
 def clean_env():

@@ -15,7 +15,8 @@
 # shipped with the bpy module of this Python.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-PYTHON="${PYTHON:-python3}"
+source scripts/environments.sh
+PYTHON="$(checkout_python)"  # PYTHON, else the test or the demo environment's
 WHEELHOUSE=""
 if [ "${1:-}" = "--wheels" ]; then
   WHEELHOUSE="$(cd "${2:?--wheels needs a folder}" && pwd)"

@@ -14,16 +14,19 @@
 #     threads and the C++ runtime included; on macOS arm64 the bindings and the core linked into
 #     the extension module _core.cpython-311-darwin.so (-undefined dynamic_lookup, as macOS
 #     extension modules link). The first link per target builds zig's libc++ for it (minutes on
-#     2 cores; cached in ~/.cache/zig afterwards).
+#     2 cores; cached in .cache/zig of the checkout afterwards, scripts/environments.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-PYTHON="${PYTHON:-python3}"
+source scripts/environments.sh
+PYTHON="$(checkout_python)"  # PYTHON, else the test or the demo environment's
 LINK=1
 if [ "${1:-}" = "--compile-only" ]; then
   LINK=0
   shift
 fi
 OUT="${1:-build/cross}"
+# zig's caches in the checkout's cache folder, not in the home folder.
+export ZIG_GLOBAL_CACHE_DIR="$BOXMARCH_CACHE/zig" ZIG_LOCAL_CACHE_DIR="$BOXMARCH_CACHE/zig"
 ZIG=("$PYTHON" -m ziglang)
 "${ZIG[@]}" version >/dev/null 2>&1 || { echo "cross_compile: zig is missing (pip install ziglang)" >&2; exit 1; }
 PY_INCLUDE="$("$PYTHON" -c 'import sysconfig; print(sysconfig.get_paths()["include"])')"

@@ -4,7 +4,8 @@
 # Assumes scripts/setup.sh has installed the system packages once.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-PYTHON="${PYTHON:-python3}"
+source scripts/environments.sh
+PYTHON="$(checkout_python)"  # PYTHON, else the test or the demo environment's
 cmake -S . -B build/dev -DCMAKE_BUILD_TYPE=Release -DBOXMARCH_BUILD_PYTHON=ON \
   -DPython_EXECUTABLE="$(command -v "$PYTHON")" \
   -Dpybind11_DIR="$("$PYTHON" -c 'import pybind11; print(pybind11.get_cmake_dir())')" >/dev/null

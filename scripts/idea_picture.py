@@ -5,7 +5,7 @@ every default and exported with the GLTF preset's defaults, loaded unmodified by
 headless Chromium, posed by the same bones and raymarched by the shipped material: every box a
 chain link (sdf_preset_link), one draw call; the flesh drawn by three.js as a capsule per bone.
 
-Usage: PYTHONPATH=addon python3 -m scripts.idea_picture [--out FOLDER]   (writes FOLDER/idea.png; default docs/)
+Usage: .venv-demo/bin/python -m scripts.idea_picture [--out FOLDER]   (writes FOLDER/idea.png; default docs/)
 About 25 s on a 2-core machine (most of it three.js on SwiftShader); skipped, with a line saying why,
 where Chromium or three.js r111 is missing.
 """

@@ -10,7 +10,8 @@
 # Any sanitizer report aborts with a nonzero exit. Assumes scripts/setup.sh ran once.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-PYTHON="${PYTHON:-python3}"
+source scripts/environments.sh
+PYTHON="$(checkout_python)"  # PYTHON, else the test or the demo environment's
 stage="${1:-all}"
 build=build/sanitize
 export ASAN_OPTIONS="detect_leaks=0:abort_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1"

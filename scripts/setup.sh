@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
-# Installs everything the test command needs on a fresh Debian 12 machine with Python 3.11 (the
-# demo's packages, scripts/packages.sh, and the test and lint tools) and builds the package into
-# that Python. Safe to run again: it only installs what is missing. --list prints the Debian and
-# Python packages it installs (one a line: apt NAME, pip SPEC) and installs nothing.
+# Installs everything the test command needs on a fresh Debian 12 machine with Python 3.11: the
+# demo's packages (scripts/packages.sh) and the test and lint tools, the Python ones into the test
+# environment, .venv-test (scripts/environments.sh: made from python3, or PYTHON, with none of its
+# site-packages), bpy 4.2 into .cache/bpy-4.2, and builds boxmarch into .venv-test. Safe to run
+# again: it only installs what is missing. --list prints the Debian and Python packages it installs
+# (one a line: apt NAME, pip SPEC) and installs nothing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-PYTHON="${PYTHON:-python3}"
+PYTHON="${PYTHON:-python3}"  # the Python the environment is made from
 source scripts/packages.sh
+source scripts/environments.sh
 
 # Beyond the demo's (DEMO_APT_PACKAGES): what the tests need.
 APT_PACKAGES=(blender python3-numpy glslang-tools xvfb xauth
@@ -21,7 +24,7 @@ APT_PACKAGES=(blender python3-numpy glslang-tools xvfb xauth
               shellcheck)  # actionlint checks the workflows' run: scripts with it (tests/test_workflows.py)
 # Beyond the demo's (DEMO_PIP_PACKAGES, bpy 5.0 among them): the test and lint tools.
 PIP_PACKAGES=(pytest hypothesis matplotlib
-              ruff import-linter  # tests/test_house.py: lint and the layer contract
+              ruff "import-linter>=2.17"  # tests/test_house.py: lint and the import contracts (2.17, the release tried here, has acyclic_siblings)
               jsonschema  # tests/test_sidecar.py: every export's sidecar against its schema
               ufbx  # tests/engines/ufbx_dump.py: Godot 4.3+'s FBX loader reads the FBX exports
               PyOpenGL==3.1.10  # bench/bench_gpu_frame.py: the preview's shaders through EGL (llvmpipe or a GPU)
@@ -33,13 +36,14 @@ if [ "${1:-}" = "--list" ]; then
   printf 'pip %s\n' "${DEMO_PIP_PACKAGES[@]}" "${PIP_PACKAGES[@]}"
   exit 0
 fi
-apt_install_missing "${DEMO_APT_PACKAGES[@]}" "${APT_PACKAGES[@]}"
-# --root-user-action=ignore: the test command installs into the machine's Python on purpose (as root
-# on a fresh machine); pip's advice to use a virtual environment is noise there.
-pip_quiet=(-q --disable-pip-version-check --root-user-action=ignore)
-echo "[setup] pip install ${DEMO_PIP_PACKAGES[*]} ${PIP_PACKAGES[*]}" >&2
-"$PYTHON" -m pip install "${pip_quiet[@]}" "${DEMO_PIP_PACKAGES[@]}" "${PIP_PACKAGES[@]}"
+# shellcheck disable=SC2046  # one word or none
+apt_install_missing "${DEMO_APT_PACKAGES[@]}" "${APT_PACKAGES[@]}" $(venv_apt_packages "$PYTHON")
+[ -x "$TEST_VENV/bin/python" ] || "$PYTHON" -m venv "$TEST_VENV"
+TEST_PYTHON="$TEST_VENV/bin/python"
+pip_quiet=(-q --disable-pip-version-check)
+echo "[setup] pip install ${DEMO_PIP_PACKAGES[*]} ${PIP_PACKAGES[*]} into $TEST_VENV" >&2
+"$TEST_PYTHON" -m pip install "${pip_quiet[@]}" "${DEMO_PIP_PACKAGES[@]}" "${PIP_PACKAGES[@]}"
 # The oldest supported bpy (4.2 LTS) in its own folder, for scripts/test.sh's second run.
-bash scripts/install_bpy.sh 4.2 >/dev/null
-echo "[setup] building boxmarch" >&2
-"$PYTHON" -m pip install "${pip_quiet[@]}" --no-build-isolation .
+PYTHON="$TEST_PYTHON" bash scripts/install_bpy.sh 4.2 >/dev/null
+echo "[setup] building boxmarch into $TEST_VENV" >&2
+"$TEST_PYTHON" -m pip install "${pip_quiet[@]}" --no-build-isolation -C build-dir="$(venv_build_dir "$TEST_VENV")" .

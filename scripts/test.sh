@@ -2,12 +2,14 @@
 # The test command: set up (idempotent, scripts/setup.sh), then run every test tier by tier, each
 # announced and timed (pytest names each file as it runs it): the everyday tier, the slow tier
 # (engines, Blender 3.4 program runs, renders, CLI and install runs), the native tier (sanitizers,
-# fuzzer), then the quick Blender-facing selection under bpy 4.2 LTS (scripts/blender_matrix.py).
-# Arguments select tests for one pytest run instead.
+# fuzzer), then the quick Blender-facing selection under bpy 4.2 LTS (scripts/blender_matrix.py),
+# all with the test environment's Python (.venv-test, scripts/environments.sh). Arguments select
+# tests for one pytest run instead.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-PYTHON="${PYTHON:-python3}"
 bash scripts/setup.sh
+source scripts/environments.sh
+PYTHON="$TEST_VENV/bin/python"
 if [ $# -gt 0 ]; then
   exec "$PYTHON" -m pytest -q "$@"
 fi

@@ -15,7 +15,7 @@ _COMPONENTS = {5120: ("b", 127.0), 5121: ("B", 255.0), 5122: ("h", 32767.0), 512
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
 
 
-def _chunks(data):
+def chunks(data):
     magic, version, length = struct.unpack_from("<4sII", data, 0)
     assert magic == b"glTF" and version == 2 and length == len(data), "not a glTF 2.0 binary"
     offset, chunks = 12, {}
@@ -43,7 +43,7 @@ def _accessor(doc, binary, index):
 
 def read_glb(path):
     with open(path, "rb") as f:
-        doc, binary = _chunks(f.read())
+        doc, binary = chunks(f.read())
     meshes = []
     for mesh in doc.get("meshes", []):
         primitives = []
@@ -58,7 +58,7 @@ def read_glb(path):
     return meshes
 
 
-def _node_matrix(node):
+def node_matrix(node):
     """A node's local 4 x 4 transform: its column-major ``matrix`` or T * R * S (section 5.25)."""
     if "matrix" in node:
         return np.array(node["matrix"], np.float64).reshape(4, 4).T
@@ -89,14 +89,14 @@ def read_skin(path):
     "node_names", "parent" (per node, -1 for roots), "local" and "global" (nodes, 4, 4) rest
     transforms}."""
     with open(path, "rb") as f:
-        doc, binary = _chunks(f.read())
+        doc, binary = chunks(f.read())
     skin = doc["skins"][0]
     nodes = doc["nodes"]
     parent = np.full(len(nodes), -1)
     for i, node in enumerate(nodes):
         for child in node.get("children", []):
             parent[child] = i
-    local = np.array([_node_matrix(node) for node in nodes])
+    local = np.array([node_matrix(node) for node in nodes])
     inverse_bind = _accessor(doc, binary, skin["inverseBindMatrices"])[0].reshape(-1, 4, 4).transpose(0, 2, 1)
     return {"joints": list(skin["joints"]), "inverse_bind": inverse_bind, "parent": parent,
             "node_names": [node.get("name") for node in nodes], "local": local, "global": node_globals(local, parent)}

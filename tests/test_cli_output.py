@@ -22,7 +22,7 @@ def test_table_fits_the_width_and_keeps_every_word():
     long = "demo_godot3.glb + demo_godot3.boxmarch.json + demo_godot3.boxes.tres + demo_godot3.glb.import"
     rows = [["export GODOT3", "2.783 s", f"layout NORMAL_COLOR: {long}", "x" * 150],
             ["total", "16.612 s", "wrote /a/rather/long/path/to/demo_out/demo.blend", ""]]
-    table = cli._table(["step", "time", "what", "accuracy"], rows)
+    table = cli.format_table(["step", "time", "what", "accuracy"], rows)
     lines = table.splitlines()
     assert max(map(len, lines)) <= cli.TABLE_WIDTH, table
     assert len({len(line) for line in lines}) == 1  # every line ends at the same column
@@ -33,7 +33,7 @@ def test_table_fits_the_width_and_keeps_every_word():
     assert "".join(cells[3] for cells in columns[1:]) == "x" * 150
     assert " ".join(cells[0] for cells in columns if cells[0]) == "step export GODOT3 total"
     # A table that fits is left as it is.
-    narrow = cli._table(["step", "time"], [["bake", "0.1 s"]])
+    narrow = cli.format_table(["step", "time"], [["bake", "0.1 s"]])
     assert narrow.splitlines() == ["| step | time  |", "|------|-------|", "| bake | 0.1 s |"]
 
 
@@ -49,13 +49,13 @@ def test_table_breaks_cells_between_words_only():
     assert any("engines/unreal/" in row[3] for row in rows)  # the word that was cut
     rows.append(["total", "63.463 s", "wrote /home/someone/projects/a-rather-long-folder-name/demo_out/demo.blend", ""])
     for width in (100, 90):
-        table = cli._table(["step", "time", "what", "accuracy"], rows, width=width)
+        table = cli.format_table(["step", "time", "what", "accuracy"], rows, width=width)
         lines = [line for line in table.splitlines()[2:]]
         assert max(map(len, lines)) <= width, table
         for column in range(4):
             read = " ".join(line.strip("|").split(" | ")[column].strip() for line in lines).replace("/ ", "/")
             assert read.split() == " ".join(row[column] for row in rows).split(), (column, table)
-    narrow = cli._table(["step", "what"], [["total", "wrote /home/someone/a-rather-long-folder-name/x.blend"]], width=40)
+    narrow = cli.format_table(["step", "what"], [["total", "wrote /home/someone/a-rather-long-folder-name/x.blend"]], width=40)
     pieces = [line.strip("|").split(" | ")[1].strip() for line in narrow.splitlines()[2:]]
     assert pieces == ["wrote /home/someone/", "a-rather-long-folder-name/", "x.blend"], narrow
 

@@ -1,8 +1,10 @@
 """scripts/cross_compile.sh --compile-only: every core source compiles for Windows x64 and macOS
 arm64 (and the bindings for macOS arm64) with zig's clang, warnings as errors, into object files
 of the target's format. Nothing is linked or run here (docs/PLATFORMS.md)."""
+import os
 import struct
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -25,7 +27,8 @@ def macho_cpu(path):
 @pytest.mark.slow
 def test_native_code_compiles_for_windows_and_macos(tmp_path):
     proc = subprocess.run(["bash", str(REPO / "scripts" / "cross_compile.sh"), "--compile-only", str(tmp_path)],
-                          cwd=REPO, capture_output=True, text=True, timeout=1200)
+                          cwd=REPO, env=dict(os.environ, PYTHON=sys.executable), capture_output=True, text=True,
+                          timeout=1200)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     windows, macos = tmp_path / "x86_64-windows-gnu", tmp_path / "aarch64-macos"
     assert sorted(p.stem for p in windows.glob("*.o")) == CORE_SOURCES

@@ -15,7 +15,8 @@ REPO = Path(__file__).resolve().parent.parent
 
 @pytest.fixture(scope="module")
 def bpy_42():
-    proc = subprocess.run(["bash", str(REPO / "scripts" / "install_bpy.sh"), "4.2"], capture_output=True, text=True)
+    proc = subprocess.run(["bash", str(REPO / "scripts" / "install_bpy.sh"), "4.2"],
+                          env=dict(os.environ, PYTHON=sys.executable), capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr[-2000:]
     return proc.stdout.strip()
 

@@ -132,14 +132,14 @@ def test_static_gltf_of_a_parented_non_uniformly_scaled_object(blender, tmp_path
     path = tmp_path / "static.glb"
     report = scene.export_objects(blender.context, [ob], "GLTF", str(path))
     assert report["meshes"][0]["space"] == "object" and report["transform_error"] < 1e-5
-    from tests.gltf_reader import _chunks, _node_matrix
+    from tests.gltf_reader import chunks, node_matrix
 
-    doc, _ = _chunks(path.read_bytes())
+    doc, _ = chunks(path.read_bytes())
     parent = np.full(len(doc["nodes"]), -1)
     for i, node in enumerate(doc["nodes"]):
         for c in node.get("children", []):
             parent[c] = i
-    globals_ = node_globals(np.array([_node_matrix(n) for n in doc["nodes"]]), parent)
+    globals_ = node_globals(np.array([node_matrix(n) for n in doc["nodes"]]), parent)
     (node,) = [i for i, n in enumerate(doc["nodes"]) if "mesh" in n]
     (mesh,) = read_glb(path)
     (p,) = mesh["primitives"]

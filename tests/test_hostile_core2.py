@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import boxmarch
-from boxmarch import cli_args, core, core_boxes, core_tools, scenes
+from boxmarch import cli_args, core, core_boxes, core_render, core_tools, scenes
 from boxmarch.formats import layouts
 from tests.helpers.core_reference import decoded_origins, mesh_from_polys
 from tests.hostile import race_child
@@ -228,9 +228,9 @@ def test_a_thread_writing_the_inputs_during_the_call_never_crashes(case):
 
 def test_every_public_function_of_the_numpy_api_has_a_race_case():
     """Enumerated, so that a new function cannot escape the race test: every public function of
-    boxmarch.core, core_boxes and core_tools is called by a case of race_child.py, or takes no
-    array at all."""
-    public = {name for module in (core, core_boxes, core_tools) for name, f in vars(module).items()
+    boxmarch.core, core_boxes, core_render and core_tools is called by a case of race_child.py, or
+    takes no array at all."""
+    public = {name for module in (core, core_boxes, core_render, core_tools) for name, f in vars(module).items()
               if inspect.isfunction(f) and not name.startswith("_") and f.__module__ == module.__name__}
     assert len(public) > 30
     for name in race_child.TAKES_NO_ARRAY:

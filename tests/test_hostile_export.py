@@ -131,7 +131,7 @@ def test_every_json_the_project_writes_is_strict(tmp_path):
     assert loose == []
     # Driven with hostile values, the writers refuse rather than write the tokens, and leave nothing.
     with pytest.raises(ValueError, match="Out of range float values are not JSON compliant"):
-        cli._write_json(str(tmp_path / "r.json"), {"seconds": math.inf})
+        cli.write_json(str(tmp_path / "r.json"), {"seconds": math.inf})
     with pytest.raises(ValueError, match="Out of range float values are not JSON compliant"):
         glb.write(str(tmp_path / "m.glb"), {"accessors": [{"min": [math.nan]}]}, b"")
     assert os.listdir(tmp_path) == []
@@ -145,7 +145,7 @@ def test_every_json_the_project_writes_is_strict(tmp_path):
 # atomic). A new writer must be added here, and then pass the checks below.
 FILE_WRITERS = {
     "blend_file.save_blend_copy": "atomic",
-    "cli._write_json": "atomic",
+    "cli.write_json": "atomic",
     "demo._preview_picture": "atomic",
     "export/scene._write_sidecar": "body",
     "export/scene.export_objects": "atomic",
@@ -323,13 +323,13 @@ def test_a_linked_or_overridden_baked_asset_exports_as_the_library_itself_does(b
     for attribute, values in reference["primitives"][0].items():
         assert np.array_equal(linked["primitives"][0][attribute], values), attribute
     # An exporter that fails leaves no copy behind either.
-    real = scene._run_exporter
-    scene._run_exporter = lambda *_args: (_ for _ in ()).throw(RuntimeError("the exporter failed"))
+    real = scene.run_exporter
+    scene.run_exporter = lambda *_args: (_ for _ in ()).throw(RuntimeError("the exporter failed"))
     try:
         with pytest.raises(RuntimeError, match="the exporter failed"):
             scene.export_objects(blender.context, [ob], "GLTF", str(tmp_path / "failed.glb"))
     finally:
-        scene._run_exporter = real
+        scene.run_exporter = real
     assert len(blender.data.meshes) == meshes and not (tmp_path / "failed.glb").exists()
 
 

@@ -55,13 +55,14 @@ def lint_imports(package_parent):
 def test_imports_keep_the_layer_contracts():
     proc = lint_imports(ROOT / "addon")
     assert proc.returncode == 0, proc.stdout[-5000:] + proc.stderr[-2000:]
-    assert "2 kept, 0 broken" in proc.stdout, proc.stdout[-2000:]
+    assert "3 kept, 0 broken" in proc.stdout, proc.stdout[-2000:]
 
 
 @pytest.mark.parametrize("module, planted, contract", [
     ("core.py", "from . import mesh_io", "Layers"),      # the core reaching up to the Blender door
     ("formats/layouts.py", "import bpy", "never import Blender"),  # a format-facing module importing Blender
     ("formats/fbx_container.py", "from io_scene_fbx import parse_fbx", "never import Blender"),  # Blender's add-on
+    ("core_boxes.py", "from . import core", "No circle"),  # two modules of one layer importing each other
 ])
 def test_lint_imports_catches_a_planted_import(tmp_path, module, planted, contract):
     """Negative control: a copy of the package with one forbidden import breaks its contract."""
@@ -71,6 +72,60 @@ def test_lint_imports_catches_a_planted_import(tmp_path, module, planted, contra
     proc = lint_imports(tmp_path)
     broken = [line for line in proc.stdout.splitlines() if " BROKEN" in line]
     assert proc.returncode == 1 and any(contract in line for line in broken), proc.stdout[-3000:] + proc.stderr[-2000:]
+
+
+# Tests use the add-on's public names only (CONTRIBUTING.md): a name with a leading underscore may
+# change with no test saying so. One exception: `_core`, the compiled module (its name is the
+# build's), whose own argument checks and loaded file the tests look at.
+PRIVATE_NAMES_READ_BY_TESTS = {"_core"}
+
+
+def private_names_read(source: str) -> list:
+    """(line, name) of each private name of the add-on ``source`` reads: ``m._name`` (or
+    ``m.sub._name``) where ``m`` was imported from boxmarch, ``from boxmarch... import _name``, or
+    ``setattr(m, "_name", ...)`` (monkeypatch's too)."""
+    def private(name):
+        return name.startswith("_") and not name.endswith("__") and name not in PRIVATE_NAMES_READ_BY_TESTS
+
+    def root(node):
+        while isinstance(node, ast.Attribute):
+            node = node.value
+        return node.id if isinstance(node, ast.Name) else None
+
+    tree, bound, found = ast.parse(source), set(), []
+    for node in ast.walk(tree):  # the names bound to the add-on's modules and objects
+        if isinstance(node, ast.Import):
+            bound.update(alias.asname or "boxmarch" for alias in node.names if alias.name.split(".")[0] == "boxmarch")
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or "").split(".")[0] == "boxmarch":
+            bound.update(alias.asname or alias.name for alias in node.names)
+            found += [(node.lineno, f"{node.module}.{alias.name}") for alias in node.names if private(alias.name)]
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and private(node.attr) and root(node) in bound:
+            found.append((node.lineno, ast.unparse(node)))
+        elif (isinstance(node, ast.Call) and getattr(node.func, "attr", getattr(node.func, "id", None)) == "setattr"
+              and len(node.args) >= 2 and root(node.args[0]) in bound and isinstance(node.args[1], ast.Constant)
+              and isinstance(node.args[1].value, str) and private(node.args[1].value)):
+            found.append((node.lineno, f"{ast.unparse(node.args[0])}.{node.args[1].value}"))
+    return sorted(found)
+
+
+def test_tests_read_no_private_name_of_the_add_on():
+    reads = {str(path.relative_to(ROOT)): found for path in sorted((ROOT / "tests").rglob("*.py"))
+             if (found := private_names_read(path.read_text()))}
+    assert reads == {}, f"tests reading private names of the add-on (test its public behaviour instead): {reads}"
+
+
+@pytest.mark.parametrize("planted, name", [
+    ("from boxmarch import cli\ncli._table([], [])", "cli._table"),
+    ("import boxmarch.preview\nboxmarch.preview._APP_HANDLERS", "boxmarch.preview._APP_HANDLERS"),
+    ("from boxmarch.export.scene import _run_exporter", "boxmarch.export.scene._run_exporter"),
+    ("from boxmarch.export import scene\nmonkeypatch.setattr(scene, '_run_exporter', print)", "scene._run_exporter"),
+])
+def test_private_name_scan_catches_a_planted_read(planted, name):
+    assert [found for _, found in private_names_read(planted)] == [name]
+    # Not the add-on's, or not private: the compiled module, a helper of the tests, a dunder, self.
+    assert private_names_read("from boxmarch.native import _core\nfrom boxmarch import core\ncore._core.__file__\n"
+                              "from tests import gltf_reader\ngltf_reader._x\ncore.__name__\nself._y\n") == []
 
 
 def clang_format():
@@ -164,12 +219,21 @@ def module_names():
     return modules
 
 
+def made_folders():
+    """The folders the commands make inside the checkout, which .gitignore names from the root
+    (``/.venv-test/``): the docs may name paths in them (``.venv-test/bin/python``)."""
+    return {line.strip("/") for line in (ROOT / ".gitignore").read_text().split()
+            if line.startswith("/") and line.endswith("/")}
+
+
 def stale_references(text, files, modules, identifiers):
     """The backticked names of ``text`` (outside code blocks) that name nothing in the tree: a path
     (relative to the repository or the package, ``...`` and ``*`` as wildcards, ``a/b.name`` a
-    module's attribute), a file name, ``module.name`` (the module by its path in the package or its
-    own name: ``layouts.channels``), or an identifier found in no source file."""
+    module's attribute, or inside a folder of :func:`made_folders`), a file name, ``module.name``
+    (the module by its path in the package or its own name: ``layouts.channels``), or an identifier
+    found in no source file."""
     paths = set(files) | {str(Path(f).parent) for f in files}
+    made = made_folders()
     package_paths = {p[len("addon/boxmarch/"):] for p in paths if p.startswith("addon/boxmarch/")}
     basenames = {Path(f).name for f in files}
     by_own_name = {}
@@ -204,8 +268,8 @@ def stale_references(text, files, modules, identifiers):
                  if " " not in token or "/" in word and "$" not in word]
         for token in words:
             first = token.split("/")[0]
-            if token.startswith("."):  # `.cpp`: a kind of file; `.clang-format`: a file
-                ok = token in paths or re.fullmatch(r"\.\w+", token) is not None
+            if token.startswith("."):  # `.cpp`: a kind of file; `.clang-format`: a file; `.venv-test/bin/python`
+                ok = token in paths or re.fullmatch(r"\.\w+", token) is not None or first in made
             elif token.endswith(SOURCE_SUFFIXES) or "/" in token and (first in paths or first in package_paths):
                 if "/" not in token:
                     ok = token in basenames
@@ -246,7 +310,7 @@ def test_docs_check_catches_planted_stale_references(code_names):
     """Negative control: names of modules, functions and files that do not exist are reported."""
     planted = ["export/transforms.py", "formats/nowhere.py", "preview/sources", "transforms.PRESETS",
                "files.save_blend_copy", "import_settings.for_preset", "export/boxes.no_such_function",
-               "read_tool_meshes", "cpp/src/nowhere.cpp"]
+               "read_tool_meshes", "cpp/src/nowhere.cpp", ".venv-tests/bin/python"]
     text = (ROOT / "docs/ARCHITECTURE.md").read_text() + "\n" + " ".join(f"`{name}`" for name in planted)
     assert stale_references(text, *code_names) == planted
 

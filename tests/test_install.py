@@ -23,9 +23,9 @@ REPO = Path(__file__).resolve().parent.parent
 def packages(tmp_path_factory):
     out = tmp_path_factory.mktemp("dist")
     # Without a Blender >= 4.2 program the script validates and builds with the extension tool of
-    # the bpy module under test (BOXMARCH_BPY_PATH's release when set).
+    # the bpy module under test (BOXMARCH_BPY_PATH's release when set), in this Python.
     proc = subprocess.run(["bash", str(REPO / "scripts" / "build_extension.sh"), str(out)], cwd=REPO,
-                          env=python_env(dict(os.environ)), capture_output=True, text=True, timeout=600)
+                          env=python_env(dict(os.environ, PYTHON=sys.executable)), capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     assert "Success parsing TOML" in proc.stdout  # the extension tool validated the manifest
     return {"legacy": out / "boxmarch-0.1.0-legacy-linux-x64.zip", "extension": out / "boxmarch-0.1.0.zip"}
@@ -137,7 +137,7 @@ def test_one_extension_per_platform_from_a_wheelhouse(packages, tmp_path):
             whl.writestr(f"boxmarch/{name}", data)
     out = tmp_path / "dist"
     proc = subprocess.run(["bash", str(REPO / "scripts" / "build_extension.sh"), "--wheels", str(wheelhouse), str(out)],
-                          cwd=REPO, env=python_env(dict(os.environ)), capture_output=True, text=True, timeout=600)
+                          cwd=REPO, env=python_env(dict(os.environ, PYTHON=sys.executable)), capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     assert sorted(p.name for p in out.iterdir()) == ["boxmarch-0.1.0-linux_x64.zip", "boxmarch-0.1.0-windows_x64.zip"]
     for platform, wheel in (("linux-x64", "boxmarch_native-0.1.0-cp311-cp311-manylinux_2_28_x86_64.whl"),

@@ -77,7 +77,7 @@ def test_cache_handlers_survive_loading_a_file(blender):
     from boxmarch import preview
 
     blender.ops.wm.read_factory_settings(use_empty=True)  # loading a file drops non-persistent handlers
-    for list_name, function in preview._APP_HANDLERS:
+    for list_name, function in preview.APP_HANDLERS:
         assert function in getattr(blender.app.handlers, list_name), list_name
 
 

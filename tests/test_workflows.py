@@ -1,17 +1,18 @@
 """The GitHub Actions workflows (.github/workflows) pass actionlint, which checks their syntax, the
 runner labels, expressions, the inputs of known actions and, through shellcheck, their run: scripts.
 They are not run here (they need GitHub's runners); docs/PLATFORMS.md says what they do."""
-import shutil
 import subprocess
 from pathlib import Path
 
 import pytest
 
+from tests.helpers.tools import python_program
+
 WORKFLOWS = Path(__file__).resolve().parent.parent / ".github" / "workflows"
 
 
 def actionlint(*paths):
-    program = shutil.which("actionlint")
+    program = python_program("actionlint")
     if program is None:
         pytest.fail("actionlint is missing: run scripts/setup.sh")
     return subprocess.run([program, "-no-color", *map(str, paths)], capture_output=True, text=True, timeout=120)

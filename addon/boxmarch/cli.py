@@ -78,7 +78,7 @@ def _wrap(cell: str, width: int) -> list:
     return lines or [""]
 
 
-def _table(headers, rows, width=TABLE_WIDTH) -> str:
+def format_table(headers, rows, width=TABLE_WIDTH) -> str:
     """A Markdown-like table at most ``width`` characters wide: the widest columns are narrowed,
     first not below their longest word-or-path-component (NARROWEST_COLUMN at least), so their
     cells wrap between words or after a path's '/', then, where that cannot fit, down to
@@ -100,7 +100,8 @@ def _table(headers, rows, width=TABLE_WIDTH) -> str:
     return "\n".join([*lines(head), rule, *(line for row in body for line in lines(row))])
 
 
-def _write_json(path: str, report: dict) -> None:
+def write_json(path: str, report: dict) -> None:
+    """Writes ``report`` to ``path`` as strict JSON (NaN and infinities refused), atomically."""
     def write(temp):
         with open(temp, "w") as f:
             json.dump(report, f, indent=2, default=float, allow_nan=False)
@@ -303,12 +304,12 @@ def _run_steps(args, steps) -> int:
     total = time.perf_counter() - start
     rows = [[r["step"], f"{r['seconds']:.3f} s", r["summary"]] for r in reports]
     rows.append(["total", f"{total:.3f} s", f"wrote {out}" if out else "no --out: the .blend was not saved"])
-    print(_table(["step", "time", "result"], rows))
+    print(format_table(["step", "time", "result"], rows))
     report = {"ok": True, "command": args.command, "blender": bpy.app.version_string,
               "file": bpy.data.filepath or None, "objects": names, "steps": reports, "out": out,
               "seconds": total}
     if args.json:
-        _write_json(args.json, report)
+        write_json(args.json, report)
     return 0
 
 
@@ -352,9 +353,9 @@ def cmd_demo(args) -> int:
     with _blender_stdout_held_back():
         rows, report = demo.run_demo(args.count, args.seed, folder, args.preview, _progress)
     print(f"boxmarch demo: {args.count:,} boxes, Blender {bpy.app.version_string}")
-    print(_table(["step", "time", "what", "accuracy"], rows))
+    print(format_table(["step", "time", "what", "accuracy"], rows))
     if args.json:
-        _write_json(args.json, report)
+        write_json(args.json, report)
     return 0
 
 
@@ -411,7 +412,7 @@ def run(argv=None) -> int:
     report_path = getattr(args, "failure_report", None)  # only a --json the output checks accepted
     if report_path:
         try:
-            _write_json(report_path, {"ok": False, "command": args.command, "exit_code": code, "error": message})
+            write_json(report_path, {"ok": False, "command": args.command, "exit_code": code, "error": message})
         except Exception:
             pass  # the error line above is the report
     return code

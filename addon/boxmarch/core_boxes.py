@@ -14,45 +14,6 @@ HIERARCHY_RULES = ("ATTRIBUTE", "CONTAINMENT", "CHAIN", "BONES")
 _RULE_CODES = {"ATTRIBUTE": 0, "CONTAINMENT": 1, "CHAIN": 2, "BONES": 0}
 
 
-# A vertex lies on its box when it is within this share of the box's size along a local axis of
-# one of the two faces across that axis; a piece with more vertices than a box's 8 and more than
-# NOT_BOX_SHARE of them off its box does not look like a box (the bake warns).
-ON_BOX_TOLERANCE = 0.05
-NOT_BOX_SHARE = 0.25
-
-
-def not_boxes(positions, submesh_of_vertex, quaternions):
-    """(not_box bool (S,), off_box float64 (S,)): per submesh of more than 8 vertices, the share of
-    its vertices off its box (the bounds of its vertices in its baked frame, ``quaternions`` (S, 4)
-    x, y, z, w; 0 for a submesh of 8 vertices or fewer, which is never reported) and whether more
-    than NOT_BOX_SHARE of them are. A box has none off, its faces cut into a grid or not, as has a
-    box with one-segment bevels; a modelled torus, sphere or chain link has most of its vertices
-    inside its bounding box. Costs nothing on meshes of 8-vertex boxes."""
-    from .core import rotate_vector
-
-    q = np.array(quaternions, np.float64).reshape(-1, 4)
-    sub = checked_indices(submesh_of_vertex, "submesh_of_vertex", len(q))
-    positions = np.array(positions, np.float64)
-    if positions.shape != (len(sub), 3):
-        raise ValueError(f"positions must be ({len(sub)}, 3) beside submesh_of_vertex, got {positions.shape}")
-    counts = np.bincount(sub, minlength=len(q))
-    off = np.zeros(len(q))
-    checked = np.flatnonzero((counts > 8)[sub])
-    if len(checked):
-        sub = sub[checked]
-        local = rotate_vector(positions[checked], q[sub] * (-1.0, -1.0, -1.0, 1.0))
-        order = np.argsort(sub, kind="stable")
-        grouped = sub[order]
-        starts = np.flatnonzero(np.r_[True, grouped[1:] != grouped[:-1]])
-        lo, hi = np.zeros((len(q), 3)), np.zeros((len(q), 3))
-        lo[grouped[starts]] = np.minimum.reduceat(local[order], starts)
-        hi[grouped[starts]] = np.maximum.reduceat(local[order], starts)
-        tolerance = ON_BOX_TOLERANCE * (hi - lo)[sub]
-        on_box = ((local - lo[sub] <= tolerance) | (hi[sub] - local <= tolerance)).any(axis=1)
-        off = np.bincount(sub, weights=~on_box, minlength=len(q)) / np.maximum(counts, 1)
-    return off > NOT_BOX_SHARE, off
-
-
 def reduce_per_submesh(values, submesh_of_element, submesh_count):
     """One value tuple per submesh from per-element ``values`` ((E,) or (E, k), k <= 4) and
     ``submesh_of_element`` (E,): the tuple most of the submesh's elements hold (ties: the one of
@@ -180,45 +141,3 @@ def box_hierarchy(origins, quaternions, half_extents, rule="ATTRIBUTE", given_pa
         origins, np.ascontiguousarray(quaternions, np.float32).reshape(-1, 4),
         np.ascontiguousarray(half_extents, np.float64).reshape(-1, 3), _RULE_CODES[rule], given)
     return parent, depth, int(deepest)
-
-
-def preset_of_shape(shapes) -> np.ndarray:
-    """int (S,): the SDF preset (index into core.SDF_PRESETS) each shape id picks, as the shaders'
-    bm_sdf_by_id does: the id rounded to the nearest whole number, any id outside the presets
-    the box (0)."""
-    from .core import SDF_PRESETS
-
-    ids = np.floor(np.asarray(shapes, np.float64) + 0.5)
-    return np.where((ids >= 0) & (ids < len(SDF_PRESETS)), ids, 0).astype(np.int64)
-
-
-def render_boxes_by_shape(origins, quaternions, half_extents, shapes, object_to_clip, object_to_view, width, height,
-                          **options):
-    """core.render_boxes where each box draws the preset its shape id picks (``shapes`` (S,), as
-    bm_sdf_by_id): the boxes of each preset are rendered in turn into the same images, the
-    nearest hit winning by depth as in one pass (boxes never read each other). ``options`` as
-    render_boxes, but ``sdf``."""
-    from .core import SDF_PRESETS, render_boxes
-
-    if "sdf" in options:
-        raise ValueError("render_boxes_by_shape takes the preset of each box from its shape id, not sdf")
-    origins = np.asarray(origins, np.float32).reshape(-1, 3)
-    presets = preset_of_shape(shapes)
-    if presets.shape != (len(origins),):
-        raise ValueError(f"shapes must hold one id per box ({len(origins)}), got shape {np.shape(shapes)}")
-    quaternions = np.asarray(quaternions, np.float32).reshape(-1, 4)
-    half_extents = np.broadcast_to(np.asarray(half_extents, np.float32), (len(origins), 3))
-    result = None
-    for preset in np.unique(presets) if len(presets) else [0]:
-        chosen = presets == preset
-        if result is not None:
-            options.update(depth=result.depth, rgba=result.rgba)
-        part = render_boxes(origins[chosen], quaternions[chosen], half_extents[chosen], object_to_clip,
-                            object_to_view, width, height, sdf=SDF_PRESETS[preset], **options)
-        if result is None:
-            result = part
-            continue
-        won = np.any(part.normals != 0, axis=2)
-        result.normals[won] = part.normals[won]
-        result.steps += part.steps
-    return result

@@ -105,7 +105,7 @@ results = {
     "formats.glb.write": run_writer(["a.glb"], lambda path: glb.write(path, {"asset": {"version": "2.0"}}, bytes(4096))),
     "formats.fbx_container.write": run_writer(["b.fbx"], lambda path: fbx_container.write(path, document)),
     "formats.fbx.replace_frame": run_writer([], lambda path: fbx.replace_frame(path, frames), "cube.fbx"),
-    "cli._write_json": run_writer(["r.json"], lambda path: cli._write_json(path, {"text": "x" * 4096})),
+    "cli.write_json": run_writer(["r.json"], lambda path: cli.write_json(path, {"text": "x" * 4096})),
     "blend_file.save_blend_copy": run_writer(["c.blend"], blend_file.save_blend_copy),
 }
 for preset, name in (("GLTF", "e.glb"), ("UNITY", "u.fbx"), ("GODOT3", "g.glb"), ("BLENDER", "x.blend")):

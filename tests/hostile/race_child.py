@@ -12,7 +12,7 @@ NumPy arithmetic, or a call holding the GIL), it must have the untouched result'
 types. Any other exception propagates (exit 1); a crash shows as death by a signal.
 
 CASES names, for each case, the public function it calls: the test fails when a public function
-of boxmarch.core, core_boxes or core_tools has no case (or is in TAKES_NO_ARRAY)."""
+of boxmarch.core, core_boxes, core_render or core_tools has no case (or is in TAKES_NO_ARRAY)."""
 import dataclasses
 import sys
 import threading

@@ -199,6 +199,53 @@ def morph_warnings(objects, preset) -> list:
     return out
 
 
+def written_warnings(stats, objects, preset, layout) -> list:
+    """The export's warnings about what the written file gets wrong, from each mesh's ``stats``
+    (box_data's, completed by the export): float offsets that 8-bit vertex colours would clip,
+    skins that do not move boxes rigidly, object parents a per-mesh numbering cannot name, boxes
+    that decode off Blender's in the file, boxes and parents changed since the bake."""
+    warnings = []
+    if preset.colour_8bit and layouts.LAYOUTS[layout].classic_colour:
+        floats = [m for m in stats if m["colour"] == "FLOAT_COLOR"]
+        if floats:
+            warnings.append(
+                f"{', '.join(m['mesh'] for m in floats)}: float offsets (alpha up to "
+                f"{max(m['max_alpha'] for m in floats):.3g}); Unity usually stores vertex colours as "
+                "8-bit Color32, which clips alpha above 1 and rounds the rest: bake with 8-bit colour "
+                "for Unity (docs/EXPORT.md)")
+    for m in stats:
+        skin = m.get("skin")
+        if skin and skin["non_rigid_boxes"]:
+            warnings.append(f"{m['mesh']}: {skin['non_rigid_boxes']} of {m['boxes']} boxes have vertices with different "
+                            f"bone weights (up to {skin['worst_weight_spread']:.2g} apart): posed, their decoded origins "
+                            "leave the boxes (docs/ACCURACY.md); weight each box to its bones alike")
+        if skin and skin["unweighted_vertices"]:
+            warnings.append(f"{m['mesh']}: {skin['unweighted_vertices']} vertices carry no weight of "
+                            f"'{skin['armature']}': Blender leaves them at rest, engines may not")
+    owners = {ob.data.name: ob.name for ob in objects}
+    numbered_per_mesh = not layouts.LAYOUTS[layout].has_index
+    unlinked = [m["mesh"] for m in stats if numbered_per_mesh and "object_parent" in m.get("box_parameters", {})]
+    if unlinked:
+        warnings.append(f"{', '.join(unlinked)}: their objects have parent objects, but {layout} numbers boxes per "
+                        "mesh, so no box names a box of another mesh as parent: export with a layout that has "
+                        "box numbers (UV_FRAME, NORMAL_FRAME) for that")
+    for m in stats:
+        if m["transform_error"] > m.get("float32_error_bound", FILE_DECODE_TOLERANCE):
+            warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': the file's boxes decode up to "
+                            f"{m['transform_error']:.2g} of the largest offset away from Blender's: the exporter "
+                            "wrote positions in a space this export does not know; do not use the file")
+    for m in stats:
+        if m.get("stale_boxes"):
+            warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': {m['stale_boxes']} of {m['boxes']} boxes "
+                            "changed shape since the bake, so the file's offsets and frames are stale and decode off: "
+                            "run Bake Box Frames again, then export")
+        if m.get("stale_parents"):
+            warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': {m['stale_parents']} of {m['boxes']} boxes "
+                            "name parents that no box holds since the bake (boxes deleted or added, meshes joined): "
+                            "the file makes them roots: run Bake Box Frames again for their parents, then export")
+    return warnings
+
+
 def exported_parent(ob, exported):
     """The nearest ancestor object of ``ob`` whose name is in ``exported`` (objects between are
     skipped: an empty or an armature holds no boxes), or None."""

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import os
 import time
+from typing import NamedTuple
 
 import bpy
 import numpy as np
@@ -104,7 +105,8 @@ def _operator_kwargs(operator, wanted: dict) -> dict:
     return {k: v for k, v in wanted.items() if k in known}
 
 
-def _run_exporter(preset, layout, path):
+def run_exporter(preset, layout, path):
+    """Blender's exporter for ``preset``'s file extension, run on the selected objects into ``path``."""
     if preset.extension == ".fbx":
         op = bpy.ops.export_scene.fbx
         op(**_operator_kwargs(op, dict(  # tangent layers for formats/fbx.py to overwrite with the frame
@@ -142,53 +144,27 @@ _BLEND_PARAM_ATTRIBUTES = {("shape", "material"): mesh_io.PARAMS_LAYERS[0], ("ra
                            ("parent", "depth"): f"{mesh_io.PARENT_LAYER}+{mesh_io.DEPTH_LAYER}"}
 
 
+class _Export(NamedTuple):
+    """What an export writes, checked before anything is changed: the preset, the layout chosen,
+    each object once, their meshes (one object per mesh), the skinned objects' skins, the files
+    written (the model first) and the box table among them (None: the layout has none)."""
+
+    preset: presets.Preset
+    layout: str
+    objects: list
+    meshes: list
+    skins: dict
+    outputs: list
+    table_file: str | None
+
+
 def export_objects(context, objects, preset_name: str, filepath: str, layout: str | None = None) -> dict:
     """Export ``objects`` (baked meshes) with a preset (and one of its layouts; None = its
     default) to ``filepath``. Returns a report dict. Raises ExportInputError (nothing written)
     for unbaked or non-mesh objects or a layout the preset cannot carry."""
-    preset = presets.PRESETS.get(preset_name)
-    if preset is None:
-        raise ExportInputError(f"preset must be one of {sorted(presets.PRESETS)}, got {preset_name!r}")
-    problem = path_problem(filepath, preset.name)
-    if problem:
-        raise ExportInputError(problem)
-    if layout is not None and layout not in preset.layouts:
-        raise ExportInputError(f"{preset.label} carries the layouts {', '.join(preset.layouts)}, not {layout}")
-    objects = list({ob.name_full: ob for ob in objects}.values())  # each object once
-    if not objects:
-        raise ExportInputError("no objects to export")
-    for ob in objects:
-        if ob.type != "MESH":
-            raise ExportInputError(f"object '{ob.name}' is a {ob.type}, not a mesh")
-    meshes = [ob.data for ob in mesh_io.one_object_per_mesh(objects)]
-    for mesh in meshes:
-        baked_layers(mesh)  # refuses unbaked meshes before anything is changed
-        if not mesh.polygons and not preset.raw_blend:
-            raise ExportInputError(f"mesh '{mesh.name}' has no faces (its baked layers are left from faces since "
-                                   "deleted): an engine draws the boxes from faces, so the file would hold nothing")
-    skins = _skins(context, objects, preset)
-    boxes.refuse_shared_world_meshes(objects, skins, preset)
-    safe = [candidate for candidate in preset.layouts if layouts.LAYOUTS[candidate].skin_safe]
-    if layout is None:  # the preset's own; for a skinned export its first that skinning carries
-        layout = safe[0] if skins and safe else preset.layouts[0]
-    if skins and not layouts.LAYOUTS[layout].skin_safe:
-        name, skin = next(iter(skins.items()))
-        raise ExportInputError(
-            f"object '{name}' is skinned by '{skin.armature.name}': the {layout} layout keeps the box frame in UV "
-            "maps, which no engine's skinning moves, so posed boxes would not decode; "
-            + (f"export with the {' or '.join(safe)} layout (frame in NORMAL + TANGENT)" if safe else
-               f"{preset.label} has no layout with the frame in NORMAL + TANGENT: export with the GLTF or UNITY preset"))
+    export = _checked_export(context, objects, preset_name, filepath, layout)
     start = time.perf_counter()
-    folder = os.path.dirname(os.path.abspath(filepath))
-    if not os.path.isdir(folder):
-        raise ExportInputError(f"folder '{folder}' does not exist")
-    outputs = outputs_of(os.path.abspath(filepath), preset.name, layout)
-    for path in outputs:
-        if bpy.data.filepath and files.written_path(path) == os.path.realpath(bpy.data.filepath):
-            raise ExportInputError(f"'{path}' is the open .blend file: export to another path")
-        if os.path.isdir(path):
-            raise ExportInputError(f"'{path}' is a folder: the export writes a file there")
-    table_file = sidecar.table_path(outputs[0], layout, preset.name)
+    preset, layout, objects, meshes, skins, outputs, table_file = export
     warnings = mesh_io.modifier_warnings(objects, "export") + boxes.morph_warnings(objects, preset)
     if preset.extension == ".fbx" and context.scene.unit_settings.scale_length != 1.0:
         warnings.append(f"unit scale is not 1: {preset.label} will scale positions by it and the offsets will not match")
@@ -211,57 +187,96 @@ def export_objects(context, objects, preset_name: str, filepath: str, layout: st
         return stats
 
     stats = files.write_together(outputs, write)
-    if preset.colour_8bit and layouts.LAYOUTS[layout].classic_colour:
-        floats = [m for m in stats if m["colour"] == "FLOAT_COLOR"]
-        if floats:
-            warnings.append(
-                f"{', '.join(m['mesh'] for m in floats)}: float offsets (alpha up to "
-                f"{max(m['max_alpha'] for m in floats):.3g}); Unity usually stores vertex colours as "
-                "8-bit Color32, which clips alpha above 1 and rounds the rest: bake with 8-bit colour "
-                "for Unity (docs/EXPORT.md)")
-    for m in stats:
-        skin = m.get("skin")
-        if skin and skin["non_rigid_boxes"]:
-            warnings.append(f"{m['mesh']}: {skin['non_rigid_boxes']} of {m['boxes']} boxes have vertices with different "
-                            f"bone weights (up to {skin['worst_weight_spread']:.2g} apart): posed, their decoded origins "
-                            "leave the boxes (docs/ACCURACY.md); weight each box to its bones alike")
-        if skin and skin["unweighted_vertices"]:
-            warnings.append(f"{m['mesh']}: {skin['unweighted_vertices']} vertices carry no weight of "
-                            f"'{skin['armature']}': Blender leaves them at rest, engines may not")
-    owners = {ob.data.name: ob.name for ob in objects}
-    numbered_per_mesh = not layouts.LAYOUTS[layout].has_index
-    unlinked = [m["mesh"] for m in stats if numbered_per_mesh and "object_parent" in m.get("box_parameters", {})]
-    if unlinked:
-        warnings.append(f"{', '.join(unlinked)}: their objects have parent objects, but {layout} numbers boxes per "
-                        "mesh, so no box names a box of another mesh as parent: export with a layout that has "
-                        "box numbers (UV_FRAME, NORMAL_FRAME) for that")
-    for m in stats:
-        if m["transform_error"] > m.get("float32_error_bound", boxes.FILE_DECODE_TOLERANCE):
-            warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': the file's boxes decode up to "
-                            f"{m['transform_error']:.2g} of the largest offset away from Blender's: the exporter "
-                            "wrote positions in a space this export does not know; do not use the file")
-    for m in stats:
-        if m.get("stale_boxes"):
-            warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': {m['stale_boxes']} of {m['boxes']} boxes changed shape since the bake, "
-                            "so the file's offsets and frames are stale and decode off: run Bake Box Frames again, "
-                            "then export")
-        if m.get("stale_parents"):
-            warnings.append(f"object '{owners.get(m['mesh'], m['mesh'])}': {m['stale_parents']} of {m['boxes']} boxes "
-                            "name parents that no box holds since the bake (boxes deleted or added, meshes joined): "
-                            "the file makes them roots: run Bake Box Frames again for their parents, then export")
+    warnings += boxes.written_warnings(stats, objects, preset, layout)
+    return _report(export, filepath, stats, warnings, time.perf_counter() - start)
+
+
+def _checked_export(context, objects, preset_name, filepath, layout) -> _Export:
+    """The export of ``objects`` to ``filepath`` with the preset named ``preset_name`` and
+    ``layout`` (None: the preset's default, for a skinned export its first that skinning
+    carries), or ExportInputError saying why there can be none."""
+    preset = presets.PRESETS.get(preset_name)
+    if preset is None:
+        raise ExportInputError(f"preset must be one of {sorted(presets.PRESETS)}, got {preset_name!r}")
+    problem = path_problem(filepath, preset.name)
+    if problem:
+        raise ExportInputError(problem)
+    if layout is not None and layout not in preset.layouts:
+        raise ExportInputError(f"{preset.label} carries the layouts {', '.join(preset.layouts)}, not {layout}")
+    objects, meshes = _checked_meshes(objects, preset)
+    skins = _skins(context, objects, preset)
+    boxes.refuse_shared_world_meshes(objects, skins, preset)
+    layout = _skinned_layout(preset, layout, skins)
+    outputs = _checked_outputs(filepath, preset, layout)
+    return _Export(preset, layout, objects, meshes, skins, outputs, sidecar.table_path(outputs[0], layout, preset.name))
+
+
+def _checked_meshes(objects, preset):
+    """(each object once, their meshes: one object per mesh), or ExportInputError for no objects,
+    an object that is not a mesh, an unbaked mesh, or one without faces (but for a .blend)."""
+    objects = list({ob.name_full: ob for ob in objects}.values())  # each object once
+    if not objects:
+        raise ExportInputError("no objects to export")
+    for ob in objects:
+        if ob.type != "MESH":
+            raise ExportInputError(f"object '{ob.name}' is a {ob.type}, not a mesh")
+    meshes = [ob.data for ob in mesh_io.one_object_per_mesh(objects)]
+    for mesh in meshes:
+        baked_layers(mesh)  # refuses unbaked meshes before anything is changed
+        if not mesh.polygons and not preset.raw_blend:
+            raise ExportInputError(f"mesh '{mesh.name}' has no faces (its baked layers are left from faces since "
+                                   "deleted): an engine draws the boxes from faces, so the file would hold nothing")
+    return objects, meshes
+
+
+def _skinned_layout(preset, layout, skins) -> str:
+    """``layout``, or the preset's own when None (for a skinned export its first that skinning
+    carries); ExportInputError when ``skins`` is not empty and the layout keeps the frame where no
+    engine's skinning moves it."""
+    safe = [candidate for candidate in preset.layouts if layouts.LAYOUTS[candidate].skin_safe]
+    if layout is None:
+        layout = safe[0] if skins and safe else preset.layouts[0]
+    if skins and not layouts.LAYOUTS[layout].skin_safe:
+        name, skin = next(iter(skins.items()))
+        raise ExportInputError(
+            f"object '{name}' is skinned by '{skin.armature.name}': the {layout} layout keeps the box frame in UV "
+            "maps, which no engine's skinning moves, so posed boxes would not decode; "
+            + (f"export with the {' or '.join(safe)} layout (frame in NORMAL + TANGENT)" if safe else
+               f"{preset.label} has no layout with the frame in NORMAL + TANGENT: export with the GLTF or UNITY preset"))
+    return layout
+
+
+def _checked_outputs(filepath, preset, layout) -> list:
+    """The files the export writes (outputs_of), or ExportInputError when their folder is missing,
+    one is the open .blend file or one is a folder."""
+    folder = os.path.dirname(os.path.abspath(filepath))
+    if not os.path.isdir(folder):
+        raise ExportInputError(f"folder '{folder}' does not exist")
+    outputs = outputs_of(os.path.abspath(filepath), preset.name, layout)
+    for path in outputs:
+        if bpy.data.filepath and files.written_path(path) == os.path.realpath(bpy.data.filepath):
+            raise ExportInputError(f"'{path}' is the open .blend file: export to another path")
+        if os.path.isdir(path):
+            raise ExportInputError(f"'{path}' is a folder: the export writes a file there")
+    return outputs
+
+
+def _report(export, filepath, stats, warnings, seconds) -> dict:
+    """The report export_objects returns."""
     # What the engine's default import would cost is not a warning: the export wrote what sets the
     # import (NAME.glb.import for Godot 3; the sidecar the Unity and Unreal helpers read), and
     # import_note says it once.
     default_errors = [m["default_import_error"] for m in stats if "default_import_error" in m]
-    return {"preset": preset.name, "layout": layout, "path": os.path.abspath(filepath),
-            "skinned": _skin_summary(skins),
+    table_file = export.table_file
+    return {"preset": export.preset.name, "layout": export.layout, "path": os.path.abspath(filepath),
+            "skinned": _skin_summary(export.skins),
             "default_import_error": max(default_errors) if default_errors else None,
             "table": table_file,
             "table_size": list(godot.table_image_size(sum(m["boxes"] for m in stats), layouts.TABLE_PLANES))
             if table_file else None,
-            "sidecar": os.path.abspath(sidecar.sidecar_path(filepath)), "files": outputs,
-            "objects": [ob.name for ob in objects], "meshes": stats, "seconds": time.perf_counter() - start,
-            "warnings": warnings, "import_settings": preset.import_settings,
+            "sidecar": os.path.abspath(sidecar.sidecar_path(filepath)), "files": export.outputs,
+            "objects": [ob.name for ob in export.objects], "meshes": stats, "seconds": seconds,
+            "warnings": warnings, "import_settings": export.preset.import_settings,
             "transform_error": max((s["transform_error"] for s in stats), default=0.0),
             "stale_boxes": sum(s.get("stale_boxes", 0) for s in stats),
             "stale_parents": sum(s.get("stale_parents", 0) for s in stats)}
@@ -366,7 +381,7 @@ def _export_with_copies(context, objects, meshes, preset, layout, temp, skins):
             users[ob.name] = ob.data
             ob.data = copies[ob.data.as_pointer()]
         edit_mode.select_only(context.view_layer, objects + armatures)  # a selected armature exports its skin
-        _run_exporter(preset, layout, temp)
+        run_exporter(preset, layout, temp)
         if not os.path.exists(temp):
             raise RuntimeError(f"the {preset.label} exporter wrote nothing")
         if preset.extension == ".glb":

@@ -100,9 +100,9 @@ def _data_replaced(*_args):
 
 
 # (handler list, function): all persistent, so loading a file keeps them.
-_APP_HANDLERS = (("depsgraph_update_post", _geometry_changed), ("frame_change_post", _frame_changed),
-                 ("load_post", _data_replaced),
-                 ("undo_post", _data_replaced), ("redo_post", _data_replaced))
+APP_HANDLERS = (("depsgraph_update_post", _geometry_changed), ("frame_change_post", _frame_changed),
+                ("load_post", _data_replaced),
+                ("undo_post", _data_replaced), ("redo_post", _data_replaced))
 
 
 def register():
@@ -111,7 +111,7 @@ def register():
     global _handler
     if _handler is None:
         _handler = bpy.types.SpaceView3D.draw_handler_add(_draw_viewport, (), "WINDOW", "POST_VIEW")
-    for list_name, function in _APP_HANDLERS:
+    for list_name, function in APP_HANDLERS:
         handlers = getattr(bpy.app.handlers, list_name)
         if function not in handlers:
             handlers.append(bpy.app.handlers.persistent(function))
@@ -126,7 +126,7 @@ def unregister():
     if _handler is not None:
         bpy.types.SpaceView3D.draw_handler_remove(_handler, "WINDOW")
         _handler = None
-    for list_name, function in _APP_HANDLERS:
+    for list_name, function in APP_HANDLERS:
         handlers = getattr(bpy.app.handlers, list_name)
         if function in handlers:
             handlers.remove(function)
