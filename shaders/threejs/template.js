@@ -189,7 +189,10 @@ function useBoxmarchMaterial(THREE, mesh, material, frontToBack) {
   var inverse = new THREE.Matrix4();
   var size = new THREE.Vector2();
   mesh.onBeforeRender = function (renderer, scene, camera) {
-    material.uniforms.bmQuality.value.y = renderer.getDrawingBufferSize(size).y;
+    // the height of what is drawn into (the quality knob's pixel): the render target's, as the
+    // pre-pass sizes its own (useBoxmarchOccluders), else the drawing buffer's
+    var target = renderer.getRenderTarget();
+    material.uniforms.bmQuality.value.y = target ? target.height : renderer.getDrawingBufferSize(size).y;
     boxmarchObjectEye(THREE, mesh, camera, inverse, material.uniforms.bmEye.value);
     // a material shared by several meshes: three.js uploads uniforms only on a material change
     material.uniformsNeedUpdate = true;
