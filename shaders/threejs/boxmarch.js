@@ -482,11 +482,68 @@ function boxmarchOccluderScene(THREE, geometry, shape, side) {
   return scene;
 }
 
+// Layers of boxes over the view (boxmarchLayersOverView) from which the pre-pass runs: below it
+// the occluders' draws cost more than the hidden marches they save. The Blender preview's rule
+// (addon/boxmarch/preview/occlusion.py MIN_LAYERS); on SwiftShader a shallow chain and links in
+// rows draw faster without the pre-pass, a deep pile with it (docs/BENCHMARKS.md, three.js).
+var BOXMARCH_MIN_LAYERS = 2;
+
+// Each box's bounding sphere (x, y, z, radius; object space) from the first corner of its first
+// triangle (boxmarchTrianglesByBox): its origin, the corner moved by its offset along its frame
+// (bm_offset, bm_axis_y), and the length of its half-extents (bm_half_extents); as the preview
+// takes them from the bake (mesh_data.layers_over_view). null where the triangles are not grouped by box.
+function boxmarchBoxSpheres(geometry) {
+  var grouped = boxmarchTrianglesByBox(geometry);
+  if (!grouped) return null;
+  var index = geometry.index ? geometry.index.array : null, a = function (name) { return geometry.getAttribute(name); };
+  var position = a('position'), normal = a('normal'), tangent = a('tangent');
+  var offsetXY = a('bmOffsetXY'), offsetZ = a('bmOffsetZIndex'), halfXY = a('bmHalfXY'), halfZ = a('bmHalfZ');
+  var spheres = new Float64Array(4 * grouped.count);
+  function unit(v) {
+    var length = Math.hypot(v[0], v[1], v[2]);
+    return [v[0] / length, v[1] / length, v[2] / length];
+  }
+  for (var box = 0; box < grouped.count; box++) {
+    var t = grouped.triangles[grouped.start[box]], v = index ? index[3 * t] : 3 * t;
+    var n = [normal.getX(v), normal.getY(v), normal.getZ(v)], w = tangent.getW(v);
+    var x = unit([tangent.getX(v), tangent.getY(v), tangent.getZ(v)]), z = unit(n);
+    var y = unit([(n[1] * x[2] - n[2] * x[1]) * w, (n[2] * x[0] - n[0] * x[2]) * w, (n[0] * x[1] - n[1] * x[0]) * w]);
+    var f = [offsetXY.getX(v), offsetXY.getY(v), offsetZ.getX(v)];
+    spheres[4 * box] = position.getX(v) + x[0] * f[0] + y[0] * f[1] + z[0] * f[2];
+    spheres[4 * box + 1] = position.getY(v) + x[1] * f[0] + y[1] * f[1] + z[1] * f[2];
+    spheres[4 * box + 2] = position.getZ(v) + x[2] * f[0] + y[2] * f[1] + z[2] * f[2];
+    spheres[4 * box + 3] = Math.hypot(halfXY.getX(v), halfXY.getY(v), halfZ.getX(v));
+  }
+  return spheres;
+}
+
+// About how many layers of boxes cover a width x height view (the preview's
+// mesh_data.layers_over_view): the bounding spheres (boxmarchBoxSpheres) in the view frustum
+// projected by objectToClip (a THREE.Matrix4, object to clip space), each at most the view's area,
+// none behind the eye, their areas summed over the view's.
+function boxmarchLayersOverView(spheres, objectToClip, width, height) {
+  var m = objectToClip.elements;  // column-major: row r, column c at m[4 c + r]
+  var rowX = Math.hypot(m[0], m[4], m[8]), rowY = Math.hypot(m[1], m[5], m[9]);
+  var perspective = m[3] !== 0 || m[7] !== 0 || m[11] !== 0, area = width * height, sum = 0;
+  for (var i = 0; i < spheres.length; i += 4) {
+    var px = spheres[i], py = spheres[i + 1], pz = spheres[i + 2], radius = spheres[i + 3];
+    var cx = m[0] * px + m[4] * py + m[8] * pz + m[12], cy = m[1] * px + m[5] * py + m[9] * pz + m[13];
+    var w = perspective ? m[3] * px + m[7] * py + m[11] * pz + m[15] : 1;
+    if (!(w > 0) || Math.abs(cx) - radius * rowX > w || Math.abs(cy) - radius * rowY > w) continue;
+    var r = radius * rowY * 0.5 * height / w;
+    sum += Math.min(Math.PI * r * r, area);
+  }
+  return sum / area;
+}
+
 // Sets up the hidden-box pre-pass of mesh (given useBoxmarchMaterial's material) for occluder
 // shape id `shape` (boxmarchOccluderShape; null: none): before each draw of mesh, its occluders
 // are rendered into their own target, as three.js's Reflector renders its view from the mesh's
-// onBeforeRender, and the material reads them. A SkinnedMesh keeps marching every fragment (the
-// pre-pass draws the geometry at rest). Returns the pre-pass ({target, scene}), or null.
+// onBeforeRender, and the material reads them, where the boxes lie BOXMARCH_MIN_LAYERS layers
+// deep or more over the view (boxmarchLayersOverView, computed again when the camera, the mesh or
+// the view's size changed; elsewhere every fragment marches). A SkinnedMesh keeps marching every
+// fragment (the pre-pass draws the geometry at rest). Returns the pre-pass ({target, scene,
+// layers: of the last draw, drawn: whether the last draw ran it}), or null.
 function useBoxmarchOccluders(THREE, mesh, shape) {
   if (shape === null || shape === undefined || mesh.isSkinnedMesh) return null;
   var material = mesh.material;
@@ -495,12 +552,26 @@ function useBoxmarchOccluders(THREE, mesh, shape) {
   // the boxes' far sides culled where the march culls them (useBoxmarchBackFaceCulling)
   var scene = boxmarchOccluderScene(THREE, mesh.geometry, shape, mesh.userData.boxmarchEyeBox ? THREE.FrontSide : THREE.DoubleSide);
   var size = new THREE.Vector2(), clear = new THREE.Color(), white = new THREE.Color(1, 1, 1);
-  var marching = mesh.onBeforeRender;
+  var marching = mesh.onBeforeRender, spheres = boxmarchBoxSpheres(mesh.geometry);
+  var toClip = new THREE.Matrix4(), seen = new THREE.Matrix4(), seenSize = new THREE.Vector2();
+  var prePass = { target: target, scene: scene, layers: null, drawn: false };
   mesh.onBeforeRender = function (renderer, parentScene, camera, geometry, drawnMaterial, group) {
     marching.call(mesh, renderer, parentScene, camera, geometry, drawnMaterial, group);
     var previous = renderer.getRenderTarget();
     if (previous) size.set(previous.width, previous.height);
     else renderer.getDrawingBufferSize(size);
+    toClip.multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse).multiply(mesh.matrixWorld);
+    if (prePass.layers === null || !toClip.equals(seen) || !size.equals(seenSize)) {
+      // boxes not grouped by box (a triangle spanning two): as deep as any pile, the pre-pass as before
+      prePass.layers = spheres ? boxmarchLayersOverView(spheres, toClip, size.x, size.y) : Infinity;
+      seen.copy(toClip);
+      seenSize.copy(size);
+    }
+    prePass.drawn = prePass.layers >= BOXMARCH_MIN_LAYERS;
+    if (!prePass.drawn) {
+      material.uniforms.bmOcclusion.value.set(0, 0, 0, 0);
+      return;
+    }
     if (target.width !== size.x || target.height !== size.y) target.setSize(size.x, size.y);
     scene.children.forEach(function (occluder) {
       occluder.matrix.copy(mesh.matrixWorld);
@@ -519,8 +590,8 @@ function useBoxmarchOccluders(THREE, mesh, shape) {
     material.uniforms.bmOccluderDepth.value = target.texture;
     material.uniforms.bmOcclusion.value.set(1, 1 / size.x, 1 / size.y, 0);
   };
-  mesh.userData.boxmarchOccluders = { target: target, scene: scene };
-  return mesh.userData.boxmarchOccluders;
+  mesh.userData.boxmarchOccluders = prePass;
+  return prePass;
 }
 
 // Hidden fragments culled by the depth test (docs/ENGINES.md, three.js): SwiftShader, llvmpipe and
