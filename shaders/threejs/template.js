@@ -543,7 +543,8 @@ function boxmarchLayersOverView(spheres, objectToClip, width, height) {
 // deep or more over the view (boxmarchLayersOverView, computed again when the camera, the mesh or
 // the view's size changed; elsewhere every fragment marches). A SkinnedMesh keeps marching every
 // fragment (the pre-pass draws the geometry at rest). Returns the pre-pass ({target, scene,
-// layers: of the last draw, drawn: whether the last draw ran it}), or null.
+// layers: of the last draw, drawn: whether the last draw ran it, minLayers: the depth from which
+// it runs, BOXMARCH_MIN_LAYERS; 0 runs it at any depth}), or null.
 function useBoxmarchOccluders(THREE, mesh, shape) {
   if (shape === null || shape === undefined || mesh.isSkinnedMesh) return null;
   var material = mesh.material;
@@ -554,7 +555,7 @@ function useBoxmarchOccluders(THREE, mesh, shape) {
   var size = new THREE.Vector2(), clear = new THREE.Color(), white = new THREE.Color(1, 1, 1);
   var marching = mesh.onBeforeRender, spheres = boxmarchBoxSpheres(mesh.geometry);
   var toClip = new THREE.Matrix4(), seen = new THREE.Matrix4(), seenSize = new THREE.Vector2();
-  var prePass = { target: target, scene: scene, layers: null, drawn: false };
+  var prePass = { target: target, scene: scene, layers: null, drawn: false, minLayers: BOXMARCH_MIN_LAYERS };
   mesh.onBeforeRender = function (renderer, parentScene, camera, geometry, drawnMaterial, group) {
     marching.call(mesh, renderer, parentScene, camera, geometry, drawnMaterial, group);
     var previous = renderer.getRenderTarget();
@@ -567,7 +568,7 @@ function useBoxmarchOccluders(THREE, mesh, shape) {
       seen.copy(toClip);
       seenSize.copy(size);
     }
-    prePass.drawn = prePass.layers >= BOXMARCH_MIN_LAYERS;
+    prePass.drawn = prePass.layers >= prePass.minLayers;
     if (!prePass.drawn) {
       material.uniforms.bmOcclusion.value.set(0, 0, 0, 0);
       return;
