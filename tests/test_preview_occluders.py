@@ -157,3 +157,17 @@ def test_eye_in_a_large_box_of_a_mirrored_object(rendered):
     assert coverage >= 0.995 and depth_p999 <= 2e-6
     assert np.array_equal(r["ROOM_DEFAULT_rgba"], r["ROOM_PLAIN_rgba"])
     assert np.array_equal(r["ROOM_DEFAULT_depth"], r["ROOM_PLAIN_depth"])
+
+
+@pytest.mark.parametrize("quality", (0.5, 0.25))
+def test_no_pre_pass_below_full_quality(rendered, quality):
+    """occlusion.occluder_count draws no pre-pass below full quality (the knob's one-tap boxes stand
+    at their centre's depth, behind their own occluders): with occlusion.MIN_LAYERS at 0 the picture
+    of the pile seen from far is the one without the pre-pass, and the pre-pass forced there (the
+    gate bypassed: the negative control) changes pixels."""
+    on, off, forced = (rendered[f"Q{quality}_{name}_rgba"] for name in ("ON", "OFF", "FORCED"))
+    covered = off[..., 3] > 0
+    assert covered.sum() > 20
+    assert np.array_equal(on, off)
+    changed = (np.abs(forced - off).max(-1) > 1 / 255) & (covered | (forced[..., 3] > 0))
+    assert changed.sum() >= 0.05 * covered.sum(), (changed.sum(), covered.sum())

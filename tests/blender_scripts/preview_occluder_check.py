@@ -72,6 +72,24 @@ resolve.SHADE = shade
 occlusion.ENABLED, resolve.ENABLED, occlusion.MIN_LAYERS = True, True, float("inf")
 result["BELOW_MIN_LAYERS_steps"] = preview.render(scene, camera, W, H, output="STEPS")[0]
 occlusion.MIN_LAYERS = 0.0
+# Below full quality (the pile from 20 times as far: its links under 2 px long, under the knob's
+# one-tap size at 0.5 and 0.25): no pre-pass, whatever the depth (occlusion.occluder_count's gate); and
+# the pre-pass forced there (the gate bypassed: what it keeps out, a negative control).
+camera.location = 20.0 * Vector((0.4, -3.5, 0.6))
+camera.rotation_euler = (-camera.location).to_track_quat("-Z", "Y").to_euler()
+bpy.context.view_layer.update()
+occluder_count = occlusion.occluder_count
+for quality in (0.5, 0.25):
+    pile.boxmarch.quality = quality
+    for name, enabled, count in (("ON", True, occluder_count), ("OFF", False, occluder_count),
+                                 ("FORCED", True, lambda sdf, quality=1.0: occluder_count(sdf))):
+        occlusion.ENABLED, resolve.ENABLED, occlusion.occluder_count = enabled, False, count
+        result[f"Q{quality}_{name}_rgba"] = preview.render(scene, camera, W, H)[0]
+occlusion.occluder_count = occluder_count
+pile.boxmarch.quality = 1.0
+camera.location = (0.4, -3.5, 0.6)
+camera.rotation_euler = (-camera.location).to_track_quat("-Z", "Y").to_euler()
+bpy.context.view_layer.update()
 # The hard cases: the eye inside a box of the pile (that box marches from the eye; boxes the near
 # plane cuts lie around it) and the pile mirrored (front faces culled), without the pre-pass, with
 # it and one pass, and in the resolved passes (there the boxes holding the eye draw with the depth
