@@ -51,7 +51,6 @@ HERE = Path(__file__).resolve().parent
 
 SIZE, REPEATS = 320, 7
 SCENES = ("chain down the arm", "pile", "pile of boxes")
-BOXES_IN_PILE = 1000
 # the map of each scene's shape: the links' preset; None, the loader's default map (a rounded box)
 MAPS = {"LINK": "return sdf_preset_link(p, box_half);", "BOX": None}
 # label, loadBoxmarch's options (the map added), whether the pre-pass runs at any depth (minLayers 0)
@@ -297,7 +296,7 @@ def main():
     bpy.ops.wm.read_factory_settings(use_empty=True)
     threejs.TIMEOUT_S = 600  # a page times every configuration of a 4,000-link pile: minutes on SwiftShader
     made = scenes_to_measure(SIZE, 8)
-    made["pile of boxes"] = pile_of_boxes(BOXES_IN_PILE, np.random.default_rng(2), SIZE, SIZE)
+    made["pile of boxes"] = pile_of_boxes(SIZE, SIZE)
     releases = [r for r in ("r180", "r111") if threejs.available(r) is None]
     rows, pieces = [], []
     with tempfile.TemporaryDirectory(prefix="bench-threejs-") as folder:
