@@ -64,6 +64,8 @@ CONFIGS = (("none (cullBackFaces: false, occluders: false)", {"cullBackFaces": F
            ("quality 0.5 (no pre-pass below 1)", {"quality": 0.5}, False),
            ("ShaderMaterial (declareDepth: false), none",
             {"declareDepth": False, "cullBackFaces": False, "occluders": False}, False))
+HEADERS = ["scene", "three.js", "options", "declared", "pre-pass ran", "SDF evals/px", "frame ms", "speed-up",
+           "pixels changed", "covered", "sort ms", "clock ms"]
 FRONT_TO_BACK = 6  # the row whose sort is timed
 FORCED = 4  # the row whose pre-pass is also timed alone (PIECES)
 # Pieces of a frame timed in the same round robin: an empty scene (what render() and the read-back
@@ -294,7 +296,7 @@ def main():
 
     boxmarch.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    threejs.TIMEOUT_S = 600  # a page times every configuration of a 4,000-link pile: minutes on SwiftShader
+    threejs.TIMEOUT_S = 1800  # a page times every configuration of a 4,000-link pile: minutes on SwiftShader, more on a busy machine
     made = scenes_to_measure(SIZE, 8)
     made["pile of boxes"] = pile_of_boxes(SIZE, SIZE)
     releases = [r for r in ("r180", "r111") if threejs.available(r) is None]
@@ -306,11 +308,10 @@ def main():
                 configurations, parts = rows_for(name, made[name], glb, sidecar, release)
                 rows += configurations
                 pieces += parts
+                print(table(HEADERS, configurations), flush=True)  # each scene's rows as they come
     print(f"three.js on SwiftShader (headless Chromium), {SIZE} x {SIZE} px, best of {REPEATS}; "
           "the material's defaults (maxSteps 96, epsilon 1e-4) in every row")
-    print(table(["scene", "three.js", "options", "declared", "pre-pass ran", "SDF evals/px", "frame ms", "speed-up",
-                 "pixels changed", "covered",
-                 "sort ms", "clock ms"], rows))
+    print(table(HEADERS, rows))
     print("\nPieces of a frame, timed in the same round robin (PIECES)")
     print(table(["scene", "three.js", "what is drawn", "frame ms"], pieces))
 
