@@ -171,3 +171,18 @@ def test_no_pre_pass_below_full_quality(rendered, quality):
     assert np.array_equal(on, off)
     changed = (np.abs(forced - off).max(-1) > 1 / 255) & (covered | (forced[..., 3] > 0))
     assert changed.sum() >= 0.05 * covered.sum(), (changed.sum(), covered.sum())
+
+
+def test_marches_from_the_eye_are_bounded_by_the_occluders_never_dropped(rendered):
+    """The room's far faces, seen through a cluster of small tori whose occluders lie in front of
+    them: a fragment that marches from the eye is not thrown away behind the occluders (its box's
+    entry is the eye, in front of them), only its march is bounded. The SDF evaluations of every
+    fragment with the pre-pass (STEPS, green) are those the CPU reference's cost model counts by
+    that rule (core.render_boxes, occluders=True)."""
+    r = rendered
+    model, view, projection = r["room_matrix_world"], r["room_low_view"], r["room_low_projection"]
+    height, width = r["ROOM_LOW_steps"].shape[:2]
+    ref = core.render_boxes(r["room_centres"], quaternions_of(r["room_rotations"]), r["room_half"],
+                            projection @ view @ model, view @ model, width, height, sdf="TORUS", occluders=True)
+    assert (ref.depth < 1.0).mean() > 0.9
+    assert r["ROOM_LOW_steps"][..., 1].sum() == pytest.approx(ref.cost["sdf_evaluations"], rel=0.05)

@@ -147,6 +147,14 @@ result["room_view"], result["room_projection"] = preview.camera_matrices(scene, 
 for name, enabled in (("ROOM_PLAIN", False), ("ROOM_DEFAULT", True)):
     occlusion.ENABLED, resolve.ENABLED, draw.CULL_BACK_FACES = enabled, False, enabled
     result[f"{name}_rgba"], result[f"{name}_depth"] = preview.render(scene, camera, W, H)
+# Looking at the small tori (their occluders in front of the room's far faces over much of the
+# view): the SDF evaluations of every fragment with the pre-pass, where the room's marches from the
+# eye run bounded by the occluders, never dropped (STEPS, green).
+camera.rotation_euler = (room.matrix_world.to_3x3() @ Vector((1.0, 0.0, -0.05))).to_track_quat("-Z", "Y").to_euler()
+bpy.context.view_layer.update()
+result["room_low_view"], result["room_low_projection"] = preview.camera_matrices(scene, camera, W, H)
+occlusion.ENABLED, resolve.ENABLED, draw.CULL_BACK_FACES = True, False, True
+result["ROOM_LOW_steps"] = preview.render(scene, camera, W, H, output="STEPS")[0]
 occlusion.ENABLED, resolve.ENABLED, resolve.SHADE, resolve.MIN_OVERDRAW = True, True, shade, minimum
 occlusion.MIN_LAYERS, draw.CULL_BACK_FACES = min_layers, True
 
