@@ -93,6 +93,16 @@ def pile_of_links(count, rng, width, height):
             camera((0.0, -7.0, 1.0), (0.0, 0.0, 0.0), width, height))
 
 
+def pile_of_boxes(width, height, count=1000):
+    """A scene (as scenes_to_measure's) of ``count`` plain boxes of 0.3 x 0.25 x 0.2 at random in
+    the pile's 4 x 4 x 4 cube, turned at random, each drawn as the renderer's default shape (sdf
+    BOX: the preview's default; the three.js loader's default map), under the pile's camera."""
+    rng = np.random.default_rng(2)
+    centres = rng.uniform(-2.0, 2.0, (count, 3))
+    return (centres, scenes.random_rotations(count, rng), np.tile([0.15, 0.125, 0.1], (count, 1)), "BOX",
+            camera((0.0, -7.0, 1.0), (0.0, 0.0, 0.0), width, height))
+
+
 def smaller_piles(size, height=None, counts=(500, 1000, 2000)):
     """name -> scene (as scenes_to_measure) of piles of ``counts`` links in the pile's cube under
     its camera: where the hidden-box techniques start to pay (bench_preview_cost.py --sweep,

@@ -1,6 +1,7 @@
 """Viewport preview frame times with and without the GPU-side techniques, in one run.
 
-The scenes of bench_gpu_cost.py that fit a preview mesh (chain down the arm, pile, cloud), baked
+The scenes of bench_gpu_cost.py that fit a preview mesh (chain down the arm, pile, cloud) and its
+pile of 1,000 plain boxes (pile_of_boxes, the preview's default shape BOX; as bench_threejs_cost.py), baked
 and drawn by the preview's own draw_object into an offscreen buffer, timed from clear to a 1-pixel
 read-back (best of REPEATS frames, wall time and the process's CPU time over all of llvmpipe's
 threads, which a busy machine disturbs less). Rows:
@@ -39,7 +40,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 
 WIDTH, HEIGHT, REPEATS = 480, 480, 5
-SCENES = ("chain down the arm", "pile", "cloud")
+SCENES = ("chain down the arm", "pile", "cloud", "pile of boxes")
 # (label, create-info depth_write, draw.FRONT_TO_BACK, quality, occlusion.ENABLED, draw.CULL_BACK_FACES,
 #  resolve.ENABLED, occlusion.MIN_LAYERS): the pre-pass forced whatever the depth of the boxes (0)
 #  but in the shipped rows (None: the preview's own)
@@ -205,7 +206,7 @@ def main():
 
     import boxmarch
     from boxmarch import preview
-    from bench.bench_gpu_cost import scenes_to_measure
+    from bench.bench_gpu_cost import pile_of_boxes, scenes_to_measure
     from bench.common import table
 
     global WIDTH, HEIGHT
@@ -220,6 +221,7 @@ def main():
     bpy.ops.wm.read_factory_settings(use_empty=True)
     preview.ensure_gpu_context()
     made = scenes_to_measure(WIDTH, 8, HEIGHT)
+    made["pile of boxes"] = pile_of_boxes(WIDTH, HEIGHT)
     if args.sweep:
         rows = sweep_rows(bpy, made)
         print(f"Blender {bpy.app.version_string}, {gpu.platform.renderer_get()}, {WIDTH} x {HEIGHT} px, best of {REPEATS}")

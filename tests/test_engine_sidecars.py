@@ -8,10 +8,13 @@ with the plug-in enabled on the sidecars that crashed or stopped it; Unity: the 
 check compiled with mcs against the Unity API stub and run under mono; Unreal: the import script
 under a stub ``unreal`` module that fails on any use."""
 import base64
+import http.server
 import json
 import shutil
 import subprocess
 import sys
+import threading
+import time
 import types
 
 import pytest
@@ -213,3 +216,56 @@ def test_unreal_script_refuses_each_hostile_sidecar_before_using_unreal(tmp_path
                 namespace["import_boxmarch_fbx"](model, "/Game/Boxmarch")
     hostile_sidecars.check_refusals(messages, "UNREAL", "UV_FRAME",
                                     lambda name: str(tmp_path / f"{stems[name]}.boxmarch.json"))
+
+
+class _Streaming(http.server.BaseHTTPRequestHandler):
+    """Serves any path as a sidecar declaring STREAMED_LENGTH bytes (over the 16 MiB limit) and
+    streaming them slowly, CHUNK every PAUSE_S, until the client goes or STREAMED_LENGTH is sent
+    (about 14 s); counts the bytes sent in ``sent`` (a one-item list, set per server)."""
+
+    sent = [0]
+
+    def do_GET(self):
+        self.send_response(200)
+        self.send_header("Content-Type", "application/json")
+        self.send_header("Content-Length", str(STREAMED_LENGTH))
+        self.send_header("Access-Control-Allow-Origin", "*")  # the page is served from another port
+        self.end_headers()
+        chunk = b" " * CHUNK
+        try:
+            while self.sent[0] < STREAMED_LENGTH:
+                self.wfile.write(chunk)
+                self.wfile.flush()
+                self.sent[0] += len(chunk)
+                time.sleep(PAUSE_S)
+        except OSError:  # the client closed the connection
+            pass
+
+    def log_message(self, *args):
+        pass
+
+
+CHUNK, PAUSE_S = 1 << 16, 0.05
+STREAMED_LENGTH = hostile_sidecars.MAX_BYTES + CHUNK
+
+
+@pytest.mark.parametrize("release", sorted(threejs.RELEASES))
+def test_threejs_loader_refuses_a_declared_length_over_the_limit_before_reading_the_body(release):
+    """A server that declares a sidecar of over 16 MiB and streams it slowly: loadBoxmarch refuses
+    it from its Content-Length, the body unread: the server has sent a small share of it when the
+    page is done (reading it all would take about 14 s; the body-size check alone gives the same
+    message only after it)."""
+    need(threejs.available(release))
+    handler = type("Streaming", (_Streaming,), {"sent": [0]})
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    server.daemon_threads = True
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    url = f"http://127.0.0.1:{server.server_address[1]}/big.glb"
+    try:
+        message = threejs.run_page(b"", loader_job(url), threejs.shipped_material(release), release)
+    finally:
+        server.shutdown()
+        server.server_close()
+    sidecar = url.replace(".glb", ".boxmarch.json")
+    assert message == f"boxmarch: {sidecar}: larger than {hostile_sidecars.MAX_BYTES} bytes, not a boxmarch sidecar"
+    assert handler.sent[0] <= STREAMED_LENGTH // 4, handler.sent[0]

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from boxmarch import core, scenes
+from boxmarch.preview import mesh_data
 from tests.conftest import empty_scene, mesh_object
 from tests.engine_scene import TO_Y_UP
 from tests.engines import perspective, threejs
@@ -62,6 +63,20 @@ DRAWS_JS = """async function (gltf) {
 }""".replace("__NAMES__", json.dumps([*core.SDF_PRESETS, "PER_BOX"])).replace("__MAP__", json.dumps(LINK_MAP))
 
 
+# The pile from 8 times as far: about a tenth of a layer of boxes over the view
+FAR = dict(CAMERA, position=[8 * x for x in CAMERA["position"]])
+DECISION_AFTER = """var prePass = null;
+    scene.traverse(function (o) { if (o.userData.boxmarchOccluders) prePass = o.userData.boxmarchOccluders; });
+    return {layers: prePass.layers, drawn: prePass.drawn};"""
+
+
+def decision_job(camera):
+    """:class:`Job` drawing the pile as loadBoxmarch does by default from ``camera``: (Shot, the
+    layers of boxes its pre-pass measured over the view, whether it ran)."""
+    job = threejs.render_job(loader_js(True), W, H, camera, DECISION_AFTER)
+    return threejs.Job(job.js, lambda out: (job.parse(out), out["layers"], out["drawn"]))
+
+
 @pytest.fixture(scope="module", params=sorted(threejs.RELEASES))
 def counted(request, pile):
     release = request.param
@@ -69,11 +84,13 @@ def counted(request, pile):
     glb, sidecar, centres, rotations = pile
     # and from inside the first link's box, where the near plane cuts the boxes around the eye
     inside = dict(CAMERA, position=(TO_Y_UP @ centres[0]).tolist())
-    jobs = [threejs.count_job(loader_js(occluders), W, H, camera) for camera in (CAMERA, inside)
+    jobs = [threejs.count_job(loader_js(occluders), W, H, camera) for camera in (CAMERA, inside, FAR)
             for occluders in (True, False)]
-    results = threejs.run_jobs(glb, [*jobs, DRAWS_JS], threejs.shipped_material(release), release,
+    decided = [decision_job(camera) for camera in (CAMERA, FAR)]
+    results = threejs.run_jobs(glb, [*jobs, DRAWS_JS, *decided], threejs.shipped_material(release), release,
                                {"pile.glb": glb, "pile.boxmarch.json": sidecar})
-    return dict(zip(("on", "off", "inside_on", "inside_off", "draws"), results)), centres, rotations
+    names = ("on", "off", "inside_on", "inside_off", "far_on", "far_off", "draws", "decided", "far_decided")
+    return dict(zip(names, results)), centres, rotations
 
 
 def test_pre_pass_changes_no_pixel_with_the_eye_inside_the_pile(counted):
@@ -121,3 +138,22 @@ def test_pre_pass_draws_each_preset_s_occluder_boxes_and_no_empty_draw(counted):
                 for name in core.SDF_PRESETS}
     expected["PER_BOX"] = core.occluder_boxes("BOX", LINK / 2)[0].shape[1]
     assert out["draws"] == expected
+
+
+def test_pre_pass_runs_where_the_boxes_lie_min_layers_deep(counted):
+    """loadBoxmarch decides as the preview does (occlusion.MIN_LAYERS, mesh_data.layers_over_view):
+    the layers it measures are the preview's for the links' known centres and boxes, the pre-pass
+    runs on the pile seen close and not from far, where every fragment's evaluations are those
+    of ``occluders: false``, to the count (and close, fewer)."""
+    from boxmarch.preview import occlusion  # imports Blender's gpu module: bpy is loaded by the pile's bake
+
+    out, centres, _rotations = counted
+    for name, runs in (("decided", True), ("far_decided", False)):
+        shot, layers, drawn = out[name]
+        to_clip = perspective(CAMERA, W / H) @ shot.view
+        expected = mesh_data.layers_over_view(centres @ TO_Y_UP.T, np.tile(LINK / 2, (len(centres), 1)), to_clip, W, H)
+        assert layers == pytest.approx(expected, rel=1e-4)
+        assert drawn == runs == (layers >= occlusion.MIN_LAYERS)
+    assert np.array_equal(out["far_on"][1], out["far_off"][1])
+    assert (out["far_on"][0].pixels[..., 3] > 0).sum() > 100
+    assert out["on"][1].sum() < out["off"][1].sum()

@@ -21,7 +21,8 @@
 // orthographic views the object-space view direction with w = 0); march (epsilon, relaxation,
 // max_distance, max_steps); base_color; mode.x (0 shaded, 1 object-space normal as colour,
 // 2 steps of every fragment in red, 1 in blue, with alpha 1, for Blender's ADDITIVE blend: src *
-// alpha + dst);
+// alpha + dst); mode.y (1: the object's matrix mirrors, so its boxes' outer faces are the ones
+// gl_FrontFacing calls back faces);
 // quality (x: the quality knob of bm_quality, y: the viewport height in pixels);
 // blend.x (the blend radius of PER_BOX_BLEND, else 0); blend.y (1: colour each box by its
 // material id); occlusion.x (1: the hidden-box pre-pass ran and occluder_depth holds the nearest
@@ -107,13 +108,14 @@ void main()
   mat3 frame = mat3(preview.frame);
   vec3 rd = normalize(bm_to_local(frame * (ray_object / eye_distance), x, y, z));
 
-  // A fragment where the ray enters: front-facing, or (whatever the winding) more of the box
-  // ahead than behind. A fragment of the far side only marches when the eye is inside the box
-  // (from the eye).
+  // A fragment where the ray enters: an outer face (front-facing, or back-facing in a mirrored
+  // object: preview.mode.y), or (whatever the winding) more of the box ahead than behind. A
+  // fragment of the far side only marches when the eye is inside the box (from the eye).
   vec2 span = bm_box_span(ro, rd, drawn_half);
   float t_end = span.y;
   vec3 march_start = obj_pos;
-  bool from_eye = !gl_FrontFacing && span.x + span.y < 0.0;
+  bool outer_face = gl_FrontFacing != (preview.mode.y == 1);
+  bool from_eye = !outer_face && span.x + span.y < 0.0;
   if (from_eye) {
     if (preview.eye.w < 0.5 || eye_distance > -span.x) {
       bm_drop(0.0);

@@ -186,7 +186,10 @@ function useBoxmarchMaterial(THREE, mesh, material, frontToBack) {
   var inverse = new THREE.Matrix4();
   var size = new THREE.Vector2();
   mesh.onBeforeRender = function (renderer, scene, camera) {
-    material.uniforms.bmQuality.value.y = renderer.getDrawingBufferSize(size).y;
+    // the height of what is drawn into (the quality knob's pixel): the render target's, as the
+    // pre-pass sizes its own (useBoxmarchOccluders), else the drawing buffer's
+    var target = renderer.getRenderTarget();
+    material.uniforms.bmQuality.value.y = target ? target.height : renderer.getDrawingBufferSize(size).y;
     boxmarchObjectEye(THREE, mesh, camera, inverse, material.uniforms.bmEye.value);
     // a material shared by several meshes: three.js uploads uniforms only on a material change
     material.uniformsNeedUpdate = true;
@@ -269,44 +272,111 @@ function sortBoxmarchFrontToBack(THREE, mesh, camera) {
   return true;
 }
 
+// The triangles of geometry grouped box by box (the box number of bmOffsetZIndex.y): the boxes'
+// count, where each box's triangles start (start[box]..start[box + 1]) in `triangles` (triangle
+// numbers, in the file's order within a box), or null when a triangle's corners lie in different
+// boxes or a box number is not a number. Typed arrays of the triangles' count only (a counting sort
+// on each box number's rank among the distinct ones): no Map or Set, whose entries JavaScript
+// limits to 2^24, fewer than the directed edges of 466,000 boxes.
+function boxmarchTrianglesByBox(geometry) {
+  var number = geometry.getAttribute('bmOffsetZIndex'), index = geometry.index ? geometry.index.array : null;
+  var count = Math.floor((index ? index.length : number.count) / 3), boxOf = new Float64Array(count);
+  for (var t = 0; t < count; t++) {
+    var box = number.getY(index ? index[3 * t] : 3 * t);
+    if (box !== box || number.getY(index ? index[3 * t + 1] : 3 * t + 1) !== box
+        || number.getY(index ? index[3 * t + 2] : 3 * t + 2) !== box) return null;
+    boxOf[t] = box;
+  }
+  var numbers = boxOf.slice().sort(), boxes = 0;
+  for (t = 0; t < count; t++) if (t === 0 || numbers[t] !== numbers[t - 1]) numbers[boxes++] = numbers[t];
+  var rank = new Uint32Array(count), start = new Uint32Array(boxes + 1);
+  for (t = 0; t < count; t++) {
+    var low = 0, high = boxes - 1;
+    while (low < high) {
+      var middle = (low + high) >> 1;
+      if (numbers[middle] < boxOf[t]) low = middle + 1;
+      else high = middle;
+    }
+    rank[t] = low;
+    start[low + 1]++;
+  }
+  for (box = 0; box < boxes; box++) start[box + 1] += start[box];
+  var triangles = new Uint32Array(count), filled = start.slice(0, boxes);
+  for (t = 0; t < count; t++) triangles[filled[rank[t]]++] = t;
+  return { count: boxes, start: start, triangles: triangles };
+}
+
 // Whether every box of geometry is closed and wound outward, the rule the Blender preview culls
-// by (mesh_data.closed_outward) applied to the triangles the file carries: within each box (the
-// box number of bmOffsetZIndex.y), its vertices welded by position (the glTF export splits them per
-// face corner), each directed edge once and its reverse once, and the box's signed volume
-// positive. Then a box's back faces are its far side, hidden by its own front.
+// by (mesh_data.closed_outward) applied to the triangles the file carries, box by box
+// (boxmarchTrianglesByBox; false where a triangle spans boxes): its corners welded by position
+// (the glTF export splits vertices per face corner), each directed edge once and its reverse once,
+// and its signed volume positive. Then a box's back faces are its far side, hidden by its own
+// front. Time linear in the corners (hash tables sized for the largest box, reused box after box:
+// an entry counts only if stamped with the box being checked); memory typed arrays of the
+// triangles' count and of the largest box's corners.
 function boxmarchClosedOutward(geometry) {
-  var position = geometry.getAttribute('position'), number = geometry.getAttribute('bmOffsetZIndex');
-  var index = geometry.index ? geometry.index.array : null, corners = index ? index.length : position.count;
+  var position = geometry.getAttribute('position');
+  var corners = geometry.index ? geometry.index.array.length : position.count;
   if (!corners || corners % 3) return false;
-  var welded = new Map(), id = new Float64Array(position.count);
-  for (var v = 0; v < position.count; v++) {
-    var key = number.getY(v) + ':' + position.getX(v) + ',' + position.getY(v) + ',' + position.getZ(v);
-    if (!welded.has(key)) welded.set(key, welded.size);
-    id[v] = welded.get(key);
+  var grouped = boxmarchTrianglesByBox(geometry);
+  if (!grouped) return false;
+  var index = geometry.index ? geometry.index.array : null, most = 0;
+  for (var box = 0; box < grouped.count; box++) most = Math.max(most, 3 * (grouped.start[box + 1] - grouped.start[box]));
+  var size = 2;
+  while (size < 2 * most) size *= 2;
+  // the box's corners (their positions, as float64 words for hashing; their welded ids), and two
+  // tables: welded positions (the corner holding each slot) and directed edges (welded ids)
+  var xyz = new Float64Array(3 * most), words = new Int32Array(xyz.buffer), id = new Int32Array(most);
+  var held = new Int32Array(size), heldBy = new Uint32Array(size);
+  var from = new Int32Array(size), to = new Int32Array(size), edgeBy = new Uint32Array(size);
+  function edgeSlot(a, b, stamp) {  // the slot of directed edge a -> b, or of the free slot where it would go
+    var slot = (Math.imul(a, 0x9E3779B1) ^ Math.imul(b, 0x85EBCA77)) & (size - 1);
+    while (edgeBy[slot] === stamp && (from[slot] !== a || to[slot] !== b)) slot = (slot + 1) & (size - 1);
+    return slot;
   }
-  var n = welded.size, edges = new Set(), volume = new Map(), corner = [0, 0, 0];
-  for (var t = 0; t < corners; t += 3) {
-    for (var k = 0; k < 3; k++) corner[k] = index ? index[t + k] : t + k;
-    for (k = 0; k < 3; k++) {
-      var edge = id[corner[k]] * n + id[corner[(k + 1) % 3]];
-      if (edges.has(edge)) return false;
-      edges.add(edge);
+  for (box = 0; box < grouped.count; box++) {
+    var first = grouped.start[box], n = 3 * (grouped.start[box + 1] - first), stamp = box + 1, welded = 0;
+    for (var c = 0; c < n; c++) {
+      var t = grouped.triangles[first + (c / 3 | 0)], v = index ? index[3 * t + c % 3] : 3 * t + c % 3;
+      // + 0: -0 welds with 0
+      var x = xyz[3 * c] = position.getX(v) + 0, y = xyz[3 * c + 1] = position.getY(v) + 0;
+      var z = xyz[3 * c + 2] = position.getZ(v) + 0, hash = 0;
+      for (var w = 6 * c; w < 6 * c + 6; w++) hash = Math.imul(hash ^ words[w], 0x9E3779B1) ^ (hash >>> 15);
+      var slot = hash & (size - 1);
+      for (; heldBy[slot] === stamp; slot = (slot + 1) & (size - 1)) {
+        var other = held[slot];
+        if (xyz[3 * other] === x && xyz[3 * other + 1] === y && xyz[3 * other + 2] === z) break;
+      }
+      if (heldBy[slot] === stamp) {
+        id[c] = id[held[slot]];
+      } else {
+        heldBy[slot] = stamp;
+        held[slot] = c;
+        id[c] = welded++;
+      }
     }
-    // the signed volume about the box's first corner: a closed surface's does not depend on the point
-    var box = number.getY(corner[0]);
-    if (!volume.has(box)) volume.set(box, { o: corner[0], sum: 0 });
-    var entry = volume.get(box), p = [];
-    for (k = 0; k < 3; k++) {
-      p.push([position.getX(corner[k]) - position.getX(entry.o), position.getY(corner[k]) - position.getY(entry.o),
-        position.getZ(corner[k]) - position.getZ(entry.o)]);
+    var volume = 0;
+    for (c = 0; c < n; c += 3) {
+      for (var k = 0; k < 3; k++) {
+        var a = id[c + k], b = id[c + (k + 1) % 3];
+        slot = edgeSlot(a, b, stamp);
+        if (edgeBy[slot] === stamp) return false;  // a directed edge twice
+        edgeBy[slot] = stamp;
+        from[slot] = a;
+        to[slot] = b;
+      }
+      // the signed volume about the box's first corner: a closed surface's does not depend on the point
+      var ax = xyz[3 * c] - xyz[0], ay = xyz[3 * c + 1] - xyz[1], az = xyz[3 * c + 2] - xyz[2];
+      var bx = xyz[3 * c + 3] - xyz[0], by = xyz[3 * c + 4] - xyz[1], bz = xyz[3 * c + 5] - xyz[2];
+      var cx = xyz[3 * c + 6] - xyz[0], cy = xyz[3 * c + 7] - xyz[1], cz = xyz[3 * c + 8] - xyz[2];
+      volume += ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx);
     }
-    entry.sum += p[0][0] * (p[1][1] * p[2][2] - p[1][2] * p[2][1]) + p[0][1] * (p[1][2] * p[2][0] - p[1][0] * p[2][2])
-      + p[0][2] * (p[1][0] * p[2][1] - p[1][1] * p[2][0]);
+    if (!(volume > 0)) return false;
+    for (c = 0; c < n; c++) {  // every directed edge's reverse
+      if (edgeBy[edgeSlot(id[c - c % 3 + (c + 1) % 3], id[c], stamp)] !== stamp) return false;
+    }
   }
-  var closed = true;
-  edges.forEach(function (e) { if (closed && !edges.has((e % n) * n + Math.floor(e / n))) closed = false; });
-  volume.forEach(function (entry) { if (!(entry.sum > 0)) closed = false; });
-  return closed;
+  return true;
 }
 
 // A copy of mesh's marching material with defines added (the uniforms shared) drawing `side`.
@@ -409,11 +479,69 @@ function boxmarchOccluderScene(THREE, geometry, shape, side) {
   return scene;
 }
 
+// Layers of boxes over the view (boxmarchLayersOverView) from which the pre-pass runs: below it
+// the occluders' draws cost more than the hidden marches they save. The Blender preview's rule
+// (addon/boxmarch/preview/occlusion.py MIN_LAYERS); on SwiftShader a shallow chain and links in
+// rows draw faster without the pre-pass, a deep pile with it (docs/BENCHMARKS.md, three.js).
+var BOXMARCH_MIN_LAYERS = 2;
+
+// Each box's bounding sphere (x, y, z, radius; object space) from the first corner of its first
+// triangle (boxmarchTrianglesByBox): its origin, the corner moved by its offset along its frame
+// (bm_offset, bm_axis_y), and the length of its half-extents (bm_half_extents); as the preview
+// takes them from the bake (mesh_data.layers_over_view). null where the triangles are not grouped by box.
+function boxmarchBoxSpheres(geometry) {
+  var grouped = boxmarchTrianglesByBox(geometry);
+  if (!grouped) return null;
+  var index = geometry.index ? geometry.index.array : null, a = function (name) { return geometry.getAttribute(name); };
+  var position = a('position'), normal = a('normal'), tangent = a('tangent');
+  var offsetXY = a('bmOffsetXY'), offsetZ = a('bmOffsetZIndex'), halfXY = a('bmHalfXY'), halfZ = a('bmHalfZ');
+  var spheres = new Float64Array(4 * grouped.count);
+  function unit(v) {
+    var length = Math.hypot(v[0], v[1], v[2]);
+    return [v[0] / length, v[1] / length, v[2] / length];
+  }
+  for (var box = 0; box < grouped.count; box++) {
+    var t = grouped.triangles[grouped.start[box]], v = index ? index[3 * t] : 3 * t;
+    var n = [normal.getX(v), normal.getY(v), normal.getZ(v)], w = tangent.getW(v);
+    var x = unit([tangent.getX(v), tangent.getY(v), tangent.getZ(v)]), z = unit(n);
+    var y = unit([(n[1] * x[2] - n[2] * x[1]) * w, (n[2] * x[0] - n[0] * x[2]) * w, (n[0] * x[1] - n[1] * x[0]) * w]);
+    var f = [offsetXY.getX(v), offsetXY.getY(v), offsetZ.getX(v)];
+    spheres[4 * box] = position.getX(v) + x[0] * f[0] + y[0] * f[1] + z[0] * f[2];
+    spheres[4 * box + 1] = position.getY(v) + x[1] * f[0] + y[1] * f[1] + z[1] * f[2];
+    spheres[4 * box + 2] = position.getZ(v) + x[2] * f[0] + y[2] * f[1] + z[2] * f[2];
+    spheres[4 * box + 3] = Math.hypot(halfXY.getX(v), halfXY.getY(v), halfZ.getX(v));
+  }
+  return spheres;
+}
+
+// About how many layers of boxes cover a width x height view (the preview's
+// mesh_data.layers_over_view): the bounding spheres (boxmarchBoxSpheres) in the view frustum
+// projected by objectToClip (a THREE.Matrix4, object to clip space), each at most the view's area,
+// none behind the eye, their areas summed over the view's.
+function boxmarchLayersOverView(spheres, objectToClip, width, height) {
+  var m = objectToClip.elements;  // column-major: row r, column c at m[4 c + r]
+  var rowX = Math.hypot(m[0], m[4], m[8]), rowY = Math.hypot(m[1], m[5], m[9]);
+  var perspective = m[3] !== 0 || m[7] !== 0 || m[11] !== 0, area = width * height, sum = 0;
+  for (var i = 0; i < spheres.length; i += 4) {
+    var px = spheres[i], py = spheres[i + 1], pz = spheres[i + 2], radius = spheres[i + 3];
+    var cx = m[0] * px + m[4] * py + m[8] * pz + m[12], cy = m[1] * px + m[5] * py + m[9] * pz + m[13];
+    var w = perspective ? m[3] * px + m[7] * py + m[11] * pz + m[15] : 1;
+    if (!(w > 0) || Math.abs(cx) - radius * rowX > w || Math.abs(cy) - radius * rowY > w) continue;
+    var r = radius * rowY * 0.5 * height / w;
+    sum += Math.min(Math.PI * r * r, area);
+  }
+  return sum / area;
+}
+
 // Sets up the hidden-box pre-pass of mesh (given useBoxmarchMaterial's material) for occluder
 // shape id `shape` (boxmarchOccluderShape; null: none): before each draw of mesh, its occluders
 // are rendered into their own target, as three.js's Reflector renders its view from the mesh's
-// onBeforeRender, and the material reads them. A SkinnedMesh keeps marching every fragment (the
-// pre-pass draws the geometry at rest). Returns the pre-pass ({target, scene}), or null.
+// onBeforeRender, and the material reads them, where the boxes lie BOXMARCH_MIN_LAYERS layers
+// deep or more over the view (boxmarchLayersOverView, computed again when the camera, the mesh or
+// the view's size changed; elsewhere every fragment marches). A SkinnedMesh keeps marching every
+// fragment (the pre-pass draws the geometry at rest). Returns the pre-pass ({target, scene,
+// layers: of the last draw, drawn: whether the last draw ran it, minLayers: the depth from which
+// it runs, BOXMARCH_MIN_LAYERS; 0 runs it at any depth}), or null.
 function useBoxmarchOccluders(THREE, mesh, shape) {
   if (shape === null || shape === undefined || mesh.isSkinnedMesh) return null;
   var material = mesh.material;
@@ -422,12 +550,26 @@ function useBoxmarchOccluders(THREE, mesh, shape) {
   // the boxes' far sides culled where the march culls them (useBoxmarchBackFaceCulling)
   var scene = boxmarchOccluderScene(THREE, mesh.geometry, shape, mesh.userData.boxmarchEyeBox ? THREE.FrontSide : THREE.DoubleSide);
   var size = new THREE.Vector2(), clear = new THREE.Color(), white = new THREE.Color(1, 1, 1);
-  var marching = mesh.onBeforeRender;
+  var marching = mesh.onBeforeRender, spheres = boxmarchBoxSpheres(mesh.geometry);
+  var toClip = new THREE.Matrix4(), seen = new THREE.Matrix4(), seenSize = new THREE.Vector2();
+  var prePass = { target: target, scene: scene, layers: null, drawn: false, minLayers: BOXMARCH_MIN_LAYERS };
   mesh.onBeforeRender = function (renderer, parentScene, camera, geometry, drawnMaterial, group) {
     marching.call(mesh, renderer, parentScene, camera, geometry, drawnMaterial, group);
     var previous = renderer.getRenderTarget();
     if (previous) size.set(previous.width, previous.height);
     else renderer.getDrawingBufferSize(size);
+    toClip.multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse).multiply(mesh.matrixWorld);
+    if (prePass.layers === null || !toClip.equals(seen) || !size.equals(seenSize)) {
+      // boxes not grouped by box (a triangle spanning two): as deep as any pile, the pre-pass as before
+      prePass.layers = spheres ? boxmarchLayersOverView(spheres, toClip, size.x, size.y) : Infinity;
+      seen.copy(toClip);
+      seenSize.copy(size);
+    }
+    prePass.drawn = prePass.layers >= prePass.minLayers;
+    if (!prePass.drawn) {
+      material.uniforms.bmOcclusion.value.set(0, 0, 0, 0);
+      return;
+    }
     if (target.width !== size.x || target.height !== size.y) target.setSize(size.x, size.y);
     scene.children.forEach(function (occluder) {
       occluder.matrix.copy(mesh.matrixWorld);
@@ -446,8 +588,8 @@ function useBoxmarchOccluders(THREE, mesh, shape) {
     material.uniforms.bmOccluderDepth.value = target.texture;
     material.uniforms.bmOcclusion.value.set(1, 1 / size.x, 1 / size.y, 0);
   };
-  mesh.userData.boxmarchOccluders = { target: target, scene: scene };
-  return mesh.userData.boxmarchOccluders;
+  mesh.userData.boxmarchOccluders = prePass;
+  return prePass;
 }
 
 // Hidden fragments culled by the depth test (docs/ENGINES.md, three.js): SwiftShader, llvmpipe and

@@ -20,7 +20,7 @@ from mathutils import Vector  # noqa: E402
 import boxmarch  # noqa: E402
 from boxmarch import mesh_io, preview, scenes  # noqa: E402
 from boxmarch.formats import shader_sources  # noqa: E402
-from boxmarch.preview import occlusion, resolve  # noqa: E402
+from boxmarch.preview import draw, occlusion, resolve  # noqa: E402
 from boxmarch.preview import shader as pv_shader  # noqa: E402
 
 boxmarch.register()
@@ -72,6 +72,24 @@ resolve.SHADE = shade
 occlusion.ENABLED, resolve.ENABLED, occlusion.MIN_LAYERS = True, True, float("inf")
 result["BELOW_MIN_LAYERS_steps"] = preview.render(scene, camera, W, H, output="STEPS")[0]
 occlusion.MIN_LAYERS = 0.0
+# Below full quality (the pile from 20 times as far: its links under 2 px long, under the knob's
+# one-tap size at 0.5 and 0.25): no pre-pass, whatever the depth (occlusion.occluder_count's gate); and
+# the pre-pass forced there (the gate bypassed: what it keeps out, a negative control).
+camera.location = 20.0 * Vector((0.4, -3.5, 0.6))
+camera.rotation_euler = (-camera.location).to_track_quat("-Z", "Y").to_euler()
+bpy.context.view_layer.update()
+occluder_count = occlusion.occluder_count
+for quality in (0.5, 0.25):
+    pile.boxmarch.quality = quality
+    for name, enabled, count in (("ON", True, occluder_count), ("OFF", False, occluder_count),
+                                 ("FORCED", True, lambda sdf, quality=1.0: occluder_count(sdf))):
+        occlusion.ENABLED, resolve.ENABLED, occlusion.occluder_count = enabled, False, count
+        result[f"Q{quality}_{name}_rgba"] = preview.render(scene, camera, W, H)[0]
+occlusion.occluder_count = occluder_count
+pile.boxmarch.quality = 1.0
+camera.location = (0.4, -3.5, 0.6)
+camera.rotation_euler = (-camera.location).to_track_quat("-Z", "Y").to_euler()
+bpy.context.view_layer.update()
 # The hard cases: the eye inside a box of the pile (that box marches from the eye; boxes the near
 # plane cuts lie around it) and the pile mirrored (front faces culled), without the pre-pass, with
 # it and one pass, and in the resolved passes (there the boxes holding the eye draw with the depth
@@ -99,8 +117,46 @@ if resolve.available():
     shader_sources.fullscreen_source = fullscreen_source
     resolve.refused = None
     pv_shader.clear_cache()
+# The eye inside a large box of a mirrored object (a room: a torus's box, the eye in the torus's
+# hole looking at its far wall over the tube), with 20 small tori inside the tube: the room's far
+# faces, front-facing on screen in the mirrored object, are the fragments that march from the eye.
+# Without the cut (no culling, no pre-pass) and by default (culling, the pre-pass whatever the depth).
+pile.hide_viewport = pile.hide_render = True
+pile.boxmarch.preview = False
+room_rng = np.random.default_rng(3)
+room_centres = np.vstack([[0.0, 0.0, 0.0], np.c_[room_rng.uniform(1.9, 2.7, 20), room_rng.uniform(-1.2, 1.2, 20),
+                                                 room_rng.uniform(-0.4, 0.4, 20)]])
+room_sizes = np.vstack([[6.0, 6.0, 1.6], np.tile([0.3, 0.3, 0.1], (20, 1))])
+room_rotations = np.vstack([np.eye(3)[None], scenes.random_rotations(20, room_rng)])
+arrays = scenes.box_arrays(room_centres, room_sizes, room_rotations)
+room = bpy.data.objects.new("room", mesh_io.new_mesh("room", arrays[0], *arrays[2:]))
+scene.collection.objects.link(room)
+for other in scene.objects:
+    other.select_set(other == room)
+bpy.context.view_layer.objects.active = room
+assert bpy.ops.boxmarch.bake(sort_axes_by_extent=False) == {"FINISHED"}
+room.boxmarch.preview = True
+room.boxmarch.sdf = "TORUS"
+room.scale = (-1.0, 1.0, 1.0)
+camera.location = room.matrix_world @ Vector((0.3, 0.2, 0.1))
+camera.rotation_euler = (room.matrix_world.to_3x3() @ Vector((1.0, 0.1, 0.6))).to_track_quat("-Z", "Y").to_euler()
+bpy.context.view_layer.update()
+result.update(room_centres=room_centres, room_half=room_sizes / 2, room_rotations=room_rotations,
+              room_matrix_world=np.array(room.matrix_world))
+result["room_view"], result["room_projection"] = preview.camera_matrices(scene, camera, W, H)
+for name, enabled in (("ROOM_PLAIN", False), ("ROOM_DEFAULT", True)):
+    occlusion.ENABLED, resolve.ENABLED, draw.CULL_BACK_FACES = enabled, False, enabled
+    result[f"{name}_rgba"], result[f"{name}_depth"] = preview.render(scene, camera, W, H)
+# Looking at the small tori (their occluders in front of the room's far faces over much of the
+# view): the SDF evaluations of every fragment with the pre-pass, where the room's marches from the
+# eye run bounded by the occluders, never dropped (STEPS, green).
+camera.rotation_euler = (room.matrix_world.to_3x3() @ Vector((1.0, 0.0, -0.05))).to_track_quat("-Z", "Y").to_euler()
+bpy.context.view_layer.update()
+result["room_low_view"], result["room_low_projection"] = preview.camera_matrices(scene, camera, W, H)
+occlusion.ENABLED, resolve.ENABLED, draw.CULL_BACK_FACES = True, False, True
+result["ROOM_LOW_steps"] = preview.render(scene, camera, W, H, output="STEPS")[0]
 occlusion.ENABLED, resolve.ENABLED, resolve.SHADE, resolve.MIN_OVERDRAW = True, True, shade, minimum
-occlusion.MIN_LAYERS = min_layers
+occlusion.MIN_LAYERS, draw.CULL_BACK_FACES = min_layers, True
 
 np.savez_compressed(out_path, **result)
 sys.stdout.flush()

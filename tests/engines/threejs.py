@@ -203,6 +203,35 @@ _COUNT_AFTER = counting_js("  if (!hit) discard;",
 FRAGMENTS_AFTER = counting_js("void main() {", "void main() {\n  gl_FragColor = vec4(1.0, 0.0, 0.0, 1.0);\n  return;")
 
 
+# A page function (no model needed) making a BufferGeometry of ``count`` cubes of half-extent 1,
+# 3 units apart along x, box numbers 0 .. count - 1 in bmOffsetZIndex.y (its only other attribute
+# is position), each face's 4 corners its own vertices as the glTF export splits them, every
+# triangle wound outward, indexed (Uint32): the shape of the export that boxmarchClosedOutward reads.
+CUBES_JS = """function boxmarchTestCubes(THREE, count) {
+  var faces = [[0, 1, 2], [0, 2, 1], [1, 2, 0], [1, 0, 2], [2, 0, 1], [2, 1, 0]];  // axis, u, v: + then - side
+  var corners = [[-1, -1], [1, -1], [1, 1], [-1, 1]];
+  var position = new Float32Array(72 * count), number = new Float32Array(48 * count), index = new Uint32Array(36 * count);
+  for (var b = 0; b < count; b++) {
+    for (var f = 0; f < 6; f++) {
+      var axis = faces[f][0], u = faces[f][1], v = faces[f][2], base = 24 * b + 4 * f;
+      for (var k = 0; k < 4; k++) {
+        var at = 3 * (base + k);
+        position[at + axis] = f % 2 ? -1 : 1;
+        position[at + u] = corners[k][0];
+        position[at + v] = corners[k][1];
+        position[at] += 3 * b;
+        number[2 * (base + k) + 1] = b;
+      }
+      index.set([base, base + 1, base + 2, base, base + 2, base + 3], 36 * b + 6 * f);
+    }
+  }
+  var geometry = new THREE.BufferGeometry();
+  geometry.setAttribute('position', new THREE.BufferAttribute(position, 3));
+  geometry.setAttribute('bmOffsetZIndex', new THREE.BufferAttribute(number, 2));
+  geometry.setIndex(new THREE.BufferAttribute(index, 1));
+  return geometry;
+}"""
+
 def shipped_material(release="r111"):
     """The text of the shipped material file the release loads (shaders/threejs/), as it is."""
     from boxmarch.formats import shader_sources

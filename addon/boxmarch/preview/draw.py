@@ -249,7 +249,9 @@ def uniform_block_data(object_to_clip, object_to_view, perspective, settings, ou
                        base_color=(0.8, 0.8, 0.8, 1.0), frame=None, viewport_height=1080,
                        occluders=False) -> np.ndarray:
     """The BoxmarchPreview block (shaders/glsl/preview.frag.glsl) as std140 float32 words;
-    ``occluders``: the hidden-box pre-pass runs before the march (occlusion.py)."""
+    ``occluders``: the hidden-box pre-pass runs before the march (occlusion.py). mode.y: 1 where
+    ``object_to_view`` mirrors, so that the fragment stage knows a box's outer faces wind the other
+    way on screen (Blender's GPU module keeps the winding; three.js flips it itself)."""
     object_to_clip = np.asarray(object_to_clip, np.float64)
     object_to_view = np.asarray(object_to_view, np.float64)
     data = np.zeros(76, np.float32)
@@ -271,7 +273,7 @@ def uniform_block_data(object_to_clip, object_to_view, perspective, settings, ou
         data[51] = 0.0
     data[52:56] = settings.epsilon, settings.relaxation, settings.max_distance, settings.max_steps
     data[56:60] = base_color
-    data.view(np.int32)[60] = output_mode
+    data.view(np.int32)[60:62] = output_mode, int(np.linalg.det(object_to_view[:3, :3]) < 0.0)
     data[64:66] = settings.quality, viewport_height
     data[68] = settings.blend_radius if settings.sdf == "PER_BOX_BLEND" else 0.0
     data[69] = float(settings.colour_by_material)

@@ -1,0 +1,90 @@
+"""The quality knob of the shipped three.js material (quality < 1; shaders/glsl/raymarch.glsl
+bm_quality) in three.js r111 (WebGL 1) and r180 (WebGL 2) on SwiftShader, on the dense pile of
+links of tests/test_engine_threejs_occluders.py:
+
+* the knob sizes a pixel by the height of what is drawn into: a render target's (useBoxmarchMaterial's
+  onBeforeRender, as the pre-pass sizes its own), so the pile drawn into a 100 x 75 target under a
+  200 x 150 canvas is the picture of a 100 x 75 canvas, pixel for pixel;
+* below full quality loadBoxmarch draws no hidden-box pre-pass (boxmarchOccluderShape's gate): the
+  knob draws a box under 4 (1 - quality) pixels with one tap at its centre, which lies behind its
+  own occluders; the default picture is the one with ``occluders: false``, and the pre-pass forced
+  onto the same mesh (the negative control: what the gate keeps out) changes pixels."""
+import base64
+import json
+
+import numpy as np
+import pytest
+
+from tests.engines import threejs
+from tests.helpers.tools import need
+from tests.test_engine_threejs_occluders import CAMERA, LINK_MAP, pile  # noqa: F401 (fixture)
+
+pytestmark = pytest.mark.slow  # Chromium renders
+
+W, H = 100, 75
+# the pile from 8 times as far: the links 2-3 px long, under the one-tap size of quality 0.5 and 0.25
+FAR = dict(CAMERA, position=[8 * x for x in CAMERA["position"]])
+QUALITIES = (0.5, 0.25)
+LINK_SHAPE = 6  # LINK in bm_sdf_by_id's numbering (BOXMARCH_OCCLUDER_PRESETS)
+
+
+def loader_js(quality, occluders=None, after=""):
+    """The pile as loadBoxmarch draws it at ``quality`` (``occluders``: that option, else left out)."""
+    options = {"map": LINK_MAP, "quality": quality}
+    if occluders is not None:
+        options["occluders"] = occluders
+    return ("scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, 'pile.glb', "
+            f"{json.dumps(options)}); scene.add(loaded.scene);" + after)
+
+
+# the picture of the scene drawn into a W x H render target (row 0 at the top, as Shot.pixels)
+TARGET_AFTER = """var target = new THREE.WebGLRenderTarget(__W__, __H__, {minFilter: THREE.NearestFilter,
+      magFilter: THREE.NearestFilter});
+    renderer.setRenderTarget(target);
+    renderer.render(scene, camera);
+    var px = new Uint8Array(__W__ * __H__ * 4);
+    renderer.readRenderTargetPixels(target, 0, 0, __W__, __H__, px);
+    renderer.setRenderTarget(null);
+    return {target: __b64(px)};""".replace("__W__", str(W)).replace("__H__", str(H))
+
+
+def target_pixels(out):
+    """TARGET_AFTER's picture, rows from the top (readRenderTargetPixels starts at the bottom)."""
+    return np.frombuffer(base64.b64decode(out["target"]), np.uint8).reshape(H, W, 4)[::-1].copy()
+
+
+@pytest.fixture(scope="module", params=sorted(threejs.RELEASES))
+def drawn(request, pile):  # noqa: F811 (the fixture imported above)
+    release = request.param
+    need(threejs.available(release))
+    glb, sidecar, _centres, _rotations = pile
+    # the forced pre-pass: onto the mesh loaded without it, as boxmarchOccluderShape would pick it without its gate
+    forced = " useBoxmarchOccluders(THREE, loaded.meshes[0], __SHAPE__);".replace("__SHAPE__", str(LINK_SHAPE))
+    jobs = {"canvas": threejs.render_job(loader_js(0.25), W, H, CAMERA),
+            "target": threejs.Job(threejs.render_job(loader_js(0.25), 2 * W, 2 * H, CAMERA, TARGET_AFTER).js,
+                                  target_pixels)}
+    for quality in QUALITIES:
+        jobs[f"default {quality}"] = threejs.render_job(loader_js(quality), W, H, FAR)
+        jobs[f"plain {quality}"] = threejs.render_job(loader_js(quality, False), W, H, FAR)
+        jobs[f"forced {quality}"] = threejs.render_job(loader_js(quality, False, forced), W, H, FAR)
+    results = threejs.run_jobs(glb, list(jobs.values()), threejs.shipped_material(release), release,
+                               {"pile.glb": glb, "pile.boxmarch.json": sidecar})
+    return dict(zip(jobs, results))
+
+
+def test_the_knob_sizes_pixels_by_the_render_target_drawn_into(drawn):
+    canvas, target = drawn["canvas"].pixels, drawn["target"]
+    assert (canvas[..., 3] > 0).mean() > 0.3
+    assert np.array_equal(target, canvas)
+
+
+@pytest.mark.parametrize("quality", QUALITIES)
+def test_no_pre_pass_below_full_quality(drawn, quality):
+    plain, default, forced = (drawn[f"{name} {quality}"].pixels for name in ("plain", "default", "forced"))
+    covered = plain[..., 3] > 0
+    assert covered.sum() > 20
+    assert np.array_equal(default, plain)
+    # negative control: the pre-pass forced on below full quality changes the pixels of one-tap
+    # boxes (their tap moved from the centre to the occluders' depth: another normal, another colour)
+    changed = np.abs(forced.astype(int) - plain).max(-1) > 1
+    assert changed.sum() >= 0.05 * covered.sum(), (changed.sum(), covered.sum())
