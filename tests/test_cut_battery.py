@@ -1,0 +1,143 @@
+"""The differential battery of the cuts that claim to change no pixel (tests/helpers/cut_battery.py,
+docs/ACCURACY.md "Cuts that change no pixel"): the Blender preview's back-face culling, occluder
+pre-pass and resolved passes, three.js's culling, pre-pass and visibility passes, each against the
+plain march on seeded random scenes; every pixel a cut changes must be one where plain and cut
+agree when both march with the large step budget.
+
+The slow tier runs CI_SEEDS and every seed of REGRESSIONS in each renderer; the everyday tier
+checks the comparison itself on made-up pictures and that CI_SEEDS draw every trait the
+generator has. ``python3 -m bench.cut_battery`` runs thousands. Another worktree's add-on and
+shaders: ``PYTHONPATH=/work/wt/OTHER/addon python3 -m pytest -m slow tests/test_cut_battery.py``.
+"""
+import numpy as np
+import pytest
+
+from tests.engines import threejs
+from tests.helpers import cut_battery
+from tests.helpers.tools import need
+
+CI_SEEDS = range(0, 60)
+# Seeds where a cut changed pixels that no step budget explains: (seed, renderer, what it found
+# the day it was kept). Each runs every time, in its renderer.
+REGRESSIONS = []
+
+
+@pytest.fixture(scope="module")
+def battery(tmp_path_factory):
+    """{renderer: [Found, ...]} of CI_SEEDS and the regression seeds, each renderer drawn on first use."""
+    seeds = sorted(set(CI_SEEDS) | {seed for seed, _renderer, _found in REGRESSIONS})
+    folder = tmp_path_factory.mktemp("cut_battery")
+    drawn = cut_battery.draw_in_blender(seeds, folder)
+    failed = {seed: arrays["error"] for seed, arrays in drawn.items() if "error" in arrays}
+    assert not failed, f"scenes that did not build or draw: {failed}"
+    cache = {}
+
+    def found(renderer):
+        if renderer not in cache:
+            if renderer == "preview":
+                cache[renderer] = [f for seed in seeds for f in cut_battery.preview_findings(seed, drawn[seed])]
+            else:
+                need(threejs.available(renderer))
+                cache[renderer] = cut_battery.draw_in_threejs(seeds, folder, renderer)
+        return cache[renderer]
+
+    return seeds, folder, found
+
+
+def unexplained(found):
+    return [f.line() for f in found if f.unexplained]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("renderer", cut_battery.RENDERERS)
+def test_every_pixel_a_cut_changes_is_one_the_plain_march_leaves_unresolved(battery, renderer):
+    seeds, folder, found = battery
+    results = found(renderer)
+    exported = {f.seed for f in results}
+    assert len(exported) >= 0.9 * len(seeds), f"only {len(exported)} of {len(seeds)} scenes drawn"
+    assert not unexplained(results), "\n".join(unexplained(results))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed, renderer, kept", REGRESSIONS)
+def test_regression_seed(battery, seed, renderer, kept):
+    _seeds, _folder, found = battery
+    results = [f for f in found(renderer) if f.seed == seed]
+    assert results, f"seed {seed} was not drawn in {renderer}"
+    assert not unexplained(results), f"kept as: {kept}\nnow: " + "\n".join(unexplained(results))
+
+
+# --- negative controls: a cut known to be wrong must fail the battery -----------------------------
+
+# Seeds at full quality whose shape is not the box: the box's own occluder (the whole box) covers
+# what such a shape leaves open around it.
+def _rounded_seeds(count):
+    scenes = (cut_battery.scene(s) for s in range(1000))
+    seeds = (c["seed"] for c in scenes if c["quality"] == 1.0 and c["shape"] in ("SPHERE", "CAPSULE", "TORUS")
+             and "eye inside a box" not in c["traits"])
+    return [next(seeds) for _ in range(count)]
+
+
+@pytest.mark.slow
+def test_a_cut_that_occludes_with_the_whole_box_fails_the_battery(tmp_path):
+    """Negative control: the pre-pass drawing each box's BOX occluder (the whole box) for a sphere,
+    capsule or torus hides what lies behind the shape's open corners, at every step budget."""
+    seeds = _rounded_seeds(3)
+    broken_preview = {"occlusion.ENABLED": True, "occlusion.shape_id": {"returns": 0.0}}
+    drawn = cut_battery.draw_in_blender(seeds, tmp_path, cuts={"whole box": broken_preview})
+    preview = [f for s in seeds for f in cut_battery.preview_findings(s, drawn[s], {"whole box": broken_preview})]
+    assert sum(f.unexplained for f in preview) > 100 and all(f.kinds.get("emptied", 0) + f.kinds.get(
+        "shows what lies behind", 0) > 0 for f in preview if f.unexplained)
+    need(threejs.available("r180"))
+    three = cut_battery.draw_in_threejs(seeds, tmp_path, "r180",
+                                        cuts={"whole box": {"occluders": "BOX", "cullBackFaces": False}})
+    assert sum(f.unexplained for f in three) > 100
+
+
+# --- everyday tier: the comparison and the generator ------------------------------------------------
+
+def _picture(covered, colour, depth):
+    rgba = np.zeros((cut_battery.H, cut_battery.W, 4))
+    rgba[covered] = [*colour, 1.0]
+    d = np.ones((cut_battery.H, cut_battery.W))
+    d[covered] = depth
+    return rgba, d
+
+
+PROJECTION = np.array([[1.0, 0, 0, 0], [0, 1.33, 0, 0], [0, 0, -1.02, -0.202], [0, 0, -1, 0]])  # near 0.1, far 10
+
+
+def test_compare_explains_only_pixels_where_the_large_budget_agrees():
+    covered = np.zeros((cut_battery.H, cut_battery.W), bool)
+    covered[10:20, 10:20] = True
+    plain = _picture(covered, (0.5, 0.5, 0.5), 0.9)
+    emptied = _picture(covered & ~(np.arange(cut_battery.W) == 12)[None, :], (0.5, 0.5, 0.5), 0.9)
+    # the large budget: the plain march now finds nothing on that column either: explained
+    found = cut_battery.compare(1, "preview", "x", plain, emptied, emptied, emptied, PROJECTION)
+    assert (found.changed, found.explained, found.kinds) == (10, 10, {})
+    # the large budget draws the column in plain, not with the cut: unexplained, emptied
+    found = cut_battery.compare(1, "preview", "x", plain, emptied, plain, emptied, PROJECTION)
+    assert (found.changed, found.unexplained, found.kinds) == (10, 10, {"emptied": 10})
+    # a farther hit (the box behind) and another colour at the same depth
+    behind = _picture(covered, (0.5, 0.5, 0.5), 0.99)
+    found = cut_battery.compare(1, "preview", "x", plain, behind, plain, behind, PROJECTION)
+    assert found.kinds == {"shows what lies behind": 100}
+    tinted = _picture(covered, (0.5, 0.6, 0.5), 0.9)
+    found = cut_battery.compare(1, "preview", "x", plain, tinted, plain, tinted, PROJECTION)
+    assert found.kinds == {"wrong colour": 100}
+    # within the tolerances: explained
+    close = _picture(covered, (0.5 + 3 / 255, 0.5, 0.5), 0.9 + 1e-7)
+    found = cut_battery.compare(1, "preview", "x", plain, close, plain, close, PROJECTION)
+    assert (found.changed, found.unexplained) == (100, 0)
+
+
+def test_ci_seeds_draw_every_trait_of_the_generator():
+    drawn = [cut_battery.scene(s) for s in CI_SEEDS]
+    traits = {t for c in drawn for t in c["traits"][3:]}
+    assert {c["shape"] for c in drawn} == set(cut_battery.SHAPES)
+    assert {c["quality"] for c in drawn} == set(cut_battery.QUALITIES)
+    assert {"ordinary", "long thin", "axis-aligned", "nested", "coincident", "flat", "open", "inside-out",
+            "vertices far from the origin", "non-uniform scale", "mirrored", "sheared", "far from the world origin",
+            "eye inside a box", "near plane cuts boxes", "orthographic", "perspective"} <= traits
+    scales = [float(c["traits"][0].split(" ")[1]) for c in drawn]
+    assert min(scales) < 1e-2 and max(scales) > 1e2
