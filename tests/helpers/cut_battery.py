@@ -403,37 +403,54 @@ def _rgba(shot):
     return shot.pixels.astype(np.float64) / 255.0, None
 
 
+def _pages(keys, batch):
+    """(seed, ...) keys in pages of at most ``batch`` seeds each, one shape per page: a page
+    compiles each material it draws once (SwiftShader: about a second of CPU each)."""
+    by_shape = {}
+    for key in keys:
+        by_shape.setdefault(scene(key[0])["shape"], []).append(key)
+    pages = []
+    for group in by_shape.values():
+        seeds = list(dict.fromkeys(key[0] for key in group))
+        for k in range(0, len(seeds), batch):
+            chosen = set(seeds[k:k + batch])
+            pages.append([key for key in group if key[0] in chosen])
+    return pages
+
+
 def draw_in_threejs(seeds, folder, release, batch=40, cuts=None):
     """Found per three.js cut (THREEJS_CUTS when ``cuts`` is None) of each seed exported into
-    ``folder``: every scene drawn plain and with each cut, at the everyday budget (the material's
-    default maxSteps) and at HIGH_STEPS, in pages of ``batch`` scenes of one shape."""
+    ``folder``: every scene drawn plain and with each cut at the material's default maxSteps, in
+    pages of ``batch`` scenes of one shape; then, in as few pages, plain and each cut that changed
+    a pixel again at HIGH_STEPS."""
     from tests.engines import threejs
 
     cuts = THREEJS_CUTS if cuts is None else cuts
     folder = Path(folder)
-    # a page compiles each material it draws once (SwiftShader: about a second each): one shape per page
-    by_shape = {}
-    for s in seeds:
-        if (folder / f"scene_{s}.glb").exists():
-            by_shape.setdefault(scene(s)["shape"], []).append(s)
-    pages = [group[k:k + batch] for group in by_shape.values() for k in range(0, len(group), batch)]
-    material = threejs.shipped_material(release)
     configs = {"plain": THREEJS_PLAIN, **cuts}
-    found = []
-    for chunk in pages:
-        specs = {s: scene(s) for s in chunk}
-        files = {}
-        for s in chunk:
-            files[f"scene_{s}.glb"] = (folder / f"scene_{s}.glb").read_bytes()
-            files[f"scene_{s}.boxmarch.json"] = (folder / f"scene_{s}.boxmarch.json").read_bytes()
-        model = files[f"scene_{chunk[0]}.glb"]
-        # both budgets in one page: a second page would cost a Chromium start, more than the renders
-        jobs = [(s, name, steps) for s in chunk for name in configs for steps in (None, HIGH_STEPS)]
-        shots = threejs.run_jobs(model, [threejs_job(s, specs[s], configs[n], steps) for s, n, steps in jobs],
-                                 material, release, files, PAGE_TIMEOUT_S)
-        drawn = {key: _rgba(shot) for key, shot in zip(jobs, shots)}
-        for s in chunk:
-            for cut in cuts:
-                found.append(compare(s, release, cut, drawn[(s, "plain", None)], drawn[(s, cut, None)],
-                                     drawn[(s, "plain", HIGH_STEPS)], drawn[(s, cut, HIGH_STEPS)]))
-    return found
+    material = threejs.shipped_material(release)
+    drawn = {}
+
+    def draw(keys):
+        for page in _pages(keys, batch):
+            page_seeds = list(dict.fromkeys(key[0] for key in page))
+            files = {}
+            for s in page_seeds:
+                for name in (f"scene_{s}.glb", f"scene_{s}.boxmarch.json"):
+                    files[name] = (folder / name).read_bytes()
+            shots = threejs.run_jobs(files[f"scene_{page_seeds[0]}.glb"],
+                                     [threejs_job(s, scene(s), configs[n], steps) for s, n, steps in page],
+                                     material, release, files, PAGE_TIMEOUT_S)
+            drawn.update((key, _rgba(shot)) for key, shot in zip(page, shots))
+
+    seeds = [s for s in seeds if (folder / f"scene_{s}.glb").exists()]
+    draw([(s, name, None) for s in seeds for name in configs])
+    changed = {(s, cut) for s in seeds for cut in cuts
+               if not np.array_equal(drawn[(s, "plain", None)][0], drawn[(s, cut, None)][0])}
+    again = [(s, name, HIGH_STEPS) for s in seeds for name in configs
+             if (s, name) in changed or (name == "plain" and any((s, cut) in changed for cut in cuts))]
+    if again:
+        draw(again)
+    return [compare(s, release, cut, drawn[(s, "plain", None)], drawn[(s, cut, None)],
+                    drawn.get((s, "plain", HIGH_STEPS)), drawn.get((s, cut, HIGH_STEPS)))
+            for s in seeds for cut in cuts]
