@@ -1,4 +1,4 @@
-"""The differential battery's long form (tests/helpers/cut_battery.py; docs/ACCURACY.md, "Cuts that
+"""The differential battery's long form (tests/helpers/cut_battery.py; docs/BENCHMARKS.md, "Cuts that
 change no pixel"): thousands of seeded scenes drawn by the Blender preview (bpy module) and three.js
 r111 and r180 (headless Chromium), plain and with each cut; prints per renderer and cut the scenes
 run, pixels compared, changed, explained (plain and cut agree at the large step budget) and

@@ -1,5 +1,5 @@
 """The differential battery of the cuts that claim to change no pixel (tests/helpers/cut_battery.py,
-docs/ACCURACY.md "Cuts that change no pixel"): the Blender preview's back-face culling, occluder
+docs/BENCHMARKS.md "Cuts that change no pixel"): the Blender preview's back-face culling, occluder
 pre-pass and resolved passes, three.js's culling, pre-pass and visibility passes, each against the
 plain march on seeded random scenes; every pixel a cut changes must be one where plain and cut
 agree when both march with the large step budget.

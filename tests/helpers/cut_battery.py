@@ -1,4 +1,4 @@
-"""The differential battery of the cuts that claim to change no pixel (docs/ACCURACY.md, "Cuts
+"""The differential battery of the cuts that claim to change no pixel (docs/BENCHMARKS.md, "Cuts
 that change no pixel"): seeded random scenes a user might make and a hostile one would, drawn by
 the Blender preview (bpy module, llvmpipe) and by three.js r111 and r180 (headless Chromium,
 SwiftShader), each with a cut and without (plain); every pixel a cut changes must be one the plain
