@@ -128,8 +128,12 @@ _LOAD_JOB = """function (gltf) {
 
 _RENDER_JOB = """async function (gltf) {
   var W = __W__, H = __H__, cam = __CAMERA__;
-  var canvas = document.createElement('canvas');
-  var renderer = new THREE.WebGLRenderer({canvas: canvas, antialias: false, alpha: true, preserveDrawingBuffer: true});
+  var renderer = __SHARED__ ? window.__sharedRenderer : null;
+  if (!renderer) {
+    renderer = new THREE.WebGLRenderer({canvas: document.createElement('canvas'), antialias: false, alpha: true,
+                                        preserveDrawingBuffer: true});
+    if (__SHARED__) window.__sharedRenderer = renderer;
+  }
   renderer.setPixelRatio(1);
   renderer.setSize(W, H, false);
   renderer.setClearColor(0x000000, 0);
@@ -155,8 +159,10 @@ _RENDER_JOB = """async function (gltf) {
   var extra = await (async function (THREE, renderer, scene, camera, W, H) {
     __AFTER__
   })(THREE, renderer, scene, camera, W, H);
-  renderer.dispose();
-  renderer.forceContextLoss();  // one page renders many times: give each context back
+  if (!__SHARED__) {
+    renderer.dispose();
+    renderer.forceContextLoss();  // one page renders many times: give each context back
+  }
   return Object.assign({pixels: __b64(px), view: __f64(camera.matrixWorldInverse.elements),
                         projection: __f64(camera.projectionMatrix.elements)}, extra || {});
 }"""
@@ -302,10 +308,10 @@ def _serve(files):
     return server
 
 
-def chromium(url, *mode, budget_ms=30000):
+def chromium(url, *mode, budget_ms=30000, timeout_s=TIMEOUT_S):
     """(exit code, stdout, stderr) of headless Chromium on SwiftShader, with a fresh profile, run on
     ``url`` in ``mode`` (its flags: ``--dump-dom``, or ``--screenshot=PATH``, ``--window-size=W,H``)
-    for at most ``budget_ms`` of the page's virtual time; RuntimeError after TIMEOUT_S."""
+    for at most ``budget_ms`` of the page's virtual time; RuntimeError after ``timeout_s``."""
     with tempfile.TemporaryDirectory(prefix="boxmarch-three-") as tmp:
         cmd = [CHROMIUM, "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
                "--no-proxy-server", f"--virtual-time-budget={budget_ms}", f"--user-data-dir={os.path.join(tmp, 'profile')}",
@@ -313,19 +319,20 @@ def chromium(url, *mode, budget_ms=30000):
         # own session: on timeout every Chromium process (GPU, renderer) is killed with it
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
         try:
-            stdout, stderr = proc.communicate(timeout=TIMEOUT_S)
+            stdout, stderr = proc.communicate(timeout=timeout_s)
         except subprocess.TimeoutExpired:
             os.killpg(proc.pid, signal.SIGKILL)
-            raise RuntimeError(f"chromium timed out after {TIMEOUT_S} s:\n{proc.communicate()[1][-4000:]}") from None
+            raise RuntimeError(f"chromium timed out after {timeout_s} s:\n{proc.communicate()[1][-4000:]}") from None
     return proc.returncode, stdout, stderr
 
 
-def run_jobs(glb_bytes, jobs, material_js="", release="r111", files=None):
+def run_jobs(glb_bytes, jobs, material_js="", release="r111", files=None, timeout_s=TIMEOUT_S):
     """Runs each :class:`Job` (or plain JS function text) in headless Chromium with three.js
     ``release`` loaded, in order, each on a fresh parse of ``glb_bytes`` (null when it is empty);
     returns their parsed results. ``material_js``: served as material.js, a classic script for
     r111 (its functions become globals) or an ES module for r180 (its exports become globals).
-    ``files``: extra served files, name -> bytes (``glb_bytes`` is served as model.glb)."""
+    ``files``: extra served files, name -> bytes (``glb_bytes`` is served as model.glb).
+    ``timeout_s``: how long the page may take (a page of many jobs may take more than TIMEOUT_S)."""
     jobs = [j if isinstance(j, Job) else Job(j) for j in jobs]
     served = {name: open(path, "rb").read() for name, path in _release_files(release).items()}
     served.update({"material.js": material_js.encode(), "model.glb": bytes(glb_bytes)})
@@ -335,7 +342,8 @@ def run_jobs(glb_bytes, jobs, material_js="", release="r111", files=None):
     served["page.html"] = re.sub("|".join(parts), lambda m: parts[m.group(0)], _PAGE).encode()
     server = _serve(served)
     try:
-        returncode, stdout, stderr = chromium(f"http://127.0.0.1:{server.server_address[1]}/page.html", "--dump-dom")
+        returncode, stdout, stderr = chromium(f"http://127.0.0.1:{server.server_address[1]}/page.html", "--dump-dom",
+                                           timeout_s=timeout_s)
     finally:
         server.shutdown()
         server.server_close()
@@ -390,7 +398,7 @@ def load_attributes(glb_bytes, release="r111"):
     return run_jobs(glb_bytes, [load_job()], release=release)[0]
 
 
-def render_job(setup_js, width, height, camera, after_js="return {};"):
+def render_job(setup_js, width, height, camera, after_js="return {};", shared_renderer=False):
     """:class:`Job` rendering the loaded .glb once (WebGL 1 for r111, WebGL 2 for r180; SwiftShader);
     its result is a :class:`Shot`.
 
@@ -404,8 +412,12 @@ def render_job(setup_js, width, height, camera, after_js="return {};"):
     ``camera.projectionMatrix``, both as three.js computed them. ``after_js``: the body of an
     async function of ``THREE``, ``renderer``, ``scene``, ``camera``, ``W`` and ``H`` run after
     the render; what it returns joins the job's raw result (see :func:`count_job`).
+    ``shared_renderer``: draw with the page's one WebGLRenderer kept for every job that shares it
+    (its compiled programs too: SwiftShader takes seconds to compile a marching material), where by
+    default each job makes its own and gives its context back.
     """
     js = (_RENDER_JOB.replace("__W__", str(int(width))).replace("__H__", str(int(height)))
+          .replace("__SHARED__", "true" if shared_renderer else "false")
           .replace("__CAMERA__", json.dumps(camera)).replace("__SETUP__", setup_js).replace("__AFTER__", after_js))
 
     def shot(out):
