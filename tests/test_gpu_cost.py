@@ -78,12 +78,13 @@ def test_occluders_return_hidden_fragments_before_the_march_in_either_order():
 
 def test_occluders_end_a_march_at_their_depth():
     # P: a sphere of radius 0.5 at z = -4 in a box reaching z = -1 (pixel centres |x|, |y| <= 0.375);
-    # Q: a sphere of radius 1 at z = -3 whose first occluder box (0.825, 0.4, 0.4) - 0.001 covers the
-    # pixel (0.375, 0.375) from z = -2.599. There P's ray misses its sphere (0.53 from the axis) and
-    # would march on towards z = -7; its first step (the distance 2.546 from z = -1) passes the
-    # occluder's depth, so with occluders P spends one map() there. Q hits as before.
+    # Q: a sphere of radius 1.1 at z = -3 whose first occluder box 1.1 (0.825, 0.4, 0.4), less 0.0011
+    # and the eighth of a pixel (0.03125) of bm_occluder_rounding, covers the pixel (0.375, 0.375)
+    # from z = -2.126. There P's ray misses its sphere (0.53 from the axis) and would march on
+    # towards z = -7; its first step (the distance 2.546 from z = -1) passes the occluder's depth,
+    # so with occluders P spends one map() there. Q hits as before.
     p_box = ([[0.0, 0.0, -4.0]], [[0.5, 0.5, 3.0]])
-    q_box = ([[0.0, 0.0, -3.0]], [[1.0, 1.0, 1.0]])
+    q_box = ([[0.0, 0.0, -3.0]], [[1.1, 1.1, 1.1]])
     both = (p_box[0] + q_box[0], p_box[1] + q_box[1])
     row, column = 2, 5  # pixel centre (0.375, 0.375): rows run from the top
     p_alone, q_alone = render(*p_box, sdf="SPHERE"), render(*q_box, sdf="SPHERE")

@@ -1,7 +1,8 @@
 """The create-info the preview builds (boxmarch.preview.shader), recorded through a stub of
 Blender's gpu module (tests/helpers/gpu_stub.py), the marching shader's and the hidden-box
 pre-pass's: each one's gl_FragDepth declaration is the direction its own fragment source keeps
-(none for the pre-pass, which writes no depth), and each compiles and links as Blender's GL
+(GREATER for both: the marched depth is clamped to the face's, the pre-pass writes its
+occluders' depth a margin farther), and each compiles and links as Blender's GL
 backend declares it. Blender-free; the preview's real compile runs in tests/test_preview_blender.py."""
 import re
 import subprocess
@@ -55,9 +56,8 @@ def test_preview_declares_the_depth_direction_its_fragment_keeps():
     marching, occluders = built_create_infos(gpu_stub.gpu_module())
     assert len(marching) == len(occluders) == len(shader_sources.VERTEX_INPUTS)
     assert [fault for info in marching + occluders for fault in create_info_faults(info)] == []
-    assert all(info.called("depth_write") == [("GREATER",)] for info in marching)  # the preview's clamp: max(...)
-    # the pre-pass's depth is the rasterised one: its fragment writes none and declares none
-    assert all(info.called("depth_write") == [] for info in occluders)
+    # the preview's clamp, max(...): the marched depth, and the occluders' limit (bm_occluder_limit)
+    assert all(info.called("depth_write") == [("GREATER",)] for info in marching + occluders)
 
 
 @pytest.mark.parametrize("wrong", ["ANY", "LESS", "UNCHANGED"])

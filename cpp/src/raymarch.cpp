@@ -224,7 +224,8 @@ PixelRay pixel_ray(const glm::dmat4& from_clip, int x, int y, int W, int H, cons
 
 // The depth pre-pass of RenderPlan::occluders over rows [row_begin, row_end): per pixel, the
 // nearest window depth (1: none) of the occluder boxes of every box (bm_occluder_centre and
-// bm_occluder_half of the preset), as the rasteriser would write them; a box that the near plane
+// bm_occluder_half of the preset, pulled in by bm_occluder_rounding as the pre-pass's vertex stage
+// pulls them), as the rasteriser would write them; a box that the near plane
 // cuts (the eye inside it among them) draws none, as the shaders' pre-pass drops it: its shape may
 // not be drawn where its occluders would lie.
 std::vector<float> occluder_depths(const float* origins, const float* quaternions, const float* half_extents,
@@ -249,8 +250,20 @@ std::vector<float> occluder_depths(const float* origins, const float* quaternion
             nearest -= h[axis] * std::abs(glm::dot(vec3(near_side), q * unit));
         }
         if (nearest <= 0.0f) continue;
+        // pulled in further for the GPU's rounding (bm_occluder_rounding): a pixel's size at the
+        // box's far side (its greatest clip w), and the box's distance from the object's origin
+        const vec4 w_row(to_clip[0][3], to_clip[1][3], to_clip[2][3], to_clip[3][3]);
+        float farthest = glm::dot(vec3(w_row), c) + w_row.w;
+        for (int axis = 0; axis < 3; ++axis) {
+            vec3 unit(0.0f);
+            unit[axis] = 1.0f;
+            farthest += h[axis] * std::abs(glm::dot(vec3(w_row), q * unit));
+        }
+        const float row_y = glm::length(vec3(to_clip[0][1], to_clip[1][1], to_clip[2][1]));
+        const float rounding = shader::bm_occluder_rounding(shader::bm_pixel_size(farthest, row_y, float(H)), glm::length(c));
         for (float k = 0.0f; k < shader::bm_occluder_count(shape); k += 1.0f) {
-            const vec3 centre = shader::bm_occluder_centre(shape, h, k), extent = shader::bm_occluder_half(shape, h, k);
+            const vec3 centre = shader::bm_occluder_centre(shape, h, k);
+            const vec3 extent = shader::bm_occluder_half(shape, h, k) - vec3(rounding);
             if (shader::bm_min3(extent) <= 0.0f) continue;
             for (int y = std::max(r.y, int(row_begin)); y <= std::min(r.w, int(row_end) - 1); ++y) {
                 for (int x = r.x; x <= r.z; ++x) {

@@ -51,11 +51,6 @@ layout(early_fragment_tests) in;
 
 // BM_NO_HIT (defined by formats/shader_sources.py, as for preview_resolve.glsl): hit_min's value
 // where no hit was kept, the bits of 1.0, the far plane's window depth.
-// How far (window depth) from the nearest hit the shade pass looks for the fragment that made it:
-// 2^-18, 64 float steps at the far plane. The march's hit depth and the inversion of a depth into
-// a distance along the ray (bm_depth_crossing) round differently; on the cloud of spheres a margin
-// of 2^-21 (bm_occluder_limit's) lost 10 of 22,614 pixels, 2^-20 lost none.
-const float BM_SHADE_MARGIN = 3.8e-6;
 #endif
 
 // Ends a fragment that draws nothing: thrown away, or in mode 2 (STEPS) counted, with the SDF
@@ -113,7 +108,6 @@ void main()
   // fragment of the far side only marches when the eye is inside the box (from the eye).
   vec2 span = bm_box_span(ro, rd, drawn_half);
   float t_end = span.y;
-  vec3 march_start = obj_pos;
   bool outer_face = gl_FrontFacing != (preview.mode.y == 1);
   bool from_eye = !outer_face && span.x + span.y < 0.0;
   if (from_eye) {
@@ -123,17 +117,23 @@ void main()
     }
     ro -= rd * eye_distance;
     t_end = eye_distance;
-    march_start = preview.eye.xyz;
   }
 
   // The ray in clip space, c0 + t c1 from the march's start: where it reaches a depth kept by the
-  // pre-pass or the resolved passes, a march may stop (bm_depth_crossing).
-  vec4 c0 = preview.object_to_clip * vec4(march_start, 1.0);
+  // pre-pass or the resolved passes, a march may stop (bm_depth_crossing), and at a hit, its depth.
+  // From the face, the start's clip z and w are the rasteriser's own (gl_FragCoord), not obj_pos
+  // through the matrix, a product that loses digits as the vertices lie far from the object's
+  // origin (1,000 units out, the shade pass of the resolved passes then missed 9 of 24,695 pixels
+  // whose hit the visibility pass had kept); x and y are never read.
+  float face_w = 1.0 / gl_FragCoord.w;
+  vec4 c0 = from_eye ? preview.object_to_clip * vec4(preview.eye.xyz, 1.0)
+                     : vec4(0.0, 0.0, (2.0 * gl_FragCoord.z - 1.0) * face_w, face_w);
   vec4 c1 = preview.object_to_clip * vec4(ray_object / eye_distance, 0.0);
   // Hidden boxes: behind the occluders' depth nothing is visible (a march from the eye is only
-  // bounded: its box's own entry is the eye).
-  if (preview.occlusion.x > 0.5) {
-    float hidden_from = bm_occluder_limit(texelFetch(occluder_depth, ivec2(gl_FragCoord.xy), 0).r);
+  // bounded: its box's own entry is the eye). The pre-pass wrote each occluder's depth as the limit
+  // to compare with (bm_occluder_limit); 1 where it drew none.
+  float hidden_from = preview.occlusion.x > 0.5 ? texelFetch(occluder_depth, ivec2(gl_FragCoord.xy), 0).r : 1.0;
+  if (hidden_from < 1.0) {
     if (!from_eye && gl_FragCoord.z > hidden_from) {
       bm_drop(0.0);
       return;
@@ -150,9 +150,9 @@ void main()
   uint winner = imageLoad(hit_min, ivec2(gl_FragCoord.xy)).x;
   if (winner < BM_NO_HIT) {
     float nearest = uintBitsToFloat(winner);
-    float reach = bm_depth_crossing(c0, c1, 2.0 * (nearest - BM_SHADE_MARGIN) - 1.0);
-    float beyond = bm_depth_crossing(c0, c1, 2.0 * (nearest + BM_SHADE_MARGIN) - 1.0);
-    bool hidden = !from_eye && gl_FragCoord.z > nearest + BM_SHADE_MARGIN;
+    float reach = bm_depth_crossing(c0, c1, 2.0 * (nearest - bm_shade_margin()) - 1.0);
+    float beyond = bm_depth_crossing(c0, c1, 2.0 * (nearest + bm_shade_margin()) - 1.0);
+    bool hidden = !from_eye && gl_FragCoord.z > nearest + bm_shade_margin();
     int taps = 0;
     // (a march from the eye writes no nearer than its far side, clamped as every depth here is:
     // its hit need not lie at the depth kept, so it takes no test)
@@ -190,8 +190,7 @@ void main()
     : bm_march(ro, rd, min(t_end, preview.march.z), max_steps, preview.march.x, preview.march.y,
                vec2(quality.x * footprint, quality.w), t, steps, d);
   vec3 local_hit = ro + rd * t;
-  vec3 obj_hit = obj_pos + transpose(frame) * bm_from_local(local_hit + f, x, y, z);
-  vec4 clip = preview.object_to_clip * vec4(obj_hit, 1.0);
+  vec4 clip = c0 + c1 * t;
 #ifdef BM_RESOLVED
   float hit_depth = max(clip.z / clip.w * 0.5 + 0.5, gl_FragCoord.z);
   // the visibility pass counts the march alone (no normal); the shade pass its march and, for the

@@ -19,7 +19,7 @@
 // layout carries no per-vertex half-extents, ch_params, the box's parameters as the layout carries
 // them, and ch_parent_*), the outputs (shader_sources.STAGE_INTERFACE) and the uniform block
 // preview (BoxmarchPreview, see preview.frag.glsl).
-// With BM_OCCLUDER_PASS defined (and sdf.glsl and box_params.glsl before it) it is the hidden-box
+// With BM_OCCLUDER_PASS defined (and sdf.glsl, box_params.glsl and raymarch.glsl before it) it is the hidden-box
 // pre-pass's vertex stage: each box's vertices pulled in to its occluder box number
 // occluder_index (box_params.glsl; the shape id preview.occlusion.y, or the box's own where it is
 // negative), none where the eye is inside the drawn box (the marching stage then starts at the
@@ -83,23 +83,44 @@ void main()
     gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
   }
 #ifdef BM_OCCLUDER_PASS
-  // box-local vertex v in a box of half-extents h (as baked, before the blend's growth)
+  // box-local vertex v in a box of half-extents h (as baked, before the blend's growth), the box's
+  // axes and origin in object space
   vec3 h = frag_half - vec3(grow);
   float shape = preview.occlusion.y < 0.0 ? ch_params.x : preview.occlusion.y;
-  vec3 extent = bm_occluder_half(shape, h, occluder_index);
-  vec3 pulled = bm_occluder_centre(shape, h, occluder_index) + v * extent / max(h, vec3(1e-30));
-  vec3 moved = pos + transpose(frame) * bm_from_local(pulled - v, frag_axis_x, frag_axis_y, frag_axis_z);
-  // A box reaching the near plane draws none either: the plane cuts its front, so its shape may
-  // not be drawn where its occluders would hide what lies behind. z + w >= 0 in clip space on
-  // this side of the near plane; its least value over the box, from the box's origin and axes.
   mat4 m = preview.object_to_clip;
-  vec4 near_side = vec4(m[0][2] + m[0][3], m[1][2] + m[1][3], m[2][2] + m[2][3], m[3][2] + m[3][3]);
   mat3 to_object = transpose(frame);
-  vec3 origin = pos - to_object * bm_from_local(v, frag_axis_x, frag_axis_y, frag_axis_z);
-  float nearest = dot(near_side.xyz, origin) + near_side.w - frag_half.x * abs(dot(near_side.xyz, to_object * frag_axis_x))
-    - frag_half.y * abs(dot(near_side.xyz, to_object * frag_axis_y)) - frag_half.z * abs(dot(near_side.xyz, to_object * frag_axis_z));
-  // outside the clip volume (every vertex of the box alike): nothing drawn
-  gl_Position = (eye_inside || nearest <= 0.0 || bm_min3(extent) <= 0.0) ? vec4(2.0, 2.0, 2.0, 1.0)
-                                                                        : preview.object_to_clip * vec4(moved, 1.0);
+  vec3 ax = to_object * normalize(frag_axis_x);
+  vec3 ay = to_object * normalize(frag_axis_y);
+  vec3 az = to_object * normalize(frag_axis_z);
+  vec3 origin = pos - bm_from_local(v, ax, ay, az);
+  // The box's least z + w in clip space over its corners (z + w >= 0 on this side of the near
+  // plane), and its greatest w (the far side, where a pixel is largest).
+  vec4 near_side = vec4(m[0][2] + m[0][3], m[1][2] + m[1][3], m[2][2] + m[2][3], m[3][2] + m[3][3]);
+  vec4 w_row = vec4(m[0][3], m[1][3], m[2][3], m[3][3]);
+  vec3 near_reach = h * abs(vec3(dot(near_side.xyz, ax), dot(near_side.xyz, ay), dot(near_side.xyz, az)));
+  vec3 far_reach = h * abs(vec3(dot(w_row.xyz, ax), dot(w_row.xyz, ay), dot(w_row.xyz, az)));
+  float nearest = dot(near_side.xyz, origin) + near_side.w - near_reach.x - near_reach.y - near_reach.z;
+  float farthest = dot(w_row.xyz, origin) + w_row.w + far_reach.x + far_reach.y + far_reach.z;
+  float rounding = bm_occluder_rounding(bm_pixel_size(farthest, length(vec3(m[0][1], m[1][1], m[2][1])), preview.quality.y),
+                                        length(pos));
+  vec3 extent = bm_occluder_half(shape, h, occluder_index) - vec3(rounding);
+  // No occluder for a box holding the eye, nor for one that reaches within the rounding of the
+  // near plane (the plane cuts its front, so its shape may not be drawn where its occluders would
+  // hide what lies behind), nor for one across which a march may run out of max_distance before it
+  // reaches the shape (preview.march.z: it draws nothing there), nor where the rounding leaves
+  // none. Its vertices go to the occluder's centre, so that its triangles have no area; where the
+  // vertices of one box decide differently (each rounds its own arithmetic), what they draw still
+  // lies inside the occluder.
+  bool drawn = !eye_inside && nearest > rounding * length(near_side.xyz) && 2.0 * length(frag_half) <= preview.march.z
+    && bm_min3(extent) > 0.0;
+  vec3 pulled = bm_occluder_centre(shape, h, occluder_index) + (drawn ? v * extent / max(h, vec3(1e-30)) : vec3(0.0));
+  vec3 moved = pos + bm_from_local(pulled - v, ax, ay, az);
+  vec4 clip = m * vec4(moved, 1.0);
+  // pushed back in depth by what float32 rounding may move it (bm_depth_rounding), its place on
+  // screen kept: z + k w in clip space adds k to the depth across the whole triangle
+  vec2 spread = vec2(dot(abs(vec3(m[0][2], m[1][2], m[2][2])), abs(moved)) + abs(m[3][2]),
+                     dot(abs(w_row.xyz), abs(moved)) + abs(w_row.w));
+  clip.z += 2.0 * bm_depth_rounding(spread, clip) * clip.w;
+  gl_Position = clip;
 #endif
 }

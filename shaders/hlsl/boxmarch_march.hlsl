@@ -130,22 +130,49 @@ float3 bm_normal(float3 p, float d, float e)
   return len > 0.0 ? n / len : float3(0.0, 0.0, 0.0);
 }
 
-// Hidden boxes (box_params.glsl, conservative occluders): the occluders' nearest window depth (0
-// near, 1 far; GL's depth range) made safe to compare with: 2^-21 farther, eight float steps at
-// the far plane. That covers the rounding of window depths near 1 (a float step there spans
-// about 1 cm at 140 units with a 0.1 near plane) and a 24-bit depth buffer's step. A fragment
-// whose box entry lies beyond this limit is hidden; a march stops at it.
+// Hidden boxes (box_params.glsl, conservative occluders): an occluder's window depth (0 near, 1
+// far; GL's depth range) made safe to compare with: 2^-21 farther, eight float steps at the far
+// plane. That covers the rounding of window depths near 1 (a float step there spans about 1 cm at
+// 140 units with a 0.1 near plane), where an occluder pulled in by a fraction of a pixel lies
+// fewer float steps behind its box's face than the face's depth and a hit's are rounded by, and a
+// 24-bit depth buffer's step. The pre-pass writes it as each occluder's depth, so the marching
+// stage's test and the depth test of passes that write no depth compare with the same limit: a
+// fragment whose box entry lies beyond it is hidden; a march stops at it.
 float bm_occluder_limit(float occluder_depth)
 {
   return occluder_depth + 4.8e-7;
+}
+
+// How far float32 rounding may move a point's window depth, for the pre-pass to push its occluders
+// back by it: `spread` the sums of the magnitudes of the terms of the point's clip z (x) and clip
+// w (y), the object-to-clip matrix's rows times its object-space coordinates; `clip` its clip
+// position. Each of z and w is a sum of products of rounded matrix entries and a rounded
+// coordinate, off by a few steps of 2^-24 of that sum, and z / w loses those steps whole where
+// the two nearly cancel (vertices far from the object's origin, a near plane far nearer than the
+// boxes: 1,000 units out, with a near plane of 0.01, a face came out 5e-5 deeper than drawn, three
+// times the depth its occluder lay behind it). 2^-22 covers four steps of each, for the face and
+// for the occluder behind it.
+float bm_depth_rounding(float2 spread, float4 clip)
+{
+  return 2.4e-7 * (spread.x + abs(clip.z / clip.w) * spread.y) / abs(clip.w);
+}
+
+// How far (window depth) from the nearest hit kept at a pixel a pass that shades only that hit
+// (the preview's resolved passes, three.js's useBoxmarchVisibility) looks for the fragment that
+// made it: 2^-18, 64 float steps at the far plane. The march's hit depth and the inversion of a
+// depth into a distance along the ray (bm_depth_crossing) round differently; on the preview's
+// cloud of spheres a margin of 2^-21 (bm_occluder_limit's) lost 10 of 22,614 pixels, 2^-20 lost
+// none.
+float bm_shade_margin()
+{
+  return 3.8e-6;
 }
 
 // Distance t along a ray whose clip-space position is c0 + t c1 at which its clip depth z / w
 // reaches ndc_z (GL: 2 x window depth - 1; D3D and Vulkan: the window depth), so a march can
 // stop at the occluders' depth: nothing beyond it is visible. 1e30 (no bound) where the ray does
 // not reach that depth ahead of it: a depth that does not change along the ray, or one past what
-// the projection reaches (an empty pixel's depth 1 plus bm_occluder_limit's margin lies beyond the
-// far plane, whose depth a perspective ray only approaches).
+// the projection reaches (a depth beyond the far plane, which a perspective ray only approaches).
 float bm_depth_crossing(float4 c0, float4 c1, float ndc_z)
 {
   float rate = c1.z - ndc_z * c1.w;

@@ -450,28 +450,107 @@ function boxmarchOccluderShape(options) {
 
 // The pre-pass material: occluder box number `index` (BM_OCCLUDER_INDEX) of shape id `shape`
 // (BM_OCCLUDER_SHAPE; < 0: each box's own), none for a box holding the eye (its march starts at
-// the eye); writes its window depth packed into RGBA. Both are compiled in as constants, so the
+// the eye); writes the limit the march compares with (bm_occluder_limit: its window depth a margin
+// farther) packed into RGBA, white (none) where that reaches 1. Both are compiled in as constants, so the
 // compiler keeps only that preset's branch of the occluder's arithmetic (measured on SwiftShader:
 // the pile's four occluder draws 1.2x as fast as with them as uniforms, docs/BENCHMARKS.md).
 function createBoxmarchOccluderMaterial(THREE, index, shape, side) {
   return new THREE.ShaderMaterial({
-    uniforms: { bmEye: { value: new THREE.Vector4(0, 0, 0, 1) } },
+    uniforms: { bmEye: { value: new THREE.Vector4(0, 0, 0, 1) }, bmViewHeight: { value: 1 } },
     defines: { BM_OCCLUDER_INDEX: index.toFixed(1), BM_OCCLUDER_SHAPE: shape.toFixed(1) },
     vertexShader: BOXMARCH_DECODE + '\n' + BOXMARCH_LIBRARY + '\n' + BOXMARCH_OCCLUDER_VERTEX,
-    fragmentShader: BOXMARCH_DEPTH_PACKING + '\nvoid main() {\n  gl_FragColor = bm_pack_depth(gl_FragCoord.z);\n}\n',
+    fragmentShader: [BOXMARCH_DECODE, BOXMARCH_LIBRARY, BOXMARCH_NO_MAP, BOXMARCH_DEPTH_PACKING, 'void main() {',
+      '  float limit = bm_occluder_limit(gl_FragCoord.z);',
+      '  gl_FragColor = limit < 1.0 ? bm_pack_depth(limit) : vec4(1.0);', '}'].join('\n'),
     side: side
   });
 }
 
-// The pre-pass's draws of geometry's occluders of shape id `shape`: one mesh per occluder box of
-// the preset (BOXMARCH_OCCLUDER_COUNTS), four for each box's own shape (box_params.glsl's most; an
-// index a box's shape lacks draws nothing: its vertices leave the view), their matrices to be
-// copied from the mesh's world matrix before each draw; `side`: the faces drawn (the occluders
-// are their boxes scaled and moved, so a box's back faces are their far side too).
+// How far (a share of a box's largest half-extent) a box's triangle may lie inside a face of its
+// box and count as on it (boxmarchSealedTriangles): the Blender preview's mesh_data.SEALED_TOLERANCE.
+var BOXMARCH_SEALED_TOLERANCE = 1e-3;
+
+// The triangles (their first corners' positions in geometry's index, or in its vertices where it
+// has none) of the boxes that may draw occluders, by the rule the Blender preview draws them by
+// (mesh_data.sealed_boxes): a box's triangles must be the whole surface of its box, whichever way
+// they are wound. Within each box (the box number of bmOffsetZIndex.y), its vertices welded by
+// position (the glTF export splits them per face corner): every edge shared by exactly two
+// triangles, and each triangle on one face of the box (its corners' box-local positions -f within
+// BOXMARCH_SEALED_TOLERANCE of the largest half-extent of that face's plane). Only such a box is
+// drawn wherever its shape may be seen: an open box, or a modelled shape smaller than its box,
+// would hide with its occluders what is seen past it.
+function boxmarchSealedTriangles(geometry) {
+  var position = geometry.getAttribute('position'), number = geometry.getAttribute('bmOffsetZIndex');
+  var offset = geometry.getAttribute('bmOffsetXY'), halfXY = geometry.getAttribute('bmHalfXY');
+  var halfZ = geometry.getAttribute('bmHalfZ');
+  var index = geometry.index ? geometry.index.array : null, corners = index ? index.length : position.count;
+  var byBox = new Map(), sealed = [];
+  for (var t = 0; t + 2 < corners; t += 3) {
+    var box = number.getY(index ? index[t] : t);
+    if (!byBox.has(box)) byBox.set(box, []);
+    byBox.get(box).push(t);
+  }
+  function corner(t) { return index ? index[t] : t; }
+  function onFace(t) {  // whether triangle t lies on one face of its box
+    var v = corner(t), h = [halfXY.getX(v), halfXY.getY(v), halfZ.getX(v)];
+    var slack = h.map(function (e) { return e - BOXMARCH_SEALED_TOLERANCE * Math.max(h[0], h[1], h[2]); });
+    for (var axis = 0; axis < 3; axis++) {
+      var above = 0, below = 0;
+      for (var k = 0; k < 3; k++) {
+        var c = corner(t + k), f = axis === 0 ? offset.getX(c) : axis === 1 ? offset.getY(c) : number.getX(c);
+        if (-f >= slack[axis]) above++;
+        if (-f <= -slack[axis]) below++;
+      }
+      if (above === 3 || below === 3) return true;
+    }
+    return false;
+  }
+  byBox.forEach(function (triangles) {
+    var welded = new Map(), id = [];
+    triangles.forEach(function (t) {
+      for (var k = 0; k < 3; k++) {
+        var v = corner(t + k), key = position.getX(v) + ',' + position.getY(v) + ',' + position.getZ(v);
+        if (!welded.has(key)) welded.set(key, welded.size);
+        id.push(welded.get(key));
+      }
+    });
+    var n = welded.size, uses = new Map(), closed = true;
+    for (var i = 0; i < id.length; i++) {
+      var a = id[i], b = id[i % 3 === 2 ? i - 2 : i + 1], edge = Math.min(a, b) * n + Math.max(a, b);
+      uses.set(edge, (uses.get(edge) || 0) + 1);
+    }
+    uses.forEach(function (count) { if (count !== 2) closed = false; });
+    if (closed && triangles.every(onFace)) Array.prototype.push.apply(sealed, triangles);
+  });
+  return sealed;
+}
+
+// The geometry the pre-pass draws occluders from (boxmarchSealedTriangles): geometry itself where
+// every box is sealed, null where none is, else a geometry of the sealed boxes' triangles sharing
+// geometry's attributes.
+function boxmarchOccluderGeometry(THREE, geometry) {
+  var sealed = boxmarchSealedTriangles(geometry), index = geometry.index;
+  if (3 * sealed.length === (index ? index.count : geometry.getAttribute('position').count)) return geometry;
+  if (!sealed.length) return null;
+  var kept = geometry.getAttribute('position').count > 65535 ? new Uint32Array(3 * sealed.length) : new Uint16Array(3 * sealed.length);
+  sealed.forEach(function (t, i) { for (var k = 0; k < 3; k++) kept[3 * i + k] = index ? index.array[t + k] : t + k; });
+  var drawn = new THREE.BufferGeometry();
+  Object.keys(geometry.attributes).forEach(function (name) { drawn.setAttribute(name, geometry.attributes[name]); });
+  return drawn.setIndex(new THREE.BufferAttribute(kept, 1));
+}
+
+// The pre-pass's draws of geometry's occluders of shape id `shape`, or null where no box of
+// geometry may draw any (boxmarchOccluderGeometry): one mesh per occluder box of the preset
+// (BOXMARCH_OCCLUDER_COUNTS), four for each box's own shape (box_params.glsl's most; an index a
+// box's shape lacks draws nothing: its vertices leave the view), their matrices to be copied from
+// the mesh's world matrix before each draw; `side`: the faces drawn (the occluders are their boxes
+// scaled and moved, so a box's back faces are their far side too).
 function boxmarchOccluderScene(THREE, geometry, shape, side) {
+  var drawn = boxmarchOccluderGeometry(THREE, geometry);
+  if (!drawn) return null;
   var scene = new THREE.Scene();
   for (var k = 0; k < (shape >= 0 ? BOXMARCH_OCCLUDER_COUNTS[shape] : 4); k++) {
-    var occluder = new THREE.Mesh(geometry, createBoxmarchOccluderMaterial(THREE, k, shape, side));
+    var occluder = new THREE.Mesh(drawn, createBoxmarchOccluderMaterial(THREE, k, shape, side));
     occluder.matrixAutoUpdate = false;
     occluder.frustumCulled = false;
     scene.add(occluder);
@@ -539,16 +618,18 @@ function boxmarchLayersOverView(spheres, objectToClip, width, height) {
 // onBeforeRender, and the material reads them, where the boxes lie BOXMARCH_MIN_LAYERS layers
 // deep or more over the view (boxmarchLayersOverView, computed again when the camera, the mesh or
 // the view's size changed; elsewhere every fragment marches). A SkinnedMesh keeps marching every
-// fragment (the pre-pass draws the geometry at rest). Returns the pre-pass ({target, scene,
-// layers: of the last draw, drawn: whether the last draw ran it, minLayers: the depth from which
-// it runs, BOXMARCH_MIN_LAYERS; 0 runs it at any depth}), or null.
+// fragment (the pre-pass draws the geometry at rest), as does a mesh none of whose boxes may draw
+// occluders (boxmarchOccluderScene). Returns the pre-pass ({target, scene, layers: of the last
+// draw, drawn: whether the last draw ran it, minLayers: the depth from which it runs,
+// BOXMARCH_MIN_LAYERS; 0 runs it at any depth}), or null.
 function useBoxmarchOccluders(THREE, mesh, shape) {
   if (shape === null || shape === undefined || mesh.isSkinnedMesh) return null;
   var material = mesh.material;
-  var target = new THREE.WebGLRenderTarget(1, 1, { minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
-    depthBuffer: true, stencilBuffer: false });
   // the boxes' far sides culled where the march culls them (useBoxmarchBackFaceCulling)
   var scene = boxmarchOccluderScene(THREE, mesh.geometry, shape, mesh.userData.boxmarchEyeBox ? THREE.FrontSide : THREE.DoubleSide);
+  if (!scene) return null;
+  var target = new THREE.WebGLRenderTarget(1, 1, { minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
+    depthBuffer: true, stencilBuffer: false });
   var size = new THREE.Vector2(), clear = new THREE.Color(), white = new THREE.Color(1, 1, 1);
   var marching = mesh.onBeforeRender, spheres = boxmarchBoxSpheres(mesh.geometry);
   var toClip = new THREE.Matrix4(), seen = new THREE.Matrix4(), seenSize = new THREE.Vector2();
@@ -575,6 +656,7 @@ function useBoxmarchOccluders(THREE, mesh, shape) {
       occluder.matrix.copy(mesh.matrixWorld);
       occluder.matrixWorldNeedsUpdate = true;
       occluder.material.uniforms.bmEye.value.copy(material.uniforms.bmEye.value);
+      occluder.material.uniforms.bmViewHeight.value = size.y;
     });
     var alpha = renderer.getClearAlpha(), autoClear = renderer.autoClear;
     clear.copy(renderer.getClearColor(clear));  // r111 returns its own colour and takes no argument
@@ -632,13 +714,15 @@ function createBoxmarchScreenMaterial(THREE, uniforms, body, all) {
 }
 
 // The mesh for one pass of useBoxmarchVisibility: mesh's geometry with a variant of its marching
-// material (defines; the uniforms shared), front faces tested against the depth buffer, or the
-// back faces of the box holding the eye untested (eyeBox).
-function boxmarchPassMesh(THREE, mesh, defines, eyeBox) {
+// material (defines; the uniforms shared), tested against the depth buffer, front faces where the
+// boxes are closed and wound outward (`outward`, boxmarchClosedOutward: a box's back faces are its
+// far side), else both sides as the marching mesh draws them (an inside-out box's front faces are
+// its far side); or the back faces of the box holding the eye untested (eyeBox).
+function boxmarchPassMesh(THREE, mesh, defines, eyeBox, outward) {
   // BackSide would flip the winding three.js calls front (gl_FrontFacing with it); from inside
   // its box every face is a back face anyway
   var material = boxmarchMaterialVariant(THREE, mesh, Object.assign({}, defines, eyeBox ? { BM_EYE_BOX_ONLY: '' } : {}),
-    eyeBox ? THREE.DoubleSide : THREE.FrontSide);
+    eyeBox || !outward ? THREE.DoubleSide : THREE.FrontSide);
   material.depthTest = !eyeBox;
   material.depthWrite = false;
   if (defines.BM_VISIBILITY_PASS !== undefined) {
@@ -655,13 +739,15 @@ function boxmarchPassMesh(THREE, mesh, defines, eyeBox) {
 
 // Sets up useBoxmarchVisibility's passes for mesh (given useBoxmarchMaterial's material) with
 // occluder shape id `shape` (boxmarchOccluderShape; null: none, nor these passes, as for a
-// SkinnedMesh): mesh itself is no longer drawn (its material's visible is false); its child
+// SkinnedMesh and for a mesh none of whose boxes may draw occluders, boxmarchOccluderScene): mesh itself is no longer drawn (its material's visible is false); its child
 // `composite` draws the picture, running the passes from its onBeforeRender. Where the context
 // lacks the extensions (boxmarchVisibilitySupported), it draws mesh's material behind the
 // occluder pre-pass (useBoxmarchOccluders) there instead. Returns {composite, targets, scenes,
 // supported}, or null.
 function useBoxmarchVisibility(THREE, mesh, shape) {
   if (shape === null || shape === undefined || mesh.isSkinnedMesh) return null;
+  var occluders = boxmarchOccluderScene(THREE, mesh.geometry, shape, THREE.DoubleSide);
+  if (!occluders) return null;
   var material = mesh.material, uniforms = material.uniforms, marching = mesh.onBeforeRender;
   // today's path, drawn from the composite's onBeforeRender where the extensions are missing
   var fallback = new THREE.Mesh(mesh.geometry, material);
@@ -679,16 +765,19 @@ function useBoxmarchVisibility(THREE, mesh, shape) {
   uniforms.bmResolvedDepth = { value: nearest.texture };
   var scenes = { fallback: new THREE.Scene(), visibility: new THREE.Scene(), shade: new THREE.Scene() };
   scenes.fallback.add(fallback);
-  scenes.occluders = boxmarchOccluderScene(THREE, mesh.geometry, shape, THREE.DoubleSide);
+  scenes.occluders = occluders;
   scenes.occluders.children.forEach(function (occluder) {
-    occluder.material.fragmentShader = 'void main() {\n  gl_FragColor = vec4(gl_FragCoord.z);\n}\n';
-    // a margin for the march's own rounding: the occluders a little farther than drawn
-    occluder.material.polygonOffset = true;
-    occluder.material.polygonOffsetUnits = 4;
+    // the limit the march compares with (bm_occluder_limit), as depth too: the passes' depth test
+    // then keeps the fragments the march's own test would
+    occluder.material.fragmentShader = [BOXMARCH_DECODE, BOXMARCH_LIBRARY, BOXMARCH_NO_MAP, 'void main() {',
+      '  float limit = min(bm_occluder_limit(gl_FragCoord.z), 1.0);',
+      '  gl_FragDepthEXT = limit;', '  gl_FragColor = vec4(limit);', '}'].join('\n');
+    if (parseInt(THREE.REVISION, 10) < 163) occluder.material.extensions = { fragDepth: true };
   });
+  var outward = boxmarchClosedOutward(mesh.geometry);
   [false, true].forEach(function (eyeBox) {
-    scenes.visibility.add(boxmarchPassMesh(THREE, mesh, { BM_VISIBILITY_PASS: '' }, eyeBox));
-    scenes.shade.add(boxmarchPassMesh(THREE, mesh, { BM_SHADE_PASS: '' }, eyeBox));
+    scenes.visibility.add(boxmarchPassMesh(THREE, mesh, { BM_VISIBILITY_PASS: '' }, eyeBox, outward));
+    scenes.shade.add(boxmarchPassMesh(THREE, mesh, { BM_SHADE_PASS: '' }, eyeBox, outward));
   });
   var screen = { bmResolvedDepth: uniforms.bmResolvedDepth, bmShaded: { value: shaded.texture }, bmOcclusion: uniforms.bmOcclusion };
   var triangle = new THREE.BufferGeometry();
@@ -734,7 +823,10 @@ function useBoxmarchVisibility(THREE, mesh, shape) {
       }
       uniforms.bmOcclusion.value.set(1, 1 / size.x, 1 / size.y, 0);
       uniforms.bmOccluderDepth.value = bound.texture;
-      scenes.occluders.children.forEach(function (occluder) { occluder.material.uniforms.bmEye.value.copy(uniforms.bmEye.value); });
+      scenes.occluders.children.forEach(function (occluder) {
+        occluder.material.uniforms.bmEye.value.copy(uniforms.bmEye.value);
+        occluder.material.uniforms.bmViewHeight.value = size.y;
+      });
       draw(renderer, nearest, scenes.occluders, camera, white);
       draw(renderer, bound, scenes.copy, camera, null);
       renderer.setRenderTarget(nearest);
@@ -1018,27 +1110,31 @@ var BOXMARCH_FRAGMENT = [
   '  mat4 objectToClip = projectionMatrix * modelViewMatrix;',
   // Hidden boxes (useBoxmarchOccluders): behind the occluders' depth nothing is visible; a march
   // from the eye is only bounded (its box's own entry is the eye).
-  // the ray in clip space, c0 + t c1 from the march's start (bm_depth_crossing)
-  '  vec4 c0 = objectToClip * vec4(fromEye ? bmEye.xyz : bmObjPos, 1.0);',
+  // the ray in clip space, c0 + t c1 from the march's start (bm_depth_crossing; a hit's depth): from
+  // the face, its z and w the rasteriser's (gl_FragCoord), as the Blender preview's (which says why)
+  '  float faceW = 1.0 / gl_FragCoord.w;',
+  '  vec4 c0 = fromEye ? objectToClip * vec4(bmEye.xyz, 1.0) : vec4(0.0, 0.0, (2.0 * gl_FragCoord.z - 1.0) * faceW, faceW);',
   '  vec4 c1 = objectToClip * vec4(ray / eye_distance, 0.0);',
+  // the pre-pass wrote each occluder's limit (bm_occluder_limit); 1 or more where it drew none
+  '  float hidden = 1.0;',
   '  if (bmOcclusion.x > 0.5) {',
   '#if defined(BM_VISIBILITY_PASS) || defined(BM_SHADE_PASS)',
-  '    float hidden = bm_occluder_limit(texture2D(bmOccluderDepth, gl_FragCoord.xy * bmOcclusion.yz).r);',  // float
+  '    hidden = texture2D(bmOccluderDepth, gl_FragCoord.xy * bmOcclusion.yz).r;',  // float
   '#else',
-  '    float hidden = bm_occluder_limit(bm_unpack_depth(texture2D(bmOccluderDepth, gl_FragCoord.xy * bmOcclusion.yz)));',
+  '    hidden = bm_unpack_depth(texture2D(bmOccluderDepth, gl_FragCoord.xy * bmOcclusion.yz));',
   '#endif',
+  '  }',
+  '  if (hidden < 1.0) {',
   '    if (!fromEye && gl_FragCoord.z > hidden) { drawn = false; discard; }',
   '    t_end = min(t_end, bm_depth_crossing(c0, c1, 2.0 * hidden - 1.0));',
   '  }',
   '#ifdef BM_SHADE_PASS',
-  // The nearest hit's depth (useBoxmarchVisibility): where the ray reaches it lies the winning hit;
-  // a box that does not hold that point (give or take a margin for the depth's rounding) loses.
+  // The nearest hit's depth (useBoxmarchVisibility): the winning hit lies where the ray reaches it,
+  // give or take bm_shade_margin (near the far plane a float step of depth spans centimetres along
+  // the ray); a box that ends before that loses (one that starts after it, the depth test culls)
   '  float resolved = texture2D(bmResolvedDepth, gl_FragCoord.xy * bmOcclusion.yz).r;',
-  '  float t_win = bm_depth_crossing(c0, c1, 2.0 * resolved - 1.0);',
-  // none ahead: the least depth is this fragment's own (a hit on the face, rounded nearer) or
-  // nearer, which the depth test has judged
-  '  if (t_win > 1e29) t_win = 0.0;',
-  '  if (max3(abs(ro + rd * t_win) - box_half) > 1e-3 * (t_win + max3(box_half))) { drawn = false; discard; }',
+  '  float t_win = bm_depth_crossing(c0, c1, 2.0 * (resolved - bm_shade_margin()) - 1.0);',
+  '  if (t_win < 1e29 && t_win > t_end) { drawn = false; discard; }',
   '#endif',
   // The quality knob (as the Blender preview applies it): a pixel's size at the face, the box's size on screen.
   '  vec4 knob = bm_quality(bmQuality.x);',
@@ -1052,8 +1148,7 @@ var BOXMARCH_FRAGMENT = [
   '      vec2(knob.x * footprint, knob.w), t, steps, d));',
   '  if (!hit) discard;',
   '  vec3 local_hit = ro + rd * t;',
-  '  vec3 obj_hit = bmObjPos + bm_from_local(local_hit + f, x, y, z);',
-  '  vec4 clip = objectToClip * vec4(obj_hit, 1.0);',
+  '  vec4 clip = c0 + c1 * t;',
   // Never nearer than the rasterised face: what the raw material's layout(depth_greater) declares.
   '  float depth = max(0.5 + 0.5 * clip.z / clip.w, gl_FragCoord.z);',
   '#ifdef BM_VISIBILITY_PASS',
@@ -1072,12 +1167,19 @@ var BOXMARCH_FRAGMENT = [
   '}'
 ].join('\n');
 
+// The map() of the pre-pass's stages: the library's march needs one; the pre-pass marches nothing.
+var BOXMARCH_NO_MAP = 'float map(vec3 p) { return 1.0; }';
+
 // The pre-pass's vertex stage (createBoxmarchOccluderMaterial): the box's vertex v = -f moved to
-// centre + v * extent / h of its occluder box (box_params.glsl), as the Blender preview's does.
+// centre + v * extent / h of its occluder box (box_params.glsl), pulled in further by
+// bm_occluder_rounding for a pixel's size at the box's far side (bmViewHeight: the target's height
+// in pixels) and pushed back in depth by bm_depth_rounding, as the Blender preview's does
+// (preview.vert.glsl, which says why).
 var BOXMARCH_OCCLUDER_VERTEX = [
-  'float map(vec3 p) { return 1.0; }',  // the library's march needs one; the pre-pass marches nothing
+  BOXMARCH_NO_MAP,
   BOXMARCH_ATTRIBUTES,
   'uniform vec4 bmEye;',
+  'uniform float bmViewHeight;',
   'void main() {',
   '  vec3 z = normalize(normal);',
   '  vec3 x = normalize(tangent.xyz);',
@@ -1085,19 +1187,30 @@ var BOXMARCH_OCCLUDER_VERTEX = [
   '  vec3 v = -bm_offset(bmOffsetXY, bmOffsetZIndex);',
   '  vec3 h = bm_half_extents(bmHalfXY, bmHalfZ);',
   '  float shape = BM_OCCLUDER_SHAPE < 0.0 ? bm_box_params(bmShapeMaterial, bmRandomUser).x : BM_OCCLUDER_SHAPE;',
-  '  vec3 extent = bm_occluder_half(shape, h, BM_OCCLUDER_INDEX);',
-  '  vec3 pulled = bm_occluder_centre(shape, h, BM_OCCLUDER_INDEX) + v * extent / max(h, vec3(1e-30));',
   '  vec3 eye = bm_to_local(bmEye.xyz - position, x, y, z) + v;',
   '  bool eyeInside = bmEye.w > 0.5 && max3(abs(eye) - h) <= 0.0;',
-  '  vec3 moved = position + bm_from_local(pulled - v, x, y, z);',
-  // a box the near plane cuts draws none either: its shape may not be drawn where its occluders
-  // would lie (preview.vert.glsl); z + w >= 0 in clip space beyond that plane, least over the box
+  // the box's least z + w in clip space (z + w >= 0 beyond the near plane) and its greatest w
   '  mat4 m = projectionMatrix * modelViewMatrix;',
-  '  vec3 side = vec3(m[0][2] + m[0][3], m[1][2] + m[1][3], m[2][2] + m[2][3]);',
-  '  float nearest = dot(side, position + bm_from_local(-v, x, y, z)) + m[3][2] + m[3][3]',
-  '    - h.x * abs(dot(side, x)) - h.y * abs(dot(side, y)) - h.z * abs(dot(side, z));',
-  '  gl_Position = eyeInside || nearest <= 0.0 || min3(extent) <= 0.0 ? vec4(2.0, 2.0, 2.0, 1.0)',
-  '    : m * vec4(moved, 1.0);',
+  '  vec3 origin = position - bm_from_local(v, x, y, z);',
+  '  vec4 side = vec4(m[0][2] + m[0][3], m[1][2] + m[1][3], m[2][2] + m[2][3], m[3][2] + m[3][3]);',
+  '  vec4 wRow = vec4(m[0][3], m[1][3], m[2][3], m[3][3]);',
+  '  float nearest = dot(side.xyz, origin) + side.w - dot(h, abs(vec3(dot(side.xyz, x), dot(side.xyz, y), dot(side.xyz, z))));',
+  '  float farthest = dot(wRow.xyz, origin) + wRow.w + dot(h, abs(vec3(dot(wRow.xyz, x), dot(wRow.xyz, y), dot(wRow.xyz, z))));',
+  '  float rounding = bm_occluder_rounding(bm_pixel_size(farthest, length(vec3(m[0][1], m[1][1], m[2][1])), bmViewHeight),',
+  '    length(position));',
+  '  vec3 extent = bm_occluder_half(shape, h, BM_OCCLUDER_INDEX) - vec3(rounding);',
+  // none for a box holding the eye, reaching within the rounding of the near plane, or left
+  // empty by the rounding: its vertices go to the occluder's centre (no area; where one box's
+  // vertices decide differently, what they draw stays inside the occluder)
+  '  bool drawn = !eyeInside && nearest > rounding * length(side.xyz) && min3(extent) > 0.0;',
+  '  vec3 pulled = bm_occluder_centre(shape, h, BM_OCCLUDER_INDEX) + (drawn ? v * extent / max(h, vec3(1e-30)) : vec3(0.0));',
+  '  vec3 moved = position + bm_from_local(pulled - v, x, y, z);',
+  '  vec4 clip = m * vec4(moved, 1.0);',
+  // pushed back in depth by what float32 rounding may move it, its place on screen kept
+  '  vec2 spread = vec2(dot(abs(vec3(m[0][2], m[1][2], m[2][2])), abs(moved)) + abs(m[3][2]),',
+  '    dot(abs(wRow.xyz), abs(moved)) + abs(wRow.w));',
+  '  clip.z += 2.0 * bm_depth_rounding(spread, clip) * clip.w;',
+  '  gl_Position = clip;',
   '}'
 ].join('\n');
 

@@ -191,12 +191,26 @@ def fullscreen_declarations(stage: str) -> str:
 def vertex_source(layout: str = "CLASSIC", occluder: bool = False) -> str:
     """The vertex stage as Blender compiles it: ``layout``'s decode (the shipped decode.glsl);
     ``occluder``: the hidden-box pre-pass's, which pulls each box in to its occluder box number
-    ``occluder_index`` of its shape (box_params.glsl)."""
+    ``occluder_index`` of its shape (box_params.glsl; raymarch.glsl's bm_pixel_size sizes its
+    rounding margin, and the march there needs a map(), which the pre-pass never calls)."""
     if layout not in VERTEX_INPUTS:
         raise ValueError(f"layout must be one of {tuple(VERTEX_INPUTS)}, got {layout!r}")
-    shapes = ["#define BM_OCCLUDER_PASS", read_glsl("sdf.glsl"), read_glsl("box_params.glsl")] if occluder else []
+    shapes = ["#define BM_OCCLUDER_PASS", read_glsl("sdf.glsl"), read_glsl("box_params.glsl"), read_glsl("raymarch.glsl"),
+              NO_MAP] if occluder else []
     return "\n".join([f"#define BM_LAYOUT_{layout}", read_glsl("decode.glsl"), *shapes, read_glsl("preview.vert.glsl")])
 
 
-# The pre-pass writes depth only; a colour output is declared as every create-info has one.
-OCCLUDER_FRAGMENT_SOURCE = "void main()\n{\n  frag_color = vec4(0.0);\n}\n"
+# The map() of the pre-pass's stages, which include raymarch.glsl for its depth rules but march nothing.
+NO_MAP = "float map(vec3 p)\n{\n  return 1.0;\n}\n"
+
+# The pre-pass writes, as each occluder's depth, the limit the marching stage compares with
+# (raymarch.glsl bm_occluder_limit: a margin farther), so that the depth test of the resolved
+# passes, which compare their faces with that depth before any shader runs, keeps the same
+# fragments as the marching stage's own test; never nearer than the face (declared GREATER, as
+# the marching stage's depth). A colour output is declared as every create-info has one.
+OCCLUDER_FRAGMENT_SOURCE = "\n".join([read_glsl("sdf.glsl"), read_glsl("raymarch.glsl"), NO_MAP, """void main()
+{
+  gl_FragDepth = max(bm_occluder_limit(gl_FragCoord.z), gl_FragCoord.z);
+  frag_color = vec4(0.0);
+}
+"""])

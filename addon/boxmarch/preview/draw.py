@@ -102,8 +102,12 @@ class _Drawn:
     offsets: np.ndarray           # float64 (N, 3) f, box-local
     frame: Callable               # () -> float64 (N, 3, 3) the frame the layout decodes to (unit columns)
     outward: bool = False         # every box closed and wound outward: back faces may be culled
+    # the boxes that may draw occluders (mesh_data.sealed_boxes): all (True), none (False), or a
+    # GPUIndexBuf of their triangles
+    sealed: object = True
     vectors: tuple | None = None  # the overlay's two line batches, made when first shown
     marches: dict = field(default_factory=dict)  # octant -> GPUBatch of the preview shader
+    occluder_batch: object = None  # GPUBatch of the sealed boxes where only some are sealed
 
     def march(self, octant: int | None):
         """The batch of the preview shader drawing the boxes front to back for ``octant``."""
@@ -112,6 +116,17 @@ class _Drawn:
             batch.vertbuf_add(self.static)
             self.marches[octant] = batch
         return self.marches[octant]
+
+    def occluders(self, march):
+        """The batch the hidden-box pre-pass draws, given the one marching (``march``): that one
+        where every box is sealed (mesh_data.sealed_boxes), one of the sealed boxes' triangles
+        where some are, None where none is (no pre-pass)."""
+        if isinstance(self.sealed, bool):
+            return march if self.sealed else None
+        if self.occluder_batch is None:
+            self.occluder_batch = gpu.types.GPUBatch(type="TRIS", buf=self.moving, elem=self.sealed)
+            self.occluder_batch.vertbuf_add(self.static)
+        return self.occluder_batch
 
 
 class _OctantTriangles:
@@ -140,6 +155,7 @@ class _Mesh:
     static: object                # GPUVertBuf of the inputs not in POSE_INPUTS
     edges: object                 # GPUIndexBuf
     triangles: _OctantTriangles
+    sealed: object                # _Drawn.sealed
     rest: _Drawn | None = None
 
 
@@ -158,7 +174,7 @@ def _batches(pose_inputs: dict, mesh: _Mesh, positions, offsets, frame) -> _Draw
     moving = _vertex_buffer(pose_inputs)
     outline = gpu.types.GPUBatch(type="LINES", buf=moving, elem=mesh.edges)
     return _Drawn(moving=moving, static=mesh.static, triangles=mesh.triangles, outline=outline,
-                  positions=positions, offsets=offsets, frame=frame, outward=mesh.baked.outward)
+                  positions=positions, offsets=offsets, frame=frame, outward=mesh.baked.outward, sealed=mesh.sealed)
 
 
 def _normalised(vectors):
@@ -173,7 +189,11 @@ def _mesh(mesh, layout) -> _Mesh:
         inputs = mesh_data.layout_inputs(layout, baked)
         static = _vertex_buffer({k: v for k, v in inputs.items() if k not in POSE_INPUTS})
         edges = gpu.types.GPUIndexBuf(type="LINES", seq=baked.edges)
-        mesh = _Mesh(baked=baked, inputs=inputs, static=static, edges=edges, triangles=_OctantTriangles(baked))
+        in_sealed = baked.sealed[baked.submesh_of_vertex[baked.triangles[:, 0]]]
+        sealed = (bool(in_sealed.all()) if in_sealed.all() or not in_sealed.any()
+                  else gpu.types.GPUIndexBuf(type="TRIS", seq=baked.triangles[in_sealed]))
+        mesh = _Mesh(baked=baked, inputs=inputs, static=static, edges=edges, triangles=_OctantTriangles(baked),
+                     sealed=sealed)
         mesh.rest = _batches({k: v for k, v in inputs.items() if k in POSE_INPUTS}, mesh, baked.positions,
                              mesh_data.box_data_in_object_frame(baked).offsets,
                              lambda: layouts.quaternion_matrices(baked.quaternions))
@@ -358,7 +378,7 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, 
         return mesh_data.layers_over_view(baked.origins, baked.box_half_extents, object_to_clip, viewport[2], viewport[3])
 
     occluders = occlusion.occluder_count(settings.sdf, settings.quality)
-    occluders = occluders if occlusion.used(occluders, layers) else 0
+    occluders = occluders if drawn.sealed is not False and occlusion.used(occluders, layers) else 0
     resolved = resolve.used(occluders, layers)
     shader = resolve.prepared(lambda: _marching_shader(ob, True)) if resolved else None
     if shader is None:
@@ -380,7 +400,7 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, 
             _draw_sides(shader, batch, block, cull, perspective, mirrored, eye_depth_test)
 
         depth, occluder_framebuffer = (
-            occlusion.draw_occluders(batch, settings.layout, ubo, occluders, viewport[2], viewport[3],
+            occlusion.draw_occluders(drawn.occluders(batch), settings.layout, ubo, occluders, viewport[2], viewport[3],
                                      ("FRONT" if mirrored else "BACK") if cull else "NONE")
             if occluders else (occlusion.no_depth(), None))
         if resolved:

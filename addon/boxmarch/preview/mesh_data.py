@@ -28,6 +28,7 @@ class BakedMesh:
     submesh_of_vertex: np.ndarray  # int32 (N,) the box number of each vertex
     box_layers: mesh_io.BoxLayers | None = None  # per-box parameters and parents (None: baked without)
     outward: bool = False        # every box closed and wound outward (closed_outward)
+    sealed: np.ndarray | None = None  # bool (S,) each box's triangles are its whole surface (sealed_boxes)
 
 
 def read_baked(mesh) -> BakedMesh:
@@ -47,7 +48,8 @@ def read_baked(mesh) -> BakedMesh:
                      origins=origins, box_quaternions=box_q, box_half_extents=box_half,
                      submesh_of_vertex=submesh_of_vertex,
                      box_layers=mesh_io.read_box_layers(mesh, submesh_of_vertex, count),
-                     outward=closed_outward(positions, triangles, origins, submesh_of_vertex))
+                     outward=closed_outward(positions, triangles, origins, submesh_of_vertex),
+                     sealed=sealed_boxes(colour, box_half[submesh_of_vertex], triangles, submesh_of_vertex, len(origins)))
 
 
 def closed_outward(positions, triangles, origins, submesh_of_vertex) -> bool:
@@ -66,6 +68,36 @@ def closed_outward(positions, triangles, origins, submesh_of_vertex) -> bool:
     a, b, c = (positions[triangles[:, k]].astype(np.float64) - origins[box] for k in range(3))
     volume = np.bincount(box, np.einsum("ij,ij->i", a, np.cross(b, c)), minlength=len(origins))
     return bool(np.all(volume > 0.0))
+
+
+# How far (a share of a box's largest half-extent) a box's triangle may lie inside a face of its
+# box and count as on it (sealed_boxes): within the margin by which bm_occluder_half pulls the
+# occluders in (box_params.glsl), so the faces still cover every occluder.
+SEALED_TOLERANCE = 1e-3
+
+
+def sealed_boxes(offsets, half_extents, triangles, submesh_of_vertex, box_count: int) -> np.ndarray:
+    """bool (S,): whether each box's triangles are the whole surface of its box, whichever way
+    they are wound: every edge of them shared by exactly two, and each on one face of the box (its
+    corners' box-local positions -f, ``offsets`` as core.decode_offsets reads them, within
+    SEALED_TOLERANCE of the largest of ``half_extents`` (N, 3, per vertex) of that face's plane).
+    Only such a box is drawn wherever its shape may be seen, so only its occluders are sure to lie
+    behind what the box draws (docs/PREVIEW.md, "Hidden boxes"): an open box, or a modelled shape
+    smaller than its box, would hide what is seen past it."""
+    triangles = np.asarray(triangles, np.int64).reshape(-1, 3)
+    box = np.asarray(submesh_of_vertex, np.int64)[triangles[:, 0]]
+    sealed = np.bincount(box, minlength=box_count) > 0
+    if not len(triangles):
+        return sealed
+    corner = -core.decode_offsets(offsets)[triangles]  # (T, 3 corners, 3 axes) box-local
+    half = np.asarray(half_extents, np.float64)[triangles[:, 0]]  # (T, 3)
+    slack = half - SEALED_TOLERANCE * half.max(axis=1, keepdims=True)
+    on_face = ((corner >= slack[:, None]).all(axis=1) | (corner <= -slack[:, None]).all(axis=1)).any(axis=1)
+    edges = np.sort(np.stack([triangles, np.roll(triangles, -1, axis=1)], -1).reshape(-1, 2), axis=1)
+    _unique, where, uses = np.unique(edges, axis=0, return_inverse=True, return_counts=True)
+    closed = (uses[where.reshape(-1)] == 2).reshape(-1, 3).all(axis=1)
+    sealed &= np.bincount(box, weights=~(on_face & closed), minlength=box_count) == 0
+    return sealed
 
 
 def box_data_in_object_frame(baked: BakedMesh) -> layouts.BoxData:

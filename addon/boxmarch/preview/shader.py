@@ -36,7 +36,8 @@ MAX_USER_SHADERS = 8
 
 def _create_info(fragment: str, layout: str, occluder: bool = False, resolved: bool = False):
     """The create-info of the marching shader, or with ``occluder`` of the hidden-box pre-pass
-    (the same inputs and block; the box mesh pulled in to an occluder box, depth only); with
+    (the same inputs and block; the box mesh pulled in to an occluder box, depth only, each
+    occluder's written a margin farther: shader_sources.OCCLUDER_FRAGMENT_SOURCE); with
     ``resolved`` of the resolved passes' marching stage (the hit_min image, no depth written)."""
     iface = gpu.types.GPUStageInterfaceInfo("boxmarch_preview_interface")
     for interpolation, type_name, name in shader_sources.STAGE_INTERFACE:
@@ -53,10 +54,10 @@ def _create_info(fragment: str, layout: str, occluder: bool = False, resolved: b
         info.push_constant(*shader_sources.OCCLUDER_INDEX)
     else:
         info.sampler(*shader_sources.OCCLUDER_SAMPLER)
-        if resolved:
-            info.image(*shader_sources.HIT_MIN_IMAGE, qualifiers={"READ", "WRITE"})
-        elif hasattr(info, "depth_write"):  # Blender 4+; 3.4 has no declaration
-            info.depth_write(DEPTH_WRITE)
+    if resolved:
+        info.image(*shader_sources.HIT_MIN_IMAGE, qualifiers={"READ", "WRITE"})
+    elif hasattr(info, "depth_write"):  # Blender 4+; 3.4 has no declaration
+        info.depth_write(DEPTH_WRITE)
     info.vertex_source(shader_sources.vertex_source(layout, occluder))
     info.fragment_source(fragment)
     return info, iface
