@@ -49,7 +49,7 @@ def main():
     counts = [int(n) for n in sys.argv[1:]] or list(COUNTS)
     threejs.TIMEOUT_S = 900
     js = (TIMING_JOB.replace("__CUBES__", threejs.CUBES_JS).replace("__CLOCK__", threejs.CLOCK)
-          .replace("__COUNTS__", json.dumps(counts)).replace("__REPEATS__", str(REPEATS)))
+          .replace("__COUNTS__", json.dumps(counts, allow_nan=False)).replace("__REPEATS__", str(REPEATS)))
     rows = []
     for release in [r for r in sorted(threejs.RELEASES) if threejs.available(r) is None]:
         for row in threejs.run_page(b"", js, threejs.shipped_material(release), release):

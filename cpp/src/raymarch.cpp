@@ -260,7 +260,8 @@ std::vector<float> occluder_depths(const float* origins, const float* quaternion
             farthest += h[axis] * std::abs(glm::dot(vec3(w_row), q * unit));
         }
         const float row_y = glm::length(vec3(to_clip[0][1], to_clip[1][1], to_clip[2][1]));
-        const float rounding = shader::bm_occluder_rounding(shader::bm_pixel_size(farthest, row_y, float(H)), glm::length(c));
+        const float rounding =
+                shader::bm_occluder_rounding(shader::bm_pixel_size(farthest, row_y, float(H)), glm::length(c));
         for (float k = 0.0f; k < shader::bm_occluder_count(shape); k += 1.0f) {
             const vec3 centre = shader::bm_occluder_centre(shape, h, k);
             const vec3 extent = shader::bm_occluder_half(shape, h, k) - vec3(rounding);
