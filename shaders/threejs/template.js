@@ -700,10 +700,12 @@ function boxmarchVisibilitySupported(renderer) {
 }
 
 // A full-screen pass reading the least-depth target (bmResolvedDepth) and, for the composite,
-// the shaded colour (bmShaded): no hit (depth 1, the clear) is discarded.
+// the shaded colour (bmShaded): no hit (depth 1, the clear) is discarded. Both sides: the
+// composite is a child of the mesh, and under a mirroring matrix three.js winds it clockwise.
 function createBoxmarchScreenMaterial(THREE, uniforms, body, all) {
   var revision = parseInt(THREE.REVISION, 10), material = new THREE.ShaderMaterial({
     uniforms: uniforms,
+    side: THREE.DoubleSide,
     vertexShader: 'void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }',
     fragmentShader: ['uniform sampler2D bmResolvedDepth;', 'uniform sampler2D bmShaded;', 'uniform vec4 bmOcclusion;',
       'void main() {', '  vec2 uv = gl_FragCoord.xy * bmOcclusion.yz;',
