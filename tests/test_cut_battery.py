@@ -38,6 +38,8 @@ REGRESSIONS = [
     (54, "r180", "pre-pass 1 px emptied; an ordinary BOX scene at scale 271"),
     (61, "r180", "visibility 2,378 px another colour; LINK, eye inside a box, mirrored, sheared"),
     (74, "r180", "visibility: all 6,912 px emptied; ROUNDED_BOX, eye inside a box, mirrored"),
+    (70, "r180", "visibility 227 px emptied (cutfix, main at cf51879); CYLINDER, eye inside a box, nested, "
+                 "inside-out, vertices far"),
     (98, "r180", "pre-pass 133 px (86 emptied); ROUNDED_BOX, orthographic, sheared, open"),
 ]
 

@@ -1133,10 +1133,12 @@ var BOXMARCH_FRAGMENT = [
   '#ifdef BM_SHADE_PASS',
   // The nearest hit's depth (useBoxmarchVisibility): the winning hit lies where the ray reaches it,
   // give or take bm_shade_margin (near the far plane a float step of depth spans centimetres along
-  // the ray); a box that ends before that loses (one that starts after it, the depth test culls)
+  // the ray); a box that ends before that loses (one that starts after it, the depth test culls).
+  // Not a march from the eye: its depth is its back face's (never nearer than the face), so its
+  // t_win is its t_end give or take rounding, and the depth's equality below decides alone.
   '  float resolved = texture2D(bmResolvedDepth, gl_FragCoord.xy * bmOcclusion.yz).r;',
   '  float t_win = bm_depth_crossing(c0, c1, 2.0 * (resolved - bm_shade_margin()) - 1.0);',
-  '  if (t_win < 1e29 && t_win > t_end) { drawn = false; discard; }',
+  '  if (!fromEye && t_win < 1e29 && t_win > t_end) { drawn = false; discard; }',
   '#endif',
   // The quality knob (as the Blender preview applies it): a pixel's size at the face, the box's size on screen.
   '  vec4 knob = bm_quality(bmQuality.x);',
