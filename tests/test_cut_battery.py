@@ -40,6 +40,8 @@ REGRESSIONS = [
     (74, "r180", "visibility: all 6,912 px emptied; ROUNDED_BOX, eye inside a box, mirrored"),
     (70, "r180", "visibility 227 px emptied (cutfix, main at cf51879); CYLINDER, eye inside a box, nested, "
                  "inside-out, vertices far"),
+    (51, "r180", "visibility 36 px emptied (cutfix, main at cf51879; hits beyond the far plane); ROUNDED_BOX, "
+                 "eye inside a box, coincident, long thin"),
     (98, "r180", "pre-pass 133 px (86 emptied); ROUNDED_BOX, orthographic, sheared, open"),
 ]
 
