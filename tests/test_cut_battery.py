@@ -28,6 +28,8 @@ REGRESSIONS = [
     (19, "preview", "resolved passes 302 px emptied (pre-pass 1); CAPSULE, coincident, vertices far"),
     (55, "preview", "culling 903 px (826 emptied); PER_BOX, quality 0.25, mirrored, near plane cuts boxes"),
     (80, "preview", "resolved passes 252 px emptied; PER_BOX, open, inside-out, mirrored, near plane cuts boxes"),
+    (81, "preview", "resolved passes 1 px emptied (cutfix, main at cf51879: still open); PER_BOX, eye inside a box, "
+                    "orthographic, nested, open, inside-out, coincident"),
     (58, "r111", "visibility 1,566 px emptied; TORUS, nested, mirrored"),
     (68, "r111", "pre-pass 4 px emptied; an ordinary CYLINDER scene"),
     (75, "r111", "pre-pass 59 px emptied; CYLINDER, inside-out, vertices far, non-uniform scale"),
