@@ -28,6 +28,8 @@ REGRESSIONS = [
     (19, "preview", "resolved passes 302 px emptied (pre-pass 1); CAPSULE, coincident, vertices far"),
     (55, "preview", "culling 903 px (826 emptied); PER_BOX, quality 0.25, mirrored, near plane cuts boxes"),
     (80, "preview", "resolved passes 252 px emptied; PER_BOX, open, inside-out, mirrored, near plane cuts boxes"),
+    (81, "preview", "resolved passes 1 px emptied (cutfix, main at cf51879: still open); PER_BOX, eye inside a box, "
+                    "orthographic, nested, open, inside-out, coincident"),
     (58, "r111", "visibility 1,566 px emptied; TORUS, nested, mirrored"),
     (68, "r111", "pre-pass 4 px emptied; an ordinary CYLINDER scene"),
     (75, "r111", "pre-pass 59 px emptied; CYLINDER, inside-out, vertices far, non-uniform scale"),
@@ -38,6 +40,10 @@ REGRESSIONS = [
     (54, "r180", "pre-pass 1 px emptied; an ordinary BOX scene at scale 271"),
     (61, "r180", "visibility 2,378 px another colour; LINK, eye inside a box, mirrored, sheared"),
     (74, "r180", "visibility: all 6,912 px emptied; ROUNDED_BOX, eye inside a box, mirrored"),
+    (70, "r180", "visibility 227 px emptied (cutfix, main at cf51879); CYLINDER, eye inside a box, nested, "
+                 "inside-out, vertices far"),
+    (51, "r180", "visibility 36 px emptied (cutfix, main at cf51879; hits beyond the far plane); ROUNDED_BOX, "
+                 "eye inside a box, coincident, long thin"),
     (98, "r180", "pre-pass 133 px (86 emptied); ROUNDED_BOX, orthographic, sheared, open"),
 ]
 

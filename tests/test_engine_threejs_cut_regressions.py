@@ -4,7 +4,7 @@ piles of randomly rotated boxes baked and exported with the GLTF preset, the pic
 is the one without it (``occluders: false``), pixel for pixel, and the plain picture covers what
 the CPU reference (core.render_boxes, from the boxes' known centres and rotations) covers.
 
-Each case fails without its fix (all 16 fail on the material before this test; pixels the cut
+Each case fails without its fix (the first 16 fail on the material before this test; pixels the cut
 emptied at 200 x 150 on r111, each measured with the other fixes in place):
 * a plain pile, the default map: 791 px; ``sdf_preset_box`` with BOX occluders: 475 px (the
   rasteriser's sub-pixel snapping moved occluder faces in front of their boxes' faces at a slant:
@@ -16,7 +16,12 @@ emptied at 200 x 150 on r111, each measured with the other fixes in place):
   only, an inside-out box's far side);
 * the pile seen from 11 times as far with a near plane of 0.01, ``visibilityPass: true``: 29 px
   (the shade pass's box test had no margin for the depth's rounding near the far plane:
-  raymarch.glsl bm_shade_margin).
+  raymarch.glsl bm_shade_margin);
+* the pile mirrored (scale -1 along x), ``visibilityPass: true``: 14,410 px, all it covered (the composite, a
+  child of the mesh, is wound clockwise under the mirroring matrix and was culled:
+  createBoxmarchScreenMaterial draws both sides).
+The mirrored pile with the default cuts (pre-pass, culling) passed before: it keeps every cut
+checked on a mirroring matrix.
 """
 import json
 
@@ -91,8 +96,10 @@ def exported(bpy_module, tmp_path_factory):
 
 
 def loader_js(name, options):
+    """Loads ``name`` (a key of ``exported``; "NAME mirrored": NAME's scene scaled by -1 along x)."""
+    name, mirrored = name.removesuffix(" mirrored"), name.endswith(" mirrored")
     return (f"scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, '{name}.glb', "
-            f"{json.dumps(options)}); scene.add(loaded.scene);")
+            f"{json.dumps(options)}); scene.add(loaded.scene);" + (" loaded.scene.scale.x = -1;" if mirrored else ""))
 
 
 # (scene, camera, options with the cut): each drawn with them and with occluders: false
@@ -105,6 +112,8 @@ CASES = {
     "open boxes, visibility passes": ("open", NEAR_CAMERA, {"map": BOX_MAP, "visibilityPass": True}),
     "inside out, visibility passes": ("flipped", NEAR_CAMERA, {"map": BOX_MAP, "visibilityPass": True}),
     "distant, visibility passes": ("pile", DISTANT_CAMERA, {"map": BOX_MAP, "visibilityPass": True}),
+    "mirrored": ("pile mirrored", NEAR_CAMERA, {"map": BOX_MAP}),
+    "mirrored, visibility passes": ("pile mirrored", NEAR_CAMERA, {"map": BOX_MAP, "visibilityPass": True}),
 }
 
 

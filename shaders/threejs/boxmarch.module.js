@@ -704,14 +704,16 @@ function boxmarchVisibilitySupported(renderer) {
 }
 
 // A full-screen pass reading the least-depth target (bmResolvedDepth) and, for the composite,
-// the shaded colour (bmShaded): no hit (depth 1, the clear) is discarded.
+// the shaded colour (bmShaded): no hit (more than 1: the clear, BOXMARCH_NO_HIT) is discarded. Both sides: the
+// composite is a child of the mesh, and under a mirroring matrix three.js winds it clockwise.
 function createBoxmarchScreenMaterial(THREE, uniforms, body, all) {
   var revision = parseInt(THREE.REVISION, 10), material = new THREE.ShaderMaterial({
     uniforms: uniforms,
+    side: THREE.DoubleSide,
     vertexShader: 'void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }',
     fragmentShader: ['uniform sampler2D bmResolvedDepth;', 'uniform sampler2D bmShaded;', 'uniform vec4 bmOcclusion;',
       'void main() {', '  vec2 uv = gl_FragCoord.xy * bmOcclusion.yz;',
-      '  float depth = texture2D(bmResolvedDepth, uv).r;', all ? '' : '  if (depth >= 1.0) discard;', body, '}'].join('\n')
+      '  float depth = texture2D(bmResolvedDepth, uv).r;', all ? '' : '  if (depth > 1.0) discard;', body, '}'].join('\n')
   });
   if (revision < 163) material.extensions = { fragDepth: true };
   return material;
@@ -800,12 +802,14 @@ function useBoxmarchVisibility(THREE, mesh, shape) {
     '  gl_FragColor = texture2D(bmShaded, uv);\n  gl_FragDepthEXT = depth;'));
   composite.frustumCulled = false;
   composite.name = mesh.name + ' (boxmarch)';
-  var size = new THREE.Vector2(), clear = new THREE.Color(), white = new THREE.Color(1, 1, 1);
+  // the least-depth target's clear, above any depth: a hit clamped to the far plane (1, as the
+  // depth buffer clamps the marching mesh's, which the depth test passes) is still a hit
+  var size = new THREE.Vector2(), clear = new THREE.Color(), noHit = new THREE.Color(2, 2, 2);
   // supported: whether the context has the extensions (boxmarchVisibilitySupported), known from the first draw
   var passes = { composite: composite, targets: { nearest: nearest, shaded: shaded }, scenes: scenes, supported: null };
   function draw(renderer, target, scene, camera, clearColor) {
     renderer.setRenderTarget(target);
-    if (clearColor) renderer.setClearColor(clearColor, clearColor === white ? 1 : 0);
+    if (clearColor) renderer.setClearColor(clearColor, clearColor === noHit ? 1 : 0);
     renderer.autoClear = !!clearColor;
     renderer.render(scene, camera);
   }
@@ -831,10 +835,10 @@ function useBoxmarchVisibility(THREE, mesh, shape) {
         occluder.material.uniforms.bmEye.value.copy(uniforms.bmEye.value);
         occluder.material.uniforms.bmViewHeight.value = size.y;
       });
-      draw(renderer, nearest, scenes.occluders, camera, white);
+      draw(renderer, nearest, scenes.occluders, camera, noHit);
       draw(renderer, bound, scenes.copy, camera, null);
       renderer.setRenderTarget(nearest);
-      renderer.clear(true, false, false);  // white again, the occluders' depth kept
+      renderer.clear(true, false, false);  // no hit again, the occluders' depth kept
       draw(renderer, nearest, scenes.visibility, camera, null);
       draw(renderer, shaded, scenes.resolve, camera, new THREE.Color(0, 0, 0));
       draw(renderer, shaded, scenes.shade, camera, null);
@@ -1135,10 +1139,12 @@ var BOXMARCH_FRAGMENT = [
   '#ifdef BM_SHADE_PASS',
   // The nearest hit's depth (useBoxmarchVisibility): the winning hit lies where the ray reaches it,
   // give or take bm_shade_margin (near the far plane a float step of depth spans centimetres along
-  // the ray); a box that ends before that loses (one that starts after it, the depth test culls)
+  // the ray); a box that ends before that loses (one that starts after it, the depth test culls).
+  // Not a march from the eye: its depth is its back face's (never nearer than the face), so its
+  // t_win is its t_end give or take rounding, and the depth's equality below decides alone.
   '  float resolved = texture2D(bmResolvedDepth, gl_FragCoord.xy * bmOcclusion.yz).r;',
   '  float t_win = bm_depth_crossing(c0, c1, 2.0 * (resolved - bm_shade_margin()) - 1.0);',
-  '  if (t_win < 1e29 && t_win > t_end) { drawn = false; discard; }',
+  '  if (!fromEye && t_win < 1e29 && t_win > t_end) { drawn = false; discard; }',
   '#endif',
   // The quality knob (as the Blender preview applies it): a pixel's size at the face, the box's size on screen.
   '  vec4 knob = bm_quality(bmQuality.x);',
@@ -1153,8 +1159,9 @@ var BOXMARCH_FRAGMENT = [
   '  if (!hit) discard;',
   '  vec3 local_hit = ro + rd * t;',
   '  vec4 clip = c0 + c1 * t;',
-  // Never nearer than the rasterised face: what the raw material's layout(depth_greater) declares.
-  '  float depth = max(0.5 + 0.5 * clip.z / clip.w, gl_FragCoord.z);',
+  // Never nearer than the rasterised face: what the raw material's layout(depth_greater) declares;
+  // at most the far plane, as the depth buffer clamps what it is given (the passes compare it).
+  '  float depth = min(max(0.5 + 0.5 * clip.z / clip.w, gl_FragCoord.z), 1.0);',
   '#ifdef BM_VISIBILITY_PASS',
   '  gl_FragColor = vec4(depth);',  // MIN-blended: the nearest hit's depth (useBoxmarchVisibility)
   '#else',
