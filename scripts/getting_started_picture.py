@@ -22,7 +22,6 @@ import sys
 import tempfile
 import time
 
-from scripts.threejs_picture import write_png
 from tests.engines import godot3, threejs
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -80,6 +79,10 @@ def godot3_picture(blend, folder):
 
 
 def main():
+    # here, not at the top: make_chain runs inside Blender's own Python, where boxmarch (which
+    # threejs_picture imports for the demo's character) is not on the path
+    from scripts.threejs_picture import write_png
+
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out-folder", default=os.path.join(ROOT, "docs"))
     args = parser.parse_args()
