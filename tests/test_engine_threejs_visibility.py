@@ -101,8 +101,9 @@ def drawn(request, pile):  # noqa: F811 (the fixture imported above)
             "without the extensions": (True, "passes.supported = false;", CAMERA)}
     jobs = [parse(threejs.render_job(setup_js(passes, tamper), W, H, camera, DEPTH_AFTER))
             for passes, tamper, camera in runs.values()]
+    # one page draws every run (36 s of r180 seen on a loaded machine): more than TIMEOUT_S's minute
     results = threejs.run_jobs(glb, jobs, threejs.shipped_material(release), release,
-                               {"pile.glb": glb, "pile.boxmarch.json": sidecar})
+                               {"pile.glb": glb, "pile.boxmarch.json": sidecar}, timeout_s=240)
     return dict(zip(runs, results))
 
 
