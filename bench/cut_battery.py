@@ -6,7 +6,7 @@ unexplained, the scenes with unexplained pixels, then a line per such scene (see
 counts, kinds).
 
     PYTHONPATH=addon python3 -m bench.cut_battery --scenes 2000 --renderer all
-    PYTHONPATH=/work/wt/OTHER/addon python3 -m bench.cut_battery ...   # another worktree's add-on and shaders
+    PYTHONPATH=OTHER_CHECKOUT/addon python3 -m bench.cut_battery ...   # another worktree's add-on and shaders
 
 Scenes are built in bpy processes of --chunk seeds each; three.js draws --batch scenes per page.
 """

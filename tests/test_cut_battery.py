@@ -8,7 +8,7 @@ The slow tier runs CI_SEEDS and every seed of REGRESSIONS and OPEN in each rende
 seeds not yet fixed, expected to fail); the everyday tier
 checks the comparison itself on made-up pictures and that CI_SEEDS draw every trait the
 generator has. ``python3 -m bench.cut_battery`` runs thousands. Another worktree's add-on and
-shaders: ``PYTHONPATH=/work/wt/OTHER/addon python3 -m pytest -m slow tests/test_cut_battery.py``.
+shaders: ``PYTHONPATH=OTHER_CHECKOUT/addon python3 -m pytest -m slow tests/test_cut_battery.py``.
 """
 import numpy as np
 import pytest
