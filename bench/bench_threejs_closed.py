@@ -18,17 +18,7 @@ REPEATS = 3
 
 TIMING_JOB = """async function () {
   __CUBES__
-  function now() {
-    var request = new XMLHttpRequest();
-    request.open('GET', '__CLOCK__', false);
-    request.send();
-    return parseFloat(request.responseText);
-  }
-  var overhead = Infinity;
-  for (var e = 0; e < 10; e++) {
-    var before = now();
-    overhead = Math.min(overhead, now() - before);
-  }
+  __CLOCK_JS__
   var rows = [];
   for (var count of __COUNTS__) {
     var geometry = boxmarchTestCubes(THREE, count), best = Infinity, closed = null;
@@ -48,7 +38,7 @@ def main():
 
     counts = [int(n) for n in sys.argv[1:]] or list(COUNTS)
     threejs.TIMEOUT_S = 900
-    js = (TIMING_JOB.replace("__CUBES__", threejs.CUBES_JS).replace("__CLOCK__", threejs.CLOCK)
+    js = (TIMING_JOB.replace("__CUBES__", threejs.CUBES_JS).replace("__CLOCK_JS__", threejs.CLOCK_JS)
           .replace("__COUNTS__", json.dumps(counts, allow_nan=False)).replace("__REPEATS__", str(REPEATS)))
     rows = []
     for release in [r for r in sorted(threejs.RELEASES) if threejs.available(r) is None]:

@@ -102,19 +102,7 @@ TIMING_JOB = """async function (gltf) {
     pieces.push(new THREE.Scene().add(basic));
   });
   pieces.push(drawn[__FORCED__].mesh.userData.boxmarchOccluders.scene);  // its matrices and eye: set by each draw of the mesh
-  // The serving process's clock (performance.now() stands still under Chromium's virtual time
-  // once the page has awaited anything); a reading costs a loopback round trip, taken off below.
-  function now() {
-    var request = new XMLHttpRequest();
-    request.open('GET', '__CLOCK__', false);
-    request.send();
-    return parseFloat(request.responseText);
-  }
-  var overhead = Infinity;
-  for (var e = 0; e < 10; e++) {
-    var before = now();
-    overhead = Math.min(overhead, now() - before);
-  }
+  __CLOCK_JS__
   var gl = renderer.getContext(), pixel = new Uint8Array(4);
   function frame(k) {
     var start = now();
@@ -254,7 +242,7 @@ def rows_for(name, scene, glb, sidecar, release):
     parts = {"__SIZE__": str(SIZE), "__CAMERA__": json.dumps(three_camera(to_view, eye), allow_nan=False),
              "__CONFIGS__": json.dumps(loaded, allow_nan=False),
              "__REPEATS__": str(REPEATS), "__FRONT_TO_BACK__": str(FRONT_TO_BACK), "__FORCED__": str(FORCED),
-             "__CLOCK__": threejs.CLOCK}
+             "__CLOCK_JS__": threejs.CLOCK_JS}
     js = TIMING_JOB
     for key, value in parts.items():
         js = js.replace(key, value)

@@ -32,6 +32,20 @@ from . import Shot, ndc_to_pixels
 
 CHROMIUM = "chromium"
 CLOCK = "clock"  # served path of the real-time clock (_Files)
+# A page's timing functions: now(), the serving process's clock in ms (performance.now() stands
+# still under Chromium's virtual time once the page has awaited anything), and overhead, what a
+# reading costs (a loopback round trip), for the benches to take off.
+CLOCK_JS = """function now() {
+    var request = new XMLHttpRequest();
+    request.open('GET', '""" + CLOCK + """', false);
+    request.send();
+    return parseFloat(request.responseText);
+  }
+  var overhead = Infinity;
+  for (var e = 0; e < 10; e++) {
+    var before = now();
+    overhead = Math.min(overhead, now() - before);
+  }"""
 TIMEOUT_S = 60
 NICEGUI_THREE = os.path.join("elements", "scene", "dist", "index.js")  # inside the nicegui package
 
