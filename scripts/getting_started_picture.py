@@ -78,11 +78,15 @@ def godot3_picture(blend, folder):
                          uniforms={"box_table": "res://model.boxes.tres"})
 
 
-def main():
-    # here, not at the top: make_chain runs inside Blender's own Python, where boxmarch (which
-    # threejs_picture imports for the demo's character) is not on the path
-    from scripts.threejs_picture import write_png
+def write_png(path, rgba):
+    """threejs_picture.write_png, imported when called: make_chain runs inside Blender's own
+    Python, where boxmarch (which threejs_picture imports for the demo's character) is not on the path."""
+    from scripts.threejs_picture import write_png as write
 
+    write(path, rgba)
+
+
+def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out-folder", default=os.path.join(ROOT, "docs"))
     args = parser.parse_args()
