@@ -9,9 +9,10 @@ tangent swapped) must visibly fail to converge, and so must the raw lines."""
 import numpy as np
 import pytest
 
-from tests.engine_scene import TO_Y_UP, baked_scene, box_corners
+from tests.engine_scene import baked_scene
 from tests.engines import godot3, import_helpers, segment_errors
 from tests.helpers.tools import need
+from tests.test_engine_threejs_vectors import corrected_segments
 
 pytestmark = pytest.mark.slow  # Godot 3 imports and renders
 
@@ -47,15 +48,6 @@ def draw(project, **properties):
     shot = godot3.render(str(project), BLACK, width=W, height=H, camera=CAMERA, child_script="res://" + SCRIPT,
                          child_properties=properties)
     return shot, shot.pixels[..., :3].max(axis=2) > 40
-
-
-def corrected_segments(shot, centres, sizes, rotations):
-    """Every generating box corner to its box's generating centre, in Godot's pixels."""
-    segments = []
-    for c, s, r in zip(centres, sizes, rotations):
-        ends = shot.project(np.r_[box_corners(c, s, r), [c]] @ TO_Y_UP.T)
-        segments += [[corner, ends[-1]] for corner in ends[:-1]]
-    return np.array(segments)
 
 
 def test_godot3_corrected_vectors_meet_at_each_box_centre(imported):
