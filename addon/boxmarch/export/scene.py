@@ -29,13 +29,13 @@ def uv_name(layout: str, channel: str) -> str:
 
 
 def _keep_artist_uv0(copy) -> None:
-    """Remove every UV map but the artist's first (made empty if there is none): the layout's
-    channels follow it as UV1, UV2, ..."""
+    """Remove every UV map but the artist's first (made of zeros if there is none: one value per
+    vertex, so it splits no vertex): the layout's channels follow it as UV1, UV2, ..."""
     artist = [uv.name for uv in copy.uv_layers if uv.name not in _BOXMARCH_UV_NAMES]
     for name in [uv.name for uv in copy.uv_layers if uv.name not in artist[:1]]:
         copy.uv_layers.remove(copy.uv_layers[name])
     if not artist:
-        copy.uv_layers.new(name="UVMap")
+        mesh_io.new_zero_uv(copy, "UVMap")
 
 
 def _checked_box_data(mesh, preset, index_base, space, owner):
@@ -72,6 +72,8 @@ def _target_copy(mesh, preset, layout, data, corner_verts, stats, skin=None):
     for name in [a.name for a in copy.color_attributes]:
         copy.attributes.remove(copy.attributes[name])
     _keep_artist_uv0(copy)
+    if not layouts.LAYOUTS[layout].skin_safe:  # no decode reads their normals: one per vertex splits nothing
+        mesh_io.one_normal_per_vertex(copy)
     if preset.extension == ".glb":
         colour = glb.index_colours(len(data.index))
     else:

@@ -16,8 +16,8 @@ that adds one.
     rebuild  replace a mesh's geometry by arrays the core computed, keeping its attributes
     weights  vertex-group weights and the skin of an Armature modifier (preview, export)
 """
-from .arrays import (new_mesh, one_object_per_mesh, read_corner_edges, read_face_selection,
-                     read_hidden_vertices, read_point_values, read_positions, read_topology, read_triangles,
+from .arrays import (new_mesh, new_zero_uv, one_normal_per_vertex, one_object_per_mesh, read_corner_edges,
+                     read_face_selection, read_hidden_vertices, read_point_values, read_positions, read_topology, read_triangles,
                      read_uv, read_vertex_selection, remove_attributes, write_point_flags, write_selection,
                      write_uv)
 from .baked import (BAKED_UV_MAPS, FINGERPRINT_ATTRIBUTE, LAYERS_DIGEST, MAX_UV_MAPS, NEUTRAL_BYTE, NEUTRAL_FLOAT,

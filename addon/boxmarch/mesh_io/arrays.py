@@ -202,6 +202,32 @@ def read_uv(mesh, name) -> np.ndarray:
     return buf.reshape(-1, 2)
 
 
+def new_zero_uv(mesh, name) -> None:
+    """A new UV map ``name`` holding (0, 0) at every corner. Where a mesh needs a first UV map only
+    so the box channels that follow get their numbers, its values must not differ between the
+    corners of one vertex: Blender's default fill (each face its own unit square) makes every
+    exporter split a box's 8 vertices into 20."""
+    mesh.uv_layers.new(name=name, do_init=False)
+    write_uv(mesh, name, np.zeros((len(mesh.loops), 2), np.float32))
+
+
+def one_normal_per_vertex(mesh) -> None:
+    """Give every vertex of ``mesh`` one normal at all its corners: faces smooth, no sharp edges,
+    custom normals back to the default. Exporters split a vertex wherever its corners' normals
+    differ (a flat box: 24 vertices for 8); for a copy whose normals no decode reads."""
+    mesh.polygons.foreach_set("use_smooth", np.ones(len(mesh.polygons), bool))
+    sharp_edge = mesh.attributes.get("sharp_edge")  # 4.1+; before, sharp edges act only with auto smooth
+    if sharp_edge is not None:
+        mesh.attributes.remove(sharp_edge)
+    if hasattr(mesh, "use_auto_smooth"):  # before 4.1: sharp edges and custom normals need it
+        mesh.use_auto_smooth = False
+    # 5.0 keeps custom normals in this attribute, and "free" ones differ between the corners of a
+    # smooth fan; before 5.0 they are offsets per fan, so smooth faces without sharp edges merge them
+    custom = mesh.attributes.get("custom_normal")
+    if custom is not None:
+        mesh.attributes.remove(custom)
+
+
 def write_uv(mesh, name, values) -> None:
     """Store float32 (corners, 2) in the existing UV map ``name``."""
     values = np.ascontiguousarray(values, np.float32)

@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import core
 from ..formats import layouts
-from .arrays import read_positions, read_topology, read_uv, read_vertex_selection, write_uv
+from .arrays import new_zero_uv, read_positions, read_topology, read_uv, read_vertex_selection, write_uv
 from .box_layers import BoxLayerError, BoxLayers, compute_box_layers, object_parameters, write_box_layers
 
 OFFSET_ATTRIBUTE = "BoxOffset"
@@ -248,8 +248,8 @@ class PreparedBake:
         r.offsets = None  # stored now; released so the UV maps do not add to the peak
 
         # UV maps in channel order, created without copying the active map's values.
-        if len(mesh.uv_layers) == 0:
-            mesh.uv_layers.new(name="UVMap")
+        if len(mesh.uv_layers) == 0:  # the artist's channel, so the box maps are UV1 and UV2
+            new_zero_uv(mesh, "UVMap")
         everything = r.baked == r.submesh_count
         buffer = None
         for half, name in enumerate((QUAT_XY_UV, QUAT_ZW_UV)):

@@ -1,0 +1,88 @@
+"""Vertices and bytes per box in every engine export (docs/FORMAT.md, *Vertices and bytes per box*).
+
+Every vertex of a box carries the same frame, half-extents, index and parameters, and an offset
+that depends on the vertex only, so a box needs its 8 corners and no more. The export's copy
+must not split them: no UV map whose values differ between the corners of one vertex where the
+artist gave none, and one normal per vertex in the layouts whose decode reads no normal (a flat
+box would be 24). Counted from the written files with the tests' own readers
+(tests/helpers/file_vertices.py); the expected bytes per vertex are the sums of the channels
+docs/ENGINES.md lists per layout (float32: position 12, normal 12, tangent 16 in glTF and 12
+plus a 12-byte binormal in FBX, a UV 8, a colour 16), the triangles 12 per box."""
+import numpy as np
+import pytest
+
+from boxmarch.formats import presets
+from tests.conftest import random_boxes_object
+from tests.helpers.file_vertices import model_counts
+
+BOXES = 24
+# (preset, layout): float32 bytes of one vertex, from the channel tables of docs/ENGINES.md
+VERTEX_BYTES = {
+    ("GLTF", "NORMAL_FRAME"): 12 + 12 + 16 + 8 * 8,   # POSITION, NORMAL, TANGENT, TEXCOORD_0..7
+    ("GLTF", "UV_FRAME"): 12 + 12 + 8 * 8,            # POSITION, NORMAL, TEXCOORD_0..7
+    ("GLTF", "CLASSIC"): 12 + 12 + 6 * 8 + 16,        # POSITION, NORMAL, TEXCOORD_0..5, COLOR_0
+    ("GODOT3", "NORMAL_COLOR"): 12 + 12 + 16 + 8 + 16,  # POSITION, NORMAL, TANGENT, TEXCOORD_0, COLOR_0
+    ("UNITY", "UV_FRAME"): 12 + 12 + 8 * 8,
+    ("UNITY", "CLASSIC"): 12 + 12 + 6 * 8 + 16,
+    ("UNITY", "NORMAL_FRAME"): 12 + 12 + 12 + 12 + 8 * 8,  # normal, tangent, binormal, 8 UV maps
+    ("UNREAL", "UV_FRAME"): 12 + 12 + 8 * 8,
+}
+
+
+def test_every_engine_layout_is_counted():
+    assert set(VERTEX_BYTES) == {(name, layout) for name, p in presets.PRESETS.items() if not p.raw_blend
+                                 for layout in p.layouts}
+
+
+def flatten(bpy, mesh):
+    """Faces flat, every edge sharp, custom normals set to the face normals (Blender 5.0: "free"
+    ones, which differ per corner on smooth faces too): as Add > Mesh > Cube and a normals
+    modifier leave boxes, so every corner of a vertex has its own normal."""
+    mesh.polygons.foreach_set("use_smooth", np.zeros(len(mesh.polygons), bool))
+    mesh.edges.foreach_set("use_edge_sharp", np.ones(len(mesh.edges), bool))
+    if hasattr(mesh, "use_auto_smooth"):
+        mesh.use_auto_smooth = True
+    face_normals = np.empty(len(mesh.polygons) * 3, np.float32)
+    mesh.polygons.foreach_get("normal", face_normals)
+    face_of_corner = np.repeat(np.arange(len(mesh.polygons)), [len(p.vertices) for p in mesh.polygons])
+    corner_normals = face_normals.reshape(-1, 3)[face_of_corner]
+    if bpy.app.version >= (5, 0, 0):
+        mesh.attributes.new("custom_normal", "FLOAT_VECTOR", "CORNER").data.foreach_set("vector", corner_normals.ravel())
+    else:
+        mesh.normals_split_custom_set(corner_normals)
+    assert mesh.has_custom_normals
+
+
+@pytest.mark.parametrize("faces", ["smooth", "flat"])
+def test_every_export_writes_8_vertices_per_box(blender, tmp_path, faces):
+    bpy = blender
+    ob = random_boxes_object(bpy, count=BOXES)
+    if faces == "flat":
+        flatten(bpy, ob.data)
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+    for (name, layout), vertex_bytes in VERTEX_BYTES.items():
+        path = tmp_path / f"{name}_{layout}{presets.PRESETS[name].extension}"
+        assert bpy.ops.boxmarch.export(filepath=str(path), preset=name, layout=layout) == {"FINISHED"}
+        counts = model_counts(path)
+        index_width = 2 if path.suffix == ".glb" else 4  # glTF: uint16 below 65,536 vertices
+        per_box = (counts["vertices"] * counts["vertex_bytes"] + counts["index_bytes"]) / BOXES
+        assert (counts["vertices"] / BOXES, counts["triangles"], counts["vertex_bytes"], per_box) == \
+            (8, 12 * BOXES, vertex_bytes, 8 * vertex_bytes + 36 * index_width), (name, layout, counts["attributes"])
+
+
+def test_artist_uvs_that_differ_per_corner_are_kept(blender, tmp_path):
+    """The artist's UV map is texture data: where its corners of one vertex differ, the file keeps
+    every distinct (vertex, UV) pair, and the values (glTF's 1 - v)."""
+    bpy = blender
+    ob = random_boxes_object(bpy, count=BOXES)
+    mesh = ob.data
+    uv = mesh.uv_layers.new(name="UVMap")
+    corner_uv = np.random.default_rng(1).integers(0, 4, (len(mesh.loops), 2)).astype(np.float32) / 4
+    uv.data.foreach_set("uv", corner_uv.reshape(-1))
+    corner_vertex = np.empty(len(mesh.loops), np.int32)
+    mesh.loops.foreach_get("vertex_index", corner_vertex)
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+    pairs = np.unique(np.column_stack([corner_vertex, corner_uv]), axis=0)
+    path = tmp_path / "uv.glb"
+    assert bpy.ops.boxmarch.export(filepath=str(path), preset="GLTF") == {"FINISHED"}
+    assert model_counts(path)["vertices"] == len(pairs) > 8 * BOXES
