@@ -1,0 +1,86 @@
+"""Triangle budgets: a character wearing chains of 100, 500 and 2,000 links, its chain's triangles
+as boxmarch boxes and as a triangle mesh of the same links at the boxes' error, against the
+triangle limits of VRChat's avatar performance ranks (PC and Quest).
+
+VRChat ranks an avatar by its triangles ("Polygons", counted in triangles) among other figures;
+an avatar is in the best rank whose limit its count does not exceed, and Very Poor above the
+Poor limit. Limits as VRChat publishes them (VRCHAT_TRIANGLE_LIMITS, with their source). On
+Quest the default Minimum Displayed Performance Rank is Medium: an avatar ranked Poor or Very Poor
+is not shown by default.
+
+Boxes: 12 triangles a box (chain_data.TRIANGLES_PER_BOX). Mesh: the triangles a link needs at
+the boxes' coverage error in the close-up view, read from the run-time-against-error curve's
+points (``python3 -m bench.curve --json CURVE.json``; scene "close chain", the demo character's
+chains seen close): per renderer, the boxes at the shipped defaults and the mesh of fewest
+triangles whose coverage error is at most theirs, its triangles over the scene's links (where no
+mesh measured reaches it, the finest one's, a lower bound, marked ">="). The chain alone is
+ranked: a body adds its own triangles.
+
+    PYTHONPATH=addon python3 -m bench.bench_budgets --curve CURVE.json
+"""
+import argparse
+import json
+
+from bench.chain_data import TRIANGLES_PER_BOX
+from bench.common import table
+
+LINK_COUNTS = (100, 500, 2000)
+# https://creators.vrchat.com/avatars/avatar-performance-ranking-system/ ("Avatar Performance
+# Ranks - Value Maximums per Rank", Polygons; source: vrchat-community/creator-docs,
+# Docs/docs/avatars/avatar-performance-ranking-system.md at 723a30ab, page updated 2023-03-10).
+# rank -> the most triangles it allows; above the last: Very Poor.
+VRCHAT_TRIANGLE_LIMITS = {
+    "PC": (("Excellent", 32_000), ("Good", 70_000), ("Medium", 70_000), ("Poor", 70_000)),
+    "Quest": (("Excellent", 7_500), ("Good", 10_000), ("Medium", 15_000), ("Poor", 20_000)),
+}
+
+
+def rank(platform, triangles):
+    """The best VRChat rank on ``platform`` whose triangle limit ``triangles`` does not exceed."""
+    return next((name for name, limit in VRCHAT_TRIANGLE_LIMITS[platform] if triangles <= limit), "Very Poor")
+
+
+def equal_error_per_link(points, renderer, scene="close chain"):
+    """(triangles a link, reached) of the mesh at the boxes' coverage error in ``scene`` on
+    ``renderer``, from the curve's points: the mesh of fewest triangles whose coverage error is
+    at most the boxes' at their defaults (reached), else the finest mesh measured (a lower bound)."""
+    here = [p for p in points if p["renderer"] == renderer and p["scene"] == scene]
+    boxes = next(p for p in here if p["method"] == "boxes" and p["setting"].startswith("defaults"))
+    links = boxes["triangles"] // TRIANGLES_PER_BOX
+    meshes = sorted((p for p in here if p["method"] == "mesh"), key=lambda p: p["triangles"])
+    equal = next((p for p in meshes if p["coverage"] <= boxes["coverage"]), None)
+    return (equal or meshes[-1])["triangles"] // links, equal is not None
+
+
+def budget_rows(mesh_per_link, link_counts=LINK_COUNTS):
+    """[(links, method, triangles, PC rank, Quest rank)]: the boxes, then a mesh per entry of
+    ``mesh_per_link`` (label -> triangles a link)."""
+    rows = []
+    for links in link_counts:
+        methods = [("boxes", TRIANGLES_PER_BOX)] + list(mesh_per_link.items())
+        for method, per_link in methods:
+            triangles = links * per_link
+            rows.append((links, method, triangles, rank("PC", triangles), rank("Quest", triangles)))
+    return rows
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--curve", required=True, help="bench.curve's --json points")
+    args = parser.parse_args()
+    with open(args.curve, encoding="utf-8") as f:
+        points = json.load(f)
+    mesh_per_link = {}
+    for renderer in dict.fromkeys(p["renderer"] for p in points):
+        per_link, reached = equal_error_per_link(points, renderer)
+        mesh_per_link[f"mesh at the boxes' error, {renderer}" + ("" if reached else " (>=)")] = per_link
+    limits = "; ".join(f"{platform}: " + ", ".join(f"{name} <= {limit:,}" for name, limit in ranks)
+                       for platform, ranks in VRCHAT_TRIANGLE_LIMITS.items())
+    print(f"VRChat triangle limits ({limits}; above: Very Poor)")
+    print(table(["links", "method", "triangles a link", "triangles", "PC rank", "Quest rank"],
+                [[f"{links:,}", method, f"{triangles // links:,}", f"{triangles:,}", pc, quest]
+                 for links, method, triangles, pc, quest in budget_rows(mesh_per_link)]))
+
+
+if __name__ == "__main__":
+    main()
