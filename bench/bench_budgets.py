@@ -14,17 +14,20 @@ points (``python3 -m bench.curve --json CURVE.json``; scene "close chain", the d
 chains seen close): per renderer, the boxes at the shipped defaults and the mesh of fewest
 triangles whose coverage error is at most theirs, its triangles over the scene's links (where no
 mesh measured reaches it, the finest one's, a lower bound, marked ">="). The chain alone is
-ranked: a body adds its own triangles.
+ranked: a body adds its own triangles. Always printed beside them: the coarsest mesh that still
+reads as a link (a 3-sided tube on 6 rings, 36 triangles), a floor under any mesh's count.
 
-    PYTHONPATH=addon python3 -m bench.bench_budgets --curve CURVE.json
+    PYTHONPATH=addon python3 -m bench.bench_budgets [--curve CURVE.json]
 """
 import argparse
 import json
 
+from bench.bench_boxes_vs_triangles import link_mesh
 from bench.chain_data import TRIANGLES_PER_BOX
 from bench.common import table
 
 LINK_COUNTS = (100, 500, 2000)
+COARSEST_LINK = (3, 2)  # link_mesh(n, m): a 3-sided tube on 6 rings, the coarsest mesh with the link's hole
 # https://creators.vrchat.com/avatars/avatar-performance-ranking-system/ ("Avatar Performance
 # Ranks - Value Maximums per Rank", Polygons; source: vrchat-community/creator-docs,
 # Docs/docs/avatars/avatar-performance-ranking-system.md at 723a30ab, page updated 2023-03-10).
@@ -66,14 +69,16 @@ def budget_rows(mesh_per_link, link_counts=LINK_COUNTS):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--curve", required=True, help="bench.curve's --json points")
+    parser.add_argument("--curve", help="bench.curve's --json points (without: the coarsest mesh only)")
     args = parser.parse_args()
-    with open(args.curve, encoding="utf-8") as f:
-        points = json.load(f)
-    mesh_per_link = {}
-    for renderer in dict.fromkeys(p["renderer"] for p in points):
-        per_link, reached = equal_error_per_link(points, renderer)
-        mesh_per_link[f"mesh at the boxes' error, {renderer}" + ("" if reached else " (>=)")] = per_link
+    n, m = COARSEST_LINK
+    mesh_per_link = {f"mesh {n} x {2 * m + 2}, the coarsest that reads as a link": len(link_mesh(n, m)[2])}
+    if args.curve:
+        with open(args.curve, encoding="utf-8") as f:
+            points = json.load(f)
+        for renderer in dict.fromkeys(p["renderer"] for p in points):
+            per_link, reached = equal_error_per_link(points, renderer)
+            mesh_per_link[f"mesh at the boxes' error, {renderer}" + ("" if reached else " (>=)")] = per_link
     limits = "; ".join(f"{platform}: " + ", ".join(f"{name} <= {limit:,}" for name, limit in ranks)
                        for platform, ranks in VRCHAT_TRIANGLE_LIMITS.items())
     print(f"VRChat triangle limits ({limits}; above: Very Poor)")
