@@ -8,12 +8,15 @@ box would be 24). Counted from the written files with the tests' own readers
 (tests/helpers/file_vertices.py); the expected bytes per vertex are the sums of the channels
 docs/ENGINES.md lists per layout (float32: position 12, normal 12, tangent 16 in glTF and 12
 plus a 12-byte binormal in FBX, a UV 8, a colour 16), the triangles 12 per box."""
+import json
+import pathlib
+
 import numpy as np
 import pytest
 
 from boxmarch.formats import presets
 from tests.conftest import random_boxes_object
-from tests.helpers.file_vertices import model_counts
+from tests.helpers.file_vertices import flatten, model_counts
 
 BOXES = 24
 # (preset, layout): float32 bytes of one vertex, from the channel tables of docs/ENGINES.md
@@ -34,23 +37,13 @@ def test_every_engine_layout_is_counted():
                                  for layout in p.layouts}
 
 
-def flatten(bpy, mesh):
-    """Faces flat, every edge sharp, custom normals set to the face normals (Blender 5.0: "free"
-    ones, which differ per corner on smooth faces too): as Add > Mesh > Cube and a normals
-    modifier leave boxes, so every corner of a vertex has its own normal."""
-    mesh.polygons.foreach_set("use_smooth", np.zeros(len(mesh.polygons), bool))
-    mesh.edges.foreach_set("use_edge_sharp", np.ones(len(mesh.edges), bool))
-    if hasattr(mesh, "use_auto_smooth"):
-        mesh.use_auto_smooth = True
-    face_normals = np.empty(len(mesh.polygons) * 3, np.float32)
-    mesh.polygons.foreach_get("normal", face_normals)
-    face_of_corner = np.repeat(np.arange(len(mesh.polygons)), [len(p.vertices) for p in mesh.polygons])
-    corner_normals = face_normals.reshape(-1, 3)[face_of_corner]
-    if bpy.app.version >= (5, 0, 0):
-        mesh.attributes.new("custom_normal", "FLOAT_VECTOR", "CORNER").data.foreach_set("vector", corner_normals.ravel())
-    else:
-        mesh.normals_split_custom_set(corner_normals)
-    assert mesh.has_custom_normals
+def assert_8_vertices_a_box(path, name, layout, boxes=BOXES):
+    counts = model_counts(path)
+    index_width = 2 if path.suffix == ".glb" else 4  # glTF: uint16 below 65,536 vertices
+    per_box = (counts["vertices"] * counts["vertex_bytes"] + counts["index_bytes"]) / boxes
+    vertex_bytes = VERTEX_BYTES[name, layout]
+    assert (counts["vertices"] / boxes, counts["triangles"], counts["vertex_bytes"], per_box) == \
+        (8, 12 * boxes, vertex_bytes, 8 * vertex_bytes + 36 * index_width), (name, layout, counts["attributes"])
 
 
 @pytest.mark.parametrize("faces", ["smooth", "flat"])
@@ -60,14 +53,28 @@ def test_every_export_writes_8_vertices_per_box(blender, tmp_path, faces):
     if faces == "flat":
         flatten(bpy, ob.data)
     assert bpy.ops.boxmarch.bake() == {"FINISHED"}
-    for (name, layout), vertex_bytes in VERTEX_BYTES.items():
+    for name, layout in VERTEX_BYTES:
         path = tmp_path / f"{name}_{layout}{presets.PRESETS[name].extension}"
         assert bpy.ops.boxmarch.export(filepath=str(path), preset=name, layout=layout) == {"FINISHED"}
-        counts = model_counts(path)
-        index_width = 2 if path.suffix == ".glb" else 4  # glTF: uint16 below 65,536 vertices
-        per_box = (counts["vertices"] * counts["vertex_bytes"] + counts["index_bytes"]) / BOXES
-        assert (counts["vertices"] / BOXES, counts["triangles"], counts["vertex_bytes"], per_box) == \
-            (8, 12 * BOXES, vertex_bytes, 8 * vertex_bytes + 36 * index_width), (name, layout, counts["attributes"])
+        assert_8_vertices_a_box(path, name, layout)
+
+
+@pytest.mark.slow
+def test_blender_34_exports_write_8_vertices_per_box(blender, tmp_path, package_parent):
+    """The same in Debian's Blender 3.4 program (its exporters, auto smooth and custom normals of
+    before 4.1): tests/blender_scripts/export_bytes_check.py exports, this process counts."""
+    from tests.helpers.blender_program import SCRIPTS, run_blender
+
+    run_blender(["--background", "--factory-startup", "--python-exit-code", "1", "--python",
+                 str(SCRIPTS / "export_bytes_check.py"), "--", str(package_parent),
+                 str(pathlib.Path(__file__).parent.parent), str(tmp_path), str(BOXES)], tmp_path)
+    result = json.loads((tmp_path / "result.json").read_text())
+    assert result["version"][:2] == [3, 4]
+    assert sorted(result["files"]) == sorted(f"{faces} {name} {layout}" for faces in ("smooth", "flat")
+                                             for name, layout in VERTEX_BYTES)
+    for key, file_name in result["files"].items():
+        _faces, name, layout = key.split()
+        assert_8_vertices_a_box(tmp_path / file_name, name, layout)
 
 
 def test_artist_uvs_that_differ_per_corner_are_kept(blender, tmp_path):

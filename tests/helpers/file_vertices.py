@@ -6,7 +6,8 @@ A .glb's vertices are its accessors' counts (what every glTF loader uploads as t
 FBX file holds its data per polygon corner; an engine's importer welds corners whose every
 attribute agrees (Unity's Weld Vertices, Unreal's build), so its vertices are the file's
 distinct corner tuples (position, normal, tangent, binormal, every UV map and colour layer) and
-each attribute is counted as float32 components, as the presets' import settings keep them."""
+each attribute is counted as float32 components, as the presets' import settings keep them.
+flatten() gives boxes the per-corner normals a flat box has (Blender 3.4 to 5.0)."""
 import numpy as np
 
 from tests.gltf_reader import chunks
@@ -68,3 +69,22 @@ def fbx_counts(path):
 def model_counts(path):
     """glb_counts or fbx_counts by the file's extension."""
     return glb_counts(path) if str(path).endswith(".glb") else fbx_counts(path)
+
+
+def flatten(bpy, mesh):
+    """Faces flat, every edge sharp, custom normals set to the face normals (Blender 5.0: "free"
+    ones, which differ per corner on smooth faces too): as Add > Mesh > Cube and a normals
+    modifier leave boxes, so every corner of a vertex has its own normal."""
+    mesh.polygons.foreach_set("use_smooth", np.zeros(len(mesh.polygons), bool))
+    mesh.edges.foreach_set("use_edge_sharp", np.ones(len(mesh.edges), bool))
+    if hasattr(mesh, "use_auto_smooth"):
+        mesh.use_auto_smooth = True
+    face_normals = np.empty(len(mesh.polygons) * 3, np.float32)
+    mesh.polygons.foreach_get("normal", face_normals)
+    face_of_corner = np.repeat(np.arange(len(mesh.polygons)), [len(p.vertices) for p in mesh.polygons])
+    corner_normals = face_normals.reshape(-1, 3)[face_of_corner]
+    if bpy.app.version >= (5, 0, 0):
+        mesh.attributes.new("custom_normal", "FLOAT_VECTOR", "CORNER").data.foreach_set("vector", corner_normals.ravel())
+    else:
+        mesh.normals_split_custom_set(corner_normals)
+    assert mesh.has_custom_normals
