@@ -13,11 +13,12 @@ the boxes' coverage error in the close-up view, read from the run-time-against-e
 points (``python3 -m bench.curve --json CURVE.json``; scene "close chain", the demo character's
 chains seen close): per renderer, the boxes at the shipped defaults and the mesh of fewest
 triangles whose coverage error is at most theirs, its triangles over the scene's links (where no
-mesh measured reaches it, the finest one's, a lower bound, marked ">="). The chain alone is
-ranked: a body adds its own triangles. Always printed beside them: the coarsest mesh that still
-reads as a link (a 3-sided tube on 6 rings, 36 triangles), a floor under any mesh's count.
+mesh measured reaches it, the finest one's, marked so); ``--boxes SETTING`` takes the boxes at
+another of the curve's settings (e.g. "512 steps", the closed-form presets' target). The chain
+alone is ranked: a body adds its own triangles. Always printed beside them: the coarsest mesh
+that still reads as a link (a 3-sided tube on 6 rings, 36 triangles), a floor under any mesh's.
 
-    PYTHONPATH=addon python3 -m bench.bench_budgets [--curve CURVE.json]
+    PYTHONPATH=addon python3 -m bench.bench_budgets [--curve CURVE.json [--boxes SETTING]]
 """
 import argparse
 import json
@@ -43,16 +44,17 @@ def rank(platform, triangles):
     return next((name for name, limit in VRCHAT_TRIANGLE_LIMITS[platform] if triangles <= limit), "Very Poor")
 
 
-def equal_error_per_link(points, renderer, scene="close chain"):
-    """(triangles a link, reached) of the mesh at the boxes' coverage error in ``scene`` on
-    ``renderer``, from the curve's points: the mesh of fewest triangles whose coverage error is
-    at most the boxes' at their defaults (reached), else the finest mesh measured (a lower bound)."""
+def equal_error_per_link(points, renderer, scene="close chain", setting="defaults"):
+    """(triangles a link, reached, the boxes' coverage error %) of the mesh at the boxes' coverage
+    error in ``scene`` on ``renderer``, from the curve's points: the mesh of fewest triangles whose
+    coverage error is at most the boxes' at ``setting`` (the start of a boxes point's setting;
+    their shipped defaults) (reached), else the finest mesh measured (none measured reaches it)."""
     here = [p for p in points if p["renderer"] == renderer and p["scene"] == scene]
-    boxes = next(p for p in here if p["method"] == "boxes" and p["setting"].startswith("defaults"))
+    boxes = next(p for p in here if p["method"] == "boxes" and p["setting"].startswith(setting))
     links = boxes["triangles"] // TRIANGLES_PER_BOX
     meshes = sorted((p for p in here if p["method"] == "mesh"), key=lambda p: p["triangles"])
     equal = next((p for p in meshes if p["coverage"] <= boxes["coverage"]), None)
-    return (equal or meshes[-1])["triangles"] // links, equal is not None
+    return (equal or meshes[-1])["triangles"] // links, equal is not None, boxes["coverage"]
 
 
 def budget_rows(mesh_per_link, link_counts=LINK_COUNTS):
@@ -70,6 +72,7 @@ def budget_rows(mesh_per_link, link_counts=LINK_COUNTS):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--curve", help="bench.curve's --json points (without: the coarsest mesh only)")
+    parser.add_argument("--boxes", default="defaults", help="the boxes' setting in the curve (default: defaults)")
     args = parser.parse_args()
     n, m = COARSEST_LINK
     mesh_per_link = {f"mesh {n} x {2 * m + 2}, the coarsest that reads as a link": len(link_mesh(n, m)[2])}
@@ -77,8 +80,10 @@ def main():
         with open(args.curve, encoding="utf-8") as f:
             points = json.load(f)
         for renderer in dict.fromkeys(p["renderer"] for p in points):
-            per_link, reached = equal_error_per_link(points, renderer)
-            mesh_per_link[f"mesh at the boxes' error, {renderer}" + ("" if reached else " (>=)")] = per_link
+            per_link, reached, error = equal_error_per_link(points, renderer, setting=args.boxes)
+            label = (f"mesh at the boxes' error ({error:.3f} %), {renderer}"
+                     + ("" if reached else ": none up to this reaches it"))
+            mesh_per_link[label] = per_link
     limits = "; ".join(f"{platform}: " + ", ".join(f"{name} <= {limit:,}" for name, limit in ranks)
                        for platform, ranks in VRCHAT_TRIANGLE_LIMITS.items())
     print(f"VRChat triangle limits ({limits}; above: Very Poor)")

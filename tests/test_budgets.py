@@ -51,13 +51,16 @@ def test_ranks_follow_vrchat_limits():
 def test_equal_error_mesh_is_the_coarsest_at_the_boxes_error():
     """From curve points: 10 links (120 box triangles), boxes 0.2 %; meshes of 40, 80 and 160
     triangles a link at 0.5, 0.15 and 0.1 %: 80 a link, reached; with the boxes at 0.01 % none
-    reaches it: the finest, 160, as a lower bound."""
+    reaches it: the finest, 160, marked; the boxes' 512-step point (0.12 %), asked for: 160, reached."""
     def points(boxes_coverage):
         return ([{"renderer": "r", "scene": "close chain", "method": "boxes", "setting": "defaults (LINK)",
                   "triangles": 120, "coverage": boxes_coverage},
+                 {"renderer": "r", "scene": "close chain", "method": "boxes", "setting": "512 steps, 1e-6",
+                  "triangles": 120, "coverage": 0.12},
                  {"renderer": "r", "scene": "other", "method": "boxes", "setting": "defaults", "triangles": 12,
                   "coverage": 9.0}]
                 + [{"renderer": "r", "scene": "close chain", "method": "mesh", "setting": "", "triangles": 10 * t,
                     "coverage": c} for t, c in ((160, 0.1), (40, 0.5), (80, 0.15))])
-    assert equal_error_per_link(points(0.2), "r") == (80, True)
-    assert equal_error_per_link(points(0.01), "r") == (160, False)
+    assert equal_error_per_link(points(0.2), "r") == (80, True, 0.2)
+    assert equal_error_per_link(points(0.01), "r") == (160, False, 0.01)
+    assert equal_error_per_link(points(0.2), "r", setting="512 steps") == (160, True, 0.12)
