@@ -93,3 +93,20 @@ def test_artist_uvs_that_differ_per_corner_are_kept(blender, tmp_path):
     path = tmp_path / "uv.glb"
     assert bpy.ops.boxmarch.export(filepath=str(path), preset="GLTF") == {"FINISHED"}
     assert model_counts(path)["vertices"] == len(pairs) > 8 * BOXES
+
+
+def test_a_bake_from_before_gets_8_vertices_after_its_uv_maps_are_removed(blender, tmp_path):
+    """A bake before the zero placeholder left Blender's default fill in UVMap: the export keeps
+    it as the artist's (20 vertices a box); removing the three UV maps and baking again gives 8
+    (docs/FORMAT.md)."""
+    bpy = blender
+    ob = random_boxes_object(bpy, count=BOXES)
+    ob.data.uv_layers.new(name="UVMap")  # Blender's default fill, as the bake made it before
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+    assert bpy.ops.boxmarch.export(filepath=str(tmp_path / "before.glb"), preset="GLTF") == {"FINISHED"}
+    for name in ("UVMap", "BoxQuatXY", "BoxQuatZW"):
+        ob.data.uv_layers.remove(ob.data.uv_layers[name])
+    assert bpy.ops.boxmarch.bake() == {"FINISHED"}
+    assert bpy.ops.boxmarch.export(filepath=str(tmp_path / "after.glb"), preset="GLTF") == {"FINISHED"}
+    assert model_counts(tmp_path / "before.glb")["vertices"] == 20 * BOXES
+    assert_8_vertices_a_box(tmp_path / "after.glb", "GLTF", "NORMAL_FRAME")
