@@ -24,6 +24,7 @@ APT_PACKAGES=(blender python3-numpy glslang-tools xvfb xauth
               shellcheck)  # actionlint checks the workflows' run: scripts with it (tests/test_workflows.py)
 # Beyond the demo's (DEMO_PIP_PACKAGES, bpy 5.0 among them): the test and lint tools.
 PIP_PACKAGES=(pytest hypothesis matplotlib
+              "pytest-xdist==3.8.0"  # scripts/test.sh runs the everyday and slow tiers on every core (-n)
               ruff "import-linter>=2.17"  # tests/test_house.py: lint and the import contracts (2.17, the release tried here, has acyclic_siblings)
               jsonschema  # tests/test_sidecar.py: every export's sidecar against its schema
               ufbx  # tests/engines/ufbx_dump.py: Godot 4.3+'s FBX loader reads the FBX exports

@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
-# The test command: set up (idempotent, scripts/setup.sh), then run every test tier by tier, each
-# announced and timed (pytest names each file as it runs it): the everyday tier, the slow tier
-# (engines, Blender 3.4 program runs, renders, CLI and install runs), the native tier (sanitizers,
-# fuzzer), then the quick Blender-facing selection under bpy 4.2 LTS (scripts/blender_matrix.py),
-# all with the test environment's Python (.venv-test, scripts/environments.sh). Arguments select
-# tests for one pytest run instead.
+# The test command: set up (idempotent, scripts/setup.sh), then run every test tier, each announced
+# and timed: the everyday tier, the slow tier (engines, Blender 3.4 program runs, renders, CLI and
+# install runs), then the native tier (sanitizers, fuzzer) beside the quick Blender-facing
+# selection under bpy 4.2 LTS (scripts/blender_matrix.py), all with the test environment's Python
+# (.venv-test, scripts/environments.sh). The everyday and slow tiers run on WORKERS processes
+# (pytest-xdist; BOXMARCH_TEST_WORKERS, default the machine's cores), each test file on one worker
+# (--dist loadfile: the Blender or Chromium run a module's fixture makes for its tests runs once);
+# the slow tier names each test as it finishes (-v) and lists its slowest at the end. Arguments
+# select tests for one pytest run instead.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -15,16 +18,29 @@ if [ $# -gt 0 ]; then
 fi
 status=0
 started=$SECONDS
-run_tier() {  # NAME COMMAND...: one tier, then its result and time
+run_tier() {  # NAME COMMAND...: one tier, then its result and time; fails when the tier failed
   local name="$1" start=$SECONDS result=passed
   shift
   echo "[test] $name" >&2
-  "$@" || { status=1; result=FAILED; }
+  "$@" || result=FAILED
   echo "[test] $name: $result in $((SECONDS - start)) s" >&2
+  [ "$result" = passed ]
 }
-run_tier "everyday tier (-m 'not slow')" "$PYTHON" -m pytest -m "not slow"
-run_tier "slow tier (-m 'slow and not native')" "$PYTHON" -m pytest -m "slow and not native"
-run_tier "native tier (-m native)" "$PYTHON" -m pytest -m native
-run_tier "bpy 4.2 LTS selection" "$PYTHON" scripts/blender_matrix.py --quick 4.2
+WORKERS="${BOXMARCH_TEST_WORKERS:-$(nproc)}"
+parallel=(-n "$WORKERS" --dist loadfile)
+run_tier "everyday tier (-m 'not slow')" "$PYTHON" -m pytest "${parallel[@]}" -m "not slow" || status=1
+run_tier "slow tier (-m 'slow and not native')" "$PYTHON" -m pytest "${parallel[@]}" -v --durations=25 \
+  -m "slow and not native" || status=1
+# The native tier and the bpy 4.2 selection side by side (the fuzzer's CI budget is a minute of one
+# core), each into its own log, shown when both are done.
+logs="$(mktemp -d)"
+trap 'rm -rf "$logs"' EXIT
+run_tier "native tier (-m native)" "$PYTHON" -m pytest -m native >"$logs/native" 2>&1 &
+native=$!
+run_tier "bpy 4.2 LTS selection" "$PYTHON" scripts/blender_matrix.py --quick 4.2 >"$logs/bpy" 2>&1 &
+bpy=$!
+wait "$native" || status=1
+wait "$bpy" || status=1
+cat "$logs/native" "$logs/bpy" >&2
 echo "[test] every tier $([ "$status" -eq 0 ] && echo passed || echo FAILED) in $((SECONDS - started)) s" >&2
 exit "$status"

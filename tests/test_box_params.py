@@ -188,6 +188,7 @@ def tying_scenes(draw):
     return origins, turns, half
 
 
+@pytest.mark.slow  # 120 scenes against the quadratic definitions: about 3.5 s of CPU
 @settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(tying_scenes())
 def test_geometric_rules_give_the_parents_of_their_pairwise_definitions(scene):

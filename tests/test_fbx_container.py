@@ -147,6 +147,7 @@ def test_replace_frame_changes_only_the_frame_layers(exports, tmp_path):
         "LayerElementNormal", "LayerElementTangent", "LayerElementBinormal")) for line in found), found
 
 
+@pytest.mark.slow  # a Blender 3.4 program run
 @pytest.mark.blender_program
 def test_round_trip_of_blender_34_export(bpy_module, tmp_path):
     """The same scene exported by Debian's Blender 3.4 program (its older FBX writer, which closes
@@ -353,6 +354,7 @@ def test_lossy_writes_are_refused():
             fbx_container.encode(fbx_container.Document(7400, [node], bytes(16)))
 
 
+@pytest.mark.slow  # 460 decodes: about 5 s of CPU
 def test_flipped_bytes_never_crash(exports):
     """Every single-byte change at 400 seeded places either reads or raises ValueError."""
     original = exports["scene"].read_bytes()
