@@ -18,6 +18,11 @@ HERE = Path(__file__).parent
 PACKAGE_PARENT = Path(boxmarch.__file__).parent.parent
 LIMIT_KB = 1_000_000  # the bare interpreter with numpy and boxmarch maps about 130 MB
 
+# A hang guard, not a speed target (bench/ measures speed): the linear paths take about 0.3 s of
+# CPU here; a quadratic one tests 5e11 pairs of a million vertices (minutes), so a bound 200 times
+# the linear time fails on that and not on a loaded machine.
+HANG_S = 60.0
+
 
 def run_limited(*args):
     env = dict(os.environ, PYTHONPATH=str(PACKAGE_PARENT))
@@ -106,7 +111,7 @@ def test_merge_of_a_million_coincident_vertices_is_linear():
     pos = np.zeros((n, 3), np.float32)
     t = time.perf_counter()
     target, merged, count = core.merge_targets(pos, np.zeros(n, np.int32), 1, distance=1e-3)
-    assert time.perf_counter() - t < 5.0
+    assert time.perf_counter() - t < HANG_S
     assert count == n - 1 and (target == target[0]).all()
     pass_of_vertex, passes = core.merge_passes(pos, np.zeros(n, np.int32), 1, distance=1e-3)
     assert passes == 1 and (pass_of_vertex == 0).all()
@@ -150,7 +155,7 @@ def test_select_across_with_an_epsilon_joining_everything_is_linear():
     sel[0] = 1
     t = time.perf_counter()
     out = core.select_linked_across(pos, sel, sub, n // 8, epsilon=10.0)
-    assert time.perf_counter() - t < 5.0
+    assert time.perf_counter() - t < HANG_S
     out = out[0] if isinstance(out, tuple) else out
     assert out.all()
 
