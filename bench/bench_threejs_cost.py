@@ -141,12 +141,13 @@ TIMING_JOB = """async function (gltf) {
 
 
 def three_camera(to_view, eye):
-    """The bench_gpu_cost camera in glTF's frame (Blender's x, z, -y)."""
+    """The bench_gpu_cost camera in glTF's frame (Blender's x, z, -y); its up the view's own (a
+    camera looking straight down has no up along Blender's z)."""
     from tests.engine_scene import TO_Y_UP
 
-    forward = -np.asarray(to_view)[2, :3]
+    forward, up = -np.asarray(to_view)[2, :3], np.asarray(to_view)[1, :3]
     return {"position": (TO_Y_UP @ eye[:3]).tolist(), "target": (TO_Y_UP @ (eye[:3] + forward)).tolist(),
-            "up": (TO_Y_UP @ [0.0, 0.0, 1.0]).tolist(), "fov": 40.0, "near": 0.1, "far": 4000.0}
+            "up": (TO_Y_UP @ up).tolist(), "fov": 40.0, "near": 0.1, "far": 4000.0}
 
 
 # Counts the SDF evaluations of loadBoxmarch's visibility and shade passes (useBoxmarchVisibility),
