@@ -1171,6 +1171,7 @@ var BOXMARCH_FRAGMENT = [
   '  if (fromEye && map(ro) <= 0.0) closed = vec4(-rd, 0.0);',
   '  t = closed.w;',
   '  bool hit = drawn && t >= 0.0 && t <= t_end;',
+  '  int normalTaps = 0;',
   '#else',
   // The quality knob (as the Blender preview applies it): a pixel's size at the face, the box's size on screen.
   '  vec4 knob = bm_quality(bmQuality.x);',
@@ -1179,6 +1180,7 @@ var BOXMARCH_FRAGMENT = [
   '  bool hit = drawn && (boxPixels < knob.z ? bm_one_tap(ro, rd, t_end, footprint, t, d)',
   '    : bm_march(ro, rd, t_end, int(bm_step_limit(boxPixels, knob.y, bmMarch.y)), bmMarch.x, 1.0,',
   '      vec2(knob.x * footprint, knob.w), t, steps, d));',
+  '  int normalTaps = 3;',  // bm_normal's map() calls at a hit
   '#endif',
   '  if (!hit) discard;',
   '  vec3 local_hit = ro + rd * t;',
