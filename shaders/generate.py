@@ -52,7 +52,7 @@ def _march_ranges():
 MARCH = _march_ranges()
 
 # GLSL built-ins the library calls that mean the same in HLSL and GLM; mix is HLSL's lerp.
-SAME_BUILTINS = {"abs", "clamp", "cross", "dot", "floor", "length", "max", "min", "normalize", "sqrt"}
+SAME_BUILTINS = {"abs", "acos", "clamp", "cos", "cross", "dot", "floor", "length", "max", "min", "normalize", "pow", "sqrt"}
 KEYWORDS = {"if", "for", "while", "return"}
 
 
