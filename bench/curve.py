@@ -39,9 +39,11 @@ coverage only (alpha); depth and normal errors come from llvmpipe, where the box
 NORMAL output and both methods' depth buffers are read.
 
     PYTHONPATH=addon python3 -m bench.curve [--quick] [--json out.json] [--before before.json]
+    PYTHONPATH=addon python3 -m bench.curve --from-json out.json [--before before.json]  # no measuring
 
 writes docs/curve_llvmpipe.png and docs/curve_swiftshader.png (--before: a previous run's points
-drawn hollow beside this run's) and prints the tables of docs/BENCHMARKS.md.
+drawn hollow beside this run's, and its boxes' rows beside this run's in a table) and prints the
+tables of docs/BENCHMARKS.md.
 """
 import argparse
 import json
@@ -535,6 +537,40 @@ def write_json(path, points):
     os.replace(written, path)
 
 
+BEFORE_HEADERS = ["renderer", "scene", "boxes' setting", "coverage error % (before / after)",
+                  "depth p99 px (before / after)", "normal p99 deg (before / after)", "frame ms (before / after)"]
+
+
+def before_after_rows(before, points):
+    """The boxes' rows of two runs side by side (a previous run, ``before``, and this one)."""
+    number = lambda v, f: "-" if v is None else format(v, f)  # noqa: E731
+    earlier = {(p["renderer"], p["scene"], p["setting"]): p for p in before if p["method"] == "boxes"}
+    rows = []
+    for p in points:
+        b = earlier.get((p["renderer"], p["scene"], p["setting"]))
+        if p["method"] != "boxes" or b is None:
+            continue
+        rows.append([p["renderer"], p["scene"], p["setting"], f"{b['coverage']:.3f} / {p['coverage']:.3f}",
+                     f"{number(b['depth'], '.2f')} / {number(p['depth'], '.2f')}",
+                     f"{number(b['normal'], '.2f')} / {number(p['normal'], '.2f')}",
+                     f"{b['ms']:.1f} / {p['ms']:.1f} ({b['ms'] / p['ms']:.2f}x)"])
+    return rows
+
+
+def report(points, before, plots, renderers):
+    """Prints the tables and crossing points of ``points`` and writes the plots into ``plots``."""
+    from bench.common import table
+
+    print(table(HEADERS, table_rows(points)))
+    print("\n" + "\n".join(crossing_lines(points)))
+    if before:
+        print("\nThe boxes before (--before) and now")
+        print(table(BEFORE_HEADERS, before_after_rows(before, points)))
+    if plots:
+        for renderer in renderers:
+            plot(points, renderer, Path(plots) / f"curve_{renderer.lower()}.png", before)
+
+
 RENDERERS = ("llvmpipe", "SwiftShader")
 
 
@@ -545,7 +581,14 @@ def main():
     parser.add_argument("--json", help="write the points here")
     parser.add_argument("--before", help="a previous run's --json, drawn hollow in the plots")
     parser.add_argument("--plots", default=None, help="folder of curve_*.png (default: docs/; none with --quick)")
+    parser.add_argument("--from-json", help="measure nothing: report this earlier run's --json")
     args = parser.parse_args()
+    before = json.loads(Path(args.before).read_text()) if args.before else ()
+    plots = args.plots or (None if args.quick else str(HERE.parent / "docs"))
+    if args.from_json:
+        points = json.loads(Path(args.from_json).read_text())
+        report(points, before, plots, list(dict.fromkeys(p["renderer"] for p in points)))
+        return
     import bpy
 
     import boxmarch
@@ -574,13 +617,7 @@ def main():
 
     print(f"\n{gpu.platform.renderer_get()} (bpy {bpy.app.version_string}); three.js r111 on SwiftShader; "
           f"median of {REPEATS} frames in round robin; {time.perf_counter() - began:.0f} s in all")
-    print(table(HEADERS, table_rows(points)))
-    print("\n" + "\n".join(crossing_lines(points)))
-    plots = args.plots or (None if args.quick else str(HERE.parent / "docs"))
-    if plots:
-        before = json.loads(Path(args.before).read_text()) if args.before else ()
-        for renderer in args.renderers:
-            plot(points, renderer, Path(plots) / f"curve_{renderer.lower()}.png", before)
+    report(points, before, plots, args.renderers)
     if args.json:
         write_json(args.json, points)
     sys.stdout.flush()
