@@ -463,8 +463,9 @@ def crossing_lines(points):
                       key=lambda p: p["triangles"])
         line = (f"{renderer}, {scene}: boxes (defaults) {boxes['coverage']:.3f} % coverage error, {boxes['ms']:.1f} ms; ")
         if equal:
+            cpu = (f", CPU {equal['cpu ms'] / boxes['cpu ms']:.2f}x" if equal.get("cpu ms") and boxes.get("cpu ms") else "")
             line += (f"the mesh matches it from {equal['triangles']:,} triangles ({equal['setting']}, "
-                     f"{equal['coverage']:.3f} %), {equal['ms']:.1f} ms = {equal['ms'] / boxes['ms']:.2f}x the boxes' time; ")
+                     f"{equal['coverage']:.3f} %), {equal['ms']:.1f} ms = {equal['ms'] / boxes['ms']:.2f}x the boxes' time{cpu}; ")
         else:
             line += (f"no mesh up to {largest['triangles']:,} triangles reaches it ({largest['coverage']:.3f} % "
                      f"at {largest['ms'] / boxes['ms']:.2f}x the boxes' time); ")
@@ -538,7 +539,8 @@ def write_json(path, points):
 
 
 BEFORE_HEADERS = ["renderer", "scene", "boxes' setting", "coverage error % (before / after)",
-                  "depth p99 px (before / after)", "normal p99 deg (before / after)", "frame ms (before / after)"]
+                  "depth p99 px (before / after)", "normal p99 deg (before / after)", "frame ms (before / after)",
+                  "CPU ms (before / after)"]
 
 
 def before_after_rows(before, points):
@@ -553,7 +555,9 @@ def before_after_rows(before, points):
         rows.append([p["renderer"], p["scene"], p["setting"], f"{b['coverage']:.3f} / {p['coverage']:.3f}",
                      f"{number(b['depth'], '.2f')} / {number(p['depth'], '.2f')}",
                      f"{number(b['normal'], '.2f')} / {number(p['normal'], '.2f')}",
-                     f"{b['ms']:.1f} / {p['ms']:.1f} ({b['ms'] / p['ms']:.2f}x)"])
+                     f"{b['ms']:.1f} / {p['ms']:.1f} ({b['ms'] / p['ms']:.2f}x)",
+                     f"{b['cpu ms']:.1f} / {p['cpu ms']:.1f} ({b['cpu ms'] / p['cpu ms']:.2f}x)"
+                     if b.get("cpu ms") and p.get("cpu ms") else "-"])
     return rows
 
 
