@@ -195,11 +195,11 @@ vec4 bm_nearer_hit(vec4 best, vec3 n, float t, float slack)
   return best;
 }
 
-// Nearer root of t^2 + 2 b t + c = 0 (a unit direction's quadratic; h = b^2 - c >= 0), without
-// the cancellation of -b - sqrt(h) where the origin lies near the surface.
-float bm_near_root(float b, float c, float h)
+// Nearer root of a t^2 + 2 b t + c = 0 (a > 0; h = b^2 - a c >= 0), without the cancellation of
+// (-b - sqrt(h)) / a where the origin lies near the surface.
+float bm_near_root(float a, float b, float c, float h)
 {
-  return b < 0.0 ? c / (sqrt(h) - b) : -b - sqrt(h);
+  return b < 0.0 ? c / (sqrt(h) - b) : (-b - sqrt(h)) / a;
 }
 
 // Sphere of radius r at the origin; the discriminant from the ray's closest approach (no digits
@@ -212,7 +212,7 @@ vec4 bm_hit_sphere(vec3 ro, vec3 rd, float r)
   if (h < 0.0 || sqrt(h) - b < 0.0) {
     return vec4(0.0, 0.0, 0.0, -1.0);
   }
-  float t = max(bm_near_root(b, dot(ro, ro) - r * r, h), 0.0);
+  float t = max(bm_near_root(1.0, b, dot(ro, ro) - r * r, h), 0.0);
   return vec4(normalize(ro + rd * t), t);
 }
 
@@ -259,7 +259,7 @@ vec4 bm_hit_round_box(vec3 ro, vec3 rd, vec3 b, float r)
     float b2 = dot(o, d);
     float h = b2 * b2 - dot(o, o) + r * r;
     if (h >= 0.0 && sqrt(h) - b2 >= 0.0) {
-      t = max(bm_near_root(b2, dot(o, o) - r * r, h), 0.0);
+      t = max(bm_near_root(1.0, b2, dot(o, o) - r * r, h), 0.0);
     }
     // edge along x: the cylinder around the line o.yz = 0, within |p.x| <= size.x
     vec3 a = vec3(d.y * d.y + d.z * d.z, d.z * d.z + d.x * d.x, d.x * d.x + d.y * d.y);
@@ -307,7 +307,11 @@ vec4 bm_hit_capsule(vec3 ro, vec3 rd, float half_length, float r)
   if (h < 0.0 || (a < 1e-20 && c > 0.0)) {
     return vec4(0.0, 0.0, 0.0, -1.0);
   }
-  float t = a < 1e-20 ? -1e30 : (b < 0.0 ? c / (sqrt(h) - b) : (-b - sqrt(h)) / a);
+  // (if chains, not nested ?: here and below: Godot 3's shading language refuses a ?: inside a ?:)
+  float t = -1e30;
+  if (a >= 1e-20) {
+    t = bm_near_root(a, b, c, h);
+  }
   float x = ro.x + rd.x * t;
   // entering the side ahead, or starting on it (a root a rounding behind)
   bool on_side = t < 0.0 && (c <= 0.0 || t >= -1e-4 * r) && abs(ro.x) <= half_length;
@@ -317,7 +321,10 @@ vec4 bm_hit_capsule(vec3 ro, vec3 rd, float half_length, float r)
     return vec4(normalize(vec3(0.0, p.y, p.z)), t);
   }
   // else the cap of the side the ray enters at (the start's side where the entry lies behind)
-  float side = t >= 0.0 ? x : (a < 1e-20 ? -rd.x : ro.x);
+  float side = a < 1e-20 ? -rd.x : ro.x;
+  if (t >= 0.0) {
+    side = x;
+  }
   return bm_hit_sphere(ro - vec3(side < 0.0 ? -half_length : half_length, 0.0, 0.0), rd, r);
 }
 
@@ -332,8 +339,12 @@ vec4 bm_hit_cylinder(vec3 ro, vec3 rd, float r, float half_height)
   if (h < 0.0 || (a < 1e-20 && c > 0.0)) {
     return vec4(0.0, 0.0, 0.0, -1.0);
   }
-  float side_in = a < 1e-20 ? -1e30 : (b < 0.0 ? c / (sqrt(h) - b) : (-b - sqrt(h)) / a);
-  float side_out = a < 1e-20 ? 1e30 : (b < 0.0 ? (sqrt(h) - b) / a : c / (-b - sqrt(h)));
+  float side_in = -1e30;
+  float side_out = 1e30;
+  if (a >= 1e-20) {
+    side_in = bm_near_root(a, b, c, h);
+    side_out = b < 0.0 ? (sqrt(h) - b) / a : c / (-b - sqrt(h));
+  }
   float s = rd.z < 0.0 ? -1.0 : 1.0;
   float inv = 1.0 / max(abs(rd.z), 1e-12);
   float cap_in = (-half_height - s * ro.z) * inv;
@@ -405,7 +416,10 @@ vec4 bm_hit_torus_part(vec3 ro, vec3 rd, float major, float minor, float centre,
   // (t^2 + y)^2 = (a t - c)^2: t^2 - a t + y + c = 0 and t^2 + a t + y - c = 0
   float a = sqrt(max(2.0 * y - P, 0.0));
   float e = sqrt(max(y * y - S, 0.0));
-  float c = a > e ? 0.5 * Q / a : (Q < 0.0 ? -e : e);
+  float c = Q < 0.0 ? -e : e;
+  if (a > e) {
+    c = 0.5 * Q / a;
+  }
   vec4 found = best;
   for (int i = 0; i < 2; ++i) {
     float half_a = i == 0 ? 0.5 * a : -0.5 * a;
@@ -438,7 +452,7 @@ vec4 bm_hit_link(vec3 ro, vec3 rd, float half_length, float ring, float minor)
     float c = (ro.x - x0) * (ro.x - x0) + ro.z * ro.z - minor * minor;
     float h = b * b - a * c;
     if (h >= 0.0 && a >= 1e-20 && half_length > 0.0) {
-      float t = b < 0.0 ? c / (sqrt(h) - b) : (-b - sqrt(h)) / a;
+      float t = bm_near_root(a, b, c, h);
       if (abs(ro.y + rd.y * t) <= half_length) {
         best = bm_nearer_hit(best, vec3(0.0), t, 1e-4 * minor);
       }
