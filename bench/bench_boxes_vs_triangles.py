@@ -51,10 +51,20 @@ REPEATS = 5
 CHANNEL_BYTES = {"COLOR": 16, "NORMAL": 12, "TANGENT": 16}  # float32; UVn: 8
 
 
-def link_distance(p):
-    """sd_link of the LINK preset at box-local points p (float64), as sdf.glsl has it (p.yxz)."""
-    qy = np.maximum(np.abs(p[..., 0]) - LE, 0.0)
-    return np.hypot(np.hypot(p[..., 1], qy) - R1, p[..., 2]) - R2
+def link_radii(half):
+    """(le, r1, r2) of sdf.glsl's sdf_preset_link for a box of half-extents ``half`` (..., 3),
+    longest axis first: the straight runs' half length, the path's radius, the wire's radius."""
+    half = np.asarray(half, np.float64)
+    thickness = np.minimum(half[..., 2], 0.25 * np.minimum(half[..., 0], half[..., 1]))
+    return np.maximum(half[..., 0] - half[..., 1], 0.0), half[..., 1] - thickness, thickness
+
+
+def link_distance(p, half=HALF):
+    """sd_link of the LINK preset at box-local points p (float64), as sdf.glsl has it (p.yxz), in
+    a box of half-extents ``half`` (longest axis first; broadcast against p's points)."""
+    le, r1, r2 = link_radii(half)
+    qy = np.maximum(np.abs(p[..., 0]) - le, 0.0)
+    return np.hypot(np.hypot(p[..., 1], qy) - r1, p[..., 2]) - r2
 
 
 def chord_error(n, m):
@@ -75,16 +85,19 @@ def fewest_triangles(error):
     return best
 
 
-def link_mesh(n, m):
-    """(positions (V, 3), normals (V, 3), triangles (T, 3)) of the link mesh, box-local."""
+def link_mesh(n, m, half=HALF):
+    """(positions (V, 3), normals (V, 3), triangles (T, 3)) of the link mesh, box-local, for a box
+    of half-extents ``half`` (longest axis first); triangles wound counter-clockwise seen from
+    outside."""
+    le, r1, r2 = (float(v) for v in link_radii(half))
     # path rings: half circle at x = +le (angles -90..90 degrees), then at x = -le (90..270)
     angles = np.concatenate([np.linspace(-np.pi / 2, np.pi / 2, m + 1), np.linspace(np.pi / 2, 3 * np.pi / 2, m + 1)])
-    ends = np.repeat([LE, -LE], m + 1)
+    ends = np.repeat([le, -le], m + 1)
     outward = np.column_stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)])
-    path = outward * R1 + np.column_stack([ends, np.zeros((len(ends), 2))])
+    path = outward * r1 + np.column_stack([ends, np.zeros((len(ends), 2))])
     phi = 2 * np.pi * np.arange(n) / n
     normals = (np.cos(phi)[None, :, None] * outward[:, None, :] + np.sin(phi)[None, :, None] * [0.0, 0.0, 1.0])
-    positions = path[:, None, :] + R2 * normals
+    positions = path[:, None, :] + r2 * normals
     rings = len(path)
     a = np.arange(rings)[:, None] * n + np.arange(n)[None, :]
     b = ((np.arange(rings)[:, None] + 1) % rings) * n + np.arange(n)[None, :]
@@ -116,10 +129,11 @@ def layout_bytes():
     return {name: 12 + sum(CHANNEL_BYTES.get(c, 8) for c in layout.channels) for name, layout in layouts.LAYOUTS.items()}
 
 
-def chain_rows(count):
+def chain_rows(count, size=SIZE):
     """A chain of ``count`` links in rows along x (links 0.36 apart, alternate ones turned 90
-    degrees about x), rows 0.3 apart in y, and a camera looking down -z that frames them:
-    (origins, rotations, half-extents, sdf, (object_to_clip, object_to_view, eye))."""
+    degrees about x), rows 0.3 apart in y, and a camera looking down -z that frames them in an
+    image of ``size`` (width, height): (origins, rotations, half-extents, sdf, (object_to_clip,
+    object_to_view, eye))."""
     from bench.bench_gpu_cost import camera
 
     per_row = math.ceil(math.sqrt(count * 0.3 / 0.36))
@@ -130,9 +144,9 @@ def chain_rows(count):
     rotations = np.where((k % 2 == 1)[:, None, None], turn, np.eye(3))
     extent = np.abs(origins).max(0)[:2] + LINK[0]
     tan = math.tan(math.radians(FOV) / 2)
-    distance = max(extent[1], extent[0] * SIZE[1] / SIZE[0]) / tan
+    distance = max(extent[1], extent[0] * size[1] / size[0]) / tan
     eye = (0.0, 0.0, distance)
-    to_clip, to_view, eye4 = camera(eye, (0.0, 0.0, 0.0), *SIZE, up=(0.0, 1.0, 0.0))
+    to_clip, to_view, eye4 = camera(eye, (0.0, 0.0, 0.0), *size, up=(0.0, 1.0, 0.0))
     return origins, rotations, np.tile(HALF, (count, 1)), "LINK", (to_clip, to_view, eye4)
 
 
@@ -179,9 +193,19 @@ void main()
 }
 """
 
+# The normal as the preview's NORMAL output writes it (0.5 + 0.5 n; n in object space when to_view
+# is the identity)
+NORMAL_FRAGMENT = """
+void main()
+{
+  frag_color = vec4(0.5 + 0.5 * normalize(normal_view), 1.0);
+}
+"""
 
-def triangle_shader():
-    """A lit-mesh shader: position and normal in, Lambert from the view axis out."""
+
+def triangle_shader(fragment=TRIANGLE_FRAGMENT):
+    """A lit-mesh shader: position and normal in, Lambert from the view axis out (``fragment``:
+    another fragment stage of the same interface, e.g. NORMAL_FRAGMENT)."""
     import gpu
 
     interface = gpu.types.GPUStageInterfaceInfo("bm_triangles")
@@ -194,14 +218,17 @@ def triangle_shader():
     info.vertex_out(interface)
     info.fragment_out(0, "VEC4", "frag_color")
     info.vertex_source(TRIANGLE_VERTEX)
-    info.fragment_source(TRIANGLE_FRAGMENT)
+    info.fragment_source(fragment)
     return gpu.shader.create_from_info(info)
 
 
 def chain_mesh(scene, n, m):
-    """The chain's triangle mesh in object space: (positions, normals, triangles)."""
-    origins, rotations, _half, _sdf, _camera = scene
-    positions, normals, triangles = link_mesh(n, m)
+    """The chain's triangle mesh in object space: (positions, normals, triangles); every link of
+    the scene the same size."""
+    origins, rotations, half, _sdf, _camera = scene
+    if not np.allclose(half, half[0]):
+        raise ValueError("chain_mesh: the links differ in size")
+    positions, normals, triangles = link_mesh(n, m, half[0])
     world = np.einsum("kij,vj->kvi", rotations, positions) + origins[:, None, :]
     world_normals = np.einsum("kij,vj->kvi", rotations, normals)
     offsets = (np.arange(len(origins)) * len(positions))[:, None, None]

@@ -42,7 +42,8 @@ class TriangleMesh:
         eye_height = -float(to_view[2, 3])  # the camera looks down -z from (0, 0, eye_height)
         self.nearest = eye_height - HALF[1]  # the links lie in z = 0, the turned ones upright
         self.segments = fewest_triangles(pixel_width(self.nearest, height))
-        scene = (stored["origins"].astype(np.float64), stored["rotations"].astype(np.float64), None, None, None)
+        origins = stored["origins"].astype(np.float64)
+        scene = (origins, stored["rotations"].astype(np.float64), np.tile(HALF, (len(origins), 1)), None, None)
         positions, normals, triangles = chain_mesh(scene, *self.segments)
         self.triangles = len(triangles)
         self.vertex_bytes, self.index_bytes = positions.nbytes + normals.nbytes, triangles.nbytes

@@ -22,9 +22,13 @@ threads, which a busy machine disturbs less). Rows:
   resolved passes from resolve.MIN_OVERDRAW; + quality 0.5: the knob (occlusion.occluder_count
   runs no pre-pass below full quality).
 
+* + back faces culled, marched: that row with the scene's preset written as a user's text block
+  (``return sdf_preset_NAME(p, box_half);``), which the preview marches where every other row
+  solves the preset in closed form (no pre-pass: a user's text has no occluders).
+
 SDF evaluations per covered pixel: counted in the shader (the STEPS output: green = march steps
-plus a hit's normal taps, summed over every fragment through an additive float target), divided
-by the pixels the shaded image covers.
+plus a hit's normal taps, a closed-form hit counting 1, summed over every fragment through an
+additive float target), divided by the pixels the shaded image covers.
 
 Pixels changed: pixels whose colour differs from today's by more than 1/255, as a share of the
 pixels covered in either image.
@@ -52,7 +56,11 @@ CONFIGS = (("today", "ANY", False, 1.0, False, False, False, 0.0),
            ("+ resolved passes where 16+ layers deep", "GREATER", True, 1.0, True, True, True, 0.0),
            ("shipped: the pre-pass from 2 layers, the resolved passes from 16", "GREATER", True, 1.0, True, True, True,
             None),
-           ("shipped + quality 0.5 (no pre-pass below quality 1)", "GREATER", True, 0.5, True, True, True, None))
+           ("shipped + quality 0.5 (no pre-pass below quality 1)", "GREATER", True, 0.5, True, True, True, None),
+           ("+ back faces culled, marched (the preset as a user's text)", "GREATER", True, 1.0, False, True, False, 0.0))
+# the rows whose shape is the scene's preset written as a user's text block, which the preview
+# marches (a preset itself is solved in closed form, shaders/glsl/raymarch.glsl bm_preset_hit)
+MARCHED = {CONFIGS[-1]}
 
 
 def baked_object(bpy, name, scene):
@@ -99,10 +107,16 @@ def frame_rows(bpy, name, scene):
 
     shipped_min_layers = occlusion.MIN_LAYERS
 
+    preset = ob.boxmarch.sdf
+    text = bpy.data.texts.new(f"{name}_marched.glsl")
+    text.write(f"float map(vec3 p)\n{{\n  return sdf_preset_{preset.lower()}(p, box_half);\n}}\n")
+    ob.boxmarch.user_text = text.name
+
     def use(config):
         (shader.DEPTH_WRITE, draw.FRONT_TO_BACK, ob.boxmarch.quality, occlusion.ENABLED,
          draw.CULL_BACK_FACES, resolve.ENABLED, min_layers) = config[1:]
         occlusion.MIN_LAYERS = shipped_min_layers if min_layers is None else min_layers
+        ob.boxmarch.sdf = "USER" if config in MARCHED else preset
 
     camera = scene_camera(bpy, to_view)
 

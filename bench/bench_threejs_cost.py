@@ -16,6 +16,9 @@ the configurations, best of REPEATS frames each. Rows (CONFIGS):
 * default: loadBoxmarch with no options: back faces culled where the boxes are closed and wound
   outward (useBoxmarchBackFaceCulling) and the hidden-box pre-pass (useBoxmarchOccluders) where
   the boxes lie 2 layers deep or more over the view (*pre-pass ran*: whether it did);
+* default, marched: the default with the map written as a user's own (``1.0 *`` the preset's
+  text) and the pre-pass's occluders named, so the material marches it (96 steps, epsilon 1e-4)
+  where the rows above solve the preset in closed form: the cost before closed-form hits;
 * culling only (``occluders: false``); pre-pass only (``cullBackFaces: false``);
 * default, pre-pass at any depth: the default with the pre-pass's minLayers set to 0, as the
   loader drew it before it measured the depth;
@@ -29,8 +32,9 @@ the configurations, best of REPEATS frames each. Rows (CONFIGS):
   what the declaration changes, same scenes, same run.
 
 SDF evaluations per covered pixel: counted in the shader (tests/engines/threejs.py count_job: every
-fragment's march steps plus a hit's normal taps, summed through an additive float target) over the
-pixels the shaded image covers, one page per configuration after the timed page.
+fragment's march steps plus a hit's normal taps, a closed-form hit counting 1, summed through an
+additive float target) over the pixels the shaded image covers, one page per configuration after
+the timed page.
 
 Pixels changed: pixels whose colour differs from the first row's by more than 1/255, as a share of the
 pixels covered in either image. *sort ms*: one sortBoxmarchFrontToBack after the eye moved (mean
@@ -53,9 +57,14 @@ SIZE, REPEATS = 320, 7
 SCENES = ("chain down the arm", "pile", "pile of boxes")
 # the map of each scene's shape: the links' preset; None, the loader's default map (a rounded box)
 MAPS = {"LINK": "return sdf_preset_link(p, box_half);", "BOX": None}
+# the same shapes as a map() of the user's own, which the material marches (the presets are solved
+# in closed form, shaders/glsl/raymarch.glsl bm_preset_hit), with the pre-pass's occluders named
+MARCHED = {"LINK": ("return 1.0 * sdf_preset_link(p, box_half);", "LINK"),
+           "BOX": ("return 1.0 * sd_round_box(p, box_half, 0.1 * min3(box_half));", "ROUNDED_BOX")}
 # label, loadBoxmarch's options (the map added), whether the pre-pass runs at any depth (minLayers 0)
 CONFIGS = (("none (cullBackFaces: false, occluders: false)", {"cullBackFaces": False, "occluders": False}, False),
            ("default (no options)", {}, False),
+           ("default, marched (the map as a user's own)", {"marched": True}, False),
            ("culling only (occluders: false)", {"occluders": False}, False),
            ("pre-pass only (cullBackFaces: false)", {"cullBackFaces": False}, False),
            ("default, pre-pass at any depth", {}, True),
@@ -66,8 +75,8 @@ CONFIGS = (("none (cullBackFaces: false, occluders: false)", {"cullBackFaces": F
             {"declareDepth": False, "cullBackFaces": False, "occluders": False}, False))
 HEADERS = ["scene", "three.js", "options", "declared", "pre-pass ran", "SDF evals/px", "frame ms", "speed-up",
            "pixels changed", "covered", "sort ms", "clock ms"]
-FRONT_TO_BACK = 6  # the row whose sort is timed
-FORCED = 4  # the row whose pre-pass is also timed alone (PIECES)
+FRONT_TO_BACK = 7  # the row whose sort is timed
+FORCED = 5  # the row whose pre-pass is also timed alone (PIECES)
 # Pieces of a frame timed in the same round robin: an empty scene (what render() and the read-back
 # cost with nothing to draw), the box mesh with three.js's MeshBasicMaterial (front faces; both
 # sides), i.e. the rasterisation of the boxes with a trivial fragment stage, and the pre-pass alone
@@ -141,12 +150,13 @@ TIMING_JOB = """async function (gltf) {
 
 
 def three_camera(to_view, eye):
-    """The bench_gpu_cost camera in glTF's frame (Blender's x, z, -y)."""
+    """The bench_gpu_cost camera in glTF's frame (Blender's x, z, -y); its up the view's own (a
+    camera looking straight down has no up along Blender's z)."""
     from tests.engine_scene import TO_Y_UP
 
-    forward = -np.asarray(to_view)[2, :3]
+    forward, up = -np.asarray(to_view)[2, :3], np.asarray(to_view)[1, :3]
     return {"position": (TO_Y_UP @ eye[:3]).tolist(), "target": (TO_Y_UP @ (eye[:3] + forward)).tolist(),
-            "up": (TO_Y_UP @ [0.0, 0.0, 1.0]).tolist(), "fov": 40.0, "near": 0.1, "far": 4000.0}
+            "up": (TO_Y_UP @ up).tolist(), "fov": 40.0, "near": 0.1, "far": 4000.0}
 
 
 # Counts the SDF evaluations of loadBoxmarch's visibility and shade passes (useBoxmarchVisibility),
@@ -207,7 +217,9 @@ PASSES_COUNT_AFTER = """var passes = null;
 def loader_options(sdf, config):
     """loadBoxmarch's options for ``config`` on a scene of shape ``sdf``: the row's, and the scene's map."""
     options = dict(config[1])
-    if MAPS[sdf] is not None:
+    if options.pop("marched", False):
+        options["map"], options["occluders"] = MARCHED[sdf]
+    elif MAPS[sdf] is not None:
         options["map"] = MAPS[sdf]
     return options
 

@@ -37,10 +37,11 @@ def preview_frame(offscreen, ob, view, projection, read=False):
     return offscreen_frame(offscreen, lambda: draw.draw_object(ob, view, projection, True), read)
 
 
-def offscreen_frame(offscreen, draw_call, read=False):
+def offscreen_frame(offscreen, draw_call, read=False, depth=False):
     """``draw_call()`` into ``offscreen`` cleared, with the viewport's depth state (test LESS_EQUAL,
     writes on), then read back: one pixel (so the frame has finished on the GPU) or, with
-    ``read``, the whole image as a float32 (height, width, 4) array."""
+    ``read``, the whole image as a float32 (height, width, 4) array, row 0 at the bottom (with
+    ``depth`` too, (image, window depths (height, width)))."""
     import gpu
 
     width, height = (offscreen.width, offscreen.height) if read else (1, 1)
@@ -51,11 +52,16 @@ def offscreen_frame(offscreen, draw_call, read=False):
         gpu.state.depth_mask_set(True)
         draw_call()
         buffer = fb.read_color(0, 0, width, height, 4, 0, "FLOAT")
+        depths = fb.read_depth(0, 0, width, height) if read and depth else None
         gpu.state.depth_test_set("NONE")
         gpu.state.depth_mask_set(False)
     if read:
         buffer.dimensions = width * height * 4
-        return np.array(buffer, np.float32).reshape(height, width, 4)
+        image = np.array(buffer, np.float32).reshape(height, width, 4)
+        if depths is None:
+            return image
+        depths.dimensions = width * height
+        return image, np.array(depths, np.float32).reshape(height, width)
     return None
 
 

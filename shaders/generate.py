@@ -12,7 +12,7 @@ the SDF library and the march.
   box_params.glsl and raymarch.glsl embedded as strings (three.js compiles them as they are, GLSL ES 1.00 on WebGL 1
   and 3.00 on WebGL 2);
 * godot3/boxmarch.shader: godot3/template.shader with decode.glsl, every function of sdf.glsl,
-  box_params.glsl and raymarch.glsl; Godot 3 has no global variables, so bm_march, bm_one_tap and
+  box_params.glsl and raymarch.glsl (the closed-form hits, bm_nearer_hit to bm_preset_hit, among them); Godot 3 has no global variables, so bm_march, bm_one_tap and
   bm_normal take the box (h, index) and pass it on to map() (``passing_the_box``);
 * godot3/decode_vectors.shader: godot3/decode_vectors_template.shader (the decode-vectors view's
   line material) with decode.glsl;
@@ -52,7 +52,7 @@ def _march_ranges():
 MARCH = _march_ranges()
 
 # GLSL built-ins the library calls that mean the same in HLSL and GLM; mix is HLSL's lerp.
-SAME_BUILTINS = {"abs", "clamp", "cross", "dot", "floor", "length", "max", "min", "normalize", "sqrt"}
+SAME_BUILTINS = {"abs", "acos", "clamp", "cos", "cross", "dot", "floor", "length", "max", "min", "normalize", "pow", "sqrt"}
 KEYWORDS = {"if", "for", "while", "return"}
 
 
@@ -250,9 +250,10 @@ def godot3() -> str:
     text = text.replace("/*@DECODE@*/", pasted("decode.glsl"))
     text = text.replace("/*@SDF@*/", "".join(top_level_functions(glsl("sdf.glsl")).values())
                         + "".join(top_level_functions(glsl("box_params.glsl")).values()))
+    closed_form = list(raymarch)[list(raymarch).index("bm_nearer_hit"):list(raymarch).index("bm_preset_hit") + 1]
     text = text.replace("/*@SPAN@*/", "".join(raymarch[name] for name in (
         "bm_box_span", "bm_quality", "bm_pixel_size", "bm_step_limit", "bm_normal_tap", "bm_occluder_limit",
-        "bm_depth_crossing")))
+        "bm_depth_crossing", *closed_form)))
     return text.replace("/*@MARCH@*/", "".join(passing_the_box(raymarch[name])
                                                for name in ("bm_march", "bm_one_tap", "bm_normal")))
 

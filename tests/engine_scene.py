@@ -415,11 +415,12 @@ def paint_shapes(bpy, ob, shapes):
                                 layers.vertex_quaternions(), np.repeat(np.arange(len(shapes)), 8))
 
 
-def per_box_agreement(covered, shot, camera, boxes, shapes):
+def per_box_agreement(covered, shot, camera, boxes, shapes, **options):
     """Fraction of pixels where ``covered`` (an engine's (H, W) mask) equals the CPU reference
     drawing each of the Blender-space ``boxes`` with the preset its id in ``shapes`` picks
-    (core.render_boxes_by_shape), seen by the engine's camera (``shot.view`` and the harness's
-    ``camera``: vertical fov in degrees, near, far) in the Y-up engine frame."""
+    (core.render_boxes_by_shape, with ``options``: e.g. preview_render.EXACT_MARCH), seen by the
+    engine's camera (``shot.view`` and the harness's ``camera``: vertical fov in degrees, near,
+    far) in the Y-up engine frame."""
     from boxmarch import core
     from tests.engines import perspective
 
@@ -427,5 +428,5 @@ def per_box_agreement(covered, shot, camera, boxes, shapes):
     to_world = np.eye(4)
     to_world[:3, :3] = TO_Y_UP
     to_clip = perspective(camera, width / height) @ shot.view @ to_world
-    reference = core.render_boxes_by_shape(*boxes, shapes, to_clip, shot.view @ to_world, width, height)
+    reference = core.render_boxes_by_shape(*boxes, shapes, to_clip, shot.view @ to_world, width, height, **options)
     return float((covered == reference.coverage).mean())

@@ -11,6 +11,7 @@ from tests.engine_scene import (MIXED_SHAPES, TO_Y_UP, baked_scene, box_of_verte
                                 frame_and_size_errors, paint_shapes, per_box_agreement, rounded_box_mismatch, silhouettes,
                                 table_texels)
 from tests.engines import coverage_mismatch, godot3, import_helpers
+from tests.helpers.preview_render import EXACT_MARCH
 from tests.helpers.tools import need
 
 pytestmark = pytest.mark.slow  # Godot 3 imports and renders
@@ -154,6 +155,25 @@ def test_godot3_draws_the_shape_each_box_id_picks(imported):
     covered = shot.pixels[..., :3].max(axis=2) > 20
     agree = per_box_agreement(covered, shot, WIDE, boxes, MIXED_SHAPES)
     shuffled = per_box_agreement(covered, shot, WIDE, boxes, np.roll(MIXED_SHAPES, 1))
+    assert covered.sum() > 500
+    assert agree >= 0.995 and shuffled < 0.99, (agree, shuffled)
+
+
+PER_BOX_CLOSED_FORM = ("vec4 params = texelFetch(box_table, ivec2(bm_box_table_texel(index, 1.0, "
+                       "vec2(textureSize(box_table, 0)))), 0);\nreturn bm_preset_hit(params.x, ro, rd, h);")
+
+
+def test_godot3_solves_each_box_shape_in_closed_form(imported):
+    """bm_map_hit() giving each box's preset hit in closed form (bm_preset_hit of its shape id):
+    coverage matches the CPU reference marched to the exact surface on >= 99.5 % of pixels;
+    against the ids shuffled it must not."""
+    project, _table, _centres, _sizes, _rotations, boxes = imported
+    uniforms = {"box_table": "res://model.boxes.tres", "max_steps": 256}
+    code = godot3.shipped_shader(PER_BOX_MAP, closed_code=PER_BOX_CLOSED_FORM)
+    shot = godot3.render(project, code, width=W, height=H, camera=WIDE, uniforms=uniforms)
+    covered = shot.pixels[..., :3].max(axis=2) > 20
+    agree = per_box_agreement(covered, shot, WIDE, boxes, MIXED_SHAPES, **EXACT_MARCH)
+    shuffled = per_box_agreement(covered, shot, WIDE, boxes, np.roll(MIXED_SHAPES, 1), **EXACT_MARCH)
     assert covered.sum() > 500
     assert agree >= 0.995 and shuffled < 0.99, (agree, shuffled)
 

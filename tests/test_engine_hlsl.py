@@ -60,6 +60,23 @@ def example(tmp_path_factory):
                      for stage in ("vert", "frag")} for layout in ("UV_FRAME", "NORMAL_FRAME")}
 
 
+@pytest.fixture(scope="module")
+def closed_form_example(tmp_path_factory):
+    """The example material with its map() a box at INNER solved in closed form (BM_CLOSED_FORM,
+    boxmarch_raymarch.hlsl) instead of marched, and as the negative control the closed form of
+    the whole box; UV_FRAME layout."""
+    need(hlsl_webgl.available())
+    hlsl = shader_sources.shader_dir() / "hlsl"
+    text = (hlsl / "boxmarch_example.hlsl").read_text().replace(SHIPPED_MAP, f"return sd_box(p, {INNER} * box_half);")
+    programs = {}
+    for name, half in (("inner", f"{INNER} * box_half"), ("whole", "box_half")):
+        path = tmp_path_factory.mktemp("hlsl_closed") / "example.hlsl"
+        path.write_text(f"#define BM_CLOSED_FORM bm_hit_box(ro, rd, {half})\n" + text)
+        programs[name] = {stage: hlsl_webgl.to_glsl_es(path, stage, stage, ["_LAYOUT_UV_FRAME"], [hlsl])
+                          for stage in ("vert", "frag")}
+    return programs
+
+
 @pytest.fixture
 def unity_mesh(blender, tmp_path):
     _ob, centres, sizes, rotations = baked_scene(blender)
@@ -103,6 +120,20 @@ def test_unity_material_raymarches_each_box_where_unity_holds_it(example, unity_
     mismatch = coverage_mismatch(covered, expected)
     assert mismatch is None, mismatch
     assert covered.sum() > 500
+
+
+def test_unity_material_hits_in_closed_form(closed_form_example, unity_mesh):
+    """BM_CLOSED_FORM in place of the march (the presets' hits, shaders/glsl/raymarch.glsl, in
+    boxmarch_march.hlsl): the boxes at INNER land on their silhouettes; the whole boxes' closed
+    form (the negative control) does not."""
+    attributes, count, centres, sizes, rotations = unity_mesh
+    shot = draw(closed_form_example["inner"], attributes, count, STATIC_CAMERA)
+    expected = unity_silhouettes(shot, centres, sizes, rotations)
+    inner = shot.pixels[..., 3] > 0
+    whole = draw(closed_form_example["whole"], attributes, count, STATIC_CAMERA).pixels[..., 3] > 0
+    assert inner.sum() > 500
+    assert coverage_mismatch(inner, expected) is None, coverage_mismatch(inner, expected)
+    assert coverage_mismatch(whole, expected) is not None
 
 
 def test_unity_material_without_the_frame_fails(example, unity_mesh):

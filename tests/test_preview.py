@@ -16,7 +16,7 @@ import pytest
 from boxmarch import core
 from boxmarch.formats import layouts
 from tests.helpers.blender_program import blender_env
-from tests.helpers.preview_render import BLENDERS, agreement, quaternions_of, run_check_script
+from tests.helpers.preview_render import BLENDERS, EXACT_MARCH, agreement, quaternions_of, run_check_script
 
 SCRIPT = Path(__file__).parent / "blender_scripts" / "preview_check.py"
 OUTLINE_COLOR = (0.05, 0.05, 0.05)  # preview/draw.py OUTLINE_COLOR (that module needs bpy)
@@ -30,17 +30,21 @@ def rendered(request, package_parent, tmp_path_factory):
     return run_check_script(request.param, SCRIPT, package_parent, tmp / "preview.npz", tmp)
 
 
-def reference(r, sdf, view=None, projection=None, shift=0.0):
+# The preview's march settings, a user's map()'s (the presets are compared with EXACT_MARCH).
+PREVIEW_MARCH = {"epsilon": 1e-3, "max_steps": 64, "normal": "FORWARD"}
+
+
+def reference(r, sdf, view=None, projection=None, shift=0.0, **options):
     height, width = r["BOX_SHADED_depth"].shape
     model = r["matrix_world"]
     view = r["view"] if view is None else view
     projection = r["projection"] if projection is None else projection
     return core.render_boxes(r["centres"] + shift, quaternions_of(r["rotations"]), r["sizes"] / 2,
                              projection @ view @ model, view @ model, width, height, sdf=sdf,
-                             base_color=r["color"][:3])
+                             base_color=r["color"][:3], **(options or EXACT_MARCH))
 
 
-def reference_from_layers(r, sdf, view=None, projection=None, size=None, quality=1.0):
+def reference_from_layers(r, sdf, view=None, projection=None, size=None, quality=1.0, **options):
     """The CPU reference fed with the baked layers themselves: the presets that are not symmetric
     under axis swaps depend on the frame the bake chose."""
     height, width = r["BOX_SHADED_depth"].shape if size is None else size
@@ -51,19 +55,32 @@ def reference_from_layers(r, sdf, view=None, projection=None, size=None, quality
     submesh_of_vertex = np.repeat(np.arange(len(positions) // 8), 8)  # 8 vertices per box, in order
     return core.render_baked_mesh(positions, r["layer_offsets"], r["layer_corner_verts"],
                                   r["layer_corner_quaternions"], submesh_of_vertex, projection @ view @ model,
-                                  view @ model, width, height, sdf=sdf, base_color=r["color"][:3], quality=quality)
+                                  view @ model, width, height, sdf=sdf, base_color=r["color"][:3], quality=quality,
+                                  **(options or EXACT_MARCH))
+
+
+def preset_reference(r, sdf, **options):
+    # presets symmetric under axis swaps: from the known boxes; the others: from the baked layers
+    return reference(r, sdf, **options) if sdf in ("BOX", "SPHERE", "ROUNDED_BOX") else reference_from_layers(r, sdf, **options)
 
 
 @pytest.mark.parametrize("sdf", core.SDF_PRESETS)
 def test_preview_matches_cpu_reference(rendered, sdf):
-    # presets symmetric under axis swaps: from the known boxes; the others: from the baked layers
-    ref = reference(rendered, sdf) if sdf in ("BOX", "SPHERE", "ROUNDED_BOX") else reference_from_layers(rendered, sdf)
+    """A preset's closed-form hit against the reference marched to the exact surface: closer in
+    coverage and depth than the march at the preview's settings comes (the bars: docs/PREVIEW.md)."""
+    ref = preset_reference(rendered, sdf)
     depth = rendered[f"{sdf}_SHADED_depth"]
     gpu_hit, cpu_hit = depth < 1.0, ref.depth < 1.0
     assert cpu_hit.mean() > 0.1  # the scene is in view
-    assert (gpu_hit == cpu_hit).mean() >= 0.99
+    assert (gpu_hit == cpu_hit).mean() >= 0.999
     both = gpu_hit & cpu_hit
     assert np.percentile(np.abs(depth - ref.depth)[both], 99.9) <= 2e-6
+    # the march at the preview's settings misses those bars (its epsilon fattens the shape; a
+    # box's march hits at its face, as the closed form does)
+    marched = preset_reference(rendered, sdf, **PREVIEW_MARCH).depth
+    marched_both = both & (marched < 1.0)
+    assert (sdf == "BOX" or ((marched < 1.0) != cpu_hit).mean() > 1e-3
+            or np.percentile(np.abs(marched - ref.depth)[marched_both], 99.9) > 2e-6)
     normals = rendered[f"{sdf}_NORMAL_rgba"][..., :3] * 2.0 - 1.0
     angle = np.degrees(np.arccos(np.clip((normals * ref.normals).sum(-1)[both], -1.0, 1.0)))
     assert np.percentile(angle, 99) <= 2.0
@@ -86,7 +103,7 @@ def test_per_box_shape_matches_cpu_reference(rendered, layout):
     assert set(shapes.tolist()) == set(range(len(core.SDF_PRESETS)))  # every preset is drawn
 
     def by_shape(ids):
-        return core.render_boxes_by_shape(*boxes, ids, projection @ view @ model, view @ model, width, height)
+        return core.render_boxes_by_shape(*boxes, ids, projection @ view @ model, view @ model, width, height, **EXACT_MARCH)
     ref = by_shape(shapes)
     assert (ref.depth < 1.0).mean() > 0.1
     coverage, depth = agreement(rendered[f"PER_BOX_{layout}_depth"], ref)
@@ -113,10 +130,14 @@ def test_sphere_is_inside_box_and_differs_from_it(rendered):
     assert sphere.sum() < 0.8 * box.sum()
 
 
-def test_user_sdf_text_block_matches_preset(rendered):
+def test_user_sdf_text_block_marches(rendered):
+    """The SPHERE preset written by hand as a user's map() is marched, not solved in closed form:
+    it is the CPU reference's march at the preview's settings, and not the preset's picture."""
     assert rendered["user_error"] == "None"
-    assert np.array_equal(rendered["USER_SHADED_depth"] < 1.0, rendered["SPHERE_SHADED_depth"] < 1.0)
-    assert np.abs(rendered["USER_SHADED_depth"] - rendered["SPHERE_SHADED_depth"]).max() <= 1e-6
+    coverage, depth = agreement(rendered["USER_SHADED_depth"], reference(rendered, "SPHERE", **PREVIEW_MARCH))
+    assert coverage >= 0.99 and depth <= 2e-6, (coverage, depth)
+    coverage, depth = agreement(rendered["USER_SHADED_depth"], reference(rendered, "SPHERE"))
+    assert depth > 1e-5, (coverage, depth)
 
 
 def test_user_sdf_error_names_line_and_falls_back_to_outline(rendered):
@@ -170,12 +191,12 @@ def test_quality_knob_matches_cpu_reference(rendered):
     TORUS at quality 0.05 on 40 x 30 px; the full-quality reference must differ more."""
     depth = rendered["QUALITY_depth"]
     low = reference_from_layers(rendered, "TORUS", rendered["quality_view"], rendered["quality_projection"],
-                                size=depth.shape, quality=0.05)
+                                size=depth.shape, quality=0.05, **PREVIEW_MARCH)
     assert low.cost["lod_fragments"] > 0 and (low.depth < 1.0).mean() > 0.1
     coverage, depth_error = agreement(depth, low)
     assert coverage >= 0.99 and depth_error <= 2e-6, (coverage, depth_error)
     full = reference_from_layers(rendered, "TORUS", rendered["quality_view"], rendered["quality_projection"],
-                                 size=depth.shape)
+                                 size=depth.shape, **PREVIEW_MARCH)
     full_coverage, full_depth = agreement(depth, full)
     assert full_coverage < coverage or full_depth > 1e-4, (full_coverage, full_depth)
 
@@ -231,16 +252,19 @@ def test_blend_into_parent_adds_a_neck_only_at_the_joints(rendered):
     epsilon band, measured up to 2.1e-5 of window depth), it adds many pixels, and everything it
     changes by more than 1e-4 of window depth lies near the two contact points; the same boxes
     without parents change nothing (the control)."""
-    plain, blend = rendered["CHAIN_PER_BOX_depth"], rendered["CHAIN_PER_BOX_BLEND_depth"]
-    covered, blended = plain < 1.0, blend < 1.0
+    # PER_BOX is solved in closed form, PER_BOX_BLEND marched: the blend is compared with the same
+    # map() without parents (CHAIN_ROOTS, marched alike); that one lies within the march's hit band
+    # of PER_BOX (the control: the same coverage, the median depth within 5e-5)
+    roots, blend, plain = (rendered[f"CHAIN_{k}_depth"] for k in ("ROOTS", "PER_BOX_BLEND", "PER_BOX"))
+    covered, blended = roots < 1.0, blend < 1.0
     assert covered.sum() > 500
     assert not (covered & ~blended).any()
-    assert (blend - plain)[covered].max() <= 5e-5
+    assert (blend - roots)[covered].max() <= 5e-5
     added = blended & ~covered
-    changed = added | (covered & (np.abs(blend - plain) > 1e-4))
+    changed = added | (covered & (np.abs(blend - roots) > 1e-4))
     contacts, reach = chain_contacts_px(rendered)
     ys, xs = np.nonzero(changed)
     near = np.min(np.linalg.norm(np.stack([xs + 0.5, ys + 0.5], 1)[:, None, :] - contacts[None], axis=2), axis=1)
     assert added.sum() >= 50 and near.max() <= reach, (added.sum(), near.max(), reach)
-    roots = rendered["CHAIN_ROOTS_depth"]
-    assert np.array_equal(roots < 1.0, covered) and np.abs(roots - plain)[covered].max() <= 2e-6
+    both = covered & (plain < 1.0)
+    assert (covered == (plain < 1.0)).mean() >= 0.99 and np.median(np.abs(roots - plain)[both]) <= 5e-5

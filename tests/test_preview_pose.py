@@ -2,7 +2,8 @@
 weighted boxes, rendered offscreen by the preview (Debian's Blender 3.4 program and the bpy 5.0
 module, Mesa llvmpipe), against the CPU reference raymarch of the posed boxes computed here from the
 rest boxes, the bones' rest matrices and the known joint turns (40 degrees each), not from anything
-the preview computes. Same tolerances as tests/test_preview.py: coverage agreement >= 99 %, 99.9th
+the preview computes (marched to the exact surface: the preview solves the preset in closed form).
+Same tolerances as tests/test_preview.py: coverage agreement >= 99 %, 99.9th
 percentile of the window depth difference <= 2e-6."""
 from pathlib import Path
 
@@ -10,7 +11,7 @@ import numpy as np
 import pytest
 
 from boxmarch import core
-from tests.helpers.preview_render import BLENDERS, agreement, quaternions_of, run_check_script
+from tests.helpers.preview_render import BLENDERS, EXACT_MARCH, agreement, quaternions_of, run_check_script
 
 SCRIPT = Path(__file__).parent / "blender_scripts" / "preview_pose_check.py"
 
@@ -49,7 +50,7 @@ def reference(r, pose=None, still_bones=()):
     height, width = r["POSE_A_NORMAL_FRAME_depth"].shape
     model, view, projection = r["matrix_world"], r["view"], r["projection"]
     return core.render_boxes(centres, quaternions_of(rotations), r["sizes"] / 2, projection @ view @ model,
-                             view @ model, width, height, sdf="ROUNDED_BOX")
+                             view @ model, width, height, sdf="ROUNDED_BOX", **EXACT_MARCH)
 
 
 def matches(depth, ref):

@@ -176,19 +176,33 @@ void main()
   }
 #endif
 
+  float t;
+  float d;
+  int steps = 1;
+#ifdef BM_CLOSED_FORM
+  // map() is a preset (formats/shader_sources.py defines BM_CLOSED_FORM as its bm_preset_hit):
+  // its hit in closed form, no march and no normal taps; an eye inside the shape hits at once.
+  vec4 closed = BM_CLOSED_FORM;
+  if (from_eye && map(ro) <= 0.0) {
+    closed = vec4(-rd, 0.0);
+  }
+  t = closed.w;
+  d = 0.0;
+  bool hit = t >= 0.0 && t <= min(t_end, preview.march.z);
+  int normal_taps = 0;
+#else
   // The quality knob: a pixel's size at the rasterised face, the box's size on screen from it.
   vec4 quality = bm_quality(preview.quality.x);
   vec3 row_y = vec3(preview.object_to_clip[0][1], preview.object_to_clip[1][1], preview.object_to_clip[2][1]);
   float footprint = bm_pixel_size(1.0 / gl_FragCoord.w, length(row_y), preview.quality.y);
   float box_pixels = 2.0 * bm_max3(box_half) / footprint;
   int max_steps = int(bm_step_limit(box_pixels, quality.y, preview.march.w));
-  float t;
-  float d;
-  int steps = 1;
   bool hit = box_pixels < quality.z
     ? bm_one_tap(ro, rd, min(t_end, preview.march.z), footprint, t, d)
     : bm_march(ro, rd, min(t_end, preview.march.z), max_steps, preview.march.x, preview.march.y,
                vec2(quality.x * footprint, quality.w), t, steps, d);
+  int normal_taps = 3;
+#endif
   vec3 local_hit = ro + rd * t;
   vec4 clip = c0 + c1 * t;
 #ifdef BM_RESOLVED
@@ -200,7 +214,7 @@ void main()
     imageAtomicMin(hit_min, ivec2(gl_FragCoord.xy), floatBitsToUint(hit_depth));
   }
   if (preview.mode.x == 2) {
-    frag_color = vec4(float(steps), float(steps + (shaded ? 3 : 0)), 1.0, 1.0);
+    frag_color = vec4(float(steps), float(steps + (shaded ? normal_taps : 0)), 1.0, 1.0);
     return;
   }
   if (!shaded) {
@@ -208,7 +222,7 @@ void main()
   }
 #else
   if (preview.mode.x == 2) {
-    frag_color = vec4(float(steps), float(steps + (hit ? 3 : 0)), 1.0, 1.0);
+    frag_color = vec4(float(steps), float(steps + (hit ? normal_taps : 0)), 1.0, 1.0);
     return;
   }
   if (!hit) {
@@ -217,7 +231,12 @@ void main()
   gl_FragDepth = max(clip.z / clip.w * 0.5 + 0.5, gl_FragCoord.z);
 #endif
 
-  vec3 n_object = transpose(frame) * bm_from_local(bm_normal(local_hit, d, bm_normal_tap(box_half)), x, y, z);
+#ifdef BM_CLOSED_FORM
+  vec3 n_local = closed.xyz;
+#else
+  vec3 n_local = bm_normal(local_hit, d, bm_normal_tap(box_half));
+#endif
+  vec3 n_object = transpose(frame) * bm_from_local(n_local, x, y, z);
   if (preview.mode.x == 1) {
     frag_color = vec4(n_object * 0.5 + 0.5, 1.0);
   }

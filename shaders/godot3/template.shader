@@ -13,7 +13,8 @@
 //
 // boxmarch for Godot 3: raymarches an SDF inside every box of a mesh exported with the GODOT3
 // preset (NORMAL_COLOR layout, docs/ENGINES.md). Import the .glb with Meshes > Compress off, set
-// this shader on the mesh and the exported NAME.boxes.tres as box_table. Edit map() below.
+// this shader on the mesh and the exported NAME.boxes.tres as box_table. Edit map() below (and
+// bm_map_hit() after it, which solves the default rounded box's hit without marching).
 // Godot 3's shading language has no global variables or prototypes, so map() takes the box's
 // half-extents h (and index), and bm_march, bm_one_tap and bm_normal, after it, pass them on; every function
 // is the shared GLSL of shaders/glsl.
@@ -50,6 +51,15 @@ float map(vec3 p, vec3 h, float index)
   return sd_round_box(p, h, 0.1 * min3(h));
 }
 
+// The first hit of map()'s shape solved in closed form where it has one (the presets' hits of
+// the library: bm_preset_hit(shape id, ro, rd, h), bm_hit_round_box, ...; xyz the unit normal, w
+// the distance, -1.0 a miss), or w = -2.0: march map(). Keep it in step with map(): for a map()
+// of your own, return vec4(0.0, 0.0, 0.0, -2.0).
+vec4 bm_map_hit(vec3 ro, vec3 rd, vec3 h, float index)
+{
+  return bm_hit_round_box(ro, rd, h, 0.1 * min3(h));
+}
+
 /*@MARCH@*/
 void vertex()
 {
@@ -81,7 +91,8 @@ void fragment()
   vec3 ro = -f;
   vec2 span = bm_box_span(ro, rd, h);
   float t_end = span.y;
-  if (!FRONT_FACING && span.x + span.y < 0.0) {
+  bool from_eye = !FRONT_FACING && span.x + span.y < 0.0;
+  if (from_eye) {
     if (!perspective || eye_distance > -span.x) {
       discard;
     }
@@ -95,12 +106,24 @@ void fragment()
   float footprint = bm_pixel_size((object_to_clip * vec4(bm_v_obj_pos, 1.0)).w,
       length(vec3(object_to_clip[0][1], object_to_clip[1][1], object_to_clip[2][1])), VIEWPORT_SIZE.y);
   float box_pixels = 2.0 * max3(h) / footprint;
-  float t;
-  float d;
+  float t = 0.0;
+  float d = 0.0;
   int steps = 1;
-  bool hit = box_pixels < knob.z ? bm_one_tap(ro, rd, t_end, footprint, t, d, h, index)
-      : bm_march(ro, rd, t_end, int(bm_step_limit(box_pixels, knob.y, float(max_steps))), march_epsilon, 1.0,
-                 vec2(knob.x * footprint, knob.w), t, steps, d, h, index);
+  bool hit = false;
+  // a preset's hit in closed form (bm_map_hit above; an eye inside the shape hits at once), else the march
+  vec4 closed = bm_map_hit(ro, rd, h, index);
+  if (closed.w > -1.5) {
+    if (from_eye && map(ro, h, index) <= 0.0) {
+      closed = vec4(-rd, 0.0);
+    }
+    t = closed.w;
+    hit = t >= 0.0 && t <= t_end;
+  }
+  else {
+    hit = box_pixels < knob.z ? bm_one_tap(ro, rd, t_end, footprint, t, d, h, index)
+        : bm_march(ro, rd, t_end, int(bm_step_limit(box_pixels, knob.y, float(max_steps))), march_epsilon, 1.0,
+                   vec2(knob.x * footprint, knob.w), t, steps, d, h, index);
+  }
   if (!hit) {
     discard;
   }
@@ -108,7 +131,7 @@ void fragment()
   vec3 obj_hit = bm_v_obj_pos + bm_from_local(local_hit + f, x, y, z);
   vec4 clip = object_to_clip * vec4(obj_hit, 1.0);
   DEPTH = 0.5 + 0.5 * clip.z / clip.w;
-  vec3 n = normalize((INV_CAMERA_MATRIX * WORLD_MATRIX * vec4(bm_from_local(
-      bm_normal(local_hit, d, bm_normal_tap(h), h, index), x, y, z), 0.0)).xyz);
+  vec3 n_local = closed.w > -1.5 ? closed.xyz : bm_normal(local_hit, d, bm_normal_tap(h), h, index);
+  vec3 n = normalize((INV_CAMERA_MATRIX * WORLD_MATRIX * vec4(bm_from_local(n_local, x, y, z), 0.0)).xyz);
   ALBEDO = base_color.rgb * (0.35 + 0.65 * max(n.z, 0.0));
 }

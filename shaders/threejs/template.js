@@ -132,7 +132,8 @@ function createBoxmarchMaterial(THREE, options) {
       bmOccluderDepth: { value: null }
     },
     vertexShader: BOXMARCH_DECODE + '\n' + BOXMARCH_VERTEX,
-    fragmentShader: BOXMARCH_DECODE + '\n' + BOXMARCH_LIBRARY + '\nfloat box_index = 0.0;\nfloat map(vec3 p)\n{\n' + map + '\n}\n' + BOXMARCH_FRAGMENT,
+    fragmentShader: BOXMARCH_DECODE + '\n' + BOXMARCH_LIBRARY + '\nfloat box_index = 0.0;\nfloat map(vec3 p)\n{\n' + map + '\n}\n'
+      + (boxmarchClosedForm(map) ? '#define BM_CLOSED_FORM ' + boxmarchClosedForm(map) + '\n' : '') + BOXMARCH_FRAGMENT,
     side: THREE.DoubleSide
   };
   var material;
@@ -157,6 +158,20 @@ function createBoxmarchMaterial(THREE, options) {
   material = new THREE.ShaderMaterial(parameters);
   if (revision < 129) material.userData.boxmarchSkinning = !!options.skinning;
   return material;
+}
+
+// The closed-form hit (shaders/glsl/raymarch.glsl, bm_preset_hit) of the map() body `map` where it
+// is a preset's: the default rounded box (radius 0.1 x min3), a preset
+// ('return sdf_preset_NAME(p, box_half);') or each box's ('return bm_sdf_by_id(box_params.x, p,
+// box_half);'), as the GLSL expression the fragment stage evaluates (BM_CLOSED_FORM); '' for a
+// map() of the user's own, which is marched.
+function boxmarchClosedForm(map) {
+  var text = String(map).replace(/\s+/g, '');
+  if (text === 'returnsd_round_box(p,box_half,0.1*min3(box_half));') return 'bm_hit_round_box(ro, rd, box_half, 0.1 * min3(box_half))';
+  if (text === 'returnbm_sdf_by_id(box_params.x,p,box_half);') return 'bm_preset_hit(box_params.x, ro, rd, box_half)';
+  var preset = /^returnsdf_preset_(\w+)\(p,box_half\);$/.exec(text);
+  var id = preset ? BOXMARCH_OCCLUDER_PRESETS.indexOf(preset[1].toUpperCase()) : -1;
+  return id >= 0 ? 'bm_preset_hit(' + id.toFixed(1) + ', ro, rd, box_half)' : '';
 }
 
 // The camera in the mesh's object space, into eye (a THREE.Vector4): its position with w = 1, or
@@ -1142,16 +1157,27 @@ var BOXMARCH_FRAGMENT = [
   '  float t_win = bm_depth_crossing(c0, c1, 2.0 * (resolved - bm_shade_margin()) - 1.0);',
   '  if (!fromEye && t_win < 1e29 && t_win > t_end) { drawn = false; discard; }',
   '#endif',
+  '  float t = 0.0;',
+  '  float d = 0.0;',
+  '  int steps = 1;',
+  '#ifdef BM_CLOSED_FORM',
+  // The map is a preset's (boxmarchClosedForm): its hit in closed form, no march and no normal
+  // taps; an eye inside the shape hits at once.
+  '  vec4 closed = BM_CLOSED_FORM;',
+  '  if (fromEye && map(ro) <= 0.0) closed = vec4(-rd, 0.0);',
+  '  t = closed.w;',
+  '  bool hit = drawn && t >= 0.0 && t <= t_end;',
+  '  int normalTaps = 0;',
+  '#else',
   // The quality knob (as the Blender preview applies it): a pixel's size at the face, the box's size on screen.
   '  vec4 knob = bm_quality(bmQuality.x);',
   '  float footprint = bm_pixel_size(1.0 / gl_FragCoord.w, length(vec3(objectToClip[0][1], objectToClip[1][1], objectToClip[2][1])), bmQuality.y);',
   '  float boxPixels = 2.0 * max3(box_half) / footprint;',
-  '  float t = 0.0;',
-  '  float d = 0.0;',
-  '  int steps = 1;',
   '  bool hit = drawn && (boxPixels < knob.z ? bm_one_tap(ro, rd, t_end, footprint, t, d)',
   '    : bm_march(ro, rd, t_end, int(bm_step_limit(boxPixels, knob.y, bmMarch.y)), bmMarch.x, 1.0,',
   '      vec2(knob.x * footprint, knob.w), t, steps, d));',
+  '  int normalTaps = 3;',  // bm_normal's map() calls at a hit
+  '#endif',
   '  if (!hit) discard;',
   '  vec3 local_hit = ro + rd * t;',
   '  vec4 clip = c0 + c1 * t;',
@@ -1168,7 +1194,11 @@ var BOXMARCH_FRAGMENT = [
   '  gl_FragDepthEXT = depth;',
   '#endif',
   '  vec3 n = vec3(0.0, 0.0, 1.0);',
+  '#ifdef BM_CLOSED_FORM',
+  '  if (hit) n = normalize(normalMatrix * bm_from_local(closed.xyz, x, y, z));',
+  '#else',
   '  if (hit) n = normalize(normalMatrix * bm_from_local(bm_normal(local_hit, d, bm_normal_tap(box_half)), x, y, z));',
+  '#endif',
   '  gl_FragColor = vec4(bmColor * (0.35 + 0.65 * max(n.z, 0.0)), 1.0);',
   '#endif',
   '}'

@@ -175,7 +175,11 @@ camera.data.type = "PERSP"
 
 # The quality knob at its lowest, 40 x 30 px, where the boxes are 1 to 6 px wide: secant steps
 # within 0.475 px of a surface, the step limit and one tap for boxes under 3.8 px.
-boxes.boxmarch.sdf = "TORUS"
+# The TORUS preset as a user's map(): the knob sets a march, and a preset is solved in closed form.
+quality_text = bpy.data.texts.new("torus.glsl")
+quality_text.write("float map(vec3 p)\n{\n  return sdf_preset_torus(p, box_half);\n}\n")
+boxes.boxmarch.sdf = "USER"
+boxes.boxmarch.user_text = quality_text.name
 boxes.boxmarch.quality = 0.05
 result["quality_view"], result["quality_projection"] = preview.camera_matrices(scene, camera, 40, 30)
 result["QUALITY_rgba"], result["QUALITY_depth"] = preview.render(scene, camera, 40, 30)

@@ -195,6 +195,9 @@ _PROBES = [[x * d * 0.1, y * d * 0.1, -d] for d in (1.0, 3.0, 7.0) for x in (-1,
 
 # The shipped shader's map() body and frame lines, which tests replace.
 SHIPPED_MAP = "return sd_round_box(p, h, 0.1 * min3(h));"
+# bm_map_hit()'s body as shipped (the default rounded box's hit), and the body that marches map()
+SHIPPED_CLOSED_FORM = "return bm_hit_round_box(ro, rd, h, 0.1 * min3(h));"
+MARCH_MAP = "return vec4(0.0, 0.0, 0.0, -2.0);"
 SHIPPED_FRAME = ("  bm_v_axis_z = mat3(WORLD_MATRIX) * NORMAL;\n  bm_v_axis_x = mat3(WORLD_MATRIX) * TANGENT;\n"
                  "  bm_v_axis_y = mat3(WORLD_MATRIX) * BINORMAL;")
 # Negative controls for a mesh whose object sits at the world origin (the varyings are world
@@ -204,13 +207,16 @@ IDENTITY_FRAME = "  bm_v_axis_z = vec3(0.0, 0.0, 1.0);\n  bm_v_axis_x = vec3(1.0
 REST_FRAME = "  bm_v_axis_z = NORMAL;\n  bm_v_axis_x = TANGENT;\n  bm_v_axis_y = BINORMAL;"
 
 
-def shipped_shader(map_code=None, frame_code=None):
-    """shaders/godot3/boxmarch.shader, with its map() body replaced by ``map_code`` and its
-    frame lines by ``frame_code`` where given (each must be found)."""
+def shipped_shader(map_code=None, frame_code=None, closed_code=None):
+    """shaders/godot3/boxmarch.shader, with its map() body replaced by ``map_code``, its frame
+    lines by ``frame_code`` and its bm_map_hit() body by ``closed_code`` where given (each must be
+    found); a map_code without a closed_code marches (bm_map_hit() returns w = -2)."""
     from boxmarch.formats import shader_sources
 
     code = (shader_sources.shader_dir() / "godot3" / "boxmarch.shader").read_text()
-    for old, new in ((SHIPPED_MAP, map_code), (SHIPPED_FRAME, frame_code)):
+    if map_code is not None and closed_code is None:
+        closed_code = MARCH_MAP
+    for old, new in ((SHIPPED_MAP, map_code), (SHIPPED_FRAME, frame_code), (SHIPPED_CLOSED_FORM, closed_code)):
         if new is not None:
             if old not in code:
                 raise AssertionError(f"the shipped Godot shader has no {old!r}")

@@ -218,7 +218,7 @@ def counting_js(line, counted):
 # The SDF evaluations of every fragment (march steps plus a hit's 3 normal taps), as the Blender
 # preview's STEPS output counts them: the line that discards a miss writes the count instead.
 _COUNT_AFTER = counting_js("  if (!hit) discard;",
-                           "  gl_FragColor = vec4(float(steps + (hit ? 3 : 0)), 0.0, 0.0, 1.0);\n  return;")
+                           "  gl_FragColor = vec4(float(steps + (hit ? normalTaps : 0)), 0.0, 0.0, 1.0);\n  return;")
 # The fragments the rasteriser hands the material, before anything in it runs: 1 per fragment.
 FRAGMENTS_AFTER = counting_js("void main() {", "void main() {\n  gl_FragColor = vec4(1.0, 0.0, 0.0, 1.0);\n  return;")
 

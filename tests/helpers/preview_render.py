@@ -40,6 +40,13 @@ def quaternions_of(rotations):
     return np.stack([x, y, z, w], 1)
 
 
+# core.render_boxes options that march to the exact surface: the reference for the presets, which
+# the preview and the engines solve in closed form (shaders/glsl/raymarch.glsl bm_preset_hit); the
+# CPU reference's own defaults (epsilon 1e-3, 64 steps, forward differences) are the preview's
+# march, a user's map()'s.
+EXACT_MARCH = {"epsilon": 1e-6, "max_steps": 512, "normal": "CENTRAL"}
+
+
 def agreement(depth, ref):
     """(coverage agreement, 99.9th percentile of |depth difference| where both hit)."""
     both = (depth < 1.0) & (ref.depth < 1.0)

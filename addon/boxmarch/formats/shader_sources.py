@@ -128,6 +128,23 @@ PER_BOX_BLEND = "PER_BOX_BLEND"
 PRESET_MAPS[PER_BOX_BLEND] = ("float map(vec3 p)\n{\n  return bm_sdf_blend_parent(box_params.x, p, box_half, box_parent_origin.xyz, "
                               "box_parent_q, box_parent_half, box_parent_origin.w);\n}\n")
 
+# The maps whose hit the fragment stage solves in closed form instead of marching (raymarch.glsl
+# bm_preset_hit, defined as BM_CLOSED_FORM): each preset by its shape id, PER_BOX by each box's;
+# PER_BOX_BLEND's fillet and a user's text march.
+CLOSED_FORM_SHAPES = {**{name: f"{float(i)}" for i, name in enumerate(core.SDF_PRESETS)}, PER_BOX: "box_params.x"}
+
+
+def closed_form_define(sdf: str, local_mirror=(1.0, 1.0, 1.0)) -> str:
+    """The line defining BM_CLOSED_FORM for preset map ``sdf`` (a key of CLOSED_FORM_SHAPES): its
+    hit and normal, the ray seen through an engine's local mirror (as engine_map_source mirrors the
+    point) and the normal mirrored back."""
+    shape = CLOSED_FORM_SHAPES[sdf]
+    if all(float(v) > 0 for v in local_mirror):
+        return f"#define BM_CLOSED_FORM bm_preset_hit({shape}, ro, rd, box_half)"
+    mirror = "vec3(" + ", ".join(f"{float(v):.1f}" for v in local_mirror) + ")"
+    return f"#define BM_CLOSED_FORM (bm_preset_hit({shape}, ro * {mirror}, rd * {mirror}, box_half) * vec4({mirror}, 1.0))"
+
+
 # User text goes between two #line directives: the compiler then reports errors in it by the
 # line number the user sees in the text editor, and anything after it from USER_END_LINE on.
 USER_END_LINE = 100000
@@ -149,16 +166,18 @@ def engine_map_source(body: str, local_mirror) -> str:
 def fragment_source(sdf: str = "BOX", user_text: str | None = None, local_mirror=(1.0, 1.0, 1.0),
                     resolved: bool = False) -> str:
     """The fragment stage as Blender compiles it (after its own declarations): the library, the
-    preset's map() or the user's text (seen through an engine's local mirror, if any), and the
-    preview's main(); ``resolved``: the stage of the resolved passes (BM_RESOLVED), which writes
+    preset's map() (and its closed-form hit, BM_CLOSED_FORM) or the user's text (seen through an
+    engine's local mirror, if any), and the preview's main(); ``resolved``: the stage of the resolved passes (BM_RESOLVED), which writes
     no depth."""
     if user_text is None and sdf not in PRESET_MAPS:
         raise ValueError(f"sdf must be one of {tuple(PRESET_MAPS)}, got {sdf!r}")
     body = user_map_source(user_text) if user_text is not None else PRESET_MAPS[sdf]
     if any(float(v) < 0 for v in local_mirror):
         body = engine_map_source(body, local_mirror)
-    resolved_defines = ["#define BM_RESOLVED", f"#define BM_NO_HIT {NO_HIT}u"] if resolved else []
-    return "\n".join([*resolved_defines, read_glsl("decode.glsl"), read_glsl("sdf.glsl"), read_glsl("box_params.glsl"),
+    defines = ["#define BM_RESOLVED", f"#define BM_NO_HIT {NO_HIT}u"] if resolved else []
+    if user_text is None and sdf in CLOSED_FORM_SHAPES:
+        defines.append(closed_form_define(sdf, local_mirror))
+    return "\n".join([*defines, read_glsl("decode.glsl"), read_glsl("sdf.glsl"), read_glsl("box_params.glsl"),
                       read_glsl("raymarch.glsl"), body, read_glsl("preview.frag.glsl")])
 
 

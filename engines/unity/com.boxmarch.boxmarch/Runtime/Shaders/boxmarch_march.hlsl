@@ -181,4 +181,361 @@ float bm_depth_crossing(float4 c0, float4 c1, float ndc_z)
   return t >= 0.0 ? t : 1e30;
 }
 
+// ---- closed-form hits of the presets
+// Where map() is a preset (sdf.glsl sdf_preset_*, or bm_sdf_by_id of each box's shape id) the
+// fragment solves its first hit in closed form instead of marching (Quilez's ray intersectors):
+// one solve per fragment, the exact surface (no epsilon fattening the silhouette), and the unit
+// normal from the same solution (no map() taps). Each bm_hit_* takes a ray ro + t rd (rd unit)
+// in the shape's own frame and returns (unit normal, t) of its first surface point at t >= 0, or
+// w = -1.0 where the ray misses. The ray starts outside the shape or on its surface (at a box
+// face; a fragment whose eye may lie inside the shape tests map() there itself). Measured against
+// float64 in docs/ACCURACY.md ("Closed-form hits").
+
+// The nearer of hit `best` and the surface point (n, t), for t >= -slack: a root a rounding behind
+// the start (a ray starting on the surface, where a shape touches its box's face) hits at 0.
+float4 bm_nearer_hit(float4 best, float3 n, float t, float slack)
+{
+  if (t >= -slack && (best.w < 0.0 || max(t, 0.0) < best.w)) {
+    return float4(n, max(t, 0.0));
+  }
+  return best;
+}
+
+// Nearer root of a t^2 + 2 b t + c = 0 (a > 0; h = b^2 - a c >= 0), without the cancellation of
+// (-b - sqrt(h)) / a where the origin lies near the surface.
+float bm_near_root(float a, float b, float c, float h)
+{
+  return b < 0.0 ? c / (sqrt(h) - b) : (-b - sqrt(h)) / a;
+}
+
+// Sphere of radius r at the origin; the discriminant from the ray's closest approach (no digits
+// lost for a far origin).
+float4 bm_hit_sphere(float3 ro, float3 rd, float r)
+{
+  float b = dot(ro, rd);
+  float3 closest = ro - b * rd;
+  float h = r * r - dot(closest, closest);
+  if (h < 0.0 || sqrt(h) - b < 0.0) {
+    return float4(0.0, 0.0, 0.0, -1.0);
+  }
+  float t = max(bm_near_root(1.0, b, dot(ro, ro) - r * r, h), 0.0);
+  return float4(normalize(ro + rd * t), t);
+}
+
+// Box of half-extents b (slabs: bm_box_span); the normal is the entered face's.
+float4 bm_hit_box(float3 ro, float3 rd, float3 b)
+{
+  float2 span = bm_box_span(ro, rd, b);
+  if (span.x > span.y || span.y < 0.0) {
+    return float4(0.0, 0.0, 0.0, -1.0);
+  }
+  float3 s = float3(rd.x < 0.0 ? -1.0 : 1.0, rd.y < 0.0 ? -1.0 : 1.0, rd.z < 0.0 ? -1.0 : 1.0);
+  float3 t_near = (-b - s * ro) / max(abs(rd), float3(1e-12, 1e-12, 1e-12));
+  float3 n = float3(0.0, 0.0, -s.z);
+  if (t_near.x >= t_near.y && t_near.x >= t_near.z) {
+    n = float3(-s.x, 0.0, 0.0);
+  }
+  else if (t_near.y >= t_near.z) {
+    n = float3(0.0, -s.y, 0.0);
+  }
+  return float4(n, max(span.x, 0.0));
+}
+
+// sd_round_box(p, b, r): the box b - r grown by r (Quilez's): where the ray enters the box b in a
+// face's flat part, that point; else the nearest of the corner sphere and the three edge
+// cylinders of the octant it enters (a piece's surface outside its own part lies inside the shape).
+float4 bm_hit_round_box(float3 ro, float3 rd, float3 b, float r)
+{
+  float2 span = bm_box_span(ro, rd, b);
+  if (span.x > span.y || span.y < 0.0) {
+    return float4(0.0, 0.0, 0.0, -1.0);
+  }
+  float3 size = b - float3(r, r, r);
+  // where the ray enters the box, or its start inside it
+  float t = max(span.x, 0.0);
+  float3 entry = ro + rd * t;
+  float3 s = float3(entry.x < 0.0 ? -1.0 : 1.0, entry.y < 0.0 ? -1.0 : 1.0, entry.z < 0.0 ? -1.0 : 1.0);
+  float3 flat_part = abs(entry) - size;
+  flat_part = max(flat_part, flat_part.yzx);
+  if (bm_min3(flat_part) >= 0.0) {
+    // in the octant's frame (s flips it into the first); o: from the inner corner
+    float3 o = ro * s - size;
+    float3 d = rd * s;
+    t = -1.0;
+    float b2 = dot(o, d);
+    float h = b2 * b2 - dot(o, o) + r * r;
+    if (h >= 0.0 && sqrt(h) - b2 >= 0.0) {
+      t = max(bm_near_root(1.0, b2, dot(o, o) - r * r, h), 0.0);
+    }
+    // edge along x: the cylinder around the line o.yz = 0, within |p.x| <= size.x
+    float3 a = float3(d.y * d.y + d.z * d.z, d.z * d.z + d.x * d.x, d.x * d.x + d.y * d.y);
+    float3 bb = float3(o.y * d.y + o.z * d.z, o.z * d.z + o.x * d.x, o.x * d.x + o.y * d.y);
+    float3 cc = float3(o.y * o.y + o.z * o.z, o.z * o.z + o.x * o.x, o.x * o.x + o.y * o.y) - ((float3)(r * r));
+    float3 hh = bb * bb - a * cc;
+    if (hh.x >= 0.0 && a.x > 0.0) {
+      float te = (-bb.x - sqrt(hh.x)) / a.x;
+      if (te >= 0.0 && (t < 0.0 || te < t) && abs(ro.x + rd.x * te) <= size.x) {
+        t = te;
+      }
+    }
+    if (hh.y >= 0.0 && a.y > 0.0) {
+      float te = (-bb.y - sqrt(hh.y)) / a.y;
+      if (te >= 0.0 && (t < 0.0 || te < t) && abs(ro.y + rd.y * te) <= size.y) {
+        t = te;
+      }
+    }
+    if (hh.z >= 0.0 && a.z > 0.0) {
+      float te = (-bb.z - sqrt(hh.z)) / a.z;
+      if (te >= 0.0 && (t < 0.0 || te < t) && abs(ro.z + rd.z * te) <= size.z) {
+        t = te;
+      }
+    }
+    if (t < 0.0) {
+      return float4(0.0, 0.0, 0.0, -1.0);
+    }
+  }
+  t = max(t, 0.0);
+  float3 p = ro + rd * t;
+  float3 outward = max(abs(p) - size, float3(0.0, 0.0, 0.0));
+  float3 sp = float3(p.x < 0.0 ? -1.0 : 1.0, p.y < 0.0 ? -1.0 : 1.0, p.z < 0.0 ? -1.0 : 1.0);
+  return float4(sp * outward / max(length(outward), 1e-30), t);
+}
+
+// Capsule along x: the segment |x| <= half_length, radius r. The cylinder around the axis where
+// its entry lies along the segment, else the end sphere on that side (a ray along the axis enters
+// the cap it travels towards).
+float4 bm_hit_capsule(float3 ro, float3 rd, float half_length, float r)
+{
+  float a = rd.y * rd.y + rd.z * rd.z;
+  float b = ro.y * rd.y + ro.z * rd.z;
+  float c = ro.y * ro.y + ro.z * ro.z - r * r;
+  float h = b * b - a * c;
+  if (h < 0.0 || (a < 1e-20 && c > 0.0)) {
+    return float4(0.0, 0.0, 0.0, -1.0);
+  }
+  // (if chains, not nested ?: here and below: Godot 3's shading language refuses a ?: inside a ?:)
+  float t = -1e30;
+  if (a >= 1e-20) {
+    t = bm_near_root(a, b, c, h);
+  }
+  float x = ro.x + rd.x * t;
+  // entering the side ahead, or starting on it (a root a rounding behind)
+  bool on_side = t < 0.0 && (c <= 0.0 || t >= -1e-4 * r) && abs(ro.x) <= half_length;
+  if ((t >= 0.0 && abs(x) <= half_length) || on_side) {
+    t = max(t, 0.0);
+    float3 p = ro + rd * t;
+    return float4(normalize(float3(0.0, p.y, p.z)), t);
+  }
+  // else the cap of the side the ray enters at (the start's side where the entry lies behind)
+  float side = a < 1e-20 ? -rd.x : ro.x;
+  if (t >= 0.0) {
+    side = x;
+  }
+  return bm_hit_sphere(ro - float3(side < 0.0 ? -half_length : half_length, 0.0, 0.0), rd, r);
+}
+
+// Capped cylinder around z: radius r, |z| <= half_height. The span inside the infinite cylinder
+// meets the caps' slab; the normal is that of whichever was entered last.
+float4 bm_hit_cylinder(float3 ro, float3 rd, float r, float half_height)
+{
+  float a = rd.x * rd.x + rd.y * rd.y;
+  float b = ro.x * rd.x + ro.y * rd.y;
+  float c = ro.x * ro.x + ro.y * ro.y - r * r;
+  float h = b * b - a * c;
+  if (h < 0.0 || (a < 1e-20 && c > 0.0)) {
+    return float4(0.0, 0.0, 0.0, -1.0);
+  }
+  float side_in = -1e30;
+  float side_out = 1e30;
+  if (a >= 1e-20) {
+    side_in = bm_near_root(a, b, c, h);
+    side_out = b < 0.0 ? (sqrt(h) - b) / a : c / (-b - sqrt(h));
+  }
+  float s = rd.z < 0.0 ? -1.0 : 1.0;
+  float inv = 1.0 / max(abs(rd.z), 1e-12);
+  float cap_in = (-half_height - s * ro.z) * inv;
+  float cap_out = (half_height - s * ro.z) * inv;
+  float t_in = max(side_in, cap_in);
+  if (t_in > min(side_out, cap_out) || min(side_out, cap_out) < 0.0) {
+    return float4(0.0, 0.0, 0.0, -1.0);
+  }
+  float t = max(t_in, 0.0);
+  float3 p = ro + rd * t;
+  float3 n = side_in > cap_in ? normalize(float3(p.x, p.y, 0.0)) : float3(0.0, 0.0, -s);
+  return float4(n, t);
+}
+
+// Unit gradient of sd_link(p, half_length, ring, minor) (half_length 0: sd_torus's): away from the
+// nearest point of the ring's centre line.
+float3 bm_link_normal(float3 p, float half_length, float ring)
+{
+  float3 q = float3(p.x, p.y - clamp(p.y, -half_length, half_length), p.z);
+  float radial = length(q.xy);
+  return normalize(float3(q.xy * ((radial - ring) / max(radial, 1e-30)), q.z));
+}
+
+// The torus around z (radii major, minor) centred at `centre` on the y axis, its points with
+// side * (y - centre) >= 0 (side 0: all), as hits nearer than `best` (their t; the normal is
+// bm_hit_link's). The quartic in t is solved
+// in a frame scaled by 1 / major with the origin moved to the ray's closest approach to the centre,
+// where it is depressed (no cubic term) and its coefficients are of order 1 whatever the box's size
+// and distance; Ferrari's factorisation into two quadratics from the largest root of the resolvent
+// cubic (closed form, one Newton step). Roots within the rounding of the order-1 coefficients;
+// bm_hit_link polishes the nearest on the SDF.
+float4 bm_hit_torus_part(float3 ro, float3 rd, float major, float minor, float centre, float side, float4 best)
+{
+  float3 o = (ro - float3(0.0, centre, 0.0)) / major;
+  float r = minor / major;
+  float t0 = -dot(o, rd);
+  o += rd * t0;
+  float m = dot(o, o);
+  if (m > (1.0 + r) * (1.0 + r)) {
+    return best;
+  }
+  // t^4 + P t^2 + Q t + S = 0
+  float k = m - 1.0 - r * r;
+  float P = 2.0 * k + 4.0 * rd.z * rd.z;
+  float Q = 8.0 * o.z * rd.z;
+  float S = k * k - 4.0 * r * r + 4.0 * o.z * o.z;
+  // largest root of y^3 + A y^2 + B y + C (Ferrari's resolvent): depressed by y = x - A / 3
+  float A = -0.5 * P;
+  float B = -S;
+  float C = 0.5 * P * S - 0.125 * Q * Q;
+  float p3 = (B - A * A / 3.0) / 3.0;
+  float q2 = 0.5 * (2.0 * A * A * A / 27.0 - A * B / 3.0 + C);
+  float disc = q2 * q2 + p3 * p3 * p3;
+  float x = 0.0;
+  if (disc < 0.0) {
+    // three real roots (p3 < 0): the largest
+    float root = sqrt(-p3);
+    x = 2.0 * root * cos(acos(clamp(-q2 / (root * root * root), -1.0, 1.0)) / 3.0);
+  }
+  else {
+    // one: Cardano's, the cube root taken of the sum that does not cancel
+    float w = -q2 + (q2 > 0.0 ? -sqrt(disc) : sqrt(disc));
+    float u = (w < 0.0 ? -1.0 : 1.0) * pow(abs(w), 1.0 / 3.0);
+    x = u == 0.0 ? 0.0 : u - p3 / u;
+  }
+  float y = x - A / 3.0;
+  float slope = (3.0 * y + 2.0 * A) * y + B;
+  y -= abs(slope) > 1e-20 ? (((y + A) * y + B) * y + C) / slope : 0.0;
+  // (t^2 + y)^2 = (a t - c)^2: t^2 - a t + y + c = 0 and t^2 + a t + y - c = 0
+  float a = sqrt(max(2.0 * y - P, 0.0));
+  float e = sqrt(max(y * y - S, 0.0));
+  float c = Q < 0.0 ? -e : e;
+  if (a > e) {
+    c = 0.5 * Q / a;
+  }
+  float4 found = best;
+  [loop]
+  for (int i = 0; i < 2; ++i) {
+    float half_a = i == 0 ? 0.5 * a : -0.5 * a;
+    float h = half_a * half_a - (i == 0 ? y + c : y - c);
+    if (h >= 0.0) {
+      [loop]
+      for (int j = 0; j < 2; ++j) {
+        float t = major * (t0 + half_a + (j == 0 ? -sqrt(h) : sqrt(h)));
+        float3 p = ro + rd * t;
+        if (side * (p.y - centre) >= 0.0) {
+          found = bm_nearer_hit(found, float3(0.0, 0.0, 0.0), t, 1e-4 * major);
+        }
+      }
+    }
+  }
+  return found;
+}
+
+// sd_link(p, half_length, ring, minor): the two straight tubes (cylinders along y at x = +-ring,
+// |y| <= half_length) and the two half-tori at y = +-half_length, the nearest; then two Newton steps
+// on sd_link along the ray (the quartic's root to float precision; skipped where the ray grazes
+// the surface, within 0.06 degrees),
+// the normal its gradient there. A torus: half_length 0.
+float4 bm_hit_link(float3 ro, float3 rd, float half_length, float ring, float minor)
+{
+  float4 best = float4(0.0, 0.0, 0.0, -1.0);
+  float a = rd.x * rd.x + rd.z * rd.z;
+  [loop]
+  for (int i = 0; i < 2; ++i) {
+    float x0 = i == 0 ? ring : -ring;
+    float b = (ro.x - x0) * rd.x + ro.z * rd.z;
+    float c = (ro.x - x0) * (ro.x - x0) + ro.z * ro.z - minor * minor;
+    float h = b * b - a * c;
+    if (h >= 0.0 && a >= 1e-20 && half_length > 0.0) {
+      float t = bm_near_root(a, b, c, h);
+      if (abs(ro.y + rd.y * t) <= half_length) {
+        best = bm_nearer_hit(best, float3(0.0, 0.0, 0.0), t, 1e-4 * minor);
+      }
+    }
+  }
+  if (half_length > 0.0) {
+    best = bm_hit_torus_part(ro, rd, ring, minor, half_length, 1.0, best);
+    best = bm_hit_torus_part(ro, rd, ring, minor, -half_length, -1.0, best);
+  }
+  else {
+    best = bm_hit_torus_part(ro, rd, ring, minor, 0.0, 0.0, best);
+  }
+  if (best.w < 0.0) {
+    return best;
+  }
+  float t = best.w;
+  [loop]
+  for (int i = 0; i < 2; ++i) {
+    float3 p = ro + rd * t;
+    float slope = dot(bm_link_normal(p, half_length, ring), rd);
+    if (slope < -1e-3) {
+      float q = sd_link(p, half_length, ring, minor);
+      t = max(t - clamp(q / slope, -minor, minor), 0.0);
+    }
+  }
+  return float4(bm_link_normal(ro + rd * t, half_length, ring), t);
+}
+
+// v from the order bm_by_extent sorts h into back to the box's axes (the permutation's transpose).
+float3 bm_unsorted(float3 v, float3 h)
+{
+  return float3(dot(bm_by_extent(float3(1.0, 0.0, 0.0), h), v), dot(bm_by_extent(float3(0.0, 1.0, 0.0), h), v),
+              dot(bm_by_extent(float3(0.0, 0.0, 1.0), h), v));
+}
+
+// The first hit of the preset shape id `shape` picks (bm_sdf_by_id's numbering) sized by the box's
+// half-extents h, box-local: (unit normal, t), w = -1.0 where the ray misses. Each preset in its
+// own frame as sdf.glsl sizes it.
+float4 bm_preset_hit(float shape, float3 ro, float3 rd, float3 h)
+{
+  float id = floor(shape + 0.5);
+  if (id == 1.0) {
+    return bm_hit_sphere(ro, rd, bm_min3(h));
+  }
+  if (id == 2.0) {
+    return bm_hit_round_box(ro, rd, h, 0.25 * bm_min3(h));
+  }
+  if (id < 3.0 || id > 6.0) {
+    return bm_hit_box(ro, rd, h);
+  }
+  float3 o = bm_by_extent(ro, h);
+  float3 d = bm_by_extent(rd, h);
+  float3 s = bm_by_extent(h, h);
+  float4 hit = float4(0.0, 0.0, 0.0, 0.0);
+  if (id == 3.0) {
+    float r = min(s.y, s.z);
+    hit = bm_hit_capsule(o, d, max(s.x - r, 0.0), r);
+  }
+  if (id == 4.0) {
+    bool rod = s.x * s.z > s.y * s.y;
+    float3 c = rod ? s.yzx : s;
+    hit = bm_hit_cylinder(rod ? o.yzx : o, rod ? d.yzx : d, min(c.x, c.y), c.z);
+    hit.xyz = rod ? hit.zxy : hit.xyz;
+  }
+  if (id == 5.0) {
+    float minor = min(s.z, 0.5 * min(s.x, s.y));
+    hit = bm_hit_link(o, d, 0.0, min(s.x, s.y) - minor, minor);
+  }
+  if (id == 6.0) {
+    float thickness = min(s.z, 0.25 * min(s.x, s.y));
+    hit = bm_hit_link(o.yxz, d.yxz, max(s.x - s.y, 0.0), s.y - thickness, thickness);
+    hit.xyz = hit.yxz;
+  }
+  return float4(bm_unsorted(hit.xyz, h), hit.w);
+}
+
 #endif

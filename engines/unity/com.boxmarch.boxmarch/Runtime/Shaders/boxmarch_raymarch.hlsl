@@ -67,27 +67,42 @@ bm_hit bm_raymarch_in_frame(float3 obj_pos, float3 obj_camera, float3 f, float3 
   float t_end = span.y;
   // entry: front-facing, or (whatever the winding) more box ahead than behind; the far side
   // only marches when the camera is inside the box
-  if (!front_facing && span.x + span.y < 0.0) {
+  bool from_eye = !front_facing && span.x + span.y < 0.0;
+  if (from_eye) {
     if (eye_distance > -span.x) return o;
     ro -= rd * eye_distance;
     t_end = eye_distance;
   }
+  float t;
+  int steps = 1;
+#ifdef BM_CLOSED_FORM
+  // map() is a preset: its hit in closed form (boxmarch_march.hlsl bm_preset_hit), no march and no
+  // normal taps; an eye inside the shape hits at once. Define BM_CLOSED_FORM before including this
+  // file as the preset's hit, e.g. bm_preset_hit(6.0, ro, rd, box_half) for sdf_preset_link.
+  float4 closed = BM_CLOSED_FORM;
+  if (from_eye && map(ro) <= 0.0) closed = float4(-rd, 0.0);
+  t = closed.w;
+  o.hit = t >= 0.0 && t <= min(t_end, max_distance);
+#else
   // the quality knob, as the preview applies it (shaders/glsl/preview.frag.glsl)
   float4 knob = bm_quality(quality);
   float box_pixels = 2.0 * bm_max3(box_half) / footprint;
-  float t;
   float d;
-  int steps = 1;
   if (box_pixels < knob.z)
     o.hit = bm_one_tap(ro, rd, min(t_end, max_distance), footprint, t, d);
   else
     o.hit = bm_march(ro, rd, min(t_end, max_distance), int(bm_step_limit(box_pixels, knob.y, float(max_steps))),
                      epsilon, relaxation, float2(knob.x * footprint, knob.w), t, steps, d);
+#endif
   o.steps = steps;
   if (!o.hit) return o;
   float3 local_hit = ro + rd * t;
   o.obj_pos = obj_pos + bm_from_local(local_hit + f, x, y, z);
+#ifdef BM_CLOSED_FORM
+  o.obj_normal = bm_from_local(closed.xyz, x, y, z);
+#else
   o.obj_normal = bm_from_local(bm_normal(local_hit, d, bm_normal_tap(box_half)), x, y, z);
+#endif
   return o;
 }
 
