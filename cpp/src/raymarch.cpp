@@ -67,7 +67,8 @@ struct March {
 };
 
 // raymarch.glsl: bm_march, without its 512-step bound (a GLSL ES 1.00 constant loop limit):
-// secant steps under secant.x (at most secant.y times the distance; secant.x = 0: none).
+// secant steps under secant.x (at most secant.y times the distance; secant.x = 0: none); a step
+// under 2^-23 t ends it as a hit.
 March bm_march(SdfPreset kind, vec3 ro, vec3 rd, vec3 h, float t_end, const MarchOptions& o, vec2 secant) {
     float t = 0.0f, d = 0.0f, last_d = 0.0f, last_advance = 0.0f;
     for (int i = 0; i < o.max_steps; ++i) {
@@ -75,6 +76,7 @@ March bm_march(SdfPreset kind, vec3 ro, vec3 rd, vec3 h, float t_end, const Marc
         if (d < o.epsilon) return {true, t, i + 1, d};
         float advance = o.relaxation * d;
         if (d < secant.x && d < last_d) advance = std::min(d * last_advance / (last_d - d), secant.y * d);
+        if (advance < 1.2e-7f * t) return {true, t, i + 1, d};  // a step t cannot take: a hit
         last_d = d;
         last_advance = advance;
         t += advance;
