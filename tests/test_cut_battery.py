@@ -49,13 +49,14 @@ REGRESSIONS = [
     (98, "r180", "pre-pass 133 px (86 emptied); ROUNDED_BOX, orthographic, sheared, open"),
     (6, "r111", _SEED_6),
     (6, "r180", _SEED_6),
+    (81, "preview", "resolved passes 1 px emptied (main at 9ec7267: a hit a hair in front of the near plane, "
+                    "window depth -9e-6, never kept); PER_BOX, eye inside a box, orthographic, nested, open, "
+                    "inside-out, coincident"),
 ]
 # Seeds a cut still changes a pixel of that no step budget explains, not yet fixed (issue 36 stays
 # open for them): test_open_seed_still_fails checks they still fail (the day one passes, the run
 # says so and it moves to REGRESSIONS); its renderer's run over CI_SEEDS leaves it to that test.
 OPEN = [
-    (81, "preview", "resolved passes 1 px emptied; PER_BOX, eye inside a box, orthographic, nested, open, "
-                    "inside-out, coincident"),
 ]
 
 

@@ -192,7 +192,10 @@ void main()
   vec3 local_hit = ro + rd * t;
   vec4 clip = c0 + c1 * t;
 #ifdef BM_RESOLVED
-  float hit_depth = max(clip.z / clip.w * 0.5 + 0.5, gl_FragCoord.z);
+  // never negative, as the depth buffer clamps what it is given: a face the near plane clips may
+  // rasterise a hair in front of it (llvmpipe: window depth -9e-6), and a negative float's bits
+  // sort after every other depth's as uint, so that hit was never kept
+  float hit_depth = max(max(clip.z / clip.w * 0.5 + 0.5, gl_FragCoord.z), 0.0);
   // the visibility pass counts the march alone (no normal); the shade pass its march and, for the
   // one fragment it shades, the normal's taps
   bool shaded = hit && preview.occlusion.w == 2.0 && floatBitsToUint(hit_depth) == winner;
