@@ -31,7 +31,7 @@ TIMING_JOB = """async function () {
   }
   var rows = [];
   for (var count of __COUNTS__) {
-    var geometry = boxmarchTestCubes(THREE, count);
+    var geometry = boxmarchTestCubes(THREE, count, true);
     for (var name in checks) {
       var best = Infinity, answer = null;
       for (var r = 0; r < checks[name][1]; r++) {
