@@ -3,7 +3,9 @@ pre-pass) in typed arrays, against the implementation it replaced (string-keyed 
 CPU for 100,000 boxes; issue 36), kept here verbatim as the reference: on seeded random meshes of
 boxes split per face corner as the glTF export writes them, with open boxes, a lost triangle, a
 doubled face, faces wound inward, a modelled shape smaller than its box, shuffled triangles, box
-numbers in any order, indexed and not, both give the same triangles. One node process (no
+numbers in any order, indexed and not, both give the same triangles. One change: a mesh with a
+triangle spanning two boxes (not what the export writes) now seals no box, as
+boxmarchClosedOutward refuses it. One node process (no
 three.js: the geometry is a stand-in with the attribute methods the functions call).
 bench/bench_threejs_closed.py times both checks at 100,000 and 470,000 boxes."""
 import json
@@ -152,3 +154,10 @@ def test_sealed_triangles_are_the_ones_the_map_based_check_gave(indexed):
     for seed, ((_, sealed), result) in enumerate(zip(built, results)):
         assert result["now"] == result["before"], f"seed {seed}"
         assert len(result["now"]) == 12 * sealed and 0 < sealed < 40, (seed, sealed)  # some sealed, some not
+
+
+def test_a_triangle_spanning_two_boxes_seals_no_box():
+    spanning, _ = mesh(0)
+    spanning["index"][0] = spanning["index"][-1]  # a corner of the last box's last triangle
+    result = run([spanning])[0]
+    assert result["now"] == [] and len(result["before"]) > 100
