@@ -64,6 +64,14 @@ OPEN = [
     (184, "preview", _EDGE_ON + "; also mirrored, sheared, flat, nested, far from the world origin, perspective"),
     (195, "preview", _EDGE_ON + "; also inside-out, nested, mirrored, quality 0.25, perspective"),
     (237, "preview", _EDGE_ON + "; also non-uniform scale, orthographic"),
+    (337, "preview", "culling 1 px wrong colour, the same signature (seeds 300-499 at c000917); BOX, long thin, "
+                     "mirrored, sheared, vertices far, non-uniform scale, perspective"),
+    (441, "preview", "culling 1 px wrong colour, the same signature; BOX, quality 0.5, long thin, non-uniform scale, "
+                     "orthographic"),
+    (488, "preview", "culling 1 px wrong colour, the same signature; BOX, long thin, non-uniform scale, orthographic"),
+    (464, "preview", "resolved passes 4,242 px emptied (seeds 300-499 at c000917): CYLINDER, nested, eye inside a "
+                     "box, perspective; plain draws them at window depth exactly 1.0 (the eye box's march writes its "
+                     "far side's depth, here at the far plane), whose bits are the resolved passes' no-hit value"),
 ]
 
 
