@@ -190,14 +190,15 @@ def glm_library() -> str:
                  "bm_box_span": raymarch["bm_box_span"],
                  "bm_normal_tap": raymarch["bm_normal_tap"], "bm_quality": raymarch["bm_quality"],
                  "bm_pixel_size": raymarch["bm_pixel_size"], "bm_step_limit": raymarch["bm_step_limit"],
-                 "bm_occluder_limit": raymarch["bm_occluder_limit"], "bm_depth_crossing": raymarch["bm_depth_crossing"],
-                 "bm_shade": top_level_functions(glsl("preview.frag.glsl"))["bm_shade"]}
+                 "bm_occluder_limit": raymarch["bm_occluder_limit"], "bm_depth_rounding": raymarch["bm_depth_rounding"],
+                 "bm_depth_crossing": raymarch["bm_depth_crossing"], "bm_shade": top_level_functions(glsl("preview.frag.glsl"))["bm_shade"]}
     body = to_glm("\n".join(functions.values()), set(functions))
     usings = "".join(f"using glm::{v};\n" for v in ("vec2", "vec3", "vec4") if re.search(rf"\b{v}\b", body))
     return (f"// {GENERATED_BY} from shaders/glsl/sdf.glsl, box_params.glsl, decode.glsl (bm_rotate_vector,\n"
             f"// bm_quat_conjugate), raymarch.glsl (bm_box_span, bm_normal_tap, bm_quality, bm_pixel_size,\n"
-            f"// bm_step_limit, bm_occluder_limit, bm_depth_crossing) and preview.frag.glsl (bm_shade): edit those,\n"
-            f"// not this file. The shaders' functions that do not call map(), in GLM, so the CPU reference evaluates what the GPU does.\n"
+            f"// bm_step_limit, bm_occluder_limit, bm_depth_rounding, bm_depth_crossing) and preview.frag.glsl (bm_shade):\n"
+            f"// edit those,"
+            f" not this file. The shaders' functions that do not call map(), in GLM, so the CPU reference evaluates what the GPU does.\n"
             f"#pragma once\n\n#include <glm/glm.hpp>\n\nnamespace boxmarch::shader {{\n\n{usings}\n{body}\n"
             f"}}  // namespace boxmarch::shader\n")
 

@@ -20,6 +20,9 @@ from tests.helpers.tools import need
 # The scenes the slow tier draws in each renderer: every seed is built and exported once (bpy);
 # the three.js releases draw distinct scenes (the two draw alike: issue 36 item 10).
 CI_SEEDS = {"preview": range(0, 60), "r111": range(0, 24), "r180": range(24, 48)}
+_SEED_6 = ("pre-pass, visibility and default 1 px another colour (main at 9ec7267); an ordinary LINK scene, long thin links, "
+           "orthographic, scale 879: a march closing in on a link 2,000 units long at a slant stalled (epsilon 1e-4 "
+           "under t's float32 step) and missed at every budget, so plain and cut showed different boxes behind")
 # Seeds where a cut changed pixels that no step budget explains: (seed, renderer, what it found
 # the day it was kept, main at 20bdfbf, 96 x 72). Each runs every time, in its renderer.
 REGRESSIONS = [
@@ -44,18 +47,31 @@ REGRESSIONS = [
     (51, "r180", "visibility 36 px emptied (cutfix, main at cf51879; hits beyond the far plane); ROUNDED_BOX, "
                  "eye inside a box, coincident, long thin"),
     (98, "r180", "pre-pass 133 px (86 emptied); ROUNDED_BOX, orthographic, sheared, open"),
+    (6, "r111", _SEED_6),
+    (6, "r180", _SEED_6),
+    (81, "preview", "resolved passes 1 px emptied (main at 9ec7267: a hit a hair in front of the near plane, "
+                    "window depth -9e-6, never kept); PER_BOX, eye inside a box, orthographic, nested, open, "
+                    "inside-out, coincident"),
+    (464, "preview", "resolved passes 4,242 px emptied (c000917: hits plain draws at window depth exactly 1.0, the "
+                     "eye box's march writing its far side's depth at the far plane, were the no-hit value); "
+                     "CYLINDER, nested, eye inside a box, perspective"),
 ]
 # Seeds a cut still changes a pixel of that no step budget explains, not yet fixed (issue 36 stays
 # open for them): test_open_seed_still_fails checks they still fail (the day one passes, the run
 # says so and it moves to REGRESSIONS); its renderer's run over CI_SEEDS leaves it to that test.
-_SEED_6 = ("pre-pass, visibility and default 1 px another colour; an ordinary LINK scene, long thin links, "
-           "orthographic, scale 879: the march capped at the occluders' depth misses a hit the plain march "
-           "shows (uncapped it agrees), an occluder in front of the shape")
+_EDGE_ON = ("culling (and default) 1 px wrong colour (bench.cut_battery seeds 100-299 at c000917): BOX, coincident "
+            "boxes, vertices far from the origin; at a box's silhouette plain's winning fragment is one of a face the "
+            "rasteriser calls back-facing (seen on seed 237) whose own span calls it an entry (more of its box ahead "
+            "than behind), 5e-5 window depth in front of the front face; culling drops it, the front face shows")
 OPEN = [
-    (6, "r111", _SEED_6),
-    (6, "r180", _SEED_6),
-    (81, "preview", "resolved passes 1 px emptied; PER_BOX, eye inside a box, orthographic, nested, open, "
-                    "inside-out, coincident"),
+    (184, "preview", _EDGE_ON + "; also mirrored, sheared, flat, nested, far from the world origin, perspective"),
+    (195, "preview", _EDGE_ON + "; also inside-out, nested, mirrored, quality 0.25, perspective"),
+    (237, "preview", _EDGE_ON + "; also non-uniform scale, orthographic"),
+    (337, "preview", "culling 1 px wrong colour, the same signature (seeds 300-499 at c000917); BOX, long thin, "
+                     "mirrored, sheared, vertices far, non-uniform scale, perspective"),
+    (441, "preview", "culling 1 px wrong colour, the same signature; BOX, quality 0.5, long thin, non-uniform scale, "
+                     "orthographic"),
+    (488, "preview", "culling 1 px wrong colour, the same signature; BOX, long thin, non-uniform scale, orthographic"),
 ]
 
 

@@ -67,7 +67,8 @@ struct March {
 };
 
 // raymarch.glsl: bm_march, without its 512-step bound (a GLSL ES 1.00 constant loop limit):
-// secant steps under secant.x (at most secant.y times the distance; secant.x = 0: none).
+// secant steps under secant.x (at most secant.y times the distance; secant.x = 0: none); a step
+// under 2^-23 t ends it as a hit.
 March bm_march(SdfPreset kind, vec3 ro, vec3 rd, vec3 h, float t_end, const MarchOptions& o, vec2 secant) {
     float t = 0.0f, d = 0.0f, last_d = 0.0f, last_advance = 0.0f;
     for (int i = 0; i < o.max_steps; ++i) {
@@ -75,6 +76,7 @@ March bm_march(SdfPreset kind, vec3 ro, vec3 rd, vec3 h, float t_end, const Marc
         if (d < o.epsilon) return {true, t, i + 1, d};
         float advance = o.relaxation * d;
         if (d < secant.x && d < last_d) advance = std::min(d * last_advance / (last_d - d), secant.y * d);
+        if (advance < 1.2e-7f * t) return {true, t, i + 1, d};  // a step t cannot take: a hit
         last_d = d;
         last_advance = advance;
         t += advance;
@@ -224,10 +226,10 @@ PixelRay pixel_ray(const glm::dmat4& from_clip, int x, int y, int W, int H, cons
 
 // The depth pre-pass of RenderPlan::occluders over rows [row_begin, row_end): per pixel, the
 // nearest window depth (1: none) of the occluder boxes of every box (bm_occluder_centre and
-// bm_occluder_half of the preset, pulled in by bm_occluder_rounding as the pre-pass's vertex stage
-// pulls them), as the rasteriser would write them; a box that the near plane
-// cuts (the eye inside it among them) draws none, as the shaders' pre-pass drops it: its shape may
-// not be drawn where its occluders would lie.
+// bm_occluder_half of the preset, pulled in by bm_occluder_rounding and pushed back in depth by
+// bm_depth_rounding as the pre-pass's vertex stage moves them), as the rasteriser would write
+// them; a box that the near plane cuts (the eye inside it among them) draws none, as the shaders'
+// pre-pass drops it: its shape may not be drawn where its occluders would lie.
 std::vector<float> occluder_depths(const float* origins, const float* quaternions, const float* half_extents,
                                    size_t box_count, const std::vector<glm::ivec4>& rects, const glm::mat4& to_clip,
                                    const glm::dmat4& from_clip, SdfPreset kind, int W, int H, size_t row_begin,
@@ -271,9 +273,16 @@ std::vector<float> occluder_depths(const float* origins, const float* quaternion
                     const PixelRay ray = pixel_ray(from_clip, x, y, W, H, iq, c);
                     const vec2 span = shader::bm_box_span(ray.ro - centre, ray.rd, extent);
                     if (span.x < 0.0f || span.y < span.x) continue;
-                    const vec4 clip = to_clip * vec4(c + q * (ray.ro + ray.rd * span.x), 1.0f);
+                    const vec3 point = c + q * (ray.ro + ray.rd * span.x);
+                    const vec4 clip = to_clip * vec4(point, 1.0f);
+                    // pushed back by what float32 rounding may move it (bm_depth_rounding), as the
+                    // pre-pass's vertex stage pushes its occluders
+                    const vec2 spread(glm::dot(glm::abs(vec3(to_clip[0][2], to_clip[1][2], to_clip[2][2])), glm::abs(point)) +
+                                              std::abs(to_clip[3][2]),
+                                      glm::dot(glm::abs(vec3(to_clip[0][3], to_clip[1][3], to_clip[2][3])), glm::abs(point)) +
+                                              std::abs(to_clip[3][3]));
                     float& pixel = depth[size_t(y - int(row_begin)) * size_t(W) + size_t(x)];
-                    pixel = std::min(pixel, clip.z / clip.w * 0.5f + 0.5f);
+                    pixel = std::min(pixel, clip.z / clip.w * 0.5f + 0.5f + shader::bm_depth_rounding(spread, clip));
                 }
             }
         }

@@ -50,7 +50,7 @@
 layout(early_fragment_tests) in;
 
 // BM_NO_HIT (defined by formats/shader_sources.py, as for preview_resolve.glsl): hit_min's value
-// where no hit was kept, the bits of 1.0, the far plane's window depth.
+// where no hit was kept, the bits of 2.0, above every depth kept.
 #endif
 
 // Ends a fragment that draws nothing: thrown away, or in mode 2 (STEPS) counted, with the SDF
@@ -206,7 +206,12 @@ void main()
   vec3 local_hit = ro + rd * t;
   vec4 clip = c0 + c1 * t;
 #ifdef BM_RESOLVED
-  float hit_depth = max(clip.z / clip.w * 0.5 + 0.5, gl_FragCoord.z);
+  // in [0, 1], as the depth buffer clamps what it is given: a face the near plane clips may
+  // rasterise a hair in front of it (llvmpipe: window depth -9e-6), and a negative float's bits
+  // sort after every other depth's as uint, so that hit was never kept; a hit at or past the far
+  // plane is kept at 1.0, as the plain draw keeps it (a march from the eye writes its box's far
+  // side's depth, which may lie there)
+  float hit_depth = clamp(max(clip.z / clip.w * 0.5 + 0.5, gl_FragCoord.z), 0.0, 1.0);
   // the visibility pass counts the march alone (no normal); the shade pass its march and, for the
   // one fragment it shades, the normal's taps
   bool shaded = hit && preview.occlusion.w == 2.0 && floatBitsToUint(hit_depth) == winner;

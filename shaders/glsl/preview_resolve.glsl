@@ -17,7 +17,7 @@ void main()
 void main()
 {
   uint nearest = imageLoad(hit_min, ivec2(gl_FragCoord.xy)).x;
-  if (nearest >= BM_NO_HIT) {  // formats/shader_sources.py defines it: the bits of 1.0, no hit
+  if (nearest >= BM_NO_HIT) {  // formats/shader_sources.py defines it: the bits of 2.0, no hit
     discard;
   }
   gl_FragDepth = uintBitsToFloat(nearest);
@@ -35,8 +35,9 @@ void main()
   // summed in shaded_colour's rgb are added once
   frag_color.a = 1.0;
 #else
+  // nothing shaded: the target as cleared (a hit kept at the far plane has depth 1.0 too)
   float depth = texelFetch(shaded_depth, pixel, 0).r;
-  if (depth >= 1.0) {
+  if (depth >= 1.0 && frag_color.a <= 0.0) {
     discard;
   }
   gl_FragDepth = depth;

@@ -894,6 +894,9 @@ vec4 bm_map_hit(vec3 ro, vec3 rd, vec3 h, float index)
 // last two distances along the ray, extended to zero), at most secant.y times the distance: near
 // a surface met at a slant the distances shrink geometrically and the secant skips that tail, and
 // the hit test stays epsilon, so the silhouette does not move (secant.x = 0: plain sphere tracing).
+// A step under 2^-23 t ends the march as a hit: float32 moves t by at most one float step for it,
+// so the march would spend its whole budget in place and miss a surface within the step's reach
+// (an epsilon finer than float32 resolves at t: 1e-4 in a box 2,000 units long).
 // t: distance travelled; steps: map(, h, index) evaluations; d: the last map(, h, index) value (at a hit, the hit's
 // own distance, which bm_normal reuses). The loop's bound is a constant, as GLSL ES 1.00 (WebGL 1)
 // requires.
@@ -917,6 +920,10 @@ bool bm_march(vec3 ro, vec3 rd, float t_end, int step_limit, float epsilon, floa
     float advance = relaxation * d;
     if (d < secant.x && d < last_d) {
       advance = min(d * last_advance / (last_d - d), secant.y * d);
+    }
+    if (advance < 1.2e-7 * t) {
+      steps = i + 1;
+      return true;
     }
     last_d = d;
     last_advance = advance;

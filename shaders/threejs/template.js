@@ -321,39 +321,26 @@ function boxmarchTrianglesByBox(geometry) {
   return { count: boxes, start: start, triangles: triangles };
 }
 
-// Whether every box of geometry is closed and wound outward, the rule the Blender preview culls
-// by (mesh_data.closed_outward) applied to the triangles the file carries, box by box
-// (boxmarchTrianglesByBox; false where a triangle spans boxes): its corners welded by position
-// (the glTF export splits vertices per face corner), each directed edge once and its reverse once,
-// and its signed volume positive. Then a box's back faces are its far side, hidden by its own
-// front. Time linear in the corners (hash tables sized for the largest box, reused box after box:
-// an entry counts only if stamped with the box being checked); memory typed arrays of the
-// triangles' count and of the largest box's corners.
-function boxmarchClosedOutward(geometry) {
-  var position = geometry.getAttribute('position');
-  var corners = geometry.index ? geometry.index.array.length : position.count;
-  if (!corners || corners % 3) return false;
-  var grouped = boxmarchTrianglesByBox(geometry);
-  if (!grouped) return false;
-  var index = geometry.index ? geometry.index.array : null, most = 0;
+// Welds the corners of geometry's boxes (grouped by boxmarchTrianglesByBox) by position, box
+// after box (the glTF export splits vertices per face corner): weld(box) fills, for the box's
+// corners (3 per triangle, in `grouped`'s order), vertex (each corner's vertex), xyz (its position;
+// + 0: -0 welds with 0) and id (its welded number), and returns their count. Time linear in the
+// corners: a hash table sized for the largest box (size: a power of two at least twice its
+// corners, which the caller's own tables of that box's edges take too), reused box after box (an
+// entry counts only if stamped with the box being welded, box + 1); no Map or Set.
+function boxmarchCornerWelder(geometry, grouped) {
+  var position = geometry.getAttribute('position'), index = geometry.index ? geometry.index.array : null, most = 0;
   for (var box = 0; box < grouped.count; box++) most = Math.max(most, 3 * (grouped.start[box + 1] - grouped.start[box]));
   var size = 2;
   while (size < 2 * most) size *= 2;
-  // the box's corners (their positions, as float64 words for hashing; their welded ids), and two
-  // tables: welded positions (the corner holding each slot) and directed edges (welded ids)
+  // the box's corners (their positions, as float64 words for hashing) and the table of welded
+  // positions (the corner holding each slot)
   var xyz = new Float64Array(3 * most), words = new Int32Array(xyz.buffer), id = new Int32Array(most);
-  var held = new Int32Array(size), heldBy = new Uint32Array(size);
-  var from = new Int32Array(size), to = new Int32Array(size), edgeBy = new Uint32Array(size);
-  function edgeSlot(a, b, stamp) {  // the slot of directed edge a -> b, or of the free slot where it would go
-    var slot = (Math.imul(a, 0x9E3779B1) ^ Math.imul(b, 0x85EBCA77)) & (size - 1);
-    while (edgeBy[slot] === stamp && (from[slot] !== a || to[slot] !== b)) slot = (slot + 1) & (size - 1);
-    return slot;
-  }
-  for (box = 0; box < grouped.count; box++) {
+  var vertex = new Uint32Array(most), held = new Int32Array(size), heldBy = new Uint32Array(size);
+  function weld(box) {
     var first = grouped.start[box], n = 3 * (grouped.start[box + 1] - first), stamp = box + 1, welded = 0;
     for (var c = 0; c < n; c++) {
-      var t = grouped.triangles[first + (c / 3 | 0)], v = index ? index[3 * t + c % 3] : 3 * t + c % 3;
-      // + 0: -0 welds with 0
+      var t = grouped.triangles[first + (c / 3 | 0)], v = vertex[c] = index ? index[3 * t + c % 3] : 3 * t + c % 3;
       var x = xyz[3 * c] = position.getX(v) + 0, y = xyz[3 * c + 1] = position.getY(v) + 0;
       var z = xyz[3 * c + 2] = position.getZ(v) + 0, hash = 0;
       for (var w = 6 * c; w < 6 * c + 6; w++) hash = Math.imul(hash ^ words[w], 0x9E3779B1) ^ (hash >>> 15);
@@ -370,7 +357,33 @@ function boxmarchClosedOutward(geometry) {
         id[c] = welded++;
       }
     }
-    var volume = 0;
+    return n;
+  }
+  return { size: size, xyz: xyz, id: id, vertex: vertex, weld: weld };
+}
+
+// Whether every box of geometry is closed and wound outward, the rule the Blender preview culls
+// by (mesh_data.closed_outward) applied to the triangles the file carries, box by box
+// (boxmarchTrianglesByBox; false where a triangle spans boxes): its corners welded by position
+// (boxmarchCornerWelder), each directed edge once and its reverse once, and its signed volume
+// positive. Then a box's back faces are its far side, hidden by its own front. Time linear in the
+// corners (a hash table of the directed edges sized and reused as the welder's); memory typed
+// arrays of the triangles' count and of the largest box's corners.
+function boxmarchClosedOutward(geometry) {
+  var position = geometry.getAttribute('position');
+  var corners = geometry.index ? geometry.index.array.length : position.count;
+  if (!corners || corners % 3) return false;
+  var grouped = boxmarchTrianglesByBox(geometry);
+  if (!grouped) return false;
+  var welder = boxmarchCornerWelder(geometry, grouped), size = welder.size, xyz = welder.xyz, id = welder.id;
+  var from = new Int32Array(size), to = new Int32Array(size), edgeBy = new Uint32Array(size);
+  function edgeSlot(a, b, stamp) {  // the slot of directed edge a -> b, or of the free slot where it would go
+    var slot = (Math.imul(a, 0x9E3779B1) ^ Math.imul(b, 0x85EBCA77)) & (size - 1);
+    while (edgeBy[slot] === stamp && (from[slot] !== a || to[slot] !== b)) slot = (slot + 1) & (size - 1);
+    return slot;
+  }
+  for (var box = 0; box < grouped.count; box++) {
+    var n = welder.weld(box), stamp = box + 1, volume = 0, c, slot;
     for (c = 0; c < n; c += 3) {
       for (var k = 0; k < 3; k++) {
         var a = id[c + k], b = id[c + (k + 1) % 3];
@@ -486,58 +499,63 @@ function createBoxmarchOccluderMaterial(THREE, index, shape, side) {
 var BOXMARCH_SEALED_TOLERANCE = 1e-3;
 
 // The triangles (their first corners' positions in geometry's index, or in its vertices where it
-// has none) of the boxes that may draw occluders, by the rule the Blender preview draws them by
-// (mesh_data.sealed_boxes): a box's triangles must be the whole surface of its box, whichever way
-// they are wound. Within each box (the box number of bmOffsetZIndex.y), its vertices welded by
-// position (the glTF export splits them per face corner): every edge shared by exactly two
-// triangles, and each triangle on one face of the box (its corners' box-local positions -f within
-// BOXMARCH_SEALED_TOLERANCE of the largest half-extent of that face's plane). Only such a box is
-// drawn wherever its shape may be seen: an open box, or a modelled shape smaller than its box,
-// would hide with its occluders what is seen past it.
+// has none, in the file's order, a Uint32Array) of the boxes that may draw occluders, by the rule
+// the Blender preview draws them by (mesh_data.sealed_boxes): a box's triangles must be the whole
+// surface of its box, whichever way they are wound. Within each box (boxmarchTrianglesByBox; none
+// where a triangle spans boxes), its vertices welded by position (boxmarchCornerWelder): every
+// edge shared by exactly two triangles, and each triangle on one face of the box (its corners'
+// box-local positions -f within BOXMARCH_SEALED_TOLERANCE of the largest half-extent of that
+// face's plane). Only such a box is drawn wherever its shape may be seen: an open box, or a
+// modelled shape smaller than its box, would hide with its occluders what is seen past it. Time
+// linear in the corners, typed arrays as boxmarchClosedOutward's.
 function boxmarchSealedTriangles(geometry) {
-  var position = geometry.getAttribute('position'), number = geometry.getAttribute('bmOffsetZIndex');
-  var offset = geometry.getAttribute('bmOffsetXY'), halfXY = geometry.getAttribute('bmHalfXY');
-  var halfZ = geometry.getAttribute('bmHalfZ');
-  var index = geometry.index ? geometry.index.array : null, corners = index ? index.length : position.count;
-  var byBox = new Map(), sealed = [];
-  for (var t = 0; t + 2 < corners; t += 3) {
-    var box = number.getY(index ? index[t] : t);
-    if (!byBox.has(box)) byBox.set(box, []);
-    byBox.get(box).push(t);
-  }
-  function corner(t) { return index ? index[t] : t; }
-  function onFace(t) {  // whether triangle t lies on one face of its box
-    var v = corner(t), h = [halfXY.getX(v), halfXY.getY(v), halfZ.getX(v)];
-    var slack = h.map(function (e) { return e - BOXMARCH_SEALED_TOLERANCE * Math.max(h[0], h[1], h[2]); });
+  var number = geometry.getAttribute('bmOffsetZIndex'), offset = geometry.getAttribute('bmOffsetXY');
+  var halfXY = geometry.getAttribute('bmHalfXY'), halfZ = geometry.getAttribute('bmHalfZ');
+  var grouped = boxmarchTrianglesByBox(geometry);
+  if (!grouped) return new Uint32Array(0);
+  var welder = boxmarchCornerWelder(geometry, grouped), size = welder.size, id = welder.id, vertex = welder.vertex;
+  // the box's undirected edges (welded ids, the lesser first) and how many of its triangles hold each
+  var low = new Int32Array(size), high = new Int32Array(size), uses = new Uint8Array(size), edgeBy = new Uint32Array(size);
+  var kept = new Uint8Array(grouped.triangles.length), count = 0;
+  function onFace(c) {  // whether the triangle of corners c, c + 1, c + 2 lies on one face of its box
+    var v = vertex[c], hx = halfXY.getX(v), hy = halfXY.getY(v), hz = halfZ.getX(v);
+    var tolerance = BOXMARCH_SEALED_TOLERANCE * Math.max(hx, hy, hz);
     for (var axis = 0; axis < 3; axis++) {
-      var above = 0, below = 0;
+      var slack = (axis === 0 ? hx : axis === 1 ? hy : hz) - tolerance, above = 0, below = 0;
       for (var k = 0; k < 3; k++) {
-        var c = corner(t + k), f = axis === 0 ? offset.getX(c) : axis === 1 ? offset.getY(c) : number.getX(c);
-        if (-f >= slack[axis]) above++;
-        if (-f <= -slack[axis]) below++;
+        var u = vertex[c + k], f = axis === 0 ? offset.getX(u) : axis === 1 ? offset.getY(u) : number.getX(u);
+        if (-f >= slack) above++;
+        if (-f <= -slack) below++;
       }
       if (above === 3 || below === 3) return true;
     }
     return false;
   }
-  byBox.forEach(function (triangles) {
-    var welded = new Map(), id = [];
-    triangles.forEach(function (t) {
-      for (var k = 0; k < 3; k++) {
-        var v = corner(t + k), key = position.getX(v) + ',' + position.getY(v) + ',' + position.getZ(v);
-        if (!welded.has(key)) welded.set(key, welded.size);
-        id.push(welded.get(key));
+  for (var box = 0; box < grouped.count; box++) {
+    var n = welder.weld(box), stamp = box + 1, edges = 0, sealed = true, c;
+    for (c = 0; c < n && sealed; c++) {
+      var a = id[c], b = id[c % 3 === 2 ? c - 2 : c + 1], lo = Math.min(a, b), hi = Math.max(a, b);
+      var slot = (Math.imul(lo, 0x9E3779B1) ^ Math.imul(hi, 0x85EBCA77)) & (size - 1);
+      while (edgeBy[slot] === stamp && (low[slot] !== lo || high[slot] !== hi)) slot = (slot + 1) & (size - 1);
+      if (edgeBy[slot] !== stamp) {
+        edgeBy[slot] = stamp;
+        low[slot] = lo;
+        high[slot] = hi;
+        uses[slot] = 0;
+        edges++;
       }
-    });
-    var n = welded.size, uses = new Map(), closed = true;
-    for (var i = 0; i < id.length; i++) {
-      var a = id[i], b = id[i % 3 === 2 ? i - 2 : i + 1], edge = Math.min(a, b) * n + Math.max(a, b);
-      uses.set(edge, (uses.get(edge) || 0) + 1);
+      sealed = ++uses[slot] <= 2;
     }
-    uses.forEach(function (count) { if (count !== 2) closed = false; });
-    if (closed && triangles.every(onFace)) Array.prototype.push.apply(sealed, triangles);
-  });
-  return sealed;
+    // n edge uses, none more than two: every edge exactly two when there are n / 2 edges
+    sealed = sealed && 2 * edges === n;
+    for (c = 0; c < n && sealed; c += 3) sealed = onFace(c);
+    if (!sealed) continue;
+    for (var k = grouped.start[box]; k < grouped.start[box + 1]; k++) kept[grouped.triangles[k]] = 1;
+    count += grouped.start[box + 1] - grouped.start[box];
+  }
+  var out = new Uint32Array(count), at = 0;
+  for (var t = 0; t < kept.length; t++) if (kept[t]) out[at++] = 3 * t;
+  return out;
 }
 
 // The geometry the pre-pass draws occluders from (boxmarchSealedTriangles): geometry itself where
@@ -548,7 +566,9 @@ function boxmarchOccluderGeometry(THREE, geometry) {
   if (3 * sealed.length === (index ? index.count : geometry.getAttribute('position').count)) return geometry;
   if (!sealed.length) return null;
   var kept = geometry.getAttribute('position').count > 65535 ? new Uint32Array(3 * sealed.length) : new Uint16Array(3 * sealed.length);
-  sealed.forEach(function (t, i) { for (var k = 0; k < 3; k++) kept[3 * i + k] = index ? index.array[t + k] : t + k; });
+  for (var i = 0; i < sealed.length; i++) {
+    for (var k = 0; k < 3; k++) kept[3 * i + k] = index ? index.array[sealed[i] + k] : sealed[i] + k;
+  }
   var drawn = new THREE.BufferGeometry();
   Object.keys(geometry.attributes).forEach(function (name) { drawn.setAttribute(name, geometry.attributes[name]); });
   return drawn.setIndex(new THREE.BufferAttribute(kept, 1));

@@ -224,13 +224,16 @@ FRAGMENTS_AFTER = counting_js("void main() {", "void main() {\n  gl_FragColor = 
 
 
 # A page function (no model needed) making a BufferGeometry of ``count`` cubes of half-extent 1,
-# 3 units apart along x, box numbers 0 .. count - 1 in bmOffsetZIndex.y (its only other attribute
-# is position), each face's 4 corners its own vertices as the glTF export splits them, every
-# triangle wound outward, indexed (Uint32): the shape of the export that boxmarchClosedOutward reads.
-CUBES_JS = """function boxmarchTestCubes(THREE, count) {
+# 3 units apart along x, box numbers 0 .. count - 1 in bmOffsetZIndex.y, each face's 4 corners its
+# own vertices as the glTF export splits them, every triangle wound outward, indexed (Uint32): the
+# shape of the export that boxmarchClosedOutward reads; ``boxData``: also the attributes
+# boxmarchSealedTriangles reads (bmOffsetXY and bmOffsetZIndex.x: f, the box-local vector from the
+# corner to the box's origin; bmHalfXY, bmHalfZ: 1).
+CUBES_JS = """function boxmarchTestCubes(THREE, count, boxData) {
   var faces = [[0, 1, 2], [0, 2, 1], [1, 2, 0], [1, 0, 2], [2, 0, 1], [2, 1, 0]];  // axis, u, v: + then - side
   var corners = [[-1, -1], [1, -1], [1, 1], [-1, 1]];
   var position = new Float32Array(72 * count), number = new Float32Array(48 * count), index = new Uint32Array(36 * count);
+  var offset = new Float32Array(boxData ? 48 * count : 0);
   for (var b = 0; b < count; b++) {
     for (var f = 0; f < 6; f++) {
       var axis = faces[f][0], u = faces[f][1], v = faces[f][2], base = 24 * b + 4 * f;
@@ -239,6 +242,11 @@ CUBES_JS = """function boxmarchTestCubes(THREE, count) {
         position[at + axis] = f % 2 ? -1 : 1;
         position[at + u] = corners[k][0];
         position[at + v] = corners[k][1];
+        if (boxData) {
+          offset[2 * (base + k)] = -position[at];
+          offset[2 * (base + k) + 1] = -position[at + 1];
+          number[2 * (base + k)] = -position[at + 2];
+        }
         position[at] += 3 * b;
         number[2 * (base + k) + 1] = b;
       }
@@ -248,6 +256,11 @@ CUBES_JS = """function boxmarchTestCubes(THREE, count) {
   var geometry = new THREE.BufferGeometry();
   geometry.setAttribute('position', new THREE.BufferAttribute(position, 3));
   geometry.setAttribute('bmOffsetZIndex', new THREE.BufferAttribute(number, 2));
+  if (boxData) {
+    geometry.setAttribute('bmOffsetXY', new THREE.BufferAttribute(offset, 2));
+    geometry.setAttribute('bmHalfXY', new THREE.BufferAttribute(new Float32Array(48 * count).fill(1), 2));
+    geometry.setAttribute('bmHalfZ', new THREE.BufferAttribute(new Float32Array(24 * count).fill(1), 1));
+  }
   geometry.setIndex(new THREE.BufferAttribute(index, 1));
   return geometry;
 }"""

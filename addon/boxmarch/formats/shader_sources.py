@@ -78,9 +78,10 @@ OCCLUDER_INDEX = ("FLOAT", "occluder_index")
 # depth, kept by the visibility pass (imageAtomicMin) and read by the shade and resolve passes;
 # the full-screen stages' vertex input and the composite's textures.
 HIT_MIN_IMAGE = (1, "R32UI", "UINT_2D", "hit_min")
-# hit_min's value where no hit was kept: the bits of 1.0 (the far plane's window depth), above the
-# bits of every depth kept; defined as BM_NO_HIT in the resolved passes' stages.
-NO_HIT = 0x3F800000
+# hit_min's value where no hit was kept: the bits of 2.0, above the bits of every depth kept (in
+# [0, 1], as the depth buffer clamps it: a hit at or past the far plane is kept at 1.0, as the
+# plain draw keeps it); defined as BM_NO_HIT in the resolved passes' stages.
+NO_HIT = 0x40000000
 FULLSCREEN_INPUT = ("VEC2", "pos")
 COMPOSITE_SAMPLERS = ((0, "FLOAT_2D", "shaded_colour"), (1, "FLOAT_2D", "shaded_depth"))
 

@@ -1,0 +1,163 @@
+"""boxmarchSealedTriangles (shaders/threejs/: which boxes of a mesh may draw occluders in the
+pre-pass) in typed arrays, against the implementation it replaced (string-keyed Maps: about 6 s of
+CPU for 100,000 boxes; issue 36), kept here verbatim as the reference: on seeded random meshes of
+boxes split per face corner as the glTF export writes them, with open boxes, a lost triangle, a
+doubled face, faces wound inward, a modelled shape smaller than its box, shuffled triangles, box
+numbers in any order, indexed and not, both give the same triangles. One change: a mesh with a
+triangle spanning two boxes (not what the export writes) now seals no box, as
+boxmarchClosedOutward refuses it. One node process (no
+three.js: the geometry is a stand-in with the attribute methods the functions call).
+bench/bench_threejs_closed.py times both checks at 100,000 and 470,000 boxes."""
+import json
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from boxmarch import scenes
+from boxmarch.formats import shader_sources
+from tests.helpers.tools import need
+
+# The implementation replaced (template.js before the typed arrays), renamed.
+OLD_SEALED_JS = r"""function oldSealedTriangles(geometry) {
+  var position = geometry.getAttribute('position'), number = geometry.getAttribute('bmOffsetZIndex');
+  var offset = geometry.getAttribute('bmOffsetXY'), halfXY = geometry.getAttribute('bmHalfXY');
+  var halfZ = geometry.getAttribute('bmHalfZ');
+  var index = geometry.index ? geometry.index.array : null, corners = index ? index.length : position.count;
+  var byBox = new Map(), sealed = [];
+  for (var t = 0; t + 2 < corners; t += 3) {
+    var box = number.getY(index ? index[t] : t);
+    if (!byBox.has(box)) byBox.set(box, []);
+    byBox.get(box).push(t);
+  }
+  function corner(t) { return index ? index[t] : t; }
+  function onFace(t) {  // whether triangle t lies on one face of its box
+    var v = corner(t), h = [halfXY.getX(v), halfXY.getY(v), halfZ.getX(v)];
+    var slack = h.map(function (e) { return e - BOXMARCH_SEALED_TOLERANCE * Math.max(h[0], h[1], h[2]); });
+    for (var axis = 0; axis < 3; axis++) {
+      var above = 0, below = 0;
+      for (var k = 0; k < 3; k++) {
+        var c = corner(t + k), f = axis === 0 ? offset.getX(c) : axis === 1 ? offset.getY(c) : number.getX(c);
+        if (-f >= slack[axis]) above++;
+        if (-f <= -slack[axis]) below++;
+      }
+      if (above === 3 || below === 3) return true;
+    }
+    return false;
+  }
+  byBox.forEach(function (triangles) {
+    var welded = new Map(), id = [];
+    triangles.forEach(function (t) {
+      for (var k = 0; k < 3; k++) {
+        var v = corner(t + k), key = position.getX(v) + ',' + position.getY(v) + ',' + position.getZ(v);
+        if (!welded.has(key)) welded.set(key, welded.size);
+        id.push(welded.get(key));
+      }
+    });
+    var n = welded.size, uses = new Map(), closed = true;
+    for (var i = 0; i < id.length; i++) {
+      var a = id[i], b = id[i % 3 === 2 ? i - 2 : i + 1], edge = Math.min(a, b) * n + Math.max(a, b);
+      uses.set(edge, (uses.get(edge) || 0) + 1);
+    }
+    uses.forEach(function (count) { if (count !== 2) closed = false; });
+    if (closed && triangles.every(onFace)) Array.prototype.push.apply(sealed, triangles);
+  });
+  return sealed;
+}
+"""
+
+NODE_JS = r"""
+const vm = require('vm');
+const fs = require('fs');
+vm.runInThisContext(fs.readFileSync(process.argv[1], 'utf8'));
+vm.runInThisContext(process.argv[2]);
+function attribute(values, itemSize) {
+  const array = Float32Array.from(values);
+  return { array: array, itemSize: itemSize, count: array.length / itemSize,
+           getX: (i) => array[i * itemSize], getY: (i) => array[i * itemSize + 1], getZ: (i) => array[i * itemSize + 2] };
+}
+const meshes = JSON.parse(fs.readFileSync(0, 'utf8'));
+console.log(JSON.stringify(meshes.map((m) => {
+  const attributes = {};
+  for (const name in m.attributes) attributes[name] = attribute(m.attributes[name][0], m.attributes[name][1]);
+  const geometry = { attributes: attributes, index: m.index ? { array: Uint32Array.from(m.index) } : null,
+                     getAttribute: (name) => attributes[name] };
+  return { now: Array.from(boxmarchSealedTriangles(geometry)), before: oldSealedTriangles(geometry).slice().sort((a, b) => a - b) };
+})));
+"""
+
+SIGNS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1], [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], float)
+QUADS = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [2, 3, 7, 6], [1, 2, 6, 5], [0, 4, 7, 3]]  # outward
+
+
+def mesh(seed, indexed=True):
+    """A JSON-ready mesh of 40 boxes, a quarter of them spoiled one way or another, and how many
+    boxes are left sealed by construction."""
+    rng = np.random.default_rng([36, seed])
+    count = 40
+    numbers = rng.permutation(1000)[:count] * 0.5 + 3  # any order, not 0..n-1
+    position, offset_xy, offset_z_index, half_xy, half_z, triangles = [], [], [], [], [], []
+    sealed = 0
+    for b in range(count):
+        h = rng.uniform(0.1, 2.0, 3)
+        rotation = scenes.random_rotations(1, rng)[0]
+        centre = rng.uniform(-5, 5, 3) if rng.random() < 0.9 else np.zeros(3)
+        spoil = rng.choice(["none", "open", "lost triangle", "doubled face", "inward", "smaller"], p=[0.5, 0.1, 0.1, 0.1, 0.1, 0.1])
+        faces = []
+        for quad in QUADS:
+            first = len(position)
+            for corner in quad:
+                local = SIGNS[corner] * h
+                f = -local * (0.9 if spoil == "smaller" else 1.0)
+                position.append((centre + rotation @ local).tolist())
+                offset_xy.append([f[0], f[1]])
+                offset_z_index.append([f[2], numbers[b]])
+                half_xy.append([h[0], h[1]])
+                half_z.append([h[2]])
+            quad_triangles = [[first, first + 1, first + 2], [first, first + 2, first + 3]]
+            if spoil == "inward":
+                quad_triangles = [t[::-1] for t in quad_triangles]
+            faces += quad_triangles
+        if spoil == "open":
+            del faces[0:2]
+        elif spoil == "lost triangle":
+            del faces[int(rng.integers(0, 12))]
+        elif spoil == "doubled face":
+            faces += faces[2:4]
+        sealed += spoil in ("none", "inward")
+        triangles += faces
+    triangles = [triangles[k] for k in rng.permutation(len(triangles))] if seed % 2 else triangles
+    index = np.array(triangles, int).reshape(-1)
+    attributes = {"position": (position, 3), "bmOffsetXY": (offset_xy, 2), "bmOffsetZIndex": (offset_z_index, 2),
+                  "bmHalfXY": (half_xy, 2), "bmHalfZ": (half_z, 1)}
+    if not indexed:
+        attributes = {name: ([values[v] for v in index], size) for name, (values, size) in attributes.items()}
+    attributes = {name: (np.ravel(values).tolist(), size) for name, (values, size) in attributes.items()}
+    return {"attributes": attributes, "index": index.tolist() if indexed else None}, sealed
+
+
+def run(meshes):
+    node = shutil.which("node") or shutil.which("nodejs")
+    need(None if node else "node is not installed (apt-get install nodejs)")
+    material = shader_sources.shader_dir() / "threejs" / "boxmarch.js"
+    proc = subprocess.run([node, "-e", NODE_JS, str(material), OLD_SEALED_JS], input=json.dumps(meshes),
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout)
+
+
+@pytest.mark.parametrize("indexed", [True, False])
+def test_sealed_triangles_are_the_ones_the_map_based_check_gave(indexed):
+    built = [mesh(seed, indexed) for seed in range(6)]
+    results = run([m for m, _ in built])
+    for seed, ((_, sealed), result) in enumerate(zip(built, results)):
+        assert result["now"] == result["before"], f"seed {seed}"
+        assert len(result["now"]) == 12 * sealed and 0 < sealed < 40, (seed, sealed)  # some sealed, some not
+
+
+def test_a_triangle_spanning_two_boxes_seals_no_box():
+    spanning, _ = mesh(0)
+    spanning["index"][0] = spanning["index"][-1]  # a corner of the last box's last triangle
+    result = run([spanning])[0]
+    assert result["now"] == [] and len(result["before"]) > 100
