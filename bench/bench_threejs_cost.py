@@ -207,7 +207,7 @@ PASSES_COUNT_AFTER = """var passes = null;
     passes.targets.shaded.dispose();
     passes.targets.shaded.texture.type = THREE.FloatType;
     counting(passes.scenes.shade, [[miss, '  if (!hit) { gl_FragColor = vec4(float(steps)); return; }'],
-      ['  if (depth != resolved) discard;', '  gl_FragColor = vec4(float(steps + (depth == resolved ? 3 : 0)));\\n  return;']]);
+      ['  if (depth != resolved) discard;', '  gl_FragColor = vec4(float(steps + (depth == resolved ? normalTaps : 0)));\\n  return;']]);
     renderer.render(scene, camera);
     var shade = read(passes.targets.shaded), counts = new Float32Array(W * H * 4);
     for (var i = 0; i < W * H; i++) counts[4 * i] = visibility[4 * i] - 1 + shade[4 * i];

@@ -12,7 +12,8 @@ the SDF library and the march.
   box_params.glsl and raymarch.glsl embedded as strings (three.js compiles them as they are, GLSL ES 1.00 on WebGL 1
   and 3.00 on WebGL 2);
 * godot3/boxmarch.shader: godot3/template.shader with decode.glsl, every function of sdf.glsl,
-  box_params.glsl and raymarch.glsl (the closed-form hits, bm_nearer_hit to bm_preset_hit, among them); Godot 3 has no global variables, so bm_march, bm_one_tap and
+  box_params.glsl and raymarch.glsl (the closed-form hits, bm_nearer_hit to bm_preset_hit,
+  among them); Godot 3 has no global variables, so bm_march, bm_one_tap and
   bm_normal take the box (h, index) and pass it on to map() (``passing_the_box``);
 * godot3/decode_vectors.shader: godot3/decode_vectors_template.shader (the decode-vectors view's
   line material) with decode.glsl;
