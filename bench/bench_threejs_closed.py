@@ -59,7 +59,7 @@ def main():
     for release in [r for r in sorted(threejs.RELEASES) if threejs.available(r) is None]:
         for row in threejs.run_page(b"", js, threejs.shipped_material(release), release):
             rows.append([f"r{threejs.RELEASES[release].revision}", row["check"], f"{row['count']:,}", f"{row['ms']:,.0f}",
-                         f"{row['ms'] * 1e3 / row['count']:.1f}", json.dumps(row["answer"])])
+                         f"{row['ms'] * 1e3 / row['count']:.1f}", json.dumps(row["answer"], allow_nan=False)])
     print(f"loadBoxmarch's mesh checks in headless Chromium, best of {REPEATS} (the replaced check: one call)")
     print(table(["three.js", "check", "cubes", "ms", "us per box", "answer"], rows))
 

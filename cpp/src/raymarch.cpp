@@ -277,10 +277,11 @@ std::vector<float> occluder_depths(const float* origins, const float* quaternion
                     const vec4 clip = to_clip * vec4(point, 1.0f);
                     // pushed back by what float32 rounding may move it (bm_depth_rounding), as the
                     // pre-pass's vertex stage pushes its occluders
-                    const vec2 spread(glm::dot(glm::abs(vec3(to_clip[0][2], to_clip[1][2], to_clip[2][2])), glm::abs(point)) +
-                                              std::abs(to_clip[3][2]),
-                                      glm::dot(glm::abs(vec3(to_clip[0][3], to_clip[1][3], to_clip[2][3])), glm::abs(point)) +
-                                              std::abs(to_clip[3][3]));
+                    const vec2 spread(
+                            glm::dot(glm::abs(vec3(to_clip[0][2], to_clip[1][2], to_clip[2][2])), glm::abs(point)) +
+                                    std::abs(to_clip[3][2]),
+                            glm::dot(glm::abs(vec3(to_clip[0][3], to_clip[1][3], to_clip[2][3])), glm::abs(point)) +
+                                    std::abs(to_clip[3][3]));
                     float& pixel = depth[size_t(y - int(row_begin)) * size_t(W) + size_t(x)];
                     pixel = std::min(pixel, clip.z / clip.w * 0.5f + 0.5f + shader::bm_depth_rounding(spread, clip));
                 }
