@@ -430,7 +430,7 @@ def swiftshader_points(bpy, name, scene, reference, levels, folder):
     parts = {"__W__": str(scene.width), "__H__": str(scene.height), "__REPEATS__": str(REPEATS),
              "__CAMERA__": json.dumps(three_camera(scene.camera[1], scene.camera[2]), allow_nan=False),
              "__SETTINGS__": json.dumps([dict(options, map=LINK_MAP) for _label, options in settings], allow_nan=False),
-             "__MESHES__": json.dumps(meshes), "__CLOCK_JS__": threejs.CLOCK_JS}
+             "__MESHES__": json.dumps(meshes, allow_nan=False), "__CLOCK_JS__": threejs.CLOCK_JS}
     js = THREEJS_JOB
     for key, value in parts.items():
         js = js.replace(key, value)
