@@ -5,7 +5,7 @@ plain march on seeded random scenes; every pixel a cut changes must be one where
 agree when both march with the large step budget.
 
 The slow tier runs CI_SEEDS and every seed of REGRESSIONS and OPEN in each renderer (OPEN: the
-seeds not yet fixed, checked to fail still); the everyday tier
+seeds not yet fixed, checked to fail still and held to the pixels they changed); the everyday tier
 checks the comparison itself on made-up pictures and that CI_SEEDS draw every trait the
 generator has. ``python3 -m bench.cut_battery`` runs thousands. Another worktree's add-on and
 shaders: ``PYTHONPATH=OTHER_CHECKOUT/addon python3 -m pytest -m slow tests/test_cut_battery.py``.
@@ -23,6 +23,11 @@ CI_SEEDS = {"preview": range(0, 60), "r111": range(0, 24), "r180": range(24, 48)
 _SEED_6 = ("pre-pass, visibility and default 1 px another colour (main at 9ec7267); an ordinary LINK scene, long thin links, "
            "orthographic, scale 879: a march closing in on a link 2,000 units long at a slant stalled (epsilon 1e-4 "
            "under t's float32 step) and missed at every budget, so plain and cut showed different boxes behind")
+_EDGE_ON = ("culling (and default) 1 px wrong colour (bench.cut_battery seeds 100-299 at c000917): BOX, coincident "
+            "boxes, vertices far from the origin; at a box's silhouette plain's winning fragment is one of a face the "
+            "rasteriser calls back-facing (seen on seed 237) whose own span calls it an entry (more of its box ahead "
+            "than behind), 5e-5 window depth in front of the front face; culling dropped it, the front face showed; passes since "
+            "presets hit in closed form")
 # Seeds where a cut changed pixels that no step budget explains: (seed, renderer, what it found
 # the day it was kept, main at 20bdfbf, 96 x 72). Each runs every time, in its renderer.
 REGRESSIONS = [
@@ -55,15 +60,6 @@ REGRESSIONS = [
     (464, "preview", "resolved passes 4,242 px emptied (c000917: hits plain draws at window depth exactly 1.0, the "
                      "eye box's march writing its far side's depth at the far plane, were the no-hit value); "
                      "CYLINDER, nested, eye inside a box, perspective"),
-]
-# Seeds a cut still changes a pixel of that no step budget explains, not yet fixed (issue 36 stays
-# open for them): test_open_seed_still_fails checks they still fail (the day one passes, the run
-# says so and it moves to REGRESSIONS); its renderer's run over CI_SEEDS leaves it to that test.
-_EDGE_ON = ("culling (and default) 1 px wrong colour (bench.cut_battery seeds 100-299 at c000917): BOX, coincident "
-            "boxes, vertices far from the origin; at a box's silhouette plain's winning fragment is one of a face the "
-            "rasteriser calls back-facing (seen on seed 237) whose own span calls it an entry (more of its box ahead "
-            "than behind), 5e-5 window depth in front of the front face; culling drops it, the front face shows")
-OPEN = [
     (184, "preview", _EDGE_ON + "; also mirrored, sheared, flat, nested, far from the world origin, perspective"),
     (195, "preview", _EDGE_ON + "; also inside-out, nested, mirrored, quality 0.25, perspective"),
     (237, "preview", _EDGE_ON + "; also non-uniform scale, orthographic"),
@@ -73,12 +69,22 @@ OPEN = [
                      "orthographic"),
     (488, "preview", "culling 1 px wrong colour, the same signature; BOX, long thin, non-uniform scale, orthographic"),
 ]
+# Seeds a cut still changes a pixel of that no step budget explains, not yet fixed (issue 36 stays
+# open for them): (seed, renderer, the most unexplained pixels a cut may change there, what was
+# found). test_open_seed_still_fails checks they still fail (the day one passes, the run says so and
+# it moves to REGRESSIONS); every other check holds each of their cuts to that many pixels.
+OPEN = [
+    (2, "preview", 1, "every cut 1 px wrong colour (closed-form hits, main at the merge of h-closed): ROUNDED_BOX, "
+                   "quality 0.25, orthographic"),
+    (80, "preview", 1, "every cut 1 px wrong colour (closed-form hits, main at the merge of h-closed): PER_BOX, open, "
+                    "inside-out, mirrored, near plane cuts boxes"),
+]
 
 
 @pytest.fixture(scope="module")
 def battery(tmp_path_factory):
     """found(renderer): [Found, ...] of the renderer's CI seeds and regression seeds, drawn on first use."""
-    wanted = {r: sorted(set(CI_SEEDS[r]) | {s for s, renderer, _ in REGRESSIONS + OPEN if renderer == r})
+    wanted = {r: sorted(set(CI_SEEDS[r]) | {s for s, renderer, *_ in REGRESSIONS + OPEN if renderer == r})
               for r in cut_battery.RENDERERS}
     seeds = sorted(set().union(*wanted.values()))
     folder = tmp_path_factory.mktemp("cut_battery")
@@ -100,7 +106,9 @@ def battery(tmp_path_factory):
 
 
 def unexplained(found):
-    return [f.line() for f in found if f.unexplained]
+    """Lines of the findings with more unexplained pixels than an OPEN seed is held to (0 elsewhere)."""
+    allowed = {(seed, renderer): pixels for seed, renderer, pixels, _ in OPEN}
+    return [f.line() for f in found if f.unexplained > allowed.get((f.seed, f.renderer), 0)]
 
 
 @pytest.mark.slow
@@ -109,8 +117,7 @@ def test_every_pixel_a_cut_changes_is_one_the_plain_march_leaves_unresolved(batt
     seeds, results = battery(renderer)
     exported = {f.seed for f in results}
     assert len(exported) >= 0.9 * len(seeds), f"only {len(exported)} of {len(seeds)} scenes drawn"
-    still_open = {seed for seed, open_renderer, _ in OPEN if open_renderer == renderer}
-    lines = unexplained([f for f in results if f.seed not in still_open])
+    lines = unexplained(results)
     assert not lines, "\n".join(lines)
 
 
@@ -123,13 +130,13 @@ def test_regression_seed(battery, seed, renderer, kept):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed, renderer, kept", OPEN)
-def test_open_seed_still_fails(battery, seed, renderer, kept):
+@pytest.mark.parametrize("seed, renderer, pixels, kept", OPEN)
+def test_open_seed_still_fails(battery, seed, renderer, pixels, kept):
     """A seed still open (issue 36) changes pixels no budget explains; the day it does not, this
     fails: move the seed to REGRESSIONS."""
     results = [f for f in battery(renderer)[1] if f.seed == seed]
     assert results, f"seed {seed} was not drawn in {renderer}"
-    assert unexplained(results), f"seed {seed} in {renderer} passes now: move it from OPEN to REGRESSIONS ({kept})"
+    assert any(f.unexplained for f in results), f"seed {seed} in {renderer} passes now: move it from OPEN to REGRESSIONS ({kept})"
 
 
 # --- negative controls: a cut known to be wrong must fail the battery -----------------------------
