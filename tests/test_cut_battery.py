@@ -73,11 +73,22 @@ REGRESSIONS = [
 # open for them): (seed, renderer, the most unexplained pixels a cut may change there, what was
 # found). test_open_seed_still_fails checks they still fail (the day one passes, the run says so and
 # it moves to REGRESSIONS); every other check holds each of their cuts to that many pixels.
+_NAN_NORMAL = ("; not the cuts': plain draws the same pixel NaN at the same depth, and each cut leaves it "
+               "so (NaN != NaN counted it 'wrong colour' before compare() named NaN colours). A ROUNDED_BOX "
+               "box's face fragment starts a rounding inside the shape in its rounded edge's region (vertices "
+               "far from the origin); bm_hit_round_box rejects the edge cylinder it starts in (near root < 0) "
+               "and takes a farther piece's root inside the shape, normal max(|p| - size, 0) = 0, shaded NaN; "
+               "tests/test_closed_form.py::test_a_start_a_rounding_inside_the_shape_hits_at_once_with_a_unit_"
+               "normal[ROUNDED_BOX] (xfail) is the focused form")
 OPEN = [
-    (2, "preview", 1, "every cut 1 px wrong colour (closed-form hits, main at the merge of h-closed): ROUNDED_BOX, "
-                   "quality 0.25, orthographic"),
-    (80, "preview", 1, "every cut 1 px wrong colour (closed-form hits, main at the merge of h-closed): PER_BOX, open, "
-                    "inside-out, mirrored, near plane cuts boxes"),
+    (2, "preview", 1, "every cut 1 px NaN colour, (64, 24) (closed-form hits, main at c8600c7): ROUNDED_BOX, "
+                   "quality 0.25, orthographic; box 26 of object 2 (vertices 1,300 units out, half 0.0225 x "
+                   "0.203 x 0.0225): float64 hits its +x face's flat part at window depth 0.46267, every "
+                   "picture shows depth 0.47018 (a root 0.012 inside)" + _NAN_NORMAL),
+    (80, "preview", 1, "every cut 1 px NaN colour, (27, 62) (closed-form hits, main at c8600c7): PER_BOX, open, "
+                    "inside-out, mirrored, near plane cuts boxes; box 17 of object 1 (ROUNDED_BOX id, inside-out, "
+                    "vertices 4,600 units out, half 0.259 x 0.304 x 0.329): float64 hits its +z face by the "
+                    "rounded x edge at window depth 0.43752, every picture shows 0.52430" + _NAN_NORMAL),
 ]
 
 
@@ -201,6 +212,24 @@ def test_compare_explains_only_pixels_where_the_large_budget_agrees():
     close = _picture(covered, (0.5 + 3 / 255, 0.5, 0.5), 0.9 + 1e-7)
     found = cut_battery.compare(1, "preview", "x", plain, close, plain, close, PROJECTION)
     assert (found.changed, found.unexplained) == (100, 0)
+
+
+def test_compare_counts_a_nan_colour_in_both_pictures_and_only_it():
+    """A NaN colour at the same pixel and depth in plain and cut (seeds 2 and 80: a closed-form hit's
+    zero normal, every picture alike) is counted as itself, never as a cut's wrong colour; the same
+    pictures without the NaN are unchanged, and a real wrong colour beside it keeps its kind."""
+    covered = np.zeros((cut_battery.H, cut_battery.W), bool)
+    covered[10:20, 10:20] = True
+    plain = _picture(covered, (0.5, 0.5, 0.5), 0.9)
+    assert cut_battery.compare(1, "preview", "x", plain, plain, plain, plain, PROJECTION).changed == 0
+    with_nan = _picture(covered, (0.5, 0.5, 0.5), 0.9)
+    with_nan[0][12, 12, :3] = np.nan
+    found = cut_battery.compare(1, "preview", "x", with_nan, with_nan, with_nan, with_nan, PROJECTION)
+    assert (found.changed, found.unexplained, found.kinds) == (1, 1, {"NaN colour": 1})
+    tinted = (with_nan[0].copy(), with_nan[1])
+    tinted[0][15, 15, 1] = 0.6
+    found = cut_battery.compare(1, "preview", "x", with_nan, tinted, with_nan, tinted, PROJECTION)
+    assert (found.changed, found.unexplained, found.kinds) == (2, 2, {"NaN colour": 1, "wrong colour": 1})
 
 
 def test_ci_seeds_draw_every_trait_of_the_generator():

@@ -290,7 +290,11 @@ def compare(seed, renderer, cut, plain, changed_by_cut, plain_high=None, cut_hig
     needs ``projection``."""
     rgba, depth = plain
     cut_rgba, cut_depth = changed_by_cut
-    changed = np.any(rgba != cut_rgba, axis=-1)
+    # A NaN colour is never a right picture: counted changed and unexplained in either picture (kind
+    # "NaN colour"), also where both hold it at the same pixel, which NaN != NaN would otherwise call
+    # "wrong colour" (issue 36: preview seeds 2 and 80, a closed-form hit's zero normal).
+    nan = np.isnan(rgba).any(axis=-1) | np.isnan(cut_rgba).any(axis=-1)
+    changed = np.any(rgba != cut_rgba, axis=-1) | nan
     if depth is not None:
         changed |= depth != cut_depth
     total = int(changed.sum())
@@ -302,8 +306,8 @@ def compare(seed, renderer, cut, plain, changed_by_cut, plain_high=None, cut_hig
     if high_depth is not None:
         distance, cut_distance = view_distance(high_depth, projection), view_distance(cut_high_depth, projection)
         agree &= ~covered | (np.abs(distance - cut_distance) <= pixel_footprint(distance, projection, high.shape[0]) / 2)
-    bad = changed & ~agree
-    kinds = {}
+    bad = changed & (~agree | nan)
+    kinds = {"NaN colour": int(nan.sum())} if nan.any() else {}
     low_covered, low_cut_covered = rgba[..., 3] > 0, cut_rgba[..., 3] > 0
     kind_masks = {"emptied": low_covered & ~low_cut_covered, "drawn where plain draws nothing": ~low_covered & low_cut_covered}
     both = low_covered & low_cut_covered
@@ -316,7 +320,7 @@ def compare(seed, renderer, cut, plain, changed_by_cut, plain_high=None, cut_hig
     else:
         kind_masks["another colour"] = both
     for name, mask in kind_masks.items():
-        n = int((bad & mask).sum())
+        n = int((bad & mask & ~nan).sum())
         if n:
             kinds[name] = n
     return Found(seed, renderer, cut, changed.size, total, total - int(bad.sum()), kinds)
