@@ -2,7 +2,7 @@
 on llvmpipe (a compute shader, tests/helpers/closed_form.py) against a float64 sphere tracing of the
 exact SDFs to 1e-12 of the box: RAYS rays per preset as fragments cast them (boxes of largest
 half-extent 0.01..1000, eyes 1..10,000 box sizes away, 20 % from an eye inside the box), and the
-torus and link again without the two Newton steps on the SDF that polish the quartic's root
+torus and link again without the Newton step on the SDF that polishes the quartic's root
 (the method's own error). Errors relative to the box's largest half-extent; normal errors in
 degrees; *unresolved*: rays float64 cannot call at float32 (grazing within 0.6 degrees, or missing
 by under 1e-5 of the box), left out.
@@ -30,8 +30,8 @@ def main():
     count = int(sys.argv[1]) if len(sys.argv) > 1 else RAYS
     library = shader_sources.read_glsl("sdf.glsl") + "\n" + shader_sources.read_glsl("raymarch.glsl")
     # bm_hit_link's polish loop taken out: the quartic's roots as solved
-    polish = "  float t = best.w;\n  for (int i = 0; i < 2; ++i) {"
-    unpolished = library.replace(polish, polish.replace("i < 2", "i < 0"))
+    polish = "  float t = best.w;\n  for (int i = 0; i < 1; ++i) {"
+    unpolished = library.replace(polish, polish.replace("i < 1", "i < 0"))
     assert unpolished != library
     rows = []
     for shape, name in enumerate(closed_form.PRESETS):

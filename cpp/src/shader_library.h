@@ -135,6 +135,33 @@ inline vec3 bm_by_extent(vec3 v, vec3 h)
   return r;
 }
 
+// v in the box's own axis order from the order bm_by_extent sorts h into (its inverse: the same
+// swaps, decided alike, undone in reverse).
+inline vec3 bm_from_extent(vec3 v, vec3 h)
+{
+  vec3 s = h;
+  bool first = s.y > 1.001f * s.x;
+  if (first) {
+    s = vec3(s.y, s.x, s.z);
+  }
+  bool second = s.z > 1.001f * s.y;
+  if (second) {
+    s = vec3(s.x, s.z, s.y);
+  }
+  bool third = s.y > 1.001f * s.x;
+  vec3 r = v;
+  if (third) {
+    r = vec3(r.y, r.x, r.z);
+  }
+  if (second) {
+    r = vec3(r.x, r.z, r.y);
+  }
+  if (first) {
+    r = vec3(r.y, r.x, r.z);
+  }
+  return r;
+}
+
 // Exact.
 inline float sdf_preset_box(vec3 p, vec3 h) { return sd_box(p, h); }
 
@@ -280,33 +307,6 @@ inline vec3 bm_ring_occluder_half(float half_length, float ring, float minor, fl
   float w = glm::sqrt(glm::max(minor * minor - a * a, 0.0f));
   float e = glm::sqrt(glm::max((ring + w) * (ring + w) - (ring + a) * (ring + a), 0.0f));
   return k < 2.0f ? vec3(half_length + e, a, a) : vec3(a, e, a);
-}
-
-// v in the box's own axis order from the order bm_by_extent sorts h into (its inverse: the same
-// swaps, decided alike, undone in reverse).
-inline vec3 bm_from_extent(vec3 v, vec3 h)
-{
-  vec3 s = h;
-  bool first = s.y > 1.001f * s.x;
-  if (first) {
-    s = vec3(s.y, s.x, s.z);
-  }
-  bool second = s.z > 1.001f * s.y;
-  if (second) {
-    s = vec3(s.x, s.z, s.y);
-  }
-  bool third = s.y > 1.001f * s.x;
-  vec3 r = v;
-  if (third) {
-    r = vec3(r.y, r.x, r.z);
-  }
-  if (second) {
-    r = vec3(r.x, r.z, r.y);
-  }
-  if (first) {
-    r = vec3(r.y, r.x, r.z);
-  }
-  return r;
 }
 
 // Centre (centre true) or half-extents of occluder box k of shape id `shape` (bm_sdf_by_id's

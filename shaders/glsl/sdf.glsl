@@ -138,6 +138,33 @@ vec3 bm_by_extent(vec3 v, vec3 h)
   return r;
 }
 
+// v in the box's own axis order from the order bm_by_extent sorts h into (its inverse: the same
+// swaps, decided alike, undone in reverse).
+vec3 bm_from_extent(vec3 v, vec3 h)
+{
+  vec3 s = h;
+  bool first = s.y > 1.001 * s.x;
+  if (first) {
+    s = s.yxz;
+  }
+  bool second = s.z > 1.001 * s.y;
+  if (second) {
+    s = s.xzy;
+  }
+  bool third = s.y > 1.001 * s.x;
+  vec3 r = v;
+  if (third) {
+    r = r.yxz;
+  }
+  if (second) {
+    r = r.xzy;
+  }
+  if (first) {
+    r = r.yxz;
+  }
+  return r;
+}
+
 // Exact.
 float sdf_preset_box(vec3 p, vec3 h) { return sd_box(p, h); }
 // Exact.

@@ -139,33 +139,6 @@ float3 bm_ring_occluder_half(float half_length, float ring, float minor, float k
   return k < 2.0 ? float3(half_length + e, a, a) : float3(a, e, a);
 }
 
-// v in the box's own axis order from the order bm_by_extent sorts h into (its inverse: the same
-// swaps, decided alike, undone in reverse).
-float3 bm_from_extent(float3 v, float3 h)
-{
-  float3 s = h;
-  bool first = s.y > 1.001 * s.x;
-  if (first) {
-    s = s.yxz;
-  }
-  bool second = s.z > 1.001 * s.y;
-  if (second) {
-    s = s.xzy;
-  }
-  bool third = s.y > 1.001 * s.x;
-  float3 r = v;
-  if (third) {
-    r = r.yxz;
-  }
-  if (second) {
-    r = r.xzy;
-  }
-  if (first) {
-    r = r.yxz;
-  }
-  return r;
-}
-
 // Centre (centre true) or half-extents of occluder box k of shape id `shape` (bm_sdf_by_id's
 // numbering) in a box of half-extents h, in the preset's own frame (sdf.glsl: the capsule,
 // cylinder, torus and link read the axes by extent, bm_by_extent) mapped back to the box's axes,

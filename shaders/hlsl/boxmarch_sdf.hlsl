@@ -142,6 +142,33 @@ float3 bm_by_extent(float3 v, float3 h)
   return r;
 }
 
+// v in the box's own axis order from the order bm_by_extent sorts h into (its inverse: the same
+// swaps, decided alike, undone in reverse).
+float3 bm_from_extent(float3 v, float3 h)
+{
+  float3 s = h;
+  bool first = s.y > 1.001 * s.x;
+  if (first) {
+    s = s.yxz;
+  }
+  bool second = s.z > 1.001 * s.y;
+  if (second) {
+    s = s.xzy;
+  }
+  bool third = s.y > 1.001 * s.x;
+  float3 r = v;
+  if (third) {
+    r = r.yxz;
+  }
+  if (second) {
+    r = r.xzy;
+  }
+  if (first) {
+    r = r.yxz;
+  }
+  return r;
+}
+
 // Exact.
 float sdf_preset_box(float3 p, float3 h) { return sd_box(p, h); }
 // Exact.
