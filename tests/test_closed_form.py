@@ -60,16 +60,11 @@ def test_the_comparison_sees_a_wrong_preset_and_a_flipped_normal(solved):
 # object's origin, by much more than float32 keeps of the box (issue 36, preview seeds 2 and 80:
 # ROUNDED_BOX boxes 1,200 and 4,600 units out, the start ~1e-4 inside a 0.0225 face, in the
 # rounded edge's region). Where the shape touches the face there, the start lies a hair inside the
-# shape, and the right hit is at once. bm_hit_round_box rejects the edge cylinder the start lies in
-# (its near root a hair behind, te < 0) and takes a farther piece's root, inside the shape, whose
-# normal is max(|p| - size, 0) = 0: the preview shaded it NaN in every picture, plain and cut alike.
-# The torus and link pieces (bm_hit_torus_part) also answer a start inside late or not at all.
-_STARTS_INSIDE_OPEN = {"ROUNDED_BOX", "TORUS", "LINK"}
-
-
-@pytest.mark.parametrize("shape", [pytest.param(s, marks=pytest.mark.xfail(
-    strict=True, reason="issue 36: a start a rounding inside the shape hits late, misses or has no normal"))
-    if s in _STARTS_INSIDE_OPEN else s for s in closed_form.PRESETS])
+# shape, and the right hit is at once. The solves alone (bm_preset_solve) rejected the piece the
+# start lies in (its near root a hair behind) and took a farther piece's root: the rounded box's
+# normal there is max(|p| - size, 0) = 0 (the preview shaded it NaN), the torus and link hit late
+# or missed; bm_preset_hit tests the start first.
+@pytest.mark.parametrize("shape", closed_form.PRESETS)
 def test_a_start_a_rounding_inside_the_shape_hits_at_once_with_a_unit_normal(shape):
     """Face starts of random_rays moved 1e-3 of the box along the ray (inside the box); those the
     float64 SDF puts inside the shape must hit within 2e-3 of the box with a unit normal."""

@@ -4,8 +4,7 @@ pre-pass and resolved passes, three.js's culling, pre-pass and visibility passes
 plain march on seeded random scenes; every pixel a cut changes must be one where plain and cut
 agree when both march with the large step budget.
 
-The slow tier runs CI_SEEDS and every seed of REGRESSIONS and OPEN in each renderer (OPEN: the
-seeds not yet fixed, checked to fail still and held to the pixels they changed); the everyday tier
+The slow tier runs CI_SEEDS and every seed of REGRESSIONS in each renderer; the everyday tier
 checks the comparison itself on made-up pictures and that CI_SEEDS draw every trait the
 generator has. ``python3 -m bench.cut_battery`` runs thousands. Another worktree's add-on and
 shaders: ``PYTHONPATH=OTHER_CHECKOUT/addon python3 -m pytest -m slow tests/test_cut_battery.py``.
@@ -28,6 +27,10 @@ _EDGE_ON = ("culling (and default) 1 px wrong colour (bench.cut_battery seeds 10
             "rasteriser calls back-facing (seen on seed 237) whose own span calls it an entry (more of its box ahead "
             "than behind), 5e-5 window depth in front of the front face; culling dropped it, the front face showed; passes since "
             "presets hit in closed form")
+_NAN = ("(closed-form hits, main at c8600c7; not the cuts': plain drew the same pixel NaN at the same depth): the "
+        "box's face fragment started a rounding inside the shape (vertices far from the origin), where "
+        "bm_hit_round_box took a farther piece's root with normal 0; bm_preset_hit now hits such a start at once "
+        "(bm_face_hit)")
 # Seeds where a cut changed pixels that no step budget explains: (seed, renderer, what it found
 # the day it was kept, main at 20bdfbf, 96 x 72). Each runs every time, in its renderer.
 REGRESSIONS = [
@@ -36,7 +39,10 @@ REGRESSIONS = [
     (16, "preview", "pre-pass 162 px, 151 the box behind; BOX, nested, vertices far, far from the world origin"),
     (19, "preview", "resolved passes 302 px emptied (pre-pass 1); CAPSULE, coincident, vertices far"),
     (55, "preview", "culling 903 px (826 emptied); PER_BOX, quality 0.25, mirrored, near plane cuts boxes"),
-    (80, "preview", "resolved passes 252 px emptied; PER_BOX, open, inside-out, mirrored, near plane cuts boxes"),
+    (80, "preview", "resolved passes 252 px emptied; PER_BOX, open, inside-out, mirrored, near plane cuts boxes; "
+                    "later every cut 1 px NaN colour at (27, 62), a ROUNDED_BOX id 4,600 units out " + _NAN),
+    (2, "preview", "every cut 1 px NaN colour at (64, 24); ROUNDED_BOX 1,300 units out, quality 0.25, orthographic "
+                   + _NAN),
     (58, "r111", "visibility 1,566 px emptied; TORUS, nested, mirrored"),
     (68, "r111", "pre-pass 4 px emptied; an ordinary CYLINDER scene"),
     (75, "r111", "pre-pass 59 px emptied; CYLINDER, inside-out, vertices far, non-uniform scale"),
@@ -69,33 +75,10 @@ REGRESSIONS = [
                      "orthographic"),
     (488, "preview", "culling 1 px wrong colour, the same signature; BOX, long thin, non-uniform scale, orthographic"),
 ]
-# Seeds a cut still changes a pixel of that no step budget explains, not yet fixed (issue 36 stays
-# open for them): (seed, renderer, the most unexplained pixels a cut may change there, what was
-# found). test_open_seed_still_fails checks they still fail (the day one passes, the run says so and
-# it moves to REGRESSIONS); every other check holds each of their cuts to that many pixels.
-_NAN_NORMAL = ("; not the cuts': plain draws the same pixel NaN at the same depth, and each cut leaves it "
-               "so (NaN != NaN counted it 'wrong colour' before compare() named NaN colours). A ROUNDED_BOX "
-               "box's face fragment starts a rounding inside the shape in its rounded edge's region (vertices "
-               "far from the origin); bm_hit_round_box rejects the edge cylinder it starts in (near root < 0) "
-               "and takes a farther piece's root inside the shape, normal max(|p| - size, 0) = 0, shaded NaN; "
-               "tests/test_closed_form.py::test_a_start_a_rounding_inside_the_shape_hits_at_once_with_a_unit_"
-               "normal[ROUNDED_BOX] (xfail) is the focused form")
-OPEN = [
-    (2, "preview", 1, "every cut 1 px NaN colour, (64, 24) (closed-form hits, main at c8600c7): ROUNDED_BOX, "
-                   "quality 0.25, orthographic; box 26 of object 2 (vertices 1,300 units out, half 0.0225 x "
-                   "0.203 x 0.0225): float64 hits its +x face's flat part at window depth 0.46267, every "
-                   "picture shows depth 0.47018 (a root 0.012 inside)" + _NAN_NORMAL),
-    (80, "preview", 1, "every cut 1 px NaN colour, (27, 62) (closed-form hits, main at c8600c7): PER_BOX, open, "
-                    "inside-out, mirrored, near plane cuts boxes; box 17 of object 1 (ROUNDED_BOX id, inside-out, "
-                    "vertices 4,600 units out, half 0.259 x 0.304 x 0.329): float64 hits its +z face by the "
-                    "rounded x edge at window depth 0.43752, every picture shows 0.52430" + _NAN_NORMAL),
-]
-
-
 @pytest.fixture(scope="module")
 def battery(tmp_path_factory):
     """found(renderer): [Found, ...] of the renderer's CI seeds and regression seeds, drawn on first use."""
-    wanted = {r: sorted(set(CI_SEEDS[r]) | {s for s, renderer, *_ in REGRESSIONS + OPEN if renderer == r})
+    wanted = {r: sorted(set(CI_SEEDS[r]) | {s for s, renderer, _ in REGRESSIONS if renderer == r})
               for r in cut_battery.RENDERERS}
     seeds = sorted(set().union(*wanted.values()))
     folder = tmp_path_factory.mktemp("cut_battery")
@@ -117,9 +100,7 @@ def battery(tmp_path_factory):
 
 
 def unexplained(found):
-    """Lines of the findings with more unexplained pixels than an OPEN seed is held to (0 elsewhere)."""
-    allowed = {(seed, renderer): pixels for seed, renderer, pixels, _ in OPEN}
-    return [f.line() for f in found if f.unexplained > allowed.get((f.seed, f.renderer), 0)]
+    return [f.line() for f in found if f.unexplained]
 
 
 @pytest.mark.slow
@@ -138,16 +119,6 @@ def test_regression_seed(battery, seed, renderer, kept):
     results = [f for f in battery(renderer)[1] if f.seed == seed]
     assert results, f"seed {seed} was not drawn in {renderer}"
     assert not unexplained(results), f"kept as: {kept}\nnow: " + "\n".join(unexplained(results))
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("seed, renderer, pixels, kept", OPEN)
-def test_open_seed_still_fails(battery, seed, renderer, pixels, kept):
-    """A seed still open (issue 36) changes pixels no budget explains; the day it does not, this
-    fails: move the seed to REGRESSIONS."""
-    results = [f for f in battery(renderer)[1] if f.seed == seed]
-    assert results, f"seed {seed} was not drawn in {renderer}"
-    assert any(f.unexplained for f in results), f"seed {seed} in {renderer} passes now: move it from OPEN to REGRESSIONS ({kept})"
 
 
 # --- negative controls: a cut known to be wrong must fail the battery -----------------------------

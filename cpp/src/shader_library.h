@@ -213,19 +213,6 @@ inline float sdf_preset_link(vec3 p, vec3 h)
   return sd_link(vec3(q.y, q.x, q.z), glm::max(s.x - s.y, 0.0f), s.y - thickness, thickness);
 }
 
-// q v q* for a unit quaternion q; bm_rotate_vector(v, bm_quat_conjugate(q)) is the inverse
-// rotation.
-inline vec3 bm_rotate_vector(vec3 v, vec4 q)
-{
-  return v + 2.0f * glm::cross(vec3(q.x, q.y, q.z), glm::cross(vec3(q.x, q.y, q.z), v) + q.w * v);
-}
-
-// The inverse rotation of a unit quaternion.
-inline vec4 bm_quat_conjugate(vec4 q)
-{
-  return vec4(-vec3(q.x, q.y, q.z), q.w);
-}
-
 // The SDF preset a shape id picks, sized by the box's half-extents h: the id rounded to the
 // nearest whole number indexes the presets in the preview's menu order (0 box, 1 sphere,
 // 2 rounded box, 3 capsule, 4 cylinder, 5 torus, 6 link); any other id draws the box. Exact
@@ -252,6 +239,19 @@ inline float bm_sdf_by_id(float shape, vec3 p, vec3 h)
     return sdf_preset_link(p, h);
   }
   return sdf_preset_box(p, h);
+}
+
+// q v q* for a unit quaternion q; bm_rotate_vector(v, bm_quat_conjugate(q)) is the inverse
+// rotation.
+inline vec3 bm_rotate_vector(vec3 v, vec4 q)
+{
+  return v + 2.0f * glm::cross(vec3(q.x, q.y, q.z), glm::cross(vec3(q.x, q.y, q.z), v) + q.w * v);
+}
+
+// The inverse rotation of a unit quaternion.
+inline vec4 bm_quat_conjugate(vec4 q)
+{
+  return vec4(-vec3(q.x, q.y, q.z), q.w);
 }
 
 // This box's shape (its shape id, sized by h) blended into its parent's across their boundary:

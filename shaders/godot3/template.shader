@@ -52,12 +52,12 @@ float map(vec3 p, vec3 h, float index)
 }
 
 // The first hit of map()'s shape solved in closed form where it has one (the presets' hits of
-// the library: bm_preset_hit(shape id, ro, rd, h), bm_hit_round_box, ...; xyz the unit normal, w
+// the library: bm_preset_hit(shape id, ro, rd, h), bm_round_box_hit, ...; xyz the unit normal, w
 // the distance, -1.0 a miss), or w = -2.0: march map(). Keep it in step with map(): for a map()
 // of your own, return vec4(0.0, 0.0, 0.0, -2.0).
 vec4 bm_map_hit(vec3 ro, vec3 rd, vec3 h, float index)
 {
-  return bm_hit_round_box(ro, rd, h, 0.1 * min3(h));
+  return bm_round_box_hit(ro, rd, h, 0.1 * min3(h));
 }
 
 /*@MARCH@*/

@@ -207,6 +207,25 @@ float4 bm_nearer_hit(float4 best, float3 n, float t, float slack)
   return best;
 }
 
+// The hit of a ray whose start ro, on a face of the box |p| <= h, lies inside the shape: at once,
+// with that face's normal (the shape's own where it touches the face). A fragment's start is its
+// box face's point rounded, by about 1e-4 units where the vertices lie 1,300 units from the
+// object's origin: where the shape touches that face the start may lie a rounding inside it, where
+// the solves answer late (a farther piece's root) or with no normal (issue 36, cut battery seeds
+// 2 and 80: a NaN colour). Callers test the start with the shape's SDF.
+float4 bm_face_hit(float3 ro, float3 h)
+{
+  float3 a = abs(ro) / h;
+  float3 n = float3(0.0, 0.0, ro.z < 0.0 ? -1.0 : 1.0);
+  if (a.x >= a.y && a.x >= a.z) {
+    n = float3(ro.x < 0.0 ? -1.0 : 1.0, 0.0, 0.0);
+  }
+  else if (a.y >= a.z) {
+    n = float3(0.0, ro.y < 0.0 ? -1.0 : 1.0, 0.0);
+  }
+  return float4(n, 0.0);
+}
+
 // Nearer root of a t^2 + 2 b t + c = 0 (a > 0; h = b^2 - a c >= 0), without the cancellation of
 // (-b - sqrt(h)) / a where the origin lies near the surface.
 float bm_near_root(float a, float b, float c, float h)
@@ -305,6 +324,16 @@ float4 bm_hit_round_box(float3 ro, float3 rd, float3 b, float r)
   float3 outward = max(abs(p) - size, float3(0.0, 0.0, 0.0));
   float3 sp = float3(p.x < 0.0 ? -1.0 : 1.0, p.y < 0.0 ? -1.0 : 1.0, p.z < 0.0 ? -1.0 : 1.0);
   return float4(sp * outward / max(length(outward), 1e-30), t);
+}
+
+// sd_round_box(p, b, r)'s hit for a fragment's ray: a start inside the shape hits at once
+// (bm_face_hit), else bm_hit_round_box's (three.js's and Godot 3's default map).
+float4 bm_round_box_hit(float3 ro, float3 rd, float3 b, float r)
+{
+  if (sd_round_box(ro, b, r) > 0.0) {
+    return bm_hit_round_box(ro, rd, b, r);
+  }
+  return bm_face_hit(ro, b);
 }
 
 // Capsule along x: the segment |x| <= half_length, radius r. The cylinder around the axis where
@@ -507,10 +536,9 @@ float4 bm_hit_link(float3 ro, float3 rd, float half_length, float ring, float mi
   return float4(bm_link_normal(ro + rd * t, half_length, ring), t);
 }
 
-// The first hit of the preset shape id `shape` picks (bm_sdf_by_id's numbering) sized by the box's
-// half-extents h, box-local: (unit normal, t), w = -1.0 where the ray misses. Each preset in its
-// own frame as sdf.glsl sizes it.
-float4 bm_preset_hit(float shape, float3 ro, float3 rd, float3 h)
+// bm_preset_hit's solve for a start outside the shape: each preset in its own frame as sdf.glsl
+// sizes it.
+float4 bm_preset_solve(float shape, float3 ro, float3 rd, float3 h)
 {
   float id = floor(shape + 0.5);
   if (id == 1.0) {
@@ -546,6 +574,17 @@ float4 bm_preset_hit(float shape, float3 ro, float3 rd, float3 h)
     hit.xyz = hit.yxz;
   }
   return float4(bm_from_extent(hit.xyz, h), hit.w);
+}
+
+// The first hit of the preset shape id `shape` picks (bm_sdf_by_id's numbering) sized by the box's
+// half-extents h, box-local: (unit normal, t), w = -1.0 where the ray misses; a start inside the
+// shape hits at once (bm_face_hit).
+float4 bm_preset_hit(float shape, float3 ro, float3 rd, float3 h)
+{
+  if (bm_sdf_by_id(shape, ro, h) > 0.0) {
+    return bm_preset_solve(shape, ro, rd, h);
+  }
+  return bm_face_hit(ro, h);
 }
 
 #endif

@@ -167,7 +167,7 @@ function createBoxmarchMaterial(THREE, options) {
 // map() of the user's own, which is marched.
 function boxmarchClosedForm(map) {
   var text = String(map).replace(/\s+/g, '');
-  if (text === 'returnsd_round_box(p,box_half,0.1*min3(box_half));') return 'bm_hit_round_box(ro, rd, box_half, 0.1 * min3(box_half))';
+  if (text === 'returnsd_round_box(p,box_half,0.1*min3(box_half));') return 'bm_round_box_hit(ro, rd, box_half, 0.1 * min3(box_half))';
   if (text === 'returnbm_sdf_by_id(box_params.x,p,box_half);') return 'bm_preset_hit(box_params.x, ro, rd, box_half)';
   var preset = /^returnsdf_preset_(\w+)\(p,box_half\);$/.exec(text);
   var id = preset ? BOXMARCH_OCCLUDER_PRESETS.indexOf(preset[1].toUpperCase()) : -1;

@@ -196,7 +196,7 @@ _PROBES = [[x * d * 0.1, y * d * 0.1, -d] for d in (1.0, 3.0, 7.0) for x in (-1,
 # The shipped shader's map() body and frame lines, which tests replace.
 SHIPPED_MAP = "return sd_round_box(p, h, 0.1 * min3(h));"
 # bm_map_hit()'s body as shipped (the default rounded box's hit), and the body that marches map()
-SHIPPED_CLOSED_FORM = "return bm_hit_round_box(ro, rd, h, 0.1 * min3(h));"
+SHIPPED_CLOSED_FORM = "return bm_round_box_hit(ro, rd, h, 0.1 * min3(h));"
 MARCH_MAP = "return vec4(0.0, 0.0, 0.0, -2.0);"
 SHIPPED_FRAME = ("  bm_v_axis_z = mat3(WORLD_MATRIX) * NORMAL;\n  bm_v_axis_x = mat3(WORLD_MATRIX) * TANGENT;\n"
                  "  bm_v_axis_y = mat3(WORLD_MATRIX) * BINORMAL;")

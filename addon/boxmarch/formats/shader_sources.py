@@ -121,7 +121,7 @@ def gl_declarations(stage: str, layout: str = "CLASSIC", version: str = "330 cor
 # map() of each preset; `box_half` is set by the fragment stage (shaders/glsl/sdf.glsl).
 PRESET_MAPS = {name: f"float map(vec3 p)\n{{\n  return sdf_preset_{name.lower()}(p, box_half);\n}}\n"
                for name in core.SDF_PRESETS}
-# Each box the preset its shape id picks (shaders/glsl/box_params.glsl, bm_sdf_by_id).
+# Each box the preset its shape id picks (shaders/glsl/sdf.glsl, bm_sdf_by_id).
 PER_BOX = "PER_BOX"
 PRESET_MAPS[PER_BOX] = "float map(vec3 p)\n{\n  return bm_sdf_by_id(box_params.x, p, box_half);\n}\n"
 # Each box's shape blended into its parent's (bm_sdf_blend_parent), blend radius in box_parent_origin.w.

@@ -550,6 +550,24 @@ vec4 bm_nearer_hit(vec4 best, vec3 n, float t, float slack)
   }
   return best;
 }
+// The hit of a ray whose start ro, on a face of the box |p| <= h, lies inside the shape: at once,
+// with that face's normal (the shape's own where it touches the face). A fragment's start is its
+// box face's point rounded, by about 1e-4 units where the vertices lie 1,300 units from the
+// object's origin: where the shape touches that face the start may lie a rounding inside it, where
+// the solves answer late (a farther piece's root) or with no normal (issue 36, cut battery seeds
+// 2 and 80: a NaN colour). Callers test the start with the shape's SDF.
+vec4 bm_face_hit(vec3 ro, vec3 h)
+{
+  vec3 a = abs(ro) / h;
+  vec3 n = vec3(0.0, 0.0, ro.z < 0.0 ? -1.0 : 1.0);
+  if (a.x >= a.y && a.x >= a.z) {
+    n = vec3(ro.x < 0.0 ? -1.0 : 1.0, 0.0, 0.0);
+  }
+  else if (a.y >= a.z) {
+    n = vec3(0.0, ro.y < 0.0 ? -1.0 : 1.0, 0.0);
+  }
+  return vec4(n, 0.0);
+}
 // Nearer root of a t^2 + 2 b t + c = 0 (a > 0; h = b^2 - a c >= 0), without the cancellation of
 // (-b - sqrt(h)) / a where the origin lies near the surface.
 float bm_near_root(float a, float b, float c, float h)
@@ -645,6 +663,15 @@ vec4 bm_hit_round_box(vec3 ro, vec3 rd, vec3 b, float r)
   vec3 outward = max(abs(p) - size, vec3(0.0));
   vec3 sp = vec3(p.x < 0.0 ? -1.0 : 1.0, p.y < 0.0 ? -1.0 : 1.0, p.z < 0.0 ? -1.0 : 1.0);
   return vec4(sp * outward / max(length(outward), 1e-30), t);
+}
+// sd_round_box(p, b, r)'s hit for a fragment's ray: a start inside the shape hits at once
+// (bm_face_hit), else bm_hit_round_box's (three.js's and Godot 3's default map).
+vec4 bm_round_box_hit(vec3 ro, vec3 rd, vec3 b, float r)
+{
+  if (sd_round_box(ro, b, r) > 0.0) {
+    return bm_hit_round_box(ro, rd, b, r);
+  }
+  return bm_face_hit(ro, b);
 }
 // Capsule along x: the segment |x| <= half_length, radius r. The cylinder around the axis where
 // its entry lies along the segment, else the end sphere on that side (a ray along the axis enters
@@ -837,10 +864,9 @@ vec4 bm_hit_link(vec3 ro, vec3 rd, float half_length, float ring, float minor)
   }
   return vec4(bm_link_normal(ro + rd * t, half_length, ring), t);
 }
-// The first hit of the preset shape id `shape` picks (bm_sdf_by_id's numbering) sized by the box's
-// half-extents h, box-local: (unit normal, t), w = -1.0 where the ray misses. Each preset in its
-// own frame as sdf.glsl sizes it.
-vec4 bm_preset_hit(float shape, vec3 ro, vec3 rd, vec3 h)
+// bm_preset_hit's solve for a start outside the shape: each preset in its own frame as sdf.glsl
+// sizes it.
+vec4 bm_preset_solve(float shape, vec3 ro, vec3 rd, vec3 h)
 {
   float id = floor(shape + 0.5);
   if (id == 1.0) {
@@ -877,6 +903,16 @@ vec4 bm_preset_hit(float shape, vec3 ro, vec3 rd, vec3 h)
   }
   return vec4(bm_from_extent(hit.xyz, h), hit.w);
 }
+// The first hit of the preset shape id `shape` picks (bm_sdf_by_id's numbering) sized by the box's
+// half-extents h, box-local: (unit normal, t), w = -1.0 where the ray misses; a start inside the
+// shape hits at once (bm_face_hit).
+vec4 bm_preset_hit(float shape, vec3 ro, vec3 rd, vec3 h)
+{
+  if (bm_sdf_by_id(shape, ro, h) > 0.0) {
+    return bm_preset_solve(shape, ro, rd, h);
+  }
+  return bm_face_hit(ro, h);
+}
 
 
 // The shape in every box, box-local (h = the box's half-extents; index = its number).
@@ -886,12 +922,12 @@ float map(vec3 p, vec3 h, float index)
 }
 
 // The first hit of map()'s shape solved in closed form where it has one (the presets' hits of
-// the library: bm_preset_hit(shape id, ro, rd, h), bm_hit_round_box, ...; xyz the unit normal, w
+// the library: bm_preset_hit(shape id, ro, rd, h), bm_round_box_hit, ...; xyz the unit normal, w
 // the distance, -1.0 a miss), or w = -2.0: march map(). Keep it in step with map(): for a map()
 // of your own, return vec4(0.0, 0.0, 0.0, -2.0).
 vec4 bm_map_hit(vec3 ro, vec3 rd, vec3 h, float index)
 {
-  return bm_hit_round_box(ro, rd, h, 0.1 * min3(h));
+  return bm_round_box_hit(ro, rd, h, 0.1 * min3(h));
 }
 
 // Sphere-traces map(, h, index) from ro along unit rd until a distance falls below epsilon (true), the ray

@@ -30,34 +30,6 @@ static float4 box_parent_origin = float4(0.0, 0.0, 0.0, 0.0);
 static float4 box_parent_q = float4(0.0, 0.0, 0.0, 1.0);
 static float4 box_parent_half = ((float4)(-1.0));
 
-// The SDF preset a shape id picks, sized by the box's half-extents h: the id rounded to the
-// nearest whole number indexes the presets in the preview's menu order (0 box, 1 sphere,
-// 2 rounded box, 3 capsule, 4 cylinder, 5 torus, 6 link); any other id draws the box. Exact
-// (each preset is).
-float bm_sdf_by_id(float shape, float3 p, float3 h)
-{
-  float id = floor(shape + 0.5);
-  if (id == 1.0) {
-    return sdf_preset_sphere(p, h);
-  }
-  if (id == 2.0) {
-    return sdf_preset_rounded_box(p, h);
-  }
-  if (id == 3.0) {
-    return sdf_preset_capsule(p, h);
-  }
-  if (id == 4.0) {
-    return sdf_preset_cylinder(p, h);
-  }
-  if (id == 5.0) {
-    return sdf_preset_torus(p, h);
-  }
-  if (id == 6.0) {
-    return sdf_preset_link(p, h);
-  }
-  return sdf_preset_box(p, h);
-}
-
 // This box's shape (its shape id, sized by h) blended into its parent's across their boundary:
 // the parent's shape evaluated in the parent's frame (parent_origin: its origin in this box's
 // local coordinates; parent_q: its frame relative to this box's; parent_half.xyz its

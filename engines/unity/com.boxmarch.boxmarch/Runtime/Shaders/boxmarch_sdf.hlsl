@@ -215,4 +215,32 @@ float sdf_preset_link(float3 p, float3 h)
   return sd_link(q.yxz, max(s.x - s.y, 0.0), s.y - thickness, thickness);
 }
 
+// The SDF preset a shape id picks, sized by the box's half-extents h: the id rounded to the
+// nearest whole number indexes the presets in the preview's menu order (0 box, 1 sphere,
+// 2 rounded box, 3 capsule, 4 cylinder, 5 torus, 6 link); any other id draws the box. Exact
+// (each preset is).
+float bm_sdf_by_id(float shape, float3 p, float3 h)
+{
+  float id = floor(shape + 0.5);
+  if (id == 1.0) {
+    return sdf_preset_sphere(p, h);
+  }
+  if (id == 2.0) {
+    return sdf_preset_rounded_box(p, h);
+  }
+  if (id == 3.0) {
+    return sdf_preset_capsule(p, h);
+  }
+  if (id == 4.0) {
+    return sdf_preset_cylinder(p, h);
+  }
+  if (id == 5.0) {
+    return sdf_preset_torus(p, h);
+  }
+  if (id == 6.0) {
+    return sdf_preset_link(p, h);
+  }
+  return sdf_preset_box(p, h);
+}
+
 #endif
