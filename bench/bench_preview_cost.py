@@ -20,7 +20,8 @@ threads, which a busy machine disturbs less). Rows:
 * shipped: what the preview draws by default: the pre-pass only where the boxes lie
   occlusion.MIN_LAYERS layers deep or more (the rows above draw it whatever the depth), the
   resolved passes from resolve.MIN_OVERDRAW; + quality 0.5: the knob (occlusion.occluder_count
-  runs no pre-pass below full quality).
+  runs no pre-pass below full quality for a marched shape; the presets, solved in closed form,
+  ignore the knob and keep it).
 
 * + back faces culled, marched: that row with the scene's preset written as a user's text block
   (``return sdf_preset_NAME(p, box_half);``), which the preview marches where every other row
@@ -56,7 +57,7 @@ CONFIGS = (("today", "ANY", False, 1.0, False, False, False, 0.0),
            ("+ resolved passes where 16+ layers deep", "GREATER", True, 1.0, True, True, True, 0.0),
            ("shipped: the pre-pass from 2 layers, the resolved passes from 16", "GREATER", True, 1.0, True, True, True,
             None),
-           ("shipped + quality 0.5 (no pre-pass below quality 1)", "GREATER", True, 0.5, True, True, True, None),
+           ("shipped + quality 0.5", "GREATER", True, 0.5, True, True, True, None),
            ("+ back faces culled, marched (the preset as a user's text)", "GREATER", True, 1.0, False, True, False, 0.0))
 # the rows whose shape is the scene's preset written as a user's text block, which the preview
 # marches (a preset itself is solved in closed form, shaders/glsl/raymarch.glsl bm_preset_hit)

@@ -5,13 +5,16 @@ links of tests/test_engine_threejs_occluders.py:
 * the knob sizes a pixel by the height of what is drawn into: a render target's (useBoxmarchMaterial's
   onBeforeRender, as the pre-pass sizes its own), so the pile drawn into a 100 x 75 target under a
   200 x 150 canvas is the picture of a 100 x 75 canvas, pixel for pixel;
-* below full quality loadBoxmarch sets up no hidden-box pre-pass (boxmarchOccluderShape's gate):
-  the knob draws a box under 4 (1 - quality) pixels with one tap at its centre, which may lie
-  behind its own occluders. The default picture is the one with ``occluders: false``, and the
+* below full quality loadBoxmarch sets up no hidden-box pre-pass for a marched map
+  (boxmarchOccluderShape's gate): the knob draws a box under 4 (1 - quality) pixels with one tap
+  at its centre, which may lie behind its own occluders. The link's preset written as a user's
+  map (marched, its occluders named ``LINK``) draws the picture of ``occluders: false``, and the
   loaded mesh holds no pre-pass (``userData.boxmarchOccluders``), where at quality 1 the same load
-  holds one (the control: the probe sees a pre-pass where there is one). The picture alone cannot
-  show the gate here: far off, the links' occluders are thinner than the pre-pass's rounding
-  margins (bm_occluder_rounding) and draw nothing."""
+  holds one (the control: the probe sees a pre-pass where there is one). The preset's own map is
+  solved in closed form, which takes no one-tap: its pre-pass stays below full quality, the
+  picture the one without it. The picture alone cannot show the gate here: far off, the links'
+  occluders are thinner than the pre-pass's rounding margins (bm_occluder_rounding) and draw
+  nothing."""
 import base64
 import json
 
@@ -28,15 +31,18 @@ W, H = 100, 75
 # the pile from 8 times as far: the links 2-3 px long, under the one-tap size of quality 0.5 and 0.25
 FAR = dict(CAMERA, position=[8 * x for x in CAMERA["position"]])
 QUALITIES = (0.5, 0.25)
+# the link's preset as a user's own map (the material marches it), its occluders named
+MARCHED_LINK_MAP = "return 1.0 * sdf_preset_link(p, box_half);"
 # whether a mesh of the scene holds a pre-pass set up by loadBoxmarch
 PRE_PASS_AFTER = """var held = false;
     scene.traverse(function (object) { if (object.userData.boxmarchOccluders) held = true; });
     return {prePass: held};"""
 
 
-def loader_js(quality, occluders=None, after=""):
-    """The pile as loadBoxmarch draws it at ``quality`` (``occluders``: that option, else left out)."""
-    options = {"map": LINK_MAP, "quality": quality}
+def loader_js(quality, occluders=None, after="", sdf=LINK_MAP):
+    """The pile as loadBoxmarch draws it at ``quality`` with map ``sdf`` (``occluders``: that
+    option, else left out)."""
+    options = {"map": sdf, "quality": quality}
     if occluders is not None:
         options["occluders"] = occluders
     return ("scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, 'pile.glb', "
@@ -71,6 +77,9 @@ def drawn(request, pile):  # noqa: F811 (the fixture imported above)
         default = threejs.render_job(loader_js(quality), W, H, FAR, PRE_PASS_AFTER)
         jobs[f"default {quality}"] = threejs.Job(default.js, lambda out, shot=default.parse: (shot(out), out["prePass"]))
         jobs[f"plain {quality}"] = threejs.render_job(loader_js(quality, False), W, H, FAR)
+        marched = threejs.render_job(loader_js(quality, "LINK", sdf=MARCHED_LINK_MAP), W, H, FAR, PRE_PASS_AFTER)
+        jobs[f"marched {quality}"] = threejs.Job(marched.js, lambda out, shot=marched.parse: (shot(out), out["prePass"]))
+        jobs[f"marched plain {quality}"] = threejs.render_job(loader_js(quality, False, sdf=MARCHED_LINK_MAP), W, H, FAR)
     results = threejs.run_jobs(glb, list(jobs.values()), threejs.shipped_material(release), release,
                                {"pile.glb": glb, "pile.boxmarch.json": sidecar})
     return dict(zip(jobs, results))
@@ -83,10 +92,18 @@ def test_the_knob_sizes_pixels_by_the_render_target_drawn_into(drawn):
 
 
 @pytest.mark.parametrize("quality", QUALITIES)
-def test_no_pre_pass_below_full_quality(drawn, quality):
-    (default, pre_pass), plain = drawn[f"default {quality}"], drawn[f"plain {quality}"].pixels
+def test_no_pre_pass_below_full_quality_for_a_marched_map(drawn, quality):
+    (marched, pre_pass), plain = drawn[f"marched {quality}"], drawn[f"marched plain {quality}"].pixels
     covered = plain[..., 3] > 0
     assert covered.sum() > 20
-    assert np.array_equal(default.pixels, plain)
+    assert np.array_equal(marched.pixels, plain)
     assert not pre_pass
-    assert drawn["default 1.0"][1]  # control: at full quality the same load holds its pre-pass
+    assert drawn["marched 1.0"][1]  # control: at full quality the same load holds its pre-pass
+
+
+@pytest.mark.parametrize("quality", QUALITIES)
+def test_closed_form_map_keeps_its_pre_pass_below_full_quality(drawn, quality):
+    (default, pre_pass), plain = drawn[f"default {quality}"], drawn[f"plain {quality}"].pixels
+    assert (plain[..., 3] > 0).sum() > 20
+    assert np.array_equal(default.pixels, plain)
+    assert pre_pass

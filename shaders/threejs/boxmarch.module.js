@@ -462,15 +462,17 @@ function useBoxmarchBackFaceCulling(THREE, mesh) {
 // shape id (bm_sdf_by_id(box_params.x, ...)), or null: none (a map() of the user's own, whose
 // inside nothing here knows). options.occluders overrides: a preset name (BOX, SPHERE,
 // ROUNDED_BOX, CAPSULE, CYLINDER, TORUS, LINK; any shape containing that preset's shape in the
-// same box), 'PER_BOX', false, or true (as left out). None below full quality (options.quality < 1).
-// Throws for options checkBoxmarchOptions refuses.
+// same box), 'PER_BOX', false, or true (as left out). None below full quality (options.quality < 1)
+// for a marched map. Throws for options checkBoxmarchOptions refuses.
 function boxmarchOccluderShape(options) {
   checkBoxmarchOptions(options);
   var presets = BOXMARCH_OCCLUDER_PRESETS;
   var chosen = options && options.occluders;
   // below full quality the knob's one-tap boxes stand at their centre's depth, which may lie
-  // behind their own occluders: no pre-pass there
-  if (chosen === false || (options && options.quality && options.quality < 1)) return null;
+  // behind their own occluders: no pre-pass there; a closed-form map (the default's included)
+  // takes no one-tap, so its pre-pass stays
+  var marched = options && options.map && !boxmarchClosedForm(options.map);
+  if (chosen === false || (marched && options.quality && options.quality < 1)) return null;
   if (typeof chosen === 'string') return chosen === 'PER_BOX' ? -1 : presets.indexOf(chosen);
   var map = String(options && options.map || '').replace(/\s+/g, '');
   // the default map, a rounded box of radius 0.1 x min3: it holds ROUNDED_BOX's (radius 0.25 x min3)

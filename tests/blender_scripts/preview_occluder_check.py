@@ -73,9 +73,9 @@ occlusion.ENABLED, resolve.ENABLED, occlusion.MIN_LAYERS = True, True, float("in
 result["BELOW_MIN_LAYERS_steps"] = preview.render(scene, camera, W, H, output="STEPS")[0]
 occlusion.MIN_LAYERS = 0.0
 # Below full quality (the pile from 20 times as far: its links under 2 px long, under the knob's
-# one-tap size at 0.5 and 0.25): no pre-pass, whatever the depth (occlusion.occluder_count's gate):
-# the picture is the one without it, and the pre-pass's draws are counted (at full quality, the
-# control, the same view draws them). The picture alone cannot show the gate here: far off, the
+# one-tap size at 0.5 and 0.25): the link's closed form takes no one-tap, so its pre-pass stays
+# (occlusion.occluder_count's gate stops it for marched shapes only): the picture is the one
+# without it, and the pre-pass's draws are counted (at full quality too). The picture alone cannot show the gate here: far off, the
 # links' occluders are thinner than the pre-pass's rounding margins and draw nothing.
 camera.location = 20.0 * Vector((0.4, -3.5, 0.6))
 camera.rotation_euler = (-camera.location).to_track_quat("-Z", "Y").to_euler()
@@ -98,6 +98,10 @@ for quality in (0.5, 0.25, 1.0):
         result[f"Q{quality}_{name}_pre_passes"] = np.array(len(pre_passes))
 occlusion.draw_occluders = draw_occluders
 pile.boxmarch.quality = 1.0
+# the marched shape (PER_BOX_BLEND: each box's shape blended with its parent's) below full quality
+occlusion.ENABLED = True
+for quality in (0.5, 0.25, 1.0):
+    result[f"Q{quality}_PER_BOX_BLEND_count"] = np.array(occlusion.occluder_count("PER_BOX_BLEND", quality))
 camera.location = (0.4, -3.5, 0.6)
 camera.rotation_euler = (-camera.location).to_track_quat("-Z", "Y").to_euler()
 bpy.context.view_layer.update()

@@ -25,9 +25,13 @@ def occluder_count(sdf: str, quality: float = 1.0) -> int:
     """How many pre-pass draws an object of preview shape ``sdf`` makes (0: no pre-pass): the
     preset's occluder boxes (box_params.glsl), all core.occluder_boxes indices for the per-box
     shapes (each box's shape id picks its own), none for a user map(), and none below full
-    ``quality``: the knob's one-tap boxes stand at their centre's depth, which may lie behind
-    their own occluders, so the pre-pass would change the knob's picture."""
-    if not ENABLED or quality < 1.0 or sdf not in core.SDF_PRESETS + (shader_sources.PER_BOX, shader_sources.PER_BOX_BLEND):
+    ``quality`` for a marched shape (PER_BOX_BLEND): the knob's one-tap boxes stand at their
+    centre's depth, which may lie behind their own occluders, so the pre-pass would change the
+    knob's picture. The shapes solved in closed form (shader_sources.CLOSED_FORM_SHAPES) take no
+    one-tap and keep it."""
+    if not ENABLED or sdf not in core.SDF_PRESETS + (shader_sources.PER_BOX, shader_sources.PER_BOX_BLEND):
+        return 0
+    if quality < 1.0 and sdf not in shader_sources.CLOSED_FORM_SHAPES:
         return 0
     if sdf not in core.SDF_PRESETS:
         return core.occluder_boxes("BOX", (1.0, 1.0, 1.0))[0].shape[1]
