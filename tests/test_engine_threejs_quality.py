@@ -70,9 +70,10 @@ def drawn(request, pile):  # noqa: F811 (the fixture imported above)
     release = request.param
     need(threejs.available(release))
     glb, sidecar, _centres, _rotations = pile
-    jobs = {"canvas": threejs.render_job(loader_js(0.25), W, H, CAMERA),
-            "target": threejs.Job(threejs.render_job(loader_js(0.25), 2 * W, 2 * H, CAMERA, TARGET_AFTER).js,
-                                  target_pixels)}
+    # a marched map: the knob sizes marches (a closed-form map takes none)
+    jobs = {"canvas": threejs.render_job(loader_js(0.25, sdf=MARCHED_LINK_MAP), W, H, CAMERA),
+            "target": threejs.Job(threejs.render_job(loader_js(0.25, sdf=MARCHED_LINK_MAP), 2 * W, 2 * H, CAMERA,
+                                                     TARGET_AFTER).js, target_pixels)}
     for quality in (*QUALITIES, 1.0):
         default = threejs.render_job(loader_js(quality), W, H, FAR, PRE_PASS_AFTER)
         jobs[f"default {quality}"] = threejs.Job(default.js, lambda out, shot=default.parse: (shot(out), out["prePass"]))
