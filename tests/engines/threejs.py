@@ -335,18 +335,28 @@ def _serve(files):
     return server
 
 
+def _chromium_temp_base():
+    """Where Chromium's temporary folder goes: Chromium puts its singleton socket at
+    $TMPDIR/org.chromium.Chromium.XXXXXX/SingletonSocket (46 bytes) and aborts where that path
+    passes a Unix socket's 107 bytes; a deep temporary folder (a test's own tmp_path as TMPDIR,
+    under pytest-xdist's per-worker folders) gives way to /tmp."""
+    base = tempfile.gettempdir()
+    return base if len(base) <= 36 else "/tmp"
+
+
 def chromium(url, *mode, budget_ms=30000, timeout_s=None):
     """(exit code, stdout, stderr) of headless Chromium on SwiftShader, with a fresh profile, run on
     ``url`` in ``mode`` (its flags: ``--dump-dom``, or ``--screenshot=PATH``, ``--window-size=W,H``)
     for at most ``budget_ms`` of the page's virtual time; RuntimeError after ``timeout_s`` (None:
     TIMEOUT_S as it is then, which a bench may raise)."""
     timeout_s = TIMEOUT_S if timeout_s is None else timeout_s
-    with tempfile.TemporaryDirectory(prefix="boxmarch-three-") as tmp:
+    with tempfile.TemporaryDirectory(prefix="boxmarch-three-", dir=_chromium_temp_base()) as tmp:
         cmd = [CHROMIUM, "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
                "--no-proxy-server", f"--virtual-time-budget={budget_ms}", f"--user-data-dir={os.path.join(tmp, 'profile')}",
                *mode, url]
         # own session: on timeout every Chromium process (GPU, renderer) is killed with it
-        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+                                env=dict(os.environ, TMPDIR=tmp))
         try:
             stdout, stderr = proc.communicate(timeout=timeout_s)
         except subprocess.TimeoutExpired:
