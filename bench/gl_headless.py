@@ -56,8 +56,18 @@ _logged = set()
 
 
 def program(vertex, fragment):
+    return _linked(((GL.GL_VERTEX_SHADER, vertex), (GL.GL_FRAGMENT_SHADER, fragment)))
+
+
+def compute_program(source):
+    return _linked(((GL.GL_COMPUTE_SHADER, source),))
+
+
+def _linked(stages):
+    """A program of (stage, source) pairs; exits with the driver's log where one fails to compile
+    or the program to link."""
     shaders = []
-    for stage, source in ((GL.GL_VERTEX_SHADER, vertex), (GL.GL_FRAGMENT_SHADER, fragment)):
+    for stage, source in stages:
         shader = GL.glCreateShader(stage)
         GL.glShaderSource(shader, str(source))
         GL.glCompileShader(shader)
@@ -76,6 +86,19 @@ def program(vertex, fragment):
     if not GL.glGetProgramiv(handle, GL.GL_LINK_STATUS):
         sys.exit(f"link failed:\n{GL.glGetProgramInfoLog(handle)}")
     return handle
+
+
+def storage_buffers(values, output_bytes):
+    """``values`` (float32) as shader storage buffer 0 and ``output_bytes`` for the shader to write
+    as buffer 1, bound; buffer 1 stays bound to GL_SHADER_STORAGE_BUFFER for reading back."""
+    values = np.ascontiguousarray(values, np.float32)
+    buffers = GL.glGenBuffers(2)
+    GL.glBindBuffer(GL.GL_SHADER_STORAGE_BUFFER, buffers[0])
+    GL.glBufferData(GL.GL_SHADER_STORAGE_BUFFER, values.nbytes, values, GL.GL_STATIC_DRAW)
+    GL.glBindBufferBase(GL.GL_SHADER_STORAGE_BUFFER, 0, buffers[0])
+    GL.glBindBuffer(GL.GL_SHADER_STORAGE_BUFFER, buffers[1])
+    GL.glBufferData(GL.GL_SHADER_STORAGE_BUFFER, output_bytes, None, GL.GL_DYNAMIC_READ)
+    GL.glBindBufferBase(GL.GL_SHADER_STORAGE_BUFFER, 1, buffers[1])
 
 
 def framebuffer(width, height):

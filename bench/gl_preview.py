@@ -17,7 +17,7 @@ by pass:
 Needs numpy and PyOpenGL (gl_headless.py)."""
 import numpy as np
 
-from bench.gl_headless import GL, program
+from bench.gl_headless import GL, compute_program, program
 
 # BoxmarchPreview's words (preview/draw.py uniform_block_data): occlusion.x (pre-pass ran), .y
 # (its shape id), .z (which boxes a draw takes: 0 all, 1 those not holding the eye, 2 those
@@ -91,7 +91,7 @@ class PreviewObject:
         fullscreen_vertex = str(data["source_fullscreen_vertex"])
         for stage in ("resolve_depth", "composite"):
             self.programs[stage] = program(fullscreen_vertex, data[f"source_fullscreen_{stage}"])
-        self.barrier = _compute_program(BARRIER_SOURCE)
+        self.barrier = compute_program(BARRIER_SOURCE)
         for handle in self.programs.values():
             index = GL.glGetUniformBlockIndex(handle, "_preview")
             if index != GL.GL_INVALID_INDEX:
@@ -280,18 +280,6 @@ def begin_frame(target, width, height):
     GL.glClearColor(0.0, 0.0, 0.0, 0.0)
     GL.glClearDepth(1.0)
     GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
-
-
-def _compute_program(source):
-    shader = GL.glCreateShader(GL.GL_COMPUTE_SHADER)
-    GL.glShaderSource(shader, source)
-    GL.glCompileShader(shader)
-    if not GL.glGetShaderiv(shader, GL.GL_COMPILE_STATUS):
-        raise RuntimeError(f"gl_preview: compute shader: {GL.glGetShaderInfoLog(shader)}")
-    handle = GL.glCreateProgram()
-    GL.glAttachShader(handle, shader)
-    GL.glLinkProgram(handle)
-    return handle
 
 
 def fullscreen_triangle():

@@ -164,27 +164,13 @@ void main()
 GL_SIDE = """
 import sys
 import numpy as np
-from bench.gl_headless import GL, egl_context
+from bench.gl_headless import GL, compute_program, egl_context, storage_buffers
 egl_context()
 data = dict(np.load(sys.argv[1]))
-shader = GL.glCreateShader(GL.GL_COMPUTE_SHADER)
-GL.glShaderSource(shader, str(data["source"]))
-GL.glCompileShader(shader)
-if not GL.glGetShaderiv(shader, GL.GL_COMPILE_STATUS):
-    sys.exit("compute shader: " + str(GL.glGetShaderInfoLog(shader)))
-program = GL.glCreateProgram()
-GL.glAttachShader(program, shader)
-GL.glLinkProgram(program)
+program = compute_program(data["source"])
 GL.glUseProgram(program)
-rays = np.ascontiguousarray(data["rays"], np.float32)
-count = len(rays) // 3
-buffers = GL.glGenBuffers(2)
-GL.glBindBuffer(GL.GL_SHADER_STORAGE_BUFFER, buffers[0])
-GL.glBufferData(GL.GL_SHADER_STORAGE_BUFFER, rays.nbytes, rays, GL.GL_STATIC_DRAW)
-GL.glBindBufferBase(GL.GL_SHADER_STORAGE_BUFFER, 0, buffers[0])
-GL.glBindBuffer(GL.GL_SHADER_STORAGE_BUFFER, buffers[1])
-GL.glBufferData(GL.GL_SHADER_STORAGE_BUFFER, count * 16, None, GL.GL_DYNAMIC_READ)
-GL.glBindBufferBase(GL.GL_SHADER_STORAGE_BUFFER, 1, buffers[1])
+count = len(data["rays"]) // 3
+storage_buffers(data["rays"], count * 16)
 GL.glUniform1i(GL.glGetUniformLocation(program, "count"), count)
 GL.glDispatchCompute((count + 63) // 64, 1, 1)
 GL.glMemoryBarrier(GL.GL_BUFFER_UPDATE_BARRIER_BIT)
