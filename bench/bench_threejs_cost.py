@@ -87,14 +87,7 @@ PIECES = ("empty scene", "boxes, MeshBasicMaterial, front faces", "boxes, MeshBa
 
 TIMING_JOB = """async function (gltf) {
   var W = __SIZE__, H = __SIZE__, cam = __CAMERA__, configs = __CONFIGS__;
-  var renderer = new THREE.WebGLRenderer({canvas: document.createElement('canvas'), antialias: false, alpha: true});
-  renderer.setPixelRatio(1);
-  renderer.setSize(W, H, false);
-  renderer.setClearColor(0x000000, 0);
-  var camera = new THREE.PerspectiveCamera(cam.fov, W / H, cam.near, cam.far);
-  camera.position.fromArray(cam.position);
-  camera.up.fromArray(cam.up);
-  camera.lookAt(new THREE.Vector3().fromArray(cam.target));
+__RENDERER_AND_CAMERA__
   var drawn = [], declared = [];
   for (var i = 0; i < configs.length; i++) {
     var loaded = await loadBoxmarch(THREE, GLTFLoader, 'model.glb', configs[i][1]);
@@ -158,6 +151,19 @@ def three_camera(to_view, eye):
     forward, up = -np.asarray(to_view)[2, :3], np.asarray(to_view)[1, :3]
     return {"position": (TO_Y_UP @ eye[:3]).tolist(), "target": (TO_Y_UP @ (eye[:3] + forward)).tolist(),
             "up": (TO_Y_UP @ up).tolist(), "fov": 40.0, "near": 0.1, "far": 4000.0}
+
+
+# A timing page's renderer (W x H, no antialiasing, cleared transparent) and its camera from
+# three_camera's fields `cam`; the page declares W, H and cam before it.
+RENDERER_AND_CAMERA_JS = """
+  var renderer = new THREE.WebGLRenderer({canvas: document.createElement('canvas'), antialias: false, alpha: true});
+  renderer.setPixelRatio(1);
+  renderer.setSize(W, H, false);
+  renderer.setClearColor(0x000000, 0);
+  var camera = new THREE.PerspectiveCamera(cam.fov, W / H, cam.near, cam.far);
+  camera.position.fromArray(cam.position);
+  camera.up.fromArray(cam.up);
+  camera.lookAt(new THREE.Vector3().fromArray(cam.target));"""
 
 
 # Counts the SDF evaluations of loadBoxmarch's visibility and shade passes (useBoxmarchVisibility),
@@ -255,7 +261,7 @@ def rows_for(name, scene, glb, sidecar, release):
     parts = {"__SIZE__": str(SIZE), "__CAMERA__": json.dumps(three_camera(to_view, eye), allow_nan=False),
              "__CONFIGS__": json.dumps(loaded, allow_nan=False),
              "__REPEATS__": str(REPEATS), "__FRONT_TO_BACK__": str(FRONT_TO_BACK), "__FORCED__": str(FORCED),
-             "__CLOCK_JS__": threejs.CLOCK_JS}
+             "__CLOCK_JS__": threejs.CLOCK_JS, "__RENDERER_AND_CAMERA__": RENDERER_AND_CAMERA_JS}
     js = TIMING_JOB
     for key, value in parts.items():
         js = js.replace(key, value)

@@ -358,14 +358,7 @@ def llvmpipe_points(bpy, name, scene, reference, levels):
 # its picture (coverage as bits, row 0 at the bottom) and its draw calls, then timed in round robin.
 THREEJS_JOB = """async function (gltf) {
   var W = __W__, H = __H__, cam = __CAMERA__, settings = __SETTINGS__, meshes = __MESHES__;
-  var renderer = new THREE.WebGLRenderer({canvas: document.createElement('canvas'), antialias: false, alpha: true});
-  renderer.setPixelRatio(1);
-  renderer.setSize(W, H, false);
-  renderer.setClearColor(0x000000, 0);
-  var camera = new THREE.PerspectiveCamera(cam.fov, W / H, cam.near, cam.far);
-  camera.position.fromArray(cam.position);
-  camera.up.fromArray(cam.up);
-  camera.lookAt(new THREE.Vector3().fromArray(cam.target));
+__RENDERER_AND_CAMERA__
   var scenes = [];
   for (var i = 0; i < settings.length; i++) {
     var loaded = await loadBoxmarch(THREE, GLTFLoader, 'model.glb', settings[i]);
@@ -411,7 +404,7 @@ def swiftshader_points(bpy, name, scene, reference, levels, folder):
     """The scene's points on SwiftShader (three.js r111): one dict per configuration."""
     import base64
 
-    from bench.bench_threejs_cost import exported_glb, three_camera
+    from bench.bench_threejs_cost import RENDERER_AND_CAMERA_JS, exported_glb, three_camera
     from tests.engine_scene import TO_Y_UP
     from tests.engines import threejs
 
@@ -430,7 +423,8 @@ def swiftshader_points(bpy, name, scene, reference, levels, folder):
     parts = {"__W__": str(scene.width), "__H__": str(scene.height), "__REPEATS__": str(REPEATS),
              "__CAMERA__": json.dumps(three_camera(scene.camera[1], scene.camera[2]), allow_nan=False),
              "__SETTINGS__": json.dumps([dict(options, map=LINK_MAP) for _label, options in settings], allow_nan=False),
-             "__MESHES__": json.dumps(meshes, allow_nan=False), "__CLOCK_JS__": threejs.CLOCK_JS}
+             "__MESHES__": json.dumps(meshes, allow_nan=False), "__CLOCK_JS__": threejs.CLOCK_JS,
+             "__RENDERER_AND_CAMERA__": RENDERER_AND_CAMERA_JS}
     js = THREEJS_JOB
     for key, value in parts.items():
         js = js.replace(key, value)
