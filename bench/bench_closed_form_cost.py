@@ -11,7 +11,16 @@ as the materials compile it:
 * floor: the ray read and a vec4 written, nothing solved (the dispatch's own cost per ray);
 * march: bm_march over map() = the preset's sdf_preset_* from the box entry to its exit (the
   materials' defaults: 96 steps, epsilon 1e-4 of the box, no secant) and bm_normal's 3 taps at a hit;
+* march, hidden: the same march with t_end 0, as a fragment behind the pre-pass's depth marches it
+  (one map() then out of its loop; the normal's taps still run, masked: below);
 * closed form: bm_preset_hit;
+* closed form behind an if no lane takes: bm_preset_hit inside ``if (ro.x > 1e30)``, which no ray
+  here passes (the program writes a miss): what a fragment pays for code its lanes skip. llvmpipe
+  (Mesa 22.3, lp_bld_nir_soa.c if_cond) runs an if's body for every lane, masked, where no lane
+  takes it, and SwiftShader likewise (SpirvEmitter::EmitBranchConditional: "TODO: Optimize for
+  case where all lanes take same path"); only a loop stops early, once no lane of the SIMD group
+  goes on (at least one pass of its body). So a bounding test that skips a piece by an if saves
+  nothing on these renderers, and a hidden fragment's early return skips no solve;
 * torus and link only, the closed form with one piece taken out (a profile: wrong pictures, their
   cost): the Newton polish on sd_link, the resolvent cubic's acos / cos / pow (their arguments
   passed through) and, the link only, its two half-tori's quartics (its tubes and normal left).
@@ -62,7 +71,13 @@ MARCH = """float t;
   bool hit = bm_march(ro, rd, span.y, 96, 1e-4 * bm_max3(box_half), 1.0, vec2(0.0), t, steps, d);
   vec3 n = hit ? bm_normal(ro + rd * t, d, bm_normal_tap(box_half)) : vec3(0.0);
   hits[i] = vec4(n, hit ? t : -1.0);"""
+HIDDEN = MARCH.replace("bm_march(ro, rd, span.y,", "bm_march(ro, rd, 0.0,")
 CLOSED = "hits[i] = bm_preset_hit(__ID__, ro, rd, box_half);"
+SKIPPED = """vec4 hit = vec4(0.0, 0.0, 0.0, -1.0);
+  if (ro.x > 1e30) {
+    hit = bm_preset_hit(__ID__, ro, rd, box_half);
+  }
+  hits[i] = hit;"""
 # the closed form's pieces taken out (torus and link): (label, text, its replacement)
 POLISH = "  float t = best.w;\n  for (int i = 0; i < "
 PIECES = (("no Newton polish", POLISH, POLISH + "0 && i < "),
@@ -145,7 +160,9 @@ def main():
     for name in args.presets.split(","):
         shape = closed_form.PRESETS.index(name)
         program = PROGRAM.replace("__NAME__", name.lower()).replace("__ID__", f"{float(shape)}")
-        labelled = [("floor", library, FLOOR), ("march", library, MARCH), ("closed form", library, CLOSED)]
+        labelled = [("floor", library, FLOOR), ("march", library, MARCH),
+                    ("march, hidden (t_end 0)", library, HIDDEN), ("closed form", library, CLOSED),
+                    ("closed form behind an if no lane takes", library, SKIPPED)]
         if name in ("TORUS", "LINK"):
             for label, text, replacement in PIECES[::2] if name == "TORUS" else PIECES:
                 if text not in library:
