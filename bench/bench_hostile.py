@@ -24,7 +24,7 @@ point (each origin on its own box's axis, up to 90 from the point), nested shell
 sizes 1.0001^k numbered in shuffled order, turned at random) and turned flat boxes 200 x 200 x
 0.01. Run it with PYTHONPATH naming another build's add-on folder to time that build:
 
-    python3 -m bench.bench_hostile --containment [--scenes random,thin,...] [BOXES ...]"""
+    python3 -m bench.bench_hostile --containment [--scenes random,thin-x,thin,thin-one-point,shells,flat] [BOXES ...]"""
 import json
 import os
 import subprocess
