@@ -14,13 +14,17 @@ alternately:
 
 Each measurement runs in its own process, so its peak RSS (VmHWM) is its own.
 
-The CONTAINMENT hierarchy on randomly turned long thin boxes (200 x 0.01 x 0.01, issue 36) beside
-as many random boxes (0.05 to 2 on a side), both with random rotations and origins in one cube of
-side 200, for 100,000, 200,000 and 400,000 boxes (or the counts given): wall and CPU time, and
-the CPU time's growth from the count before (n^(4/3) work, the bound this rule meets for lines
-crossing one region, is 2.52x per doubling; linear is 2x):
+The CONTAINMENT hierarchy (issue 36) on the layouts that cost it most beside random boxes, for
+25,000 to 400,000 boxes (or the counts given; ``--scenes`` picks layouts by name): CPU time and its
+growth from the count before (n log n: about 2.1x per doubling; n^(4/3), what lines crossing one
+region of points cost a k-d tree: 2.52x; n^(5/3), planes: 3.17x), and the boxes given a parent.
+Origins in one cube of side 200 unless said: random boxes 0.05 to 2 a side turned at random, long
+thin boxes 200 x 0.01 x 0.01 along the x axis and turned at random, such boxes all crossing one
+point (each origin on its own box's axis, up to 90 from the point), nested shells (one centre,
+sizes 1.0001^k numbered in shuffled order, turned at random) and turned flat boxes 200 x 200 x
+0.01. Run it with PYTHONPATH naming another build's add-on folder to time that build:
 
-    python3 -m bench.bench_hostile --containment [BOXES ...]"""
+    python3 -m bench.bench_hostile --containment [--scenes random,thin-x,thin,thin-one-point,shells,flat] [BOXES ...]"""
 import json
 import os
 import subprocess
@@ -138,34 +142,48 @@ def bake_rows(before, rounds=4):
     return rows
 
 
+CONTAINMENT_SCENES = {"random": "random 0.05-2, turned", "thin-x": "thin 200 x 0.01 x 0.01 along x",
+                      "thin": "thin 200 x 0.01 x 0.01, turned", "thin-one-point": "thin, turned, crossing one point",
+                      "shells": "nested shells, turned, shuffled", "flat": "flat 200 x 200 x 0.01, turned"}
+
+
 def containment_scene(count, kind, seed=0):
-    """(origins, quaternions, half-extents) of ``count`` boxes turned at random, origins in a cube
-    of side 200 (scenes.random_boxes' default spread): "thin" 200 x 0.01 x 0.01, "random" 0.05 to 2 a
-    side."""
+    """(origins, quaternions, half-extents) of ``count`` boxes of one of CONTAINMENT_SCENES."""
     import numpy as np
 
     rng = np.random.default_rng(seed)
     origins = rng.uniform(-100, 100, (count, 3))
     turns = rng.normal(size=(count, 4))
     turns /= np.linalg.norm(turns, axis=1, keepdims=True)
-    half = np.tile([100.0, 0.005, 0.005], (count, 1)) if kind == "thin" else rng.uniform(0.05, 2.0, (count, 3)) / 2
-    return origins, turns.astype(np.float32), half
+    quaternions = turns.astype(np.float32)
+    half = {"flat": [100.0, 100.0, 0.005], "random": None, "shells": None}.get(kind, [100.0, 0.005, 0.005])
+    half = np.tile(half, (count, 1)) if half is not None else rng.uniform(0.05, 2.0, (count, 3)) / 2
+    if kind == "thin-x":
+        quaternions[:] = [0, 0, 0, 1]
+    elif kind == "thin-one-point":  # the box's local x axis in object space, scaled by up to 90
+        x, y, z, w = quaternions.astype(np.float64).T
+        axis = np.stack([1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w)], 1)
+        origins = axis * rng.uniform(-90, 90, (count, 1))
+    elif kind == "shells":
+        origins[:] = 0.0
+        half = np.tile(1.0001 ** rng.permutation(count)[:, None], (1, 3))
+    return origins, quaternions, half
 
 
-def containment_rows(counts):
+def containment_rows(counts, kinds):
     from boxmarch import core
 
     rows, before = [], {}
     for count in counts:
-        for kind in ("random", "thin"):
+        for kind in kinds:
             origins, quaternions, half = containment_scene(count, kind)
-            start, start_cpu = time.perf_counter(), time.process_time()
+            start = time.process_time()
             parent = core.box_hierarchy(origins, quaternions, half, rule="CONTAINMENT")[0]
-            wall, cpu = time.perf_counter() - start, time.process_time() - start_cpu
-            growth = f"{cpu / before[kind]:.2f}x" if kind in before else ""
+            cpu = time.process_time() - start
+            growth = f"{cpu / before[kind]:.2f}x" if before.get(kind) else ""
             before[kind] = cpu
-            rows.append([f"{count:,}", "turned thin 200 x 0.01 x 0.01" if kind == "thin" else "random 0.05-2",
-                         f"{wall:.2f}", f"{cpu:.2f}", growth, f"{int((parent >= 0).sum()):,}"])
+            rows.append([f"{count:,}", CONTAINMENT_SCENES[kind], f"{cpu:.2f}", growth, f"{int((parent >= 0).sum()):,}"])
+            print(rows[-1], file=sys.stderr, flush=True)
     return rows
 
 
@@ -190,9 +208,14 @@ if __name__ == "__main__":
     elif sys.argv[1:2] == ["--bake-child"]:
         bake_child(int(sys.argv[2]), int(sys.argv[3]))
     elif sys.argv[1:2] == ["--containment"]:
-        counts = [int(c) for c in sys.argv[2:]] or [100_000, 200_000, 400_000]
-        print(table(["boxes", "scene", "CONTAINMENT wall s", "CPU s", "CPU growth", "boxes with a parent"],
-                    containment_rows(counts)))
+        args = sys.argv[2:]
+        kinds = list(CONTAINMENT_SCENES)
+        if "--scenes" in args:
+            at = args.index("--scenes")
+            kinds, args = args[at + 1].split(","), args[:at] + args[at + 2:]
+        counts = [int(c) for c in args] or [25_000, 50_000, 100_000, 200_000, 400_000]
+        print(table(["boxes", "scene", "CONTAINMENT CPU s", "growth", "boxes with a parent"],
+                    containment_rows(counts, kinds)))
     elif sys.argv[1:2] == ["--bake"]:
         before = sys.argv[sys.argv.index("--before") + 1] if "--before" in sys.argv else None
         print(table(["boxes", "module", "core.bake best ms", "median ms", "best CPU ms", "validate_mesh CPU ms",

@@ -231,6 +231,73 @@ def test_containment_of_turned_long_thin_boxes_gives_the_parents_of_its_definiti
     assert (parent[40:120] >= 0).sum() > 10 and (parent[40:120] < 40).sum() > 5  # rods do hold boxes here
 
 
+def from_local(quaternions):
+    """Per box, the matrix taking a box-local difference to object space: the inverse of the map
+    the definition applies (glm's rotation by the conjugate quaternion, a linear map whatever the
+    length), shape (n, 3, 3); its columns are the local axes in object space."""
+    q = quaternions.astype(np.float64)
+    u, w = -q[:, :3], q[:, 3]
+    skew = np.zeros((len(q), 3, 3))
+    skew[:, 0, 1], skew[:, 0, 2], skew[:, 1, 2] = -u[:, 2], u[:, 1], -u[:, 0]
+    skew -= skew.transpose(0, 2, 1)
+    to_local = (1 - 2 * (u * u).sum(1))[:, None, None] * np.eye(3) + 2 * w[:, None, None] * skew \
+        + 2 * u[:, :, None] * u[:, None, :]
+    return np.linalg.inv(to_local)
+
+
+def long_flat_and_nested_boxes(seed, count=180):
+    """Boxes that take the k-d tree's costly paths (issue 36), among small ones placed on them:
+    turned and axis-aligned long thin boxes (edges 4 to 1e4 times the others, some of zero
+    thickness, some at the 4:1 ratio where the search changes its test and just below it), long
+    boxes crossing one point, turned flat boxes, nested shells at one centre (sizes from a few
+    values: equal volumes), coincident copies, quaternions off unit length (0.7 to 1.3); the
+    small boxes lie on a long or flat box's faces, ends and corners exactly, just inside and just
+    past them (1e-6 of its largest half-extent is the contract's slack), or anywhere."""
+    rng = np.random.default_rng(seed)
+    turns = rng.normal(size=(count, 4))
+    turns /= np.linalg.norm(turns, axis=1, keepdims=True)
+    turns[rng.random(count) < 0.2] = [0, 0, 0, 1]
+    off_unit = rng.random(count) < 0.2
+    turns[off_unit] *= rng.uniform(0.7, 1.3, (off_unit.sum(), 1))
+    quaternions = turns.astype(np.float32)
+    origins = rng.uniform(-10, 10, (count, 3))
+    half = rng.uniform(0.001, 0.05, (count, 3))
+    big = count // 3
+    kind = rng.integers(0, 6, big)
+    for i in range(big):
+        length = rng.choice([4.0, 3.99, 4.01, 20.0, 1e4])
+        if kind[i] in (0, 1, 2):  # long: x is the long local axis
+            width = rng.choice([0.0, 1e-3, 0.01])
+            half[i] = [max(width, 1e-3) * length if length < 5 else length, width, width * rng.choice([1.0, 0.5])]
+            if kind[i] == 1:  # crossing the point (1, 2, 3)
+                origins[i] = [1.0, 2.0, 3.0] - from_local(quaternions[i:i + 1])[0, :, 0] * rng.uniform(-8, 8)
+        elif kind[i] == 3:  # flat: z thin
+            half[i] = [rng.uniform(2, 20), rng.uniform(2, 20), rng.choice([0.0, 1e-3])]
+        elif kind[i] == 4:  # shells at one centre
+            origins[i] = [-2.0, 0.0, 0.0]
+            half[i] = rng.choice([0.5, 1.0, 2.0], 3)
+        elif i:  # a copy of an earlier box
+            origins[i], half[i], quaternions[i] = origins[i - 1], half[i - 1], quaternions[i - 1]
+    back = from_local(quaternions)
+    for i in range(big, count):
+        if rng.random() < 0.2:
+            continue
+        holder = rng.integers(0, big)
+        local = half[holder] * rng.choice([-1.0, 0.0, 1.0], 3) * rng.choice([1.0, 0.3], 3)
+        slack = 1e-6 * half[holder].max()
+        local += rng.choice([0.0, -0.5, 0.5, 1.5], 3) * slack
+        origins[i] = origins[holder] + back[holder] @ local
+    return origins, quaternions, half
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_containment_of_long_flat_and_nested_boxes_gives_the_parents_of_its_definition(seed):
+    origins, quaternions, half = long_flat_and_nested_boxes(seed)
+    parent = core.box_hierarchy(origins, quaternions, half, rule="CONTAINMENT")[0]
+    assert parent.tolist() == definition_containment(origins, quaternions, half).tolist()
+    assert (parent[60:] >= 0).sum() > 40  # the small boxes are held
+
+
 def test_the_definitions_see_ties_and_nesting_and_catch_a_wrong_parent():
     # Box 1 and 2 are equal and share box 0's origin; box 3 sits in both, on box 2's face.
     origins = np.float64([[0, 0, 0], [0, 0, 0], [0, 0, 0], [1, 0, 0], [2, 0, 0]])

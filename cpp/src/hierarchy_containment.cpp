@@ -5,14 +5,19 @@
 // among them. The first box to claim an origin is the smallest larger box holding it, which is
 // the definition, so every origin is claimed at most once. The unclaimed origins live in a k-d
 // tree (kd_tree.h) that counts them per node: a box reads only nodes with unclaimed origins
-// whose bounds its oriented box may reach (a test on the box's own axes, not a bounding
-// sphere), so nested boxes and boxes at one origin cost about what spread boxes do. A long thin
-// box crossing a region of n origins reads the leaves along it, about (n / 8)^(1/3) of them at
-// any turn: n such boxes cost n^(4/3) (1.26x more work per box at twice the boxes; telling
-// whether any of n points lies on any of n lines is Hopcroft's problem, which no known method
-// decides in near-linear time). The origins are kept in the tree's order beside it, so a leaf's
-// points are read in one run rather than one cache miss each. Every claim is decided by the
-// exact inside test.
+// whose bounds its oriented box may reach, so nested boxes and boxes at one origin cost about
+// what spread boxes do. A node is tested against the box's own axes and the object's (misses);
+// a long box (longest edge 4 times the next or more) against its centre line widened by its
+// cross-section instead (misses_line: a slab clip, about as tight as the full separating-axis
+// test and a third of the arithmetic), so a turned long thin box reads only the nodes its line
+// passes through. Cost: a box reads the nodes its bounds meet. A long thin box crossing a region
+// of m origins still meets about (m / 8)^(1/3) leaves and about 5 times as many nodes above them,
+// so n such boxes cost n^(4/3) (2.52x per doubling; deciding whether any of n points lies on any
+// of n lines is Hopcroft's problem, with no known near-linear method), and a flat box crossing
+// the region meets about (m / 8)^(2/3) leaves: n^(5/3) (3.17x per doubling; simplex range
+// searching in linear space takes about m^(2/3) per query, Chazelle's lower bound). The origins
+// are kept in the tree's order beside it, so a leaf's points are read in one run rather than one
+// cache miss each. Every claim is decided by the exact inside test.
 #include "internal.h"
 #include "kd_tree.h"
 
@@ -46,7 +51,13 @@ glm::dvec3 inside_bounds(const double* half_extents, size_t j) {
 struct Holder {
     glm::dvec3 origin, bounds, rows[3];
     glm::dvec3 reach{INFINITY};  // half-size along each object axis of what the bounds can hold
-    double length2 = 0.0;        // the quaternion's squared length
+    // A long box (its longest edge at least 4 times the next) is read as its centre line: the
+    // segment t * axis, |t| <= half_length, widened by `widen` along each object axis (see
+    // misses_line); other boxes, and maps far from a rotation or infinite bounds, by misses.
+    bool long_box = false;
+    glm::dvec3 axis{0.0}, inverse_axis{0.0}, widen{0.0};
+    double half_length = 0.0;
+    double length2 = 0.0;  // the quaternion's squared length
 
     glm::dquat to_local;
 
@@ -79,12 +90,63 @@ struct Holder {
             for (int a = 0; a < 3; ++a) r += std::abs(back[a][d]) * bounds[a];
             if (std::isfinite(r)) reach[d] = r * (1.0 + 1e-6);
         }
+        // Every held difference d has |d[k]| <= reach[k], so glm's rotation of it is off by less
+        // than e = 1e-9 (1 + 2 length2) |d|_1 on each local axis (the margin misses takes): d
+        // lies in the bounds widened by e, that is at t * axis plus sum over the other local axes
+        // a of s_a * back[a] (|t| <= bounds[longest] + e, |s_a| <= bounds[a] + e), within the
+        // segment widened by sum |back[a]| (bounds[a] + e) per object axis; 1e-9 of the largest
+        // of those terms more covers the rounding of the inverse (condition below 1e3), and 1e-9
+        // of the half-length that of its sum.
+        const double reach_sum = reach.x + reach.y + reach.z;
+        if (largest * largest_back < 1e3 && std::isfinite(reach_sum)) {
+            const double e = 1e-9 * (1.0 + 2.0 * length2) * reach_sum;
+            double edge[3];
+            for (int a = 0; a < 3; ++a) edge[a] = bounds[a] * glm::length(back[a]);
+            int longest = 0;
+            for (int a = 1; a < 3; ++a)
+                if (edge[a] > edge[longest]) longest = a;
+            const double next = std::max(edge[(longest + 1) % 3], edge[(longest + 2) % 3]);
+            if (edge[longest] >= 4.0 * next) {
+                long_box = true;
+                axis = back[longest];
+                half_length = (bounds[longest] + e) * (1.0 + 1e-9);
+                double largest_term = half_length * largest_back;
+                for (int a = 0; a < 3; ++a)
+                    if (a != longest)
+                        widen += glm::abs(back[a]) * (bounds[a] + e),
+                                largest_term = std::max(largest_term, (bounds[a] + e) * largest_back);
+                widen += 1e-9 * largest_term;
+                for (int d = 0; d < 3; ++d) inverse_axis[d] = axis[d] != 0.0 ? 1.0 / axis[d] : 0.0;
+            }
+        }
     }
 
     // The inside test: the point p (an origin) lies in the box's bounds.
     bool holds(const double* p) const {
         const glm::dvec3 local = to_local * (glm::dvec3(p[0], p[1], p[2]) - origin);
         return std::abs(local.x) <= bounds.x && std::abs(local.y) <= bounds.y && std::abs(local.z) <= bounds.z;
+    }
+
+    // For a long box, true when no origin inside the node's bounds can pass the inside test: the
+    // held differences in the node, within [lo, hi] - origin (rounding is monotonic), lie on the
+    // segment widened (see the constructor) only where the segment's parameter t meets every
+    // axis's slab [lo - widen, hi + widen] / axis[d] and |t| <= half_length; each slab is taken
+    // 1e-9 of its ends wider for the rounding of the sums and the division. A NaN (an overflowed
+    // difference) is never a reason to skip the node.
+    bool misses_line(const KdTree::Node& n) const {
+        double first = -half_length, last = half_length;
+        for (int d = 0; d < 3; ++d) {
+            const double lo = n.lo[d] - origin[d] - widen[d], hi = n.hi[d] - origin[d] + widen[d];
+            if (inverse_axis[d] == 0.0) {
+                if (lo - 1e-9 * std::abs(lo) > 0.0 || hi + 1e-9 * std::abs(hi) < 0.0) return true;
+                continue;
+            }
+            double from = lo * inverse_axis[d], to = hi * inverse_axis[d];
+            if (from > to) std::swap(from, to);
+            const double slack = 1e-9 * (std::abs(from) + std::abs(to));
+            first = std::max(first, from - slack), last = std::min(last, to + slack);
+        }
+        return first > last;
     }
 
     // True when no origin inside the node's bounds can pass the inside test: every difference
@@ -137,7 +199,7 @@ struct Unclaimed {
         if (!live[node]) return 0;
         ++work.nodes;
         const KdTree::Node& n = tree.nodes[node];
-        if (h.misses(n)) return 0;
+        if (h.long_box ? h.misses_line(n) : h.misses(n)) return 0;
         uint32_t claimed = 0;
         if (n.children) {
             claimed = claim(n.children, h, parent, j) + claim(n.children + 1, h, parent, j);

@@ -195,13 +195,16 @@ enum class HierarchyRule : int {
 // is the j < i nearest to it (ties: lowest j; a distance that overflows to infinity is never
 // taken). Neither rule compares every pair. Containment visits the boxes from the
 // smallest up, each claiming the unclaimed origins of smaller boxes its bounds hold from a k-d
-// tree of the origins (nodes tested against the box's own axes and the object axes, claimed
-// origins dropped), so nested boxes and shared origins stay near O(box_count log box_count);
-// a long thin box crossing a region of n origins reads about (n / 8)^(1/3) leaves along it, so
-// such boxes cost O(box_count^(4/3)) (points on lines: Hopcroft's problem, with no known
-// near-linear method) (measured: the work per box grows by 1.07x to 1.28x from 20,000 to 40,000
-// boxes on those scenes, tests/cpp/test_hierarchy.cpp); a box with an infinite half-extent
-// holds every origin. Chain descends a k-d tree of the
+// tree of the origins (nodes tested against the box's own axes and the object axes, a long box's
+// against its centre line; claimed origins dropped), so random, nested and clustered boxes and
+// shared origins stay near O(box_count log box_count). The bound is what the boxes' bounds meet:
+// n long thin boxes crossing one region of n origins each meet about (n / 8)^(1/3) leaves,
+// O(n^(4/3)) in all (points on lines: Hopcroft's problem, with no known near-linear method), and
+// n flat boxes crossing it about (n / 8)^(2/3) leaves each, O(n^(5/3)) (linear-space simplex
+// range searching: about n^(2/3) per query at best); no arrangement costs more than O(n^2)
+// (measured: bench/bench_hostile.py --containment, docs/BENCHMARKS.md; work per box on 20,000
+// and 40,000 boxes, tests/cpp/test_hierarchy.cpp); a box with an infinite half-extent holds
+// every origin. Chain descends a k-d tree of the
 // origins, nearer side first, skipping nodes without a lower box or farther than the nearest
 // found: about O(box_count log box_count) for every arrangement tested (clusters any distance
 // apart, one origin, curves). Chain runs on all cores, Containment on one; the parents are those
