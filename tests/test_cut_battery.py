@@ -31,6 +31,9 @@ _NAN = ("(closed-form hits, main at c8600c7; not the cuts': plain drew the same 
         "box's face fragment started a rounding inside the shape (vertices far from the origin), where "
         "bm_hit_round_box took a farther piece's root with normal 0; bm_preset_hit now hits such a start at once "
         "(bm_face_hit)")
+_PAST_FAR = ("(bench.cut_battery seeds 300-699 at 3bba224, closed-form hits): plain draws hits past the far plane at "
+             "window depth 1.0 (clamped); the visibility pass kept 1.0, and the shade pass bounded its march at the "
+             "crossing of depth 1.0 + bm_shade_margin, short of the hit, so nothing was shaded there")
 # Seeds where a cut changed pixels that no step budget explains: (seed, renderer, what it found
 # the day it was kept, main at 20bdfbf, 96 x 72). Each runs every time, in its renderer.
 REGRESSIONS = [
@@ -74,6 +77,10 @@ REGRESSIONS = [
     (441, "preview", "culling 1 px wrong colour, the same signature; BOX, quality 0.5, long thin, non-uniform scale, "
                      "orthographic"),
     (488, "preview", "culling 1 px wrong colour, the same signature; BOX, long thin, non-uniform scale, orthographic"),
+    (381, "preview", "resolved passes 5 px emptied " + _PAST_FAR + "; SPHERE, quality 0.25, scale 0.00144, long thin, "
+                     "nested, coincident, inside-out, open, mirrored, vertices far, non-uniform scale, perspective"),
+    (485, "preview", "resolved passes 83 px emptied " + _PAST_FAR + "; LINK, quality 0.25, scale 0.00116, long thin, "
+                     "nested, vertices far, mirrored, coincident, open, inside-out, perspective"),
 ]
 @pytest.fixture(scope="module")
 def battery(tmp_path_factory):
