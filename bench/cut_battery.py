@@ -7,6 +7,7 @@ counts, kinds).
 
     PYTHONPATH=addon python3 -m bench.cut_battery --scenes 2000 --renderer all
     PYTHONPATH=OTHER_CHECKOUT/addon python3 -m bench.cut_battery ...   # another worktree's add-on and shaders
+    PYTHONPATH=addon python3 -m bench.cut_battery --generator mid-depth-ortho ...   # cut_battery.GENERATORS
 
 Scenes are built in bpy processes of --chunk seeds each; three.js draws --batch scenes per page.
 """

@@ -94,8 +94,11 @@ OPEN = [
                      "1.8e-5, under float32's step there) has more of its box ahead than behind (span -1.5e-3, 5.1e-3) "
                      "and hits at 1.5e-4; culling drops it and no front face covers that pixel; LINK, quality 0.5, "
                      "scale 0.00289, nested, coincident, inside-out (another object), non-uniform scale, perspective"),
-    (771, "preview", "culling, resolved and default 2 px wrong colour, cause not found; PER_BOX, scale 38.6, eye "
-                     "inside a box, nested, coincident, perspective"),
+    (771, "preview", "culling, resolved and default 2 px wrong colour: at (1, 16) and (25, 91) plain's winner is a "
+                     "front face (its hit at window depth 0.99990225), the cut's the eye box's march from the eye, "
+                     "which writes its far side's depth, the same float there: a tie LESS_EQUAL gives the last "
+                     "drawn, and the cuts draw the eye's boxes apart; PER_BOX, scale 38.6, eye inside a box, nested, "
+                     "coincident, perspective"),
 ]
 
 
@@ -246,3 +249,18 @@ def test_ci_seeds_draw_every_trait_of_the_generator():
             "eye inside a box", "near plane cuts boxes", "orthographic", "perspective"} <= traits
     scales = [float(c["traits"][0].split(" ")[1]) for c in drawn]
     assert min(scales) < 1e-2 and max(scales) > 1e2
+
+
+def test_the_depth_generators_draw_what_they_say():
+    """bench.cut_battery --generator: mid-depth-ortho puts the view's centre at window depth 0.5 of
+    an orthographic camera, the vertices around their object's origin; depth-hostile draws each of
+    its traits on seeds 0-199 (docs/BENCHMARKS.md, the occluder depth margin)."""
+    for seed in range(20):
+        spec = cut_battery.mid_depth_ortho_scene(seed)
+        camera = spec["camera"]
+        distance = np.linalg.norm(np.subtract(camera["position"], camera["target"]))
+        assert "ortho" in camera and "fov" not in camera
+        assert abs((distance - camera["near"]) / (camera["far"] - camera["near"]) - 0.5) < 1e-9
+        assert distance > 1e4 * camera["ortho"] * 0.99 and all(ob["offset"] == [0.0] * 3 for ob in spec["objects"])
+    traits = {t for s in range(200) for t in cut_battery.depth_hostile_scene(s)["traits"]}
+    assert {"near plane far nearer", "far plane far farther", "vertices 1e3-1e4 out", "grazing"} <= traits
