@@ -7,6 +7,7 @@ counts, kinds).
 
     PYTHONPATH=addon python3 -m bench.cut_battery --scenes 2000 --renderer all
     PYTHONPATH=OTHER_CHECKOUT/addon python3 -m bench.cut_battery ...   # another worktree's add-on and shaders
+    PYTHONPATH=addon python3 -m bench.cut_battery --generator mid-depth-ortho ...   # cut_battery.GENERATORS
 
 Scenes are built in bpy processes of --chunk seeds each; three.js draws --batch scenes per page.
 """
@@ -19,7 +20,7 @@ from bench.common import table
 from tests.helpers import cut_battery
 
 
-def run(seeds, renderers, chunk, batch, log=print):
+def run(seeds, renderers, chunk, batch, log=print, generator=cut_battery.scene):
     """[Found, ...] of every seed in every renderer, and the seconds each renderer took."""
     found, seconds = [], defaultdict(float)
     three = [r for r in renderers if r != "preview"]
@@ -27,7 +28,8 @@ def run(seeds, renderers, chunk, batch, log=print):
         part = list(seeds[start:start + chunk])
         with tempfile.TemporaryDirectory(prefix="boxmarch-cut-battery-") as folder:
             began = time.perf_counter()
-            drawn = cut_battery.draw_in_blender(part, folder, preview="preview" in renderers, export=bool(three))
+            drawn = cut_battery.draw_in_blender(part, folder, preview="preview" in renderers, export=bool(three),
+                                                generator=generator)
             seconds["blender"] += time.perf_counter() - began
             for seed, arrays in drawn.items():
                 if "error" in arrays:
@@ -36,7 +38,7 @@ def run(seeds, renderers, chunk, batch, log=print):
                     found += cut_battery.preview_findings(seed, arrays)
             for release in three:
                 began = time.perf_counter()
-                found += cut_battery.draw_in_threejs(part, folder, release, batch)
+                found += cut_battery.draw_in_threejs(part, folder, release, batch, generator=generator)
                 seconds[release] += time.perf_counter() - began
         log(f"{min(start + chunk, len(seeds))} of {len(seeds)} scenes")
     return found, seconds
@@ -61,15 +63,18 @@ def main(argv=None):
     parser.add_argument("--renderer", choices=("all", *cut_battery.RENDERERS), default="all")
     parser.add_argument("--chunk", type=int, default=200, help="seeds per bpy process")
     parser.add_argument("--batch", type=int, default=40, help="scenes per three.js page (one shape per page)")
+    parser.add_argument("--generator", choices=tuple(cut_battery.GENERATORS), default="battery",
+                        help="the battery's scenes, or made hostile to the occluders' depth rounding")
     args = parser.parse_args(argv)
     renderers = cut_battery.RENDERERS if args.renderer == "all" else (args.renderer,)
     seeds = range(args.first, args.first + args.scenes)
-    found, seconds = run(seeds, renderers, args.chunk, args.batch)
+    generator = cut_battery.GENERATORS[args.generator]
+    found, seconds = run(seeds, renderers, args.chunk, args.batch, generator=generator)
     print(summary(found))
     print("seconds: " + ", ".join(f"{k} {v:.0f}" for k, v in seconds.items()))
     for f in found:
         if f.unexplained:
-            print(f.line() + "  traits: " + ", ".join(cut_battery.scene(f.seed)["traits"]))
+            print(f.line() + "  traits: " + ", ".join(generator(f.seed)["traits"]))
 
 
 if __name__ == "__main__":

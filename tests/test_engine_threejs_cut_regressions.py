@@ -20,6 +20,10 @@ emptied at 200 x 150 on r111, each measured with the other fixes in place):
 * the pile mirrored (scale -1 along x), ``visibilityPass: true``: 14,410 px, all it covered (the composite, a
   child of the mesh, is wound clockwise under the mirroring matrix and was culled:
   createBoxmarchScreenMaterial draws both sides).
+* the pile at window depth 0.5 under an orthographic camera 100,000 units away (clip range 1,000
+  to 199,000) with bm_occluder_limit's margin set to 0: 39 px (r180) and 27 px (r111) with the
+  pre-pass, 1,001 px with the visibility passes, in both; none with the margin (there
+  bm_depth_rounding pushes the occluders back by almost nothing: their clip z is about 0).
 The mirrored pile with the default cuts (pre-pass, culling) passed before: it keeps every cut
 checked on a mirroring matrix.
 """
@@ -52,6 +56,11 @@ def far(camera, offset):
 
 DISTANT_CAMERA = dict(NEAR_CAMERA, position=(np.array(NEAR_CAMERA["position"]) * 40 / 3.5).tolist(), fov=4,
                       near=0.01, far=1000)
+
+# An orthographic camera 100,000 units away whose clip range puts the pile at window depth 0.5
+# (the Blender preview's mid_depth_ortho, tests/test_cut_regressions.py)
+MID_DEPTH_ORTHO = {"position": (np.array(NEAR_CAMERA["position"]) / np.linalg.norm(NEAR_CAMERA["position"]) * 1e5).tolist(),
+                   "target": [0.0, 0.0, 0.0], "ortho": 1.0, "near": 1e3, "far": 2e5 - 1e3}
 
 
 def pile_arrays(offset=0.0, opened=0, flipped=False):
@@ -114,6 +123,8 @@ CASES = {
     "distant, visibility passes": ("pile", DISTANT_CAMERA, {"map": BOX_MAP, "visibilityPass": True}),
     "mirrored": ("pile mirrored", NEAR_CAMERA, {"map": BOX_MAP}),
     "mirrored, visibility passes": ("pile mirrored", NEAR_CAMERA, {"map": BOX_MAP, "visibilityPass": True}),
+    "mid-depth orthographic": ("pile", MID_DEPTH_ORTHO, {"map": BOX_MAP}),
+    "mid-depth orthographic, visibility passes": ("pile", MID_DEPTH_ORTHO, {"map": BOX_MAP, "visibilityPass": True}),
 }
 
 
@@ -129,7 +140,8 @@ def drawn(request, exported):
                                        camera))
     served = {f"{name}.{kind}": data for name, pair in files.items()
               for kind, data in zip(("glb", "boxmarch.json"), pair)}
-    shots = threejs.run_jobs(files["pile"][0], jobs, threejs.shipped_material(release), release, served)
+    # a page of 24 pictures: more than threejs.TIMEOUT_S on a loaded 2-core machine
+    shots = threejs.run_jobs(files["pile"][0], jobs, threejs.shipped_material(release), release, served, 600)
     return {case: (shots[2 * k], shots[2 * k + 1]) for k, case in enumerate(CASES)}, truth
 
 

@@ -151,7 +151,10 @@ void main()
   if (winner < BM_NO_HIT) {
     float nearest = uintBitsToFloat(winner);
     float reach = bm_depth_crossing(c0, c1, 2.0 * (nearest - bm_shade_margin()) - 1.0);
-    float beyond = bm_depth_crossing(c0, c1, 2.0 * (nearest + bm_shade_margin()) - 1.0);
+    // a kept 1.0 stands for every hit at or past the far plane (clamped, as the plain draw's depth
+    // is): no bound beyond it, nor a tap at it (issue 36, cut battery seeds 381 and 485: hits past
+    // the far plane, t beyond the crossing of depth 1 + the margin, were never shaded)
+    float beyond = nearest < 1.0 ? bm_depth_crossing(c0, c1, 2.0 * (nearest + bm_shade_margin()) - 1.0) : 1e30;
     bool hidden = !from_eye && gl_FragCoord.z > nearest + bm_shade_margin();
     int taps = 0;
     // (a march from the eye writes no nearer than its far side, clamped as every depth here is:

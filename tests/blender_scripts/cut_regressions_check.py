@@ -25,13 +25,17 @@ W, H = 200, 150
 SIZE = np.array([0.3, 0.25, 0.2])
 COUNT = 300
 # name: (vertices' offset from the object's origin, every n-th box opened, camera distance, lens (mm),
-# near plane)
+# near plane); the orthographic camera's (ortho_scale, far plane) in ORTHO
 SCENES = {"pile": (0.0, 0, 3.5, 50.0, 0.1), "offset_100": (100.0, 0, 3.5, 50.0, 0.1),
           "offset_1000": (1000.0, 0, 3.5, 50.0, 0.1), "open": (0.0, 3, 3.5, 50.0, 0.1),
-          "distant": (0.0, 0, 40.0, 50.0 * 40.0 / 3.5 / 2.0, 0.01)}
+          "distant": (0.0, 0, 40.0, 50.0 * 40.0 / 3.5 / 2.0, 0.01),
+          "mid_depth_ortho": (0.0, 0, 1e5, 50.0, 1e3)}
+# far plane 2 x distance - near: the pile at window depth 0.5, where bm_depth_rounding pushes its occluders
+# back by almost nothing (their clip z is ~0) and its depth spans fewer float steps than its boxes' faces lie apart
+ORTHO = {"mid_depth_ortho": (2.6, 2e5 - 1e3)}
 
 
-def build(offset, opened, distance, lens, near):
+def build(offset, opened, distance, lens, near, ortho=None):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     rng = np.random.default_rng(1)
@@ -58,6 +62,9 @@ def build(offset, opened, distance, lens, near):
     camera.rotation_euler = (target - camera.location).to_track_quat("-Z", "Y").to_euler()
     camera.data.lens = lens
     camera.data.clip_start, camera.data.clip_end = near, 100.0 if distance < 10.0 else 1000.0
+    if ortho:
+        camera.data.type = "ORTHO"
+        camera.data.ortho_scale, camera.data.clip_end = ortho
     scene.camera = camera
     bpy.context.view_layer.update()
     return scene, camera, centres, rotations, ob
@@ -66,7 +73,7 @@ def build(offset, opened, distance, lens, near):
 result = {"resolved_available": resolve.available()}
 occlusion.MIN_LAYERS, resolve.MIN_OVERDRAW = 0.0, 0.0  # each cut whatever the depth of the boxes
 for name, settings in SCENES.items():
-    scene, camera, centres, rotations, ob = build(*settings)
+    scene, camera, centres, rotations, ob = build(*settings, ORTHO.get(name))
     if name == "pile":
         result.update(centres=centres, rotations=rotations, matrix_world=np.array(ob.matrix_world))
         result["view"], result["projection"] = preview.camera_matrices(scene, camera, W, H)

@@ -224,6 +224,84 @@ def scene(seed):
             "camera": camera, "three_camera": three_camera, "traits": traits}
 
 
+def _camera_moved(spec, position):
+    """``spec`` with its camera at ``position`` (Blender's frame), three.js's camera to match."""
+    camera = spec["camera"]
+    camera["position"] = np.asarray(position, np.float64).tolist()
+    three = {k: v for k, v in camera.items() if k not in ("position", "target")}
+    three.update(position=(TO_Y_UP @ np.asarray(camera["position"])).tolist(),
+                 target=(TO_Y_UP @ np.asarray(camera["target"])).tolist(), up=(TO_Y_UP @ [0.0, 0.0, 1.0]).tolist())
+    spec["three_camera"] = three
+    return spec
+
+
+def depth_hostile_scene(seed):
+    """The battery's scene of ``seed`` made hostile to the depth rounding of the occluders
+    (raymarch.glsl bm_occluder_limit, bm_depth_rounding; docs/BENCHMARKS.md): the near plane 10 to
+    10,000 times nearer (depths near 1), an orthographic camera's far plane up to 1,000 times
+    farther, vertices 1e3 to 1e4 units from their object's origin, axis-aligned boxes seen within
+    1e-4 to 1e-1 rad of a face plane; each with its own chance, from its own random stream."""
+    spec = scene(seed)
+    rng = np.random.default_rng([3636, seed])
+    traits, camera = spec["traits"], spec["camera"]
+    if rng.random() < 0.7:
+        camera["near"] *= 10.0 ** -rng.uniform(1, 4)
+        traits.append("near plane far nearer")
+    if "ortho" in camera and rng.random() < 0.7:
+        camera["far"] *= 10.0 ** rng.uniform(0, 3)
+        traits.append("far plane far farther")
+    for ob in spec["objects"]:
+        if rng.random() < 0.7:
+            direction = rng.normal(size=3)
+            ob["offset"] = (direction / np.linalg.norm(direction) * 10.0 ** rng.uniform(3, 4)).tolist()
+            if "vertices 1e3-1e4 out" not in traits:
+                traits.append("vertices 1e3-1e4 out")
+    position = np.asarray(camera["position"])
+    if rng.random() < 0.5:
+        traits.append("grazing")
+        for ob in spec["objects"]:
+            ob["rotations"] = np.tile(np.eye(3), (len(ob["rotations"]), 1, 1)).tolist()
+            ob["rotation"] = np.eye(3).tolist()
+            ob["parent_scale"] = [1.0, 1.0, 1.0]
+        target = np.asarray(camera["target"])
+        axis = np.zeros(3)
+        axis[rng.integers(0, 3)] = rng.choice([-1.0, 1.0])
+        tilt = rng.normal(size=3)
+        tilt -= axis * (tilt @ axis)
+        direction = axis + tilt / np.linalg.norm(tilt) * 10.0 ** rng.uniform(-4, -1)
+        if abs(direction[2]) > 0.999 * np.linalg.norm(direction):  # Blender's camera tracks with world Z up
+            direction[0] += 1e-2
+        position = target + direction / np.linalg.norm(direction) * np.linalg.norm(position - target)
+    return _camera_moved(spec, position)
+
+
+def mid_depth_ortho_scene(seed):
+    """The battery's scene of ``seed`` seen by an orthographic camera 1e4 to 1e6 times its view's
+    half-height away, its far plane twice that less the near plane, so the boxes lie at window
+    depth about 0.5, their vertices around their object's origin: there an occluder's clip z is
+    about 0, raymarch.glsl bm_depth_rounding pushes it back by almost nothing, and a box's face
+    lies less than a float step of depth in front of its own occluder (docs/BENCHMARKS.md)."""
+    spec = scene(seed)
+    rng = np.random.default_rng([3737, seed])
+    camera = spec["camera"]
+    eye, target = np.asarray(camera["position"]), np.asarray(camera["target"])
+    half_height = camera.get("ortho") or 0.5 * float(np.linalg.norm(eye - target))
+    distance = half_height * 10.0 ** rng.uniform(4, 6)
+    camera.pop("fov", None)
+    camera["ortho"] = float(half_height)
+    camera["near"] = float(distance * 10.0 ** -rng.uniform(0.5, 3))
+    camera["far"] = float(2.0 * distance - camera["near"])
+    for ob in spec["objects"]:
+        ob["offset"] = [0.0, 0.0, 0.0]
+    spec["traits"] = [t for t in spec["traits"] if t not in ("perspective", "eye inside a box", "near plane cuts boxes",
+                                                             "vertices far from the origin")] + ["mid-depth orthographic"]
+    return _camera_moved(spec, target + (eye - target) / np.linalg.norm(eye - target) * distance)
+
+
+# Scene generators by name (bench.cut_battery --generator): seed -> the JSON-ready scene.
+GENERATORS = {"battery": scene, "depth-hostile": depth_hostile_scene, "mid-depth-ortho": mid_depth_ortho_scene}
+
+
 def mesh_arrays(spec):
     """(positions, edges, face_starts, face_sizes, corner_verts) of an object's mesh: its boxes
     moved by its offset (float32, as Blender stores them), the open boxes' first face deleted,
@@ -347,8 +425,9 @@ def _with_meshes(spec):
     return spec
 
 
-def draw_in_blender(seeds, folder, preview=True, export=True, cuts=None):
-    """Builds, bakes and (``preview``) draws each seed's scene plain and with each of ``cuts``
+def draw_in_blender(seeds, folder, preview=True, export=True, cuts=None, generator=scene):
+    """Builds, bakes and (``preview``) draws each seed's scene (``generator``'s: a value of
+    GENERATORS) plain and with each of ``cuts``
     (PREVIEW_CUTS when None) in one bpy process, and (``export``) exports it with the GLTF preset
     as ``folder``/scene_SEED.glb; returns {seed: {"error": str} or the preview's arrays}. The
     boxmarch package drawn is the one this Python imports (PYTHONPATH=OTHER/addon: another
@@ -359,7 +438,7 @@ def draw_in_blender(seeds, folder, preview=True, export=True, cuts=None):
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     specs = folder / "scenes.json"
-    specs.write_text(json.dumps({"scenes": [_with_meshes(scene(s)) for s in seeds], "width": W, "height": H,
+    specs.write_text(json.dumps({"scenes": [_with_meshes(generator(s)) for s in seeds], "width": W, "height": H,
                                  "high_steps": HIGH_STEPS, "preview": preview, "export": export,
                                  "plain": PREVIEW_PLAIN,
                                  "cuts": PREVIEW_CUTS if cuts is None else cuts}))
@@ -407,12 +486,12 @@ def _rgba(shot):
     return shot.pixels.astype(np.float64) / 255.0, None
 
 
-def _pages(keys, batch):
+def _pages(keys, batch, generator=scene):
     """(seed, ...) keys in pages of at most ``batch`` seeds each, one shape per page: a page
     compiles each material it draws once (SwiftShader: about a second of CPU each)."""
     by_shape = {}
     for key in keys:
-        by_shape.setdefault(scene(key[0])["shape"], []).append(key)
+        by_shape.setdefault(generator(key[0])["shape"], []).append(key)
     pages = []
     for group in by_shape.values():
         seeds = list(dict.fromkeys(key[0] for key in group))
@@ -422,11 +501,11 @@ def _pages(keys, batch):
     return pages
 
 
-def draw_in_threejs(seeds, folder, release, batch=40, cuts=None):
+def draw_in_threejs(seeds, folder, release, batch=40, cuts=None, generator=scene):
     """Found per three.js cut (THREEJS_CUTS when ``cuts`` is None) of each seed exported into
     ``folder``: every scene drawn plain and with each cut at the material's default maxSteps, in
     pages of ``batch`` scenes of one shape; then, in as few pages, plain and each cut that changed
-    a pixel again at HIGH_STEPS."""
+    a pixel again at HIGH_STEPS. ``generator``: the one the seeds were exported from."""
     from tests.engines import threejs
 
     cuts = THREEJS_CUTS if cuts is None else cuts
@@ -436,14 +515,14 @@ def draw_in_threejs(seeds, folder, release, batch=40, cuts=None):
     drawn = {}
 
     def draw(keys):
-        for page in _pages(keys, batch):
+        for page in _pages(keys, batch, generator):
             page_seeds = list(dict.fromkeys(key[0] for key in page))
             files = {}
             for s in page_seeds:
                 for name in (f"scene_{s}.glb", f"scene_{s}.boxmarch.json"):
                     files[name] = (folder / name).read_bytes()
             shots = threejs.run_jobs(files[f"scene_{page_seeds[0]}.glb"],
-                                     [threejs_job(s, scene(s), configs[n], steps) for s, n, steps in page],
+                                     [threejs_job(s, generator(s), configs[n], steps) for s, n, steps in page],
                                      material, release, files, PAGE_TIMEOUT_S)
             drawn.update((key, _rgba(shot)) for key, shot in zip(page, shots))
 
