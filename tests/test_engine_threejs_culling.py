@@ -135,7 +135,11 @@ MANY_JS = """async function () {
   var few = boxmarchTestCubes(THREE, 4), numbers = few.getAttribute('bmOffsetZIndex');
   var unindexed = boxmarchClosedOutward(few.toNonIndexed());
   numbers.setY(few.index.array[37], 0);  // the second cube's first triangle reaches into the first cube
-  return {closed: closed, lastTurned: lastTurned, unindexed: unindexed, spanning: boxmarchClosedOutward(few)};
+  var far = boxmarchTestCubes(THREE, 4), tiny = boxmarchTestCubes(THREE, 4), p = far.getAttribute('position').array;
+  var q = tiny.getAttribute('position').array;
+  for (var i = 0; i < p.length; i++) { p[i] += 511; q[i] = 511 + 1e-5 * q[i]; }  // 511 units out: 2 and 2e-5 across
+  return {closed: closed, lastTurned: lastTurned, unindexed: unindexed, spanning: boxmarchClosedOutward(few),
+          far: boxmarchClosedOutward(far), tinyFar: boxmarchClosedOutward(tiny)};
 }""".replace("__CUBES__", CUBES_JS).replace("__COUNT__", str(MANY_CUBES))
 
 
@@ -144,4 +148,7 @@ def test_closed_outward_check_answers_for_470_000_boxes(release, monkeypatch):
     need(threejs.available(release))
     monkeypatch.setattr(threejs, "TIMEOUT_S", 300)  # a loaded machine; the time itself is the bench's
     out = threejs.run_page(b"", MANY_JS, threejs.shipped_material(release), release)
-    assert out == {"closed": True, "lastTurned": False, "unindexed": True, "spanning": False}
+    # cubes 2e-5 across 511 units out (under a float32 step's 256 there: mesh_data.CULL_MIN_STEPS) keep
+    # their back faces; 2 across they are culled
+    assert out == {"closed": True, "lastTurned": False, "unindexed": True, "spanning": False, "far": True,
+                   "tinyFar": False}

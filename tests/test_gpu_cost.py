@@ -359,6 +359,12 @@ def test_closed_outward_accepts_only_closed_boxes_wound_outward():
     turned = box[triangles[:, 0]] == 2
     one_inward[turned] = triangles[turned][:, ::-1]
     assert not mesh_data.closed_outward(positions, one_inward, origins, box)
+    # 511 units out the boxes stay culled; made 1e-4 of their size there (under CULL_MIN_STEPS float32
+    # steps across: their facing and box-local ray may disagree, cut battery seed 940) they are not
+    far = np.array([511.0, 0.0, 0.0])
+    assert mesh_data.closed_outward((positions + far).astype(np.float32), triangles, origins + far, box)
+    tiny = (1e-4 * (positions - origins[box]) + origins[box] + far).astype(np.float32)
+    assert not mesh_data.closed_outward(tiny, triangles, origins + far, box)
 
 
 def test_a_box_the_near_plane_cuts_draws_no_occluders():

@@ -366,9 +366,15 @@ function boxmarchCornerWelder(geometry, grouped) {
 // by (mesh_data.closed_outward) applied to the triangles the file carries, box by box
 // (boxmarchTrianglesByBox; false where a triangle spans boxes): its corners welded by position
 // (boxmarchCornerWelder), each directed edge once and its reverse once, and its signed volume
-// positive. Then a box's back faces are its far side, hidden by its own front. Time linear in the
+// positive, and every edge of its triangles at least BOXMARCH_CULL_MIN_STEPS float32 steps of its
+// farthest coordinate long. Then a box's back faces are its far side, hidden by its own front. Time linear in the
 // corners (a hash table of the directed edges sized and reused as the welder's); memory typed
 // arrays of the triangles' count and of the largest box's corners.
+// A box only so many of float32's steps across, at its vertices' distance from the object's origin,
+// is drawn from rounded vertices whose facing and box-local ray may disagree: its back faces are
+// kept (mesh_data.CULL_MIN_STEPS; cut battery seed 940: boxes 1.8e-5 across, 511 units out).
+var BOXMARCH_CULL_MIN_STEPS = 256;
+
 function boxmarchClosedOutward(geometry) {
   var position = geometry.getAttribute('position');
   var corners = geometry.index ? geometry.index.array.length : position.count;
@@ -383,7 +389,14 @@ function boxmarchClosedOutward(geometry) {
     return slot;
   }
   for (var box = 0; box < grouped.count; box++) {
-    var n = welder.weld(box), stamp = box + 1, volume = 0, c, slot;
+    var n = welder.weld(box), stamp = box + 1, volume = 0, c, slot, farthest = 0, shortest = Infinity;
+    for (c = 0; c < 3 * n; c++) farthest = Math.max(farthest, Math.abs(xyz[c]));
+    for (c = 0; c < n; c++) {
+      var e = c - c % 3 + (c + 1) % 3, dx = xyz[3 * e] - xyz[3 * c], dy = xyz[3 * e + 1] - xyz[3 * c + 1];
+      var dz = xyz[3 * e + 2] - xyz[3 * c + 2];
+      shortest = Math.min(shortest, Math.sqrt(dx * dx + dy * dy + dz * dz));
+    }
+    if (farthest > 0 && shortest < BOXMARCH_CULL_MIN_STEPS * Math.pow(2, Math.floor(Math.log2(farthest)) - 23)) return false;
     for (c = 0; c < n; c += 3) {
       for (var k = 0; k < 3; k++) {
         var a = id[c + k], b = id[c + (k + 1) % 3];

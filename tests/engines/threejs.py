@@ -224,7 +224,7 @@ FRAGMENTS_AFTER = counting_js("void main() {", "void main() {\n  gl_FragColor = 
 
 
 # A page function (no model needed) making a BufferGeometry of ``count`` cubes of half-extent 1,
-# 3 units apart along x, box numbers 0 .. count - 1 in bmOffsetZIndex.y, each face's 4 corners its
+# 3 units apart on a grid 80 cubes wide and deep (box b at 3 (b % 80, b / 80 % 80, b / 6,400)), box numbers 0 .. count - 1 in bmOffsetZIndex.y, each face's 4 corners its
 # own vertices as the glTF export splits them, every triangle wound outward, indexed (Uint32): the
 # shape of the export that boxmarchClosedOutward reads; ``boxData``: also the attributes
 # boxmarchSealedTriangles reads (bmOffsetXY and bmOffsetZIndex.x: f, the box-local vector from the
@@ -247,7 +247,9 @@ CUBES_JS = """function boxmarchTestCubes(THREE, count, boxData) {
           offset[2 * (base + k) + 1] = -position[at + 1];
           number[2 * (base + k)] = -position[at + 2];
         }
-        position[at] += 3 * b;
+        position[at] += 3 * (b % 80);  // 470,000 cubes within 240 units, each 2 across: many float32 steps
+        position[at + 1] += 3 * ((b / 80 | 0) % 80);
+        position[at + 2] += 3 * (b / 6400 | 0);
         number[2 * (base + k) + 1] = b;
       }
       index.set([base, base + 1, base + 2, base, base + 2, base + 3], 36 * b + 6 * f);
