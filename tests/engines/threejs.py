@@ -224,11 +224,12 @@ FRAGMENTS_AFTER = counting_js("void main() {", "void main() {\n  gl_FragColor = 
 
 
 # A page function (no model needed) making a BufferGeometry of ``count`` cubes of half-extent 1,
-# 3 units apart on a grid 80 cubes wide and deep (box b at 3 (b % 80, b / 80 % 80, b / 6,400)), box numbers 0 .. count - 1 in bmOffsetZIndex.y, each face's 4 corners its
-# own vertices as the glTF export splits them, every triangle wound outward, indexed (Uint32): the
-# shape of the export that boxmarchClosedOutward reads; ``boxData``: also the attributes
-# boxmarchSealedTriangles reads (bmOffsetXY and bmOffsetZIndex.x: f, the box-local vector from the
-# corner to the box's origin; bmHalfXY, bmHalfZ: 1).
+# 3 units apart on a grid 80 cubes wide and deep (cube b at 3 (b % 80, b / 80 % 80, b / 6,400)),
+# box numbers 0 .. count - 1 in bmOffsetZIndex.y, each face's 4 corners its own vertices as the
+# glTF export splits them, every triangle wound outward, indexed (Uint32): the shape of the export
+# that boxmarchClosedOutward reads; ``boxData``: also the attributes boxmarchSealedTriangles reads
+# (bmOffsetXY and bmOffsetZIndex.x: f, the box-local vector from the corner to the box's origin;
+# bmHalfXY, bmHalfZ: 1).
 CUBES_JS = """function boxmarchTestCubes(THREE, count, boxData) {
   var faces = [[0, 1, 2], [0, 2, 1], [1, 2, 0], [1, 0, 2], [2, 0, 1], [2, 1, 0]];  // axis, u, v: + then - side
   var corners = [[-1, -1], [1, -1], [1, 1], [-1, 1]];
