@@ -1021,6 +1021,11 @@ void fragment()
   vec3 ray = perspective ? bm_v_obj_pos - (object_from_world * vec4(CAMERA_MATRIX[3].xyz, 1.0)).xyz
                          : (object_from_world * vec4(-CAMERA_MATRIX[2].xyz, 0.0)).xyz;
   float eye_distance = length(ray);
+  // a fragment whose position rounds to the camera's (vertices far from the object's origin, the
+  // near plane close) has no ray: it draws nothing rather than a NaN
+  if (!(eye_distance > 0.0)) {
+    discard;
+  }
   vec3 rd = normalize(bm_to_local(ray / eye_distance, x, y, z));
   vec3 ro = -f;
   vec2 span = bm_box_span(ro, rd, h);

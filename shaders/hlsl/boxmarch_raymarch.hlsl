@@ -61,6 +61,9 @@ bm_hit bm_raymarch_in_frame(float3 obj_pos, float3 obj_camera, float3 f, float3 
   float3 ro = -f;
   float3 ray_object = obj_pos - obj_camera;
   float eye_distance = length(ray_object);
+  // a fragment whose position rounds to the camera's (vertices far from the object's origin, the
+  // near plane close) has no ray: it draws nothing rather than a NaN
+  if (!(eye_distance > 0.0)) return o;
   float3 rd = normalize(bm_to_local(ray_object / eye_distance, x, y, z));
   float2 span = bm_box_span(ro, rd, box_half);
   float t_end = span.y;
