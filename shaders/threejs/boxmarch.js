@@ -152,6 +152,8 @@ function createBoxmarchMaterial(THREE, options) {
     // WebGL compiles an extension's directives only once the context has handed it out.
     material.onBeforeCompile = function (shader, renderer) { renderer.getContext().getExtension('EXT_conservative_depth'); };
     material.userData.boxmarchSkinning = !!options.skinning;
+    // the box holding the eye must be drawn apart (useBoxmarchEyeBox)
+    material.userData.boxmarchDeclaresDepth = true;
     return material;
   }
   // r129 and later skin every SkinnedMesh and warn about an unknown `skinning` property.
@@ -193,8 +195,9 @@ function boxmarchObjectEye(THREE, mesh, camera, inverse, eye) {
 
 // Gives a mesh the material and keeps its object-space eye up to date before every draw; with
 // frontToBack, also draws its boxes front to back (sortBoxmarchFrontToBack before every draw).
-// The box holding the eye is drawn apart (useBoxmarchEyeBox). Throws, changing nothing, when the
-// material's skinning flag (where it is read) does not match the mesh.
+// Where the material declares its depth (the raw material, r163 and later), the box holding the
+// eye is drawn apart (useBoxmarchEyeBox). Throws, changing nothing, when the material's skinning
+// flag (where it is read) does not match the mesh.
 function useBoxmarchMaterial(THREE, mesh, material, frontToBack) {
   var skinning = material.userData.boxmarchSkinning;
   if (skinning !== undefined && skinning !== !!mesh.isSkinnedMesh) {
@@ -215,7 +218,7 @@ function useBoxmarchMaterial(THREE, mesh, material, frontToBack) {
     material.uniformsNeedUpdate = true;
     if (frontToBack) sortBoxmarchFrontToBack(THREE, mesh, camera);
   };
-  useBoxmarchEyeBox(THREE, mesh);
+  if (material.userData.boxmarchDeclaresDepth) useBoxmarchEyeBox(THREE, mesh);
   return mesh;
 }
 
@@ -225,8 +228,10 @@ function useBoxmarchMaterial(THREE, mesh, material, frontToBack) {
 // own material throws away the fragments that would march from the eye (BM_EYE_BOX_APART): such a
 // march hits nearer than its fragment (the box's far side), which the raw material's
 // layout(depth_greater) forbids it to write; the variant declares no depth and writes the hit's
-// own, so a box nested in the eye's box behind that hit stays hidden. A SkinnedMesh's eye-box mesh
-// is skinned by the same skeleton. Returns that mesh (also mesh.userData.boxmarchEyeBox).
+// own, so a box nested in the eye's box behind that hit stays hidden (a material that declares
+// nothing writes it itself). useBoxmarchMaterial calls it where the material declares its depth,
+// useBoxmarchBackFaceCulling where mesh draws front faces only. A SkinnedMesh's eye-box mesh is
+// skinned by the same skeleton. Returns that mesh (also mesh.userData.boxmarchEyeBox).
 function useBoxmarchEyeBox(THREE, mesh) {
   if (mesh.userData.boxmarchEyeBox) return mesh.userData.boxmarchEyeBox;
   mesh.material.defines = Object.assign({}, mesh.material.defines, { BM_EYE_BOX_APART: '' });
@@ -458,12 +463,13 @@ function boxmarchMaterialVariant(THREE, mesh, defines, side) {
 // return at once, yet SwiftShader runs such a fragment's lanes on through the march (measured:
 // docs/BENCHMARKS.md), so a face never rasterised is the saving. The material draws front faces
 // only (three.js flips the winding for a mirroring matrix); the box holding the eye, whose march
-// starts at the eye, is drawn apart with both sides anyway (useBoxmarchEyeBox). A SkinnedMesh is
-// left drawing both sides (skinning may bend a box). Returns whether the back faces are culled.
+// starts at the eye, is drawn apart with both sides (useBoxmarchEyeBox). A SkinnedMesh is left
+// drawing both sides (skinning may bend a box). Returns that eye-box mesh, or null where the back
+// faces are not culled.
 function useBoxmarchBackFaceCulling(THREE, mesh) {
-  if (mesh.isSkinnedMesh || !boxmarchClosedOutward(mesh.geometry)) return false;
+  if (mesh.isSkinnedMesh || !boxmarchClosedOutward(mesh.geometry)) return null;
   mesh.material.side = THREE.FrontSide;
-  return true;
+  return useBoxmarchEyeBox(THREE, mesh);
 }
 
 // Hidden boxes (docs/ENGINES.md, three.js): a depth pre-pass of each box's conservative
@@ -815,7 +821,7 @@ function useBoxmarchVisibility(THREE, mesh, shape) {
   fallback.matrixAutoUpdate = false;
   fallback.frustumCulled = mesh.frustumCulled;
   fallback.onBeforeRender = marching;
-  fallback.onAfterRender = mesh.onAfterRender;  // the box holding the eye (useBoxmarchEyeBox)
+  fallback.onAfterRender = mesh.onAfterRender;  // the box holding the eye, where drawn apart (useBoxmarchEyeBox)
   useBoxmarchOccluders(THREE, fallback, shape);
   var options = { minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter, depthBuffer: true, stencilBuffer: true };
   // stencilBuffer: a 24-bit depth buffer on r111 too (its depth-only renderbuffer is 16-bit)
@@ -1232,8 +1238,8 @@ var BOXMARCH_FRAGMENT = [
   '  vec3 local_hit = ro + rd * t;',
   '  vec4 clip = c0 + c1 * t;',
   // Never nearer than the rasterised face: what the raw material's layout(depth_greater) declares
-  // (BM_DEPTH_GREATER); but a march from the eye, drawn apart where that is declared
-  // (useBoxmarchEyeBox), writes its hit's own depth, nearer than its fragment (the far side), in
+  // (BM_DEPTH_GREATER); but a march from the eye (drawn apart where that is declared,
+  // useBoxmarchEyeBox) writes its hit's own depth, nearer than its fragment (the far side), in
   // front of the eye (0 where the eye is in the shape); at most the far plane, as the depth buffer
   // clamps what it is given (the passes compare it).
   '  float depth = 0.5 + 0.5 * clip.z / clip.w;',
