@@ -1173,8 +1173,8 @@ var BOXMARCH_FRAGMENT = [
   // A fragment of the far side only marches when the eye is inside the box (the preview's rule).
   '  bool fromEye = !gl_FrontFacing && span.x + span.y < 0.0;',
   '  if (fromEye) {',
-  // the box holding the eye is drawn apart (useBoxmarchEyeBox), by a variant that may write its
-  // hit's depth nearer than the fragment
+  // the box holding the eye is drawn apart (useBoxmarchEyeBox), by a variant that may write the
+  // depth of its hit, nearer than the fragment
   '#if defined(BM_EYE_BOX_APART) && !defined(BM_EYE_BOX_ONLY)',
   '    drawn = false; discard;',
   '#endif',
@@ -1239,7 +1239,7 @@ var BOXMARCH_FRAGMENT = [
   '  vec4 clip = c0 + c1 * t;',
   // Never nearer than the rasterised face: what the raw material's layout(depth_greater) declares
   // (BM_DEPTH_GREATER); but a march from the eye (drawn apart where that is declared,
-  // useBoxmarchEyeBox) writes its hit's own depth, nearer than its fragment (the far side), in
+  // useBoxmarchEyeBox) writes the depth of its own hit, nearer than its fragment (the far side), in
   // front of the eye (0 where the eye is in the shape); at most the far plane, as the depth buffer
   // clamps what it is given (the passes compare it).
   '  float depth = 0.5 + 0.5 * clip.z / clip.w;',
@@ -1339,7 +1339,7 @@ var BOXMARCH_RAW_FRAGMENT = [
   '#extension GL_EXT_conservative_depth : enable',
   'precision highp float;',
   'precision highp int;',
-  // not in the passes writing no depth (useBoxmarchVisibility), nor in the eye box's variant, whose
+  // not in the passes writing no depth (useBoxmarchVisibility), nor in the variant of the eye box, whose
   // march from the eye writes a depth nearer than its fragment (useBoxmarchEyeBox)
   '#if !defined(BM_VISIBILITY_PASS) && !defined(BM_SHADE_PASS) && !defined(BM_EYE_BOX_ONLY)',
   '#ifdef GL_EXT_conservative_depth',
