@@ -4,9 +4,11 @@ the same shaders (written by gpu_frame_data.py from formats/shader_sources.py be
 declarations Blender's GL backend makes), vertex buffers, uniform block words and GPU state, pass
 by pass:
 
-* one pass: the march in one draw, every face, the mesh's triangle order or the view octant's;
-* back faces culled (draw.CULL_BACK_FACES): the boxes not holding the eye with their back faces
-  culled, then those holding it with both sides (the block's occlusion.z selects them);
+* one pass: the march, every face, the mesh's triangle order or the view octant's: in a
+  perspective view the boxes not holding the eye, then those holding it by the stage that declares
+  no depth (BM_EYE_BOXES: their marches from the eye write a depth nearer than the fragment; the
+  block's occlusion.z selects them), in an orthographic one every box in one draw;
+* back faces culled (draw.CULL_BACK_FACES): in the first of those draws;
 * the occluder pre-pass (preview/occlusion.py): the box mesh pulled in to each occluder box,
   depth only, into a DEPTH_COMPONENT32F texture the march reads (occlusion.x);
 * the resolved passes (preview/resolve.py): visibility (no depth written, the nearest hit kept in
@@ -146,15 +148,15 @@ class PreviewObject:
         GL.glDrawElements(GL.GL_TRIANGLES, count, GL.GL_UNSIGNED_INT, None)
         self.draws += 1
 
-    def _draw_sides(self, order, cull, quality, height, eye_depth_test=False, **words):
-        """draw.py _draw_sides: every face in one draw, or the boxes not holding the eye (back
-        faces culled where ``cull``) and then those holding it with both sides (with
+    def _draw_sides(self, order, cull, quality, height, eye_depth_test=False, eye_program=None, **words):
+        """draw.py _draw_sides: in an orthographic view every box in one draw; in a perspective one
+        the boxes not holding the eye (back faces culled where ``cull``), then those holding it with
+        both sides, by ``eye_program`` where given (the one-pass march's BM_EYE_BOXES stage; with
         ``eye_depth_test``, the resolved passes, whatever the depth there)."""
-        if not cull and not eye_depth_test:
-            GL.glBindBufferBase(GL.GL_UNIFORM_BUFFER, 0, self._block(quality, height, selection=0.0, **words))
-            self._draw(order)
-            return
-        for selection in (1.0, 2.0):
+        perspective = self.block[51] > 0.5  # the eye's w: a position, not a direction
+        for selection in (1.0, 2.0) if perspective else (0.0,):
+            if selection == 2.0 and eye_program is not None:
+                GL.glUseProgram(eye_program)
             GL.glBindBufferBase(GL.GL_UNIFORM_BUFFER, 0, self._block(quality, height, selection=selection, **words))
             if cull and selection == 1.0:
                 GL.glEnable(GL.GL_CULL_FACE)
@@ -251,7 +253,8 @@ class PreviewObject:
         GL.glUseProgram(self.programs[fragment])
         GL.glActiveTexture(GL.GL_TEXTURE0)
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.occluder_depth if prepass else self.no_depth)
-        self._draw_sides(order, cull, quality, height, occluder=float(prepass), shape=self.shape_id)
+        self._draw_sides(order, cull, quality, height, eye_program=self.programs["eye_boxes"],
+                         occluder=float(prepass), shape=self.shape_id)
 
 
 def shipped_arguments(data, size: str) -> dict:

@@ -52,6 +52,9 @@ def stage_sources(sdf: str) -> dict:
     return {"vertex": shader_sources.gl_declarations("vert", "CLASSIC", GL_VERSION) + shader_sources.vertex_source("CLASSIC"),
             "fragment_depth_greater": declared,
             "fragment_undeclared": shader_sources.gl_declarations("frag", "CLASSIC", GL_VERSION) + fragment,
+            # the boxes holding the eye (draw.py draws them apart in a perspective view)
+            "fragment_eye_boxes": shader_sources.gl_declarations("frag", "CLASSIC", GL_VERSION, "ANY")
+            + shader_sources.fragment_source(sdf, eye_boxes=True),
             # diagnostic: the marched depth not written (the face's stays), so early depth testing is
             # certainly on: shows what the GPU's early test can skip (the depth it leaves is wrong)
             "fragment_face_depth": shader_sources.gl_declarations("frag", "CLASSIC", GL_VERSION)

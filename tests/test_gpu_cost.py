@@ -98,23 +98,26 @@ def test_occluders_end_a_march_at_their_depth():
     assert np.array_equal(bounded.depth, full.depth) and np.array_equal(bounded.rgba, full.rgba)
 
 
-def test_a_box_holding_the_eye_draws_no_occluders():
-    # The eye (origin, looking down -z, 120 degrees) inside sphere E (radius 2 about (1.2, 1.2, -1))
-    # and its box but outside E's three occluder boxes; E's march starts at the eye and paints its
-    # box's far side. Sphere F (radius 0.1) stands behind E's first occluder box along its rays, in
-    # front of that far side: visible. Were E's occluders drawn, F would return before marching
-    # (4 pixels lost, measured with the rule taken out of occluder_depths).
+def test_an_eye_inside_a_shape_sees_that_shape_alone():
+    # The eye (origin, looking down -z, 120 degrees) inside sphere E (radius 2 about (1.2, 1.2, -1)),
+    # so inside its box too; sphere F (radius 0.1) lies inside E, in view. E's march starts at the
+    # eye, inside the shape, and hits at once: E covers its box's whole silhouette at the near
+    # plane's depth and hides F. Before E wrote its hit's own depth (it wrote its box's far side's,
+    # clamped as the shaders' declared depth_greater required), F showed through E. With the
+    # pre-pass (E draws no occluders: the near plane cuts its box) the picture is the same.
     projection = perspective({"fov": 120.0, "near": 0.1, "far": 100.0}, 1.0)
     origins, half = [[1.2, 1.2, -1.0], [0.45, 1.2, -1.5]], [[2.0, 2.0, 2.0], [0.1, 0.1, 0.1]]
     q = np.tile([0.0, 0.0, 0.0, 1.0], (2, 1))
 
-    def draw(count, **plan):
-        return core.render_boxes(origins[:count], q[:count], half[:count], projection, np.eye(4), 48, 48,
-                                 sdf="SPHERE", **plan)
+    def draw(boxes, **plan):
+        return core.render_boxes(np.take(origins, boxes, axis=0), q[boxes], np.take(half, boxes, axis=0), projection,
+                                 np.eye(4), 48, 48, sdf="SPHERE", **plan)
 
-    full, alone = draw(2), draw(1)
-    assert (full.depth < alone.depth).sum() >= 4  # F shows
-    assert np.array_equal(draw(2, occluders=True).depth, full.depth)
+    full, f_alone = draw([0, 1]), draw([1])
+    f_shown = f_alone.depth < 1.0
+    assert f_shown.sum() >= 4  # F is in view: were E's depth its far side's, F would show here
+    assert np.all(full.depth[f_shown] < f_alone.depth[f_shown])
+    assert np.array_equal(draw([0, 1], occluders=True).depth, full.depth)
 
 
 @pytest.mark.parametrize("sdf", ["BOX", "CAPSULE"])

@@ -2,10 +2,13 @@
 Blender's gpu module (tests/helpers/gpu_stub.py), the marching shader's and the hidden-box
 pre-pass's: each one's gl_FragDepth declaration is the direction its own fragment source keeps
 (GREATER for both: the marched depth is clamped to the face's, the pre-pass writes its
-occluders' depth a margin farther), and each compiles and links as Blender's GL
-backend declares it. Blender-free; the preview's real compile runs in tests/test_preview_blender.py."""
+occluders' depth a margin farther; ANY for the stage drawing the boxes that hold the eye, whose
+marches from the eye write a depth nearer than the face), and each compiles and links as
+Blender's GL backend declares it. Blender-free; the preview's real compile runs in
+tests/test_preview_blender.py."""
 import re
 import subprocess
+import tempfile
 
 import pytest
 
@@ -14,11 +17,22 @@ from tests.helpers import gpu_stub
 from tests.helpers.glsl import validator
 
 
+def preprocessed(fragment: str) -> str:
+    """The fragment source as its compile sees it: its #ifdef branches taken (glslangValidator -E)."""
+    with tempfile.NamedTemporaryFile("w", suffix=".frag") as source:
+        source.write(fragment)
+        source.flush()
+        proc = subprocess.run([validator(), "-E", source.name], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    return proc.stdout
+
+
 def depth_direction(fragment: str):
-    """The depth_write a fragment's gl_FragDepth writes make true: GREATER when every write is
-    max(<depth>, gl_FragCoord.z) (never nearer than the rasterised face), LESS when every one is
-    min(<depth>, gl_FragCoord.z), ANY for any other write, None when it writes no depth."""
-    writes = [re.sub(r"\s+", "", w) for w in re.findall(r"gl_FragDepth\s*=\s*([^;]+);", fragment)]
+    """The depth_write a fragment's gl_FragDepth writes make true (in the branches its defines
+    take): GREATER when every write is max(<depth>, gl_FragCoord.z) (never nearer than the
+    rasterised face), LESS when every one is min(<depth>, gl_FragCoord.z), ANY for any other write,
+    None when it writes no depth."""
+    writes = [re.sub(r"\s+", "", w) for w in re.findall(r"gl_FragDepth\s*=\s*([^;]+);", preprocessed(fragment))]
     if not writes:
         return None
     for direction, function in (("GREATER", "max("), ("LESS", "min(")):
@@ -37,15 +51,16 @@ def create_info_faults(info) -> list:
     return [] if declared == wanted else [f"declares depth_write {declared}, its fragment's writes keep {wanted}"]
 
 
-def built_create_infos(gpu, depth_write=None):
+def built_create_infos(gpu, depth_write=None, eye_boxes=False):
     """Every create-info the preview builds for each layout under ``gpu``: the marching shader's
-    (the BOX preset) and the hidden-box pre-pass's, as two lists; with ``depth_write`` set, the
-    preview's DEPTH_WRITE replaced by it first (a mutation)."""
+    (the BOX preset; ``eye_boxes``: its stage drawing the boxes that hold the eye) and the
+    hidden-box pre-pass's, as two lists; with ``depth_write`` set, the preview's DEPTH_WRITE
+    (``eye_boxes``: EYE_BOXES_DEPTH_WRITE) replaced by it first (a mutation)."""
     shader = gpu_stub.preview_shader_module(gpu)
     if depth_write is not None:
-        shader.DEPTH_WRITE = depth_write
+        setattr(shader, "EYE_BOXES_DEPTH_WRITE" if eye_boxes else "DEPTH_WRITE", depth_write)
     for layout in shader_sources.VERTEX_INPUTS:
-        shader.preview_shader("BOX", layout=layout)
+        shader.preview_shader("BOX", layout=layout, eye_boxes=eye_boxes)
     marching = list(gpu.built)
     for layout in shader_sources.VERTEX_INPUTS:
         shader.occluder_shader(layout)
@@ -58,6 +73,18 @@ def test_preview_declares_the_depth_direction_its_fragment_keeps():
     assert [fault for info in marching + occluders for fault in create_info_faults(info)] == []
     # the preview's clamp, max(...): the marched depth, and the occluders' limit (bm_occluder_limit)
     assert all(info.called("depth_write") == [("GREATER",)] for info in marching + occluders)
+
+
+def test_the_stage_of_the_eyes_boxes_declares_any_depth():
+    """The boxes holding the eye march from it and write a depth nearer than their fragment (the
+    far side): that stage declares ANY, which its writes keep; declared GREATER (the others'
+    declaration, the negative control) it is caught."""
+    eye, _occluders = built_create_infos(gpu_stub.gpu_module(), eye_boxes=True)
+    assert len(eye) == len(shader_sources.VERTEX_INPUTS)
+    assert [fault for info in eye for fault in create_info_faults(info)] == []
+    assert all(info.called("depth_write") == [("ANY",)] for info in eye)
+    wrong, _occluders = built_create_infos(gpu_stub.gpu_module(), depth_write="GREATER", eye_boxes=True)
+    assert all(create_info_faults(info) for info in wrong)
 
 
 @pytest.mark.parametrize("wrong", ["ANY", "LESS", "UNCHANGED"])

@@ -402,17 +402,22 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                     const size_t pix = size_t(y) * size_t(W) + size_t(x);
                     ++cost.fragments;
                     covered[pix - band_start] = 1;
-                    // The rasterised face: where the ray enters, or (the ray starting inside) the far side.
-                    const vec3 face = ro + rd * (span.x >= 0.0f ? span.x : span.y);
+                    // The rasterised face: where the ray enters, or (the ray starting inside: the
+                    // march from the eye) the far side.
+                    const bool from_eye = span.x < 0.0f;
+                    const vec3 face = ro + rd * (from_eye ? span.y : span.x);
                     const float face_depth = window_depth(face);
-                    if (plan.early_depth && !(face_depth >= 0.0f && face_depth < images.depth[pix])) continue;
+                    // (the boxes holding the eye are drawn by a stage that declares no depth, which
+                    // the GPU tests late)
+                    if (plan.early_depth && !from_eye && !(face_depth >= 0.0f && face_depth < images.depth[pix]))
+                        continue;
                     const vec3 start = ro + rd * t0;
                     float t_end = std::min(span.y - t0, o.max_distance);
                     if (plan.occluders) {
                         // Behind the occluders' depth: hidden (a fragment starting inside its box
                         // marches from the eye, so only its march is bounded).
                         const float hidden_from = shader::bm_occluder_limit(occluder[pix - band_start]);
-                        if (span.x >= 0.0f && face_depth > hidden_from) {
+                        if (!from_eye && face_depth > hidden_from) {
                             ++cost.occluded_fragments;
                             continue;
                         }
@@ -437,7 +442,12 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                     const int evaluations = m.steps + normal.evaluations;
                     cost.sdf_evaluations += uint64_t(evaluations);
                     if (!m.hit) continue;
-                    float depth = std::max(window_depth(local_hit), face_depth);
+                    // never nearer than the face (the declared depth_greater), but a march from the
+                    // eye writes its hit's own depth, nearer than its face, the far side
+                    // (preview.frag.glsl BM_EYE_BOXES): clamped there, a box nested in the eye's box
+                    // between the hit and that far side would show through the hit's surface
+                    const float depth = from_eye ? std::max(window_depth(local_hit), 0.0f)
+                                                 : std::max(window_depth(local_hit), face_depth);
                     if (!(depth >= 0.0f && depth < images.depth[pix])) continue;
                     vec3 n_object = q * normal.n;
                     vec3 color = shader::bm_shade(glm::normalize(normal_matrix * n_object), base);

@@ -35,6 +35,11 @@
 // The written depth is never nearer than the rasterised face's (clamped): the create-info
 // declares it (depth_write GREATER, Blender 4+), which allows a driver to keep its early depth
 // test; NVIDIA's GL driver, Mesa llvmpipe and SwiftShader were measured not to (docs/BENCHMARKS.md).
+// But a march from the eye (a fragment of the far side of a box holding the eye) hits nearer than
+// its fragment: with BM_EYE_BOXES defined it is the stage that draws the boxes holding the eye
+// (preview/draw.py draws them apart in every perspective view), compiled without that declaration
+// (depth_write ANY), and writes such a hit's own depth; clamped to its far side, a box nested in
+// the eye's box between the hit and that far side would show through the hit's surface.
 // Mirrored by cpp/src/raymarch.cpp (render_boxes); bm_shade is translated into it by
 // shaders/generate.py.
 //
@@ -157,8 +162,8 @@ void main()
     float beyond = nearest < 1.0 ? bm_depth_crossing(c0, c1, 2.0 * (nearest + bm_shade_margin()) - 1.0) : 1e30;
     bool hidden = !from_eye && gl_FragCoord.z > nearest + bm_shade_margin();
     int taps = 0;
-    // (a march from the eye writes no nearer than its far side, clamped as every depth here is:
-    // its hit need not lie at the depth kept, so it takes no test)
+    // (a march from the eye takes no test: its fragment is its box's far side, behind its hit;
+    // the equality of its hit's depth with the kept one decides, as for every fragment)
     if (!hidden && !from_eye && preview.occlusion.w == 2.0) {
       hidden = reach < 1e30 && reach > t_end;
       if (!hidden && beyond < 1e30) {
@@ -208,13 +213,17 @@ void main()
 #endif
   vec3 local_hit = ro + rd * t;
   vec4 clip = c0 + c1 * t;
+  float window_depth = clip.z / clip.w * 0.5 + 0.5;
+  // a march from the eye: its hit's own depth, in front of the eye (0 where the eye is in the shape:
+  // t = 0, clip.w 0 give or take rounding)
+  float eye_hit_depth = clip.w > 0.0 ? max(window_depth, 0.0) : 0.0;
 #ifdef BM_RESOLVED
   // in [0, 1], as the depth buffer clamps what it is given: a face the near plane clips may
   // rasterise a hair in front of it (llvmpipe: window depth -9e-6), and a negative float's bits
   // sort after every other depth's as uint, so that hit was never kept; a hit at or past the far
-  // plane is kept at 1.0, as the plain draw keeps it (a march from the eye writes its box's far
-  // side's depth, which may lie there)
-  float hit_depth = clamp(max(clip.z / clip.w * 0.5 + 0.5, gl_FragCoord.z), 0.0, 1.0);
+  // plane is kept at 1.0, as the plain draw keeps it; a march from the eye keeps its hit's own
+  // depth (these passes write no depth, so no declaration binds them), nearer than its fragment
+  float hit_depth = clamp(from_eye ? eye_hit_depth : max(window_depth, gl_FragCoord.z), 0.0, 1.0);
   // the visibility pass counts the march alone (no normal); the shade pass its march and, for the
   // one fragment it shades, the normal's taps
   bool shaded = hit && preview.occlusion.w == 2.0 && floatBitsToUint(hit_depth) == winner;
@@ -236,7 +245,11 @@ void main()
   if (!hit) {
     discard;
   }
-  gl_FragDepth = max(clip.z / clip.w * 0.5 + 0.5, gl_FragCoord.z);
+#ifdef BM_EYE_BOXES
+  gl_FragDepth = from_eye ? eye_hit_depth : max(window_depth, gl_FragCoord.z);
+#else
+  gl_FragDepth = max(window_depth, gl_FragCoord.z);
+#endif
 #endif
 
 #ifdef BM_CLOSED_FORM

@@ -152,6 +152,8 @@ function createBoxmarchMaterial(THREE, options) {
     // WebGL compiles an extension's directives only once the context has handed it out.
     material.onBeforeCompile = function (shader, renderer) { renderer.getContext().getExtension('EXT_conservative_depth'); };
     material.userData.boxmarchSkinning = !!options.skinning;
+    // the box holding the eye must be drawn apart (useBoxmarchEyeBox)
+    material.userData.boxmarchDeclaresDepth = true;
     return material;
   }
   // r129 and later skin every SkinnedMesh and warn about an unknown `skinning` property.
@@ -193,7 +195,9 @@ function boxmarchObjectEye(THREE, mesh, camera, inverse, eye) {
 
 // Gives a mesh the material and keeps its object-space eye up to date before every draw; with
 // frontToBack, also draws its boxes front to back (sortBoxmarchFrontToBack before every draw).
-// Throws, changing nothing, when the material's skinning flag (where it is read) does not match the mesh.
+// Where the material declares its depth (the raw material, r163 and later), the box holding the
+// eye is drawn apart (useBoxmarchEyeBox). Throws, changing nothing, when the material's skinning
+// flag (where it is read) does not match the mesh.
 function useBoxmarchMaterial(THREE, mesh, material, frontToBack) {
   var skinning = material.userData.boxmarchSkinning;
   if (skinning !== undefined && skinning !== !!mesh.isSkinnedMesh) {
@@ -214,7 +218,40 @@ function useBoxmarchMaterial(THREE, mesh, material, frontToBack) {
     material.uniformsNeedUpdate = true;
     if (frontToBack) sortBoxmarchFrontToBack(THREE, mesh, camera);
   };
+  if (material.userData.boxmarchDeclaresDepth) useBoxmarchEyeBox(THREE, mesh);
   return mesh;
+}
+
+// Draws the box holding the eye apart from the rest of mesh (given useBoxmarchMaterial's
+// material), right after it (mesh's onAfterRender), by a mesh of the same geometry whose material
+// variant keeps every other box out of view (BM_EYE_BOX_ONLY) and draws both sides, while mesh's
+// own material throws away the fragments that would march from the eye (BM_EYE_BOX_APART): such a
+// march hits nearer than its fragment (the box's far side), which the raw material's
+// layout(depth_greater) forbids it to write; the variant declares no depth and writes the hit's
+// own, so a box nested in the eye's box behind that hit stays hidden (a material that declares
+// nothing writes it itself). useBoxmarchMaterial calls it where the material declares its depth,
+// useBoxmarchBackFaceCulling where mesh draws front faces only. A SkinnedMesh's eye-box mesh is
+// skinned by the same skeleton. Returns that mesh (also mesh.userData.boxmarchEyeBox).
+function useBoxmarchEyeBox(THREE, mesh) {
+  if (mesh.userData.boxmarchEyeBox) return mesh.userData.boxmarchEyeBox;
+  mesh.material.defines = Object.assign({}, mesh.material.defines, { BM_EYE_BOX_APART: '' });
+  mesh.material.needsUpdate = true;
+  var material = boxmarchMaterialVariant(THREE, mesh, { BM_EYE_BOX_ONLY: '' }, THREE.DoubleSide);
+  var eyeBox = mesh.isSkinnedMesh ? new THREE.SkinnedMesh(mesh.geometry, material) : new THREE.Mesh(mesh.geometry, material);
+  if (mesh.isSkinnedMesh) eyeBox.bind(mesh.skeleton, mesh.bindMatrix);
+  eyeBox.matrixAutoUpdate = false;  // mesh's world matrix, copied before each draw
+  eyeBox.frustumCulled = false;
+  var scene = new THREE.Scene().add(eyeBox);
+  mesh.onAfterRender = function (renderer, parentScene, camera) {
+    eyeBox.matrix.copy(mesh.matrixWorld);
+    eyeBox.matrixWorldNeedsUpdate = true;
+    var autoClear = renderer.autoClear;
+    renderer.autoClear = false;
+    renderer.render(scene, camera);
+    renderer.autoClear = autoClear;
+  };
+  mesh.userData.boxmarchEyeBox = eyeBox;
+  return eyeBox;
 }
 
 // The boxes of an indexed geometry for sortBoxmarchFrontToBack: its triangles grouped by box (the
@@ -439,26 +476,13 @@ function boxmarchMaterialVariant(THREE, mesh, defines, side) {
 // return at once, yet SwiftShader runs such a fragment's lanes on through the march (measured:
 // docs/BENCHMARKS.md), so a face never rasterised is the saving. The material draws front faces
 // only (three.js flips the winding for a mirroring matrix); the box holding the eye, whose march
-// starts at the eye, is drawn again with both sides right after the mesh (its onAfterRender), by a
-// mesh that keeps every other box out of view (BM_EYE_BOX_ONLY). A SkinnedMesh is left drawing
-// both sides (skinning may bend a box). Returns that eye-box mesh (also mesh.userData.boxmarchEyeBox), or null.
+// starts at the eye, is drawn apart with both sides (useBoxmarchEyeBox). A SkinnedMesh is left
+// drawing both sides (skinning may bend a box). Returns that eye-box mesh, or null where the back
+// faces are not culled.
 function useBoxmarchBackFaceCulling(THREE, mesh) {
   if (mesh.isSkinnedMesh || !boxmarchClosedOutward(mesh.geometry)) return null;
-  var eyeBox = new THREE.Mesh(mesh.geometry, boxmarchMaterialVariant(THREE, mesh, { BM_EYE_BOX_ONLY: '' }, THREE.DoubleSide));
-  eyeBox.matrixAutoUpdate = false;  // mesh's world matrix, copied before each draw
-  eyeBox.frustumCulled = false;
-  var scene = new THREE.Scene().add(eyeBox);
   mesh.material.side = THREE.FrontSide;
-  mesh.onAfterRender = function (renderer, parentScene, camera) {
-    eyeBox.matrix.copy(mesh.matrixWorld);
-    eyeBox.matrixWorldNeedsUpdate = true;
-    var autoClear = renderer.autoClear;
-    renderer.autoClear = false;
-    renderer.render(scene, camera);
-    renderer.autoClear = autoClear;
-  };
-  mesh.userData.boxmarchEyeBox = eyeBox;
-  return eyeBox;
+  return useBoxmarchEyeBox(THREE, mesh);
 }
 
 // Hidden boxes (docs/ENGINES.md, three.js): a depth pre-pass of each box's conservative
@@ -680,7 +704,7 @@ function useBoxmarchOccluders(THREE, mesh, shape) {
   if (shape === null || shape === undefined || mesh.isSkinnedMesh) return null;
   var material = mesh.material;
   // the boxes' far sides culled where the march culls them (useBoxmarchBackFaceCulling)
-  var scene = boxmarchOccluderScene(THREE, mesh.geometry, shape, mesh.userData.boxmarchEyeBox ? THREE.FrontSide : THREE.DoubleSide);
+  var scene = boxmarchOccluderScene(THREE, mesh.geometry, shape, mesh.material.side === THREE.FrontSide ? THREE.FrontSide : THREE.DoubleSide);
   if (!scene) return null;
   var target = new THREE.WebGLRenderTarget(1, 1, { minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
     depthBuffer: true, stencilBuffer: false });
@@ -810,6 +834,7 @@ function useBoxmarchVisibility(THREE, mesh, shape) {
   fallback.matrixAutoUpdate = false;
   fallback.frustumCulled = mesh.frustumCulled;
   fallback.onBeforeRender = marching;
+  fallback.onAfterRender = mesh.onAfterRender;  // the box holding the eye, where drawn apart (useBoxmarchEyeBox)
   useBoxmarchOccluders(THREE, fallback, shape);
   var options = { minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter, depthBuffer: true, stencilBuffer: true };
   // stencilBuffer: a 24-bit depth buffer on r111 too (its depth-only renderbuffer is 16-bit)
@@ -1161,6 +1186,11 @@ var BOXMARCH_FRAGMENT = [
   // A fragment of the far side only marches when the eye is inside the box (the preview's rule).
   '  bool fromEye = !gl_FrontFacing && span.x + span.y < 0.0;',
   '  if (fromEye) {',
+  // the box holding the eye is drawn apart (useBoxmarchEyeBox), by a variant that may write the
+  // depth of its hit, nearer than the fragment
+  '#if defined(BM_EYE_BOX_APART) && !defined(BM_EYE_BOX_ONLY)',
+  '    drawn = false; discard;',
+  '#endif',
   '    if (bmEye.w < 0.5 || eye_distance > -span.x) { drawn = false; discard; }',
   '    ro -= rd * eye_distance;',
   '    t_end = eye_distance;',
@@ -1220,9 +1250,18 @@ var BOXMARCH_FRAGMENT = [
   '  if (!hit) discard;',
   '  vec3 local_hit = ro + rd * t;',
   '  vec4 clip = c0 + c1 * t;',
-  // Never nearer than the rasterised face: what the raw material's layout(depth_greater) declares;
-  // at most the far plane, as the depth buffer clamps what it is given (the passes compare it).
-  '  float depth = min(max(0.5 + 0.5 * clip.z / clip.w, gl_FragCoord.z), 1.0);',
+  // Never nearer than the rasterised face: what the raw material's layout(depth_greater) declares
+  // (BM_DEPTH_GREATER); but a march from the eye (drawn apart where that is declared,
+  // useBoxmarchEyeBox) writes the depth of its own hit, nearer than its fragment (the far side), in
+  // front of the eye (0 where the eye is in the shape); at most the far plane, as the depth buffer
+  // clamps what it is given (the passes compare it).
+  '  float depth = 0.5 + 0.5 * clip.z / clip.w;',
+  '#ifdef BM_DEPTH_GREATER',
+  '  depth = max(depth, gl_FragCoord.z);',
+  '#else',
+  '  depth = fromEye ? (clip.w > 0.0 ? max(depth, 0.0) : 0.0) : max(depth, gl_FragCoord.z);',
+  '#endif',
+  '  depth = min(depth, 1.0);',
   '#ifdef BM_VISIBILITY_PASS',
   '  gl_FragColor = vec4(depth);',  // MIN-blended: the nearest hit's depth (useBoxmarchVisibility)
   '#else',
@@ -1313,9 +1352,12 @@ var BOXMARCH_RAW_FRAGMENT = [
   '#extension GL_EXT_conservative_depth : enable',
   'precision highp float;',
   'precision highp int;',
-  '#if !defined(BM_VISIBILITY_PASS) && !defined(BM_SHADE_PASS)',  // passes writing no depth (useBoxmarchVisibility)
+  // not in the passes writing no depth (useBoxmarchVisibility), nor in the variant of the eye box, whose
+  // march from the eye writes a depth nearer than its fragment (useBoxmarchEyeBox)
+  '#if !defined(BM_VISIBILITY_PASS) && !defined(BM_SHADE_PASS) && !defined(BM_EYE_BOX_ONLY)',
   '#ifdef GL_EXT_conservative_depth',
   'layout(depth_greater) out highp float gl_FragDepth;',
+  '#define BM_DEPTH_GREATER',
   '#endif',
   '#endif',
   '#define varying in',

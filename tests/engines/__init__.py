@@ -47,6 +47,19 @@ def perspective(camera, aspect) -> np.ndarray:
                      [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)], [0, 0, -1, 0]])
 
 
+def view_matrix(camera) -> np.ndarray:
+    """4 x 4 view matrix of a harness ``camera`` (``position``, ``target``, ``up``), as three.js's
+    ``lookAt`` makes it: the camera looks down its -z, ``up`` kept in its yz plane."""
+    eye, target = np.asarray(camera["position"], np.float64), np.asarray(camera["target"], np.float64)
+    back = (eye - target) / np.linalg.norm(eye - target)
+    right = np.cross(camera.get("up", (0.0, 1.0, 0.0)), back)
+    right /= np.linalg.norm(right)
+    view = np.eye(4)
+    view[:3, :3] = np.stack([right, np.cross(back, right), back])
+    view[:3, 3] = -view[:3, :3] @ eye
+    return view
+
+
 def polygon_mask(shape, polygon) -> np.ndarray:
     """Boolean (H, W) mask of the pixels whose centres lie inside a convex 2D ``polygon``
     (pixel coordinates as :meth:`Shot.project` returns them, either winding)."""

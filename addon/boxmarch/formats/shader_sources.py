@@ -165,17 +165,21 @@ def engine_map_source(body: str, local_mirror) -> str:
 
 
 def fragment_source(sdf: str = "BOX", user_text: str | None = None, local_mirror=(1.0, 1.0, 1.0),
-                    resolved: bool = False) -> str:
+                    resolved: bool = False, eye_boxes: bool = False) -> str:
     """The fragment stage as Blender compiles it (after its own declarations): the library, the
     preset's map() (and its closed-form hit, BM_CLOSED_FORM) or the user's text (seen through an
     engine's local mirror, if any), and the preview's main(); ``resolved``: the stage of the resolved passes (BM_RESOLVED), which writes
-    no depth."""
+    no depth; ``eye_boxes``: the stage drawing the boxes that hold the eye (BM_EYE_BOXES), whose
+    marches from the eye write their hit's depth, nearer than the fragment (compiled without the
+    depth declaration)."""
     if user_text is None and sdf not in PRESET_MAPS:
         raise ValueError(f"sdf must be one of {tuple(PRESET_MAPS)}, got {sdf!r}")
     body = user_map_source(user_text) if user_text is not None else PRESET_MAPS[sdf]
     if any(float(v) < 0 for v in local_mirror):
         body = engine_map_source(body, local_mirror)
     defines = ["#define BM_RESOLVED", f"#define BM_NO_HIT {NO_HIT}u"] if resolved else []
+    if eye_boxes and not resolved:
+        defines.append("#define BM_EYE_BOXES")
     if user_text is None and sdf in CLOSED_FORM_SHAPES:
         defines.append(closed_form_define(sdf, local_mirror))
     return "\n".join([*defines, read_glsl("decode.glsl"), read_glsl("sdf.glsl"), read_glsl("box_params.glsl"),

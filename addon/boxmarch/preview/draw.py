@@ -301,20 +301,21 @@ def uniform_block_data(object_to_clip, object_to_view, perspective, settings, ou
     return data
 
 
-def _marching_shader(ob, resolved: bool):
-    """The object's preview shader (``resolved``: the resolved passes' stage), or None (and an
-    error noted) when its user SDF fails."""
+def _marching_shader(ob, resolved: bool, eye_boxes: bool = False):
+    """The object's preview shader (``resolved``: the resolved passes' stage; ``eye_boxes``: the
+    one-pass stage of the boxes holding the eye), or None (and an error noted) when its user SDF
+    fails."""
     settings = ob.boxmarch
     mirror = presets.PRESETS[settings.engine].mirror  # what the engine's local frame does
     if settings.sdf != "USER":
         errors.pop(ob.name, None)
-        return preview_shader.preview_shader(settings.sdf, None, mirror, settings.layout, resolved)
+        return preview_shader.preview_shader(settings.sdf, None, mirror, settings.layout, resolved, eye_boxes)
     text = bpy.data.texts.get(settings.user_text)
     if text is None:
         errors[ob.name] = f"no text block named '{settings.user_text}'" if settings.user_text else "choose a text block"
         return None
     try:
-        shader = preview_shader.preview_shader("USER", text.as_string(), mirror, settings.layout)
+        shader = preview_shader.preview_shader("USER", text.as_string(), mirror, settings.layout, resolved, eye_boxes)
     except preview_shader.UserSdfError as exc:
         errors[ob.name] = f"{text.name}: {exc}"
         return None
@@ -323,29 +324,30 @@ def _marching_shader(ob, resolved: bool):
 
 
 # Cull the back faces of boxes that are closed and wound outward (mesh_data.closed_outward): a
-# box's far side is hidden by its own front unless the eye is inside it, so the boxes holding the
-# eye are drawn again with both sides. False draws every face (the benchmarks compare the two).
+# box's far side is hidden by its own front unless the eye is inside it, and the boxes holding the
+# eye are drawn apart with both sides anyway (_draw_sides). False draws every face (the benchmarks
+# compare the two).
 CULL_BACK_FACES = True
 
 
-def _draw_sides(shader, batch, block, cull, perspective, mirrored, eye_depth_test=None):
-    """Draws the marching batch with the BoxmarchPreview words ``block``: every face in one draw,
-    or with ``cull`` the boxes not holding the eye with their back faces culled (front faces when
-    the object's matrix mirrors) and, in a perspective view, the boxes holding it with both sides
-    (preview.vert.glsl, occlusion.z); ``eye_depth_test``: those boxes apart, whatever ``cull``,
-    drawn with that depth test (the resolved passes: their far side's depth bounds nothing)."""
-    if not cull and eye_depth_test is None:
-        whole = gpu.types.GPUUniformBuf(block.tobytes())  # held until drawn: freeing it unbinds it
-        shader.uniform_block(shader_sources.UNIFORM_NAME, whole)
-        batch.draw(shader)
-        return
+def _draw_sides(shaders, prepare, batch, block, cull, perspective, mirrored, eye_depth_test=None):
+    """Draws the marching batch with the BoxmarchPreview words ``block``: in an orthographic view
+    every box in one draw by ``shaders[0]``; in a perspective view the boxes not holding the eye by
+    ``shaders[0]``, then those holding it (preview.vert.glsl, occlusion.z) by ``shaders[1]``, with
+    both sides: their marches start at the eye and write a hit's depth nearer than their fragment,
+    the far side, which the first stage's declaration (depth GREATER) forbids. ``cull``: the back
+    faces of the first draw culled (front faces when the object's matrix mirrors);
+    ``eye_depth_test``: the boxes holding the eye drawn with that depth test (the resolved passes:
+    their far side's depth bounds nothing); ``prepare(shader)`` binds a shader and its textures."""
     depth_test = gpu.state.depth_test_get()
-    for selection in (1.0, 2.0) if perspective else (1.0,):
+    for selection in (1.0, 2.0) if perspective else (0.0,):
         chosen = block.copy()
         chosen[74] = selection
-        selected = gpu.types.GPUUniformBuf(chosen.tobytes())
+        shader = shaders[1] if selection == 2.0 else shaders[0]
+        prepare(shader)
+        selected = gpu.types.GPUUniformBuf(chosen.tobytes())  # held until drawn: freeing it unbinds it
         shader.uniform_block(shader_sources.UNIFORM_NAME, selected)
-        gpu.state.face_culling_set(("FRONT" if mirrored else "BACK") if cull and selection == 1.0 else "NONE")
+        gpu.state.face_culling_set(("FRONT" if mirrored else "BACK") if cull and selection != 2.0 else "NONE")
         if selection == 2.0 and eye_depth_test is not None:
             gpu.state.depth_test_set(eye_depth_test)
         batch.draw(shader)
@@ -381,9 +383,11 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, 
     occluders = occluders if drawn.sealed is not False and occlusion.used(occluders, layers) else 0
     resolved = resolve.used(occluders, layers)
     shader = resolve.prepared(lambda: _marching_shader(ob, True)) if resolved else None
+    eye_shader = shader
     if shader is None:
         resolved = False
         shader = _marching_shader(ob, False)
+        eye_shader = _marching_shader(ob, False, eye_boxes=True) if shader is not None and perspective else shader
     try:
         frame = object_frame(ob)
     except ValueError as exc:
@@ -396,19 +400,20 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, 
         batch = drawn.march(mesh_data.view_octant(object_to_view) if FRONT_TO_BACK else None)
         cull, mirrored = drawn.outward and CULL_BACK_FACES, np.linalg.det(object_to_view[:3, :3]) < 0.0
 
-        def draw_sides(shader, batch, block, eye_depth_test=None):
-            _draw_sides(shader, batch, block, cull, perspective, mirrored, eye_depth_test)
+        def draw_sides(prepare, batch, block, eye_depth_test=None):
+            _draw_sides((shader, eye_shader), prepare, batch, block, cull, perspective, mirrored, eye_depth_test)
 
         depth, occluder_framebuffer = (
             occlusion.draw_occluders(drawn.occluders(batch), settings.layout, ubo, occluders, viewport[2], viewport[3],
                                      ("FRONT" if mirrored else "BACK") if cull else "NONE")
             if occluders else (occlusion.no_depth(), None))
         if resolved:
-            resolve.draw(shader, batch, block, depth, occluder_framebuffer, draw_sides, counting=output_mode == 2)
+            resolve.draw(batch, block, depth, occluder_framebuffer, draw_sides, counting=output_mode == 2)
         else:
-            shader.bind()
-            shader.uniform_sampler(shader_sources.OCCLUDER_SAMPLER[2], depth)
-            draw_sides(shader, batch, block)
+            def prepare(marching):
+                marching.bind()
+                marching.uniform_sampler(shader_sources.OCCLUDER_SAMPLER[2], depth)
+            draw_sides(prepare, batch, block)
     if output_mode != 0:
         return shader is not None
     lines = uniform_shader()

@@ -112,22 +112,24 @@ def _fullscreen(shader):
     _triangle[0].draw(shader)
 
 
-def _march(shader, batch, block, pass_word, draw_sides, hit_min):
+def _march(batch, block, pass_word, draw_sides, hit_min):
     """One marching pass of the box mesh with ``block`` set to ``pass_word``; the boxes holding
     the eye march from it whatever the depth there (their far side's depth bounds nothing)."""
     chosen = block.copy()
     chosen[_PASS_WORD], chosen[_OCCLUDER_WORD] = pass_word, 0.0
-    shader.bind()
-    shader.image(shader_sources.HIT_MIN_IMAGE[3], hit_min)
-    shader.uniform_sampler(shader_sources.OCCLUDER_SAMPLER[2], occlusion.no_depth())
-    draw_sides(shader, batch, chosen, eye_depth_test="ALWAYS")
+
+    def prepare(marching):
+        marching.bind()
+        marching.image(shader_sources.HIT_MIN_IMAGE[3], hit_min)
+        marching.uniform_sampler(shader_sources.OCCLUDER_SAMPLER[2], occlusion.no_depth())
+    draw_sides(prepare, batch, chosen, eye_depth_test="ALWAYS")
 
 
-def draw(shader, batch, block, occluder_depth, occluder_framebuffer, draw_sides, counting: bool):
-    """Draws the resolved passes of one object into the bound framebuffer: ``shader`` (the
-    resolved marching stage), ``batch`` (the box mesh), ``block`` (its BoxmarchPreview words),
+def draw(batch, block, occluder_depth, occluder_framebuffer, draw_sides, counting: bool):
+    """Draws the resolved passes of one object into the bound framebuffer: ``batch`` (the box mesh), ``block`` (its BoxmarchPreview words),
     after occlusion.draw_occluders filled ``occluder_depth`` (attached to ``occluder_framebuffer``);
-    ``draw_sides(shader, batch, block, eye_depth_test)`` draws the boxes as draw.py culls them.
+    ``draw_sides(prepare, batch, block, eye_depth_test)`` draws the boxes as draw.py culls them
+    with the resolved marching stage (``prepare(shader)`` binding it and its textures before each draw).
     ``counting``: the STEPS output (the evaluation counts of every pass, added into the bound
     framebuffer by the caller's blend). The caller's GPU state is kept."""
     width, height = occluder_depth.width, occluder_depth.height
@@ -139,7 +141,7 @@ def draw(shader, batch, block, occluder_depth, occluder_framebuffer, draw_sides,
     with visible.bind():
         gpu.state.depth_test_set("LESS_EQUAL")
         gpu.state.depth_mask_set(False)
-        _march(shader, batch, block, VISIBILITY, draw_sides, targets.hit_min)
+        _march(batch, block, VISIBILITY, draw_sides, targets.hit_min)
     gpu.compute.dispatch(preview_shader.barrier_shader(), 1, 1, 1)
     with targets.shaded.bind():
         if counting:
@@ -156,7 +158,7 @@ def draw(shader, batch, block, occluder_depth, occluder_framebuffer, draw_sides,
         gpu.state.color_mask_set(True, True, True, True)
         gpu.state.depth_test_set("LESS_EQUAL")
         gpu.state.depth_mask_set(False)
-        _march(shader, batch, block, SHADE, draw_sides, targets.hit_min)
+        _march(batch, block, SHADE, draw_sides, targets.hit_min)
     gpu.state.blend_set(state[0])
     composite = preview_shader.fullscreen_shader("composite_steps" if counting else "composite")
     composite.bind()

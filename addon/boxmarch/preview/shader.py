@@ -26,6 +26,9 @@ class UserSdfError(Exception):
 # gl_FragDepth implies undeclared) forbids it. Mesa llvmpipe and NVIDIA's OpenGL driver 580 were
 # measured not to test early either way (bench/bench_preview_cost.py, bench/bench_gpu_frame.py).
 DEPTH_WRITE = "GREATER"
+# The declaration of the stage drawing the boxes that hold the eye (eye_boxes): their marches start
+# at the eye and write a hit's depth nearer than the fragment (the box's far side).
+EYE_BOXES_DEPTH_WRITE = "ANY"
 
 _cache: dict = {}
 # User texts that failed, so a broken text is compiled once, not at every redraw.
@@ -34,11 +37,13 @@ _failed: dict = {}
 MAX_USER_SHADERS = 8
 
 
-def _create_info(fragment: str, layout: str, occluder: bool = False, resolved: bool = False):
-    """The create-info of the marching shader, or with ``occluder`` of the hidden-box pre-pass
-    (the same inputs and block; the box mesh pulled in to an occluder box, depth only, each
-    occluder's written a margin farther: shader_sources.OCCLUDER_FRAGMENT_SOURCE); with
-    ``resolved`` of the resolved passes' marching stage (the hit_min image, no depth written)."""
+def _create_info(fragment: str, layout: str, occluder: bool = False, resolved: bool = False,
+                 depth_write: str = DEPTH_WRITE):
+    """The create-info of the marching shader (its written depth declared ``depth_write``), or with
+    ``occluder`` of the hidden-box pre-pass (the same inputs and block; the box mesh pulled in to an
+    occluder box, depth only, each occluder's written a margin farther:
+    shader_sources.OCCLUDER_FRAGMENT_SOURCE); with ``resolved`` of the resolved passes' marching
+    stage (the hit_min image, no depth written)."""
     iface = gpu.types.GPUStageInterfaceInfo("boxmarch_preview_interface")
     for interpolation, type_name, name in shader_sources.STAGE_INTERFACE:
         getattr(iface, interpolation)(type_name, name)
@@ -57,7 +62,7 @@ def _create_info(fragment: str, layout: str, occluder: bool = False, resolved: b
     if resolved:
         info.image(*shader_sources.HIT_MIN_IMAGE, qualifiers={"READ", "WRITE"})
     elif hasattr(info, "depth_write"):  # Blender 4+; 3.4 has no declaration
-        info.depth_write(DEPTH_WRITE)
+        info.depth_write(depth_write)
     info.vertex_source(shader_sources.vertex_source(layout, occluder))
     info.fragment_source(fragment)
     return info, iface
@@ -166,18 +171,21 @@ def _log_line_offset(sdf, local_mirror, layout) -> int:
 
 
 def preview_shader(sdf: str = "BOX", user_text: str | None = None, local_mirror=(1.0, 1.0, 1.0),
-                   layout: str = "CLASSIC", resolved: bool = False):
+                   layout: str = "CLASSIC", resolved: bool = False, eye_boxes: bool = False):
     """The compiled preview shader for a preset, or for user text defining ``float map(vec3 p)``,
     as an engine with ``local_mirror`` sees it, reading the channels of engine ``layout``;
-    ``resolved``: the marching stage of the resolved passes (preview/resolve.py). Raises
+    ``resolved``: the marching stage of the resolved passes (preview/resolve.py); ``eye_boxes``:
+    the one-pass stage that draws the boxes holding the eye (its depth declared ANY). Raises
     UserSdfError with the line for user text that does not compile."""
-    key = (sdf, user_text, tuple(float(v) for v in local_mirror), layout, "RESOLVED" if resolved else DEPTH_WRITE)
+    eye_boxes = eye_boxes and not resolved  # the resolved passes write no depth: one stage for all
+    depth_write = EYE_BOXES_DEPTH_WRITE if eye_boxes else DEPTH_WRITE
+    key = (sdf, user_text, tuple(float(v) for v in local_mirror), layout, "RESOLVED" if resolved else depth_write)
     if key in _cache:
         return _cache[key]
     if key in _failed:
         raise UserSdfError(*_failed[key])
-    info, iface = _create_info(shader_sources.fragment_source(sdf, user_text, local_mirror, resolved), layout,
-                               resolved=resolved)
+    info, iface = _create_info(shader_sources.fragment_source(sdf, user_text, local_mirror, resolved, eye_boxes),
+                               layout, resolved=resolved, depth_write=depth_write)
     shader, error, log = _compile_capturing_log(info)
     del iface  # the create-info refers to it until compiled
     if shader is None:

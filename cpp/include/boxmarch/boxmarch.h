@@ -346,8 +346,11 @@ struct RenderPlan {
 // rasterised as its own box, every covered pixel raymarches the preset in box-local space, and
 // the nearest hit wins by depth against the values already in images.depth. A hit's depth is
 // never nearer than the rasterised face's (clamped, as the shaders' declared depth_greater
-// requires). Boxes are drawn in plan.order; plan.early_depth skips the march of a fragment whose
-// rasterised depth fails the depth test; plan.occluders first finds, per pixel, the nearest depth
+// requires), but for a pixel whose ray starts inside its box (the march from the eye, whose face
+// is the far side: the shaders draw those boxes apart, declaring no depth), whose hit writes its
+// own depth (at least 0). Boxes are drawn in plan.order; plan.early_depth skips the march of a
+// fragment whose rasterised depth fails the depth test (not of one marching from the eye);
+// plan.occluders first finds, per pixel, the nearest depth
 // of the boxes inscribed in the shapes (bm_occluder_centre/half for the preset; none for a box
 // whose drawn box holds the eye) and returns before marching from a fragment whose rasterised
 // entry lies behind it, and ends every march at it (every fragment still runs); plan.quality below
