@@ -105,6 +105,12 @@ void main()
   vec3 ro = -f;
   vec3 ray_object = preview.eye.w > 0.5 ? obj_pos - preview.eye.xyz : preview.eye.xyz;
   float eye_distance = length(ray_object);
+  // a fragment whose position rounds to the eye's (vertices far from the object's origin, the near
+  // plane close: cut battery seed 948) has no ray: it draws nothing rather than a NaN
+  if (!(eye_distance > 0.0)) {
+    bm_drop(0.0);
+    return;
+  }
   mat3 frame = mat3(preview.frame);
   vec3 rd = normalize(bm_to_local(frame * (ray_object / eye_distance), x, y, z));
 

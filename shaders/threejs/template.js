@@ -1179,6 +1179,9 @@ var BOXMARCH_FRAGMENT = [
   // SwiftShader runs a lane on past its discard to the end of the shader (measured,
   // docs/BENCHMARKS.md): `drawn` turns the march and the normal off for it there.
   '  bool drawn = true;',
+  // a fragment whose position rounds to the eye's (vertices far from the object's origin, the near
+  // plane close) has no ray: it draws nothing rather than a NaN
+  '  if (!(eye_distance > 0.0)) { drawn = false; discard; }',
   // A fragment of the far side only marches when the eye is inside the box (the preview's rule).
   '  bool fromEye = !gl_FrontFacing && span.x + span.y < 0.0;',
   '  if (fromEye) {',
