@@ -223,14 +223,6 @@ def rods_and_boxes(seed, rods=40, others=160):
     return origins, quaternions, half
 
 
-@pytest.mark.parametrize("seed", range(6))
-def test_containment_of_turned_long_thin_boxes_gives_the_parents_of_its_definition(seed):
-    origins, quaternions, half = rods_and_boxes(seed)
-    parent = core.box_hierarchy(origins, quaternions, half, rule="CONTAINMENT")[0]
-    assert parent.tolist() == definition_containment(origins, quaternions, half).tolist()
-    assert (parent[40:120] >= 0).sum() > 10 and (parent[40:120] < 40).sum() > 5  # rods do hold boxes here
-
-
 def from_local(quaternions):
     """Per box, the matrix taking a box-local difference to object space: the inverse of the map
     the definition applies (glm's rotation by the conjugate quaternion, a linear map whatever the
@@ -290,12 +282,21 @@ def long_flat_and_nested_boxes(seed, count=180):
     return origins, quaternions, half
 
 
-@pytest.mark.parametrize("seed", range(8))
-def test_containment_of_long_flat_and_nested_boxes_gives_the_parents_of_its_definition(seed):
-    origins, quaternions, half = long_flat_and_nested_boxes(seed)
+# (scene, seed, whether the scene's boxes are held as built: the scene tests what it is for)
+CONTAINMENT_SCENES = (
+    [(rods_and_boxes, seed, lambda parent: (parent[40:120] >= 0).sum() > 10 and (parent[40:120] < 40).sum() > 5)
+     for seed in range(6)]  # rods do hold boxes
+    + [(long_flat_and_nested_boxes, seed, lambda parent: (parent[60:] >= 0).sum() > 40)
+       for seed in range(8)])  # the small boxes are held
+
+
+@pytest.mark.parametrize("scene, seed, held", CONTAINMENT_SCENES,
+                         ids=[f"{scene.__name__}-{seed}" for scene, seed, _ in CONTAINMENT_SCENES])
+def test_containment_of_long_flat_and_nested_boxes_gives_the_parents_of_its_definition(scene, seed, held):
+    origins, quaternions, half = scene(seed)
     parent = core.box_hierarchy(origins, quaternions, half, rule="CONTAINMENT")[0]
     assert parent.tolist() == definition_containment(origins, quaternions, half).tolist()
-    assert (parent[60:] >= 0).sum() > 40  # the small boxes are held
+    assert held(parent)
 
 
 def test_the_definitions_see_ties_and_nesting_and_catch_a_wrong_parent():
