@@ -178,6 +178,40 @@ def test_godot3_solves_each_box_shape_in_closed_form(imported):
     assert agree >= 0.995 and shuffled < 0.99, (agree, shuffled)
 
 
+def test_godot3_eye_inside_a_shape_sees_it_everywhere_at_a_depth_in_range(imported):
+    """The eye at the centre of box 6 (5 units across, painted SPHERE), looking at the other
+    boxes: every pixel's ray starts inside the sphere, which hits at once at the eye, where the
+    hit's clip w is 0. The depth written is the near end (0), never z / 0: the shader probed to
+    paint white where the depth it writes lies in [0, 1] is white everywhere, and the same probe
+    on the depth written as z / w unguarded (the negative control) is not. The picture: the
+    sphere's inside hides every other box, and its shade (normal -ray) depends on the ray's angle
+    to the view axis alone: the same turned half a turn about the view's centre, brightest there."""
+    project, _table, centres, _sizes, _rotations, _boxes = imported
+    assert MIXED_SHAPES[6] == 1  # SPHERE
+    eye = TO_Y_UP @ centres[6]
+    inside = {"position": eye.tolist(), "target": [0.0, 0.0, 0.0], "fov": 50, "near": 0.01, "far": 100}
+    uniforms = {"box_table": "res://model.boxes.tres", "max_steps": 256}
+    code = godot3.shipped_shader(PER_BOX_MAP, closed_code=PER_BOX_CLOSED_FORM)
+    guarded = "clip.w > 0.0 ? min(max(0.5 + 0.5 * clip.z / clip.w, 0.0), 1.0) : 0.0"
+    shade = "ALBEDO = base_color.rgb * (0.35 + 0.65 * max(n.z, 0.0));"
+    assert code.count(f"DEPTH = {guarded};") == 1 and code.count(shade) == 1
+
+    def grey(shader_code):
+        return godot3.render(project, shader_code, width=W, height=H, camera=inside,
+                             uniforms=uniforms).pixels[..., :3].astype(int).max(axis=2)
+
+    def in_range(depth):
+        """The share of pixels where the probed shader writes a depth in [0, 1]."""
+        probed = code.replace(f"DEPTH = {guarded};", f"float written = {depth};\n  DEPTH = written;")
+        return (grey(probed.replace(shade, "ALBEDO = vec3(written >= 0.0 && written <= 1.0 ? 1.0 : 0.0);")) > 128).mean()
+
+    picture = grey(code)
+    same = (np.abs(picture - picture[::-1, ::-1]) <= 2).mean()
+    assert same >= 0.995 and (picture > 20).all() and picture[H // 2, W // 2] > picture[0, 0] + 10, same
+    assert in_range(guarded) == 1.0
+    assert in_range("0.5 + 0.5 * clip.z / clip.w") < 0.5
+
+
 def test_godot3_default_compression_error_is_what_the_report_states(blender, tmp_path):
     """Godot's default import (mesh compression on) quantizes the colour to clamped 8 bits and the
     frame to 8-bit snorm: the decode breaks, and the export report says by how much."""

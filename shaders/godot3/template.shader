@@ -135,7 +135,9 @@ void fragment()
   vec3 local_hit = ro + rd * t;
   vec3 obj_hit = bm_v_obj_pos + bm_from_local(local_hit + f, x, y, z);
   vec4 clip = object_to_clip * vec4(obj_hit, 1.0);
-  DEPTH = 0.5 + 0.5 * clip.z / clip.w;
+  // an eye inside the shape hits at the eye, where clip w is 0: the near end (three.js alike); at
+  // most the far plane
+  DEPTH = clip.w > 0.0 ? min(max(0.5 + 0.5 * clip.z / clip.w, 0.0), 1.0) : 0.0;
   vec3 n_local = closed.w > -1.5 ? closed.xyz : bm_normal(local_hit, d, bm_normal_tap(h), h, index);
   vec3 n = normalize((INV_CAMERA_MATRIX * WORLD_MATRIX * vec4(bm_from_local(n_local, x, y, z), 0.0)).xyz);
   ALBEDO = base_color.rgb * (0.35 + 0.65 * max(n.z, 0.0));
