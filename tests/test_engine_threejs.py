@@ -28,6 +28,7 @@ from tests.engine_scene import (
     silhouettes,
 )
 from tests.engines import coverage_mismatch, threejs
+from tests.helpers.glsl import preprocessed
 from tests.helpers.preview_render import EXACT_MARCH
 from tests.helpers.tools import need
 
@@ -107,7 +108,8 @@ SORT_JOB = """async function (gltf) {
 
 
 # The shipped material's stages as the release's three.js hands them to WebGL (the page's first
-# mesh drawn once with createBoxmarchMaterial's defaults, shaderSource recorded), the context's
+# mesh drawn once with createBoxmarchMaterial's defaults, shaderSource recorded; where the material
+# declares its depth, then its eye-box variant's, drawn right after: useBoxmarchEyeBox), the context's
 # requests for EXT_conservative_depth among them ("getExtension" in ``calls``, in order with
 # "vertex" and "fragment"), whether the context offers the extension, and on WebGL 2 what its
 # compiler (ANGLE) says of the fragment text as built and with depth_greater misspelled, on a
@@ -142,7 +144,8 @@ STAGES_JOB = """function (gltf) {
     prototypes.forEach(function (p, i) { p.shaderSource = originals[i].shaderSource; p.getExtension = originals[i].getExtension; });
   }
   var gl = renderer.getContext(), webgl2 = typeof WebGL2RenderingContext !== 'undefined' && gl instanceof WebGL2RenderingContext;
-  var result = {vertex: sources[0], fragment: sources[1], stages: sources.length, calls: calls, webgl2: webgl2,
+  var result = {vertex: sources[0], fragment: sources[1], eyeFragment: sources[3] || null, stages: sources.length,
+                calls: calls, webgl2: webgl2,
                 extension: (gl.getSupportedExtensions() || []).indexOf('EXT_conservative_depth') >= 0, angle: null};
   renderer.dispose();
   renderer.forceContextLoss();
@@ -379,20 +382,28 @@ def test_webgl2_fragment_declares_depth_greater_where_the_extension_is_handed_ou
     depth layout in plain ES 3.00). r111 (WebGL 1): the ShaderMaterial, no #extension line."""
     out = page[0]
     stages = out["stages"]
-    assert stages["stages"] == 2 and "bmEye" in stages["fragment"]
+    assert "bmEye" in stages["fragment"]
     if out["release"] == "r111":
+        assert stages["stages"] == 2  # no eye-box variant: the ShaderMaterial writes any depth itself
         assert not stages["webgl2"] and "conservative_depth" not in stages["fragment"]
         assert "getExtension" not in stages["calls"]
         return
+    # the eye-box variant (its march from the eye writes its hit's depth, nearer than its fragment) declares none
+    assert stages["stages"] == 4 and "bmEye" in stages["eyeFragment"]
+    def as_compiled(fragment):  # on a context that hands GL_EXT_conservative_depth out
+        return preprocessed(fragment.replace("#ifdef GL_EXT_conservative_depth", "#if 1"))
+
+    assert "depth_greater" in as_compiled(stages["fragment"]) and "depth_greater" not in as_compiled(stages["eyeFragment"])
     lines = stages["fragment"].splitlines()
     assert lines[0] == "#version 300 es"
     extension = lines.index("#extension GL_EXT_conservative_depth : enable")
     assert all(line.startswith("#define ") for line in lines[1:extension])
     declared = lines.index("layout(depth_greater) out highp float gl_FragDepth;")
-    assert lines[declared - 1] == "#ifdef GL_EXT_conservative_depth" and lines[declared + 1] == "#endif"
+    assert lines[declared - 1] == "#ifdef GL_EXT_conservative_depth"
+    assert lines[declared + 1:declared + 3] == ["#define BM_DEPTH_GREATER", "#endif"]
     assert stages["extension"] is True  # SwiftShader's WebGL 2 offers it: the declared branch runs here
     # the material's onBeforeCompile asked the renderer's context for it before the stages were compiled
-    assert stages["calls"] == ["getExtension", "vertex", "fragment"], stages["calls"]
+    assert stages["calls"][:3] == ["getExtension", "vertex", "fragment"], stages["calls"]
     angle = stages["angle"]
     assert angle["handed_out"] is True
     assert angle["as_built"] == "ok" and angle["withheld_as_built"] == "ok", angle

@@ -8,23 +8,12 @@ Blender's GL backend declares it. Blender-free; the preview's real compile runs 
 tests/test_preview_blender.py."""
 import re
 import subprocess
-import tempfile
 
 import pytest
 
 from boxmarch.formats import shader_sources
 from tests.helpers import gpu_stub
-from tests.helpers.glsl import validator
-
-
-def preprocessed(fragment: str) -> str:
-    """The fragment source as its compile sees it: its #ifdef branches taken (glslangValidator -E)."""
-    with tempfile.NamedTemporaryFile("w", suffix=".frag") as source:
-        source.write(fragment)
-        source.flush()
-        proc = subprocess.run([validator(), "-E", source.name], capture_output=True, text=True, timeout=60)
-    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
-    return proc.stdout
+from tests.helpers.glsl import preprocessed, validator
 
 
 def depth_direction(fragment: str):

@@ -3,6 +3,7 @@ Blender's GPUShaderCreateInfo adds in front of it (uniform block, vertex inputs,
 outputs); an engine's HLSL is compiled as a fragment stage by glslang's HLSL front end."""
 import shutil
 import subprocess
+import tempfile
 
 from boxmarch.formats import shader_sources
 from tests.helpers.tools import need
@@ -31,3 +32,13 @@ def compile_hlsl_fragment(tmp_path, name, source):
     path.write_text(source)
     return subprocess.run([validator(), "-D", "-V", "-e", "main", "-S", "frag", str(path), "-o", str(tmp_path / "out.spv")],
                           capture_output=True, text=True, timeout=60)
+
+
+def preprocessed(fragment: str) -> str:
+    """The fragment source as its compile sees it: its #ifdef branches taken (glslangValidator -E)."""
+    with tempfile.NamedTemporaryFile("w", suffix=".frag") as source:
+        source.write(fragment)
+        source.flush()
+        proc = subprocess.run([validator(), "-E", source.name], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    return proc.stdout
