@@ -141,7 +141,8 @@ def test_every_pixel_a_cut_changes_is_one_the_plain_march_leaves_unresolved(batt
     seeds, results = battery(renderer)
     exported = {f.seed for f in results}
     assert len(exported) >= 0.9 * len(seeds), f"only {len(exported)} of {len(seeds)} scenes drawn"
-    lines = unexplained(results)
+    opened = {seed for seed, r, *_ in OPEN if r == renderer}  # each held to its own ceiling below
+    lines = unexplained([f for f in results if f.seed not in opened])
     assert not lines, "\n".join(lines)
 
 
