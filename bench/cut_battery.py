@@ -62,7 +62,7 @@ def main(argv=None):
     parser.add_argument("--first", type=int, default=0, help="first seed")
     parser.add_argument("--renderer", choices=("all", *cut_battery.RENDERERS), default="all")
     parser.add_argument("--chunk", type=int, default=200, help="seeds per bpy process")
-    parser.add_argument("--batch", type=int, default=40, help="scenes per three.js page (one shape per page)")
+    parser.add_argument("--batch", type=int, default=40, help="scenes per three.js page")
     parser.add_argument("--generator", choices=tuple(cut_battery.GENERATORS), default="battery",
                         help="the battery's scenes, or made hostile to the occluders' depth rounding")
     args = parser.parse_args(argv)

