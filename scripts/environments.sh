@@ -12,6 +12,20 @@ DEMO_VENV="${BOXMARCH_DEMO_VENV:-$REPO_ROOT/.venv-demo}"
 TEST_VENV="${BOXMARCH_TEST_VENV:-$REPO_ROOT/.venv-test}"
 BOXMARCH_CACHE="${BOXMARCH_CACHE:-$REPO_ROOT/.cache}"
 
+# use_compiler_cache: every CMake build of the scripts (and of the tests they run) compiles through
+# ccache where it is installed (scripts/setup.sh installs it), so a clone reuses what any clone on
+# this machine compiled from the same sources and flags: CCACHE_BASEDIR hashes the paths under the
+# checkout relative to it, CCACHE_NOHASHDIR leaves the build folder out of -g builds' hashes (their
+# debug paths then name the clone that compiled them). CMake reads CMAKE_CXX_COMPILER_LAUNCHER from
+# the environment. A failed compile is never cached; a compile's warnings are replayed with its hit.
+use_compiler_cache() {
+  if command -v ccache >/dev/null 2>&1; then
+    export CMAKE_CXX_COMPILER_LAUNCHER="${CMAKE_CXX_COMPILER_LAUNCHER:-ccache}"
+    export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$REPO_ROOT}" CCACHE_NOHASHDIR="${CCACHE_NOHASHDIR:-true}"
+  fi
+}
+use_compiler_cache
+
 # checkout_python: the Python a script of the checkout runs with: $PYTHON when set, else the test
 # environment's, else the demo's (so the scripts work after either README command), else python3.
 checkout_python() {

@@ -21,7 +21,8 @@ APT_PACKAGES=(blender python3-numpy glslang-tools xvfb xauth
               mono-mcs mono-runtime  # tests/test_engine_import_settings.py: the Unity postprocessor compiled against a stub of Unity's API and run under mono
               clang-format-14  # tests/test_house.py: the cpp/ style check
               libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers  # bench/vk_early_depth: the Vulkan harness's headers and loader, run on lavapipe under validation (tests/test_vk_early_depth.py)
-              shellcheck)  # actionlint checks the workflows' run: scripts with it (tests/test_workflows.py)
+              shellcheck  # actionlint checks the workflows' run: scripts with it (tests/test_workflows.py)
+              ccache)  # the C++ builds' compiler cache (scripts/environments.sh use_compiler_cache)
 # Beyond the demo's (DEMO_PIP_PACKAGES, bpy 5.0 among them): the test and lint tools.
 PIP_PACKAGES=(pytest hypothesis matplotlib
               "pytest-xdist==3.8.0"  # scripts/test.sh runs the everyday and slow tiers on every core (-n)
@@ -39,6 +40,7 @@ if [ "${1:-}" = "--list" ]; then
 fi
 # shellcheck disable=SC2046  # one word or none
 apt_install_missing "${DEMO_APT_PACKAGES[@]}" "${APT_PACKAGES[@]}" $(venv_apt_packages "$PYTHON")
+use_compiler_cache  # ccache, installed just now on a fresh machine
 [ -x "$TEST_VENV/bin/python" ] || "$PYTHON" -m venv "$TEST_VENV"
 TEST_PYTHON="$TEST_VENV/bin/python"
 pip_quiet=(-q --disable-pip-version-check)
