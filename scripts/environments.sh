@@ -16,11 +16,14 @@ BOXMARCH_CACHE="${BOXMARCH_CACHE:-$REPO_ROOT/.cache}"
 # ccache where it is installed (scripts/setup.sh installs it), so a clone reuses what any clone on
 # this machine compiled from the same sources and flags: CCACHE_BASEDIR hashes the paths under the
 # checkout relative to it, CCACHE_NOHASHDIR leaves the build folder out of -g builds' hashes (their
-# debug paths then name the clone that compiled them). CMake reads CMAKE_CXX_COMPILER_LAUNCHER from
-# the environment. A failed compile is never cached; a compile's warnings are replayed with its hit.
+# debug paths then name the clone that compiled them), CCACHE_DIR the user's cache, fixed here
+# because the tests give their subprocesses an XDG_CACHE_HOME of their own (tests/conftest.py).
+# CMake reads CMAKE_CXX_COMPILER_LAUNCHER from the environment. A failed compile is never cached; a
+# compile's warnings are replayed with its hit.
 use_compiler_cache() {
   if command -v ccache >/dev/null 2>&1; then
     export CMAKE_CXX_COMPILER_LAUNCHER="${CMAKE_CXX_COMPILER_LAUNCHER:-ccache}"
+    export CCACHE_DIR="${CCACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/ccache}"
     export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$REPO_ROOT}" CCACHE_NOHASHDIR="${CCACHE_NOHASHDIR:-true}"
   fi
 }
