@@ -13,17 +13,17 @@ TEST_VENV="${BOXMARCH_TEST_VENV:-$REPO_ROOT/.venv-test}"
 BOXMARCH_CACHE="${BOXMARCH_CACHE:-$REPO_ROOT/.cache}"
 
 # use_compiler_cache: every CMake build of the scripts (and of the tests they run) compiles through
-# ccache where it is installed (scripts/setup.sh installs it), so a clone reuses what any clone on
-# this machine compiled from the same sources and flags: CCACHE_BASEDIR hashes the paths under the
-# checkout relative to it, CCACHE_NOHASHDIR leaves the build folder out of -g builds' hashes (their
-# debug paths then name the clone that compiled them), CCACHE_DIR the user's cache, fixed here
-# because the tests give their subprocesses an XDG_CACHE_HOME of their own (tests/conftest.py).
-# CMake reads CMAKE_CXX_COMPILER_LAUNCHER from the environment. A failed compile is never cached; a
-# compile's warnings are replayed with its hit.
+# ccache where it is installed (scripts/setup.sh installs it), its cache in BOXMARCH_CACHE/ccache
+# like every other cache (set here, since the tests give their subprocesses an XDG_CACHE_HOME of
+# their own): a clean clone's set-up build fills it and the tests' builds of the same sources and
+# flags reuse it. CCACHE_BASEDIR hashes the paths under the checkout relative to it and
+# CCACHE_NOHASHDIR leaves the build folder out of -g builds' hashes, so clones that share one
+# BOXMARCH_CACHE share their compiles too. CMake reads CMAKE_CXX_COMPILER_LAUNCHER from the
+# environment. A failed compile is never cached; a compile's warnings are replayed with its hit.
 use_compiler_cache() {
   if command -v ccache >/dev/null 2>&1; then
     export CMAKE_CXX_COMPILER_LAUNCHER="${CMAKE_CXX_COMPILER_LAUNCHER:-ccache}"
-    export CCACHE_DIR="${CCACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/ccache}"
+    export CCACHE_DIR="${CCACHE_DIR:-$BOXMARCH_CACHE/ccache}"
     export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$REPO_ROOT}" CCACHE_NOHASHDIR="${CCACHE_NOHASHDIR:-true}"
   fi
 }
