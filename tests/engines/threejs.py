@@ -142,12 +142,9 @@ _LOAD_JOB = """function (gltf) {
 
 _RENDER_JOB = """async function (gltf) {
   var W = __W__, H = __H__, cam = __CAMERA__;
-  var renderer = __SHARED__ ? window.__sharedRenderer : null;
-  if (!renderer) {
-    renderer = new THREE.WebGLRenderer({canvas: document.createElement('canvas'), antialias: false, alpha: true,
-                                        preserveDrawingBuffer: true});
-    if (__SHARED__) window.__sharedRenderer = renderer;
-  }
+  // the page's one renderer (render_job)
+  var renderer = window.__pageRenderer || (window.__pageRenderer = new THREE.WebGLRenderer({
+    canvas: document.createElement('canvas'), antialias: false, alpha: true, preserveDrawingBuffer: true}));
   renderer.setPixelRatio(1);
   renderer.setSize(W, H, false);
   renderer.setClearColor(0x000000, 0);
@@ -173,10 +170,6 @@ _RENDER_JOB = """async function (gltf) {
   var extra = await (async function (THREE, renderer, scene, camera, W, H) {
     __AFTER__
   })(THREE, renderer, scene, camera, W, H);
-  if (!__SHARED__) {
-    renderer.dispose();
-    renderer.forceContextLoss();  // one page renders many times: give each context back
-  }
   return Object.assign({pixels: __b64(px), view: __f64(camera.matrixWorldInverse.elements),
                         projection: __f64(camera.projectionMatrix.elements)}, extra || {});
 }"""
@@ -440,7 +433,7 @@ def load_attributes(glb_bytes, release="r111"):
     return run_jobs(glb_bytes, [load_job()], release=release)[0]
 
 
-def render_job(setup_js, width, height, camera, after_js="return {};", shared_renderer=True):
+def render_job(setup_js, width, height, camera, after_js="return {};"):
     """:class:`Job` rendering the loaded .glb once (WebGL 1 for r111, WebGL 2 for r180; SwiftShader);
     its result is a :class:`Shot`.
 
@@ -454,13 +447,12 @@ def render_job(setup_js, width, height, camera, after_js="return {};", shared_re
     ``camera.projectionMatrix``, both as three.js computed them. ``after_js``: the body of an
     async function of ``THREE``, ``renderer``, ``scene``, ``camera``, ``W`` and ``H`` run after
     the render; what it returns joins the job's raw result (see :func:`count_job`).
-    ``shared_renderer``: draw with the page's one WebGLRenderer, kept for every job that shares it,
-    as an app draws every scene with one renderer (its compiled programs too: SwiftShader takes
-    seconds to compile a marching material, and a page of 24 pictures drew 2.7x faster so, every
-    pixel the same); False: the job makes its own renderer and gives its context back.
+    Every render job of a page draws with the page's one WebGLRenderer, as an app draws every scene
+    with one renderer, its compiled programs kept (SwiftShader takes seconds to compile a marching
+    material: a page of 24 pictures drew 2.7x faster so than with a renderer a job, every pixel the
+    same).
     """
     js = (_RENDER_JOB.replace("__W__", str(int(width))).replace("__H__", str(int(height)))
-          .replace("__SHARED__", "true" if shared_renderer else "false")
           .replace("__CAMERA__", json.dumps(camera)).replace("__SETUP__", setup_js).replace("__AFTER__", after_js))
 
     def shot(out):

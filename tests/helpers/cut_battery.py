@@ -487,9 +487,10 @@ def _rgba(shot):
 
 
 def _pages(keys, batch, generator=scene):
-    """(seed, ...) keys in pages of at most ``batch`` seeds each, the seeds ordered by shape: a page
-    draws with one renderer, so it compiles each material once however many scenes use it
-    (SwiftShader: about a second of CPU each), and each page costs a Chromium start (2.4 s)."""
+    """(seed, ...) keys in pages of at most ``batch`` seeds each, the seeds ordered by shape so a
+    page holds few shapes: a page draws with one renderer, so it compiles each material once however
+    many scenes use it (SwiftShader: about a second of CPU each), and each page costs a Chromium
+    start (2.4 s)."""
     seeds = sorted(dict.fromkeys(key[0] for key in keys), key=lambda s: generator(s)["shape"])
     pages = []
     for k in range(0, len(seeds), batch):
