@@ -25,6 +25,9 @@ fi
 OUT="${1:-dist}"
 NATIVE=""
 if [ -z "$WHEELHOUSE" ]; then
+  # The C++ compiler this Python names (sysconfig CXX), as the set-up's `pip install .` compiles
+  # with: the same compiler and flags make the compiler cache's entries from that build hit here.
+  CXX="${CXX:-$("$PYTHON" -c 'import sysconfig; print((sysconfig.get_config_var("CXX") or "c++").split()[0])')}" \
   cmake -S . -B build/extension -DCMAKE_BUILD_TYPE=Release -DBOXMARCH_BUILD_PYTHON=ON \
     -DPython_EXECUTABLE="$(command -v "$PYTHON")" \
     -Dpybind11_DIR="$("$PYTHON" -c 'import pybind11; print(pybind11.get_cmake_dir())')" >/dev/null
