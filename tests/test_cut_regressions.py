@@ -31,7 +31,7 @@ from boxmarch import core
 from tests.helpers.preview_render import BLENDERS, quaternions_of, run_check_script
 
 SCRIPT = Path(__file__).parent / "blender_scripts" / "cut_regressions_check.py"
-SCENES = ("pile", "offset_100", "offset_1000", "open", "distant", "mid_depth_ortho")
+SCENES = ("pile", "offset_100", "offset_1000", "open", "distant", "mid_depth_ortho", "squashed")
 
 pytestmark = pytest.mark.slow  # each Blender renders the piles in a subprocess
 

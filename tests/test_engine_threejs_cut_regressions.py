@@ -24,6 +24,12 @@ emptied at 200 x 150 on r111, each measured with the other fixes in place):
   to 199,000) with bm_occluder_limit's margin set to 0: 39 px (r180) and 27 px (r111) with the
   pre-pass, 1,001 px with the visibility passes, in both; none with the margin (there
   bm_depth_rounding pushes the occluders back by almost nothing: their clip z is about 0).
+* the pile squashed (scale 0.3, 1.4, 1 along x, y, z), with the pre-pass and with the visibility
+  passes: 6 px each, on r111 and r180 (the pre-pass sized a pixel, which its occluders are pulled in
+  by an eighth of, along the object-to-clip matrix's y row alone: 3.3 times too small in object
+  units across the squashed axis, so an occluder's face lay less than the rasteriser's sub-pixel
+  snapping behind its box's face; a pixel across each face is now the view-space pixel times
+  |normalMatrix a|: template.js BOXMARCH_OCCLUDER_VERTEX).
 The mirrored pile with the default cuts (pre-pass, culling) passed before: it keeps every cut
 checked on a mirroring matrix.
 """
@@ -45,6 +51,8 @@ W, H = 200, 150
 SIZE = np.array([0.3, 0.25, 0.2])
 COUNT = 300
 BOX_MAP = "return sdf_preset_box(p, box_half);"
+# the pile's scale in "squashed" cases: thin across the view, so its boxes' faces turn edge-on
+SQUASH = (0.3, 1.4, 1.0)
 NEAR_CAMERA = {"position": [0.4, 0.6, 3.5], "target": [0.0, 0.0, 0.0], "fov": 40, "near": 0.1, "far": 100}
 
 
@@ -105,10 +113,14 @@ def exported(bpy_module, tmp_path_factory):
 
 
 def loader_js(name, options):
-    """Loads ``name`` (a key of ``exported``; "NAME mirrored": NAME's scene scaled by -1 along x)."""
-    name, mirrored = name.removesuffix(" mirrored"), name.endswith(" mirrored")
-    return (f"scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, '{name}.glb', "
-            f"{json.dumps(options)}); scene.add(loaded.scene);" + (" loaded.scene.scale.x = -1;" if mirrored else ""))
+    """Loads ``name`` (a key of ``exported``; "NAME mirrored": NAME's scene scaled by -1 along x;
+    "NAME squashed": scaled by SQUASH)."""
+    transforms = {" mirrored": " loaded.scene.scale.x = -1;",
+                  " squashed": " loaded.scene.scale.set(%s);" % ", ".join(map(str, SQUASH))}
+    suffix = next((s for s in transforms if name.endswith(s)), "")
+    return (f"scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, "
+            f"'{name.removesuffix(suffix) if suffix else name}.glb', {json.dumps(options)}); scene.add(loaded.scene);"
+            + transforms.get(suffix, ""))
 
 
 # (scene, camera, options with the cut): each drawn with them and with occluders: false
@@ -123,6 +135,8 @@ CASES = {
     "distant, visibility passes": ("pile", DISTANT_CAMERA, {"map": BOX_MAP, "visibilityPass": True}),
     "mirrored": ("pile mirrored", NEAR_CAMERA, {"map": BOX_MAP}),
     "mirrored, visibility passes": ("pile mirrored", NEAR_CAMERA, {"map": BOX_MAP, "visibilityPass": True}),
+    "squashed": ("pile squashed", NEAR_CAMERA, {"map": BOX_MAP}),
+    "squashed, visibility passes": ("pile squashed", NEAR_CAMERA, {"map": BOX_MAP, "visibilityPass": True}),
     "mid-depth orthographic": ("pile", MID_DEPTH_ORTHO, {"map": BOX_MAP}),
     "mid-depth orthographic, visibility passes": ("pile", MID_DEPTH_ORTHO, {"map": BOX_MAP, "visibilityPass": True}),
 }

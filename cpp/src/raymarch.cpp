@@ -229,11 +229,13 @@ PixelRay pixel_ray(const glm::dmat4& from_clip, int x, int y, int W, int H, cons
 // bm_occluder_half of the preset, pulled in by bm_occluder_rounding and pushed back in depth by
 // bm_depth_rounding as the pre-pass's vertex stage moves them), as the rasteriser would write
 // them; a box that the near plane cuts (the eye inside it among them) draws none, as the shaders'
-// pre-pass drops it: its shape may not be drawn where its occluders would lie.
+// pre-pass drops it: its shape may not be drawn where its occluders would lie. normal_matrix: the
+// inverse transpose of the object-to-view matrix's 3x3; view_row_y: the projection's clip y per
+// view-space unit.
 std::vector<float> occluder_depths(const float* origins, const float* quaternions, const float* half_extents,
                                    size_t box_count, const std::vector<glm::ivec4>& rects, const glm::mat4& to_clip,
-                                   const glm::dmat4& from_clip, SdfPreset kind, int W, int H, size_t row_begin,
-                                   size_t row_end) {
+                                   const glm::dmat4& from_clip, const glm::mat3& normal_matrix, float view_row_y,
+                                   SdfPreset kind, int W, int H, size_t row_begin, size_t row_end) {
     std::vector<float> depth((row_end - row_begin) * size_t(W), 1.0f);
     // z + w >= 0 in GL clip space on the near plane's far side
     const vec4 near_side(to_clip[0][2] + to_clip[0][3], to_clip[1][2] + to_clip[1][3], to_clip[2][2] + to_clip[2][3],
@@ -261,12 +263,20 @@ std::vector<float> occluder_depths(const float* origins, const float* quaternion
             unit[axis] = 1.0f;
             farthest += h[axis] * std::abs(glm::dot(vec3(w_row), q * unit));
         }
-        const float row_y = glm::length(vec3(to_clip[0][1], to_clip[1][1], to_clip[2][1]));
-        const float rounding =
-                shader::bm_occluder_rounding(shader::bm_pixel_size(farthest, row_y, float(H)), glm::length(c));
+        // in box-local units across the faces normal to each axis: the view-space pixel times how
+        // many object units a plane normal to the axis lies from its parallel per view unit
+        // (preview.vert.glsl says why)
+        const float pixel = shader::bm_pixel_size(farthest, view_row_y, float(H));
+        vec3 rounding;
+        for (int axis = 0; axis < 3; ++axis) {
+            vec3 unit(0.0f);
+            unit[axis] = 1.0f;
+            rounding[axis] =
+                    shader::bm_occluder_rounding(pixel * glm::length(normal_matrix * (q * unit)), glm::length(c));
+        }
         for (float k = 0.0f; k < shader::bm_occluder_count(shape); k += 1.0f) {
             const vec3 centre = shader::bm_occluder_centre(shape, h, k);
-            const vec3 extent = shader::bm_occluder_half(shape, h, k) - vec3(rounding);
+            const vec3 extent = shader::bm_occluder_half(shape, h, k) - rounding;
             if (shader::bm_min3(extent) <= 0.0f) continue;
             for (int y = std::max(r.y, int(row_begin)); y <= std::min(r.w, int(row_end) - 1); ++y) {
                 for (int x = r.x; x <= r.z; ++x) {
@@ -363,7 +373,10 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
     const int W = int(view.width), H = int(view.height);
     const glm::mat4 to_clip = glm::make_mat4(view.object_to_clip);
     const glm::dmat4 from_clip = glm::inverse(glm::dmat4(to_clip));
-    const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(glm::make_mat4(view.object_to_view))));
+    const glm::mat4 to_view = glm::make_mat4(view.object_to_view);
+    const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(to_view)));
+    // the projection's clip y per view-space unit
+    const float view_row_y = float((glm::dmat4(to_clip) * glm::inverse(glm::dmat4(to_view)))[1][1]);
     const vec3 base = glm::make_vec3(view.base_color);
     const float row_y = glm::length(vec3(to_clip[0][1], to_clip[1][1], to_clip[2][1]));
     const vec4 quality = shader::bm_quality(plan.quality);
@@ -378,7 +391,7 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
         std::vector<uint8_t> covered(shown.size(), 0);
         const std::vector<float> occluder =
                 plan.occluders ? occluder_depths(origins, quaternions, half_extents, box_count, rects, to_clip,
-                                                 from_clip, o.sdf, W, H, row_begin, row_end)
+                                                 from_clip, normal_matrix, view_row_y, o.sdf, W, H, row_begin, row_end)
                                : std::vector<float>();
         for (size_t drawn = 0; drawn < box_count; ++drawn) {
             const size_t b = plan.order ? plan.order[drawn] : drawn;

@@ -23,7 +23,8 @@
 // 2 steps of every fragment in red, 1 in blue, with alpha 1, for Blender's ADDITIVE blend: src *
 // alpha + dst); mode.y (1: the object's matrix mirrors, so its boxes' outer faces are the ones
 // gl_FrontFacing calls back faces);
-// quality (x: the quality knob of bm_quality, y: the viewport height in pixels);
+// quality (x: the quality knob of bm_quality, y: the viewport height in pixels, z: the projection's
+// clip y per view-space unit, its [1][1]);
 // blend.x (the blend radius of PER_BOX_BLEND, else 0); blend.y (1: colour each box by its
 // material id); occlusion.x (1: the hidden-box pre-pass ran and occluder_depth holds the nearest
 // window depth of the occluders at each pixel, docs/PREVIEW.md "Hidden boxes"; 0: none),
@@ -171,7 +172,15 @@ void main()
     // (a march from the eye takes no test: its fragment is its box's far side, behind its hit;
     // the equality of its hit's depth with the kept one decides, as for every fragment)
     if (!hidden && !from_eye && preview.occlusion.w == 2.0) {
-      hidden = reach < 1e30 && reach > t_end;
+      // the box's exit nearer than that depth, compared as depths (the crossing, reach, inverts a
+      // depth into a distance, which loses every digit where the near plane is far nearer than
+      // the boxes: cut battery, depth-hostile seed 138, a winner's reach came out beyond its exit).
+      // Along the ray the depth is monotonic while w keeps its sign, so every hit_depth below
+      // (the face's depth or more) is at most the greater of the face's and the exit's, whatever
+      // the rounding of the ray's direction
+      vec4 exit_clip = c0 + c1 * t_end;
+      hidden = exit_clip.w > 0.0
+        && max(gl_FragCoord.z, 0.5 + 0.5 * exit_clip.z / exit_clip.w) < nearest - bm_shade_margin();
       if (!hidden && beyond < 1e30) {
         float at = min(bm_depth_crossing(c0, c1, 2.0 * nearest - 1.0), beyond);
         taps = 1;
@@ -220,16 +229,23 @@ void main()
   vec3 local_hit = ro + rd * t;
   vec4 clip = c0 + c1 * t;
   float window_depth = clip.z / clip.w * 0.5 + 0.5;
-  // a march from the eye: its hit's own depth, in front of the eye (0 where the eye is in the shape:
-  // t = 0, clip.w 0 give or take rounding)
-  float eye_hit_depth = clip.w > 0.0 ? max(window_depth, 0.0) : 0.0;
+  // The hit's depth: never nearer than the rasterised face (what the one-pass stage declares),
+  // but a march from the eye in the draw of the boxes holding the eye (occlusion.z 2, as the vertex
+  // stage picked them) writes its hit's own depth, in front of the eye (0 where the eye is in the
+  // shape: t = 0, clip.w 0 give or take rounding). A fragment of another box that the test above
+  // still sends from the eye (its box's face a rounding from the eye, vertices far from the origin)
+  // keeps its face's depth in every pass, as the one-pass draw's declaration makes it: the resolved
+  // passes kept its hit at depth 0 where the one-pass draw wrote its face's, and shaded nothing
+  // there (cut battery, depth-hostile seed 138).
+  bool own_depth = from_eye && preview.occlusion.z == 2.0;
+  float hit_depth = own_depth ? (clip.w > 0.0 ? max(window_depth, 0.0) : 0.0) : max(window_depth, gl_FragCoord.z);
 #ifdef BM_RESOLVED
   // in [0, 1], as the depth buffer clamps what it is given: a face the near plane clips may
   // rasterise a hair in front of it (llvmpipe: window depth -9e-6), and a negative float's bits
   // sort after every other depth's as uint, so that hit was never kept; a hit at or past the far
   // plane is kept at 1.0, as the plain draw keeps it; a march from the eye keeps its hit's own
   // depth (these passes write no depth, so no declaration binds them), nearer than its fragment
-  float hit_depth = clamp(from_eye ? eye_hit_depth : max(window_depth, gl_FragCoord.z), 0.0, 1.0);
+  hit_depth = clamp(hit_depth, 0.0, 1.0);
   // the visibility pass counts the march alone (no normal); the shade pass its march and, for the
   // one fragment it shades, the normal's taps
   bool shaded = hit && preview.occlusion.w == 2.0 && floatBitsToUint(hit_depth) == winner;
@@ -252,8 +268,9 @@ void main()
     discard;
   }
 #ifdef BM_EYE_BOXES
-  gl_FragDepth = from_eye ? eye_hit_depth : max(window_depth, gl_FragCoord.z);
+  gl_FragDepth = hit_depth;
 #else
+  // hit_depth, written as what the stage declares (depth_write GREATER): occlusion.z is not 2 here
   gl_FragDepth = max(window_depth, gl_FragCoord.z);
 #endif
 #endif

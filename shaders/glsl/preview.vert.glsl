@@ -101,9 +101,20 @@ void main()
   vec3 far_reach = h * abs(vec3(dot(w_row.xyz, ax), dot(w_row.xyz, ay), dot(w_row.xyz, az)));
   float nearest = dot(near_side.xyz, origin) + near_side.w - near_reach.x - near_reach.y - near_reach.z;
   float farthest = dot(w_row.xyz, origin) + w_row.w + far_reach.x + far_reach.y + far_reach.z;
-  float rounding = bm_occluder_rounding(bm_pixel_size(farthest, length(vec3(m[0][1], m[1][1], m[2][1])), preview.quality.y),
-                                        length(pos));
-  vec3 extent = bm_occluder_half(shape, h, occluder_index) - vec3(rounding);
+  // A pixel's size at the far side, in box-local units across the faces normal to each axis: the
+  // view-space pixel (preview.quality.z: the projection's clip y per view unit) times how many
+  // object units a plane normal to the axis lies from its parallel per view unit, |N a| with N the
+  // inverse transpose of the object-to-view matrix. Under a non-uniform scale or a shear, a pixel
+  // measured along the object-to-clip matrix's y row alone came out up to 5.6 times too small
+  // across a squashed axis of a sheared battery scene, and occluders lay in front of their boxes'
+  // faces.
+  float pixel = bm_pixel_size(farthest, preview.quality.z, preview.quality.y);
+  mat3 normal_to_view = mat3(preview.normal_to_view);
+  vec3 across = vec3(length(normal_to_view * ax), length(normal_to_view * ay), length(normal_to_view * az));
+  float reach = length(pos);
+  vec3 rounding = vec3(bm_occluder_rounding(pixel * across.x, reach), bm_occluder_rounding(pixel * across.y, reach),
+                       bm_occluder_rounding(pixel * across.z, reach));
+  vec3 extent = bm_occluder_half(shape, h, occluder_index) - rounding;
   // No occluder for a box holding the eye, nor for one that reaches within the rounding of the
   // near plane (the plane cuts its front, so its shape may not be drawn where its occluders would
   // hide what lies behind), nor for one across which a march may run out of max_distance before it
@@ -111,7 +122,7 @@ void main()
   // none. Its vertices go to the occluder's centre, so that its triangles have no area; where the
   // vertices of one box decide differently (each rounds its own arithmetic), what they draw still
   // lies inside the occluder.
-  bool drawn = !eye_inside && nearest > rounding * length(near_side.xyz) && 2.0 * length(frag_half) <= preview.march.z
+  bool drawn = !eye_inside && nearest > bm_max3(rounding) * length(near_side.xyz) && 2.0 * length(frag_half) <= preview.march.z
     && bm_min3(extent) > 0.0;
   vec3 pulled = bm_occluder_centre(shape, h, occluder_index) + (drawn ? v * extent / max(h, vec3(1e-30)) : vec3(0.0));
   vec3 moved = pos + bm_from_local(pulled - v, ax, ay, az);

@@ -1218,12 +1218,15 @@ var BOXMARCH_FRAGMENT = [
   '#ifdef BM_SHADE_PASS',
   // The nearest hit's depth (useBoxmarchVisibility): the winning hit lies where the ray reaches it,
   // give or take bm_shade_margin (near the far plane a float step of depth spans centimetres along
-  // the ray); a box that ends before that loses (one that starts after it, the depth test culls).
-  // Not a march from the eye: its depth is its back face's (never nearer than the face), so its
-  // t_win is its t_end give or take rounding, and the depth's equality below decides alone.
+  // the ray); a box whose exit lies nearer than that loses (one that starts after it, the depth
+  // test culls). Compared as depths, as the Blender preview's shade pass does (preview.frag.glsl
+  // says why): every hit's depth is at most the greater of the face's and the exit's. Not a march
+  // from the eye: the depth's equality below decides alone.
   '  float resolved = texture2D(bmResolvedDepth, gl_FragCoord.xy * bmOcclusion.yz).r;',
-  '  float t_win = bm_depth_crossing(c0, c1, 2.0 * (resolved - bm_shade_margin()) - 1.0);',
-  '  if (!fromEye && t_win < 1e29 && t_win > t_end) { drawn = false; discard; }',
+  '  vec4 exitClip = c0 + c1 * t_end;',
+  '  if (!fromEye && exitClip.w > 0.0 && max(gl_FragCoord.z, 0.5 + 0.5 * exitClip.z / exitClip.w) < resolved - bm_shade_margin()) {',
+  '    drawn = false; discard;',
+  '  }',
   '#endif',
   '  float t = 0.0;',
   '  float d = 0.0;',
@@ -1252,15 +1255,17 @@ var BOXMARCH_FRAGMENT = [
   // Never nearer than the rasterised face: what the raw material's layout(depth_greater) declares
   // (BM_DEPTH_GREATER); but a march from the eye (drawn apart where that is declared,
   // useBoxmarchEyeBox) writes the depth of its own hit, nearer than its fragment (the far side), in
-  // front of the eye (0 where the eye is in the shape); at most the far plane, as the depth buffer
-  // clamps what it is given (the passes compare it).
+  // front of the eye (0 where the eye is in the shape); within [0, 1], as the depth buffer clamps
+  // what it is given, for the passes compare it: a face cut by the near plane may hand its
+  // fragments a gl_FragCoord.z a little below 0 (SwiftShader, measured: -8e-4 with vertices far
+  // from the origin), which the depth buffer ties with the eye box's 0.
   '  float depth = 0.5 + 0.5 * clip.z / clip.w;',
   '#ifdef BM_DEPTH_GREATER',
   '  depth = max(depth, gl_FragCoord.z);',
   '#else',
   '  depth = fromEye ? (clip.w > 0.0 ? max(depth, 0.0) : 0.0) : max(depth, gl_FragCoord.z);',
   '#endif',
-  '  depth = min(depth, 1.0);',
+  '  depth = clamp(depth, 0.0, 1.0);',
   '#ifdef BM_VISIBILITY_PASS',
   '  gl_FragColor = vec4(depth);',  // MIN-blended: the nearest hit's depth (useBoxmarchVisibility)
   '#else',
@@ -1310,13 +1315,19 @@ var BOXMARCH_OCCLUDER_VERTEX = [
   '  vec4 wRow = vec4(m[0][3], m[1][3], m[2][3], m[3][3]);',
   '  float nearest = dot(side.xyz, origin) + side.w - dot(h, abs(vec3(dot(side.xyz, x), dot(side.xyz, y), dot(side.xyz, z))));',
   '  float farthest = dot(wRow.xyz, origin) + wRow.w + dot(h, abs(vec3(dot(wRow.xyz, x), dot(wRow.xyz, y), dot(wRow.xyz, z))));',
-  '  float rounding = bm_occluder_rounding(bm_pixel_size(farthest, length(vec3(m[0][1], m[1][1], m[2][1])), bmViewHeight),',
-  '    length(position));',
-  '  vec3 extent = bm_occluder_half(shape, h, BM_OCCLUDER_INDEX) - vec3(rounding);',
+  // a pixel's size at the far side across the faces normal to each axis, in box-local units (as the
+  // Blender preview's, preview.vert.glsl, which says why): the view-space pixel (projectionMatrix[1][1]:
+  // clip y per view unit) times |normalMatrix a|, the object units per view unit across those faces
+  '  float pixel = bm_pixel_size(farthest, projectionMatrix[1][1], bmViewHeight);',
+  '  vec3 across = vec3(length(normalMatrix * x), length(normalMatrix * y), length(normalMatrix * z));',
+  '  float reach = length(position);',
+  '  vec3 rounding = vec3(bm_occluder_rounding(pixel * across.x, reach), bm_occluder_rounding(pixel * across.y, reach),',
+  '    bm_occluder_rounding(pixel * across.z, reach));',
+  '  vec3 extent = bm_occluder_half(shape, h, BM_OCCLUDER_INDEX) - rounding;',
   // none for a box holding the eye, reaching within the rounding of the near plane, or left
   // empty by the rounding: its vertices go to the occluder's centre (no area; where one box's
   // vertices decide differently, what they draw stays inside the occluder)
-  '  bool drawn = !eyeInside && nearest > rounding * length(side.xyz) && min3(extent) > 0.0;',
+  '  bool drawn = !eyeInside && nearest > max3(rounding) * length(side.xyz) && min3(extent) > 0.0;',
   '  vec3 pulled = bm_occluder_centre(shape, h, BM_OCCLUDER_INDEX) + (drawn ? v * extent / max(h, vec3(1e-30)) : vec3(0.0));',
   '  vec3 moved = position + bm_from_local(pulled - v, x, y, z);',
   '  vec4 clip = m * vec4(moved, 1.0);',

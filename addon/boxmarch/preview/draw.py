@@ -294,7 +294,7 @@ def uniform_block_data(object_to_clip, object_to_view, perspective, settings, ou
     data[52:56] = settings.epsilon, settings.relaxation, settings.max_distance, settings.max_steps
     data[56:60] = base_color
     data.view(np.int32)[60:62] = output_mode, int(np.linalg.det(object_to_view[:3, :3]) < 0.0)
-    data[64:66] = settings.quality, viewport_height
+    data[64:67] = settings.quality, viewport_height, (object_to_clip @ view_to_object)[1, 1]  # the projection's y scale
     data[68] = settings.blend_radius if settings.sdf == "PER_BOX_BLEND" else 0.0
     data[69] = float(settings.colour_by_material)
     data[72:74] = float(occluders), occlusion.shape_id(settings.sdf)
