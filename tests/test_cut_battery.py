@@ -107,6 +107,18 @@ REGRESSIONS = [
                  "flat, inside-out, vertices far"),
 ]
 
+# Seeds of the depth-hostile generator (bench.cut_battery --generator depth-hostile: the near plane
+# far nearer, vertices 1e3-1e4 out, grazing views) where a cut changed pixels no step budget
+# explains: (seed, what it found), each drawn by the preview in the slow tier.
+DEPTH_HOSTILE_REGRESSIONS = [
+    (138, "resolved passes 18 px emptied (main at e5a16d1): 17 px where a back face of a box the vertex "
+          "stage calls clear of the eye, sent from the eye by the fragment's own test (positions 1e3 units "
+          "out, the eye 5e-9 away), kept its hit at depth 0 and won, where the one-pass draw writes its face's "
+          "depth; 1 px where the shade pass dropped the winner as a box ending before the kept depth, a "
+          "distance inverted from that depth along a rounded ray coming out beyond its exit; PER_BOX, eye "
+          "inside a box, mirrored, nested, flat, long thin, near plane 7.4e-10, vertices 1e3-1e4 out"),
+]
+
 
 @pytest.fixture(scope="module")
 def battery(tmp_path_factory):
@@ -152,6 +164,16 @@ def test_regression_seed(battery, seed, renderer, kept):
     results = [f for f in battery(renderer)[1] if f.seed == seed]
     assert results, f"seed {seed} was not drawn in {renderer}"
     assert not unexplained(results), f"kept as: {kept}\nnow: " + "\n".join(unexplained(results))
+
+
+@pytest.mark.slow
+def test_depth_hostile_regression_seeds(tmp_path):
+    seeds = [seed for seed, _kept in DEPTH_HOSTILE_REGRESSIONS]
+    drawn = cut_battery.draw_in_blender(seeds, tmp_path, export=False, generator=cut_battery.depth_hostile_scene)
+    for seed, kept in DEPTH_HOSTILE_REGRESSIONS:
+        assert "error" not in drawn[seed] and drawn[seed], f"seed {seed} did not draw: {drawn[seed]}"
+        lines = unexplained(cut_battery.preview_findings(seed, drawn[seed]))
+        assert not lines, f"kept as: {kept}\nnow: " + "\n".join(lines)
 
 
 # --- negative controls: a cut known to be wrong must fail the battery -----------------------------
