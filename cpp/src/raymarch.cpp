@@ -401,8 +401,9 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                               quaternions[4 * b + 2]);
             const glm::quat iq = glm::conjugate(q);
             const vec3 c = glm::make_vec3(origins + 3 * b), h = glm::make_vec3(half_extents + 3 * b);
+            auto clip_of = [&](vec3 local) { return to_clip * vec4(c + q * local, 1.0f); };
             auto window_depth = [&](vec3 local) {
-                const vec4 clip = to_clip * vec4(c + q * local, 1.0f);
+                const vec4 clip = clip_of(local);
                 return clip.z / clip.w * 0.5f + 0.5f;
             };
             for (int y = std::max(r.y, int(row_begin)); y <= std::min(r.w, int(row_end) - 1); ++y) {
@@ -459,8 +460,8 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                     // eye writes its hit's own depth, nearer than its face, the far side
                     // (preview.frag.glsl BM_EYE_BOXES): clamped there, a box nested in the eye's box
                     // between the hit and that far side would show through the hit's surface
-                    const float depth = from_eye ? std::max(window_depth(local_hit), 0.0f)
-                                                 : std::max(window_depth(local_hit), face_depth);
+                    const float depth =
+                            shader::bm_hit_depth(window_depth(local_hit), clip_of(local_hit).w, face_depth, from_eye);
                     if (!(depth >= 0.0f && depth < images.depth[pix])) continue;
                     vec3 n_object = q * normal.n;
                     vec3 color = shader::bm_shade(glm::normalize(normal_matrix * n_object), base);

@@ -229,23 +229,17 @@ void main()
   vec3 local_hit = ro + rd * t;
   vec4 clip = c0 + c1 * t;
   float window_depth = clip.z / clip.w * 0.5 + 0.5;
-  // The hit's depth: never nearer than the rasterised face (what the one-pass stage declares),
-  // but a march from the eye in the draw of the boxes holding the eye (occlusion.z 2, as the vertex
-  // stage picked them) writes its hit's own depth, in front of the eye (0 where the eye is in the
-  // shape: t = 0, clip.w 0 give or take rounding). A fragment of another box that the test above
-  // still sends from the eye (its box's face a rounding from the eye, vertices far from the origin)
-  // keeps its face's depth in every pass, as the one-pass draw's declaration makes it: the resolved
-  // passes kept its hit at depth 0 where the one-pass draw wrote its face's, and shaded nothing
-  // there (cut battery, depth-hostile seed 138).
-  bool own_depth = from_eye && preview.occlusion.z == 2.0;
-  float hit_depth = own_depth ? (clip.w > 0.0 ? max(window_depth, 0.0) : 0.0) : max(window_depth, gl_FragCoord.z);
+  // The hit's depth (bm_hit_depth): a march from the eye writes its hit's own depth only in the
+  // draw of the boxes holding the eye (occlusion.z 2, as the vertex stage picked them). A fragment
+  // of another box that the test above still sends from the eye (its box's face a rounding from
+  // the eye, vertices far from the origin) keeps its face's depth in every pass, as the one-pass
+  // draw's declaration makes it: the resolved passes kept its hit at depth 0 where the one-pass
+  // draw wrote its face's, and shaded nothing there (cut battery, depth-hostile seed 138). In
+  // [0, 1]: a face the near plane clips may rasterise a hair in front of it (llvmpipe: window
+  // depth -9e-6), and a negative float's bits sort after every other depth's as uint, so that hit
+  // was never kept; a hit at or past the far plane is kept at 1.0, as the plain draw keeps it.
+  float hit_depth = bm_hit_depth(window_depth, clip.w, gl_FragCoord.z, from_eye && preview.occlusion.z == 2.0);
 #ifdef BM_RESOLVED
-  // in [0, 1], as the depth buffer clamps what it is given: a face the near plane clips may
-  // rasterise a hair in front of it (llvmpipe: window depth -9e-6), and a negative float's bits
-  // sort after every other depth's as uint, so that hit was never kept; a hit at or past the far
-  // plane is kept at 1.0, as the plain draw keeps it; a march from the eye keeps its hit's own
-  // depth (these passes write no depth, so no declaration binds them), nearer than its fragment
-  hit_depth = clamp(hit_depth, 0.0, 1.0);
   // the visibility pass counts the march alone (no normal); the shade pass its march and, for the
   // one fragment it shades, the normal's taps
   bool shaded = hit && preview.occlusion.w == 2.0 && floatBitsToUint(hit_depth) == winner;

@@ -540,6 +540,19 @@ float bm_depth_crossing(vec4 c0, vec4 c1, float ndc_z)
   float t = abs(rate) > 1e-30 ? (ndc_z * c0.w - c0.z) / rate : -1.0;
   return t >= 0.0 ? t : 1e30;
 }
+// The window depth a hit writes, from its own (window_depth, the caller's clip z / w mapped to its
+// depth range) and its clip w: never nearer than the rasterised face (face_depth), what a stage
+// declaring depth GREATER must keep; but a march from the eye (own) writes its hit's own depth,
+// in front of the eye, 0 where the eye is in the shape (t = 0, clip w 0 give or take rounding).
+// In [0, 1], as a depth buffer clamps what it is given (passes that compare depths read it).
+float bm_hit_depth(float window_depth, float clip_w, float face_depth, bool own)
+{
+  float depth = max(window_depth, face_depth);
+  if (own) {
+    depth = clip_w > 0.0 ? window_depth : 0.0;
+  }
+  return clamp(depth, 0.0, 1.0);
+}
 // The nearer of hit `best` and the surface point (n, t), for t >= -slack: a root a rounding behind
 // the start (a ray starting on the surface, where a shape touches its box's face) hits at 0.
 vec4 bm_nearer_hit(vec4 best, vec3 n, float t, float slack)
@@ -1069,9 +1082,10 @@ void fragment()
   vec3 local_hit = ro + rd * t;
   vec3 obj_hit = bm_v_obj_pos + bm_from_local(local_hit + f, x, y, z);
   vec4 clip = object_to_clip * vec4(obj_hit, 1.0);
-  // an eye inside the shape hits at the eye, where clip w is 0: the near end (three.js alike); at
-  // most the far plane
-  DEPTH = clip.w > 0.0 ? min(max(0.5 + 0.5 * clip.z / clip.w, 0.0), 1.0) : 0.0;
+  // the hit's own depth (bm_hit_depth, as a march from the eye writes it: Godot 3 declares no
+  // depth direction, and every hit lies behind its face but a march from the eye's): an eye inside
+  // the shape hits at the eye, where clip w is 0, the near end (three.js alike); at most the far plane
+  DEPTH = bm_hit_depth(0.5 + 0.5 * clip.z / clip.w, clip.w, 0.0, true);
   vec3 n_local = closed.w > -1.5 ? closed.xyz : bm_normal(local_hit, d, bm_normal_tap(h), h, index);
   vec3 n = normalize((INV_CAMERA_MATRIX * WORLD_MATRIX * vec4(bm_from_local(n_local, x, y, z), 0.0)).xyz);
   ALBEDO = base_color.rgb * (0.35 + 0.65 * max(n.z, 0.0));

@@ -135,9 +135,10 @@ void fragment()
   vec3 local_hit = ro + rd * t;
   vec3 obj_hit = bm_v_obj_pos + bm_from_local(local_hit + f, x, y, z);
   vec4 clip = object_to_clip * vec4(obj_hit, 1.0);
-  // an eye inside the shape hits at the eye, where clip w is 0: the near end (three.js alike); at
-  // most the far plane
-  DEPTH = clip.w > 0.0 ? min(max(0.5 + 0.5 * clip.z / clip.w, 0.0), 1.0) : 0.0;
+  // the hit's own depth (bm_hit_depth, as a march from the eye writes it: Godot 3 declares no
+  // depth direction, and every hit lies behind its face but a march from the eye's): an eye inside
+  // the shape hits at the eye, where clip w is 0, the near end (three.js alike); at most the far plane
+  DEPTH = bm_hit_depth(0.5 + 0.5 * clip.z / clip.w, clip.w, 0.0, true);
   vec3 n_local = closed.w > -1.5 ? closed.xyz : bm_normal(local_hit, d, bm_normal_tap(h), h, index);
   vec3 n = normalize((INV_CAMERA_MATRIX * WORLD_MATRIX * vec4(bm_from_local(n_local, x, y, z), 0.0)).xyz);
   ALBEDO = base_color.rgb * (0.35 + 0.65 * max(n.z, 0.0));

@@ -1252,20 +1252,18 @@ var BOXMARCH_FRAGMENT = [
   '  if (!hit) discard;',
   '  vec3 local_hit = ro + rd * t;',
   '  vec4 clip = c0 + c1 * t;',
-  // Never nearer than the rasterised face: what the raw material's layout(depth_greater) declares
-  // (BM_DEPTH_GREATER); but a march from the eye (drawn apart where that is declared,
-  // useBoxmarchEyeBox) writes the depth of its own hit, nearer than its fragment (the far side), in
-  // front of the eye (0 where the eye is in the shape); within [0, 1], as the depth buffer clamps
-  // what it is given, for the passes compare it: a face cut by the near plane may hand its
-  // fragments a gl_FragCoord.z a little below 0 (SwiftShader, measured: -8e-4 with vertices far
-  // from the origin), which the depth buffer ties with the eye box's 0.
-  '  float depth = 0.5 + 0.5 * clip.z / clip.w;',
+  // The hit's depth (bm_hit_depth): never nearer than the rasterised face, what the raw material's
+  // layout(depth_greater) declares (BM_DEPTH_GREATER); a march from the eye (drawn apart where that
+  // is declared, useBoxmarchEyeBox) writes the depth of its own hit, nearer than its fragment (the
+  // far side). Within [0, 1], as the depth buffer clamps it, for the passes compare it: a face cut
+  // by the near plane may hand its fragments a gl_FragCoord.z a little below 0 (SwiftShader,
+  // measured: -8e-4 with vertices far from the origin), which the depth buffer ties with the eye
+  // box's 0.
+  '  bool ownDepth = fromEye;',
   '#ifdef BM_DEPTH_GREATER',
-  '  depth = max(depth, gl_FragCoord.z);',
-  '#else',
-  '  depth = fromEye ? (clip.w > 0.0 ? max(depth, 0.0) : 0.0) : max(depth, gl_FragCoord.z);',
+  '  ownDepth = false;',
   '#endif',
-  '  depth = clamp(depth, 0.0, 1.0);',
+  '  float depth = bm_hit_depth(0.5 + 0.5 * clip.z / clip.w, clip.w, gl_FragCoord.z, ownDepth);',
   '#ifdef BM_VISIBILITY_PASS',
   '  gl_FragColor = vec4(depth);',  // MIN-blended: the nearest hit's depth (useBoxmarchVisibility)
   '#else',

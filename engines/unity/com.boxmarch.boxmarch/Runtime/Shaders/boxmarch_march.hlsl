@@ -188,6 +188,20 @@ float bm_depth_crossing(float4 c0, float4 c1, float ndc_z)
   return t >= 0.0 ? t : 1e30;
 }
 
+// The window depth a hit writes, from its own (window_depth, the caller's clip z / w mapped to its
+// depth range) and its clip w: never nearer than the rasterised face (face_depth), what a stage
+// declaring depth GREATER must keep; but a march from the eye (own) writes its hit's own depth,
+// in front of the eye, 0 where the eye is in the shape (t = 0, clip w 0 give or take rounding).
+// In [0, 1], as a depth buffer clamps what it is given (passes that compare depths read it).
+float bm_hit_depth(float window_depth, float clip_w, float face_depth, bool own)
+{
+  float depth = max(window_depth, face_depth);
+  if (own) {
+    depth = clip_w > 0.0 ? window_depth : 0.0;
+  }
+  return clamp(depth, 0.0, 1.0);
+}
+
 // ---- closed-form hits of the presets
 // Where map() is a preset (sdf.glsl sdf_preset_*, or bm_sdf_by_id of each box's shape id) the
 // fragment solves its first hit in closed form instead of marching (Quilez's ray intersectors):
