@@ -257,7 +257,7 @@ def godot3() -> str:
     closed_form = list(raymarch)[list(raymarch).index("bm_nearer_hit"):list(raymarch).index("bm_preset_hit") + 1]
     text = text.replace("/*@SPAN@*/", "".join(raymarch[name] for name in (
         "bm_box_span", "bm_quality", "bm_pixel_size", "bm_step_limit", "bm_normal_tap", "bm_occluder_limit",
-        "bm_depth_crossing", "bm_hit_depth", *closed_form)))
+        "bm_depth_crossing", "bm_from_eye", "bm_hit_depth", *closed_form)))
     return text.replace("/*@MARCH@*/", "".join(passing_the_box(raymarch[name])
                                                for name in ("bm_march", "bm_one_tap", "bm_normal")))
 

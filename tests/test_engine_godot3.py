@@ -192,7 +192,7 @@ def test_godot3_eye_inside_a_shape_sees_it_everywhere_at_a_depth_in_range(import
     inside = {"position": eye.tolist(), "target": [0.0, 0.0, 0.0], "fov": 50, "near": 0.01, "far": 100}
     uniforms = {"box_table": "res://model.boxes.tres", "max_steps": 256}
     code = godot3.shipped_shader(PER_BOX_MAP, closed_code=PER_BOX_CLOSED_FORM)
-    guarded = "clip.w > 0.0 ? min(max(0.5 + 0.5 * clip.z / clip.w, 0.0), 1.0) : 0.0"
+    guarded = "bm_hit_depth(0.5 + 0.5 * clip.z / clip.w, clip.w, 0.0, true)"
     shade = "ALBEDO = base_color.rgb * (0.35 + 0.65 * max(n.z, 0.0));"
     assert code.count(f"DEPTH = {guarded};") == 1 and code.count(shade) == 1
 

@@ -112,16 +112,23 @@ def test_cpu_reference_hides_the_nested_box(occluders):
     assert (shown_alone & (alone.depth < 1.0)).sum() > 150
 
 
-@pytest.fixture(scope="module")
-def room(bpy_module, tmp_path_factory):
+@pytest.fixture(scope="module", params=("outward", "inside-out"))
+def room(request, bpy_module, tmp_path_factory):
     """The scene as one object of three boxes, baked, previewed as SPHERE from the eye, and
-    exported with the GLTF preset: the preview's pictures and the .glb with its sidecar."""
+    exported with the GLTF preset: the preview's pictures and the .glb with its sidecar. The big
+    box wound outward, or inside out (every face of it wound the other way: its far side, seen
+    from the eye, faces the eye, and must still march from the eye)."""
     from boxmarch import preview, scenes
     from boxmarch.preview import draw, occlusion, resolve
 
     blender = empty_scene(bpy_module)
-    ob = mesh_object(blender, "room", *scenes.box_arrays(CENTRES, 2 * np.repeat(RADII[:, None], 3, axis=1),
-                                                         np.tile(np.eye(3), (3, 1, 1))))
+    positions, edges, starts, sizes, corners = scenes.box_arrays(CENTRES, 2 * np.repeat(RADII[:, None], 3, axis=1),
+                                                                 np.tile(np.eye(3), (3, 1, 1)))
+    if request.param == "inside-out":  # the big box's six faces, the first ones, reversed
+        corners = corners.copy()
+        for start, size in zip(starts[:6], sizes[:6]):
+            corners[start:start + size] = corners[start:start + size][::-1]
+    ob = mesh_object(blender, "room", positions, edges, starts, sizes, corners)
     assert blender.ops.boxmarch.bake(sort_axes_by_extent=False) == {"FINISHED"}
     ob.boxmarch.preview = True
     ob.boxmarch.sdf = "SPHERE"

@@ -117,11 +117,12 @@ void main()
 
   // A fragment where the ray enters: an outer face (front-facing, or back-facing in a mirrored
   // object: preview.mode.y), or (whatever the winding) more of the box ahead than behind. A
-  // fragment of the far side only marches when the eye is inside the box (from the eye).
+  // fragment of the far side only marches when the eye is inside the box (from the eye,
+  // bm_from_eye: an inside-out box's far side too).
   vec2 span = bm_box_span(ro, rd, drawn_half);
   float t_end = span.y;
   bool outer_face = gl_FrontFacing != (preview.mode.y == 1);
-  bool from_eye = !outer_face && span.x + span.y < 0.0;
+  bool from_eye = bm_from_eye(span, outer_face, preview.eye.w > 0.5, eye_distance);
   if (from_eye) {
     if (preview.eye.w < 0.5 || eye_distance > -span.x) {
       bm_drop(0.0);

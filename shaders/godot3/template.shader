@@ -96,7 +96,9 @@ void fragment()
   vec3 ro = -f;
   vec2 span = bm_box_span(ro, rd, h);
   float t_end = span.y;
-  bool from_eye = !FRONT_FACING && span.x + span.y < 0.0;
+  // the far side marches from the eye where the box holds it (bm_from_eye: an inside-out box's
+  // far side too)
+  bool from_eye = bm_from_eye(span, FRONT_FACING, perspective, eye_distance);
   if (from_eye) {
     if (!perspective || eye_distance > -span.x) {
       discard;

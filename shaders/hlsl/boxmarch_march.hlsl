@@ -187,6 +187,17 @@ float bm_depth_crossing(float4 c0, float4 c1, float ndc_z)
   return t >= 0.0 ? t : 1e30;
 }
 
+// Whether a fragment marches from the eye rather than from its face: a fragment of its box's far
+// side (more of the box behind it than ahead; span: bm_box_span from the fragment along the ray
+// from the eye) that is a back face (outer_face false), or, whatever its winding, whose box holds
+// the eye (perspective: the eye a point, eye_distance from the fragment, no farther than the box
+// reaches behind it): an inside-out box's far side faces the eye. A back face of the far side
+// whose box does not hold the eye draws nothing (the caller drops it).
+bool bm_from_eye(float2 span, bool outer_face, bool perspective, float eye_distance)
+{
+  return span.x + span.y < 0.0 && (!outer_face || (perspective && eye_distance <= -span.x));
+}
+
 // The window depth a hit writes, from its own (window_depth, the caller's clip z / w mapped to its
 // depth range) and its clip w: never nearer than the rasterised face (face_depth), what a stage
 // declaring depth GREATER must keep; but a march from the eye (own) writes its hit's own depth,

@@ -68,8 +68,9 @@ bm_hit bm_raymarch_in_frame(float3 obj_pos, float3 obj_camera, float3 f, float3 
   float2 span = bm_box_span(ro, rd, box_half);
   float t_end = span.y;
   // entry: front-facing, or (whatever the winding) more box ahead than behind; the far side
-  // only marches when the camera is inside the box
-  bool from_eye = !front_facing && span.x + span.y < 0.0;
+  // only marches when the camera is inside the box (bm_from_eye: an inside-out box's far side
+  // too; the camera taken as a point, as the test below always took it)
+  bool from_eye = bm_from_eye(span, front_facing, true, eye_distance);
   if (from_eye) {
     if (eye_distance > -span.x) return o;
     ro -= rd * eye_distance;

@@ -1182,8 +1182,9 @@ var BOXMARCH_FRAGMENT = [
   // a fragment whose position rounds to the eye's (vertices far from the object's origin, the near
   // plane close) has no ray: it draws nothing rather than a NaN
   '  if (!(eye_distance > 0.0)) { drawn = false; discard; }',
-  // A fragment of the far side only marches when the eye is inside the box (the preview's rule).
-  '  bool fromEye = !gl_FrontFacing && span.x + span.y < 0.0;',
+  // A fragment of the far side only marches when the eye is inside the box (the preview's rule,
+  // bm_from_eye: an inside-out box's far side too).
+  '  bool fromEye = bm_from_eye(span, gl_FrontFacing, bmEye.w > 0.5, eye_distance);',
   '  if (fromEye) {',
   // the box holding the eye is drawn apart (useBoxmarchEyeBox), by a variant that may write the
   // depth of its hit, nearer than the fragment

@@ -541,6 +541,16 @@ float bm_depth_crossing(vec4 c0, vec4 c1, float ndc_z)
   float t = abs(rate) > 1e-30 ? (ndc_z * c0.w - c0.z) / rate : -1.0;
   return t >= 0.0 ? t : 1e30;
 }
+// Whether a fragment marches from the eye rather than from its face: a fragment of its box's far
+// side (more of the box behind it than ahead; span: bm_box_span from the fragment along the ray
+// from the eye) that is a back face (outer_face false), or, whatever its winding, whose box holds
+// the eye (perspective: the eye a point, eye_distance from the fragment, no farther than the box
+// reaches behind it): an inside-out box's far side faces the eye. A back face of the far side
+// whose box does not hold the eye draws nothing (the caller drops it).
+bool bm_from_eye(vec2 span, bool outer_face, bool perspective, float eye_distance)
+{
+  return span.x + span.y < 0.0 && (!outer_face || (perspective && eye_distance <= -span.x));
+}
 // The window depth a hit writes, from its own (window_depth, the caller's clip z / w mapped to its
 // depth range) and its clip w: never nearer than the rasterised face (face_depth), what a stage
 // declaring depth GREATER must keep; but a march from the eye (own) writes its hit's own depth,
@@ -1044,7 +1054,9 @@ void fragment()
   vec3 ro = -f;
   vec2 span = bm_box_span(ro, rd, h);
   float t_end = span.y;
-  bool from_eye = !FRONT_FACING && span.x + span.y < 0.0;
+  // the far side marches from the eye where the box holds it (bm_from_eye: an inside-out box's
+  // far side too)
+  bool from_eye = bm_from_eye(span, FRONT_FACING, perspective, eye_distance);
   if (from_eye) {
     if (!perspective || eye_distance > -span.x) {
       discard;
