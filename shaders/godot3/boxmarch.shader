@@ -462,8 +462,8 @@ vec3 bm_occluder_half(float shape, vec3 h, float k)
 }
 // How much further (box-local units) the pre-pass pulls every occluder box in than
 // bm_occluder_half does, for what the GPU rounds; `pixel`: a pixel's size at the box's far side,
-// in box-local units across the faces it pulls in (preview.vert.glsl says how), `reach`: the length of the object-space position its vertices are
-// computed from. A rasteriser snaps each vertex to a grid of at most 1/16 of a pixel (GL's least
+// in box-local units across the faces it pulls in (preview.vert.glsl says how), `reach`: the
+// length of the object-space position its vertices are computed from. A rasteriser snaps each vertex to a grid of at most 1/16 of a pixel (GL's least
 // sub-pixel precision), which moves a face and the occluder face just behind it sideways by
 // different amounts: seen at a slant, their depths at a pixel may swap, and an occluder's edge
 // may cover a pixel its box's edge leaves (on SwiftShader, a pile of rotated boxes lost 3 % of its
