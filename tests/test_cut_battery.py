@@ -119,11 +119,34 @@ DEPTH_HOSTILE_REGRESSIONS = [
           "inside a box, mirrored, nested, flat, long thin, near plane 7.4e-10, vertices 1e3-1e4 out"),
 ]
 
+# Seeds whose cut still changes pixels no step budget explains, the cause not fixed (docs/BENCHMARKS.md,
+# "Cuts that change no pixel"): (seed, renderer, the most unexplained pixels any cut may change, what
+# was found). Each runs every time and may not get worse; fixed (0 px), move it to REGRESSIONS.
+OPEN = [
+    (795, "r180", 1, "pre-pass and visibility passes 1 px emptied at (62, 55) (seeds 500-1099 at fbf929f): plain's "
+                     "closed-form hit on box 51 lies beyond its own occluders' depth there (the march's bound at their "
+                     "crossing rejects it): the occluder box inscribed in the cylinder lies in front of the curved "
+                     "surface at that pixel; pulled in by 3/16 of a pixel instead of bm_occluder_rounding's 1/8 it "
+                     "agrees (twice the reach or depth margins do not); CYLINDER, scale 465, quality 0.25, long "
+                     "thin, an ordinary scene, perspective"),
+    (851, "r180", 1, "visibility passes 1 px emptied at (42, 47) (seeds 500-1099 at fbf929f), not traced (a larger "
+                     "pixel pull-in does not change it); BOX, scale "
+                     "12.3, quality 0.25, long thin, coincident, inside-out, nested, open, mirrored, non-uniform "
+                     "scale, near plane cuts boxes, perspective"),
+    (542, "r111", 63, "culling and default 63 px another colour (seeds 400-699 at fbf929f; the same at 47ba00c, "
+                      "before this seed was run), and the visibility passes the same 63 px since f7684b8 (not "
+                      "its shade pass's depth test nor its depth clamp: each put back alone changes nothing): "
+                      "plain shows box 43's front face, the cuts box 37's march from the eye (the box holding "
+                      "the eye, drawn apart by culling and by the passes); not traced further; CAPSULE, scale 362, "
+                      "quality 0.25, long thin, inside-out, vertices far, non-uniform scale, eye inside a box, "
+                      "perspective"),
+]
+
 
 @pytest.fixture(scope="module")
 def battery(tmp_path_factory):
     """found(renderer): [Found, ...] of the renderer's CI seeds and regression seeds, drawn on first use."""
-    wanted = {r: sorted(set(CI_SEEDS[r]) | {s for s, renderer, *_ in REGRESSIONS if renderer == r})
+    wanted = {r: sorted(set(CI_SEEDS[r]) | {s for s, renderer, *_ in REGRESSIONS + OPEN if renderer == r})
               for r in cut_battery.RENDERERS}
     seeds = sorted(set().union(*wanted.values()))
     folder = tmp_path_factory.mktemp("cut_battery")
@@ -154,7 +177,8 @@ def test_every_pixel_a_cut_changes_is_one_the_plain_march_leaves_unresolved(batt
     seeds, results = battery(renderer)
     exported = {f.seed for f in results}
     assert len(exported) >= 0.9 * len(seeds), f"only {len(exported)} of {len(seeds)} scenes drawn"
-    lines = unexplained(results)
+    opened = {seed for seed, r, *_ in OPEN if r == renderer}  # each held to its own ceiling below
+    lines = unexplained([f for f in results if f.seed not in opened])
     assert not lines, "\n".join(lines)
 
 
@@ -164,6 +188,15 @@ def test_regression_seed(battery, seed, renderer, kept):
     results = [f for f in battery(renderer)[1] if f.seed == seed]
     assert results, f"seed {seed} was not drawn in {renderer}"
     assert not unexplained(results), f"kept as: {kept}\nnow: " + "\n".join(unexplained(results))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed, renderer, most, found", OPEN)
+def test_open_seed_gets_no_worse(battery, seed, renderer, most, found):
+    results = [f for f in battery(renderer)[1] if f.seed == seed]
+    assert results, f"seed {seed} was not drawn in {renderer}"
+    worse = [f.line() for f in results if f.unexplained > most]
+    assert not worse, f"open, at most {most} px: {found}\nnow: " + "\n".join(worse)
 
 
 @pytest.mark.slow
