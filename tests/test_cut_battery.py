@@ -134,12 +134,15 @@ OPEN = [
                      "12.3, quality 0.25, long thin, coincident, inside-out, nested, open, mirrored, non-uniform "
                      "scale, near plane cuts boxes, perspective"),
     (542, "r111", 63, "culling and default 63 px another colour (seeds 400-699 at fbf929f; the same at 47ba00c, "
-                      "before this seed was run), and the visibility passes the same 63 px since f7684b8 (not "
-                      "its shade pass's depth test nor its depth clamp: each put back alone changes nothing): "
-                      "plain shows box 43's front face, the cuts box 37's march from the eye (the box holding "
-                      "the eye, drawn apart by culling and by the passes); not traced further; CAPSULE, scale 362, "
-                      "quality 0.25, long thin, inside-out, vertices far, non-uniform scale, eye inside a box, "
-                      "perspective"),
+                      "before this seed was run), and the visibility passes the same 63 px since f7684b8: a depth "
+                      "tie at 0. Box 43's face, cut by the near plane, rasterises at a window depth below 0, which "
+                      "the depth buffer (and since f7684b8 the passes) clamp to 0; box 37's march from the eye, "
+                      "the eye inside its shape, hits at 0. Plain r111 draws both in one draw, box 43 after box 37, "
+                      "so LESS_EQUAL gives box 43 the tie; culling and the passes draw the box holding the eye "
+                      "apart, last, so box 37 wins (with f7684b8's clamp's lower bound put back, the passes keep "
+                      "box 43's negative depth and agree; r180 draws the eye box apart in plain too, seed 70). "
+                      "CAPSULE, scale 362, quality 0.25, long thin, inside-out, vertices far, non-uniform scale, "
+                      "eye inside a box, perspective"),
 ]
 
 
