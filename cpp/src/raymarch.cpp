@@ -266,14 +266,14 @@ std::vector<float> occluder_depths(const float* origins, const float* quaternion
         // in box-local units across the faces normal to each axis: the view-space pixel times how
         // many object units a plane normal to the axis lies from its parallel per view unit
         // (preview.vert.glsl says why)
-        const float pixel = shader::bm_pixel_size(farthest, view_row_y, float(H));
-        vec3 rounding;
+        vec3 across;
         for (int axis = 0; axis < 3; ++axis) {
             vec3 unit(0.0f);
             unit[axis] = 1.0f;
-            rounding[axis] =
-                    shader::bm_occluder_rounding(pixel * glm::length(normal_matrix * (q * unit)), glm::length(c));
+            across[axis] = glm::length(normal_matrix * (q * unit));
         }
+        const vec3 rounding = shader::bm_occluder_rounding(
+                shader::bm_pixel_size(farthest, view_row_y, float(H)) * across, glm::length(c));
         for (float k = 0.0f; k < shader::bm_occluder_count(shape); k += 1.0f) {
             const vec3 centre = shader::bm_occluder_centre(shape, h, k);
             const vec3 extent = shader::bm_occluder_half(shape, h, k) - rounding;
@@ -402,10 +402,7 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
             const glm::quat iq = glm::conjugate(q);
             const vec3 c = glm::make_vec3(origins + 3 * b), h = glm::make_vec3(half_extents + 3 * b);
             auto clip_of = [&](vec3 local) { return to_clip * vec4(c + q * local, 1.0f); };
-            auto window_depth = [&](vec3 local) {
-                const vec4 clip = clip_of(local);
-                return clip.z / clip.w * 0.5f + 0.5f;
-            };
+            auto window_depth = [](vec4 clip) { return clip.z / clip.w * 0.5f + 0.5f; };
             for (int y = std::max(r.y, int(row_begin)); y <= std::min(r.w, int(row_end) - 1); ++y) {
                 for (int x = r.x; x <= r.z; ++x) {
                     const PixelRay ray = pixel_ray(from_clip, x, y, W, H, iq, c);
@@ -420,7 +417,7 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                     // march from the eye) the far side.
                     const bool from_eye = span.x < 0.0f;
                     const vec3 face = ro + rd * (from_eye ? span.y : span.x);
-                    const float face_depth = window_depth(face);
+                    const float face_depth = window_depth(clip_of(face));
                     // (the boxes holding the eye are drawn by a stage that declares no depth, which
                     // the GPU tests late)
                     if (plan.early_depth && !from_eye && !(face_depth >= 0.0f && face_depth < images.depth[pix]))
@@ -460,8 +457,8 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                     // eye writes its hit's own depth, nearer than its face, the far side
                     // (preview.frag.glsl BM_EYE_BOXES): clamped there, a box nested in the eye's box
                     // between the hit and that far side would show through the hit's surface
-                    const float depth =
-                            shader::bm_hit_depth(window_depth(local_hit), clip_of(local_hit).w, face_depth, from_eye);
+                    const vec4 hit_clip = clip_of(local_hit);
+                    const float depth = shader::bm_hit_depth(window_depth(hit_clip), hit_clip.w, face_depth, from_eye);
                     if (!(depth >= 0.0f && depth < images.depth[pix])) continue;
                     vec3 n_object = q * normal.n;
                     vec3 color = shader::bm_shade(glm::normalize(normal_matrix * n_object), base);

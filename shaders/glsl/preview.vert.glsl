@@ -111,9 +111,7 @@ void main()
   float pixel = bm_pixel_size(farthest, preview.quality.z, preview.quality.y);
   mat3 normal_to_view = mat3(preview.normal_to_view);
   vec3 across = vec3(length(normal_to_view * ax), length(normal_to_view * ay), length(normal_to_view * az));
-  float reach = length(pos);
-  vec3 rounding = vec3(bm_occluder_rounding(pixel * across.x, reach), bm_occluder_rounding(pixel * across.y, reach),
-                       bm_occluder_rounding(pixel * across.z, reach));
+  vec3 rounding = bm_occluder_rounding(pixel * across, length(pos));
   vec3 extent = bm_occluder_half(shape, h, occluder_index) - rounding;
   // No occluder for a box holding the eye, nor for one that reaches within the rounding of the
   // near plane (the plane cuts its front, so its shape may not be drawn where its occluders would

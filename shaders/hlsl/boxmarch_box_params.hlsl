@@ -180,9 +180,10 @@ float3 bm_occluder_half(float shape, float3 h, float k)
 }
 
 // How much further (box-local units) the pre-pass pulls every occluder box in than
-// bm_occluder_half does, for what the GPU rounds; `pixel`: a pixel's size at the box's far side,
-// in box-local units across the faces it pulls in (preview.vert.glsl says how), `reach`: the
-// length of the object-space position its vertices are computed from. A rasteriser snaps each vertex to a grid of at most 1/16 of a pixel (GL's least
+// bm_occluder_half does, along each of the box's axes, for what the GPU rounds; `pixel`: a
+// pixel's size at the box's far side, in box-local units across the faces normal to each axis
+// (preview.vert.glsl says how), `reach`: the length of the object-space position its vertices are
+// computed from. A rasteriser snaps each vertex to a grid of at most 1/16 of a pixel (GL's least
 // sub-pixel precision), which moves a face and the occluder face just behind it sideways by
 // different amounts: seen at a slant, their depths at a pixel may swap, and an occluder's edge
 // may cover a pixel its box's edge leaves (on SwiftShader, a pile of rotated boxes lost 3 % of its
@@ -190,9 +191,9 @@ float3 bm_occluder_half(float shape, float3 h, float k)
 // pixels lost, 1/16 none). An eighth of a pixel covers both faces' snapping; 2^-19 of the reach
 // covers the float32 rounding of the vertices and of their transform (a few steps of 2^-24 each),
 // which no pixel margin bounds when the vertices lie far from the object's origin.
-float bm_occluder_rounding(float pixel, float reach)
+float3 bm_occluder_rounding(float3 pixel, float reach)
 {
-  return 0.125 * pixel + 1.9e-6 * reach;
+  return 0.125 * pixel + ((float3)(1.9e-6 * reach));
 }
 
 #endif

@@ -1319,9 +1319,7 @@ var BOXMARCH_OCCLUDER_VERTEX = [
   // clip y per view unit) times |normalMatrix a|, the object units per view unit across those faces
   '  float pixel = bm_pixel_size(farthest, projectionMatrix[1][1], bmViewHeight);',
   '  vec3 across = vec3(length(normalMatrix * x), length(normalMatrix * y), length(normalMatrix * z));',
-  '  float reach = length(position);',
-  '  vec3 rounding = vec3(bm_occluder_rounding(pixel * across.x, reach), bm_occluder_rounding(pixel * across.y, reach),',
-  '    bm_occluder_rounding(pixel * across.z, reach));',
+  '  vec3 rounding = bm_occluder_rounding(pixel * across, length(position));',
   '  vec3 extent = bm_occluder_half(shape, h, BM_OCCLUDER_INDEX) - rounding;',
   // none for a box holding the eye, reaching within the rounding of the near plane, or left
   // empty by the rounding: its vertices go to the occluder's centre (no area; where one box's
