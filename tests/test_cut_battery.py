@@ -105,6 +105,13 @@ REGRESSIONS = [
                  "depth buffer clamps it to 0 and LESS_EQUAL gives the tie with the eye box's hit at 0 to the eye "
                  "box, drawn last; the passes now clamp every depth to [0, 1]; CYLINDER, eye inside a box, nested, "
                  "flat, inside-out, vertices far"),
+    (542, "r111", "culling and default 63 px another colour (seeds 400-699 at fbf929f), visibility passes the same "
+                  "since f7684b8: a depth tie at 0 between box 43's face, cut by the near plane and clamped to 0 by "
+                  "the depth buffer (and the passes), and box 37's march from the eye inside its shape, hitting at "
+                  "0; plain r111 drew both in one draw, box 43 last, winning by LESS_EQUAL, while culling and the "
+                  "passes drew the eye's box apart and last; now every release draws it apart (useBoxmarchMaterial), "
+                  "one tie order with every cut; CAPSULE, scale 362, quality 0.25, long thin, inside-out, vertices "
+                  "far, non-uniform scale, eye inside a box, perspective"),
 ]
 
 # Seeds of the depth-hostile generator (bench.cut_battery --generator depth-hostile: the near plane
@@ -133,16 +140,6 @@ OPEN = [
                      "pixel pull-in does not change it); BOX, scale "
                      "12.3, quality 0.25, long thin, coincident, inside-out, nested, open, mirrored, non-uniform "
                      "scale, near plane cuts boxes, perspective"),
-    (542, "r111", 63, "culling and default 63 px another colour (seeds 400-699 at fbf929f; the same at 47ba00c, "
-                      "before this seed was run), and the visibility passes the same 63 px since f7684b8: a depth "
-                      "tie at 0. Box 43's face, cut by the near plane, rasterises at a window depth below 0, which "
-                      "the depth buffer (and since f7684b8 the passes) clamp to 0; box 37's march from the eye, "
-                      "the eye inside its shape, hits at 0. Plain r111 draws both in one draw, box 43 after box 37, "
-                      "so LESS_EQUAL gives box 43 the tie; culling and the passes draw the box holding the eye "
-                      "apart, last, so box 37 wins (with f7684b8's clamp's lower bound put back, the passes keep "
-                      "box 43's negative depth and agree; r180 draws the eye box apart in plain too, seed 70). "
-                      "CAPSULE, scale 362, quality 0.25, long thin, inside-out, vertices far, non-uniform scale, "
-                      "eye inside a box, perspective"),
 ]
 
 

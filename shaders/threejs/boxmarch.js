@@ -152,8 +152,6 @@ function createBoxmarchMaterial(THREE, options) {
     // WebGL compiles an extension's directives only once the context has handed it out.
     material.onBeforeCompile = function (shader, renderer) { renderer.getContext().getExtension('EXT_conservative_depth'); };
     material.userData.boxmarchSkinning = !!options.skinning;
-    // the box holding the eye must be drawn apart (useBoxmarchEyeBox)
-    material.userData.boxmarchDeclaresDepth = true;
     return material;
   }
   // r129 and later skin every SkinnedMesh and warn about an unknown `skinning` property.
@@ -195,8 +193,9 @@ function boxmarchObjectEye(THREE, mesh, camera, inverse, eye) {
 
 // Gives a mesh the material and keeps its object-space eye up to date before every draw; with
 // frontToBack, also draws its boxes front to back (sortBoxmarchFrontToBack before every draw).
-// Where the material declares its depth (the raw material, r163 and later), the box holding the
-// eye is drawn apart (useBoxmarchEyeBox). Throws, changing nothing, when the material's skinning
+// The box holding the eye is drawn apart, after the rest (useBoxmarchEyeBox), on every release and
+// with every cut alike, so where its hit ties another box's depth (both at the near plane) the same
+// box wins with the cuts as without. Throws, changing nothing, when the material's skinning
 // flag (where it is read) does not match the mesh.
 function useBoxmarchMaterial(THREE, mesh, material, frontToBack) {
   var skinning = material.userData.boxmarchSkinning;
@@ -218,7 +217,7 @@ function useBoxmarchMaterial(THREE, mesh, material, frontToBack) {
     material.uniformsNeedUpdate = true;
     if (frontToBack) sortBoxmarchFrontToBack(THREE, mesh, camera);
   };
-  if (material.userData.boxmarchDeclaresDepth) useBoxmarchEyeBox(THREE, mesh);
+  useBoxmarchEyeBox(THREE, mesh);
   return mesh;
 }
 
@@ -229,8 +228,7 @@ function useBoxmarchMaterial(THREE, mesh, material, frontToBack) {
 // march hits nearer than its fragment (the box's far side), which the raw material's
 // layout(depth_greater) forbids it to write; the variant declares no depth and writes the hit's
 // own, so a box nested in the eye's box behind that hit stays hidden (a material that declares
-// nothing writes it itself). useBoxmarchMaterial calls it where the material declares its depth,
-// useBoxmarchBackFaceCulling where mesh draws front faces only. A SkinnedMesh's eye-box mesh is
+// nothing writes it itself). useBoxmarchMaterial calls it. A SkinnedMesh's eye-box mesh is
 // skinned by the same skeleton. Returns that mesh (also mesh.userData.boxmarchEyeBox).
 function useBoxmarchEyeBox(THREE, mesh) {
   if (mesh.userData.boxmarchEyeBox) return mesh.userData.boxmarchEyeBox;
