@@ -46,37 +46,54 @@ ln -sfn "$NANOFLANN" "$HEADERS/nanoflann.hpp"
 CXXFLAGS=(-std=c++17 -O0 -Wall -Wextra -Wpedantic -Werror -DGLM_FORCE_XYZW_ONLY -D_USE_MATH_DEFINES
           -Icpp/include -Icpp/src -isystem "$HEADERS")
 
-compile() {  # TARGET OBJECT SOURCE EXTRA_FLAGS...
-  local target="$1" object="$2" source="$3"
-  shift 3
-  "${ZIG[@]}" c++ -target "$target" "${CXXFLAGS[@]}" "$@" -c "$source" -o "$object"
+compile() {  # TARGET SOURCE: one source into OUT/TARGET/NAME.o (a binding source with the Python headers)
+  local target="$1" source="$2" extra=()
+  case "$source" in
+    bindings/*) extra=(-isystem "$PY_INCLUDE" -isystem "$PYBIND11_INCLUDE" -fvisibility=hidden) ;;
+  esac
+  "${ZIG[@]}" c++ -target "$target" "${CXXFLAGS[@]}" "${extra[@]}" -c "$source" \
+    -o "$OUT/$target/$(basename "$source" .cpp).o"
 }
 
-build_target() {  # TARGET
-  local target="$1" dir="$OUT/$1" start=$SECONDS object exe
-  local objects=() bindings=()
-  mkdir -p "$dir"
-  for source in cpp/src/*.cpp; do
-    object="$dir/$(basename "$source" .cpp).o"
-    compile "$target" "$object" "$source"
-    objects+=("$object")
+# Every compile, one per core at a time from one queue (the two targets' lists differ in length:
+# macOS compiles the bindings too), the bindings (pybind11, the longest) first so none is left to
+# run alone at the end. A failed compile prints its errors and marks the run failed.
+TARGETS=(x86_64-windows-gnu aarch64-macos)
+jobs_list=()
+for source in bindings/*.cpp; do jobs_list+=("aarch64-macos $source"); done
+for target in "${TARGETS[@]}"; do
+  mkdir -p "$OUT/$target"
+  rm -f "$OUT/$target"/*.o "$OUT/$target/libboxmarch_core.a"
+  for source in cpp/src/*.cpp; do jobs_list+=("$target $source"); done
+  [ "$LINK" = 1 ] && jobs_list+=("$target tests/cpp/test_core.cpp")
+done
+failed="$OUT/compile_failed"
+rm -f "$failed"
+start=$SECONDS
+for job in "${jobs_list[@]}"; do
+  while [ "$(jobs -rp | wc -l)" -ge "$(nproc)" ]; do wait -n || true; done
+  # shellcheck disable=SC2086  # TARGET SOURCE, two words
+  (compile $job || { echo "[cross_compile] FAILED: $job" >&2; touch "$failed"; }) &
+done
+wait
+[ ! -e "$failed" ] || exit 1
+echo "[cross_compile] ${#jobs_list[@]} sources compiled for ${TARGETS[*]} in $((SECONDS - start)) s" >&2
+
+link_target() {  # TARGET: the core archive, and unless --compile-only the links
+  local target="$1" dir="$OUT/$1" exe
+  local objects=("$dir"/*.o) core=() bindings=()
+  for object in "${objects[@]}"; do
+    case "$(basename "$object" .o)" in
+      test_core) ;;
+      *) if [ -e "bindings/$(basename "$object" .o).cpp" ]; then bindings+=("$object"); else core+=("$object"); fi ;;
+    esac
   done
-  rm -f "$dir/libboxmarch_core.a"
-  "${ZIG[@]}" ar rcs "$dir/libboxmarch_core.a" "${objects[@]}"
-  echo "[cross_compile] $target: ${#objects[@]} core sources compiled, $dir/libboxmarch_core.a" >&2
-  if [ "$target" = aarch64-macos ]; then
-    for source in bindings/*.cpp; do
-      object="$dir/$(basename "$source" .cpp).o"
-      compile "$target" "$object" "$source" -isystem "$PY_INCLUDE" -isystem "$PYBIND11_INCLUDE" -fvisibility=hidden
-      bindings+=("$object")
-    done
-    echo "[cross_compile] $target: ${#bindings[@]} binding sources compiled" >&2
-  fi
+  "${ZIG[@]}" ar rcs "$dir/libboxmarch_core.a" "${core[@]}"
+  echo "[cross_compile] $target: ${#core[@]} core sources and ${#bindings[@]} binding sources compiled, $dir/libboxmarch_core.a" >&2
   if [ "$LINK" = 1 ]; then
     exe="$dir/test_core"
     [ "$target" = x86_64-windows-gnu ] && exe="$dir/test_core.exe"
-    compile "$target" "$dir/test_core_main.o" tests/cpp/test_core.cpp
-    "${ZIG[@]}" c++ -target "$target" "$dir/test_core_main.o" "$dir/libboxmarch_core.a" -o "$exe"
+    "${ZIG[@]}" c++ -target "$target" "$dir/test_core.o" "$dir/libboxmarch_core.a" -o "$exe"
     echo "[cross_compile] $target: linked $exe (not run)" >&2
     if [ "$target" = aarch64-macos ]; then
       "${ZIG[@]}" c++ -target "$target" -shared -Wl,-undefined,dynamic_lookup "${bindings[@]}" \
@@ -84,13 +101,12 @@ build_target() {  # TARGET
       echo "[cross_compile] $target: linked $dir/_core.cpython-311-darwin.so (not run)" >&2
     fi
   fi
-  echo "[cross_compile] $target: $((SECONDS - start)) s" >&2
 }
 
-# The two targets side by side (one core each on a 2-core machine).
+# The two targets' links side by side (the first link per target builds zig's libc++ for it).
 pids=()
-for target in x86_64-windows-gnu aarch64-macos; do
-  build_target "$target" &
+for target in "${TARGETS[@]}"; do
+  link_target "$target" &
   pids+=($!)
 done
 status=0

@@ -31,12 +31,16 @@ def run_script(*args, timeout):
     return output
 
 
+# The two sanitizer checks build the one folder (build/sanitize): one worker runs both, in turn, while
+# another runs the fuzzer (scripts/test.sh runs this tier with --dist loadgroup).
+@pytest.mark.xdist_group("sanitize")
 def test_sanitizer_build_passes_the_cpp_tests_and_the_fuzz_corpus():
     output = run_script("scripts/sanitize.sh", "cpp", timeout=1800)
     assert "100% tests passed" in output
     assert "0 failure(s)" in output
 
 
+@pytest.mark.xdist_group("sanitize")
 def test_native_python_suite_passes_under_asan_and_ubsan():
     output = run_script("scripts/sanitize.sh", "python", timeout=1800)
     assert " passed" in output and " failed" not in output
