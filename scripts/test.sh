@@ -26,16 +26,6 @@ run_tier() {  # NAME COMMAND...: one tier, then its result and time; fails when 
   echo "[test] $name: $result in $((SECONDS - start)) s" >&2
   [ "$result" = passed ]
 }
-logs="$(mktemp -d)"
-prebuild=""
-trap '[ -z "$prebuild" ] || kill -- "-$prebuild" 2>/dev/null || true; rm -rf "$logs"' EXIT
-# The native tier's two builds (build/sanitize, build/fuzz: minutes of both cores from a clean
-# checkout) start now under the idle scheduling class (chrt --idle), so they take only the CPU the
-# everyday and slow tiers leave unused (waits on Blender, Chromium, the display); the native tier
-# then builds again, which finds them done, and reports any build failure itself. In a process
-# group of their own (setsid), stopped with this script.
-setsid chrt --idle 0 bash -c 'bash scripts/sanitize.sh build && bash scripts/fuzz.sh build' >"$logs/prebuild" 2>&1 &
-prebuild=$!
 WORKERS="${BOXMARCH_TEST_WORKERS:-$(nproc)}"
 parallel=(-n "$WORKERS" --dist loadfile)
 run_tier "everyday tier (-m 'not slow')" "$PYTHON" -m pytest "${parallel[@]}" -m "not slow" || status=1
@@ -44,7 +34,8 @@ run_tier "slow tier (-m 'slow and not native')" "$PYTHON" -m pytest "${parallel[
 # The native tier and the bpy 4.2 selection side by side, each into its own log, shown when both
 # are done; the native tier on two workers, one file each: the fuzzer (a minute of one core) beside
 # the two sanitizer checks, which build one folder and so share a file.
-wait "$prebuild" || true  # built again, and any failure reported, by the native tier
+logs="$(mktemp -d)"
+trap 'rm -rf "$logs"' EXIT
 run_tier "native tier (-m native)" "$PYTHON" -m pytest -n 2 --dist loadfile -m native >"$logs/native" 2>&1 &
 native=$!
 run_tier "bpy 4.2 LTS selection" "$PYTHON" scripts/blender_matrix.py --quick 4.2 >"$logs/bpy" 2>&1 &
