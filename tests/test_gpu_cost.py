@@ -370,6 +370,29 @@ def test_closed_outward_accepts_only_closed_boxes_wound_outward():
     assert not mesh_data.closed_outward(tiny, triangles, origins + far, box)
 
 
+def test_occluder_triangles_come_wound_outward_whatever_the_mesh_winding():
+    # The pre-pass draws its occluders' front faces only (preview/draw.py, mesh_data.wound_outward):
+    # a back face seen nearly edge-on may tilt its depth plane nearer than the front face.
+    from boxmarch import scenes
+
+    rng = np.random.default_rng(3)
+    positions, _edges, _starts, _sizes, corner_verts = scenes.box_arrays(
+        rng.uniform(-5, 5, (6, 3)) + [800.0, 0.0, 0.0], rng.uniform(0.2, 1.0, (6, 3)), scenes.random_rotations(6, rng))
+    quads = corner_verts.reshape(-1, 4)
+    outward = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    box = np.repeat(np.arange(6), 8)
+    origins = np.array([positions[box == b].mean(axis=0) for b in range(6)])
+    assert mesh_data.closed_outward(positions, outward, origins, box)
+    mixed = outward.copy()
+    turned = np.isin(box[outward[:, 0]], [1, 4]) | (rng.random(len(outward)) < 0.2)  # two boxes, and strays
+    mixed[turned] = outward[turned][:, ::-1]
+    wound = mesh_data.wound_outward(positions.astype(np.float32), mixed, origins.astype(np.float32), box)
+    assert mesh_data.closed_outward(positions, wound, origins, box)
+    assert np.array_equal(np.sort(wound, axis=1), np.sort(outward, axis=1))  # the same triangles
+    assert not mesh_data.closed_outward(positions, mixed, origins, box)  # which were not outward
+    assert np.array_equal(mesh_data.wound_outward(positions, outward, origins, box), outward)
+
+
 def test_a_box_the_near_plane_cuts_draws_no_occluders():
     """The pre-pass rule of every implementation (preview.vert.glsl, three.js, occluder_depths): a
     box that the near plane cuts draws no occluders, though it does not hold the eye. Sphere N

@@ -75,15 +75,29 @@ vm.runInThisContext(process.argv[2]);
 function attribute(values, itemSize) {
   const array = Float32Array.from(values);
   return { array: array, itemSize: itemSize, count: array.length / itemSize,
-           getX: (i) => array[i * itemSize], getY: (i) => array[i * itemSize + 1], getZ: (i) => array[i * itemSize + 2] };
+           getX: (i) => array[i * itemSize], getY: (i) => array[i * itemSize + 1], getZ: (i) => array[i * itemSize + 2],
+           getW: (i) => array[i * itemSize + 3] };
 }
+// what boxmarchOccluderGeometry builds a geometry with
+const THREE = {
+  BufferAttribute: function (array, itemSize) { this.array = array; this.count = array.length; this.itemSize = itemSize; },
+  BufferGeometry: function () {
+    this.attributes = {};
+    this.setAttribute = (name, a) => { this.attributes[name] = a; return this; };
+    this.setIndex = (index) => { this.index = index; return this; };
+    this.getAttribute = (name) => this.attributes[name];
+  }
+};
 const meshes = JSON.parse(fs.readFileSync(0, 'utf8'));
 console.log(JSON.stringify(meshes.map((m) => {
   const attributes = {};
   for (const name in m.attributes) attributes[name] = attribute(m.attributes[name][0], m.attributes[name][1]);
-  const geometry = { attributes: attributes, index: m.index ? { array: Uint32Array.from(m.index) } : null,
-                     getAttribute: (name) => attributes[name] };
-  return { now: Array.from(boxmarchSealedTriangles(geometry)), before: oldSealedTriangles(geometry).slice().sort((a, b) => a - b) };
+  const geometry = { attributes: attributes, getAttribute: (name) => attributes[name],
+                     index: m.index ? { array: Uint32Array.from(m.index), count: m.index.length } : null };
+  const occluders = boxmarchOccluderGeometry(THREE, geometry);
+  return { now: Array.from(boxmarchSealedTriangles(geometry)), before: oldSealedTriangles(geometry).slice().sort((a, b) => a - b),
+           occluders: occluders === null ? null : occluders === geometry ? 'geometry'
+             : Array.from(occluders.index.array) };
 })));
 """
 
@@ -93,28 +107,35 @@ QUADS = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [2, 3, 7, 6], [1, 2, 6, 5], [
 
 def mesh(seed, indexed=True):
     """A JSON-ready mesh of 40 boxes, a quarter of them spoiled one way or another, and how many
-    boxes are left sealed by construction."""
+    boxes are left sealed by construction. Each box's frame (normal, tangent with w: y is w times
+    normal x tangent, bm_axis_y) is its rotation, half of them with w = -1 (y turned over, the
+    box-local offsets with it)."""
     rng = np.random.default_rng([36, seed])
     count = 40
     numbers = rng.permutation(1000)[:count] * 0.5 + 3  # any order, not 0..n-1
     position, offset_xy, offset_z_index, half_xy, half_z, triangles = [], [], [], [], [], []
+    normal, tangent, centres = [], [], []
     sealed = 0
     for b in range(count):
         h = rng.uniform(0.1, 2.0, 3)
         rotation = scenes.random_rotations(1, rng)[0]
         centre = rng.uniform(-5, 5, 3) if rng.random() < 0.9 else np.zeros(3)
         spoil = rng.choice(["none", "open", "lost triangle", "doubled face", "inward", "smaller"], p=[0.5, 0.1, 0.1, 0.1, 0.1, 0.1])
+        w = rng.choice([1.0, -1.0])
         faces = []
         for quad in QUADS:
             first = len(position)
             for corner in quad:
                 local = SIGNS[corner] * h
-                f = -local * (0.9 if spoil == "smaller" else 1.0)
+                f = -local * (0.9 if spoil == "smaller" else 1.0) * [1.0, w, 1.0]  # along (x, w y, z)
                 position.append((centre + rotation @ local).tolist())
                 offset_xy.append([f[0], f[1]])
                 offset_z_index.append([f[2], numbers[b]])
                 half_xy.append([h[0], h[1]])
                 half_z.append([h[2]])
+                normal.append(rotation[:, 2].tolist())
+                tangent.append(rotation[:, 0].tolist() + [w])
+                centres.append(centre.tolist())
             quad_triangles = [[first, first + 1, first + 2], [first, first + 2, first + 3]]
             if spoil == "inward":
                 quad_triangles = [t[::-1] for t in quad_triangles]
@@ -130,11 +151,12 @@ def mesh(seed, indexed=True):
     triangles = [triangles[k] for k in rng.permutation(len(triangles))] if seed % 2 else triangles
     index = np.array(triangles, int).reshape(-1)
     attributes = {"position": (position, 3), "bmOffsetXY": (offset_xy, 2), "bmOffsetZIndex": (offset_z_index, 2),
-                  "bmHalfXY": (half_xy, 2), "bmHalfZ": (half_z, 1)}
+                  "bmHalfXY": (half_xy, 2), "bmHalfZ": (half_z, 1), "normal": (normal, 3), "tangent": (tangent, 4)}
     if not indexed:
         attributes = {name: ([values[v] for v in index], size) for name, (values, size) in attributes.items()}
+    corners = {"position": np.array(position, float)[index], "centre": np.array(centres, float)[index]}
     attributes = {name: (np.ravel(values).tolist(), size) for name, (values, size) in attributes.items()}
-    return {"attributes": attributes, "index": index.tolist() if indexed else None}, sealed
+    return {"attributes": attributes, "index": index.tolist() if indexed else None}, sealed, corners
 
 
 def run(meshes):
@@ -150,14 +172,46 @@ def run(meshes):
 @pytest.mark.parametrize("indexed", [True, False])
 def test_sealed_triangles_are_the_ones_the_map_based_check_gave(indexed):
     built = [mesh(seed, indexed) for seed in range(6)]
-    results = run([m for m, _ in built])
-    for seed, ((_, sealed), result) in enumerate(zip(built, results)):
+    results = run([m for m, *_ in built])
+    for seed, ((_, sealed, _corners), result) in enumerate(zip(built, results)):
         assert result["now"] == result["before"], f"seed {seed}"
         assert len(result["now"]) == 12 * sealed and 0 < sealed < 40, (seed, sealed)  # some sealed, some not
 
 
 def test_a_triangle_spanning_two_boxes_seals_no_box():
-    spanning, _ = mesh(0)
+    spanning, *_ = mesh(0)
     spanning["index"][0] = spanning["index"][-1]  # a corner of the last box's last triangle
     result = run([spanning])[0]
     assert result["now"] == [] and len(result["before"]) > 100
+
+
+@pytest.mark.parametrize("indexed", [True, False])
+def test_occluder_triangles_are_the_sealed_ones_wound_outward(indexed):
+    """boxmarchOccluderGeometry: the pre-pass draws front faces only, so each sealed box's triangles
+    come wound outward (the inward boxes' turned back; the frames with w = -1 read right), whatever
+    the mesh's winding; judged by each triangle's object-space normal against its box's centre."""
+    built = [mesh(seed, indexed) for seed in range(6)]
+    results = run([m for m, *_ in built])
+    inward_before = 0
+    for seed, ((built_mesh, sealed, corners), result) in enumerate(zip(built, results)):
+        drawn = np.array(result["occluders"]).reshape(-1, 3)
+        first = np.array(result["now"])  # the sealed triangles' first corners, as wound in the mesh
+        assert len(drawn) == len(first) == 12 * sealed, f"seed {seed}"
+        vertices = np.array(built_mesh["attributes"]["position"][0]).reshape(-1, 3)
+        # the centre of each vertex's box: indexed, by vertex; else the corners are the vertices
+        centre_of = {}
+        for corner, vertex in enumerate(built_mesh["index"] if indexed else range(len(vertices))):
+            centre_of[vertex] = corners["centre"][corner]
+
+        def outward(triangles):
+            p = vertices[triangles]
+            normal = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+            out = p.mean(axis=1) - np.array([centre_of[t[0]] for t in triangles])
+            return np.einsum("ij,ij->i", normal, out) > 0
+
+        assert outward(drawn).all(), f"seed {seed}: {int((~outward(drawn)).sum())} inward"
+        as_wound = np.array(built_mesh["index"]).reshape(-1)[first[:, None] + np.arange(3)] if indexed \
+            else first[:, None] + np.arange(3)
+        inward_before += int((~outward(as_wound)).sum())
+        assert sorted(map(sorted, drawn.tolist())) == sorted(map(sorted, as_wound.tolist())), f"seed {seed}"
+    assert inward_before >= 24  # the mesh does hold inward boxes: the check can fail

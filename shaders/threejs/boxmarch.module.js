@@ -523,7 +523,7 @@ function boxmarchOccluderShape(options) {
 // farther) packed into RGBA, white (none) where that reaches 1. Both are compiled in as constants, so the
 // compiler keeps only that preset's branch of the occluder's arithmetic (measured on SwiftShader:
 // the pile's four occluder draws 1.2x as fast as with them as uniforms, docs/BENCHMARKS.md).
-function createBoxmarchOccluderMaterial(THREE, index, shape, side) {
+function createBoxmarchOccluderMaterial(THREE, index, shape) {
   return new THREE.ShaderMaterial({
     uniforms: { bmEye: { value: new THREE.Vector4(0, 0, 0, 1) }, bmViewHeight: { value: 1 } },
     defines: { BM_OCCLUDER_INDEX: index.toFixed(1), BM_OCCLUDER_SHAPE: shape.toFixed(1) },
@@ -531,7 +531,7 @@ function createBoxmarchOccluderMaterial(THREE, index, shape, side) {
     fragmentShader: [BOXMARCH_DECODE, BOXMARCH_LIBRARY, BOXMARCH_NO_MAP, BOXMARCH_DEPTH_PACKING, 'void main() {',
       '  float limit = bm_occluder_limit(gl_FragCoord.z);',
       '  gl_FragColor = limit < 1.0 ? bm_pack_depth(limit) : vec4(1.0);', '}'].join('\n'),
-    side: side
+    side: THREE.FrontSide  // the occluders' triangles wound outward (boxmarchOccluderGeometry)
   });
 }
 
@@ -599,34 +599,75 @@ function boxmarchSealedTriangles(geometry) {
   return out;
 }
 
-// The geometry the pre-pass draws occluders from (boxmarchSealedTriangles): geometry itself where
-// every box is sealed, null where none is, else a geometry of the sealed boxes' triangles sharing
-// geometry's attributes.
+// The geometry the pre-pass draws occluders from (boxmarchSealedTriangles): the sealed boxes'
+// triangles, each wound outward (boxmarchWoundInward's turned back), so the occluders draw their
+// front faces only whatever the mesh's winding. A convex occluder's nearest face at a pixel faces
+// the eye; a back face only wins a pixel its front face's snapped edge leaves, and a back face
+// seen nearly edge-on, its vertices snapped, may tilt its depth plane far nearer there (battery
+// seed 795 on r180: 1.1e-4 of depth in front of the occluder's own front face, hiding its box's
+// hit). geometry itself where that is every triangle as wound, null where no box is sealed, else
+// a geometry of those triangles sharing geometry's attributes.
 function boxmarchOccluderGeometry(THREE, geometry) {
   var sealed = boxmarchSealedTriangles(geometry), index = geometry.index;
-  if (3 * sealed.length === (index ? index.count : geometry.getAttribute('position').count)) return geometry;
   if (!sealed.length) return null;
-  var kept = geometry.getAttribute('position').count > 65535 ? new Uint32Array(3 * sealed.length) : new Uint16Array(3 * sealed.length);
+  var count = geometry.getAttribute('position').count, turned = 0;
+  var kept = count > 65535 ? new Uint32Array(3 * sealed.length) : new Uint16Array(3 * sealed.length);
   for (var i = 0; i < sealed.length; i++) {
     for (var k = 0; k < 3; k++) kept[3 * i + k] = index ? index.array[sealed[i] + k] : sealed[i] + k;
+    if (boxmarchWoundInward(geometry, kept[3 * i], kept[3 * i + 1], kept[3 * i + 2])) {
+      var corner = kept[3 * i + 1];
+      kept[3 * i + 1] = kept[3 * i + 2];
+      kept[3 * i + 2] = corner;
+      turned++;
+    }
   }
+  if (!turned && 3 * sealed.length === (index ? index.count : count)) return geometry;
   var drawn = new THREE.BufferGeometry();
   Object.keys(geometry.attributes).forEach(function (name) { drawn.setAttribute(name, geometry.attributes[name]); });
   return drawn.setIndex(new THREE.BufferAttribute(kept, 1));
+}
+
+// Whether the triangle of vertices a, b, c, on one face of its box (a sealed box's,
+// boxmarchSealedTriangles), is wound inward: its object-space normal (the corners' cross product,
+// counter-clockwise in front) points into the box. The face is the box axis along which the
+// corners' box-local positions (-bmOffset) sum farthest from 0 for the axis's half-extent (3 on the
+// face, at most 1 across it), its outward direction that sum's sign times the axis in object space
+// (the frame of vertex a: bm_axis_y's).
+function boxmarchWoundInward(geometry, a, b, c) {
+  var position = geometry.getAttribute('position'), normal = geometry.getAttribute('normal');
+  var tangent = geometry.getAttribute('tangent'), offsetXY = geometry.getAttribute('bmOffsetXY');
+  var offsetZ = geometry.getAttribute('bmOffsetZIndex'), halfXY = geometry.getAttribute('bmHalfXY');
+  var half = [halfXY.getX(a), halfXY.getY(a), geometry.getAttribute('bmHalfZ').getX(a)];
+  var sums = [0, 0, 0];
+  [a, b, c].forEach(function (v) {
+    sums[0] -= offsetXY.getX(v);
+    sums[1] -= offsetXY.getY(v);
+    sums[2] -= offsetZ.getX(v);
+  });
+  var axis = 0;
+  for (var k = 1; k < 3; k++) if (Math.abs(sums[k]) * half[axis] > Math.abs(sums[axis]) * half[k]) axis = k;
+  var z = [normal.getX(a), normal.getY(a), normal.getZ(a)], x = [tangent.getX(a), tangent.getY(a), tangent.getZ(a)];
+  var w = tangent.getW(a);
+  var frame = [x, [(z[1] * x[2] - z[2] * x[1]) * w, (z[2] * x[0] - z[0] * x[2]) * w, (z[0] * x[1] - z[1] * x[0]) * w], z];
+  var out = frame[axis];
+  var e = [position.getX(b) - position.getX(a), position.getY(b) - position.getY(a), position.getZ(b) - position.getZ(a)];
+  var f = [position.getX(c) - position.getX(a), position.getY(c) - position.getY(a), position.getZ(c) - position.getZ(a)];
+  var n = [e[1] * f[2] - e[2] * f[1], e[2] * f[0] - e[0] * f[2], e[0] * f[1] - e[1] * f[0]];
+  return (n[0] * out[0] + n[1] * out[1] + n[2] * out[2]) * sums[axis] < 0;
 }
 
 // The pre-pass's draws of geometry's occluders of shape id `shape`, or null where no box of
 // geometry may draw any (boxmarchOccluderGeometry): one mesh per occluder box of the preset
 // (BOXMARCH_OCCLUDER_COUNTS), four for each box's own shape (box_params.glsl's most; an index a
 // box's shape lacks draws nothing: its vertices leave the view), their matrices to be copied from
-// the mesh's world matrix before each draw; `side`: the faces drawn (the occluders are their boxes
-// scaled and moved, so a box's back faces are their far side too).
-function boxmarchOccluderScene(THREE, geometry, shape, side) {
+// the mesh's world matrix before each draw. Each draws its front faces only (boxmarchOccluderGeometry
+// winds every triangle outward; three.js turns the winding over for a mirroring matrix).
+function boxmarchOccluderScene(THREE, geometry, shape) {
   var drawn = boxmarchOccluderGeometry(THREE, geometry);
   if (!drawn) return null;
   var scene = new THREE.Scene();
   for (var k = 0; k < (shape >= 0 ? BOXMARCH_OCCLUDER_COUNTS[shape] : 4); k++) {
-    var occluder = new THREE.Mesh(drawn, createBoxmarchOccluderMaterial(THREE, k, shape, side));
+    var occluder = new THREE.Mesh(drawn, createBoxmarchOccluderMaterial(THREE, k, shape));
     occluder.matrixAutoUpdate = false;
     occluder.frustumCulled = false;
     scene.add(occluder);
@@ -701,8 +742,7 @@ function boxmarchLayersOverView(spheres, objectToClip, width, height) {
 function useBoxmarchOccluders(THREE, mesh, shape) {
   if (shape === null || shape === undefined || mesh.isSkinnedMesh) return null;
   var material = mesh.material;
-  // the boxes' far sides culled where the march culls them (useBoxmarchBackFaceCulling)
-  var scene = boxmarchOccluderScene(THREE, mesh.geometry, shape, mesh.material.side === THREE.FrontSide ? THREE.FrontSide : THREE.DoubleSide);
+  var scene = boxmarchOccluderScene(THREE, mesh.geometry, shape);
   if (!scene) return null;
   var target = new THREE.WebGLRenderTarget(1, 1, { minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
     depthBuffer: true, stencilBuffer: false });
@@ -824,7 +864,7 @@ function boxmarchPassMesh(THREE, mesh, defines, eyeBox, outward) {
 // supported}, or null.
 function useBoxmarchVisibility(THREE, mesh, shape) {
   if (shape === null || shape === undefined || mesh.isSkinnedMesh) return null;
-  var occluders = boxmarchOccluderScene(THREE, mesh.geometry, shape, THREE.DoubleSide);
+  var occluders = boxmarchOccluderScene(THREE, mesh.geometry, shape);
   if (!occluders) return null;
   var material = mesh.material, uniforms = material.uniforms, marching = mesh.onBeforeRender;
   // today's path, drawn from the composite's onBeforeRender where the extensions are missing

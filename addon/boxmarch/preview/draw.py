@@ -102,8 +102,8 @@ class _Drawn:
     offsets: np.ndarray           # float64 (N, 3) f, box-local
     frame: Callable               # () -> float64 (N, 3, 3) the frame the layout decodes to (unit columns)
     outward: bool = False         # every box closed and wound outward: back faces may be culled
-    # the boxes that may draw occluders (mesh_data.sealed_boxes): all (True), none (False), or a
-    # GPUIndexBuf of their triangles
+    # the boxes that may draw occluders (mesh_data.sealed_boxes): all, wound outward (True), none
+    # (False), or a GPUIndexBuf of their triangles wound outward (mesh_data.wound_outward)
     sealed: object = True
     vectors: tuple | None = None  # the overlay's two line batches, made when first shown
     marches: dict = field(default_factory=dict)  # octant -> GPUBatch of the preview shader
@@ -119,8 +119,8 @@ class _Drawn:
 
     def occluders(self, march):
         """The batch the hidden-box pre-pass draws, given the one marching (``march``): that one
-        where every box is sealed (mesh_data.sealed_boxes), one of the sealed boxes' triangles
-        where some are, None where none is (no pre-pass)."""
+        where every box is sealed (mesh_data.sealed_boxes) and wound outward, else one of the
+        sealed boxes' triangles wound outward, None where none is sealed (no pre-pass)."""
         if isinstance(self.sealed, bool):
             return march if self.sealed else None
         if self.occluder_batch is None:
@@ -189,9 +189,12 @@ def _mesh(mesh, layout) -> _Mesh:
         inputs = mesh_data.layout_inputs(layout, baked)
         static = _vertex_buffer({k: v for k, v in inputs.items() if k not in POSE_INPUTS})
         edges = gpu.types.GPUIndexBuf(type="LINES", seq=baked.edges)
+        # the occluders' triangles: the mesh's own where every box is sealed and wound outward,
+        # else the sealed boxes' wound outward (mesh_data.wound_outward), or none
         in_sealed = baked.sealed[baked.submesh_of_vertex[baked.triangles[:, 0]]]
-        sealed = (bool(in_sealed.all()) if in_sealed.all() or not in_sealed.any()
-                  else gpu.types.GPUIndexBuf(type="TRIS", seq=baked.triangles[in_sealed]))
+        sealed = (bool(in_sealed.all()) if (in_sealed.all() and baked.outward) or not in_sealed.any()
+                  else gpu.types.GPUIndexBuf(type="TRIS", seq=mesh_data.wound_outward(
+                      baked.positions, baked.triangles[in_sealed], baked.origins, baked.submesh_of_vertex)))
         mesh = _Mesh(baked=baked, inputs=inputs, static=static, edges=edges, triangles=_OctantTriangles(baked),
                      sealed=sealed)
         mesh.rest = _batches({k: v for k, v in inputs.items() if k in POSE_INPUTS}, mesh, baked.positions,
@@ -405,7 +408,7 @@ def draw_object(ob, view_matrix, projection_matrix, perspective, output_mode=0, 
 
         depth, occluder_framebuffer = (
             occlusion.draw_occluders(drawn.occluders(batch), settings.layout, ubo, occluders, viewport[2], viewport[3],
-                                     ("FRONT" if mirrored else "BACK") if cull else "NONE")
+                                     "FRONT" if mirrored else "BACK")
             if occluders else (occlusion.no_depth(), None))
         if resolved:
             resolve.draw(batch, block, depth, occluder_framebuffer, draw_sides, counting=output_mode == 2)

@@ -87,6 +87,24 @@ def closed_outward(positions, triangles, origins, submesh_of_vertex) -> bool:
     return bool(np.all(volume > 0.0))
 
 
+def wound_outward(positions, triangles, origins, submesh_of_vertex) -> np.ndarray:
+    """int64 (T, 3): ``triangles`` with each whose object-space normal (counter-clockwise in front)
+    points toward its box's origin turned over, so the pre-pass draws its occluders' front faces
+    only, whatever the mesh's winding (docs/PREVIEW.md, "Hidden boxes": a back face seen nearly
+    edge-on, its vertices snapped, may tilt its depth plane nearer than its occluder's front face
+    on a pixel that face's snapped edge leaves). Meant for a sealed box's triangles, each on one
+    face (sealed_boxes); a wrong call (a flat box's rounding) culls a front face and keeps the
+    back one behind it, which hides less, never more."""
+    triangles = np.array(triangles, np.int64).reshape(-1, 3)
+    if not len(triangles):
+        return triangles
+    a, b, c = (positions[triangles[:, k]].astype(np.float64) for k in range(3))
+    outward = (a + b + c) / 3.0 - origins[submesh_of_vertex[triangles[:, 0]]]
+    inward = np.einsum("ij,ij->i", np.cross(b - a, c - a), outward) < 0.0
+    triangles[inward] = triangles[inward][:, [0, 2, 1]]
+    return triangles
+
+
 # How far (a share of a box's largest half-extent) a box's triangle may lie inside a face of its
 # box and count as on it (sealed_boxes): within the margin by which bm_occluder_half pulls the
 # occluders in (box_params.glsl), so the faces still cover every occluder.

@@ -74,12 +74,12 @@ def no_depth():
     return _unused[0]
 
 
-def draw_occluders(batch, layout: str, block, count: int, width: int, height: int, culled_faces: str = "NONE"):
-    """Draws ``batch`` (the object's box mesh) ``count`` times with the pre-pass shader, one
-    occluder index each, into a depth texture of ``width`` x ``height`` cleared to 1, with the
-    object's uniform ``block``, ``culled_faces`` culled (gpu.state.face_culling_set: an occluder
-    box is wound as its box); the GPU state is left as found. Returns the texture and the
-    framebuffer it is attached to."""
+def draw_occluders(batch, layout: str, block, count: int, width: int, height: int, culled_faces: str):
+    """Draws ``batch`` (the object's sealed boxes wound outward, draw._Drawn.occluders) ``count``
+    times with the pre-pass shader, one occluder index each, into a depth texture of ``width`` x
+    ``height`` cleared to 1, with the object's uniform ``block``, ``culled_faces`` culled
+    (gpu.state.face_culling_set: the back faces, an occluder box being wound as its box); the GPU
+    state is left as found. Returns the texture and the framebuffer it is attached to."""
     texture, framebuffer = _target(width, height)
     shader = preview_shader.occluder_shader(layout)
     state = gpu.state.blend_get(), gpu.state.depth_test_get(), gpu.state.depth_mask_get()
