@@ -2,10 +2,10 @@
 
 * the AddressSanitizer + UndefinedBehaviorSanitizer build of the core passes its C++ tests and the
   replay of the kept fuzz corpus (scripts/sanitize.sh cpp);
-* the native Python test suite passes against the sanitized module (scripts/sanitize.sh python).
+* the native Python test suite passes against the sanitized module (scripts/sanitize.sh python);
+* the libFuzzer target runs clean for its CI budget, starting from the kept corpus
+  (scripts/fuzz.sh, BOXMARCH_FUZZ_SECONDS, default 60).
 
-Both build build/sanitize, so they share this file (scripts/test.sh runs the native tier with
---dist loadfile: one worker runs them in turn, another the fuzzer, tests/test_native_fuzz.py).
 Each runs a script in a subprocess and fails with its output when the script fails: a sanitizer
 report, a failed C++ check or a fuzzer crash all end in a nonzero exit. The scripts need clang-14,
 libclang-rt-14-dev and cmake, which scripts/setup.sh installs.
@@ -41,3 +41,8 @@ def test_native_python_suite_passes_under_asan_and_ubsan():
     output = run_script("scripts/sanitize.sh", "python", timeout=1800)
     assert " passed" in output and " failed" not in output
 
+
+def test_fuzz_target_runs_clean_for_its_ci_budget():
+    seconds = os.environ.get("BOXMARCH_FUZZ_SECONDS", "60")
+    output = run_script("scripts/fuzz.sh", seconds, timeout=int(seconds) + 900)
+    assert "Done" in output and "stat::number_of_executed_units" in output
