@@ -391,6 +391,8 @@ def test_occluder_triangles_come_wound_outward_whatever_the_mesh_winding():
     assert np.array_equal(np.sort(wound, axis=1), np.sort(outward, axis=1))  # the same triangles
     assert not mesh_data.closed_outward(positions, mixed, origins, box)  # which were not outward
     assert np.array_equal(mesh_data.wound_outward(positions, outward, origins, box), outward)
+    # the mesh's int32 triangles stay int32: a GPU index buffer of int64 drew nothing at all
+    assert mesh_data.wound_outward(positions, mixed.astype(np.int32), origins, box).dtype == np.int32
 
 
 def test_a_box_the_near_plane_cuts_draws_no_occluders():

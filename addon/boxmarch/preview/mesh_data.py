@@ -88,14 +88,15 @@ def closed_outward(positions, triangles, origins, submesh_of_vertex) -> bool:
 
 
 def wound_outward(positions, triangles, origins, submesh_of_vertex) -> np.ndarray:
-    """int64 (T, 3): ``triangles`` with each whose object-space normal (counter-clockwise in front)
-    points toward its box's origin turned over, so the pre-pass draws its occluders' front faces
-    only, whatever the mesh's winding (docs/PREVIEW.md, "Hidden boxes": a back face seen nearly
-    edge-on, its vertices snapped, may tilt its depth plane nearer than its occluder's front face
-    on a pixel that face's snapped edge leaves). Meant for a sealed box's triangles, each on one
-    face (sealed_boxes); a wrong call (a flat box's rounding) culls a front face and keeps the
-    back one behind it, which hides less, never more."""
-    triangles = np.array(triangles, np.int64).reshape(-1, 3)
+    """``triangles`` (T, 3), their type kept (a GPU index buffer takes int32), with each whose
+    object-space normal (counter-clockwise in front) points toward its box's origin turned over,
+    so the pre-pass draws its occluders' front faces only, whatever the mesh's winding
+    (docs/PREVIEW.md, "Hidden boxes": a back face seen nearly edge-on, its vertices snapped, may
+    tilt its depth plane nearer than its occluder's front face on a pixel that face's snapped edge
+    leaves). Meant for a sealed box's triangles, each on one face (sealed_boxes); a wrong call (a
+    flat box's rounding) culls a front face and keeps the back one behind it, which hides less,
+    never more."""
+    triangles = np.array(triangles).reshape(-1, 3)
     if not len(triangles):
         return triangles
     a, b, c = (positions[triangles[:, k]].astype(np.float64) for k in range(3))
