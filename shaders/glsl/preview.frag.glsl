@@ -178,10 +178,12 @@ void main()
       // the boxes: cut battery, depth-hostile seed 138, a winner's reach came out beyond its exit).
       // Along the ray the depth is monotonic while w keeps its sign, so every hit_depth below
       // (the face's depth or more) is at most the greater of the face's and the exit's, whatever
-      // the rounding of the ray's direction
+      // the rounding of the ray's direction; clamped to [0, 1] as every kept depth is (a box
+      // wholly in front of the near plane whose face's fragment came out below 0, drawn by the
+      // one-pass draw at depth 0, is kept at 0: three.js, cut battery seed 851)
       vec4 exit_clip = c0 + c1 * t_end;
       hidden = exit_clip.w > 0.0
-        && max(gl_FragCoord.z, 0.5 + 0.5 * exit_clip.z / exit_clip.w) < nearest - bm_shade_margin();
+        && clamp(max(gl_FragCoord.z, 0.5 + 0.5 * exit_clip.z / exit_clip.w), 0.0, 1.0) < nearest - bm_shade_margin();
       if (!hidden && beyond < 1e30) {
         float at = min(bm_depth_crossing(c0, c1, 2.0 * nearest - 1.0), beyond);
         taps = 1;

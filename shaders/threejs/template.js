@@ -1259,11 +1259,15 @@ var BOXMARCH_FRAGMENT = [
   // give or take bm_shade_margin (near the far plane a float step of depth spans centimetres along
   // the ray); a box whose exit lies nearer than that loses (one that starts after it, the depth
   // test culls). Compared as depths, as the Blender preview's shade pass does (preview.frag.glsl
-  // says why): every hit's depth is at most the greater of the face's and the exit's. Not a march
-  // from the eye: the depth's equality below decides alone.
+  // says why): every hit's depth is at most the greater of the face's and the exit's, clamped to
+  // [0, 1] as the kept depth is (cut battery seed 851: a face cut by the near plane handed its
+  // fragment a gl_FragCoord.z below 0 and its box's exit lay in front of the near plane too; its
+  // hit, kept at 0 as the depth buffer clamps it, was dropped here as ending before 0 and the
+  // pixel drawn empty). Not a march from the eye: the depth's equality below decides alone.
   '  float resolved = texture2D(bmResolvedDepth, gl_FragCoord.xy * bmOcclusion.yz).r;',
   '  vec4 exitClip = c0 + c1 * t_end;',
-  '  if (!fromEye && exitClip.w > 0.0 && max(gl_FragCoord.z, 0.5 + 0.5 * exitClip.z / exitClip.w) < resolved - bm_shade_margin()) {',
+  '  float farDepth = clamp(max(gl_FragCoord.z, 0.5 + 0.5 * exitClip.z / exitClip.w), 0.0, 1.0);',
+  '  if (!fromEye && exitClip.w > 0.0 && farDepth < resolved - bm_shade_margin()) {',
   '    drawn = false; discard;',
   '  }',
   '#endif',
