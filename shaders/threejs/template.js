@@ -606,11 +606,14 @@ function boxmarchSealedTriangles(geometry) {
 function boxmarchOccluderGeometry(THREE, geometry) {
   var sealed = boxmarchSealedTriangles(geometry), index = geometry.index;
   if (!sealed.length) return null;
-  var count = geometry.getAttribute('position').count, turned = 0;
+  var count = geometry.getAttribute('position').count, turned = 0, attribute = {};
+  ['position', 'normal', 'tangent', 'bmOffsetXY', 'bmOffsetZIndex', 'bmHalfXY', 'bmHalfZ'].forEach(function (name) {
+    attribute[name] = geometry.getAttribute(name);
+  });
   var kept = count > 65535 ? new Uint32Array(3 * sealed.length) : new Uint16Array(3 * sealed.length);
   for (var i = 0; i < sealed.length; i++) {
     for (var k = 0; k < 3; k++) kept[3 * i + k] = index ? index.array[sealed[i] + k] : sealed[i] + k;
-    if (boxmarchWoundInward(geometry, kept[3 * i], kept[3 * i + 1], kept[3 * i + 2])) {
+    if (boxmarchWoundInward(attribute, kept[3 * i], kept[3 * i + 1], kept[3 * i + 2])) {
       var corner = kept[3 * i + 1];
       kept[3 * i + 1] = kept[3 * i + 2];
       kept[3 * i + 2] = corner;
@@ -628,12 +631,10 @@ function boxmarchOccluderGeometry(THREE, geometry) {
 // counter-clockwise in front) points into the box. The face is the box axis along which the
 // corners' box-local positions (-bmOffset) sum farthest from 0 for the axis's half-extent (3 on the
 // face, at most 1 across it), its outward direction that sum's sign times the axis in object space
-// (the frame of vertex a: bm_axis_y's).
-function boxmarchWoundInward(geometry, a, b, c) {
-  var position = geometry.getAttribute('position'), normal = geometry.getAttribute('normal');
-  var tangent = geometry.getAttribute('tangent'), offsetXY = geometry.getAttribute('bmOffsetXY');
-  var offsetZ = geometry.getAttribute('bmOffsetZIndex'), halfXY = geometry.getAttribute('bmHalfXY');
-  var half = [halfXY.getX(a), halfXY.getY(a), geometry.getAttribute('bmHalfZ').getX(a)];
+// (vertex a's frame, boxmarchFrame). `attribute`: the geometry's attributes by name.
+function boxmarchWoundInward(attribute, a, b, c) {
+  var position = attribute.position, offsetXY = attribute.bmOffsetXY, offsetZ = attribute.bmOffsetZIndex;
+  var half = [attribute.bmHalfXY.getX(a), attribute.bmHalfXY.getY(a), attribute.bmHalfZ.getX(a)];
   var sums = [0, 0, 0];
   [a, b, c].forEach(function (v) {
     sums[0] -= offsetXY.getX(v);
@@ -642,10 +643,7 @@ function boxmarchWoundInward(geometry, a, b, c) {
   });
   var axis = 0;
   for (var k = 1; k < 3; k++) if (Math.abs(sums[k]) * half[axis] > Math.abs(sums[axis]) * half[k]) axis = k;
-  var z = [normal.getX(a), normal.getY(a), normal.getZ(a)], x = [tangent.getX(a), tangent.getY(a), tangent.getZ(a)];
-  var w = tangent.getW(a);
-  var frame = [x, [(z[1] * x[2] - z[2] * x[1]) * w, (z[2] * x[0] - z[0] * x[2]) * w, (z[0] * x[1] - z[1] * x[0]) * w], z];
-  var out = frame[axis];
+  var out = boxmarchFrame(attribute.normal, attribute.tangent, a)[axis];
   var e = [position.getX(b) - position.getX(a), position.getY(b) - position.getY(a), position.getZ(b) - position.getZ(a)];
   var f = [position.getX(c) - position.getX(a), position.getY(c) - position.getY(a), position.getZ(c) - position.getZ(a)];
   var n = [e[1] * f[2] - e[2] * f[1], e[2] * f[0] - e[0] * f[2], e[0] * f[1] - e[1] * f[0]];
@@ -677,6 +675,19 @@ function boxmarchOccluderScene(THREE, geometry, shape) {
 // rows draw faster without the pre-pass, a deep pile with it (docs/BENCHMARKS.md, three.js).
 var BOXMARCH_MIN_LAYERS = 2;
 
+// The box frame vertex v decodes to (bm_axis_y), unit vectors in object space: x the tangent,
+// y the tangent's w times normal x tangent, z the normal.
+function boxmarchFrame(normal, tangent, v) {
+  function unit(u) {
+    var length = Math.hypot(u[0], u[1], u[2]);
+    return [u[0] / length, u[1] / length, u[2] / length];
+  }
+  var n = [normal.getX(v), normal.getY(v), normal.getZ(v)], w = tangent.getW(v);
+  var x = unit([tangent.getX(v), tangent.getY(v), tangent.getZ(v)]);
+  var y = unit([(n[1] * x[2] - n[2] * x[1]) * w, (n[2] * x[0] - n[0] * x[2]) * w, (n[0] * x[1] - n[1] * x[0]) * w]);
+  return [x, y, unit(n)];
+}
+
 // Each box's bounding sphere (x, y, z, radius; object space) from the first corner of its first
 // triangle (boxmarchTrianglesByBox): its origin, the corner moved by its offset along its frame
 // (bm_offset, bm_axis_y), and the length of its half-extents (bm_half_extents); as the preview
@@ -688,15 +699,9 @@ function boxmarchBoxSpheres(geometry) {
   var position = a('position'), normal = a('normal'), tangent = a('tangent');
   var offsetXY = a('bmOffsetXY'), offsetZ = a('bmOffsetZIndex'), halfXY = a('bmHalfXY'), halfZ = a('bmHalfZ');
   var spheres = new Float64Array(4 * grouped.count);
-  function unit(v) {
-    var length = Math.hypot(v[0], v[1], v[2]);
-    return [v[0] / length, v[1] / length, v[2] / length];
-  }
   for (var box = 0; box < grouped.count; box++) {
     var t = grouped.triangles[grouped.start[box]], v = index ? index[3 * t] : 3 * t;
-    var n = [normal.getX(v), normal.getY(v), normal.getZ(v)], w = tangent.getW(v);
-    var x = unit([tangent.getX(v), tangent.getY(v), tangent.getZ(v)]), z = unit(n);
-    var y = unit([(n[1] * x[2] - n[2] * x[1]) * w, (n[2] * x[0] - n[0] * x[2]) * w, (n[0] * x[1] - n[1] * x[0]) * w]);
+    var frame = boxmarchFrame(normal, tangent, v), x = frame[0], y = frame[1], z = frame[2];
     var f = [offsetXY.getX(v), offsetXY.getY(v), offsetZ.getX(v)];
     spheres[4 * box] = position.getX(v) + x[0] * f[0] + y[0] * f[1] + z[0] * f[2];
     spheres[4 * box + 1] = position.getY(v) + x[1] * f[0] + y[1] * f[1] + z[1] * f[2];
