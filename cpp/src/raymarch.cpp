@@ -426,8 +426,9 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                     float t_end = std::min(span.y - t0, o.max_distance);
                     if (plan.occluders) {
                         // Behind the occluders' depth: hidden (a fragment starting inside its box
-                        // marches from the eye, so only its march is bounded).
-                        const float hidden_from = shader::bm_occluder_limit(occluder[pix - band_start]);
+                        // marches from the eye, so only its march is bounded). The occluders' depth was
+                        // cast, not rasterised: no snapped corners, no slope to allow for.
+                        const float hidden_from = shader::bm_occluder_limit(occluder[pix - band_start], 0.0f);
                         if (!from_eye && face_depth > hidden_from) {
                             ++cost.occluded_fragments;
                             continue;

@@ -516,19 +516,22 @@ function boxmarchOccluderShape(options) {
 // The pre-pass material: occluder box number `index` (BM_OCCLUDER_INDEX) of shape id `shape`
 // (BM_OCCLUDER_SHAPE; < 0: each box's own), none for a box holding the eye (its march starts at
 // the eye); writes the limit the march compares with (bm_occluder_limit: its window depth a margin
-// farther) packed into RGBA, white (none) where that reaches 1. Both are compiled in as constants, so the
+// and a share of its slope farther) packed into RGBA, white (none) where that reaches 1. Both are compiled in as constants, so the
 // compiler keeps only that preset's branch of the occluder's arithmetic (measured on SwiftShader:
 // the pile's four occluder draws 1.2x as fast as with them as uniforms, docs/BENCHMARKS.md).
 function createBoxmarchOccluderMaterial(THREE, index, shape) {
-  return new THREE.ShaderMaterial({
+  var material = new THREE.ShaderMaterial({
     uniforms: { bmEye: { value: new THREE.Vector4(0, 0, 0, 1) }, bmViewHeight: { value: 1 } },
     defines: { BM_OCCLUDER_INDEX: index.toFixed(1), BM_OCCLUDER_SHAPE: shape.toFixed(1) },
     vertexShader: BOXMARCH_DECODE + '\n' + BOXMARCH_LIBRARY + '\n' + BOXMARCH_OCCLUDER_VERTEX,
     fragmentShader: [BOXMARCH_DECODE, BOXMARCH_LIBRARY, BOXMARCH_NO_MAP, BOXMARCH_DEPTH_PACKING, 'void main() {',
-      '  float limit = bm_occluder_limit(gl_FragCoord.z);',
+      '  float limit = bm_occluder_limit(gl_FragCoord.z, fwidth(gl_FragCoord.z));',
       '  gl_FragColor = limit < 1.0 ? bm_pack_depth(limit) : vec4(1.0);', '}'].join('\n'),
     side: THREE.FrontSide  // the occluders' triangles wound outward (boxmarchOccluderGeometry)
   });
+  // fwidth: WebGL 1 needs OES_standard_derivatives (WebGL 2 and r163's GLSL 3.00 have it)
+  if (parseInt(THREE.REVISION, 10) < 163) material.extensions = { derivatives: true };
+  return material;
 }
 
 // How far (a share of a box's largest half-extent) a box's triangle may lie inside a face of its
@@ -890,9 +893,9 @@ function useBoxmarchVisibility(THREE, mesh, shape) {
     // the limit the march compares with (bm_occluder_limit), as depth too: the passes' depth test
     // then keeps the fragments the march's own test would
     occluder.material.fragmentShader = [BOXMARCH_DECODE, BOXMARCH_LIBRARY, BOXMARCH_NO_MAP, 'void main() {',
-      '  float limit = min(bm_occluder_limit(gl_FragCoord.z), 1.0);',
+      '  float limit = min(bm_occluder_limit(gl_FragCoord.z, fwidth(gl_FragCoord.z)), 1.0);',
       '  gl_FragDepthEXT = limit;', '  gl_FragColor = vec4(limit);', '}'].join('\n');
-    if (parseInt(THREE.REVISION, 10) < 163) occluder.material.extensions = { fragDepth: true };
+    if (parseInt(THREE.REVISION, 10) < 163) occluder.material.extensions = { derivatives: true, fragDepth: true };
   });
   var outward = boxmarchClosedOutward(mesh.geometry);
   [false, true].forEach(function (eyeBox) {

@@ -234,7 +234,7 @@ NO_MAP = "float map(vec3 p)\n{\n  return 1.0;\n}\n"
 # the marching stage's depth). A colour output is declared as every create-info has one.
 OCCLUDER_FRAGMENT_SOURCE = "\n".join([read_glsl("sdf.glsl"), read_glsl("raymarch.glsl"), NO_MAP, """void main()
 {
-  gl_FragDepth = max(bm_occluder_limit(gl_FragCoord.z), gl_FragCoord.z);
+  gl_FragDepth = max(bm_occluder_limit(gl_FragCoord.z, fwidth(gl_FragCoord.z)), gl_FragCoord.z);
   frag_color = vec4(0.0);
 }
 """])
