@@ -44,9 +44,13 @@ use_compiler_cache  # ccache, installed just now on a fresh machine
 [ -x "$TEST_VENV/bin/python" ] || "$PYTHON" -m venv "$TEST_VENV"
 TEST_PYTHON="$TEST_VENV/bin/python"
 pip_quiet=(-q --disable-pip-version-check)
-echo "[setup] pip install ${DEMO_PIP_PACKAGES[*]} ${PIP_PACKAGES[*]} into $TEST_VENV" >&2
+echo "[setup] pip install ${DEMO_PIP_PACKAGES[*]} ${PIP_PACKAGES[*]} into $TEST_VENV ($SECONDS s)" >&2
 "$TEST_PYTHON" -m pip install "${pip_quiet[@]}" "${DEMO_PIP_PACKAGES[@]}" "${PIP_PACKAGES[@]}"
-# The oldest supported bpy (4.2 LTS) in its own folder, for scripts/test.sh's second run.
-PYTHON="$TEST_PYTHON" bash scripts/install_bpy.sh 4.2 >/dev/null
-echo "[setup] building boxmarch into $TEST_VENV" >&2
+# The oldest supported bpy (4.2 LTS) in its own folder, for scripts/test.sh's second run: unpacked
+# (mostly disk) while boxmarch compiles (CPU).
+PYTHON="$TEST_PYTHON" bash scripts/install_bpy.sh 4.2 >/dev/null &
+bpy_install=$!
+echo "[setup] building boxmarch into $TEST_VENV ($SECONDS s)" >&2
 "$TEST_PYTHON" -m pip install "${pip_quiet[@]}" --no-build-isolation -C build-dir="$(venv_build_dir "$TEST_VENV")" .
+wait "$bpy_install"
+echo "[setup] done in $SECONDS s" >&2

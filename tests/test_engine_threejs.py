@@ -108,8 +108,9 @@ SORT_JOB = """async function (gltf) {
 
 
 # The shipped material's stages as the release's three.js hands them to WebGL (the page's first
-# mesh drawn once with createBoxmarchMaterial's defaults, shaderSource recorded; where the material
-# declares its depth, then its eye-box variant's, drawn right after: useBoxmarchEyeBox), the context's
+# mesh drawn with createBoxmarchMaterial's defaults from outside its boxes, shaderSource recorded
+# (``stagesOutside``: how many), then from inside its first box, where its eye-box variant's come,
+# drawn right after: useBoxmarchEyeBox), the context's
 # requests for EXT_conservative_depth among them ("getExtension" in ``calls``, in order with
 # "vertex" and "fragment"), whether the context offers the extension, and on WebGL 2 what its
 # compiler (ANGLE) says of the fragment text as built and with depth_greater misspelled, on a
@@ -129,7 +130,7 @@ STAGES_JOB = """function (gltf) {
       return originals[i].getExtension.call(this, name);
     };
   });
-  var renderer = new THREE.WebGLRenderer({canvas: document.createElement('canvas')});
+  var renderer = new THREE.WebGLRenderer({canvas: document.createElement('canvas')}), outside = null;
   try {
     renderer.setSize(64, 64, false);
     var mesh = null;
@@ -140,11 +141,20 @@ STAGES_JOB = """function (gltf) {
     var scene = new THREE.Scene();
     scene.add(mesh);
     renderer.render(scene, camera);
+    outside = sources.length;
+    // the eye at the centre of the first vertex's box (the mean of its corners): the eye-box variant draws
+    var number = mesh.geometry.getAttribute('bmOffsetZIndex'), position = mesh.geometry.getAttribute('position');
+    var centre = new THREE.Vector3(), corner = new THREE.Vector3(), corners = 0;
+    for (var v = 0; v < position.count; v++) {
+      if (number.getY(v) === number.getY(0)) { centre.add(corner.fromBufferAttribute(position, v)); corners++; }
+    }
+    camera.position.copy(centre.divideScalar(corners).applyMatrix4(mesh.matrixWorld));
+    renderer.render(scene, camera);
   } finally {
     prototypes.forEach(function (p, i) { p.shaderSource = originals[i].shaderSource; p.getExtension = originals[i].getExtension; });
   }
   var gl = renderer.getContext(), webgl2 = typeof WebGL2RenderingContext !== 'undefined' && gl instanceof WebGL2RenderingContext;
-  var result = {vertex: sources[0], fragment: sources[1], eyeFragment: sources[3] || null, stages: sources.length,
+  var result = {vertex: sources[0], fragment: sources[1], eyeFragment: sources[3] || null, stages: sources.length, stagesOutside: outside,
                 calls: calls, webgl2: webgl2,
                 extension: (gl.getSupportedExtensions() || []).indexOf('EXT_conservative_depth') >= 0, angle: null};
   renderer.dispose();
@@ -384,8 +394,9 @@ def test_webgl2_fragment_declares_depth_greater_where_the_extension_is_handed_ou
     stages = out["stages"]
     assert "bmEye" in stages["fragment"]
     # the eye-box variant on every release (useBoxmarchMaterial: the box holding the eye drawn
-    # apart and last, with the cuts and without, so a depth tie at the near plane goes to one box)
-    assert stages["stages"] == 4 and "bmEye" in stages["eyeFragment"]
+    # apart and last, with the cuts and without, so a depth tie at the near plane goes to one box),
+    # drawn and compiled only once the eye is in a box (boxmarchEyeMayBeInABox)
+    assert stages["stagesOutside"] == 2 and stages["stages"] == 4 and "bmEye" in stages["eyeFragment"]
     if out["release"] == "r111":
         assert not stages["webgl2"] and "conservative_depth" not in stages["fragment"]
         assert "getExtension" not in stages["calls"]

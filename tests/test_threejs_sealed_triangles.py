@@ -107,8 +107,9 @@ QUADS = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [2, 3, 7, 6], [1, 2, 6, 5], [
 
 
 def mesh(seed, indexed=True):
-    """A JSON-ready mesh of 40 boxes, a quarter of them spoiled one way or another, and how many
-    boxes are left sealed by construction. Each box's frame (normal, tangent with w: y is w times
+    """A JSON-ready mesh of 40 boxes, a quarter of them spoiled one way or another, how many
+    boxes are left sealed by construction, and its corners (with each box: centre, rotation, half
+    extents, spoil). Each box's frame (normal, tangent with w: y is w times
     normal x tangent, bm_axis_y) is its rotation, half of them with w = -1 (y turned over, the
     box-local offsets with it)."""
     rng = np.random.default_rng([36, seed])
@@ -116,7 +117,7 @@ def mesh(seed, indexed=True):
     numbers = rng.permutation(1000)[:count] * 0.5 + 3  # any order, not 0..n-1
     position, offset_xy, offset_z_index, half_xy, half_z, triangles = [], [], [], [], [], []
     normal, tangent, centres = [], [], []
-    sealed = 0
+    sealed, boxes = 0, []
     for b in range(count):
         h = rng.uniform(0.1, 2.0, 3)
         rotation = scenes.random_rotations(1, rng)[0]
@@ -148,6 +149,7 @@ def mesh(seed, indexed=True):
         elif spoil == "doubled face":
             faces += faces[2:4]
         sealed += spoil in ("none", "inward")
+        boxes.append({"centre": centre, "rotation": rotation, "half": h, "spoil": spoil})
         triangles += faces
     triangles = [triangles[k] for k in rng.permutation(len(triangles))] if seed % 2 else triangles
     index = np.array(triangles, int).reshape(-1)
@@ -155,7 +157,7 @@ def mesh(seed, indexed=True):
                   "bmHalfXY": (half_xy, 2), "bmHalfZ": (half_z, 1), "normal": (normal, 3), "tangent": (tangent, 4)}
     if not indexed:
         attributes = {name: ([values[v] for v in index], size) for name, (values, size) in attributes.items()}
-    corners = {"position": np.array(position, float)[index], "centre": np.array(centres, float)[index]}
+    corners = {"position": np.array(position, float)[index], "centre": np.array(centres, float)[index], "boxes": boxes}
     attributes = {name: (np.ravel(values).tolist(), size) for name, (values, size) in attributes.items()}
     return {"attributes": attributes, "index": index.tolist() if indexed else None}, sealed, corners
 

@@ -225,7 +225,9 @@ function useBoxmarchMaterial(THREE, mesh, material, frontToBack) {
 // layout(depth_greater) forbids it to write; the variant declares no depth and writes the hit's
 // own, so a box nested in the eye's box behind that hit stays hidden (a material that declares
 // nothing writes it itself). useBoxmarchMaterial calls it. A SkinnedMesh's eye-box mesh is
-// skinned by the same skeleton. Returns that mesh (also mesh.userData.boxmarchEyeBox).
+// skinned by the same skeleton. Where no box may hold the eye (boxmarchEyeMayBeInABox), that mesh
+// is not drawn (its visible false for the draw): no pass over the vertices, and its program is
+// compiled only once the eye comes near a box. Returns that mesh (also mesh.userData.boxmarchEyeBox).
 function useBoxmarchEyeBox(THREE, mesh) {
   if (mesh.userData.boxmarchEyeBox) return mesh.userData.boxmarchEyeBox;
   mesh.material.defines = Object.assign({}, mesh.material.defines, { BM_EYE_BOX_APART: '' });
@@ -236,7 +238,10 @@ function useBoxmarchEyeBox(THREE, mesh) {
   eyeBox.matrixAutoUpdate = false;  // mesh's world matrix, copied before each draw
   eyeBox.frustumCulled = false;
   var scene = new THREE.Scene().add(eyeBox);
+  var spheres = mesh.isSkinnedMesh ? null : boxmarchBoxSpheres(mesh.geometry);  // skinning moves the boxes
   mesh.onAfterRender = function (renderer, parentScene, camera) {
+    eyeBox.visible = boxmarchEyeMayBeInABox(spheres, material.uniforms.bmEye.value);
+    if (!eyeBox.visible) return;
     eyeBox.matrix.copy(mesh.matrixWorld);
     eyeBox.matrixWorldNeedsUpdate = true;
     var autoClear = renderer.autoClear;
@@ -714,6 +719,24 @@ function boxmarchBoxSpheres(geometry) {
   return spheres;
 }
 
+// Whether the eye (bmEye: object space, w 1 for a perspective camera; an orthographic camera's
+// lies in no box) may lie in a box of `spheres` (boxmarchBoxSpheres; null: unknown, so it may),
+// each grown by 1 % and by 1e-5 of the coordinates' size: more than the vertex stage's own margin
+// (BM_EYE_BOX_ONLY: 1e-3 of the box's largest half-extent) and its float32 rounding. A NaN sphere
+// may hold it, as the vertex stage keeps such a box. Linear in the boxes.
+function boxmarchEyeMayBeInABox(spheres, eye) {
+  if (eye.w < 0.5) return false;
+  if (!spheres) return true;
+  var eyeSize = Math.abs(eye.x) + Math.abs(eye.y) + Math.abs(eye.z);
+  for (var i = 0; i < spheres.length; i += 4) {
+    var x = spheres[i], y = spheres[i + 1], z = spheres[i + 2], radius = spheres[i + 3];
+    var reach = 1.01 * radius + 1e-5 * (eyeSize + Math.abs(x) + Math.abs(y) + Math.abs(z) + radius);
+    var dx = eye.x - x, dy = eye.y - y, dz = eye.z - z;
+    if (!(dx * dx + dy * dy + dz * dz > reach * reach)) return true;
+  }
+  return false;
+}
+
 // About how many layers of boxes cover a width x height view (the preview's
 // mesh_data.layers_over_view): the bounding spheres (boxmarchBoxSpheres) in the view frustum
 // projected by objectToClip (a THREE.Matrix4, object to clip space), each at most the view's area,
@@ -897,10 +920,13 @@ function useBoxmarchVisibility(THREE, mesh, shape) {
       '  gl_FragDepthEXT = limit;', '  gl_FragColor = vec4(limit);', '}'].join('\n');
     if (parseInt(THREE.REVISION, 10) < 163) occluder.material.extensions = { derivatives: true, fragDepth: true };
   });
-  var outward = boxmarchClosedOutward(mesh.geometry);
+  var outward = boxmarchClosedOutward(mesh.geometry), spheres = boxmarchBoxSpheres(mesh.geometry), eyePasses = [];
   [false, true].forEach(function (eyeBox) {
-    scenes.visibility.add(boxmarchPassMesh(THREE, mesh, { BM_VISIBILITY_PASS: '' }, eyeBox, outward));
-    scenes.shade.add(boxmarchPassMesh(THREE, mesh, { BM_SHADE_PASS: '' }, eyeBox, outward));
+    [[scenes.visibility, { BM_VISIBILITY_PASS: '' }], [scenes.shade, { BM_SHADE_PASS: '' }]].forEach(function (pass) {
+      var drawn = boxmarchPassMesh(THREE, mesh, pass[1], eyeBox, outward);
+      pass[0].add(drawn);
+      if (eyeBox) eyePasses.push(drawn);
+    });
   });
   var screen = { bmResolvedDepth: uniforms.bmResolvedDepth, bmShaded: { value: shaded.texture }, bmOcclusion: uniforms.bmOcclusion };
   var triangle = new THREE.BufferGeometry();
@@ -941,6 +967,9 @@ function useBoxmarchVisibility(THREE, mesh, shape) {
     composite.geometry.setDrawRange(0, supported ? Infinity : 0);
     if (supported) {
       marching.call(mesh, renderer, parentScene, camera);
+      // the box holding the eye's passes, where a box may hold it (as useBoxmarchEyeBox draws it)
+      var nearBox = boxmarchEyeMayBeInABox(spheres, uniforms.bmEye.value);
+      eyePasses.forEach(function (pass) { pass.visible = nearBox; });
       if (previous) size.set(previous.width, previous.height);
       else renderer.getDrawingBufferSize(size);
       if (nearest.width !== size.x || nearest.height !== size.y) {
