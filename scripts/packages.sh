@@ -12,8 +12,9 @@ DEMO_APT_PACKAGES=(g++ cmake libglm-dev libnanoflann-dev
                    libgl1-mesa-dri libegl1 libegl-mesa0
                    chromium libjs-three)
 # Python packages of the demo: Blender 5.0 as a module and the build backend of the native module
-# (NumPy comes with both).
-DEMO_PIP_PACKAGES=("bpy==5.0.*" "scikit-build-core>=0.10" "pybind11>=2.12")
+# (BUILD_PIP_PACKAGES, pyproject.toml's build-system requires; NumPy comes with bpy).
+BUILD_PIP_PACKAGES=("scikit-build-core>=0.10" "pybind11>=2.12")
+DEMO_PIP_PACKAGES=("bpy==5.0.*" "${BUILD_PIP_PACKAGES[@]}")
 
 # apt_install_missing PACKAGE...: installs those not installed yet (through sudo when not root);
 # nothing runs when all are there.

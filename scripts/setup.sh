@@ -2,7 +2,8 @@
 # Installs everything the test command needs on a fresh Debian 12 machine with Python 3.11: the
 # demo's packages (scripts/packages.sh) and the test and lint tools, the Python ones into the test
 # environment, .venv-test (scripts/environments.sh: made from python3, or PYTHON, with none of its
-# site-packages), bpy 4.2 into .cache/bpy-4.2, and builds boxmarch into .venv-test. Safe to run
+# site-packages), bpy 4.2 into .cache/bpy-4.2, and builds boxmarch into .venv-test (a wheel, built while
+# the rest unpacks). Safe to run
 # again: it only installs what is missing. --list prints the Debian and Python packages it installs
 # (one a line: apt NAME, pip SPEC) and installs nothing.
 set -euo pipefail
@@ -44,13 +45,20 @@ use_compiler_cache  # ccache, installed just now on a fresh machine
 [ -x "$TEST_VENV/bin/python" ] || "$PYTHON" -m venv "$TEST_VENV"
 TEST_PYTHON="$TEST_VENV/bin/python"
 pip_quiet=(-q --disable-pip-version-check)
+# boxmarch's build tools first: then boxmarch compiles (CPU) into a wheel while the rest, and bpy
+# 4.2 LTS (in its own folder, for scripts/test.sh's second run), unpack (mostly one core and disk).
+echo "[setup] pip install ${BUILD_PIP_PACKAGES[*]} into $TEST_VENV ($SECONDS s)" >&2
+"$TEST_PYTHON" -m pip install "${pip_quiet[@]}" "${BUILD_PIP_PACKAGES[@]}"
+wheels="$(mktemp -d)"
+echo "[setup] building boxmarch ($SECONDS s)" >&2
+"$TEST_PYTHON" -m pip wheel "${pip_quiet[@]}" --no-deps --no-build-isolation -C build-dir="$(venv_build_dir "$TEST_VENV")" -w "$wheels" . &
+build=$!
+trap 'kill "$build" 2>/dev/null || true; rm -rf "$wheels"' EXIT
 echo "[setup] pip install ${DEMO_PIP_PACKAGES[*]} ${PIP_PACKAGES[*]} into $TEST_VENV ($SECONDS s)" >&2
 "$TEST_PYTHON" -m pip install "${pip_quiet[@]}" "${DEMO_PIP_PACKAGES[@]}" "${PIP_PACKAGES[@]}"
-# The oldest supported bpy (4.2 LTS) in its own folder, for scripts/test.sh's second run: unpacked
-# (mostly disk) while boxmarch compiles (CPU).
-PYTHON="$TEST_PYTHON" bash scripts/install_bpy.sh 4.2 >/dev/null &
-bpy_install=$!
-echo "[setup] building boxmarch into $TEST_VENV ($SECONDS s)" >&2
-"$TEST_PYTHON" -m pip install "${pip_quiet[@]}" --no-build-isolation -C build-dir="$(venv_build_dir "$TEST_VENV")" .
-wait "$bpy_install"
+PYTHON="$TEST_PYTHON" bash scripts/install_bpy.sh 4.2 >/dev/null
+wait "$build"
+echo "[setup] installing boxmarch into $TEST_VENV ($SECONDS s)" >&2
+# the same version as one installed before: reinstalled (a wheel of it would be taken as installed)
+"$TEST_PYTHON" -m pip install "${pip_quiet[@]}" --no-deps --force-reinstall "$wheels"/boxmarch-*.whl
 echo "[setup] done in $SECONDS s" >&2

@@ -1,6 +1,7 @@
 """scripts/cross_compile.sh --compile-only: every core source compiles for Windows x64 and macOS
 arm64 (and the bindings for macOS arm64) with zig's clang, warnings as errors, into object files
-of the target's format. Nothing is linked or run here (docs/PLATFORMS.md)."""
+of the target's format. Nothing is linked or run here (docs/PLATFORMS.md). In the native tier
+(compilers, as its other files), which scripts/test.sh runs on every core."""
 import os
 import struct
 import subprocess
@@ -25,6 +26,7 @@ def macho_cpu(path):
 
 
 @pytest.mark.slow
+@pytest.mark.native
 def test_native_code_compiles_for_windows_and_macos(tmp_path):
     proc = subprocess.run(["bash", str(REPO / "scripts" / "cross_compile.sh"), "--compile-only", str(tmp_path)],
                           cwd=REPO, env=dict(os.environ, PYTHON=sys.executable), capture_output=True, text=True,

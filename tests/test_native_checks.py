@@ -1,14 +1,14 @@
-"""The native checks, run by the test suite (and so by CI):
+"""The sanitizer checks, run by the test suite (and so by CI; the native tier's other files:
+tests/test_fuzz.py, tests/test_cross_compile.py, each on its own worker in scripts/test.sh):
 
 * the AddressSanitizer + UndefinedBehaviorSanitizer build of the core passes its C++ tests and the
   replay of the kept fuzz corpus (scripts/sanitize.sh cpp);
-* the native Python test suite passes against the sanitized module (scripts/sanitize.sh python);
-* the libFuzzer target runs clean for its CI budget, starting from the kept corpus
-  (scripts/fuzz.sh, BOXMARCH_FUZZ_SECONDS, default 60).
+* the native Python test suite passes against the sanitized module (scripts/sanitize.sh python),
+  after the first (the same build folder).
 
 Each runs a script in a subprocess and fails with its output when the script fails: a sanitizer
-report, a failed C++ check or a fuzzer crash all end in a nonzero exit. The scripts need clang-14,
-libclang-rt-14-dev and cmake, which scripts/setup.sh installs.
+report or a failed C++ check ends in a nonzero exit. The scripts need libasan and cmake, which
+scripts/setup.sh installs.
 """
 import os
 import pathlib
@@ -40,9 +40,3 @@ def test_sanitizer_build_passes_the_cpp_tests_and_the_fuzz_corpus():
 def test_native_python_suite_passes_under_asan_and_ubsan():
     output = run_script("scripts/sanitize.sh", "python", timeout=1800)
     assert " passed" in output and " failed" not in output
-
-
-def test_fuzz_target_runs_clean_for_its_ci_budget():
-    seconds = os.environ.get("BOXMARCH_FUZZ_SECONDS", "60")
-    output = run_script("scripts/fuzz.sh", seconds, timeout=int(seconds) + 900)
-    assert "Done" in output and "stat::number_of_executed_units" in output
