@@ -45,21 +45,18 @@ use_compiler_cache  # ccache, installed just now on a fresh machine
 [ -x "$TEST_VENV/bin/python" ] || "$PYTHON" -m venv "$TEST_VENV"
 TEST_PYTHON="$TEST_VENV/bin/python"
 pip_quiet=(-q --disable-pip-version-check)
-# Three at once, each mostly one core or the disk: bpy 4.2 LTS unpacked into its own folder (for
-# scripts/test.sh's second run), boxmarch compiled into a wheel once its build tools are in, and
-# the rest of the packages unpacked.
-PYTHON="$TEST_PYTHON" bash scripts/install_bpy.sh 4.2 >/dev/null &
-bpy_install=$!
+# boxmarch's build tools first: then boxmarch compiles (CPU) into a wheel while the rest, and bpy
+# 4.2 LTS (in its own folder, for scripts/test.sh's second run), unpack (mostly one core and disk).
 echo "[setup] pip install ${BUILD_PIP_PACKAGES[*]} into $TEST_VENV ($SECONDS s)" >&2
 "$TEST_PYTHON" -m pip install "${pip_quiet[@]}" "${BUILD_PIP_PACKAGES[@]}"
 wheels="$(mktemp -d)"
 echo "[setup] building boxmarch ($SECONDS s)" >&2
 "$TEST_PYTHON" -m pip wheel "${pip_quiet[@]}" --no-deps --no-build-isolation -C build-dir="$(venv_build_dir "$TEST_VENV")" -w "$wheels" . &
 build=$!
-trap 'kill "$build" "$bpy_install" 2>/dev/null || true; rm -rf "$wheels"' EXIT
+trap 'kill "$build" 2>/dev/null || true; rm -rf "$wheels"' EXIT
 echo "[setup] pip install ${DEMO_PIP_PACKAGES[*]} ${PIP_PACKAGES[*]} into $TEST_VENV ($SECONDS s)" >&2
 "$TEST_PYTHON" -m pip install "${pip_quiet[@]}" "${DEMO_PIP_PACKAGES[@]}" "${PIP_PACKAGES[@]}"
-wait "$bpy_install"
+PYTHON="$TEST_PYTHON" bash scripts/install_bpy.sh 4.2 >/dev/null
 wait "$build"
 echo "[setup] installing boxmarch into $TEST_VENV ($SECONDS s)" >&2
 # the same version as one installed before: reinstalled (a wheel of it would be taken as installed)
