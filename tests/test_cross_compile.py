@@ -1,7 +1,7 @@
 """scripts/cross_compile.sh --compile-only: every core source compiles for Windows x64 and macOS
 arm64 (and the bindings for macOS arm64) with zig's clang, warnings as errors, into object files
 of the target's format. Nothing is linked or run here (docs/PLATFORMS.md). In the native tier
-(compilers, as its other files), which scripts/test.sh runs on every core."""
+(compilers, as its other files): scripts/test.sh runs it beside the sanitizer checks."""
 import os
 import struct
 import subprocess

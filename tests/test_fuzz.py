@@ -1,8 +1,8 @@
 """The libFuzzer target (fuzz/fuzz_core.cpp, clang's ASan + UBSan + libFuzzer build in build/fuzz)
 runs clean for its CI budget, starting from the kept corpus (scripts/fuzz.sh, BOXMARCH_FUZZ_SECONDS,
 default 60): a crash or a sanitizer report ends the script in a nonzero exit and fails the test
-with its output. Its own file, so scripts/test.sh runs it on another worker than the sanitizer
-checks (tests/test_native_checks.py), whose build it shares nothing with. Needs clang-14 and
+with its output. Its own file, so scripts/test.sh runs it beside the sanitizer checks
+(tests/test_native_checks.py), whose build it shares nothing with. Needs clang-14 and
 libclang-rt-14-dev, which scripts/setup.sh installs.
 """
 import os

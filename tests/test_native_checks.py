@@ -1,5 +1,5 @@
 """The sanitizer checks, run by the test suite (and so by CI; the native tier's other files:
-tests/test_fuzz.py, tests/test_cross_compile.py, each on its own worker in scripts/test.sh):
+tests/test_fuzz.py, tests/test_cross_compile.py, which scripts/test.sh runs beside this file):
 
 * the AddressSanitizer + UndefinedBehaviorSanitizer build of the core passes its C++ tests and the
   replay of the kept fuzz corpus (scripts/sanitize.sh cpp);
