@@ -13,27 +13,19 @@ import numpy as np
 
 from boxmarch.formats import shader_sources
 from tests.helpers.tools import need
-from tests.test_threejs_sealed_triangles import mesh
+from tests.test_threejs_sealed_triangles import NODE_GEOMETRY_JS, mesh
 
 NODE_JS = r"""
 const vm = require('vm');
 const fs = require('fs');
 vm.runInThisContext(fs.readFileSync(process.argv[1], 'utf8'));
-function attribute(values, itemSize) {
-  const array = Float32Array.from(values);
-  return { array: array, itemSize: itemSize, count: array.length / itemSize,
-           getX: (i) => array[i * itemSize], getY: (i) => array[i * itemSize + 1], getZ: (i) => array[i * itemSize + 2],
-           getW: (i) => array[i * itemSize + 3] };
-}
+""" + NODE_GEOMETRY_JS + r"""
 const cases = JSON.parse(fs.readFileSync(0, 'utf8'));
 console.log(JSON.stringify(cases.map((m) => {
-  const attributes = {};
-  for (const name in m.attributes) attributes[name] = attribute(m.attributes[name][0], m.attributes[name][1]);
-  const geometry = { attributes: attributes, getAttribute: (name) => attributes[name],
-                     index: m.index ? { array: Uint32Array.from(m.index), count: m.index.length } : null };
+  const geometry = geometryOf(m);
   if (m.nanBox) {  // the first corner's box: its half-extent x NaN at every vertex (JSON has no NaN)
-    const number = attributes.bmOffsetZIndex, id = number.getY(m.index ? m.index[0] : 0);
-    for (let v = 0; v < number.count; v++) if (number.getY(v) === id) attributes.bmHalfXY.array[2 * v] = NaN;
+    const number = geometry.getAttribute('bmOffsetZIndex'), id = number.getY(m.index ? m.index[0] : 0);
+    for (let v = 0; v < number.count; v++) if (number.getY(v) === id) geometry.getAttribute('bmHalfXY').array[2 * v] = NaN;
   }
   const spheres = boxmarchBoxSpheres(geometry);
   return m.eyes.map((e) => boxmarchEyeMayBeInABox(spheres, { x: e[0], y: e[1], z: e[2], w: e[3] }));

@@ -68,18 +68,29 @@ OLD_SEALED_JS = r"""function oldSealedTriangles(geometry) {
 }
 """
 
-NODE_JS = r"""
-const vm = require('vm');
-const fs = require('fs');
-vm.runInThisContext(fs.readFileSync(process.argv[1], 'utf8'));
-vm.runInThisContext(process.argv[2]);
+# The node side's stand-in geometry (no three.js): a mesh sent as JSON (mesh()) with the attribute
+# methods the shipped functions call.
+NODE_GEOMETRY_JS = r"""
 function attribute(values, itemSize) {
   const array = Float32Array.from(values);
   return { array: array, itemSize: itemSize, count: array.length / itemSize,
            getX: (i) => array[i * itemSize], getY: (i) => array[i * itemSize + 1], getZ: (i) => array[i * itemSize + 2],
            getW: (i) => array[i * itemSize + 3] };
 }
-// what boxmarchOccluderGeometry builds a geometry with
+function geometryOf(m) {
+  const attributes = {};
+  for (const name in m.attributes) attributes[name] = attribute(m.attributes[name][0], m.attributes[name][1]);
+  return { attributes: attributes, getAttribute: (name) => attributes[name],
+           index: m.index ? { array: Uint32Array.from(m.index), count: m.index.length } : null };
+}
+"""
+
+NODE_JS = r"""
+const vm = require('vm');
+const fs = require('fs');
+vm.runInThisContext(fs.readFileSync(process.argv[1], 'utf8'));
+vm.runInThisContext(process.argv[2]);
+""" + NODE_GEOMETRY_JS + r"""// what boxmarchOccluderGeometry builds a geometry with
 const THREE = {
   BufferAttribute: function (array, itemSize) { this.array = array; this.count = array.length; this.itemSize = itemSize; },
   BufferGeometry: function () {
@@ -91,10 +102,7 @@ const THREE = {
 };
 const meshes = JSON.parse(fs.readFileSync(0, 'utf8'));
 console.log(JSON.stringify(meshes.map((m) => {
-  const attributes = {};
-  for (const name in m.attributes) attributes[name] = attribute(m.attributes[name][0], m.attributes[name][1]);
-  const geometry = { attributes: attributes, getAttribute: (name) => attributes[name],
-                     index: m.index ? { array: Uint32Array.from(m.index), count: m.index.length } : null };
+  const geometry = geometryOf(m);
   const occluders = boxmarchOccluderGeometry(THREE, geometry);
   return { now: Array.from(boxmarchSealedTriangles(geometry)), before: oldSealedTriangles(geometry).slice().sort((a, b) => a - b),
            occluders: occluders === null ? null : occluders === geometry ? 'geometry'
