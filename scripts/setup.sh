@@ -2,10 +2,9 @@
 # Installs everything the test command needs on a fresh Debian 12 machine with Python 3.11: the
 # demo's packages (scripts/packages.sh) and the test and lint tools, the Python ones into the test
 # environment, .venv-test (scripts/environments.sh: made from python3, or PYTHON, with none of its
-# site-packages), bpy 4.2 into .cache/bpy-4.2, and builds boxmarch into .venv-test (a wheel, built while
-# the rest unpacks). Safe to run
-# again: it only installs what is missing. --list prints the Debian and Python packages it installs
-# (one a line: apt NAME, pip SPEC) and installs nothing.
+# site-packages), bpy 4.2 into .cache/bpy-4.2, and builds boxmarch into .venv-test (a wheel, built
+# while the rest unpacks). Safe to run again: it only installs what is missing. --list prints the
+# Debian and Python packages it installs (one a line: apt NAME, pip SPEC) and installs nothing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PYTHON="${PYTHON:-python3}"  # the Python the environment is made from
@@ -45,7 +44,7 @@ use_compiler_cache  # ccache, installed just now on a fresh machine
 [ -x "$TEST_VENV/bin/python" ] || "$PYTHON" -m venv "$TEST_VENV"
 TEST_PYTHON="$TEST_VENV/bin/python"
 pip_quiet=(-q --disable-pip-version-check)
-# boxmarch's build tools first: then boxmarch compiles (CPU) into a wheel while the rest, and bpy
+# boxmarch's build tools first: then boxmarch compiles (CPU) into a wheel while the rest, then bpy
 # 4.2 LTS (in its own folder, for scripts/test.sh's second run), unpack (mostly one core and disk).
 echo "[setup] pip install ${BUILD_PIP_PACKAGES[*]} into $TEST_VENV ($SECONDS s)" >&2
 "$TEST_PYTHON" -m pip install "${pip_quiet[@]}" "${BUILD_PIP_PACKAGES[@]}"

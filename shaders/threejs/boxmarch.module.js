@@ -242,7 +242,7 @@ function useBoxmarchEyeBox(THREE, mesh) {
   eyeBox.matrixAutoUpdate = false;  // mesh's world matrix, copied before each draw
   eyeBox.frustumCulled = false;
   var scene = new THREE.Scene().add(eyeBox);
-  var spheres = mesh.isSkinnedMesh ? null : boxmarchBoxSpheres(mesh.geometry);  // skinning moves the boxes
+  var spheres = boxmarchMeshSpheres(mesh);
   mesh.onAfterRender = function (renderer, parentScene, camera) {
     eyeBox.visible = boxmarchEyeMayBeInABox(spheres, material.uniforms.bmEye.value);
     if (!eyeBox.visible) return;
@@ -723,6 +723,16 @@ function boxmarchBoxSpheres(geometry) {
   return spheres;
 }
 
+// mesh's boxes' bounding spheres (boxmarchBoxSpheres), computed once for the mesh's set-ups (the
+// eye box, the pre-pass, the visibility passes) and kept in mesh.userData.boxmarchSpheres; null for a
+// SkinnedMesh, whose skinning moves the boxes.
+function boxmarchMeshSpheres(mesh) {
+  if (mesh.userData.boxmarchSpheres === undefined) {
+    mesh.userData.boxmarchSpheres = mesh.isSkinnedMesh ? null : boxmarchBoxSpheres(mesh.geometry);
+  }
+  return mesh.userData.boxmarchSpheres;
+}
+
 // Whether the eye (bmEye: object space, w 1 for a perspective camera; an orthographic camera's
 // lies in no box) may lie in a box of `spheres` (boxmarchBoxSpheres; null: unknown, so it may),
 // each grown by 1 % and by 1e-5 of the coordinates' size: more than the vertex stage's own margin
@@ -778,7 +788,7 @@ function useBoxmarchOccluders(THREE, mesh, shape) {
   var target = new THREE.WebGLRenderTarget(1, 1, { minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
     depthBuffer: true, stencilBuffer: false });
   var size = new THREE.Vector2(), clear = new THREE.Color(), white = new THREE.Color(1, 1, 1);
-  var marching = mesh.onBeforeRender, spheres = boxmarchBoxSpheres(mesh.geometry);
+  var marching = mesh.onBeforeRender, spheres = boxmarchMeshSpheres(mesh);
   var toClip = new THREE.Matrix4(), seen = new THREE.Matrix4(), seenSize = new THREE.Vector2();
   var prePass = { target: target, scene: scene, layers: null, drawn: false, minLayers: BOXMARCH_MIN_LAYERS };
   mesh.onBeforeRender = function (renderer, parentScene, camera, geometry, drawnMaterial, group) {
@@ -904,6 +914,7 @@ function useBoxmarchVisibility(THREE, mesh, shape) {
   fallback.frustumCulled = mesh.frustumCulled;
   fallback.onBeforeRender = marching;
   fallback.onAfterRender = mesh.onAfterRender;  // the box holding the eye, where drawn apart (useBoxmarchEyeBox)
+  fallback.userData.boxmarchSpheres = boxmarchMeshSpheres(mesh);  // the same boxes
   useBoxmarchOccluders(THREE, fallback, shape);
   var options = { minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter, depthBuffer: true, stencilBuffer: true };
   // stencilBuffer: a 24-bit depth buffer on r111 too (its depth-only renderbuffer is 16-bit)
@@ -924,7 +935,7 @@ function useBoxmarchVisibility(THREE, mesh, shape) {
       '  gl_FragDepthEXT = limit;', '  gl_FragColor = vec4(limit);', '}'].join('\n');
     if (parseInt(THREE.REVISION, 10) < 163) occluder.material.extensions = { derivatives: true, fragDepth: true };
   });
-  var outward = boxmarchClosedOutward(mesh.geometry), spheres = boxmarchBoxSpheres(mesh.geometry), eyePasses = [];
+  var outward = boxmarchClosedOutward(mesh.geometry), spheres = boxmarchMeshSpheres(mesh), eyePasses = [];
   [false, true].forEach(function (eyeBox) {
     [[scenes.visibility, { BM_VISIBILITY_PASS: '' }], [scenes.shade, { BM_SHADE_PASS: '' }]].forEach(function (pass) {
       var drawn = boxmarchPassMesh(THREE, mesh, pass[1], eyeBox, outward);
