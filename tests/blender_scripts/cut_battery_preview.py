@@ -3,7 +3,7 @@ built, baked, drawn by the viewport preview offscreen plain and with each cut, a
 the GLTF preset for three.js; one process for every scene.
 
 SCENES.json: {"scenes": [cut_battery.scene(seed) with each object's "mesh" (cut_battery.mesh_arrays)],  "width", "height", "high_steps",
-"preview": draw them, "export": export them, "plain": {"module.NAME": value}, "cuts": {cut:
+"preview": [the seeds to draw], "export": [the seeds to export], "plain": {"module.NAME": value}, "cuts": {cut:
 {"module.NAME": value}}}. For each seed it writes OUT/scene_SEED.npz: plain_rgba, plain_depth,
 CUT_rgba, CUT_depth for every cut, and where a cut changed a pixel, plain_high_* and CUT_high_*
 drawn again with max_steps = high_steps; projection (the camera's); skipped (objects the preview
@@ -114,11 +114,12 @@ def draw_scene(objects, camera, steps=None):
     return rgba, depth
 
 
+exported, drawn = set(specs["export"]), set(specs["preview"])
 for scene_spec in specs["scenes"]:
     seed = scene_spec["seed"]
     try:
         objects, camera = build(scene_spec)
-        if specs["export"]:
+        if seed in exported:
             for ob in bpy.context.scene.objects:
                 ob.select_set(ob in objects)
             path = os.path.join(out, f"scene_{seed}.glb")
@@ -127,7 +128,7 @@ for scene_spec in specs["scenes"]:
                     raise RuntimeError("the export wrote nothing")
             except RuntimeError as error:
                 open(os.path.join(out, f"scene_{seed}.export_error"), "w").write(str(error))
-        if specs["preview"]:
+        if seed in drawn:
             result = {}
             result["view"], result["projection"] = preview.camera_matrices(bpy.context.scene, camera, W, H)
             switch(specs["plain"])

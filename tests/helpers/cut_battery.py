@@ -426,10 +426,11 @@ def _with_meshes(spec):
 
 
 def draw_in_blender(seeds, folder, preview=True, export=True, cuts=None, generator=scene):
-    """Builds, bakes and (``preview``) draws each seed's scene (``generator``'s: a value of
-    GENERATORS) plain and with each of ``cuts``
-    (PREVIEW_CUTS when None) in one bpy process, and (``export``) exports it with the GLTF preset
-    as ``folder``/scene_SEED.glb; returns {seed: {"error": str} or the preview's arrays}. The
+    """Builds and bakes each seed's scene (``generator``'s: a value of GENERATORS) in one bpy
+    process, draws it plain and with each of ``cuts`` (PREVIEW_CUTS when None) where ``preview``
+    says, and exports it with the GLTF preset as ``folder``/scene_SEED.glb where ``export`` says
+    (each: True, every seed; False, none; else the seeds it names); returns {seed: {"error": str}
+    or the preview's arrays, empty where not drawn}. The
     boxmarch package drawn is the one this Python imports (PYTHONPATH=OTHER/addon: another
     worktree's, its shaders with it)."""
     import boxmarch
@@ -438,8 +439,12 @@ def draw_in_blender(seeds, folder, preview=True, export=True, cuts=None, generat
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     specs = folder / "scenes.json"
+
+    def chosen(which):
+        return list(seeds) if which is True else sorted(which or ())
+
     specs.write_text(json.dumps({"scenes": [_with_meshes(generator(s)) for s in seeds], "width": W, "height": H,
-                                 "high_steps": HIGH_STEPS, "preview": preview, "export": export,
+                                 "high_steps": HIGH_STEPS, "preview": chosen(preview), "export": chosen(export),
                                  "plain": PREVIEW_PLAIN,
                                  "cuts": PREVIEW_CUTS if cuts is None else cuts}))
     blender_env_command([package_parent, specs, folder], folder)
