@@ -79,3 +79,25 @@ def test_a_start_a_rounding_inside_the_shape_hits_at_once_with_a_unit_normal(sha
     assert inside.sum() > 0
     assert late_or_missed == 0 and no_normal == 0, (
         f"{shape}: {inside.sum()} starts inside, {late_or_missed} late or missed, {no_normal} hits without a unit normal")
+
+
+def test_a_start_at_an_edge_takes_the_face_the_ray_enters_by():
+    """A box face's start at its edge with a face the ray leaves by, rounded onto that face (1e-6 of
+    the half-extent nearer it than the face the ray enters by), hits at once with the entered
+    face's normal (cut battery seed 2387: at a box's silhouette the front face's fragment was
+    shaded with the far face's normal, turned away from the eye); a start in the middle of a face
+    the ray leaves by keeps that face's normal (a back face's own fragment, drawn behind)."""
+    rng = np.random.default_rng(2387)
+    n = 400
+    h = rng.uniform(0.01, 100.0, (n, 3)).astype(np.float32)
+    rd = rng.normal(size=(n, 3))
+    rd[:, 0], rd[:, 1] = np.abs(rd[:, 0]) + 0.05, -np.abs(rd[:, 1]) - 0.05  # leaves by +x, enters by +y
+    rd = (rd / np.linalg.norm(rd, axis=-1, keepdims=True)).astype(np.float32)
+    z = rng.uniform(-0.5, 0.5, n)
+    edge = np.stack([1.0 - 1e-6 * np.ones(n), 1.0 - 2e-6 * np.ones(n), z], -1)
+    middle = np.stack([np.ones(n), rng.uniform(-0.5, 0.5, n), z], -1)
+    for starts, wanted in ((edge, np.array([0.0, 1.0, 0.0])), (middle, np.array([1.0, 0.0, 0.0]))):
+        ro = (starts * h).astype(np.float32)
+        got = closed_form.gpu_hits(np.zeros(n, np.float32), ro, rd, h)
+        wrong = int((np.abs(got[:, :3] - wanted).max(-1) > 1e-6).sum() + (got[:, 3] != 0.0).sum())
+        assert wrong == 0, f"{wrong} of {n} starts at {starts[0]} x h: normals {got[:3, :3]}"

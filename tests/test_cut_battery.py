@@ -2,7 +2,8 @@
 docs/BENCHMARKS.md "Cuts that change no pixel"): the Blender preview's back-face culling, occluder
 pre-pass and resolved passes, three.js's culling, pre-pass and visibility passes, each against the
 plain march on seeded random scenes; every pixel a cut changes must be one where plain and cut
-agree when both march with the large step budget.
+agree when both march with the large step budget, or (three.js) where plain drawn with the
+opposite depth-tie rule draws what the cut draws.
 
 The slow tier runs CI_SEEDS and every seed of REGRESSIONS in each renderer; the everyday tier
 checks the comparison itself on made-up pictures and that CI_SEEDS draw every trait the
@@ -60,6 +61,14 @@ _EDGE_ON_OCCLUDER = ("visibility passes 1 px emptied at (45, 3) (seeds 1100-1399
                      "away, 0.0027 off. The march ended at the occluder, short of the hit. Each occluder's limit now "
                      "adds a quarter of its depth's slope (bm_occluder_limit, fwidth); CYLINDER, scale 2.6, quality 1, "
                      "far from the world origin, nested, orthographic")
+_CORNER_TIE = ("culling, visibility passes and default 1 px another colour at (20, 42) (r180 2300-2599 and r111 "
+               "2200-2499 at 2dfa9b6): plain drew box 85's back face's fragment there, the culled picture its "
+               "front face's, at one depth (0.35637226, a tie LESS_EQUAL gives to the later); the pixel's ray "
+               "passes the box's corner, where each fragment's start (float32, rounded) lay within 4e-5 of the "
+               "half-extent of three faces and took a different one's normal: the front face's fragment the far "
+               "face's, turned away from the eye (now the face the ray enters by: bm_face_hit), the back face's "
+               "the side face's. Plain with the first of a tie winning draws the culled picture's colour there: "
+               "explained (compare's plain_other_tie); BOX, scale 3.73, quality 0.5, long thin, orthographic")
 # Seeds where a cut changed pixels that no step budget explains: (seed, renderer, what it found
 # the day it was kept, main at 20bdfbf, 96 x 72). Each runs every time, in its renderer.
 REGRESSIONS = [
@@ -144,6 +153,8 @@ REGRESSIONS = [
     (851, "r111", _NEAR_EXIT),
     (1285, "r180", _EDGE_ON_OCCLUDER),
     (1285, "r111", _EDGE_ON_OCCLUDER),
+    (2387, "r180", _CORNER_TIE),
+    (2387, "r111", _CORNER_TIE),
 ]
 
 # Seeds of the depth-hostile generator (bench.cut_battery --generator depth-hostile: the near plane
@@ -278,6 +289,25 @@ def test_compare_explains_only_pixels_where_the_large_budget_agrees():
     close = _picture(covered, (0.5 + 3 / 255, 0.5, 0.5), 0.9 + 1e-7)
     found = cut_battery.compare(1, "preview", "x", plain, close, plain, close, PROJECTION)
     assert (found.changed, found.unexplained) == (100, 0)
+
+
+def test_compare_explains_a_pixel_plain_leaves_to_a_depth_tie():
+    """A pixel the cut draws another colour, unexplained at the large budget, is explained where
+    plain drawn with the opposite depth-tie rule draws the cut's colour there, and only there."""
+    covered = np.zeros((cut_battery.H, cut_battery.W), bool)
+    covered[10:20, 10:20] = True
+    plain = _picture(covered, (0.5, 0.5, 0.5), 0.9)
+    cut = (plain[0].copy(), plain[1])
+    cut[0][12, 12, :3] = 0.3
+    cut[0][15, 15, :3] = 0.3
+    other_tie = (plain[0].copy(), plain[1])
+    other_tie[0][12, 12, :3] = 0.3
+    found = cut_battery.compare(1, "r180", "x", plain, cut, plain, cut, PROJECTION)
+    assert (found.changed, found.unexplained) == (2, 2)
+    found = cut_battery.compare(1, "r180", "x", plain, cut, plain, cut, PROJECTION, plain_other_tie=other_tie)
+    assert (found.changed, found.unexplained, found.kinds) == (2, 1, {"wrong colour": 1})
+    found = cut_battery.compare(1, "r180", "x", plain, cut, plain, cut, PROJECTION, plain_other_tie=plain)
+    assert (found.changed, found.unexplained) == (2, 2)
 
 
 def test_compare_counts_a_nan_colour_in_both_pictures_and_only_it():

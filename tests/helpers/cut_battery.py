@@ -2,7 +2,8 @@
 that change no pixel"): seeded random scenes a user might make and a hostile one would, drawn by
 the Blender preview (bpy module, llvmpipe) and by three.js r111 and r180 (headless Chromium,
 SwiftShader), each with a cut and without (plain); every pixel a cut changes must be one the plain
-march leaves unresolved: drawn again by both with a large step budget, the two agree there.
+march leaves unresolved: drawn again by both with a large step budget, the two agree there, or
+(three.js) plain drawn with the opposite depth-tie rule draws the cut's colour there.
 
 A cut is one entry of PREVIEW_CUTS or THREEJS_CUTS (its switches against the plain ones): adding
 a cut is adding its line there. tests/test_cut_battery.py runs it in the test tiers and
@@ -361,11 +362,16 @@ def pixel_footprint(distance, projection, height):
     return (2.0 * distance if p[3, 2] != 0.0 else 2.0) / (p[1, 1] * height)
 
 
-def compare(seed, renderer, cut, plain, changed_by_cut, plain_high=None, cut_high=None, projection=None):
+def compare(seed, renderer, cut, plain, changed_by_cut, plain_high=None, cut_high=None, projection=None,
+            plain_other_tie=None):
     """Found of one cut: ``plain`` and ``changed_by_cut`` are (rgba float in [0, 1], depth or None)
     at the everyday budget; ``plain_high`` and ``cut_high`` at HIGH_STEPS (needed only where a
     pixel changed). Depth (window depth, 1 where nothing drew; None where the renderer gives none)
-    needs ``projection``."""
+    needs ``projection``. ``plain_other_tie``: plain at the everyday budget with the opposite
+    depth-tie rule (three.js: the first of two equally deep fragments wins, not the last); a
+    changed pixel where it draws what the cut draws is one plain leaves to the order of two
+    fragments at one depth (three.js seed 2387: one box's front and back face at its corner, each
+    fragment's start rounded onto another face), explained too."""
     rgba, depth = plain
     cut_rgba, cut_depth = changed_by_cut
     # A NaN colour is never a right picture: counted changed and unexplained in either picture (kind
@@ -384,6 +390,10 @@ def compare(seed, renderer, cut, plain, changed_by_cut, plain_high=None, cut_hig
     if high_depth is not None:
         distance, cut_distance = view_distance(high_depth, projection), view_distance(cut_high_depth, projection)
         agree &= ~covered | (np.abs(distance - cut_distance) <= pixel_footprint(distance, projection, high.shape[0]) / 2)
+    if plain_other_tie is not None:
+        tie_rgba = plain_other_tie[0]
+        tie_covered = tie_rgba[..., 3] > 0
+        agree |= (tie_covered == (cut_rgba[..., 3] > 0)) & (~tie_covered | _colour_agrees(tie_rgba, cut_rgba))
     bad = changed & (~agree | nan)
     kinds = {"NaN colour": int(nan.sum())} if nan.any() else {}
     low_covered, low_cut_covered = rgba[..., 3] > 0, cut_rgba[..., 3] > 0
@@ -475,8 +485,14 @@ def _map(shape):
     return f"return sdf_preset_{shape.lower()}(p, box_half);"
 
 
-def threejs_job(seed, spec, options, steps=None):
-    """The render job of one scene under loadBoxmarch ``options`` (with the scene's map and quality)."""
+# The key of plain drawn with the opposite depth-tie rule (compare's plain_other_tie).
+OTHER_TIE = "plain, the first of a tie"
+
+
+def threejs_job(seed, spec, options, steps=None, first_of_a_tie=False):
+    """The render job of one scene under loadBoxmarch ``options`` (with the scene's map and quality);
+    ``first_of_a_tie``: the materials' depth test (the eye box's too) LESS, not three.js's
+    LESS_EQUAL: of two fragments at one depth the first drawn wins."""
     from tests.engines import threejs
 
     options = dict(options, map=_map(spec["shape"]), quality=spec["quality"])
@@ -484,6 +500,9 @@ def threejs_job(seed, spec, options, steps=None):
         options["maxSteps"] = steps
     setup = (f"scene.remove(gltf.scene); var loaded = await loadBoxmarch(THREE, GLTFLoader, 'scene_{seed}.glb', "
              f"{json.dumps(options)}); scene.add(loaded.scene);")
+    if first_of_a_tie:
+        setup += (" loaded.scene.traverse(function (o) { [o, o.userData.boxmarchEyeBox].forEach(function (m) {"
+                  " if (m && m.material) m.material.depthFunc = THREE.LessDepth; }); });")
     return threejs.render_job(setup, W, H, spec["three_camera"])
 
 
@@ -508,7 +527,8 @@ def draw_in_threejs(seeds, folder, release, batch=40, cuts=None, generator=scene
     """Found per three.js cut (THREEJS_CUTS when ``cuts`` is None) of each seed exported into
     ``folder``: every scene drawn plain and with each cut at the material's default maxSteps, in
     pages of ``batch`` scenes; then, in as few pages, plain and each cut that changed
-    a pixel again at HIGH_STEPS. ``generator``: the one the seeds were exported from."""
+    a pixel again at HIGH_STEPS, and plain with the opposite depth-tie rule (OTHER_TIE).
+    ``generator``: the one the seeds were exported from."""
     from tests.engines import threejs
 
     cuts = THREEJS_CUTS if cuts is None else cuts
@@ -524,9 +544,10 @@ def draw_in_threejs(seeds, folder, release, batch=40, cuts=None, generator=scene
             for s in page_seeds:
                 for name in (f"scene_{s}.glb", f"scene_{s}.boxmarch.json"):
                     files[name] = (folder / name).read_bytes()
-            shots = threejs.run_jobs(files[f"scene_{page_seeds[0]}.glb"],
-                                     [threejs_job(s, generator(s), configs[n], steps) for s, n, steps in page],
-                                     material, release, files, PAGE_TIMEOUT_S)
+            jobs = [threejs_job(s, generator(s), configs.get(n, THREEJS_PLAIN), steps, n == OTHER_TIE)
+                    for s, n, steps in page]
+            shots = threejs.run_jobs(files[f"scene_{page_seeds[0]}.glb"], jobs, material, release, files,
+                                     PAGE_TIMEOUT_S)
             drawn.update((key, _rgba(shot)) for key, shot in zip(page, shots))
 
     seeds = [s for s in seeds if (folder / f"scene_{s}.glb").exists()]
@@ -535,8 +556,10 @@ def draw_in_threejs(seeds, folder, release, batch=40, cuts=None, generator=scene
                if not np.array_equal(drawn[(s, "plain", None)][0], drawn[(s, cut, None)][0])}
     again = [(s, name, HIGH_STEPS) for s in seeds for name in configs
              if (s, name) in changed or (name == "plain" and any((s, cut) in changed for cut in cuts))]
+    again += [(s, OTHER_TIE, None) for s in dict.fromkeys(s for s, _cut in changed)]
     if again:
         draw(again)
     return [compare(s, release, cut, drawn[(s, "plain", None)], drawn[(s, cut, None)],
-                    drawn.get((s, "plain", HIGH_STEPS)), drawn.get((s, cut, HIGH_STEPS)))
+                    drawn.get((s, "plain", HIGH_STEPS)), drawn.get((s, cut, HIGH_STEPS)),
+                    plain_other_tie=drawn.get((s, OTHER_TIE, None)))
             for s in seeds for cut in cuts]

@@ -588,10 +588,15 @@ vec4 bm_nearer_hit(vec4 best, vec3 n, float t, float slack)
 // box face's point rounded, by about 1e-4 units where the vertices lie 1,300 units from the
 // object's origin: where the shape touches that face the start may lie a rounding inside it, where
 // the solves answer late (a farther piece's root) or with no normal (issue 36, cut battery seeds
-// 2 and 80: a NaN colour). Callers test the start with the shape's SDF.
-vec4 bm_face_hit(vec3 ro, vec3 h)
+// 2 and 80: a NaN colour). Callers test the start with the shape's SDF. A face the ray leaves by
+// (the start and the ray on one side of the centre along its axis) gives way to a face it enters by
+// lying within 1e-4 of the half-extent as near: at a box's silhouette a start on the entered face
+// rounds onto the face beside it, seen from behind (cut battery seed 2387: the front face's
+// fragment shaded with the far face's normal, the far face's fragment with the near one's).
+vec4 bm_face_hit(vec3 ro, vec3 rd, vec3 h)
 {
-  vec3 a = abs(ro) / h;
+  vec3 a = abs(ro) / h - 1e-4 * vec3(ro.x * rd.x >= 0.0 ? 1.0 : 0.0, ro.y * rd.y >= 0.0 ? 1.0 : 0.0,
+                                      ro.z * rd.z >= 0.0 ? 1.0 : 0.0);
   vec3 n = vec3(0.0, 0.0, ro.z < 0.0 ? -1.0 : 1.0);
   if (a.x >= a.y && a.x >= a.z) {
     n = vec3(ro.x < 0.0 ? -1.0 : 1.0, 0.0, 0.0);
@@ -704,7 +709,7 @@ vec4 bm_round_box_hit(vec3 ro, vec3 rd, vec3 b, float r)
   if (sd_round_box(ro, b, r) > 0.0) {
     return bm_hit_round_box(ro, rd, b, r);
   }
-  return bm_face_hit(ro, b);
+  return bm_face_hit(ro, rd, b);
 }
 // Capsule along x: the segment |x| <= half_length, radius r. The cylinder around the axis where
 // its entry lies along the segment, else the end sphere on that side (a ray along the axis enters
@@ -944,7 +949,7 @@ vec4 bm_preset_hit(float shape, vec3 ro, vec3 rd, vec3 h)
   if (bm_sdf_by_id(shape, ro, h) > 0.0) {
     return bm_preset_solve(shape, ro, rd, h);
   }
-  return bm_face_hit(ro, h);
+  return bm_face_hit(ro, rd, h);
 }
 
 
