@@ -3,7 +3,8 @@ that change no pixel"): seeded random scenes a user might make and a hostile one
 the Blender preview (bpy module, llvmpipe) and by three.js r111 and r180 (headless Chromium,
 SwiftShader), each with a cut and without (plain); every pixel a cut changes must be one the plain
 march leaves unresolved: drawn again by both with a large step budget, the two agree there, or
-(three.js) plain drawn with the opposite depth-tie rule draws the cut's colour there.
+(three.js) plain drawn with the opposite depth-tie rule draws the cut's colour there (a pixel all
+three draw).
 
 A cut is one entry of PREVIEW_CUTS or THREEJS_CUTS (its switches against the plain ones): adding
 a cut is adding its line there. tests/test_cut_battery.py runs it in the test tiers and
@@ -371,7 +372,7 @@ def compare(seed, renderer, cut, plain, changed_by_cut, plain_high=None, cut_hig
     depth-tie rule (three.js: the first of two equally deep fragments wins, not the last); a
     changed pixel where it draws what the cut draws is one plain leaves to the order of two
     fragments at one depth (three.js seed 2387: one box's front and back face at its corner, each
-    fragment's start rounded onto another face), explained too."""
+    fragment's start rounded onto another face), explained too where all three draw there."""
     rgba, depth = plain
     cut_rgba, cut_depth = changed_by_cut
     # A NaN colour is never a right picture: counted changed and unexplained in either picture (kind
@@ -391,9 +392,11 @@ def compare(seed, renderer, cut, plain, changed_by_cut, plain_high=None, cut_hig
         distance, cut_distance = view_distance(high_depth, projection), view_distance(cut_high_depth, projection)
         agree &= ~covered | (np.abs(distance - cut_distance) <= pixel_footprint(distance, projection, high.shape[0]) / 2)
     if plain_other_tie is not None:
+        # only where plain, the cut and the other tie all draw: a hit at the far plane ties with the
+        # cleared depth, and an emptied pixel there stays the cut's (issue 36, seeds 381 and 485)
         tie_rgba = plain_other_tie[0]
-        tie_covered = tie_rgba[..., 3] > 0
-        agree |= (tie_covered == (cut_rgba[..., 3] > 0)) & (~tie_covered | _colour_agrees(tie_rgba, cut_rgba))
+        agree |= ((rgba[..., 3] > 0) & (cut_rgba[..., 3] > 0) & (tie_rgba[..., 3] > 0)
+                  & _colour_agrees(tie_rgba, cut_rgba))
     bad = changed & (~agree | nan)
     kinds = {"NaN colour": int(nan.sum())} if nan.any() else {}
     low_covered, low_cut_covered = rgba[..., 3] > 0, cut_rgba[..., 3] > 0
