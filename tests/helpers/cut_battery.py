@@ -391,15 +391,14 @@ def compare(seed, renderer, cut, plain, changed_by_cut, plain_high=None, cut_hig
     if high_depth is not None:
         distance, cut_distance = view_distance(high_depth, projection), view_distance(cut_high_depth, projection)
         agree &= ~covered | (np.abs(distance - cut_distance) <= pixel_footprint(distance, projection, high.shape[0]) / 2)
+    low_covered, low_cut_covered = rgba[..., 3] > 0, cut_rgba[..., 3] > 0
     if plain_other_tie is not None:
         # only where plain, the cut and the other tie all draw: a hit at the far plane ties with the
         # cleared depth, and an emptied pixel there stays the cut's (issue 36, seeds 381 and 485)
         tie_rgba = plain_other_tie[0]
-        agree |= ((rgba[..., 3] > 0) & (cut_rgba[..., 3] > 0) & (tie_rgba[..., 3] > 0)
-                  & _colour_agrees(tie_rgba, cut_rgba))
+        agree |= low_covered & low_cut_covered & (tie_rgba[..., 3] > 0) & _colour_agrees(tie_rgba, cut_rgba)
     bad = changed & (~agree | nan)
     kinds = {"NaN colour": int(nan.sum())} if nan.any() else {}
-    low_covered, low_cut_covered = rgba[..., 3] > 0, cut_rgba[..., 3] > 0
     kind_masks = {"emptied": low_covered & ~low_cut_covered, "drawn where plain draws nothing": ~low_covered & low_cut_covered}
     both = low_covered & low_cut_covered
     if depth is not None:
