@@ -478,16 +478,28 @@ inline float bm_depth_rounding(vec2 spread, vec4 clip)
   return 2.4e-7f * (spread.x + glm::abs(clip.z / clip.w) * spread.y) / glm::abs(clip.w);
 }
 
-// Distance t along a ray whose clip-space position is c0 + t c1 at which its clip depth z / w
-// reaches ndc_z (GL: 2 x window depth - 1; D3D and Vulkan: the window depth), so a march can
-// stop at the occluders' depth: nothing beyond it is visible. 1e30 (no bound) where the ray does
-// not reach that depth ahead of it: a depth that does not change along the ray, or one past what
-// the projection reaches (a depth beyond the far plane, which a perspective ray only approaches).
+// Distance t along a ray whose clip-space position is c0 + t c1 from which its points lie deeper
+// than ndc_z (GL: 2 x window depth - 1; D3D and Vulkan: the window depth; a depth that grows with
+// distance, not reversed Z), so a march can stop there (the occluders' depth): nothing beyond it
+// is visible. A hit where clip w is not positive takes depth 0 (bm_hit_depth, a march from the
+// eye: c0 the eye's, w 0 give or take rounding), so the bound lies no nearer than where w rises
+// above 0. 1e30 (no bound) where the ray does not pass that depth ahead of it: a depth that does
+// not grow along the ray, or one past what the projection reaches (a depth beyond the far plane,
+// which a perspective ray only approaches), or a ray whose w never rises: a direction rounded
+// away from the view (the eye thousands of units from the object's origin in a scene millimetres
+// across: cut battery seed 2333, where the crossing, taken where w < 0, cut off a march from the
+// eye whose hit had depth 0).
 inline float bm_depth_crossing(vec4 c0, vec4 c1, float ndc_z)
 {
   float rate = c1.z - ndc_z * c1.w;
-  float t = glm::abs(rate) > 1e-30f ? (ndc_z * c0.w - c0.z) / rate : -1.0f;
-  return t >= 0.0f ? t : 1e30f;
+  if (c1.w < 0.0f || (c1.w == 0.0f && c0.w <= 0.0f) || !(rate > 1e-30f)) {
+    return 1e30f;
+  }
+  float t = (ndc_z * c0.w - c0.z) / rate;
+  if (t < 0.0f) {
+    return 1e30f;
+  }
+  return c0.w < 0.0f ? glm::max(t, -c0.w / c1.w) : t;
 }
 
 // The window depth a hit writes, from its own (window_depth, the caller's clip z / w mapped to its

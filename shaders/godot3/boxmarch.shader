@@ -539,16 +539,28 @@ float bm_occluder_limit(float occluder_depth, float depth_slope)
 {
   return occluder_depth + 4.8e-7 + 0.25 * depth_slope;
 }
-// Distance t along a ray whose clip-space position is c0 + t c1 at which its clip depth z / w
-// reaches ndc_z (GL: 2 x window depth - 1; D3D and Vulkan: the window depth), so a march can
-// stop at the occluders' depth: nothing beyond it is visible. 1e30 (no bound) where the ray does
-// not reach that depth ahead of it: a depth that does not change along the ray, or one past what
-// the projection reaches (a depth beyond the far plane, which a perspective ray only approaches).
+// Distance t along a ray whose clip-space position is c0 + t c1 from which its points lie deeper
+// than ndc_z (GL: 2 x window depth - 1; D3D and Vulkan: the window depth; a depth that grows with
+// distance, not reversed Z), so a march can stop there (the occluders' depth): nothing beyond it
+// is visible. A hit where clip w is not positive takes depth 0 (bm_hit_depth, a march from the
+// eye: c0 the eye's, w 0 give or take rounding), so the bound lies no nearer than where w rises
+// above 0. 1e30 (no bound) where the ray does not pass that depth ahead of it: a depth that does
+// not grow along the ray, or one past what the projection reaches (a depth beyond the far plane,
+// which a perspective ray only approaches), or a ray whose w never rises: a direction rounded
+// away from the view (the eye thousands of units from the object's origin in a scene millimetres
+// across: cut battery seed 2333, where the crossing, taken where w < 0, cut off a march from the
+// eye whose hit had depth 0).
 float bm_depth_crossing(vec4 c0, vec4 c1, float ndc_z)
 {
   float rate = c1.z - ndc_z * c1.w;
-  float t = abs(rate) > 1e-30 ? (ndc_z * c0.w - c0.z) / rate : -1.0;
-  return t >= 0.0 ? t : 1e30;
+  if (c1.w < 0.0 || (c1.w == 0.0 && c0.w <= 0.0) || !(rate > 1e-30)) {
+    return 1e30;
+  }
+  float t = (ndc_z * c0.w - c0.z) / rate;
+  if (t < 0.0) {
+    return 1e30;
+  }
+  return c0.w < 0.0 ? max(t, -c0.w / c1.w) : t;
 }
 // Whether a fragment marches from the eye rather than from its face: a fragment of its box's far
 // side (more of the box behind it than ahead; span: bm_box_span from the fragment along the ray

@@ -156,8 +156,10 @@ void main()
 {
   int i = int(gl_GlobalInvocationID.x);
   if (i >= count) return;
-  vec4 ro = rays[3 * i];
-  hits[i] = bm_preset_hit(ro.w, ro.xyz, rays[3 * i + 1].xyz, rays[3 * i + 2].xyz);
+  vec4 a = rays[3 * i];
+  vec4 b = rays[3 * i + 1];
+  vec4 c = rays[3 * i + 2];
+  hits[i] = __CALL__;
 }
 """
 
@@ -179,22 +181,29 @@ np.save(sys.argv[2], out)
 """
 
 
-def gpu_hits(shapes, ro, rd, h, library=None):
-    """bm_preset_hit(shape, ro, rd, h) of each ray on llvmpipe: (N, 4) float32 (normal, t).
-    ``library``: the GLSL to run in place of the shipped sdf.glsl and raymarch.glsl (a negative
-    control's edit)."""
+def gpu_run(call: str, slots, library=None):
+    """GLSL vec4 expression ``call`` of three vec4 a, b, c, each row of ``slots`` ((N, 3, 4)
+    float32) giving them, run by llvmpipe in a compute shader after sdf.glsl and raymarch.glsl:
+    (N, 4) float32. ``library``: the GLSL to run in place of those two (bench_closed_form's edit)."""
     library = library or shader_sources.read_glsl("sdf.glsl") + "\n" + shader_sources.read_glsl("raymarch.glsl")
-    rays = np.zeros((len(ro), 3, 4), np.float32)
-    rays[:, 0, :3], rays[:, 0, 3], rays[:, 1, :3], rays[:, 2, :3] = ro, shapes, rd, h
+    slots = np.ascontiguousarray(slots, np.float32)
     with tempfile.TemporaryDirectory() as tmp:
         source, result = Path(tmp) / "rays.npz", Path(tmp) / "hits.npy"
-        np.savez(source, rays=rays.reshape(-1, 4), source=COMPUTE.replace("__LIBRARY__", library))
+        np.savez(source, rays=slots.reshape(-1, 4), source=COMPUTE.replace("__LIBRARY__", library).replace("__CALL__", call))
         env = {**os.environ, "EGL_PLATFORM": "surfaceless", "PYTHONPATH": str(ROOT)}
         proc = subprocess.run([sys.executable, "-c", GL_SIDE, str(source), str(result)], env=env,
                               capture_output=True, text=True, timeout=300)
         if proc.returncode != 0:
             raise RuntimeError(proc.stdout[-3000:] + proc.stderr[-3000:])
         return np.load(result)
+
+
+def gpu_hits(shapes, ro, rd, h, library=None):
+    """bm_preset_hit(shape, ro, rd, h) of each ray on llvmpipe: (N, 4) float32 (normal, t);
+    ``library`` as gpu_run's."""
+    rays = np.zeros((len(ro), 3, 4), np.float32)
+    rays[:, 0, :3], rays[:, 0, 3], rays[:, 1, :3], rays[:, 2, :3] = ro, shapes, rd, h
+    return gpu_run("bm_preset_hit(a.w, a.xyz, b.xyz, c.xyz)", rays, library)
 
 
 def errors(shape, ro, rd, h, got):
