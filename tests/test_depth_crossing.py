@@ -5,6 +5,8 @@ computed in float64 from the same clip-space ray: no point beyond the bound may 
 of the limit, with a point's depth as bm_hit_depth gives a march from the eye its hit's (0 where
 clip w is not positive). Rays from the eye (clip w 0 give or take rounding, some directions rounded
 away from the view), from faces, and orthographic. Slow tier: one llvmpipe compute run."""
+from collections import Counter
+
 import numpy as np
 import pytest
 
@@ -26,8 +28,9 @@ def orthographic(near, far, size):
 
 
 def random_rays(rng):
-    """(c0, c1, window depth of the limit, kind) per ray: c0 + t c1 in GL clip space, t in view units."""
-    rows = []
+    """(slots, kinds): per ray, c0 and c1 (the ray c0 + t c1 in GL clip space, t in view units) and
+    the limit's NDC z in slot 2's x, float32 as the shader reads them; and the ray's kind."""
+    slots, kinds = np.zeros((RAYS, 3, 4), np.float32), []
     for i in range(RAYS):
         near = 10.0 ** rng.uniform(-6, 0)
         far = near * 10.0 ** rng.uniform(1, 5)
@@ -51,8 +54,9 @@ def random_rays(rng):
         # behind a face's, a window depth crowding towards 1)
         ahead = projection @ np.append(start + d * rng.uniform(0.0, 0.3) * far, 1.0)
         limit = 0.5 + 0.5 * ahead[2] / ahead[3] if i % 8 < 4 and ahead[3] > 0 else rng.uniform(0.0, 1.0)
-        rows.append((c0, c1, float(np.clip(limit, 0.0, 1.0)), kind))
-    return rows
+        slots[i, 0], slots[i, 1], slots[i, 2, 0] = c0, c1, 2.0 * np.clip(limit, 0.0, 1.0) - 1.0
+        kinds.append(kind)
+    return slots, kinds
 
 
 def hit_depth(c0, c1, t):
@@ -65,29 +69,25 @@ def hit_depth(c0, c1, t):
 
 
 def test_no_point_beyond_the_crossing_lies_in_front_of_the_limit():
-    rows = random_rays(np.random.default_rng(2333))
-    slots = np.zeros((len(rows), 3, 4), np.float32)
-    for i, (c0, c1, depth, _kind) in enumerate(rows):
-        slots[i, 0], slots[i, 1], slots[i, 2, 0] = c0, c1, 2.0 * depth - 1.0
+    slots, kinds = random_rays(np.random.default_rng(2333))
     got = closed_form.gpu_run("vec4(bm_depth_crossing(a, b, c.x))", slots)[:, 0].astype(np.float64)
-    # the float64 ray is the float32 one the shader read
-    rows = [(s[0].astype(np.float64), s[1].astype(np.float64), 0.5 * float(s[2, 0]) + 0.5, r[3]) for s, r in zip(slots, rows)]
-    wrong, lost, bounded = {}, {}, {}
+    wrong, lost, bounded = Counter(), Counter(), Counter()
     steps = 1.0 + np.geomspace(1e-4, 1e6, 60)  # past the bound (a hit at it is kept)
-    for (c0, c1, limit, kind), bound in zip(rows, got):
+    # in float64, the float32 ray the shader read
+    for slot, kind, bound in zip(slots.astype(np.float64), kinds, got):
+        c0, c1, ndc_z = slot[0], slot[1], slot[2, 0]
         if bound >= 1e30:
             # no bound: right, but where the float64 ray passes the limit ahead with w rising (no
             # depth 0 beyond), the march is left unbounded: a lost saving
-            t = (2.0 * limit - 1.0) * c0[3] - c0[2]
-            rate = c1[2] - (2.0 * limit - 1.0) * c1[3]
-            passes = rate > 0 and c1[3] > 0 and c0[3] > 0 and t / rate > 0
-            lost[kind] = lost.get(kind, 0) + int(passes)
+            reach = ndc_z * c0[3] - c0[2]
+            rate = c1[2] - ndc_z * c1[3]
+            lost[kind] += int(rate > 0 and c1[3] > 0 and c0[3] > 0 and reach / rate > 0)
             continue
-        bounded[kind] = bounded.get(kind, 0) + 1
+        bounded[kind] += 1
         beyond = hit_depth(c0, c1, bound * steps)
         # float32 rounds the crossing: a point may sit within 1e-6 of window depth of the limit
-        wrong[kind] = wrong.get(kind, 0) + int((beyond <= limit - 1e-6).any())
+        wrong[kind] += int((beyond <= 0.5 * ndc_z + 0.5 - 1e-6).any())
     assert sum(wrong.values()) == 0, f"bounds with a point beyond at or in front of the limit: {wrong} of {bounded}"
     assert sum(lost.values()) == 0, f"rays passing the limit left unbounded: {lost}"
     # most rays of every kind but the degenerate one are bounded (the test is not vacuous)
-    assert all(bounded.get(kind, 0) > 0.3 * RAYS / 4 for kind in ("eye", "face", "orthographic")), bounded
+    assert all(bounded[kind] > 0.3 * RAYS / 4 for kind in ("eye", "face", "orthographic")), bounded
