@@ -121,6 +121,12 @@ void main()
   // bm_from_eye: an inside-out box's far side too).
   vec2 span = bm_box_span(ro, rd, drawn_half);
   float t_end = span.y;
+  // a ray along the box's silhouette edge draws nothing, whatever the fragment's winding
+  // (bm_grazes_box: culling changes nothing there)
+  if (bm_grazes_box(span, drawn_half)) {
+    bm_drop(0.0);
+    return;
+  }
   bool outer_face = gl_FrontFacing != (preview.mode.y == 1);
   bool from_eye = bm_from_eye(span, outer_face, preview.eye.w > 0.5, eye_distance);
   if (from_eye) {
@@ -242,6 +248,8 @@ void main()
   // depth -9e-6), and a negative float's bits sort after every other depth's as uint, so that hit
   // was never kept; a hit at or past the far plane is kept at 1.0, as the plain draw keeps it.
   float hit_depth = bm_hit_depth(window_depth, clip.w, gl_FragCoord.z, from_eye && preview.occlusion.z == 2.0);
+  // (-1: a hit in front of the near plane, clipped)
+  hit = hit && hit_depth >= 0.0;
 #ifdef BM_RESOLVED
   // the visibility pass counts the march alone (no normal); the shade pass its march and, for the
   // one fragment it shades, the normal's taps

@@ -28,6 +28,18 @@ vec2 bm_box_span(vec3 ro, vec3 rd, vec3 h)
   return vec2(bm_max3(t_near), bm_min3(t_far));
 }
 
+// Whether a fragment's ray meets its box only on the box's surface (span: bm_box_span; no chord
+// inside a box of positive extents): a pixel centre on the box's silhouette edge, which the
+// rasteriser's fill rule hands to the faces of one winding only, the back faces where the edge
+// runs one way (cut battery seed 3369: an orthographic ray along a box's edge, drawn from its back
+// face, which a draw culling back faces never runs). Such a fragment draws nothing, whatever its
+// winding, in every engine, so that culling changes nothing there. A flat box (a half-extent of
+// 0) is drawn as before: its every ray has a chord of length 0.
+bool bm_grazes_box(vec2 span, vec3 h)
+{
+  return span.x >= span.y && bm_min3(h) > 0.0;
+}
+
 // Sphere-traces map() from ro along unit rd until a distance falls below epsilon (true), the ray
 // passes t_end or step_limit evaluations (at most 512) are spent (false). Where a distance is under
 // secant.x and smaller than the last one, the step is the secant's instead (the line through the
@@ -218,14 +230,19 @@ bool bm_from_eye(vec2 span, bool outer_face, bool perspective, float eye_distanc
 // depth range) and its clip w: never nearer than the rasterised face (face_depth), what a stage
 // declaring depth GREATER must keep; but a march from the eye (own) writes its hit's own depth,
 // in front of the eye, 0 where the eye is in the shape (t = 0, clip w 0 give or take rounding).
-// In [0, 1], as a depth buffer clamps what it is given (passes that compare depths read it).
+// In [0, 1], as a depth buffer clamps what it is given (passes that compare depths read it); -1
+// (the caller draws nothing) where a march from its face hits in front of the near plane: what
+// lies there is clipped, as the rasteriser clips faces. A rasteriser may still hand a face a hair
+// in front of that plane (llvmpipe: window depth -9e-6; SwiftShader: -7e-3, a face nearly edge-on
+// whose winding came out reversed, cut battery seed 3188): drawn there at depth 0, its hit would
+// show where a draw culling back faces leaves the box behind.
 float bm_hit_depth(float window_depth, float clip_w, float face_depth, bool own)
 {
-  float depth = max(window_depth, face_depth);
   if (own) {
-    depth = clip_w > 0.0 ? window_depth : 0.0;
+    return clamp(clip_w > 0.0 ? window_depth : 0.0, 0.0, 1.0);
   }
-  return clamp(depth, 0.0, 1.0);
+  float depth = max(window_depth, face_depth);
+  return depth < 0.0 ? -1.0 : min(depth, 1.0);
 }
 
 // ---- closed-form hits of the presets

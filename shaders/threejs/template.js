@@ -1265,6 +1265,9 @@ var BOXMARCH_FRAGMENT = [
   // SwiftShader runs a lane on past its discard to the end of the shader (measured,
   // docs/BENCHMARKS.md): `drawn` turns the march and the normal off for it there.
   '  bool drawn = true;',
+  // a ray along the box's silhouette edge draws nothing, whatever the fragment's winding
+  // (bm_grazes_box: culling changes nothing there)
+  '  if (bm_grazes_box(span, box_half)) { drawn = false; discard; }',
   // a fragment whose position rounds to the eye's (vertices far from the object's origin, the near
   // plane close) has no ray: it draws nothing rather than a NaN
   '  if (!(eye_distance > 0.0)) { drawn = false; discard; }',
@@ -1346,15 +1349,16 @@ var BOXMARCH_FRAGMENT = [
   // The hit's depth (bm_hit_depth): never nearer than the rasterised face, what the raw material's
   // layout(depth_greater) declares (BM_DEPTH_GREATER); a march from the eye (drawn apart where that
   // is declared, useBoxmarchEyeBox) writes the depth of its own hit, nearer than its fragment (the
-  // far side). Within [0, 1], as the depth buffer clamps it, for the passes compare it: a face cut
-  // by the near plane may hand its fragments a gl_FragCoord.z a little below 0 (SwiftShader,
-  // measured: -8e-4 with vertices far from the origin), which the depth buffer ties with the eye
-  // box's 0.
+  // far side). Within [0, 1], as the depth buffer clamps it, for the passes compare it; -1 where a
+  // march from its face hits in front of the near plane, clipped as the rasteriser clips faces (a
+  // face cut by the near plane may hand its fragments a gl_FragCoord.z below 0: SwiftShader,
+  // measured -8e-4 with vertices far from the origin, -7e-3 on a face nearly edge-on).
   '  bool ownDepth = fromEye;',
   '#ifdef BM_DEPTH_GREATER',
   '  ownDepth = false;',
   '#endif',
   '  float depth = bm_hit_depth(0.5 + 0.5 * clip.z / clip.w, clip.w, gl_FragCoord.z, ownDepth);',
+  '  if (depth < 0.0) discard;',  // a hit in front of the near plane: clipped
   '#ifdef BM_VISIBILITY_PASS',
   '  gl_FragColor = vec4(depth);',  // MIN-blended: the nearest hit's depth (useBoxmarchVisibility)
   '#else',

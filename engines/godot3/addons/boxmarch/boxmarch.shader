@@ -487,6 +487,17 @@ vec2 bm_box_span(vec3 ro, vec3 rd, vec3 h)
   vec3 t_far = (h - s * ro) * inv;
   return vec2(bm_max3(t_near), bm_min3(t_far));
 }
+// Whether a fragment's ray meets its box only on the box's surface (span: bm_box_span; no chord
+// inside a box of positive extents): a pixel centre on the box's silhouette edge, which the
+// rasteriser's fill rule hands to the faces of one winding only, the back faces where the edge
+// runs one way (cut battery seed 3369: an orthographic ray along a box's edge, drawn from its back
+// face, which a draw culling back faces never runs). Such a fragment draws nothing, whatever its
+// winding, in every engine, so that culling changes nothing there. A flat box (a half-extent of
+// 0) is drawn as before: its every ray has a chord of length 0.
+bool bm_grazes_box(vec2 span, vec3 h)
+{
+  return span.x >= span.y && bm_min3(h) > 0.0;
+}
 // The quality knob q (0 < q <= 1) as the four settings it stands for. x: distance, as a share of a
 // pixel's footprint, under which the march takes secant steps (bm_march's secant.x); w: the
 // longest secant step, as a multiple of the distance (secant.y): longer steps save more and may
@@ -577,14 +588,19 @@ bool bm_from_eye(vec2 span, bool outer_face, bool perspective, float eye_distanc
 // depth range) and its clip w: never nearer than the rasterised face (face_depth), what a stage
 // declaring depth GREATER must keep; but a march from the eye (own) writes its hit's own depth,
 // in front of the eye, 0 where the eye is in the shape (t = 0, clip w 0 give or take rounding).
-// In [0, 1], as a depth buffer clamps what it is given (passes that compare depths read it).
+// In [0, 1], as a depth buffer clamps what it is given (passes that compare depths read it); -1
+// (the caller draws nothing) where a march from its face hits in front of the near plane: what
+// lies there is clipped, as the rasteriser clips faces. A rasteriser may still hand a face a hair
+// in front of that plane (llvmpipe: window depth -9e-6; SwiftShader: -7e-3, a face nearly edge-on
+// whose winding came out reversed, cut battery seed 3188): drawn there at depth 0, its hit would
+// show where a draw culling back faces leaves the box behind.
 float bm_hit_depth(float window_depth, float clip_w, float face_depth, bool own)
 {
-  float depth = max(window_depth, face_depth);
   if (own) {
-    depth = clip_w > 0.0 ? window_depth : 0.0;
+    return clamp(clip_w > 0.0 ? window_depth : 0.0, 0.0, 1.0);
   }
-  return clamp(depth, 0.0, 1.0);
+  float depth = max(window_depth, face_depth);
+  return depth < 0.0 ? -1.0 : min(depth, 1.0);
 }
 // The nearer of hit `best` and the surface point (n, t), for t >= -slack: a root a rounding behind
 // the start (a ray starting on the surface, where a shape touches its box's face) hits at 0.
@@ -1081,6 +1097,11 @@ void fragment()
   vec3 ro = -f;
   vec2 span = bm_box_span(ro, rd, h);
   float t_end = span.y;
+  // a ray along the box's silhouette edge draws nothing, whatever the fragment's winding
+  // (bm_grazes_box: culling changes nothing there)
+  if (bm_grazes_box(span, h)) {
+    discard;
+  }
   // the far side marches from the eye where the box holds it (bm_from_eye: an inside-out box's
   // far side too)
   bool from_eye = bm_from_eye(span, FRONT_FACING, perspective, eye_distance);
