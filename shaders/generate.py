@@ -4,7 +4,7 @@ the SDF library and the march.
 * hlsl/boxmarch_decode.hlsl, boxmarch_sdf.hlsl, boxmarch_box_params.hlsl, boxmarch_march.hlsl:
   decode.glsl, sdf.glsl, box_params.glsl and raymarch.glsl translated into HLSL (``to_hlsl``);
 * cpp/src/shader_library.h: the functions of sdf.glsl and box_params.glsl, bm_rotate_vector and
-  bm_quat_conjugate of decode.glsl, bm_box_span, bm_grazes_box, bm_normal_tap, bm_quality, bm_pixel_size,
+  bm_quat_conjugate of decode.glsl, bm_box_span, bm_normal_tap, bm_quality, bm_pixel_size,
   bm_step_limit, bm_occluder_limit, bm_depth_crossing and bm_hit_depth of raymarch.glsl and bm_shade of
   preview.frag.glsl translated into GLM for the CPU reference
   (``to_glm``; the functions that call map() stay in raymarch.cpp, around its preset switch);
@@ -188,7 +188,7 @@ def glm_library() -> str:
     decode = top_level_functions(glsl("decode.glsl"))
     functions = {**top_level_functions(glsl("sdf.glsl")), "bm_rotate_vector": decode["bm_rotate_vector"],
                  "bm_quat_conjugate": decode["bm_quat_conjugate"], **top_level_functions(glsl("box_params.glsl")),
-                 "bm_box_span": raymarch["bm_box_span"], "bm_grazes_box": raymarch["bm_grazes_box"],
+                 "bm_box_span": raymarch["bm_box_span"],
                  "bm_normal_tap": raymarch["bm_normal_tap"], "bm_quality": raymarch["bm_quality"],
                  "bm_pixel_size": raymarch["bm_pixel_size"], "bm_step_limit": raymarch["bm_step_limit"],
                  "bm_occluder_limit": raymarch["bm_occluder_limit"], "bm_depth_rounding": raymarch["bm_depth_rounding"],
@@ -197,9 +197,8 @@ def glm_library() -> str:
     body = to_glm("\n".join(functions.values()), set(functions))
     usings = "".join(f"using glm::{v};\n" for v in ("vec2", "vec3", "vec4") if re.search(rf"\b{v}\b", body))
     return (f"// {GENERATED_BY} from shaders/glsl/sdf.glsl, box_params.glsl, decode.glsl (bm_rotate_vector,\n"
-            f"// bm_quat_conjugate), raymarch.glsl (bm_box_span, bm_grazes_box, bm_normal_tap,\n"
-            f"// bm_quality, bm_pixel_size, bm_step_limit, bm_occluder_limit, bm_depth_rounding, bm_depth_crossing,\n"
-            f"// bm_hit_depth) and preview.frag.glsl\n"
+            f"// bm_quat_conjugate), raymarch.glsl (bm_box_span, bm_normal_tap, bm_quality, bm_pixel_size,\n"
+            f"// bm_step_limit, bm_occluder_limit, bm_depth_rounding, bm_depth_crossing, bm_hit_depth) and preview.frag.glsl\n"
             f"// (bm_shade):\n"
             f"// edit those,"
             f" not this file. The shaders' functions that do not call map(), in GLM, so the CPU reference evaluates what the GPU does.\n"
@@ -257,7 +256,7 @@ def godot3() -> str:
                         + "".join(top_level_functions(glsl("box_params.glsl")).values()))
     closed_form = list(raymarch)[list(raymarch).index("bm_nearer_hit"):list(raymarch).index("bm_preset_hit") + 1]
     text = text.replace("/*@SPAN@*/", "".join(raymarch[name] for name in (
-        "bm_box_span", "bm_grazes_box", "bm_quality", "bm_pixel_size", "bm_step_limit", "bm_normal_tap", "bm_occluder_limit",
+        "bm_box_span", "bm_quality", "bm_pixel_size", "bm_step_limit", "bm_normal_tap", "bm_occluder_limit",
         "bm_depth_crossing", "bm_from_eye", "bm_hit_depth", *closed_form)))
     return text.replace("/*@MARCH@*/", "".join(passing_the_box(raymarch[name])
                                                for name in ("bm_march", "bm_one_tap", "bm_normal")))

@@ -1,9 +1,11 @@
-"""The rules of shaders/glsl/raymarch.glsl that decide, in every engine, when a rasterised fragment
-draws nothing whatever its winding (so that culling back faces changes nothing there; docs/PREVIEW.md),
-compiled and run by Mesa's llvmpipe against what float64 geometry says:
+"""The rules of shaders/glsl/raymarch.glsl that decide, in every engine, which rasterised fragments
+draw nothing (so that culling back faces changes nothing; docs/PREVIEW.md), compiled and run by
+Mesa's llvmpipe against what float64 geometry says:
 
-* bm_grazes_box: a ray that meets its box only on the box's surface (along a silhouette edge, at a
-  corner) has no chord; one that crosses the box, or a flat box (a half-extent of 0), has one.
+* bm_from_eye: a back face is its box's far side where its ray leaves the box there or meets the
+  box only on its surface (along a silhouette edge, through a corner), and draws nothing unless
+  the box holds the eye; a back face where the ray enters (an inside-out box's near side) and
+  every front face not in a box holding the eye march from their face.
 * bm_hit_depth: a march from its face whose hit lies in front of the near plane is clipped (-1);
   one behind it keeps its depth (never nearer than its face, at most 1); a march from the eye
   keeps its own depth, 0 where clip w is not positive.
@@ -22,52 +24,61 @@ def _unit(v):
     return v / np.linalg.norm(v)
 
 
-def grazing_and_crossing_rays(rng):
-    """(slots, kinds): per ray ro (slot 0), rd (slot 1), the box's half-extents (slot 2), float32
-    as the shader reads them, each exact in float32 where it lies on the box's surface."""
+def fragments(rng):
+    """(slots, kinds): per fragment ro (slot 0; w: 1 for a front face), rd (slot 1; w: the eye's
+    distance, 0 for an orthographic view), the box's half-extents (slot 2), float32 as the shader
+    reads them, each start exact in float32 where it lies on the box's surface; kind: "edge" (the
+    ray meets the box only along an edge), "corner" (only at a corner), "entry", "exit", and for
+    front faces of exits in a perspective view "eye inside" (the eye within the box's reach behind
+    the fragment) or "eye outside"."""
     slots, kinds = np.zeros((RAYS, 3, 4), np.float32), []
     for i in range(RAYS):
-        h = (10.0 ** rng.uniform(-3, 3)) * rng.uniform(0.01, 1.0, 3)
-        kind = ("edge", "corner", "crossing", "flat")[i % 4]
-        if kind == "flat":
-            h[rng.integers(3)] = 0.0
-        h = h.astype(np.float32).astype(np.float64)
+        h = ((10.0 ** rng.uniform(-3, 3)) * rng.uniform(0.01, 1.0, 3)).astype(np.float32).astype(np.float64)
+        kind = ("edge", "corner", "entry", "exit")[i % 4]
         sign = rng.choice([-1.0, 1.0], 3)
         ro = rng.uniform(-0.9, 0.9, 3) * h
+        d = rng.normal(size=3)
         if kind in ("edge", "corner"):
             on = rng.permutation(3)[:2] if kind == "edge" else np.arange(3)
             ro[on] = sign[on] * h[on]
-            # away from the box along one of those axes, into it along another: the ray passes
-            # the edge (the corner) from outside to outside
-            d = rng.normal(size=3)
-            d[on] = np.abs(d[on]) * sign[on]
-            d[on[0]] = np.abs(d[on[0]]) * -sign[on[0]]
-            d[on] += np.sign(d[on]) * 0.05
-        elif kind == "crossing":
-            # from a face's inner part into the box
+            # away from the box along all but one of those axes, into it along that one: the ray
+            # passes the edge (the corner) from outside to outside
+            d[on] = (np.abs(d[on]) + 0.05) * sign[on]
+            d[on[0]] = -d[on[0]]
+        else:
+            # from a face's inner part, into the box or out of it
             axis = rng.integers(3)
             ro[axis] = sign[axis] * h[axis]
-            d = rng.normal(size=3)
-            d[axis] = -sign[axis] * (np.abs(d[axis]) + 0.2)
-        else:
-            # across a flat box, through its face's inner part
-            axis = int(np.argmin(h))
-            ro[axis] = 0.0
-            d = rng.normal(size=3)
-            d[axis] = np.abs(d[axis]) + 0.2
-        slots[i, 0, :3], slots[i, 1, :3], slots[i, 2, :3] = ro, _unit(d), h
-        kinds.append(kind)
+            d[axis] = (np.abs(d[axis]) + 0.2) * (-sign[axis] if kind == "entry" else sign[axis])
+        d = d / np.linalg.norm(d)
+        front = rng.random() < 0.5
+        eye = 0.0
+        if front and kind == "exit" and rng.random() < 0.5:
+            # the chord behind the fragment, in float64
+            inv = 1.0 / np.where(np.abs(d) > 1e-12, np.abs(d), 1e-12)
+            s_d = np.where(d < 0, -1.0, 1.0)
+            chord = -np.max((-h - s_d * ro) * inv)
+            inside = rng.random() < 0.5
+            eye = chord * (rng.uniform(0.05, 0.95) if inside else rng.uniform(1.05, 3.0))
+            kind = "eye inside" if inside else "eye outside"
+        slots[i, 0, :3], slots[i, 0, 3], slots[i, 1, :3], slots[i, 1, 3], slots[i, 2, :3] = ro, front, d, eye, h
+        kinds.append(("front " if front else "back ") + kind)
     return slots, kinds
 
 
-def test_a_ray_grazes_its_box_only_where_it_has_no_chord():
-    slots, kinds = grazing_and_crossing_rays(np.random.default_rng(3369))
-    got = closed_form.gpu_run("vec4(bm_grazes_box(bm_box_span(a.xyz, b.xyz, c.xyz), c.xyz) ? 1.0 : 0.0)", slots)
-    grazes = got[:, 0] > 0.5
+def test_a_back_face_where_the_ray_leaves_or_only_touches_its_box_is_the_far_side():
+    slots, kinds = fragments(np.random.default_rng(3369))
+    got = closed_form.gpu_run("vec4(bm_from_eye(bm_box_span(a.xyz, b.xyz, c.xyz), a.w > 0.5, b.w > 0.0, b.w) ? 1.0 : 0.0)",
+                              slots)
+    far_side = got[:, 0] > 0.5
     kinds = np.array(kinds)
-    for kind, expected in (("edge", True), ("corner", True), ("crossing", False), ("flat", False)):
-        wrong = np.flatnonzero((kinds == kind) & (grazes != expected))
-        assert wrong.size == 0, f"{kind}: {wrong.size} of {np.sum(kinds == kind)} rays, e.g. {slots[wrong[:3]].tolist()}"
+    expected = {"back edge": True, "back corner": True, "back exit": True, "back entry": False,
+                "front edge": False, "front corner": False, "front exit": False, "front entry": False,
+                "front eye inside": True, "front eye outside": False}
+    assert set(kinds) == set(expected)
+    for kind, far in expected.items():
+        wrong = np.flatnonzero((kinds == kind) & (far_side != far))
+        assert wrong.size == 0, f"{kind}: {wrong.size} of {np.sum(kinds == kind)}, e.g. {slots[wrong[:2]].tolist()}"
 
 
 def test_a_hit_in_front_of_the_near_plane_is_clipped_from_a_face_only():

@@ -409,8 +409,7 @@ void render_boxes(const float* origins, const float* quaternions, const float* h
                     const vec3 ro = ray.ro, rd = ray.rd;
                     vec2 span = shader::bm_box_span(ro, rd, h);
                     float t0 = std::max(span.x, 0.0f);
-                    // a ray along the box's silhouette edge draws nothing (the engines' rule)
-                    if (span.y < t0 || shader::bm_grazes_box(span, h)) continue;
+                    if (span.y < t0) continue;
                     const size_t pix = size_t(y) * size_t(W) + size_t(x);
                     ++cost.fragments;
                     covered[pix - band_start] = 1;

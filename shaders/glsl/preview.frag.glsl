@@ -121,12 +121,6 @@ void main()
   // bm_from_eye: an inside-out box's far side too).
   vec2 span = bm_box_span(ro, rd, drawn_half);
   float t_end = span.y;
-  // a ray along the box's silhouette edge draws nothing, whatever the fragment's winding
-  // (bm_grazes_box: culling changes nothing there)
-  if (bm_grazes_box(span, drawn_half)) {
-    bm_drop(0.0);
-    return;
-  }
   bool outer_face = gl_FrontFacing != (preview.mode.y == 1);
   bool from_eye = bm_from_eye(span, outer_face, preview.eye.w > 0.5, eye_distance);
   if (from_eye) {

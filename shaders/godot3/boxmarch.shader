@@ -486,17 +486,6 @@ vec2 bm_box_span(vec3 ro, vec3 rd, vec3 h)
   vec3 t_far = (h - s * ro) * inv;
   return vec2(bm_max3(t_near), bm_min3(t_far));
 }
-// Whether a fragment's ray meets its box only on the box's surface (span: bm_box_span; no chord
-// inside a box of positive extents): a pixel centre on the box's silhouette edge, which the
-// rasteriser's fill rule hands to the faces of one winding only, the back faces where the edge
-// runs one way (cut battery seed 3369: an orthographic ray along a box's edge, drawn from its back
-// face, which a draw culling back faces never runs). Such a fragment draws nothing, whatever its
-// winding, in every engine, so that culling changes nothing there. A flat box (a half-extent of
-// 0) is drawn as before: its every ray has a chord of length 0.
-bool bm_grazes_box(vec2 span, vec3 h)
-{
-  return span.x >= span.y && bm_min3(h) > 0.0;
-}
 // The quality knob q (0 < q <= 1) as the four settings it stands for. x: distance, as a share of a
 // pixel's footprint, under which the march takes secant steps (bm_march's secant.x); w: the
 // longest secant step, as a multiple of the distance (secant.y): longer steps save more and may
@@ -574,14 +563,18 @@ float bm_depth_crossing(vec4 c0, vec4 c1, float ndc_z)
   return c0.w < 0.0 ? max(t, -c0.w / c1.w) : t;
 }
 // Whether a fragment marches from the eye rather than from its face: a fragment of its box's far
-// side (more of the box behind it than ahead; span: bm_box_span from the fragment along the ray
+// side (no less of the box behind it than ahead; span: bm_box_span from the fragment along the ray
 // from the eye) that is a back face (outer_face false), or, whatever its winding, whose box holds
 // the eye (perspective: the eye a point, eye_distance from the fragment, no farther than the box
 // reaches behind it): an inside-out box's far side faces the eye. A back face of the far side
-// whose box does not hold the eye draws nothing (the caller drops it).
+// whose box does not hold the eye draws nothing (the caller drops it): among them a back face
+// whose ray meets the box only on its surface (span (0, 0): a pixel centre on the box's silhouette
+// edge, which the rasteriser's fill rule may give to the back faces and not to the front ones;
+// cut battery seed 3369, an orthographic ray along a box's edge, where a draw culling back faces
+// showed the box behind), so that culling changes nothing there.
 bool bm_from_eye(vec2 span, bool outer_face, bool perspective, float eye_distance)
 {
-  return span.x + span.y < 0.0 && (!outer_face || (perspective && eye_distance <= -span.x));
+  return span.x + span.y <= 0.0 && (!outer_face || (perspective && eye_distance <= -span.x));
 }
 // The window depth a hit writes, from its own (window_depth, the caller's clip z / w mapped to its
 // depth range) and its clip w: never nearer than the rasterised face (face_depth), what a stage
@@ -1096,11 +1089,6 @@ void fragment()
   vec3 ro = -f;
   vec2 span = bm_box_span(ro, rd, h);
   float t_end = span.y;
-  // a ray along the box's silhouette edge draws nothing, whatever the fragment's winding
-  // (bm_grazes_box: culling changes nothing there)
-  if (bm_grazes_box(span, h)) {
-    discard;
-  }
   // the far side marches from the eye where the box holds it (bm_from_eye: an inside-out box's
   // far side too)
   bool from_eye = bm_from_eye(span, FRONT_FACING, perspective, eye_distance);

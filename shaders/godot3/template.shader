@@ -96,11 +96,6 @@ void fragment()
   vec3 ro = -f;
   vec2 span = bm_box_span(ro, rd, h);
   float t_end = span.y;
-  // a ray along the box's silhouette edge draws nothing, whatever the fragment's winding
-  // (bm_grazes_box: culling changes nothing there)
-  if (bm_grazes_box(span, h)) {
-    discard;
-  }
   // the far side marches from the eye where the box holds it (bm_from_eye: an inside-out box's
   // far side too)
   bool from_eye = bm_from_eye(span, FRONT_FACING, perspective, eye_distance);

@@ -32,18 +32,6 @@ float2 bm_box_span(float3 ro, float3 rd, float3 h)
   return float2(bm_max3(t_near), bm_min3(t_far));
 }
 
-// Whether a fragment's ray meets its box only on the box's surface (span: bm_box_span; no chord
-// inside a box of positive extents): a pixel centre on the box's silhouette edge, which the
-// rasteriser's fill rule hands to the faces of one winding only, the back faces where the edge
-// runs one way (cut battery seed 3369: an orthographic ray along a box's edge, drawn from its back
-// face, which a draw culling back faces never runs). Such a fragment draws nothing, whatever its
-// winding, in every engine, so that culling changes nothing there. A flat box (a half-extent of
-// 0) is drawn as before: its every ray has a chord of length 0.
-bool bm_grazes_box(float2 span, float3 h)
-{
-  return span.x >= span.y && bm_min3(h) > 0.0;
-}
-
 // Sphere-traces map() from ro along unit rd until a distance falls below epsilon (true), the ray
 // passes t_end or step_limit evaluations (at most 512) are spent (false). Where a distance is under
 // secant.x and smaller than the last one, the step is the secant's instead (the line through the
@@ -221,14 +209,18 @@ float bm_depth_crossing(float4 c0, float4 c1, float ndc_z)
 }
 
 // Whether a fragment marches from the eye rather than from its face: a fragment of its box's far
-// side (more of the box behind it than ahead; span: bm_box_span from the fragment along the ray
+// side (no less of the box behind it than ahead; span: bm_box_span from the fragment along the ray
 // from the eye) that is a back face (outer_face false), or, whatever its winding, whose box holds
 // the eye (perspective: the eye a point, eye_distance from the fragment, no farther than the box
 // reaches behind it): an inside-out box's far side faces the eye. A back face of the far side
-// whose box does not hold the eye draws nothing (the caller drops it).
+// whose box does not hold the eye draws nothing (the caller drops it): among them a back face
+// whose ray meets the box only on its surface (span (0, 0): a pixel centre on the box's silhouette
+// edge, which the rasteriser's fill rule may give to the back faces and not to the front ones;
+// cut battery seed 3369, an orthographic ray along a box's edge, where a draw culling back faces
+// showed the box behind), so that culling changes nothing there.
 bool bm_from_eye(float2 span, bool outer_face, bool perspective, float eye_distance)
 {
-  return span.x + span.y < 0.0 && (!outer_face || (perspective && eye_distance <= -span.x));
+  return span.x + span.y <= 0.0 && (!outer_face || (perspective && eye_distance <= -span.x));
 }
 
 // The window depth a hit writes, from its own (window_depth, the caller's clip z / w mapped to its

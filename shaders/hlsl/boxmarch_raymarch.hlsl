@@ -67,9 +67,6 @@ bm_hit bm_raymarch_in_frame(float3 obj_pos, float3 obj_camera, float3 f, float3 
   float3 rd = normalize(bm_to_local(ray_object / eye_distance, x, y, z));
   float2 span = bm_box_span(ro, rd, box_half);
   float t_end = span.y;
-  // a ray along the box's silhouette edge draws nothing, whatever the fragment's winding
-  // (bm_grazes_box: culling changes nothing there)
-  if (bm_grazes_box(span, box_half)) return o;
   // entry: front-facing, or (whatever the winding) more box ahead than behind; the far side
   // only marches when the camera is inside the box (bm_from_eye: an inside-out box's far side
   // too; the camera taken as a point, as the test below always took it)

@@ -1265,9 +1265,6 @@ var BOXMARCH_FRAGMENT = [
   // SwiftShader runs a lane on past its discard to the end of the shader (measured,
   // docs/BENCHMARKS.md): `drawn` turns the march and the normal off for it there.
   '  bool drawn = true;',
-  // a ray along the box's silhouette edge draws nothing, whatever the fragment's winding
-  // (bm_grazes_box: culling changes nothing there)
-  '  if (bm_grazes_box(span, box_half)) { drawn = false; discard; }',
   // a fragment whose position rounds to the eye's (vertices far from the object's origin, the near
   // plane close) has no ray: it draws nothing rather than a NaN
   '  if (!(eye_distance > 0.0)) { drawn = false; discard; }',
