@@ -81,9 +81,9 @@ _SILHOUETTE_EDGE = ("culling, visibility passes and default 1 px another colour 
                     "55861a2; r111 3000-3499 the same): the pixel's centre lies on box 124's silhouette edge "
                     "(its ray meets the box only there: span (0, 0)); the fill rule gave the pixel to the box's "
                     "back face, not its front face (back faces 19 px, front faces 18), and plain drew that "
-                    "fragment's hit at the edge while culling dropped it (box 140 showed). A ray that meets its "
-                    "box only on its surface now draws nothing, whatever the winding (bm_grazes_box, every "
-                    "engine); BOX, scale 224, quality 0.5, long thin, axis-aligned, inside-out, non-uniform scale, "
+                    "fragment's hit at the edge while culling dropped it (box 140 showed). A back face whose ray "
+                    "meets its box only on its surface is now the far side (bm_from_eye), drawn only from an "
+                    "eye inside the box; BOX, scale 224, quality 0.5, long thin, axis-aligned, inside-out, non-uniform scale, "
                     "eye inside a box, orthographic")
 # Seeds where a cut changed pixels that no step budget explains: (seed, renderer, what it found
 # the day it was kept, main at 20bdfbf, 96 x 72). Each runs every time, in its renderer.
